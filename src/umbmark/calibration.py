@@ -1,0 +1,111 @@
+"""From estimated errors to new odometry parameters, composed with the active ones.
+
+The runs were driven with some parameters active: a wheelbase ``b`` (possibly scaled by a
+ros2_control ``wheel_separation_multiplier``) and wheel factors ``c_L``, ``c_R`` (ros2_control's
+``left_wheel_radius_multiplier`` and ``right_wheel_radius_multiplier``). The errors UMBmark
+measures are relative to those, so the correction multiplies into them (Sec. 5: a
+compensated robot is a "new" uncompensated robot with different initial parameters):
+
+- ``c_L,new = c_L,active * 2 / (E_d + 1)`` (Eq. 4.31)
+- ``c_R,new = c_R,active * 2 / (1/E_d + 1)`` (Eq. 4.32)
+- ``wheel_separation_multiplier,new = multiplier,active * E_b`` and
+  ``b_new = E_b * b_effective`` (Eq. 4.26).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .estimators.base import ErrorEstimate
+from .model import correction_factors
+
+__all__ = ["ActiveParams", "Calibration"]
+
+
+@dataclass(frozen=True)
+class ActiveParams:
+    """The odometry parameters that were active while the runs were driven.
+
+    Attributes
+    ----------
+    wheelbase : float
+        ``b`` [m] as configured (ros2_control ``wheel_separation``).
+    c_left, c_right : float
+        Wheel correction factors (ros2_control ``left/right_wheel_radius_multiplier``).
+    separation_multiplier : float
+        ros2_control ``wheel_separation_multiplier``.
+    wheel_diameter : float or None
+        Nominal wheel diameter ``D_n`` [m], when known.
+    """
+
+    wheelbase: float
+    c_left: float = 1.0
+    c_right: float = 1.0
+    separation_multiplier: float = 1.0
+    wheel_diameter: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("wheelbase", "c_left", "c_right", "separation_multiplier"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name.replace('_', ' ')} must be > 0, got {value!r}")
+        if self.wheel_diameter is not None and not (
+            math.isfinite(self.wheel_diameter) and self.wheel_diameter > 0
+        ):
+            raise ValueError(f"wheel diameter must be > 0, got {self.wheel_diameter!r} m")
+
+    @property
+    def effective_wheelbase(self) -> float:
+        """The wheelbase the odometry used [m]: ``b * separation_multiplier``."""
+        return self.wheelbase * self.separation_multiplier
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """An error estimate turned into corrected parameters."""
+
+    estimate: ErrorEstimate
+    active: ActiveParams
+
+    @property
+    def c_L(self) -> float:
+        """Left correction factor of this pass, Eq. 4.31."""
+        return float(correction_factors(self.estimate.E_d)[0])
+
+    @property
+    def c_R(self) -> float:
+        """Right correction factor of this pass, Eq. 4.32."""
+        return float(correction_factors(self.estimate.E_d)[1])
+
+    @property
+    def new_c_left(self) -> float:
+        """Absolute left factor to configure: ``c_L,active * c_L``."""
+        return self.active.c_left * self.c_L
+
+    @property
+    def new_c_right(self) -> float:
+        """Absolute right factor to configure: ``c_R,active * c_R``."""
+        return self.active.c_right * self.c_R
+
+    @property
+    def new_separation_multiplier(self) -> float:
+        """Absolute ``wheel_separation_multiplier`` to configure: ``active * E_b``."""
+        return self.active.separation_multiplier * self.estimate.E_b
+
+    @property
+    def wheelbase_corrected(self) -> float:
+        """Corrected effective wheelbase [m], Eq. 4.26: ``E_b * b_effective``."""
+        return self.estimate.E_b * self.active.effective_wheelbase
+
+    @property
+    def wheel_diameter_left(self) -> float | None:
+        """Corrected effective left wheel diameter ``c_L,new D_n`` [m], if ``D_n`` is known."""
+        d = self.active.wheel_diameter
+        return None if d is None else self.new_c_left * d
+
+    @property
+    def wheel_diameter_right(self) -> float | None:
+        """Corrected effective right wheel diameter ``c_R,new D_n`` [m], if ``D_n`` is known."""
+        d = self.active.wheel_diameter
+        return None if d is None else self.new_c_right * d

@@ -1,0 +1,1 @@
+"""The ``umbmark`` command: a thin layer that wires sources, estimators and outputs."""

@@ -1,0 +1,94 @@
+"""What every command shares: error reporting, warnings, option checks."""
+
+from __future__ import annotations
+
+import functools
+import math
+import sys
+from collections.abc import Callable
+from enum import Enum
+from typing import ParamSpec, TypeVar
+
+import typer
+
+from ..errors import InputError
+
+__all__ = [
+    "AngleUnit",
+    "Estimator",
+    "LengthUnit",
+    "check_length_flag",
+    "check_positive_flag",
+    "reports_input_errors",
+    "warn",
+]
+
+P = ParamSpec("P")
+R = TypeVar("R")
+
+#: Exit status for bad input (as for a usage error).
+EXIT_BAD_INPUT = 2
+
+
+class LengthUnit(str, Enum):
+    """Unit of lengths in an input table."""
+
+    m = "m"
+    cm = "cm"
+    mm = "mm"
+
+
+class Estimator(str, Enum):
+    """Estimators a square path test can be evaluated with."""
+
+    paper = "paper"
+    exact = "exact"
+    heading = "heading"
+
+
+class AngleUnit(str, Enum):
+    """Unit of angles in an input table."""
+
+    rad = "rad"
+    deg = "deg"
+
+
+def error_line(message: str) -> None:
+    """Print one error line to stderr (plain text: no wrapping, no colour codes)."""
+    sys.stderr.write(f"umbmark: error: {message}\n")
+
+
+def warn(message: str) -> None:
+    """Print one warning line to stderr."""
+    sys.stderr.write(f"umbmark: warning: {message}\n")
+
+
+def reports_input_errors(fn: Callable[P, R]) -> Callable[P, R]:
+    """Turn :class:`InputError` into one line on stderr and exit status 2."""
+
+    @functools.wraps(fn)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        try:
+            return fn(*args, **kwargs)
+        except InputError as exc:
+            error_line(str(exc))
+            raise typer.Exit(EXIT_BAD_INPUT) from None
+
+    return wrapper
+
+
+def check_positive_flag(name: str, value: float, unit: str = "") -> None:
+    """Refuse a flag value that is not a positive finite number."""
+    if not (math.isfinite(value) and value > 0):
+        shown = f"{value:g} {unit}".strip()
+        raise InputError(f"{name} must be > 0, got {shown}")
+
+
+def check_length_flag(name: str, value: float, largest: float) -> None:
+    """Refuse a length flag [m] that is not positive or is implausibly large (unit slip)."""
+    check_positive_flag(name, value, "m")
+    if value > largest:
+        raise InputError(
+            f"{name} {value:g} m is implausibly large: lengths on the command line are in "
+            f"metres (at most {largest:g} m here)"
+        )

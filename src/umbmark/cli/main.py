@@ -1,0 +1,48 @@
+"""The ``umbmark`` command line: one subcommand per job.
+
+Heavy imports (numpy, scipy, matplotlib, rosbags) happen inside the commands, so that
+``umbmark --help`` answers at once.
+"""
+
+from __future__ import annotations
+
+import typer
+
+from .. import __version__
+from .calibrate import calibrate
+from .example import example
+
+app = typer.Typer(
+    name="umbmark",
+    help="Measure and correct the systematic odometry errors of differential-drive robots "
+    "(Borenstein & Feng's UMBmark). Lengths in metres and angles in radians unless a flag "
+    "says otherwise.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"umbmark {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
+    """umbmark: UMBmark and beyond."""
+
+
+app.command()(calibrate)
+app.command()(example)
+
+
+def main() -> None:
+    """Entry point of the ``umbmark`` console script."""
+    app()

@@ -1,0 +1,180 @@
+"""The human-readable summary of a calibration: rich tables, every figure with its unit."""
+
+from __future__ import annotations
+
+import math
+
+from rich import box
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
+
+from ..result import CalibrationReport
+
+__all__ = ["render_report", "verdict"]
+
+_MM = 1000.0
+_METHOD_NAMES = {
+    "paper": "the paper's equations (Eqs. 4.20-4.27, x and y averaged)",
+    "exact": "exact square geometry, inverted numerically",
+    "heading": "final heading errors (Jung & Chung 2011)",
+    "trajectory": "trajectory least squares (Antonelli et al. 2005)",
+}
+
+
+def verdict(report: CalibrationReport) -> str:
+    """The 3 x SEM rule of Sec. 5, in words."""
+    b = report.benchmark
+    e, t = b.e_max_syst * _MM, b.second_pass_threshold * _MM
+    if b.second_pass_recommended:
+        return (
+            f"E_max,syst = {e:.1f} mm > 3 x SEM = {t:.1f} mm: the systematic error stands "
+            "well above the scatter of the runs. Apply the correction below, then run "
+            "UMBmark again; another pass is worth it while E_max,syst stays above 3 x SEM."
+        )
+    return (
+        f"E_max,syst = {e:.1f} mm <= 3 x SEM = {t:.1f} mm: what remains is within the "
+        "scatter of the runs; a further pass is unlikely to improve it (Sec. 5)."
+    )
+
+
+def _plus_minus(value: float, se: float | None, fmt: str) -> str:
+    if se is None or not math.isfinite(se):
+        return format(value, fmt)
+    return f"{format(value, fmt)} ± {format(se, fmt)}"
+
+
+def render_report(
+    report: CalibrationReport, console: Console, yaml_text: str | None = None
+) -> None:
+    """Print the summary of ``report`` on ``console``."""
+    bench, cal, test = report.benchmark, report.calibration, report.test
+    est, active = cal.estimate, cal.active
+    se = est.standard_errors
+
+    head = Text.assemble(
+        ("UMBmark ", "bold"),
+        (report.source, "bold cyan"),
+        f"  ({bench.cw.n} cw + {bench.ccw.n} ccw runs, square side L = "
+        f"{test.side_length:.3f} m, wheelbase b = {test.wheelbase:.4f} m)",
+    )
+    console.print(head)
+
+    clusters = _table("Return errors (Eqs. 3.1-3.4)")
+    clusters.add_column("")
+    clusters.add_column("cw", justify="right")
+    clusters.add_column("ccw", justify="right")
+    cw, ccw = bench.cw, bench.ccw
+    rows = [
+        ("centre of gravity x [mm]", cw.cg[0] * _MM, ccw.cg[0] * _MM),
+        ("centre of gravity y [mm]", cw.cg[1] * _MM, ccw.cg[1] * _MM),
+        ("r_cg [mm]", cw.r_cg * _MM, ccw.r_cg * _MM),
+        ("spread sigma (radial) [mm]", cw.sigma * _MM, ccw.sigma * _MM),
+        ("SEM = sigma / sqrt(n) [mm]", cw.sem * _MM, ccw.sem * _MM),
+    ]
+    for label, a, b in rows:
+        _row(clusters, label, f"{a:.1f}", f"{b:.1f}")
+    console.print(clusters)
+    console.print(
+        Text.assemble(
+            ("E_max,syst = ", "bold"),
+            (f"{bench.e_max_syst * _MM:.1f} mm", "bold yellow"),
+            f"  (the {bench.worst.direction.value} cluster)",
+        )
+    )
+    console.print(verdict(report))
+
+    errors = _table(f"Systematic errors: {_METHOD_NAMES.get(est.method, est.method)}")
+    errors.add_column("")
+    errors.add_column("value", justify="right")
+    errors.add_column("")
+    _row(
+        errors,
+        "alpha, Type A error per turn",
+        _plus_minus(math.degrees(est.alpha), _deg(se.get("alpha")), ".4f") + " deg",
+        "> 0: turns too little",
+    )
+    _row(
+        errors,
+        "beta, Type B error per leg",
+        _plus_minus(math.degrees(est.beta), _deg(se.get("beta")), ".4f") + " deg",
+        "> 0: legs curve left",
+    )
+    _row(
+        errors, "E_b = b_actual / b_nominal", _plus_minus(est.E_b, se.get("E_b"), ".6f"), "Eq. 4.27"
+    )
+    _row(errors, "E_d = D_R / D_L", _plus_minus(est.E_d, se.get("E_d"), ".6f"), "Eq. 4.22")
+    if est.E_s is not None:
+        _row(errors, "E_s = D_avg / D_n", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "")
+    console.print(errors)
+
+    correction = _table("Correction, composed with the values active during the runs")
+    correction.add_column("")
+    correction.add_column("active", justify="right")
+    correction.add_column("this pass", justify="right")
+    correction.add_column("new", justify="right")
+    _row(
+        correction,
+        "c_L, left wheel (Eq. 4.31)",
+        f"{active.c_left:.6f}",
+        f"{cal.c_L:.6f}",
+        f"{cal.new_c_left:.6f}",
+    )
+    _row(
+        correction,
+        "c_R, right wheel (Eq. 4.32)",
+        f"{active.c_right:.6f}",
+        f"{cal.c_R:.6f}",
+        f"{cal.new_c_right:.6f}",
+    )
+    _row(
+        correction,
+        "wheelbase multiplier (E_b)",
+        f"{active.separation_multiplier:.6f}",
+        f"{est.E_b:.6f}",
+        f"{cal.new_separation_multiplier:.6f}",
+    )
+    _row(
+        correction,
+        "wheelbase [mm] (Eq. 4.26)",
+        f"{active.effective_wheelbase * _MM:.2f}",
+        "",
+        f"{cal.wheelbase_corrected * _MM:.2f}",
+    )
+    if cal.wheel_diameter_left is not None and cal.wheel_diameter_right is not None:
+        assert active.wheel_diameter is not None
+        _row(
+            correction,
+            "left wheel diameter [mm]",
+            f"{active.c_left * active.wheel_diameter * _MM:.3f}",
+            "",
+            f"{cal.wheel_diameter_left * _MM:.3f}",
+        )
+        _row(
+            correction,
+            "right wheel diameter [mm]",
+            f"{active.c_right * active.wheel_diameter * _MM:.3f}",
+            "",
+            f"{cal.wheel_diameter_right * _MM:.3f}",
+        )
+    console.print(correction)
+
+    if yaml_text is not None:
+        console.print(
+            Text("ros2_control overlay (paste it, or write it with --yaml FILE):", style="bold")
+        )
+        # Plain text, no box: it must copy and paste as it is.
+        console.print(Text(yaml_text.rstrip()), soft_wrap=True)
+
+
+def _table(title: str) -> Table:
+    """A compact table whose cells are plain text (no markup: ``[mm]`` stays as it is)."""
+    return Table(title=Text(title), title_justify="left", box=box.SIMPLE_HEAD, padding=(0, 1))
+
+
+def _row(table: Table, *cells: str) -> None:
+    table.add_row(*(Text(cell) for cell in cells))
+
+
+def _deg(value: float | None) -> float | None:
+    return None if value is None else math.degrees(value)

@@ -1,0 +1,1 @@
+"""Reading and writing files: runs tables, parameter files, results. No maths here."""

@@ -1,0 +1,261 @@
+"""The runs table: one row per run, typed in by hand or written by ``umbmark simulate``.
+
+Format
+------
+A CSV file (comma, semicolon or tab separated; UTF-8, a byte-order mark is fine) whose
+first non-comment line is a header. Lines starting with ``#`` and blank lines are skipped.
+
+=============  ========  ==================================================
+column         required  meaning
+=============  ========  ==================================================
+direction      yes       ``cw`` or ``ccw`` (any case)
+x_abs, y_abs   yes       true (measured) end position
+x_odo, y_odo   yes       end position computed by the robot's odometry
+theta_abs      no        true end heading (with theta_odo)
+theta_odo      no        odometry end heading
+=============  ========  ==================================================
+
+``x_calc``, ``y_calc``, ``theta_calc`` (the paper's names) are accepted for the odometry
+columns. Other columns are ignored. Lengths are in metres and headings in radians unless
+the caller says otherwise. Rows are numbered as the file's lines, from 1.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..conventions import Direction, angle_to_rad, length_to_m
+from ..errors import InputError
+from ..runs import EndPose, Run
+from .atomic import atomic_write_text
+
+__all__ = [
+    "OPTIONAL_COLUMNS",
+    "REQUIRED_COLUMNS",
+    "format_runs_table",
+    "read_runs_table",
+    "write_runs_table",
+]
+
+REQUIRED_COLUMNS = ("direction", "x_abs", "y_abs", "x_odo", "y_odo")
+OPTIONAL_COLUMNS = ("theta_abs", "theta_odo")
+_ALIASES = {"x_calc": "x_odo", "y_calc": "y_odo", "theta_calc": "theta_odo"}
+#: Headings beyond this many radians are taken for degrees given as radians.
+_MAX_PLAUSIBLE_RAD = 4.0 * math.pi
+
+
+def read_text(path: str | Path) -> str:
+    """Read a text file as UTF-8 (with or without a byte-order mark).
+
+    Raises
+    ------
+    InputError
+        If the file cannot be read or is not text.
+    """
+    try:
+        return Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise InputError("no such file", source=path) from None
+    except IsADirectoryError:
+        raise InputError("is a directory, not a file", source=path) from None
+    except UnicodeDecodeError:
+        raise InputError("is not a UTF-8 text file", source=path) from None
+    except OSError as exc:
+        raise InputError(f"cannot be read ({exc.strerror or exc})", source=path) from None
+
+
+def read_runs_table(
+    path: str | Path,
+    *,
+    unit: str = "m",
+    angle_unit: str = "rad",
+    side_length: float | None = None,
+) -> list[Run]:
+    """Read a runs table into runs, converting to metres and radians.
+
+    Parameters
+    ----------
+    path : path
+        The CSV file.
+    unit : {"m", "cm", "mm"}
+        Unit of the length columns.
+    angle_unit : {"rad", "deg"}
+        Unit of the heading columns.
+    side_length : float, optional
+        Side of the square [m]: a return error larger than it is refused as implausible
+        (most likely a unit mix-up).
+
+    Raises
+    ------
+    InputError
+        Naming the file, the row and the problem.
+    """
+    text = read_text(path)
+    lines = [
+        (number, line)
+        for number, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise InputError("is empty: expected a header and one row per run", source=path)
+    header_number, header_line = lines[0]
+    dialect = _sniff(header_line)
+    header = [_column_name(cell) for cell in next(csv.reader([header_line], dialect))]
+    duplicated = sorted({h for h in header if h and header.count(h) > 1})
+    if duplicated:
+        raise InputError(
+            f"column {duplicated[0]} appears more than once", source=path, row=header_number
+        )
+    missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    if missing:
+        raise InputError(
+            f"missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
+            f"(the header has: {', '.join(h for h in header if h) or 'nothing'})",
+            source=path,
+            row=header_number,
+        )
+    has_theta = [c in header for c in OPTIONAL_COLUMNS]
+    if any(has_theta) and not all(has_theta):
+        present, absent = OPTIONAL_COLUMNS if has_theta[0] else OPTIONAL_COLUMNS[::-1]
+        raise InputError(
+            f"column {present} needs column {absent} as well", source=path, row=header_number
+        )
+    index = {
+        name: header.index(name)
+        for name in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS)
+        if name in header
+    }
+
+    runs = []
+    for number, line in lines[1:]:
+        cells = next(csv.reader([line], dialect))
+        if len(cells) < len(header):
+            raise InputError(
+                f"has {len(cells)} cells, the header has {len(header)}", source=path, row=number
+            )
+        try:
+            direction = Direction.parse(cells[index["direction"]])
+        except ValueError as exc:
+            raise InputError(str(exc), source=path, row=number) from None
+        value = {
+            name: _number(cells[index[name]], name, path, number) for name in REQUIRED_COLUMNS[1:]
+        }
+        theta = {
+            name: _number(cells[index[name]], name, path, number)
+            if cells[index[name]].strip()
+            else None
+            for name in OPTIONAL_COLUMNS
+            if name in index
+        }
+        for name, angle in theta.items():
+            if angle is not None and angle_unit == "rad" and abs(angle) > _MAX_PLAUSIBLE_RAD:
+                raise InputError(
+                    f"{name} = {angle:g} is not a plausible heading in radians; "
+                    "are the headings in degrees? (use --angle-unit deg)",
+                    source=path,
+                    row=number,
+                )
+        theta_abs, theta_odo = theta.get("theta_abs"), theta.get("theta_odo")
+        if (theta_abs is None) != (theta_odo is None):
+            raise InputError(
+                "gives one of theta_abs and theta_odo but not the other", source=path, row=number
+            )
+        run = Run(
+            direction=direction,
+            true_end=EndPose(
+                length_to_m(value["x_abs"], unit),
+                length_to_m(value["y_abs"], unit),
+                None if theta_abs is None else angle_to_rad(theta_abs, angle_unit),
+            ),
+            odometry_end=EndPose(
+                length_to_m(value["x_odo"], unit),
+                length_to_m(value["y_odo"], unit),
+                None if theta_odo is None else angle_to_rad(theta_odo, angle_unit),
+            ),
+            label=f"row {number}",
+        )
+        if side_length is not None:
+            _check_plausible(run, side_length, unit, path, number)
+        runs.append(run)
+    if not runs:
+        raise InputError("has a header but no runs", source=path)
+    return runs
+
+
+def format_runs_table(runs: Sequence[Run]) -> str:
+    """The runs as a runs table (metres, radians), headings included when all runs have them."""
+    with_theta = all(
+        run.true_end.theta is not None and run.odometry_end.theta is not None for run in runs
+    )
+    columns = (
+        ["direction", "x_abs", "y_abs", "theta_abs", "x_odo", "y_odo", "theta_odo"]
+        if with_theta
+        else list(REQUIRED_COLUMNS)
+    )
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(columns)
+    for run in runs:
+        t, o = run.true_end, run.odometry_end
+        if with_theta:
+            row = [
+                run.direction.value,
+                f"{t.x:.6f}",
+                f"{t.y:.6f}",
+                f"{t.theta:.8f}",
+                f"{o.x:.6f}",
+                f"{o.y:.6f}",
+                f"{o.theta:.8f}",
+            ]
+        else:
+            row = [run.direction.value, f"{t.x:.6f}", f"{t.y:.6f}", f"{o.x:.6f}", f"{o.y:.6f}"]
+        writer.writerow(row)
+    return out.getvalue()
+
+
+def write_runs_table(path: str | Path, runs: Sequence[Run], comment: str = "") -> None:
+    """Write ``runs`` as a runs table, atomically; ``comment`` lines are prefixed with ``#``."""
+    prefix = "".join(f"# {line}\n" for line in comment.splitlines())
+    atomic_write_text(path, prefix + format_runs_table(runs))
+
+
+def _sniff(header_line: str) -> type[csv.Dialect] | csv.Dialect:
+    try:
+        return csv.Sniffer().sniff(header_line, delimiters=",;\t")
+    except csv.Error:
+        return csv.excel
+
+
+def _column_name(cell: str) -> str:
+    name = cell.strip().lower()
+    return _ALIASES.get(name, name)
+
+
+def _number(cell: str, name: str, path: str | Path, row: int) -> float:
+    text = cell.strip()
+    if not text:
+        raise InputError(f"{name} is empty", source=path, row=row)
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"{name} {text!r} is not a number", source=path, row=row) from None
+    if not math.isfinite(value):
+        raise InputError(f"{name} is {text} (not a finite number)", source=path, row=row)
+    return value
+
+
+def _check_plausible(run: Run, side_length: float, unit: str, path: str | Path, row: int) -> None:
+    """Refuse a return error larger than the square itself: a unit mix-up, most likely."""
+    error = math.hypot(*run.return_error)
+    if error > side_length:
+        hint = "are the lengths in mm? (use --unit mm)" if unit == "m" else "check --unit"
+        raise InputError(
+            f"return error {error:.4g} m is larger than the square's side "
+            f"{side_length:g} m; {hint}",
+            source=path,
+            row=row,
+        )

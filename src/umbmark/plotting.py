@@ -1,0 +1,134 @@
+"""Figures, drawn with matplotlib's object-oriented API (no pyplot, no display needed).
+
+:func:`cluster_figure` draws the view of the paper's Fig. 6 and Fig. 11: every run's
+return error, cw and ccw marked differently, both centres of gravity and the
+``E_max,syst`` circle. Axes are in millimetres, as in the paper's figures.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .benchmark import Benchmark
+from .conventions import Direction
+from .io.atomic import atomic_path
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+__all__ = ["FIGURE_FORMATS", "cluster_figure", "draw_clusters", "save_figure"]
+
+#: File extensions a figure can be saved as.
+FIGURE_FORMATS = (".png", ".svg", ".pdf")
+
+_STYLE = {
+    Direction.CW: {"marker": "o", "color": "#1f77b4", "label": "cw runs"},
+    Direction.CCW: {"marker": "s", "color": "#d62728", "label": "ccw runs"},
+}
+_MM = 1000.0
+
+
+def draw_clusters(ax: Axes, bench: Benchmark, title: str = "", tag: str = "") -> None:
+    """Draw a benchmark's clusters onto ``ax`` (millimetres).
+
+    ``tag`` is added to the legend entries, to tell two benchmarks apart on one axes.
+    """
+    from matplotlib.patches import Circle
+
+    suffix = f" ({tag})" if tag else ""
+    for cluster in bench.clusters:
+        style = _STYLE[cluster.direction]
+        mm = cluster.errors * _MM
+        ax.scatter(
+            mm[:, 0],
+            mm[:, 1],
+            marker=style["marker"],
+            facecolors="none",
+            edgecolors=style["color"],
+            label=f"{style['label']}{suffix}",
+            zorder=3,
+        )
+        cg = cluster.cg * _MM
+        ax.plot(
+            cg[0],
+            cg[1],
+            marker="+",
+            markersize=16,
+            markeredgewidth=2.5,
+            color=style["color"],
+            linestyle="none",
+            label=f"c.g. {cluster.direction.value}{suffix}: r = {cluster.r_cg * _MM:.1f} mm",
+            zorder=4,
+        )
+    radius = bench.e_max_syst * _MM
+    ax.add_patch(
+        Circle(
+            (0.0, 0.0),
+            radius,
+            fill=False,
+            linestyle="--",
+            color="0.4",
+            label=f"E_max,syst{suffix} = {radius:.1f} mm",
+        )
+    )
+    ax.axhline(0.0, color="0.8", linewidth=0.8, zorder=1)
+    ax.axvline(0.0, color="0.8", linewidth=0.8, zorder=1)
+    ax.set_xlabel("return error x [mm]")
+    ax.set_ylabel("return error y [mm]")
+    ax.set_aspect("equal", adjustable="datalim")
+    if title:
+        ax.set_title(title)
+
+
+def cluster_figure(
+    benches: Sequence[tuple[Benchmark, str]], title: str = "UMBmark return errors"
+) -> Figure:
+    """The Fig. 6 view of one benchmark, or several side by side (Fig. 11: before, after).
+
+    Parameters
+    ----------
+    benches : sequence of (Benchmark, str)
+        Each benchmark with its panel title.
+    title : str
+        The figure's title.
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4 * len(benches), 6.0), layout="constrained")
+    axes = fig.subplots(1, len(benches), squeeze=False)[0]
+    for ax, (bench, panel_title) in zip(axes, benches, strict=True):
+        draw_clusters(ax, bench, panel_title)
+        _fit_limits(ax, bench)
+        ax.legend(loc="best", fontsize="small")
+    fig.suptitle(title)
+    return fig
+
+
+def _fit_limits(ax: Axes, bench: Benchmark) -> None:
+    points = np.vstack([c.errors for c in bench.clusters]) * _MM
+    extent = max(float(np.abs(points).max()), bench.e_max_syst * _MM, 1.0) * 1.15
+    ax.set_xlim(-extent, extent)
+    ax.set_ylim(-extent, extent)
+
+
+def save_figure(fig: Figure, path: str | Path) -> None:
+    """Save ``fig`` atomically; the format follows the extension (.png, .svg, .pdf).
+
+    Raises
+    ------
+    ValueError
+        For an extension that is not a figure format.
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix not in FIGURE_FORMATS:
+        raise ValueError(
+            f"cannot tell the figure format from {str(path)!r}: use a name ending in "
+            + ", ".join(FIGURE_FORMATS)
+        )
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=suffix[1:], dpi=150)

@@ -1,0 +1,86 @@
+"""Shared test helpers: inputs built from first principles.
+
+Nothing here calls the code under test to make an expected value: the helpers build
+inputs (files, run end points) from first principles.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = ROOT.parent / "shared"
+OPTIODOM = SHARED / "data" / "optiodom"
+
+
+def turtle_square(
+    turn_deg: float,
+    leg_turn_deg: float,
+    side: float,
+    direction: str,
+    steps: int = 20_000,
+    turn_offset: float = 0.0,
+) -> tuple[float, float, float]:
+    """Walk a square the slow, obvious way: an independent reference for the geometry.
+
+    Each leg is walked in ``steps`` tiny straight steps that together turn the heading by
+    ``leg_turn_deg`` (a circular arc of length ``side``); each corner turns by
+    ``turn_deg`` to the left (ccw) or right (cw), about a point ``turn_offset`` [m] to
+    the robot's left. Returns the end ``x, y`` [m] and the total heading [rad].
+    """
+    sign = 1.0 if direction == "ccw" else -1.0
+    x = y = heading = 0.0
+    ds = side / steps
+    dh = math.radians(leg_turn_deg) / steps
+    for _ in range(4):
+        for _ in range(steps):
+            heading += dh / 2
+            x += ds * math.cos(heading)
+            y += ds * math.sin(heading)
+            heading += dh / 2
+        turn = sign * math.radians(turn_deg)
+        cx = x - turn_offset * math.sin(heading)
+        cy = y + turn_offset * math.cos(heading)
+        rx, ry = x - cx, y - cy
+        x = cx + rx * math.cos(turn) - ry * math.sin(turn)
+        y = cy + rx * math.sin(turn) + ry * math.cos(turn)
+        heading += turn
+    return x, y, heading
+
+
+def write_table(path: Path, rows: Sequence[Sequence[object]], header: str) -> Path:
+    """Write a CSV with ``header`` and ``rows`` (cells formatted with ``str``)."""
+    lines = [header, *(",".join(str(c) for c in row) for row in rows)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def linear_cgs(alpha: float, beta: float, side: float) -> dict[str, tuple[float, float]]:
+    """Centres of gravity by the paper's first-order results (paper-notes.md).
+
+    ``x_cw = -2L(a + b)``, ``y_cw = -2L(a + b)``, ``x_ccw = -2L(a - b)``, ``y_ccw = +2L(a - b)``.
+    """
+    return {
+        "cw": (-2 * side * (alpha + beta), -2 * side * (alpha + beta)),
+        "ccw": (-2 * side * (alpha - beta), 2 * side * (alpha - beta)),
+    }
+
+
+def runs_around(
+    cgs: dict[str, tuple[float, float]], spread: float = 0.0, n: int = 5
+) -> list[tuple[str, float, float, float, float]]:
+    """Rows ``(direction, x_abs, y_abs, x_odo, y_odo)`` whose errors average to ``cgs``.
+
+    Around each centre the runs sit symmetrically (a regular polygon of radius
+    ``spread``, whose points average to its centre), with odometry ends of (0, 0).
+    """
+    rows = []
+    for direction, (cx, cy) in cgs.items():
+        for k in range(n):
+            angle = 2 * math.pi * k / n
+            rows.append(
+                (direction, cx + spread * math.cos(angle), cy + spread * math.sin(angle), 0.0, 0.0)
+            )
+    return rows

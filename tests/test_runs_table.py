@@ -1,0 +1,142 @@
+"""Reading runs tables: units, formats, and every kind of bad input (one clear message)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from umbmark.conventions import Direction
+from umbmark.errors import InputError
+from umbmark.io.runs_table import format_runs_table, read_runs_table, write_runs_table
+
+GOOD = [("cw", 10.0, 20.0, 1.0, 2.0), ("ccw", -30.0, 40.0, 0.0, 0.0)]
+
+
+def test_reads_directions_and_converts_mm_to_metres(table):
+    runs = read_runs_table(table(GOOD), unit="mm")
+    assert [r.direction for r in runs] == [Direction.CW, Direction.CCW]
+    assert runs[0].return_error == pytest.approx((0.009, 0.018))
+    assert runs[1].true_end.x == pytest.approx(-0.030)
+    assert runs[0].label == "row 2"
+
+
+def test_reads_headings_in_degrees(table):
+    path = table(
+        [("CW", 0.1, 0.2, 0.0, 0.0, -359.0, -360.0)],
+        header="direction,x_abs,y_abs,x_odo,y_odo,theta_abs,theta_odo",
+    )
+    run = read_runs_table(path, angle_unit="deg")[0]
+    assert run.true_end.theta == pytest.approx(math.radians(-359.0))
+    assert run.heading_error == pytest.approx(math.radians(1.0))
+
+
+def test_accepts_bom_semicolons_comments_extra_columns_and_paper_names(tmp_path):
+    path = tmp_path / "runs.csv"
+    path.write_text(
+        "\ufeff# measured 2026-11-20 with a tape\n"
+        "run;Direction;X_ABS;y_abs;x_calc;y_calc;note\n"
+        "\n"
+        "1;ccw;0.1;0.2;0.0;0.0;dusty floor\n",
+        encoding="utf-8",
+    )
+    (run,) = read_runs_table(path)
+    assert run.direction is Direction.CCW
+    assert run.return_error == pytest.approx((0.1, 0.2))
+    assert run.label == "row 4"
+
+
+def test_empty_heading_cells_leave_the_heading_unknown(table):
+    path = table(
+        [("cw", 0.1, 0.2, 0.0, 0.0, "", "")],
+        header="direction,x_abs,y_abs,x_odo,y_odo,theta_abs,theta_odo",
+    )
+    assert read_runs_table(path)[0].heading_error is None
+
+
+def test_round_trip_through_the_writer(tmp_path, table):
+    runs = read_runs_table(
+        table(
+            [("cw", 0.1, -0.2, 0.01, 0.0, 0.05, -6.2)],
+            header="direction,x_abs,y_abs,x_odo,y_odo,theta_abs,theta_odo",
+        )
+    )
+    out = tmp_path / "out.csv"
+    write_runs_table(out, runs, comment="made by a test\nsecond line")
+    text = out.read_text()
+    assert text.startswith("# made by a test\n# second line\ndirection,x_abs,y_abs,theta_abs,")
+    back = read_runs_table(out)
+    assert [(r.direction, r.true_end, r.odometry_end) for r in back] == [
+        (r.direction, r.true_end, r.odometry_end) for r in runs
+    ]
+    assert format_runs_table(runs).count("\n") == 2
+
+
+@pytest.mark.parametrize(
+    ("rows", "header", "message"),
+    [
+        (GOOD, "direction,x_abs,y_abs,x_odo", "row 1: missing column y_odo"),
+        (GOOD, "dir,x_abs,y_abs,x_odo,y_odo", "row 1: missing column direction"),
+        ([("cwx", 1, 2, 3, 4)], None, "row 2: direction 'cwx' is neither cw nor ccw"),
+        ([("cw", "nan", 2, 3, 4)], None, "row 2: x_abs is nan (not a finite number)"),
+        ([("cw", 1, "inf", 3, 4)], None, "row 2: y_abs is inf (not a finite number)"),
+        ([("cw", 1, 2, "", 4)], None, "row 2: x_odo is empty"),
+        ([("cw", 1, 2, 3, "4m")], None, "row 2: y_odo '4m' is not a number"),
+        ([("cw", 1, 2, 3)], None, "row 2: has 4 cells, the header has 5"),
+        ([], None, "has a header but no runs"),
+        (GOOD, "direction,x_abs,y_abs,x_odo,y_odo,theta_abs", "needs column theta_odo"),
+        (GOOD, "direction,x_abs,x_abs,x_odo,y_odo", "column x_abs appears more than once"),
+        (
+            [("cw", 1, 2, 3, 4, 359.0, 0.0)],
+            "direction,x_abs,y_abs,x_odo,y_odo,theta_abs,theta_odo",
+            "row 2: theta_abs = 359 is not a plausible heading in radians",
+        ),
+        (
+            [("cw", 1, 2, 3, 4, 0.1, "")],
+            "direction,x_abs,y_abs,x_odo,y_odo,theta_abs,theta_odo",
+            "row 2: gives one of theta_abs and theta_odo but not the other",
+        ),
+    ],
+)
+def test_bad_tables_name_file_row_and_problem(table, rows, header, message):
+    path = table(rows, header=header or "direction,x_abs,y_abs,x_odo,y_odo")
+    with pytest.raises(InputError) as info:
+        read_runs_table(path)
+    text = str(info.value)
+    assert text.startswith(str(path))
+    assert message in text
+    assert "\n" not in text
+
+
+def test_errors_larger_than_the_square_suggest_a_unit_slip(table):
+    path = table([("cw", 312.0, 40.0, 0.0, 0.0)])
+    with pytest.raises(
+        InputError,
+        match=r"row 2: return error 314.6 m is larger than the "
+        r"square's side 4 m; are the lengths in mm\? \(use --unit mm\)",
+    ):
+        read_runs_table(path, side_length=4.0)
+    # In millimetres the same numbers are fine.
+    assert read_runs_table(path, unit="mm", side_length=4.0)[0].return_error[0] == 0.312
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "no such file"),
+        (b"\xff\xfe\x00\x01binary", "is not a UTF-8 text file"),
+        (b"", "is empty"),
+        (b"# only a comment\n", "is empty"),
+    ],
+)
+def test_unreadable_files(tmp_path, content, message):
+    path = tmp_path / "runs.csv"
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(InputError, match=message):
+        read_runs_table(path)
+
+
+def test_a_directory_is_not_a_table(tmp_path):
+    with pytest.raises(InputError, match="is a directory"):
+        read_runs_table(tmp_path)
