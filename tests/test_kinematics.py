@@ -111,5 +111,5 @@ def test_bad_arguments_are_refused():
         integrate_odometry([0.1, 0.2], [0.1], 0.3)
     with pytest.raises(ValueError, match="method"):
         integrate_odometry([0.1], [0.1], 0.3, method="euler")  # type: ignore[arg-type]
-    with pytest.raises(ValueError, match="wheel_diameter"):
+    with pytest.raises(ValueError, match="wheel diameter must be > 0"):
         WheelParams(wheelbase=0.3, wheel_diameter=-0.1)

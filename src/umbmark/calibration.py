@@ -14,11 +14,11 @@ compensated robot is a "new" uncompensated robot with different initial paramete
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from .estimators.base import ErrorEstimate
 from .model import correction_factors
+from .validation import check_positive, require_positive
 
 __all__ = ["ActiveParams", "Calibration"]
 
@@ -46,14 +46,9 @@ class ActiveParams:
     wheel_diameter: float | None = None
 
     def __post_init__(self) -> None:
-        for name in ("wheelbase", "c_left", "c_right", "separation_multiplier"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name.replace('_', ' ')} must be > 0, got {value!r}")
-        if self.wheel_diameter is not None and not (
-            math.isfinite(self.wheel_diameter) and self.wheel_diameter > 0
-        ):
-            raise ValueError(f"wheel diameter must be > 0, got {self.wheel_diameter!r} m")
+        require_positive(self, "wheelbase", "c_left", "c_right", "separation_multiplier")
+        if self.wheel_diameter is not None:
+            check_positive("wheel_diameter", self.wheel_diameter, unit="m")
 
     @property
     def effective_wheelbase(self) -> float:

@@ -23,9 +23,12 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .validation import check_positive, require_positive
+
 __all__ = [
     "IntegrationMethod",
     "WheelParams",
+    "chord_step",
     "integrate_odometry",
     "pose_increments",
     "wheel_displacements",
@@ -64,17 +67,15 @@ class WheelParams:
     c_right: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in (
+        require_positive(
+            self,
             "wheelbase",
             "wheel_diameter",
             "encoder_resolution",
             "gear_ratio",
             "c_left",
             "c_right",
-        ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        )
 
     @property
     def conversion_factor(self) -> float:
@@ -159,6 +160,34 @@ def pose_increments(
     return 0.5 * (right + left), (right - left) / wheelbase
 
 
+def chord_step(
+    ds: FloatArray, dtheta: FloatArray, theta_before: FloatArray, method: IntegrationMethod
+) -> tuple[FloatArray, FloatArray]:
+    """Displacement of one sampling interval as a chord: its length and direction.
+
+    Parameters
+    ----------
+    ds, dtheta : array, shape (...)
+        Travel of the axle centre [m] and heading change [rad] over the interval.
+    theta_before : array, shape (...)
+        Heading at the start of the interval [rad].
+    method : {"arc", "midpoint", "segment"}
+        See :func:`integrate_odometry`.
+
+    Returns
+    -------
+    chord, heading : array, shape (...)
+        The interval moves the centre by ``chord * (cos(heading), sin(heading))``.
+    """
+    if method == "arc":
+        # An arc of length ds turning by dtheta has the chord ds * sin(dtheta/2)/(dtheta/2)
+        # along the mid-interval heading; np.sinc(x) = sin(pi x)/(pi x) is exact at 0.
+        return ds * np.sinc(dtheta / (2.0 * np.pi)), theta_before + 0.5 * dtheta
+    if method == "midpoint":
+        return ds, theta_before + 0.5 * dtheta
+    return ds, theta_before + dtheta
+
+
 def integrate_odometry(
     d_left: ArrayLike,
     d_right: ArrayLike,
@@ -189,31 +218,16 @@ def integrate_odometry(
     """
     if method not in INTEGRATION_METHODS:
         raise ValueError(f"unknown integration method {method!r}; use arc, midpoint or segment")
-    if not (math.isfinite(wheelbase) and wheelbase > 0):
-        raise ValueError(f"wheelbase must be a positive number, got {wheelbase!r}")
+    check_positive("wheelbase", wheelbase, unit="m")
     ds, dtheta = pose_increments(d_left, d_right, wheelbase)
-    if ds.shape != dtheta.shape:
-        raise ValueError(f"left and right wheel data differ in shape: {ds.shape} vs {dtheta.shape}")
     batch = ds.shape[:-1]
     start = (
         np.zeros((*batch, 3))
         if initial_pose is None
         else np.broadcast_to(np.asarray(initial_pose, dtype=np.float64), (*batch, 3))
     )
-    theta0 = start[..., 2:3]
-    theta_after = theta0 + np.cumsum(dtheta, axis=-1)
-    theta_before = theta_after - dtheta
-    if method == "arc":
-        # Chord of an arc of length ds turning by dtheta: ds * sinc(dtheta / 2), along the
-        # mid-interval heading. np.sinc(x) = sin(pi x) / (pi x), exact at dtheta = 0.
-        heading = theta_before + 0.5 * dtheta
-        chord = ds * np.sinc(dtheta / (2.0 * np.pi))
-    elif method == "midpoint":
-        heading = theta_before + 0.5 * dtheta
-        chord = ds
-    else:
-        heading = theta_after
-        chord = ds
+    theta_after = start[..., 2:3] + np.cumsum(dtheta, axis=-1)
+    chord, heading = chord_step(ds, dtheta, theta_after - dtheta, method)
     poses = np.empty((*batch, ds.shape[-1] + 1, 3))
     poses[..., 0, :] = start
     poses[..., 1:, 0] = start[..., 0:1] + np.cumsum(chord * np.cos(heading), axis=-1)

@@ -21,7 +21,15 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["FIGURE_FORMATS", "cluster_figure", "draw_clusters", "save_figure"]
+    from .sim.engine import Trace
+
+__all__ = [
+    "FIGURE_FORMATS",
+    "cluster_figure",
+    "draw_clusters",
+    "save_figure",
+    "trajectory_figure",
+]
 
 #: File extensions a figure can be saved as.
 FIGURE_FORMATS = (".png", ".svg", ".pdf")
@@ -80,7 +88,7 @@ def draw_clusters(ax: Axes, bench: Benchmark, title: str = "", tag: str = "") ->
     ax.axvline(0.0, color="0.8", linewidth=0.8, zorder=1)
     ax.set_xlabel("return error x [mm]")
     ax.set_ylabel("return error y [mm]")
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect("equal", adjustable="box")
     if title:
         ax.set_title(title)
 
@@ -114,6 +122,44 @@ def _fit_limits(ax: Axes, bench: Benchmark) -> None:
     extent = max(float(np.abs(points).max()), bench.e_max_syst * _MM, 1.0) * 1.15
     ax.set_xlim(-extent, extent)
     ax.set_ylim(-extent, extent)
+
+
+def trajectory_figure(
+    paths: Sequence[tuple[Trace, str]], title: str = "", side_length: float | None = None
+) -> Figure:
+    """True paths of simulated runs (the view of Figs. 3-5), one panel each.
+
+    Parameters
+    ----------
+    paths : sequence of (Trace, str)
+        A one-run trace (see :class:`umbmark.sim.engine.Trace`) and its panel title.
+    side_length : float, optional
+        Draw the nominal square of this side [m] for comparison.
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(5.2 * len(paths), 5.2), layout="constrained")
+    axes = fig.subplots(1, len(paths), squeeze=False)[0]
+    for ax, (trace, name) in zip(axes, paths, strict=True):
+        true = trace.true_pose[0]
+        odo = trace.odometry_pose[0]
+        side = float(np.max(np.abs(odo[:, :2]))) if side_length is None else side_length
+        sign = 1.0 if odo[-1, 2] > 0 else -1.0
+        corners = np.array([[0, 0], [side, 0], [side, sign * side], [0, sign * side], [0, 0]])
+        ax.plot(corners[:, 0], corners[:, 1], "--", color="0.6", label="nominal path")
+        ax.plot(true[:, 0], true[:, 1], color="#d62728", label="true path")
+        ax.plot(true[-1, 0], true[-1, 1], "o", color="#d62728", label="true end")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(
+            f"{name}: ends {1000 * float(np.hypot(*(true[-1, :2] - odo[-1, :2]))):.0f} mm "
+            "from where its odometry thinks"
+        )
+        ax.legend(loc="center", fontsize="small")
+    if title:
+        fig.suptitle(title)
+    return fig
 
 
 def save_figure(fig: Figure, path: str | Path) -> None:

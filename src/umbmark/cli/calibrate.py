@@ -108,8 +108,9 @@ def calibrate(
         Path | None,
         typer.Option(
             "--current-params",
-            help="ros2_control (or ROS 1) parameter YAML that was active during the runs: "
-            "its multipliers (and wheel_separation, wheel_radius) are read; flags override.",
+            help="What was active during the runs: a ros2_control (or ROS 1) parameter YAML "
+            "(its multipliers, wheel_separation, wheel_radius) or a previous result "
+            "(calibrate -o) whose new values were applied. Flags override.",
             show_default=False,
         ),
     ] = None,
@@ -168,6 +169,7 @@ def calibrate(
     from ..errors import InputError
     from ..estimators import SquareTest, estimate_errors
     from ..io.atomic import atomic_write_text
+    from ..io.result_file import is_result_file, read_active_from_result
     from ..io.ros_params import (
         ActiveMultipliers,
         read_active_multipliers,
@@ -196,9 +198,13 @@ def calibrate(
     if plot is not None and plot.suffix.lower() not in (".png", ".svg", ".pdf"):
         raise InputError(f"--plot {plot}: the file name should end in .png, .svg or .pdf")
 
-    active_file = (
-        read_active_multipliers(current_params, controller) if current_params is not None else None
-    )
+    active_file = None
+    if current_params is not None:
+        active_file = (
+            read_active_from_result(current_params)
+            if is_result_file(current_params)
+            else read_active_multipliers(current_params, controller)
+        )
     if wheelbase is None and active_file is not None:
         wheelbase = active_file.wheel_separation
     if wheelbase is None:

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from enum import Enum
 from typing import ParamSpec, TypeVar
 
@@ -19,6 +20,7 @@ __all__ = [
     "LengthUnit",
     "check_length_flag",
     "check_positive_flag",
+    "progress_bar",
     "reports_input_errors",
     "warn",
 ]
@@ -92,3 +94,28 @@ def check_length_flag(name: str, value: float, largest: float) -> None:
             f"{name} {value:g} m is implausibly large: lengths on the command line are in "
             f"metres (at most {largest:g} m here)"
         )
+
+
+@contextlib.contextmanager
+def progress_bar(description: str) -> Iterator[Callable[[float], None]]:
+    """A progress bar on stderr; yields a callback taking the fraction done (0 to 1).
+
+    Shown only on a terminal, so that pipes and ``--json`` output stay clean.
+    """
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    console = Console(stderr=True)
+    if not console.is_terminal:
+        yield lambda fraction: None
+        return
+    with Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(description, total=1.0)
+        yield lambda fraction: bar.update(task, completed=fraction)

@@ -10,7 +10,10 @@ import typer
 
 from .. import __version__
 from .calibrate import calibrate
+from .demo import demo
 from .example import example
+from .reproduce import reproduce_app
+from .simulate import simulate
 
 app = typer.Typer(
     name="umbmark",
@@ -39,7 +42,10 @@ def _root(
     """umbmark: UMBmark and beyond."""
 
 
+app.command()(demo)
 app.command()(calibrate)
+app.command()(simulate)
+app.add_typer(reproduce_app, name="reproduce")
 app.command()(example)
 
 

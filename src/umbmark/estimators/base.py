@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..benchmark import Benchmark
+from ..validation import check_positive
 
 __all__ = ["ErrorEstimate", "SquareTest", "cg_vector", "propagate"]
 
@@ -33,9 +34,7 @@ class SquareTest:
 
     def __post_init__(self) -> None:
         for name in ("side_length", "wheelbase"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name.replace('_', ' ')} must be > 0, got {value!r} m")
+            check_positive(name, getattr(self, name), unit="m")
 
 
 @dataclass(frozen=True)
