@@ -84,3 +84,60 @@ def runs_around(
                 (direction, cx + spread * math.cos(angle), cy + spread * math.sin(angle), 0.0, 0.0)
             )
     return rows
+
+
+def simulated_session(
+    robot: object,
+    directions: Sequence[str],
+    side: float = 2.0,
+    rest: float = 3.0,
+    seed: int = 0,
+    control: object = None,
+):
+    """One continuous recording of several simulated runs, with rests between them.
+
+    Each run starts where the previous one ended (the robot is not carried back), and the
+    robot stands still for ``rest`` seconds before, between and after the runs. Returns
+    ``(time (n,), counts (n, 2), true_pose (n, 3), ends)`` where ``ends`` lists each run's
+    true end pose in its own start frame, from the simulator.
+    """
+    import numpy as np
+
+    from umbmark.conventions import Direction
+    from umbmark.sim.engine import simulate
+    from umbmark.sim.paths import square
+
+    dirs = [Direction(d) for d in directions]
+    result = simulate(robot, square(side), dirs, control, np.random.default_rng(seed), record=True)
+    trace = result.trace
+    dt = float(trace.time[1] - trace.time[0])
+    still = round(rest / dt)
+    times, counts, poses = [], [], []
+    step = 0
+    base_counts = np.zeros(2, dtype=np.int64)
+    x0 = y0 = th0 = 0.0
+
+    def hold(n: int) -> None:
+        nonlocal step
+        for _ in range(n):
+            times.append(step * dt)
+            counts.append(base_counts.copy())
+            poses.append((x0, y0, th0))
+            step += 1
+
+    hold(still)
+    for i in range(len(dirs)):
+        n = int(result.samples_used[i]) + 1
+        c, s = math.cos(th0), math.sin(th0)
+        local = trace.true_pose[i, 1:n]
+        for k in range(local.shape[0]):
+            lx, ly, lth = local[k]
+            times.append(step * dt)
+            counts.append(base_counts + trace.counts[i, k + 1])
+            poses.append((x0 + c * lx - s * ly, y0 + s * lx + c * ly, th0 + lth))
+            step += 1
+        base_counts = base_counts + trace.counts[i, n - 1]
+        x0, y0, th0 = poses[-1]
+        hold(still)
+    ends = [tuple(result.true_end[i]) for i in range(len(dirs))]
+    return np.array(times), np.array(counts), np.array(poses), ends

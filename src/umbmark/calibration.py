@@ -64,14 +64,20 @@ class Calibration:
     active: ActiveParams
 
     @property
+    def scale(self) -> float:
+        """``E_s`` of estimators that see it (trajectory fits), else 1: the paper assumes
+        the average diameter calibrated beforehand (Sec. 2.2)."""
+        return 1.0 if self.estimate.E_s is None else self.estimate.E_s
+
+    @property
     def c_L(self) -> float:
-        """Left correction factor of this pass, Eq. 4.31."""
-        return float(correction_factors(self.estimate.E_d)[0])
+        """Left correction factor of this pass, Eq. 4.31 (times ``E_s`` when known)."""
+        return float(correction_factors(self.estimate.E_d)[0]) * self.scale
 
     @property
     def c_R(self) -> float:
-        """Right correction factor of this pass, Eq. 4.32."""
-        return float(correction_factors(self.estimate.E_d)[1])
+        """Right correction factor of this pass, Eq. 4.32 (times ``E_s`` when known)."""
+        return float(correction_factors(self.estimate.E_d)[1]) * self.scale
 
     @property
     def new_c_left(self) -> float:

@@ -180,12 +180,24 @@ def chord_step(
         The interval moves the centre by ``chord * (cos(heading), sin(heading))``.
     """
     if method == "arc":
-        # An arc of length ds turning by dtheta has the chord ds * sin(dtheta/2)/(dtheta/2)
-        # along the mid-interval heading; np.sinc(x) = sin(pi x)/(pi x) is exact at 0.
-        return ds * np.sinc(dtheta / (2.0 * np.pi)), theta_before + 0.5 * dtheta
+        # An arc of length ds turning by dtheta has the chord ds * sin(h)/h, h = dtheta/2,
+        # along the mid-interval heading.
+        half = 0.5 * dtheta
+        return ds * _sinc(half), theta_before + half
     if method == "midpoint":
         return ds, theta_before + 0.5 * dtheta
     return ds, theta_before + dtheta
+
+
+def _sinc(h: FloatArray) -> FloatArray:
+    """``sin(h) / h`` (1 at 0). Per sample ``|h|`` is tiny, where a series is exact to the
+    last bit and much cheaper than ``np.sinc``; larger angles take ``np.sinc``."""
+    h = np.asarray(h, dtype=np.float64)
+    if h.size and float(np.max(np.abs(h))) < 0.01:
+        # Next term h^8 / 9! < 3e-22 for |h| < 0.01: below double precision.
+        h2 = h * h
+        return np.asarray(1.0 - h2 / 6.0 * (1.0 - h2 / 20.0 * (1.0 - h2 / 42.0)))
+    return np.asarray(np.sinc(h / np.pi))
 
 
 def integrate_odometry(

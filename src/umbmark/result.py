@@ -31,7 +31,8 @@ class CalibrationReport:
     source : str
         Where the runs came from (a path).
     runs : sequence of Run
-    benchmark : Benchmark
+    benchmark : Benchmark or None
+        None when the runs are not in both directions (trajectory fits of other paths).
     test : SquareTest
     calibration : Calibration
     extra : mapping
@@ -40,7 +41,7 @@ class CalibrationReport:
 
     source: str
     runs: Sequence[Run]
-    benchmark: Benchmark
+    benchmark: Benchmark | None
     test: SquareTest
     calibration: Calibration
     extra: Mapping[str, Any] = field(default_factory=dict)
@@ -60,18 +61,30 @@ class CalibrationReport:
             "method": est.method,
             "units": {"length": "m", "angle": "rad"},
             "side_length": self.test.side_length,
-            "n_cw": bench.cw.n,
-            "n_ccw": bench.ccw.n,
-            "e_max_syst": bench.e_max_syst,
-            "worst_direction": bench.worst.direction.value,
+            "n_runs": len(self.runs),
         }
-        for cluster in bench.clusters:
-            out.update(_cluster_dict(cluster))
+        if bench is not None:
+            out.update(
+                {
+                    "n_cw": bench.cw.n,
+                    "n_ccw": bench.ccw.n,
+                    "e_max_syst": bench.e_max_syst,
+                    "worst_direction": bench.worst.direction.value,
+                }
+            )
+            for cluster in bench.clusters:
+                out.update(_cluster_dict(cluster))
+            out.update(
+                {
+                    "sem": bench.sem,
+                    "second_pass_threshold": bench.second_pass_threshold,
+                    "second_pass_recommended": bench.second_pass_recommended,
+                }
+            )
+        else:
+            out.update({"e_max_syst": None, "second_pass_recommended": None})
         out.update(
             {
-                "sem": bench.sem,
-                "second_pass_threshold": bench.second_pass_threshold,
-                "second_pass_recommended": bench.second_pass_recommended,
                 "alpha": est.alpha,
                 "beta": est.beta,
                 "E_d": est.E_d,

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .conventions import Direction, wrap_angle
+from .recording import RunLog
 
 __all__ = ["EndPose", "Run", "return_errors", "split_by_direction"]
 
@@ -55,7 +56,7 @@ class Run:
     true_end: EndPose
     odometry_end: EndPose
     label: str = ""
-    log: object | None = field(default=None, repr=False, compare=False)
+    log: RunLog | None = field(default=None, repr=False, compare=False)
 
     @property
     def return_error(self) -> tuple[float, float]:

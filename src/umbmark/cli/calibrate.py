@@ -1,4 +1,4 @@
-"""``umbmark calibrate``: benchmark a set of runs and compute the correction."""
+"""``umbmark calibrate``: benchmark runs, estimate the errors, compute the correction."""
 
 from __future__ import annotations
 
@@ -8,14 +8,36 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from .common import (
-    AngleUnit,
-    Estimator,
-    LengthUnit,
-    check_length_flag,
-    check_positive_flag,
-    reports_input_errors,
-    warn,
+from .common import AngleUnit, Estimator, LengthUnit, check_length_flag, reports_input_errors, warn
+from .source_options import (
+    ControllerOpt,
+    CurrentCLOpt,
+    CurrentCROpt,
+    CurrentParamsOpt,
+    CurrentSepOpt,
+    FormatChoice,
+    FormatOpt,
+    LeftJointOpt,
+    LeftTicksOpt,
+    MaxGapOpt,
+    MinRestOpt,
+    RightJointOpt,
+    RightTicksOpt,
+    SourceArg,
+    SourceFlags,
+    SplitChoice,
+    SplitOpt,
+    TfChildOpt,
+    TfParentOpt,
+    TicksPerRevOpt,
+    TimeChoice,
+    TimeSourceOpt,
+    TruthTopicOpt,
+    WheelbaseOpt,
+    WheelDiameterOpt,
+    WheelTopicOpt,
+    WindowsOpt,
+    load_source,
 )
 
 if TYPE_CHECKING:
@@ -23,42 +45,25 @@ if TYPE_CHECKING:
 
 __all__ = ["calibrate", "provenance"]
 
-#: Largest plausible square side and wheelbase [m]: beyond, a unit slip is likelier.
+#: Largest plausible square side [m]: beyond, a unit slip is likelier.
 _MAX_SIDE = 100.0
-_MAX_WHEELBASE = 10.0
+OUTPUTS = "Outputs"
 
 
 @reports_input_errors
 def calibrate(
-    source: Annotated[
-        Path,
-        typer.Argument(
-            help="Runs table (CSV: direction, x_abs, y_abs, x_odo, y_odo[, theta_abs, theta_odo]).",
-            show_default=False,
-        ),
-    ],
+    source: SourceArg,
     side_length: Annotated[
         float | None,
         typer.Option(
-            "--side-length", "-L", help="Side of the square path [m].", show_default=False
-        ),
-    ] = None,
-    wheelbase: Annotated[
-        float | None,
-        typer.Option(
-            "--wheelbase",
-            "-b",
-            help="Wheelbase b the odometry was configured with during the runs [m] "
-            "(ros2_control wheel_separation). Taken from --current-params if it has it.",
+            "--side-length",
+            "-L",
+            help="Side of the square path [m]. Logged sources may know it (OptiOdom L, "
+            "run-log side_length).",
             show_default=False,
         ),
     ] = None,
-    unit: Annotated[
-        LengthUnit, typer.Option("--unit", help="Unit of the lengths in the runs table.")
-    ] = LengthUnit.m,
-    angle_unit: Annotated[
-        AngleUnit, typer.Option("--angle-unit", help="Unit of the headings in the runs table.")
-    ] = AngleUnit.rad,
+    wheelbase: WheelbaseOpt = None,
     method: Annotated[
         Estimator,
         typer.Option(
@@ -66,83 +71,74 @@ def calibrate(
             "-m",
             help="Estimator: paper (Eqs. 4.20-4.27 as printed), exact (exact square "
             "geometry, for large errors), heading (final headings, Jung & Chung 2011; "
-            "needs theta columns).",
+            "needs headings), trajectory (least squares on whole ground-truth trajectories "
+            "of any shape, logged sources only; finds E_s too).",
         ),
     ] = Estimator.paper,
-    wheel_diameter: Annotated[
-        float | None,
+    fmt: FormatOpt = FormatChoice.auto,
+    unit: Annotated[
+        LengthUnit, typer.Option("--unit", help="Unit of the lengths in a runs table.")
+    ] = LengthUnit.m,
+    angle_unit: Annotated[
+        AngleUnit, typer.Option("--angle-unit", help="Unit of the headings in a runs table.")
+    ] = AngleUnit.rad,
+    wheel_diameter: WheelDiameterOpt = None,
+    current_c_l: CurrentCLOpt = None,
+    current_c_r: CurrentCROpt = None,
+    current_separation_multiplier: CurrentSepOpt = None,
+    current_params: CurrentParamsOpt = None,
+    controller: ControllerOpt = None,
+    window: Annotated[
+        float,
         typer.Option(
-            "--wheel-diameter",
-            help="Nominal wheel diameter D_n [m]; adds the corrected wheel diameters.",
-            show_default=False,
+            "--window", help="Window length of the trajectory fit [s].", show_default=True
         ),
-    ] = None,
-    current_c_l: Annotated[
-        float | None,
-        typer.Option(
-            "--current-c-l",
-            help="Left wheel factor c_L active during the runs (ros2_control "
-            "left_wheel_radius_multiplier). Default 1.0, or from --current-params.",
-            show_default=False,
-        ),
-    ] = None,
-    current_c_r: Annotated[
-        float | None,
-        typer.Option(
-            "--current-c-r",
-            help="Right wheel factor c_R active during the runs. Default 1.0, or from "
-            "--current-params.",
-            show_default=False,
-        ),
-    ] = None,
-    current_separation_multiplier: Annotated[
-        float | None,
-        typer.Option(
-            "--current-separation-multiplier",
-            help="wheel_separation_multiplier active during the runs. Default 1.0, or from "
-            "--current-params.",
-            show_default=False,
-        ),
-    ] = None,
-    current_params: Annotated[
-        Path | None,
-        typer.Option(
-            "--current-params",
-            help="What was active during the runs: a ros2_control (or ROS 1) parameter YAML "
-            "(its multipliers, wheel_separation, wheel_radius) or a previous result "
-            "(calibrate -o) whose new values were applied. Flags override.",
-            show_default=False,
-        ),
-    ] = None,
-    controller: Annotated[
-        str | None,
-        typer.Option(
-            "--controller",
-            help="Controller name in the parameter files [default: the one in "
-            "--current-params, else diff_drive_controller].",
-            show_default=False,
-        ),
-    ] = None,
+    ] = 1.0,
+    split: SplitOpt = SplitChoice.rests,
+    windows: WindowsOpt = None,
+    max_gap: MaxGapOpt = 0.25,
+    min_rest: MinRestOpt = 1.0,
+    wheel_topic: WheelTopicOpt = "/joint_states",
+    left_joint: LeftJointOpt = "left_wheel_joint",
+    right_joint: RightJointOpt = "right_wheel_joint",
+    left_ticks_topic: LeftTicksOpt = None,
+    right_ticks_topic: RightTicksOpt = None,
+    ticks_per_rev: TicksPerRevOpt = None,
+    truth_topic: TruthTopicOpt = None,
+    tf_parent: TfParentOpt = None,
+    tf_child: TfChildOpt = None,
+    time_source: TimeSourceOpt = TimeChoice.header,
     json_out: Annotated[
-        bool, typer.Option("--json", help="Print one JSON object (metres, radians) instead.")
+        bool,
+        typer.Option(
+            "--json", help="Print one JSON object (metres, radians).", rich_help_panel=OUTPUTS
+        ),
     ] = False,
     output: Annotated[
         Path | None,
         typer.Option(
-            "--output", "-o", help="Write the JSON result to this file.", show_default=False
+            "--output",
+            "-o",
+            help="Write the JSON result to this file.",
+            rich_help_panel=OUTPUTS,
+            show_default=False,
         ),
     ] = None,
     yaml_path: Annotated[
         Path | None,
         typer.Option(
-            "--yaml", help="Write a ros2_control overlay YAML to this file.", show_default=False
+            "--yaml",
+            help="Write a ros2_control overlay YAML.",
+            rich_help_panel=OUTPUTS,
+            show_default=False,
         ),
     ] = None,
     ros1_yaml_path: Annotated[
         Path | None,
         typer.Option(
             "--ros1-yaml",
-            help="Write ROS 1 diff_drive_controller parameters to this file.",
+            help="Write ROS 1 diff_drive_controller parameters.",
+            rich_help_panel=OUTPUTS,
             show_default=False,
         ),
     ] = None,
@@ -150,121 +146,170 @@ def calibrate(
         Path | None,
         typer.Option(
             "--plot",
-            help="Draw the clusters (Fig. 6 view) to this .png, .svg or .pdf file.",
+            help="Draw the clusters (Fig. 6 view) to a .png, .svg or .pdf file.",
+            rich_help_panel=OUTPUTS,
+            show_default=False,
+        ),
+    ] = None,
+    tum: Annotated[
+        Path | None,
+        typer.Option(
+            "--tum",
+            help="Logged sources: write TUM trajectories of every run (ground truth, nominal "
+            "and calibrated odometry) into this folder, for evo_traj.",
+            rich_help_panel=OUTPUTS,
             show_default=False,
         ),
     ] = None,
 ) -> None:
     """Benchmark runs around a square (UMBmark) and compute the correction.
 
-    Prints E_max,syst, the centres of gravity and their spread, the verdict of the paper's
-    3 x SEM rule, the estimated errors alpha, beta, E_d, E_b, the correction factors c_L,
-    c_R and the corrected wheelbase, composed with the parameters that were active during
-    the runs, and the ros2_control overlay to apply them.
+    From a runs table (end points measured by hand) or from logged runs (run logs, OptiOdom
+    sessions, ROS bags: the odometry end poses are integrated from the recorded wheels, the
+    true ones taken from the ground truth). Prints E_max,syst, the centres of gravity and
+    their spread, the verdict of the paper's 3 x SEM rule, the estimated errors alpha,
+    beta, E_d, E_b (and E_s), the correction factors c_L, c_R and the corrected wheelbase,
+    composed with the parameters active during the runs, and the ros2_control overlay.
     """
     from rich.console import Console
 
+    from ..association import summarize
     from ..benchmark import umbmark_benchmark
-    from ..calibration import ActiveParams, Calibration
+    from ..calibration import Calibration
     from ..errors import InputError
     from ..estimators import SquareTest, estimate_errors
+    from ..estimators.trajectory import trajectory_estimate
     from ..io.atomic import atomic_write_text
-    from ..io.result_file import is_result_file, read_active_from_result
-    from ..io.ros_params import (
-        ActiveMultipliers,
-        read_active_multipliers,
-        ros1_params,
-        ros2_control_overlay,
-    )
-    from ..io.runs_table import read_runs_table
+    from ..io.ros_params import ros1_params, ros2_control_overlay
     from ..result import CalibrationReport
     from .render import render_report
 
-    if side_length is None:
-        raise InputError("--side-length is required: the side of the square path, in metres")
-    check_length_flag("--side-length", side_length, _MAX_SIDE)
-    for name, value in (
-        ("--current-c-l", current_c_l),
-        ("--current-c-r", current_c_r),
-        ("--current-separation-multiplier", current_separation_multiplier),
-    ):
-        if value is not None:
-            check_positive_flag(name, value)
-    if wheel_diameter is not None:
-        check_length_flag("--wheel-diameter", wheel_diameter, _MAX_WHEELBASE)
+    if side_length is not None:
+        check_length_flag("--side-length", side_length, _MAX_SIDE)
     for name, path in (("--yaml", yaml_path), ("--ros1-yaml", ros1_yaml_path)):
         if path is not None and path.suffix.lower() not in (".yaml", ".yml"):
             raise InputError(f"{name} {path}: the file name should end in .yaml or .yml")
     if plot is not None and plot.suffix.lower() not in (".png", ".svg", ".pdf"):
         raise InputError(f"--plot {plot}: the file name should end in .png, .svg or .pdf")
+    table = fmt is FormatChoice.table or (fmt is FormatChoice.auto and source.suffix == ".csv")
+    if table and side_length is None and method is not Estimator.trajectory:
+        raise InputError("--side-length is required: the side of the square path, in metres")
 
-    active_file = None
-    if current_params is not None:
-        active_file = (
-            read_active_from_result(current_params)
-            if is_result_file(current_params)
-            else read_active_multipliers(current_params, controller)
-        )
-    if wheelbase is None and active_file is not None:
-        wheelbase = active_file.wheel_separation
-    if wheelbase is None:
-        raise InputError(
-            "--wheelbase is required: the wheelbase the odometry used during the runs, in metres"
-        )
-    check_length_flag("--wheelbase", wheelbase, _MAX_WHEELBASE)
-    if wheel_diameter is None and active_file is not None and active_file.wheel_radius:
-        wheel_diameter = 2.0 * active_file.wheel_radius
-
-    def pick(flag: float | None, from_file: float) -> float:
-        return from_file if flag is None else flag
-
-    from_file = active_file or ActiveMultipliers()
-    controller = controller or from_file.controller
-    active = ActiveParams(
+    flags = SourceFlags(
+        source=source,
+        format=fmt,
+        unit=unit.value,
+        angle_unit=angle_unit.value,
+        side_length=side_length,
         wheelbase=wheelbase,
-        c_left=pick(current_c_l, from_file.left_wheel_radius_multiplier),
-        c_right=pick(current_c_r, from_file.right_wheel_radius_multiplier),
-        separation_multiplier=pick(
-            current_separation_multiplier, from_file.wheel_separation_multiplier
-        ),
         wheel_diameter=wheel_diameter,
+        current_c_l=current_c_l,
+        current_c_r=current_c_r,
+        current_separation_multiplier=current_separation_multiplier,
+        current_params=current_params,
+        controller=controller,
+        split=split,
+        windows=windows,
+        max_gap=max_gap,
+        min_rest=min_rest,
+        wheel_topic=wheel_topic,
+        left_joint=left_joint,
+        right_joint=right_joint,
+        left_ticks_topic=left_ticks_topic,
+        right_ticks_topic=right_ticks_topic,
+        ticks_per_rev=ticks_per_rev,
+        truth_topic=truth_topic,
+        tf_parent=tf_parent,
+        tf_child=tf_child,
+        time_source=time_source,
     )
+    resolved = load_source(flags)
+    loaded, active = resolved.loaded, resolved.active
+    side = loaded.side_length
+    runs = loaded.runs
+    for note in loaded.notes:
+        warn(note)
 
-    runs = read_runs_table(
-        source, unit=unit.value, angle_unit=angle_unit.value, side_length=side_length
-    )
+    bench = None
     try:
         bench = umbmark_benchmark(runs)
-        test = SquareTest(side_length=side_length, wheelbase=active.effective_wheelbase)
-        estimate = estimate_errors(method.value, bench, runs, test)
+    except ValueError as exc:
+        if method is not Estimator.trajectory:
+            raise InputError(str(exc), source=source) from None
+    try:
+        if method is Estimator.trajectory:
+            logs = [run.log for run in runs if run.log is not None]
+            if not logs or resolved.params is None:
+                raise InputError(
+                    "the trajectory method needs logged runs (a run log, an OptiOdom session "
+                    "or a bag), not a runs table",
+                    source=source,
+                )
+            if not window > 0:
+                raise InputError(f"--window must be > 0 s, got {window:g}")
+            estimate, _ = trajectory_estimate(logs, resolved.params, side, window)
+            test = SquareTest(side or 1.0, active.effective_wheelbase)
+        else:
+            if side is None:
+                raise InputError(
+                    "--side-length is required: the side of the square path, in metres",
+                    source=source,
+                )
+            assert bench is not None
+            test = SquareTest(side, active.effective_wheelbase)
+            estimate = estimate_errors(method.value, bench, runs, test)
     except ValueError as exc:
         raise InputError(str(exc), source=source) from None
+
+    extra: dict[str, object] = {"format": loaded.format}
+    if loaded.associations:
+        extra["time_association"] = {name: assoc.to_dict() for name, assoc in loaded.associations}
+    if loaded.notes:
+        extra["notes"] = list(loaded.notes)
     report = CalibrationReport(
         source=str(source),
         runs=runs,
         benchmark=bench,
         test=test,
         calibration=Calibration(estimate, active),
+        extra=extra,
     )
-
     comments = provenance(report)
-    overlay = ros2_control_overlay(report.calibration, comments, controller)
-    for message in report.warnings:
-        warn(message)
-    if json_out:
-        typer.echo(report.to_json(), nl=False)
-    else:
-        render_report(report, Console(), overlay)
+    overlay = ros2_control_overlay(report.calibration, comments, resolved.controller)
+    # Files first: a summary piped into `head` must not cost the user their outputs.
     if output is not None:
         report.write_json(output)
     if yaml_path is not None:
         atomic_write_text(yaml_path, overlay)
     if ros1_yaml_path is not None:
-        atomic_write_text(ros1_yaml_path, ros1_params(report.calibration, comments, controller))
+        atomic_write_text(
+            ros1_yaml_path, ros1_params(report.calibration, comments, resolved.controller)
+        )
     if plot is not None:
+        if bench is None:
+            raise InputError("--plot needs runs in both directions (cw and ccw)", source=source)
         from ..plotting import cluster_figure, save_figure
 
-        save_figure(cluster_figure([(report.benchmark, str(source))]), plot)
+        save_figure(cluster_figure([(bench, str(source))]), plot)
+    if tum is not None:
+        from ..io.tum import write_tum_runs
+
+        if resolved.params is None:
+            raise InputError("--tum needs logged runs with time series", source=source)
+        cal = report.calibration
+        calibrated = resolved.params.with_corrections(
+            c_left=cal.new_c_left, c_right=cal.new_c_right, wheelbase=cal.wheelbase_corrected
+        )
+        write_tum_runs(tum, runs, {"nominal": resolved.params, "calibrated": calibrated})
+    for message in report.warnings:
+        warn(message)
+    if json_out:
+        typer.echo(report.to_json(), nl=False)
+    else:
+        console = Console()
+        for line in summarize(loaded.associations):
+            console.print(line, highlight=False)
+        render_report(report, console, overlay)
 
 
 def provenance(report: CalibrationReport) -> list[str]:
@@ -274,11 +319,15 @@ def provenance(report: CalibrationReport) -> list[str]:
     cal = report.calibration
     active = cal.active
     stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    e_max = (
+        ""
+        if report.benchmark is None
+        else f"; E_max,syst of these runs = {report.benchmark.e_max_syst * 1000:.1f} mm"
+    )
     return [
         f"Written by umbmark {__version__} on {stamp} from {report.source} "
         f"(method {cal.estimate.method}).",
-        f"E_d = {cal.estimate.E_d:.6f}, E_b = {cal.estimate.E_b:.6f}; "
-        f"E_max,syst of these runs = {report.benchmark.e_max_syst * 1000:.1f} mm.",
+        f"E_d = {cal.estimate.E_d:.6f}, E_b = {cal.estimate.E_b:.6f}{e_max}.",
         "Multiplied into the values active during the runs: separation "
         f"{active.separation_multiplier:g}, left {active.c_left:g}, right {active.c_right:g}.",
         "diff_drive_controller reads these on configure: reload or restart the controller.",

@@ -46,6 +46,7 @@ class Estimator(str, Enum):
     paper = "paper"
     exact = "exact"
     heading = "heading"
+    trajectory = "trajectory"
 
 
 class AngleUnit(str, Enum):

@@ -41,7 +41,7 @@ def demo(
     from rich.console import Console
 
     from ..errors import InputError
-    from ..estimators import SquareTest
+    from ..estimators import METHODS, SquareTest
     from ..io.atomic import atomic_write_text
     from ..io.ros_params import ros2_control_overlay
     from ..io.runs_table import write_runs_table
@@ -55,6 +55,8 @@ def demo(
 
     if runs < 2:
         raise InputError(f"--runs must be at least 2, got {runs}")
+    if method.value not in METHODS:
+        raise InputError("the demo calibrates from end points: use paper, exact or heading")
     if out.exists() and not out.is_dir():
         raise InputError("exists and is not a folder", source=out)
     robot = VirtualRobot.with_errors(LABMATE, E_d=FIG11_E_D, E_b=FIG11_E_B, noise=PAPER_NOISE)

@@ -12,6 +12,7 @@ from .. import __version__
 from .calibrate import calibrate
 from .demo import demo
 from .example import example
+from .replay import replay
 from .reproduce import reproduce_app
 from .simulate import simulate
 
@@ -44,6 +45,7 @@ def _root(
 
 app.command()(demo)
 app.command()(calibrate)
+app.command()(replay)
 app.command()(simulate)
 app.add_typer(reproduce_app, name="reproduce")
 app.command()(example)
@@ -51,4 +53,13 @@ app.command()(example)
 
 def main() -> None:
     """Entry point of the ``umbmark`` console script."""
-    app()
+    import os
+    import sys
+
+    try:
+        app()
+    except BrokenPipeError:
+        # The reader of our output went away (``umbmark ... | head``): not an error of ours.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        sys.exit(1)

@@ -9,6 +9,7 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
+from ..benchmark import Benchmark
 from ..result import CalibrationReport
 
 __all__ = ["render_report", "verdict"]
@@ -22,9 +23,8 @@ _METHOD_NAMES = {
 }
 
 
-def verdict(report: CalibrationReport) -> str:
+def verdict(b: Benchmark) -> str:
     """The 3 x SEM rule of Sec. 5, in words."""
-    b = report.benchmark
     e, t = b.e_max_syst * _MM, b.second_pass_threshold * _MM
     if b.second_pass_recommended:
         return (
@@ -38,20 +38,8 @@ def verdict(report: CalibrationReport) -> str:
     )
 
 
-def _plus_minus(value: float, se: float | None, fmt: str) -> str:
-    if se is None or not math.isfinite(se):
-        return format(value, fmt)
-    return f"{format(value, fmt)} ± {format(se, fmt)}"
-
-
-def render_report(
-    report: CalibrationReport, console: Console, yaml_text: str | None = None
-) -> None:
-    """Print the summary of ``report`` on ``console``."""
-    bench, cal, test = report.benchmark, report.calibration, report.test
-    est, active = cal.estimate, cal.active
-    se = est.standard_errors
-
+def _render_benchmark(report: CalibrationReport, bench: Benchmark, console: Console) -> None:
+    test = report.test
     head = Text.assemble(
         ("UMBmark ", "bold"),
         (report.source, "bold cyan"),
@@ -59,7 +47,6 @@ def render_report(
         f"{test.side_length:.3f} m, wheelbase b = {test.wheelbase:.4f} m)",
     )
     console.print(head)
-
     clusters = _table("Return errors (Eqs. 3.1-3.4)")
     clusters.add_column("")
     clusters.add_column("cw", justify="right")
@@ -82,7 +69,33 @@ def render_report(
             f"  (the {bench.worst.direction.value} cluster)",
         )
     )
-    console.print(verdict(report))
+    console.print(verdict(bench))
+
+
+def _plus_minus(value: float, se: float | None, fmt: str) -> str:
+    if se is None or not math.isfinite(se):
+        return format(value, fmt)
+    return f"{format(value, fmt)} ± {format(se, fmt)}"
+
+
+def render_report(
+    report: CalibrationReport, console: Console, yaml_text: str | None = None
+) -> None:
+    """Print the summary of ``report`` on ``console``."""
+    bench, cal = report.benchmark, report.calibration
+    est, active = cal.estimate, cal.active
+    se = est.standard_errors
+
+    if bench is None:
+        console.print(
+            Text.assemble(
+                ("Calibration of ", "bold"),
+                (report.source, "bold cyan"),
+                f"  ({len(report.runs)} runs; not both directions, so no UMBmark figures)",
+            )
+        )
+    else:
+        _render_benchmark(report, bench, console)
 
     errors = _table(f"Systematic errors: {_METHOD_NAMES.get(est.method, est.method)}")
     errors.add_column("")
@@ -105,7 +118,21 @@ def render_report(
     )
     _row(errors, "E_d = D_R / D_L", _plus_minus(est.E_d, se.get("E_d"), ".6f"), "Eq. 4.22")
     if est.E_s is not None:
-        _row(errors, "E_s = D_avg / D_n", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "")
+        _row(errors, "E_s = D_avg / D_active", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "scale")
+    if est.method == "trajectory":
+        comp = est.components
+        for key, label in (
+            ("r_left", "left wheel radius [mm]"),
+            ("r_right", "right wheel radius [mm]"),
+            ("wheelbase", "wheelbase [mm]"),
+        ):
+            _row(errors, label, _plus_minus(comp[key] * _MM, se[key] * _MM, ".3f"), "fitted")
+        _row(
+            errors,
+            "residual per window",
+            f"{comp['rms_position'] * _MM:.2f} mm, {math.degrees(comp['rms_heading']):.3f} deg",
+            f"{comp['windows']:.0f} windows",
+        )
     console.print(errors)
 
     correction = _table("Correction, composed with the values active during the runs")

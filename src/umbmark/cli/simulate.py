@@ -261,7 +261,7 @@ def _write_logs(
     folder: Path, result: SimResult, robot: VirtualRobot, side_length: float, note: str
 ) -> None:
     from ..errors import InputError
-    from ..io.runlog import LogMetadata, write_log_csv, write_metadata
+    from ..sources.runlog import LogMetadata, write_log_csv, write_metadata
 
     assert result.trace is not None
     if folder.exists() and not folder.is_dir():

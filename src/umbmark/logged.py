@@ -1,0 +1,177 @@
+"""From recordings to runs: association, splitting, start frames, odometry end poses.
+
+Every logged source ends here, so that a run from a CSV log, an OptiOdom session or a
+ROS bag is the same :class:`umbmark.runs.Run` the estimators consume, with its time series
+attached (:class:`umbmark.recording.RunLog`) for replay and trajectory estimation.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .association import DEFAULT_MAX_GAP, Association, associate
+from .conventions import Direction
+from .errors import InputError
+from .kinematics import IntegrationMethod, WheelParams
+from .recording import Recording, RunLog
+from .runs import EndPose, Run
+from .segmentation import SplitOptions, split_by_rests, split_by_windows
+
+__all__ = ["LoadedRuns", "SplitMode", "end_errors", "reintegrate", "runs_from_recordings"]
+
+FloatArray = NDArray[np.float64]
+SplitMode = Literal["rests", "none", "windows"]
+
+
+@dataclass(frozen=True)
+class LoadedRuns:
+    """Runs read from recordings, and how they were found.
+
+    Attributes
+    ----------
+    runs : list of Run
+        Each with its :class:`RunLog` as ``log``.
+    associations : list of (str, Association)
+        Time matching of each recording.
+    notes : list of str
+        What was found and left out, for people.
+    """
+
+    runs: list[Run]
+    associations: list[tuple[str, Association]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+def to_start_frame(poses: FloatArray) -> FloatArray:
+    """Express poses, shape (n, 3), in the frame of the first one (x along its heading)."""
+    x0, y0, th0 = poses[0]
+    c, s = math.cos(th0), math.sin(th0)
+    dx, dy = poses[:, 0] - x0, poses[:, 1] - y0
+    return np.column_stack([c * dx + s * dy, -s * dx + c * dy, poses[:, 2] - th0])
+
+
+def _run(
+    recording: Recording,
+    truth: FloatArray,
+    first: int,
+    last: int,
+    params: WheelParams,
+    label: str,
+    method: IntegrationMethod,
+) -> Run | None:
+    wheels = recording.wheels
+    matched = np.flatnonzero(np.all(np.isfinite(truth[first : last + 1]), axis=1)) + first
+    if matched.size < 2:
+        return None
+    a, b = int(matched[0]), int(matched[-1])
+    sl = slice(a, b + 1)
+    rel = np.full((b - a + 1, 3), np.nan)
+    ok = np.all(np.isfinite(truth[sl]), axis=1)
+    rel[ok] = to_start_frame(truth[sl][ok])
+    log = RunLog(
+        time=wheels.time[sl] - wheels.time[a],
+        wheel_angles=wheels.angles[sl] - wheels.angles[a],
+        truth=rel,
+        source=label,
+    )
+    odo = log.odometry(params, method)
+    turned = float(rel[-1, 2])
+    direction = Direction.CCW if turned >= 0 else Direction.CW
+    return Run(
+        direction=direction,
+        true_end=EndPose(*(float(v) for v in rel[-1])),
+        odometry_end=EndPose(*(float(v) for v in odo[-1])),
+        label=label,
+        log=log,
+    )
+
+
+def runs_from_recordings(
+    recordings: Sequence[Recording],
+    params: WheelParams,
+    *,
+    split: SplitMode = "rests",
+    windows: Sequence[tuple[float, float]] = (),
+    split_options: SplitOptions | None = None,
+    max_gap: float = DEFAULT_MAX_GAP,
+    method: IntegrationMethod = "arc",
+) -> LoadedRuns:
+    """Find the runs in ``recordings`` and compute their true and odometry end poses.
+
+    Parameters
+    ----------
+    recordings : sequence of Recording
+        Each must have ground truth.
+    params : WheelParams
+        The odometry parameters the wheel data is integrated with.
+    split : {"rests", "none", "windows"}
+        Split each recording at rests near the start (see :mod:`umbmark.segmentation`),
+        take each recording as one run, or cut it by ``windows`` (seconds from its start).
+
+    Raises
+    ------
+    InputError
+        If a recording has no ground truth, or no run is found at all.
+    """
+    out = LoadedRuns(runs=[])
+    for recording in recordings:
+        if recording.truth is None:
+            raise InputError(
+                "has no ground truth: name its topic or columns (see --help)",
+                source=recording.name,
+            )
+        truth, association = associate(
+            recording.wheels, recording.truth, max_gap=max_gap, source=recording.name
+        )
+        out.associations.append((recording.name, association))
+        if association.fraction < 0.9:
+            out.notes.append(f"{recording.name}: only {association.describe()}")
+        time, angles = recording.wheels.time, recording.wheels.angles
+        if split == "none":
+            segments = [(0, time.size - 1)]
+        elif split == "windows":
+            segments = split_by_windows(time, windows, recording.name)
+        else:
+            segments = split_by_rests(time, angles, truth, split_options)
+        found = 0
+        for first, last in segments:
+            label = recording.name if len(segments) == 1 else f"{recording.name} run {found + 1}"
+            run = _run(recording, truth, first, last, params, label, method)
+            if run is None:
+                out.notes.append(
+                    f"{recording.name}: left out a run from {time[first] - time[0]:.2f} to "
+                    f"{time[last] - time[0]:.2f} s: fewer than 2 samples with ground truth"
+                )
+                continue
+            found += 1
+            out.runs.append(run)
+        if found == 0:
+            out.notes.append(f"{recording.name}: no run found")
+    if not out.runs:
+        names = ", ".join(r.name for r in recordings) or "the recordings"
+        raise InputError(f"found no run with ground truth in {names}", source=None)
+    return out
+
+
+def reintegrate(
+    runs: Sequence[Run], params: WheelParams, method: IntegrationMethod = "arc"
+) -> list[Run]:
+    """The same runs with their odometry integrated anew with ``params`` (replay)."""
+    out = []
+    for run in runs:
+        if run.log is None:
+            raise ValueError(f"{run.label or 'a run'} has no recorded wheel data to replay")
+        odo = run.log.odometry(params, method)
+        out.append(replace(run, odometry_end=EndPose(*(float(v) for v in odo[-1]))))
+    return out
+
+
+def end_errors(runs: Sequence[Run]) -> FloatArray:
+    """Distance between true and odometry end position of every run [m], shape (n,)."""
+    return np.array([math.hypot(*run.return_error) for run in runs], dtype=np.float64)

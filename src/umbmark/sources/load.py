@@ -1,0 +1,239 @@
+"""One entry point for every source: find the format, read it, produce runs.
+
+Formats
+-------
+``table``
+    A runs table (CSV of end points, see :mod:`umbmark.io.runs_table`).
+``log``
+    An umbmark run log (folder with ``metadata.yaml`` and CSV time series, see
+    :mod:`umbmark.sources.runlog`), or one CSV of it.
+``optiodom``
+    An OptiOdom session folder (:mod:`umbmark.sources.optiodom`).
+``bag``
+    A ROS 1 bag (``.bag``) or ROS 2 bag (folder with ``metadata.yaml``, or its ``.db3`` /
+    ``.mcap`` file) (:mod:`umbmark.sources.bag`).
+``auto``
+    Decide from the path: a ``.bag``, ``.db3`` or ``.mcap`` file or a folder with a ROS 2
+    ``metadata.yaml`` is a bag; a folder with ``*_metadata.csv`` and ``*_run-NN.csv`` is
+    OptiOdom; a folder (or a CSV beside) with umbmark's ``metadata.yaml`` is a run log; any
+    other file a runs table.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal
+
+import yaml
+
+from ..association import DEFAULT_MAX_GAP, Association
+from ..errors import InputError
+from ..kinematics import WheelParams
+from ..logged import SplitMode, runs_from_recordings
+from ..recording import Recording
+from ..runs import Run
+from ..segmentation import SplitOptions
+
+if TYPE_CHECKING:
+    from .bag import BagOptions
+
+__all__ = ["FORMATS", "Format", "LoadOptions", "Loaded", "detect_format", "load_runs"]
+
+Format = Literal["auto", "table", "log", "optiodom", "bag"]
+FORMATS: tuple[Format, ...] = ("auto", "table", "log", "optiodom", "bag")
+
+
+@dataclass(frozen=True)
+class LoadOptions:
+    """How to read a source.
+
+    Attributes
+    ----------
+    unit, angle_unit : str
+        Units of a runs table.
+    side_length : float or None
+        The square's side [m] (a runs table checks its return errors against it).
+    params : WheelParams or None
+        Odometry parameters to integrate logged wheel data with; overrides what the
+        source says.
+    split : {"rests", "none", "windows"}
+        How to find runs in a recording; OptiOdom files are one run each whatever this
+        says.
+    windows : sequence of (float, float)
+        Time windows [s from a recording's start] for ``split="windows"``.
+    max_gap : float
+        Longest ground-truth gap [s] to interpolate across.
+    bag : BagOptions or None
+        Topics and joints of a bag.
+    """
+
+    unit: str = "m"
+    angle_unit: str = "rad"
+    side_length: float | None = None
+    params: WheelParams | None = None
+    split: SplitMode = "rests"
+    windows: Sequence[tuple[float, float]] = ()
+    split_options: SplitOptions | None = None
+    max_gap: float = DEFAULT_MAX_GAP
+    bag: BagOptions | None = None
+
+
+@dataclass(frozen=True)
+class Loaded:
+    """Runs from a source and what is known about them.
+
+    Attributes
+    ----------
+    format : str
+        The format that was read.
+    runs : list of Run
+    params : WheelParams or None
+        The parameters logged runs were integrated with (None for a runs table).
+    side_length : float or None
+        The square's side, from the options or the source.
+    associations : list of (str, Association)
+    notes : list of str
+    """
+
+    format: str
+    runs: list[Run]
+    params: WheelParams | None = None
+    side_length: float | None = None
+    associations: list[tuple[str, Association]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+def _is_ros2_bag_folder(path: Path) -> bool:
+    meta = path / "metadata.yaml"
+    if not meta.is_file():
+        return False
+    try:
+        data = yaml.safe_load(meta.read_text(encoding="utf-8"))
+    except (yaml.YAMLError, OSError, UnicodeDecodeError):
+        return False
+    return isinstance(data, dict) and "rosbag2_bagfile_information" in data
+
+
+def detect_format(path: str | Path) -> Format:
+    """The format of ``path`` (see the module's documentation).
+
+    Raises
+    ------
+    InputError
+        If ``path`` does not exist or is a folder of no known layout.
+    """
+    from .optiodom import is_optiodom_session
+    from .runlog import is_runlog
+
+    path = Path(path)
+    if not path.exists():
+        raise InputError("no such file or folder", source=path)
+    if path.suffix.lower() in (".bag", ".db3", ".mcap"):
+        return "bag"
+    if path.is_dir():
+        if _is_ros2_bag_folder(path):
+            return "bag"
+        if is_optiodom_session(path):
+            return "optiodom"
+        if is_runlog(path):
+            return "log"
+        raise InputError(
+            "is a folder of no known layout (a ROS 2 bag, an OptiOdom session or an umbmark "
+            "run log with metadata.yaml)",
+            source=path,
+        )
+    if path.suffix.lower() == ".csv" and is_runlog(path) and not _looks_like_table(path):
+        return "log"
+    return "table"
+
+
+def _looks_like_table(path: Path) -> bool:
+    from ..io.runs_table import read_text
+
+    for line in read_text(path).splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            return "direction" in line.lower()
+    return False
+
+
+def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
+    """Read ``source`` and return its runs.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the problem.
+    """
+    source = Path(source)
+    kind = detect_format(source) if fmt == "auto" else fmt
+    if kind == "table":
+        from ..io.runs_table import read_runs_table
+
+        runs = read_runs_table(
+            source,
+            unit=options.unit,
+            angle_unit=options.angle_unit,
+            side_length=options.side_length,
+        )
+        return Loaded(format="table", runs=runs, side_length=options.side_length)
+
+    split = options.split
+    params: WheelParams | None
+    if kind == "log":
+        from .runlog import read_runlog
+
+        recordings, metadata = read_runlog(source)
+        params, side = metadata.params, metadata.side_length
+    elif kind == "optiodom":
+        from .optiodom import read_optiodom
+
+        recordings, session = read_optiodom(source)
+        params, side = session.params, session.side_length
+        split = "none"  # each OptiOdom file is one run
+    else:
+        recordings, params, side = _read_bag(source, options)
+    if options.params is not None:
+        params = options.params
+    if params is None:
+        raise InputError(
+            "needs the wheel parameters: give --wheelbase and --wheel-diameter (or "
+            "--current-params with wheel_separation and wheel_radius)",
+            source=source,
+        )
+    if options.side_length is not None:
+        side = options.side_length
+    found = runs_from_recordings(
+        recordings,
+        params,
+        split=split,
+        windows=options.windows,
+        split_options=options.split_options,
+        max_gap=options.max_gap,
+    )
+    return Loaded(
+        format=kind,
+        runs=found.runs,
+        params=params,
+        side_length=side,
+        associations=found.associations,
+        notes=found.notes,
+    )
+
+
+def _read_bag(
+    source: Path, options: LoadOptions
+) -> tuple[list[Recording], WheelParams | None, float | None]:
+    from .bag import BagOptions, read_bag
+
+    wheels, truth = read_bag(source, options.bag or BagOptions())
+    recording = Recording(name=source.name, wheels=wheels, truth=truth)
+    return [recording], None, None
+
+
+def with_params(loaded: Loaded, params: WheelParams) -> Loaded:
+    """The same runs integrated with other parameters (for replay)."""
+    from ..logged import reintegrate
+
+    return replace(loaded, runs=reintegrate(loaded.runs, params), params=params)

@@ -1,0 +1,175 @@
+"""The OptiOdom session layout (Sousa, Petry, Moreira, Costa; MIT licence).
+
+A session is a folder ``<id>/`` holding
+
+- ``<id>_metadata.csv``: one key per row, values in the following cells (trailing cells
+  empty): ``ngear`` (gear ratio), ``encRes`` (encoder pulses per motor revolution), ``Li``
+  (nominal wheelbase [m]), ``Di`` (nominal wheel diameters [m], two values), ``N`` (runs),
+  ``L`` (square side [m], square sessions only); other rows describe the capture.
+- ``<id>_run-NN.csv``, no header: ``time [s], x_gt [m], y_gt [m], theta_gt [rad],
+  ticks_right, ticks_left``; the ticks are encoder **increments per cycle**, not counts,
+  and ground truth starts at (0, 0, 0) in the run's start frame.
+- ``<id>_run-NN_odo.csv``: the robot's own odometry logs (not used).
+
+Files may begin with a UTF-8 byte-order mark. Each run file is one run. The two ``Di``
+values are taken in the order of the tick columns (right, left); in the published
+sessions they are equal.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..io.runs_table import read_text
+from ..kinematics import WheelParams
+from ..recording import PoseSeries, Recording, WheelSeries
+
+__all__ = ["OptiOdomSession", "is_optiodom_session", "read_optiodom"]
+
+_RUN = re.compile(r"^(?P<id>.+)_run-(?P<n>\d+)\.csv$")
+
+
+class OptiOdomSession:
+    """The metadata of a session."""
+
+    def __init__(self, folder: Path, meta: dict[str, list[str]]) -> None:
+        self.folder = folder
+        self.meta = meta
+
+    def number(self, key: str, index: int = 0) -> float:
+        """A metadata value as a float.
+
+        Raises
+        ------
+        InputError
+            If it is missing or not a positive number.
+        """
+        values = self.meta.get(key, [])
+        if len(values) <= index or not values[index].strip():
+            raise InputError(f"metadata has no value {index + 1} for {key}", source=self.folder)
+        try:
+            value = float(values[index])
+        except ValueError:
+            raise InputError(
+                f"metadata {key} {values[index]!r} is not a number", source=self.folder
+            ) from None
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(f"metadata {key} = {value:g} is not positive", source=self.folder)
+        return value
+
+    @property
+    def params(self) -> WheelParams:
+        """Nominal wheel parameters (``Di`` taken as right, left)."""
+        d_right, d_left = self.number("Di", 0), self.number("Di", 1)
+        d = 0.5 * (d_left + d_right)
+        return WheelParams(
+            wheelbase=self.number("Li"),
+            wheel_diameter=d,
+            encoder_resolution=self.number("encRes"),
+            gear_ratio=self.number("ngear"),
+            c_left=d_left / d,
+            c_right=d_right / d,
+        )
+
+    @property
+    def side_length(self) -> float | None:
+        """The square's side [m], for square sessions."""
+        values = self.meta.get("L", [])
+        return self.number("L") if values and values[0].strip() else None
+
+
+def _metadata_file(folder: Path) -> Path | None:
+    found = sorted(folder.glob("*_metadata.csv"))
+    return found[0] if found else None
+
+
+def is_optiodom_session(path: Path) -> bool:
+    """Whether ``path`` is a folder in the OptiOdom layout."""
+    return (
+        path.is_dir()
+        and _metadata_file(path) is not None
+        and any(_RUN.match(p.name) for p in path.iterdir())
+    )
+
+
+def read_optiodom(folder: str | Path) -> tuple[list[Recording], OptiOdomSession]:
+    """Read every run of an OptiOdom session folder.
+
+    Returns
+    -------
+    recordings : list of Recording
+        One per run file, in run order, with wheel angles and ground truth.
+    session : OptiOdomSession
+
+    Raises
+    ------
+    InputError
+        Naming the file and the problem.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError("is not a folder (an OptiOdom session is one)", source=folder)
+    meta_path = _metadata_file(folder)
+    if meta_path is None:
+        raise InputError("has no *_metadata.csv: not an OptiOdom session", source=folder)
+    meta: dict[str, list[str]] = {}
+    for row in csv.reader(read_text(meta_path).splitlines()):
+        if row and row[0].strip():
+            meta[row[0].strip()] = [c.strip() for c in row[1:] if c.strip()]
+    session = OptiOdomSession(meta_path, meta)
+    params = session.params
+    runs = sorted((int(m.group("n")), p) for p in folder.iterdir() if (m := _RUN.match(p.name)))
+    if not runs:
+        raise InputError("has no *_run-NN.csv files", source=folder)
+    rad_per_tick = params.radians_per_pulse
+    recordings = []
+    for number, path in runs:
+        data = _read_run(path)
+        ticks = data[:, [5, 4]]  # left, right
+        angles = np.cumsum(ticks, axis=0) * rad_per_tick
+        time = data[:, 0]
+        recordings.append(
+            Recording(
+                name=f"run-{number:02d}",
+                wheels=WheelSeries(time=time, angles=angles),
+                truth=PoseSeries(time=time.copy(), poses=data[:, 1:4].copy()),
+                params=params,
+                side_length=session.side_length,
+            )
+        )
+    return recordings, session
+
+
+def _read_run(path: Path) -> np.ndarray:
+    rows = []
+    for number, line in enumerate(read_text(path).splitlines(), start=1):
+        if not line.strip():
+            continue
+        cells = line.split(",")
+        if len(cells) < 6:
+            raise InputError(
+                f"has {len(cells)} cells; an OptiOdom run row has 6 (time, x, y, theta, "
+                "ticks_right, ticks_left)",
+                source=path,
+                row=number,
+            )
+        try:
+            values = [float(c) for c in cells[:6]]
+        except ValueError:
+            raise InputError("has a cell that is not a number", source=path, row=number) from None
+        if not all(math.isfinite(v) for v in values):
+            raise InputError("has a value that is not a finite number", source=path, row=number)
+        rows.append(values)
+    if len(rows) < 2:
+        raise InputError("has fewer than 2 samples", source=path)
+    data = np.array(rows, dtype=np.float64)
+    if not np.all(np.diff(data[:, 0]) > 0):
+        bad = int(np.argmax(np.diff(data[:, 0]) <= 0)) + 2
+        raise InputError("time does not increase", source=path, row=bad)
+    return data

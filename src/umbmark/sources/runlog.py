@@ -1,0 +1,325 @@
+"""The umbmark run log: recorded runs as CSV time series plus a small metadata file.
+
+Format
+------
+A folder holding ``metadata.yaml`` and one or more CSV files (``*.csv``). Each CSV has a
+header with these columns, one row per sample, in time order:
+
+=========  ===========================================================================
+column     meaning
+=========  ===========================================================================
+time       seconds (any origin)
+x, y       ground-truth position [m], in any fixed frame (motion capture, map)
+theta      ground-truth heading [rad]
+left       left wheel: cumulative encoder counts, or cumulative wheel angle [rad]
+right      right wheel: the same
+=========  ===========================================================================
+
+A row may leave the ground-truth cells or the wheel cells empty when the two are sampled
+at different times; umbmark associates them by time and says how well they matched. A
+file may hold one run or several (separated by rests near the start point).
+
+``metadata.yaml`` (lengths in metres)::
+
+    format: umbmark-runlog
+    version: 1
+    wheel_data: counts        # counts (encoder pulses) or angles (wheel radians)
+    wheel_diameter: 0.15      # nominal D_n
+    wheelbase: 0.34           # nominal b
+    encoder_resolution: 2000  # pulses per motor revolution (counts only)
+    gear_ratio: 20            # motor revolutions per wheel revolution (counts only)
+    side_length: 4.0          # optional: the square's side, for UMBmark
+    c_left: 1.0               # optional: wheel factors active during the runs
+    c_right: 1.0
+
+Further keys (``truth``, ``notes``) are kept as they are and otherwise ignored.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from ..errors import InputError
+from ..io.atomic import atomic_write_text
+from ..io.runs_table import read_text
+from ..kinematics import WheelParams
+from ..recording import PoseSeries, Recording, WheelSeries
+
+__all__ = [
+    "LOG_COLUMNS",
+    "METADATA_FILE",
+    "LogMetadata",
+    "is_runlog",
+    "read_metadata",
+    "read_runlog",
+    "write_log_csv",
+    "write_metadata",
+]
+
+LOG_COLUMNS = ("time", "x", "y", "theta", "left", "right")
+METADATA_FILE = "metadata.yaml"
+FORMAT_NAME = "umbmark-runlog"
+
+
+@dataclass(frozen=True)
+class LogMetadata:
+    """The wheel parameters of a run log (see the module's documentation)."""
+
+    wheel_diameter: float
+    wheelbase: float
+    wheel_data: str = "counts"
+    encoder_resolution: float = 1.0
+    gear_ratio: float = 1.0
+    side_length: float | None = None
+    c_left: float = 1.0
+    c_right: float = 1.0
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def params(self) -> WheelParams:
+        """The nominal odometry parameters."""
+        return WheelParams(
+            wheelbase=self.wheelbase,
+            wheel_diameter=self.wheel_diameter,
+            encoder_resolution=self.encoder_resolution,
+            gear_ratio=self.gear_ratio,
+            c_left=self.c_left,
+            c_right=self.c_right,
+        )
+
+    def to_yaml(self) -> str:
+        """The metadata file's text."""
+        body: dict[str, Any] = {
+            "format": FORMAT_NAME,
+            "version": 1,
+            "wheel_data": self.wheel_data,
+            "wheel_diameter": self.wheel_diameter,
+            "wheelbase": self.wheelbase,
+            "encoder_resolution": self.encoder_resolution,
+            "gear_ratio": self.gear_ratio,
+        }
+        if self.side_length is not None:
+            body["side_length"] = self.side_length
+        body["c_left"] = self.c_left
+        body["c_right"] = self.c_right
+        body.update(self.extra)
+        header = "# umbmark run log: lengths in metres, angles in radians, time in seconds\n"
+        return header + yaml.safe_dump(body, sort_keys=False)
+
+
+def write_metadata(folder: str | Path, metadata: LogMetadata) -> Path:
+    """Write ``metadata.yaml`` into ``folder`` (created if missing)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / METADATA_FILE
+    atomic_write_text(path, metadata.to_yaml())
+    return path
+
+
+def write_log_csv(
+    path: str | Path,
+    time: NDArray[np.float64],
+    pose: NDArray[np.float64] | None,
+    wheels: NDArray[np.float64] | NDArray[np.int64],
+    comment: str = "",
+) -> None:
+    """Write one run-log CSV.
+
+    Parameters
+    ----------
+    time : array, shape (n,)
+        Seconds.
+    pose : array, shape (n, 3), or None
+        Ground truth ``x, y, theta`` [m, rad]; a row of NaN leaves its cells empty.
+    wheels : array, shape (n, 2)
+        Cumulative ``left, right`` counts (integers) or wheel angles [rad].
+    """
+    out = io.StringIO()
+    out.write("".join(f"# {line}\n" for line in comment.splitlines()))
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(LOG_COLUMNS)
+    integer = np.issubdtype(np.asarray(wheels).dtype, np.integer)
+    for i in range(len(time)):
+        row: list[str] = [f"{time[i]:.6f}"]
+        if pose is None or np.isnan(pose[i]).any():
+            row += ["", "", ""]
+        else:
+            row += [f"{pose[i, 0]:.6f}", f"{pose[i, 1]:.6f}", f"{pose[i, 2]:.8f}"]
+        w: Sequence[Any] = wheels[i]
+        row += [str(int(v)) for v in w] if integer else [f"{float(v):.9f}" for v in w]
+        writer.writerow(row)
+    atomic_write_text(path, out.getvalue())
+
+
+def is_runlog(path: Path) -> bool:
+    """Whether ``path`` is a run-log folder, or a CSV inside one."""
+    folder = path if path.is_dir() else path.parent
+    return (folder / METADATA_FILE).is_file()
+
+
+def read_metadata(path: str | Path) -> LogMetadata:
+    """Read a run log's ``metadata.yaml``.
+
+    Raises
+    ------
+    InputError
+        For a missing file, invalid YAML, or missing or implausible values.
+    """
+    path = Path(path)
+    try:
+        data = yaml.safe_load(read_text(path))
+    except yaml.YAMLError as exc:
+        raise InputError(f"is not valid YAML ({exc})".splitlines()[0], source=path) from None
+    if not isinstance(data, dict):
+        raise InputError("is not a mapping of keys to values", source=path)
+    wheel_data = str(data.get("wheel_data", "counts"))
+    if wheel_data not in ("counts", "angles"):
+        raise InputError(f"wheel_data is {wheel_data!r}; use counts or angles", source=path)
+
+    def number(key: str, default: float | None = None) -> float:
+        value = data.get(key, default)
+        if value is None:
+            raise InputError(f"has no {key}", source=path)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise InputError(f"{key} is {value!r}, not a number", source=path)
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(f"{key} is {value!r}, not a positive number", source=path)
+        return float(value)
+
+    counts = wheel_data == "counts"
+    side = data.get("side_length")
+    known = {
+        "format",
+        "version",
+        "wheel_data",
+        "wheel_diameter",
+        "wheelbase",
+        "encoder_resolution",
+        "gear_ratio",
+        "side_length",
+        "c_left",
+        "c_right",
+    }
+    metadata = LogMetadata(
+        wheel_diameter=number("wheel_diameter"),
+        wheelbase=number("wheelbase"),
+        wheel_data=wheel_data,
+        encoder_resolution=number("encoder_resolution") if counts else 1.0,
+        gear_ratio=number("gear_ratio", 1.0) if counts else 1.0,
+        side_length=None if side is None else number("side_length"),
+        c_left=number("c_left", 1.0),
+        c_right=number("c_right", 1.0),
+        extra={k: v for k, v in data.items() if k not in known},
+    )
+    if metadata.wheel_diameter > 10 or metadata.wheelbase > 10:
+        raise InputError(
+            "wheel_diameter and wheelbase are in metres: values over 10 m look like mm",
+            source=path,
+        )
+    return metadata
+
+
+def read_runlog(path: str | Path) -> tuple[list[Recording], LogMetadata]:
+    """Read a run log: a folder (every ``*.csv`` in it) or one CSV file of it.
+
+    Raises
+    ------
+    InputError
+        Naming the file (and row) and the problem.
+    """
+    path = Path(path)
+    folder = path if path.is_dir() else path.parent
+    meta_path = folder / METADATA_FILE
+    if not meta_path.is_file():
+        raise InputError(
+            f"has no {METADATA_FILE} beside it: a run log needs one (see umbmark docs)",
+            source=path,
+        )
+    metadata = read_metadata(meta_path)
+    files = sorted(folder.glob("*.csv")) if path.is_dir() else [path]
+    if not files:
+        raise InputError("holds no .csv run files", source=folder)
+    scale = 1.0 if metadata.wheel_data == "angles" else metadata.params.radians_per_pulse
+    recordings = [_read_log_csv(f, scale, metadata.params, metadata.side_length) for f in files]
+    return recordings, metadata
+
+
+def _read_log_csv(
+    path: Path, scale: float, params: WheelParams, side_length: float | None
+) -> Recording:
+    lines = [
+        (number, line)
+        for number, line in enumerate(read_text(path).splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise InputError("is empty", source=path)
+    header_row, header_line = lines[0]
+    header = [c.strip().lower() for c in next(csv.reader([header_line]))]
+    missing = [c for c in LOG_COLUMNS if c not in header]
+    if missing:
+        raise InputError(
+            f"missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
+            f"(a run log has {', '.join(LOG_COLUMNS)})",
+            source=path,
+            row=header_row,
+        )
+    index = [header.index(c) for c in LOG_COLUMNS]
+    wheel_rows: list[list[float]] = []
+    truth_rows: list[list[float]] = []
+    for number, line in lines[1:]:
+        cells = next(csv.reader([line]))
+        if len(cells) < len(header):
+            raise InputError(
+                f"has {len(cells)} cells, the header has {len(header)}", source=path, row=number
+            )
+        values = []
+        for name, i in zip(LOG_COLUMNS, index, strict=True):
+            text = cells[i].strip()
+            if not text:
+                values.append(math.nan)
+                continue
+            try:
+                value = float(text)
+            except ValueError:
+                raise InputError(
+                    f"{name} {text!r} is not a number", source=path, row=number
+                ) from None
+            if not math.isfinite(value):
+                raise InputError(f"{name} is {text}", source=path, row=number)
+            values.append(value)
+        t, x, y, theta, left, right = values
+        if math.isnan(t):
+            raise InputError("time is empty", source=path, row=number)
+        has_wheels = not (math.isnan(left) or math.isnan(right))
+        has_truth = not (math.isnan(x) or math.isnan(y) or math.isnan(theta))
+        if not has_wheels and not has_truth:
+            raise InputError("has neither wheel data nor ground truth", source=path, row=number)
+        if has_wheels:
+            wheel_rows.append([t, left * scale, right * scale])
+        if has_truth:
+            truth_rows.append([t, x, y, theta])
+    if len(wheel_rows) < 2:
+        raise InputError("has fewer than 2 rows with wheel data", source=path)
+    wheels = np.array(wheel_rows)
+    truth = np.array(truth_rows).reshape(-1, 4)
+    for name, array in (("wheel", wheels), ("ground-truth", truth)):
+        if array.shape[0] > 1 and not np.all(np.diff(array[:, 0]) > 0):
+            raise InputError(f"{name} time does not increase from row to row", source=path)
+    return Recording(
+        name=path.name,
+        wheels=WheelSeries(time=wheels[:, 0], angles=wheels[:, 1:]),
+        truth=PoseSeries(time=truth[:, 0], poses=truth[:, 1:]) if truth.shape[0] >= 2 else None,
+        params=params,
+        side_length=side_length,
+    )
