@@ -141,3 +141,30 @@ def simulated_session(
         hold(still)
     ends = [tuple(result.true_end[i]) for i in range(len(dirs))]
     return np.array(times), np.array(counts), np.array(poses), ends
+
+
+def cli_json(*args: str) -> dict:  # type: ignore[type-arg]
+    """Run ``umbmark ARGS --json`` in-process; it must succeed. Returns the JSON object."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from umbmark.cli.main import app
+
+    result = CliRunner().invoke(app, [*args, "--json"])
+    assert result.exit_code == 0, result.output
+    return dict(json.loads(result.stdout))
+
+
+def cli_error(*args: str) -> str:
+    """Run ``umbmark ARGS``; it must fail on bad input: exit status 2 and one line on
+    stderr, no traceback. Returns that line."""
+    from typer.testing import CliRunner
+
+    from umbmark.cli.main import app
+
+    result = CliRunner().invoke(app, list(args))
+    assert result.exit_code == 2, result.output
+    assert result.stderr.count("\n") == 1, result.stderr
+    assert "Traceback" not in result.output
+    return str(result.stderr)

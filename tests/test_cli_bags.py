@@ -8,19 +8,16 @@ the same session handed over directly.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
-from umbmark.cli.main import app
 from umbmark.kinematics import WheelParams
 from umbmark.sim.robot import VirtualRobot
 
-from helpers import simulated_session
+from helpers import cli_error, cli_json, simulated_session
 
 rosbags = pytest.importorskip("rosbags")
 from rosbags.rosbag1 import Writer as Writer1  # noqa: E402
@@ -31,7 +28,6 @@ from rosbags.typesys import Stores, get_typestore  # noqa: E402
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
 ROBOT = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
 T0 = 1_750_000_000
-runner = CliRunner()
 BAG_ARGS = [
     "--wheelbase",
     "0.34",
@@ -97,19 +93,6 @@ def _write(path: Path, fmt: str, session, truth_shift: float = 0.0) -> Path:
     return path
 
 
-def _json(*args: str) -> dict:
-    result = runner.invoke(app, [*args, "--json"])
-    assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
-
-
-def _bad(*args: str) -> str:
-    result = runner.invoke(app, list(args))
-    assert result.exit_code == 2, result.output
-    assert result.stderr.count("\n") == 1, result.stderr
-    return result.stderr
-
-
 @pytest.fixture(scope="module")
 def log_result(session, tmp_path_factory):
     """The same session as a run log: the reference the bags must match."""
@@ -131,13 +114,13 @@ def log_result(session, tmp_path_factory):
     keep = np.arange(times.size) % 2 == 0
     truth = np.where(keep[:, None], poses, np.nan)
     write_log_csv(folder / "session.csv", times, truth, counts)
-    return _json("calibrate", str(folder))
+    return cli_json("calibrate", str(folder))
 
 
 @pytest.mark.parametrize("fmt", ["ros1", "sqlite3", "mcap"])
 def test_bag_calibrates_like_the_same_session_as_a_log(tmp_path, session, log_result, fmt):
     bag = _write(tmp_path / "session", fmt, session)
-    data = _json("calibrate", str(bag), *BAG_ARGS)
+    data = cli_json("calibrate", str(bag), *BAG_ARGS)
     assert data["format"] == "bag"
     assert [r["direction"] for r in data["runs"]] == ["cw", "cw", "ccw", "ccw"]
     assert data["cg_cw"] == pytest.approx(log_result["cg_cw"], abs=5e-6)
@@ -152,12 +135,12 @@ def test_bag_calibrates_like_the_same_session_as_a_log(tmp_path, session, log_re
 def test_bag_replay_and_trajectory_fit(tmp_path, session):
     bag = _write(tmp_path / "session", "sqlite3", session)
     result = tmp_path / "fit.json"
-    fit = _json("calibrate", str(bag), *BAG_ARGS, "--method", "trajectory", "-o", str(result))
+    fit = cli_json("calibrate", str(bag), *BAG_ARGS, "--method", "trajectory", "-o", str(result))
     # Ground truth at half the wheel rate is interpolated linearly; while the robot speeds
     # up and slows down that costs about 1e-4 of the wheelbase (at full rate: 1e-6).
     assert fit["components"]["wheelbase"] == pytest.approx(ROBOT.wheelbase, rel=3e-4)
     assert 2 * fit["components"]["r_right"] == pytest.approx(ROBOT.diameter_right, rel=1e-4)
-    replay = _json(
+    replay = cli_json(
         "replay", str(bag), *BAG_ARGS[:4], "--truth-topic", "/mocap/pose", "--params", str(result)
     )
     assert replay["mean_end_error"] < 0.002
@@ -166,19 +149,19 @@ def test_bag_replay_and_trajectory_fit(tmp_path, session):
 
 def test_bad_recordings_give_one_line(tmp_path, session):
     bag = _write(tmp_path / "session", "mcap", session)
-    err = _bad("calibrate", str(bag), *BAG_ARGS[:6], "--truth-topic", "/vicon/pose")
+    err = cli_error("calibrate", str(bag), *BAG_ARGS[:6], "--truth-topic", "/vicon/pose")
     assert str(bag) in err
     assert "/vicon/pose" in err
-    err = _bad("calibrate", str(bag), *BAG_ARGS, "--left-joint", "wheel_l")
+    err = cli_error("calibrate", str(bag), *BAG_ARGS, "--left-joint", "wheel_l")
     assert "wheel_l" in err
     assert "left_wheel_joint" in err  # the joints that are there
     shifted = _write(tmp_path / "shifted", "mcap", session, truth_shift=1000.0)
-    err = _bad("calibrate", str(shifted), *BAG_ARGS)
+    err = cli_error("calibrate", str(shifted), *BAG_ARGS)
     assert "do not overlap in time" in err
-    err = _bad("calibrate", str(bag), *BAG_ARGS, "--windows", "900:950")
+    err = cli_error("calibrate", str(bag), *BAG_ARGS, "--windows", "900:950")
     assert "holds 0 wheel sample(s)" in err
-    err = _bad("calibrate", str(bag), "--side-length", "1", "--truth-topic", "/mocap/pose")
+    err = cli_error("calibrate", str(bag), "--side-length", "1", "--truth-topic", "/mocap/pose")
     assert "a bag needs the wheel parameters" in err
     not_a_bag = tmp_path / "fake.bag"
     not_a_bag.write_text("hello")
-    assert str(not_a_bag) in _bad("calibrate", str(not_a_bag), *BAG_ARGS)
+    assert str(not_a_bag) in cli_error("calibrate", str(not_a_bag), *BAG_ARGS)

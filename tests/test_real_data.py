@@ -8,7 +8,6 @@ square/230620202042.
 
 from __future__ import annotations
 
-import json
 import math
 import shutil
 
@@ -21,7 +20,7 @@ from umbmark.errors import InputError
 from umbmark.sources.load import detect_format
 from umbmark.sources.optiodom import read_optiodom
 
-from helpers import OPTIODOM
+from helpers import OPTIODOM, cli_json
 
 SQUARE = OPTIODOM / "square" / "230620202042"
 SQUARE2 = OPTIODOM / "square" / "231220200029"
@@ -29,12 +28,6 @@ CIRCLE = OPTIODOM / "circular" / "250620202104"
 runner = CliRunner()
 
 pytestmark = pytest.mark.skipif(not SQUARE.is_dir(), reason="../shared/data is not here")
-
-
-def _json(*args: str) -> dict:
-    result = runner.invoke(app, [*args, "--json"])
-    assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
 
 
 def test_session_metadata_and_runs_are_read_as_published():
@@ -55,7 +48,7 @@ def test_session_metadata_and_runs_are_read_as_published():
 
 
 def test_directions_come_from_the_heading_not_the_file_order():
-    data = _json("calibrate", str(SQUARE))
+    data = cli_json("calibrate", str(SQUARE))
     assert [r["direction"] for r in data["runs"]] == ["cw"] * 3 + ["ccw"] * 3
     assert data["format"] == "optiodom"
     assert data["side_length"] == 0.75
@@ -64,10 +57,10 @@ def test_directions_come_from_the_heading_not_the_file_order():
 
 def test_paper_calibration_lowers_the_error_on_circles(tmp_path):
     result = tmp_path / "square.json"
-    data = _json("calibrate", str(SQUARE), "-o", str(result))
+    data = cli_json("calibrate", str(SQUARE), "-o", str(result))
     assert 0.19 < data["wheelbase"] < 0.21
     assert data["wheel_diameter_left"] == pytest.approx(0.084 * data["new"]["c_L"])
-    replay = _json("replay", str(CIRCLE), "--params", str(result))
+    replay = cli_json("replay", str(CIRCLE), "--params", str(result))
     assert replay["mean_end_error_nominal"] == pytest.approx(0.042, abs=0.002)
     assert replay["mean_end_error"] == pytest.approx(0.020, abs=0.003)
     assert len(replay["runs"]) == 6
@@ -76,13 +69,13 @@ def test_paper_calibration_lowers_the_error_on_circles(tmp_path):
 @pytest.mark.parametrize("method", ["exact", "heading", "trajectory"])
 def test_other_estimators_also_help_on_circles(tmp_path, method):
     result = tmp_path / f"{method}.json"
-    _json("calibrate", str(SQUARE), "--method", method, "-o", str(result))
-    replay = _json("replay", str(CIRCLE), "--params", str(result))
+    cli_json("calibrate", str(SQUARE), "--method", method, "-o", str(result))
+    replay = cli_json("replay", str(CIRCLE), "--params", str(result))
     assert replay["mean_end_error"] < 0.6 * replay["mean_end_error_nominal"]
 
 
 def test_trajectory_method_reports_the_scale_error_with_standard_errors():
-    data = _json("calibrate", str(CIRCLE), "--method", "trajectory")
+    data = cli_json("calibrate", str(CIRCLE), "--method", "trajectory")
     assert data["method"] == "trajectory"
     assert 0.98 < data["E_s"] < 1.02
     for key in ("E_d", "E_b", "E_s", "r_left", "r_right", "wheelbase"):
@@ -95,7 +88,7 @@ def test_trajectory_method_reports_the_scale_error_with_standard_errors():
 
 def test_tum_files_for_evo(tmp_path):
     out = tmp_path / "tum"
-    _json("calibrate", str(SQUARE), "--tum", str(out))
+    cli_json("calibrate", str(SQUARE), "--tum", str(out))
     files = sorted(p.name for p in out.iterdir())
     assert len(files) == 18
     assert "run-01_truth.tum" in files
@@ -115,7 +108,7 @@ def test_ros1_and_ros2_parameter_files(tmp_path):
     import yaml
 
     ros1, ros2 = tmp_path / "ros1.yaml", tmp_path / "ros2.yaml"
-    data = _json(
+    data = cli_json(
         "calibrate",
         str(SQUARE),
         "--ros1-yaml",
@@ -158,7 +151,7 @@ def test_a_broken_session_gives_one_line(tmp_path):
 
 
 def test_second_session_longer_square():
-    data = _json("calibrate", str(SQUARE2))
+    data = cli_json("calibrate", str(SQUARE2))
     assert data["side_length"] == 1.7
     assert data["e_max_syst"] > 0.05
     assert data["second_pass_recommended"] is True

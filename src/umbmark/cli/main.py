@@ -22,6 +22,7 @@ app = typer.Typer(
     "(Borenstein & Feng's UMBmark). Lengths in metres and angles in radians unless a flag "
     "says otherwise.",
     no_args_is_help=True,
+    rich_markup_mode=None,  # help texts say "[m]" and "[s]": no markup
     add_completion=False,
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},

@@ -146,15 +146,7 @@ def replay(
     runs = resolved.loaded.runs
     sets = {"nominal": nominal}
     if params is not None:
-        new = read_calibrated_params(params)
-        d = nominal.wheel_diameter
-        c_left, c_right = new.c_left, new.c_right
-        if new.wheel_diameter_left is not None and new.wheel_diameter_right is not None:
-            # Absolute diameters carry over to a source with another nominal diameter.
-            c_left, c_right = new.wheel_diameter_left / d, new.wheel_diameter_right / d
-        sets["calibrated"] = nominal.with_corrections(
-            c_left=c_left, c_right=c_right, wheelbase=new.wheelbase
-        )
+        sets["calibrated"] = read_calibrated_params(params).applied_to(nominal)
     results = {name: reintegrate(runs, p) for name, p in sets.items()}
     errors = {name: end_errors(r) for name, r in results.items()}
     headings = {name: [run.heading_error for run in r] for name, r in results.items()}

@@ -14,6 +14,7 @@ __all__ = ["reproduce_app"]
 reproduce_app = typer.Typer(
     help="Reproduce the paper's experiments on virtual robots (Table I, Fig. 4).",
     no_args_is_help=True,
+    rich_markup_mode=None,  # help texts say "[m]" and "[s]": no markup
 )
 
 

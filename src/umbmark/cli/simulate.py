@@ -178,8 +178,8 @@ def simulate(
     noise = NoiseModel() if noise_free else NoiseModel(slip, bump_rate, bump_size)
     robot = VirtualRobot.with_errors(odometry, E_d=E_d, E_b=E_b, E_s=E_s, noise=noise)
     if params is not None:
-        new = read_calibrated_params(params)
-        robot = robot.calibrated(new.c_left, new.c_right, new.wheelbase)
+        applied = read_calibrated_params(params).applied_to(odometry)
+        robot = robot.calibrated(applied.c_left, applied.c_right, applied.wheelbase)
 
     if path is PathChoice.square:
         chosen = paths.square(side_length)

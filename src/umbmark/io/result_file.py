@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import InputError
+from ..kinematics import WheelParams
 from .ros_params import ActiveMultipliers
 from .runs_table import read_text
 
@@ -44,6 +45,18 @@ class CalibratedParams:
     configured_wheelbase: float | None = None
     wheel_diameter: float | None = None
     source: str = ""
+
+    def applied_to(self, nominal: WheelParams) -> WheelParams:
+        """``nominal`` with this result's wheelbase and wheel factors.
+
+        Where the result knows the absolute diameters, they carry over even to a robot
+        description with another nominal diameter.
+        """
+        c_left, c_right = self.c_left, self.c_right
+        if self.wheel_diameter_left is not None and self.wheel_diameter_right is not None:
+            c_left = self.wheel_diameter_left / nominal.wheel_diameter
+            c_right = self.wheel_diameter_right / nominal.wheel_diameter
+        return nominal.with_corrections(c_left=c_left, c_right=c_right, wheelbase=self.wheelbase)
 
 
 def read_calibrated_params(path: str | Path) -> CalibratedParams:
