@@ -64,6 +64,10 @@ def test_paper_calibration_lowers_the_error_on_circles(tmp_path):
     assert replay["mean_end_error_nominal"] == pytest.approx(0.042, abs=0.002)
     assert replay["mean_end_error"] == pytest.approx(0.020, abs=0.003)
     assert len(replay["runs"]) == 6
+    plot = tmp_path / "replay.svg"
+    cli_json("replay", str(CIRCLE), "--params", str(result), "--plot", str(plot))
+    svg = plot.read_text()
+    assert svg.count("ends ") == 12  # six panels, nominal and calibrated in each
 
 
 @pytest.mark.parametrize("method", ["exact", "heading", "trajectory"])

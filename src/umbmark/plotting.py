@@ -7,7 +7,7 @@ return error, cw and ccw marked differently, both centres of gravity and the
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -16,6 +16,8 @@ import numpy as np
 from .benchmark import Benchmark
 from .conventions import Direction
 from .io.atomic import atomic_path
+from .kinematics import WheelParams
+from .runs import Run
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -27,6 +29,7 @@ __all__ = [
     "FIGURE_FORMATS",
     "cluster_figure",
     "draw_clusters",
+    "replay_figure",
     "save_figure",
     "trajectory_figure",
 ]
@@ -157,6 +160,57 @@ def trajectory_figure(
             "from where its odometry thinks"
         )
         ax.legend(loc="center", fontsize="small")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def replay_figure(
+    runs: Sequence[Run], odometry: Mapping[str, WheelParams], title: str = ""
+) -> Figure:
+    """Every recorded run's true path against its odometry, one panel per run.
+
+    Parameters
+    ----------
+    runs : sequence of Run
+        Runs with their time series (``run.log``).
+    odometry : mapping of str to WheelParams
+        Named parameter sets to integrate the wheel data with (``nominal``,
+        ``calibrated``).
+    """
+    from matplotlib.figure import Figure
+
+    logged = [run for run in runs if run.log is not None]
+    if not logged:
+        raise ValueError("no run has a time series to draw")
+    columns = min(3, len(logged))
+    rows = -(-len(logged) // columns)
+    fig = Figure(figsize=(4.6 * columns, 4.4 * rows), layout="constrained")
+    axes = fig.subplots(rows, columns, squeeze=False).ravel()
+    colours = ["#1f77b4", "#2ca02c", "#9467bd", "#8c564b"]
+    for ax, run in zip(axes, logged, strict=False):
+        log = run.log
+        assert log is not None
+        truth = log.truth[log.matched]
+        ax.plot(truth[:, 0], truth[:, 1], color="black", linewidth=2, label="ground truth")
+        for colour, (name, params) in zip(colours, odometry.items(), strict=False):
+            odo = log.odometry(params)
+            end = float(np.hypot(*(odo[-1, :2] - truth[-1, :2])) * _MM)
+            ax.plot(
+                odo[:, 0],
+                odo[:, 1],
+                color=colour,
+                linewidth=1,
+                label=f"{name}: ends {end:.0f} mm off",
+            )
+        ax.plot(0.0, 0.0, "k+", markersize=12)
+        ax.set_title(f"{run.label} ({run.direction.value})", fontsize="medium")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.legend(loc="best", fontsize="x-small")
+    for ax in axes[len(logged) :]:
+        ax.set_visible(False)
     if title:
         fig.suptitle(title)
     return fig

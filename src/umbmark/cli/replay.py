@@ -84,6 +84,14 @@ def replay(
             show_default=False,
         ),
     ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot",
+            help="Draw every run's true path and odometry paths to a .png, .svg or .pdf file.",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Replay recorded runs: integrate their wheel data again and compare with the truth.
 
@@ -129,6 +137,9 @@ def replay(
         time_source=time_source,
     )
     from ..sources.load import detect_format
+
+    if plot is not None and plot.suffix.lower() not in (".png", ".svg", ".pdf"):
+        raise InputError(f"--plot {plot}: the file name should end in .png, .svg or .pdf")
 
     is_table = fmt is FormatChoice.table or (
         fmt is FormatChoice.auto and detect_format(source) == "table"
@@ -182,6 +193,10 @@ def replay(
         from ..io.tum import write_tum_runs
 
         write_tum_runs(tum, runs, sets)
+    if plot is not None:
+        from ..plotting import replay_figure, save_figure
+
+        save_figure(replay_figure(runs, sets, title=f"Replay of {source}"), plot)
     if json_out:
         typer.echo(json.dumps(summary, indent=2))
         return
