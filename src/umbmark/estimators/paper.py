@@ -112,6 +112,7 @@ def _disagreement_warnings(
                 f"{name} from x ({math.degrees(parts[name + '_x']):.3f} deg) and from y "
                 f"({math.degrees(parts[name + '_y']):.3f} deg) disagree by more than the "
                 f"spread and the geometry explain ({abs(math.degrees(excess)):.3f} deg > "
-                f"3 x {math.degrees(se):.3f} deg): check the runs' directions, axes and signs"
+                f"3 x {math.degrees(se):.3f} deg): check the runs' directions, axes and signs; "
+                "if they are right, the robot has errors the paper's model leaves out (E_s, slip)"
             )
     return out
