@@ -80,6 +80,15 @@ def test_overriding_the_wheel_parameters_changes_the_odometry(logs):
     assert wider["mean_end_error"] != pytest.approx(base["mean_end_error"])
 
 
+def test_a_runs_table_beside_the_logs_is_left_alone(logs, tmp_path):
+    import shutil
+
+    folder = tmp_path / "log"
+    shutil.copytree(logs / "log", folder)
+    shutil.copy(logs / "runs.csv", folder / "runs.csv")
+    assert cli_json("calibrate", str(folder), "--format", "log")["n_runs"] == 6
+
+
 def test_bad_logs(tmp_path, logs):
     folder = tmp_path / "log"
     folder.mkdir()

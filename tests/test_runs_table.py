@@ -92,6 +92,11 @@ def test_round_trip_through_the_writer(tmp_path, table):
             "row 2: theta_abs = 359 is not a plausible heading in radians",
         ),
         (
+            [("cw", 1, 2, 3, 4, 0.1, 6.2)],
+            "direction,x_abs,y_abs,x_odo,y_odo,theta_abs,theta_odo",
+            "row 2: labelled cw, but theta_odo = 6.2 rad is a left (ccw) loop",
+        ),
+        (
             [("cw", 1, 2, 3, 4, 0.1, "")],
             "direction,x_abs,y_abs,x_odo,y_odo,theta_abs,theta_odo",
             "row 2: gives one of theta_abs and theta_odo but not the other",

@@ -164,6 +164,17 @@ def read_runs_table(
             raise InputError(
                 "gives one of theta_abs and theta_odo but not the other", source=path, row=number
             )
+        if theta_odo is not None:
+            loop = angle_to_rad(theta_odo, angle_unit)
+            # An unwrapped odometry heading beyond half a turn tells the direction driven.
+            if abs(loop) > math.pi and (loop > 0) != (direction is Direction.CCW):
+                raise InputError(
+                    f"labelled {direction.value}, but theta_odo = {theta_odo:g} "
+                    f"{angle_unit} is a {'left (ccw)' if loop > 0 else 'right (cw)'} loop; "
+                    "check the direction column or the sign of the headings",
+                    source=path,
+                    row=number,
+                )
         run = Run(
             direction=direction,
             true_end=EndPose(

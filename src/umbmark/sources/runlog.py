@@ -246,12 +246,32 @@ def read_runlog(path: str | Path) -> tuple[list[Recording], LogMetadata]:
             source=path,
         )
     metadata = read_metadata(meta_path)
-    files = sorted(folder.glob("*.csv")) if path.is_dir() else [path]
-    if not files:
-        raise InputError("holds no .csv run files", source=folder)
+    if path.is_dir():
+        # Other CSVs may sit beside the logs (a runs table, say): take only run logs.
+        candidates = sorted(folder.glob("*.csv"))
+        files = [f for f in candidates if _is_log_csv(f)]
+        if not candidates:
+            raise InputError("holds no .csv run files", source=folder)
+        if not files:
+            files = candidates[:1]  # reading it says what is wrong with it
+    else:
+        files = [path]
     scale = 1.0 if metadata.wheel_data == "angles" else metadata.params.radians_per_pulse
     recordings = [_read_log_csv(f, scale, metadata.params, metadata.side_length) for f in files]
     return recordings, metadata
+
+
+def _is_log_csv(path: Path) -> bool:
+    """Whether the first non-comment line of ``path`` is a run-log header."""
+    try:
+        text = read_text(path)
+    except InputError:
+        return False
+    for line in text.splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            header = {c.strip().lower() for c in line.split(",")}
+            return set(LOG_COLUMNS) <= header
+    return False
 
 
 def _read_log_csv(
