@@ -8,7 +8,15 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from .common import AngleUnit, Estimator, LengthUnit, check_length_flag, reports_input_errors, warn
+from .common import (
+    AngleUnit,
+    Estimator,
+    LengthUnit,
+    check_figure_path,
+    check_length_flag,
+    reports_input_errors,
+    warn,
+)
 from .source_options import (
     ControllerOpt,
     CurrentCLOpt,
@@ -189,8 +197,7 @@ def calibrate(
     for name, path in (("--yaml", yaml_path), ("--ros1-yaml", ros1_yaml_path)):
         if path is not None and path.suffix.lower() not in (".yaml", ".yml"):
             raise InputError(f"{name} {path}: the file name should end in .yaml or .yml")
-    if plot is not None and plot.suffix.lower() not in (".png", ".svg", ".pdf"):
-        raise InputError(f"--plot {plot}: the file name should end in .png, .svg or .pdf")
+    check_figure_path("--plot", plot)
     table = fmt is FormatChoice.table or (fmt is FormatChoice.auto and source.suffix == ".csv")
     if table and side_length is None and method is not Estimator.trajectory:
         raise InputError("--side-length is required: the side of the square path, in metres")

@@ -8,6 +8,7 @@ import math
 import sys
 from collections.abc import Callable, Iterator
 from enum import Enum
+from pathlib import Path
 from typing import ParamSpec, TypeVar
 
 import typer
@@ -18,6 +19,7 @@ __all__ = [
     "AngleUnit",
     "Estimator",
     "LengthUnit",
+    "check_figure_path",
     "check_length_flag",
     "check_positive_flag",
     "progress_bar",
@@ -85,6 +87,14 @@ def check_positive_flag(name: str, value: float, unit: str = "") -> None:
     if not (math.isfinite(value) and value > 0):
         shown = f"{value:g} {unit}".strip()
         raise InputError(f"{name} must be > 0, got {shown}")
+
+
+def check_figure_path(flag: str, path: Path | None) -> None:
+    """Refuse a figure file name whose extension names no figure format."""
+    from ..plotting import FIGURE_FORMATS
+
+    if path is not None and path.suffix.lower() not in FIGURE_FORMATS:
+        raise InputError(f"{flag} {path}: the file name should end in {', '.join(FIGURE_FORMATS)}")
 
 
 def check_length_flag(name: str, value: float, largest: float) -> None:

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from .common import reports_input_errors, warn
+from .common import check_figure_path, reports_input_errors, warn
 from .source_options import (
     CurrentCLOpt,
     CurrentCROpt,
@@ -138,8 +138,7 @@ def replay(
     )
     from ..sources.load import detect_format
 
-    if plot is not None and plot.suffix.lower() not in (".png", ".svg", ".pdf"):
-        raise InputError(f"--plot {plot}: the file name should end in .png, .svg or .pdf")
+    check_figure_path("--plot", plot)
 
     is_table = fmt is FormatChoice.table or (
         fmt is FormatChoice.auto and detect_format(source) == "table"

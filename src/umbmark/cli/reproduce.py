@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from .common import progress_bar, reports_input_errors
+from .common import check_figure_path, progress_bar, reports_input_errors
 
 __all__ = ["reproduce_app"]
 
@@ -141,8 +141,7 @@ def fig4(
 
     if not 0 < abs(leg_bend) <= 10:
         raise InputError(f"--leg-bend {leg_bend:g} deg: give a bend between 0 and 10 deg")
-    if plot is not None and plot.suffix.lower() not in (".png", ".svg", ".pdf"):
-        raise InputError(f"--plot {plot}: the file name should end in .png, .svg or .pdf")
+    check_figure_path("--plot", plot)
     with progress_bar("Fig. 4: tuning the wheelbase on cw runs") as progress:
         result = run_fig4(leg_bend_deg=leg_bend, progress=progress)
     if plot is not None:

@@ -36,6 +36,7 @@ from .atomic import atomic_write_text
 __all__ = [
     "OPTIONAL_COLUMNS",
     "REQUIRED_COLUMNS",
+    "content_lines",
     "format_runs_table",
     "read_runs_table",
     "write_runs_table",
@@ -68,6 +69,21 @@ def read_text(path: str | Path) -> str:
         raise InputError(f"cannot be read ({exc.strerror or exc})", source=path) from None
 
 
+def content_lines(path: str | Path) -> list[tuple[int, str]]:
+    """The lines of a text file that are neither blank nor ``#`` comments, numbered from 1.
+
+    Raises
+    ------
+    InputError
+        If the file cannot be read or is not text.
+    """
+    return [
+        (number, line)
+        for number, line in enumerate(read_text(path).splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+
+
 def read_runs_table(
     path: str | Path,
     *,
@@ -94,12 +110,7 @@ def read_runs_table(
     InputError
         Naming the file, the row and the problem.
     """
-    text = read_text(path)
-    lines = [
-        (number, line)
-        for number, line in enumerate(text.splitlines(), start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
+    lines = content_lines(path)
     if not lines:
         raise InputError("is empty: expected a header and one row per run", source=path)
     header_number, header_line = lines[0]

@@ -150,12 +150,10 @@ def detect_format(path: str | Path) -> Format:
 
 
 def _looks_like_table(path: Path) -> bool:
-    from ..io.runs_table import read_text
+    from ..io.runs_table import content_lines
 
-    for line in read_text(path).splitlines():
-        if line.strip() and not line.lstrip().startswith("#"):
-            return "direction" in line.lower()
-    return False
+    lines = content_lines(path)
+    return bool(lines) and "direction" in lines[0][1].lower()
 
 
 def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:

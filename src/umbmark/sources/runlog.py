@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 
 from ..errors import InputError
 from ..io.atomic import atomic_write_text
-from ..io.runs_table import read_text
+from ..io.runs_table import content_lines, read_text
 from ..kinematics import WheelParams
 from ..recording import PoseSeries, Recording, WheelSeries
 
@@ -264,24 +264,16 @@ def read_runlog(path: str | Path) -> tuple[list[Recording], LogMetadata]:
 def _is_log_csv(path: Path) -> bool:
     """Whether the first non-comment line of ``path`` is a run-log header."""
     try:
-        text = read_text(path)
+        lines = content_lines(path)
     except InputError:
         return False
-    for line in text.splitlines():
-        if line.strip() and not line.lstrip().startswith("#"):
-            header = {c.strip().lower() for c in line.split(",")}
-            return set(LOG_COLUMNS) <= header
-    return False
+    return bool(lines) and set(LOG_COLUMNS) <= {c.strip().lower() for c in lines[0][1].split(",")}
 
 
 def _read_log_csv(
     path: Path, scale: float, params: WheelParams, side_length: float | None
 ) -> Recording:
-    lines = [
-        (number, line)
-        for number, line in enumerate(read_text(path).splitlines(), start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
+    lines = content_lines(path)
     if not lines:
         raise InputError("is empty", source=path)
     header_row, header_line = lines[0]
