@@ -143,28 +143,60 @@ def simulated_session(
     return np.array(times), np.array(counts), np.array(poses), ends
 
 
+def umbmark_command() -> str:
+    """The installed ``umbmark`` console script of this Python environment."""
+    import shutil
+    import sys
+
+    beside = Path(sys.executable).with_name("umbmark")
+    found = str(beside) if beside.exists() else shutil.which("umbmark")
+    assert found, "the umbmark command is not installed: pip install -e ."
+    return found
+
+
+def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 300):
+    """Run the installed ``umbmark ARGS`` as a user would; returns the finished process."""
+    import subprocess
+
+    return subprocess.run(
+        [umbmark_command(), *args],
+        capture_output=True,
+        text=True,
+        check=False,
+        env=env,
+        timeout=timeout,
+    )
+
+
 def cli_json(*args: str) -> dict:  # type: ignore[type-arg]
-    """Run ``umbmark ARGS --json`` in-process; it must succeed. Returns the JSON object."""
+    """Run ``umbmark ARGS --json``; it must succeed. Returns the JSON object."""
     import json
 
-    from typer.testing import CliRunner
-
-    from umbmark.cli.main import app
-
-    result = CliRunner().invoke(app, [*args, "--json"])
-    assert result.exit_code == 0, result.output
-    return dict(json.loads(result.stdout))
+    proc = run_cli(*args, "--json")
+    assert proc.returncode == 0, proc.stderr
+    return dict(json.loads(proc.stdout))
 
 
 def cli_error(*args: str) -> str:
     """Run ``umbmark ARGS``; it must fail on bad input: exit status 2 and one line on
     stderr, no traceback. Returns that line."""
-    from typer.testing import CliRunner
+    proc = run_cli(*args)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert proc.stderr.startswith("umbmark: error: "), proc.stderr
+    assert proc.stderr.count("\n") == 1, proc.stderr
+    assert "Traceback" not in proc.stdout + proc.stderr
+    return str(proc.stderr)
 
-    from umbmark.cli.main import app
 
-    result = CliRunner().invoke(app, list(args))
-    assert result.exit_code == 2, result.output
-    assert result.stderr.count("\n") == 1, result.stderr
-    assert "Traceback" not in result.output
-    return str(result.stderr)
+def api_error(fn, *args, **kwargs) -> str:  # type: ignore[no-untyped-def]
+    """Call ``fn``; it must raise :class:`umbmark.InputError`. Returns its message, which
+    is the line the command prints."""
+    import pytest
+
+    from umbmark.errors import InputError
+
+    with pytest.raises(InputError) as caught:
+        fn(*args, **kwargs)
+    message = str(caught.value)
+    assert "\n" not in message
+    return message

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.association import associate, summarize
 from umbmark.errors import InputError
 from umbmark.recording import PoseSeries, WheelSeries
+from umbmark.sources.association import associate, summarize
 
 
 def _wheels(t):

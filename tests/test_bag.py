@@ -24,8 +24,7 @@ from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from umbmark.errors import InputError
-from umbmark.sources import bag as bag_module
-from umbmark.sources.bag import BagOptions, bag_topics, read_bag
+from umbmark.sources.bag import BagOptions, bag_topics, fastpath, read_bag
 
 TS2 = get_typestore(Stores.LATEST)
 TS1 = get_typestore(Stores.ROS1_NOETIC)
@@ -505,7 +504,7 @@ def test_fast_path_equals_deserialization(tmp_path, fmt, monkeypatch):
     calls = count_deserialize(monkeypatch)
     fast, _ = read_bag(path, BagOptions())
     fast_calls, calls[0] = calls[0], 0
-    monkeypatch.setattr(bag_module, "_LAYOUT_ATTEMPTS", 0)  # deserialize every message
+    monkeypatch.setattr(fastpath, "_LAYOUT_ATTEMPTS", 0)  # deserialize every message
     slow, _ = read_bag(path, BagOptions())
     assert calls[0] == n
     assert fast_calls <= odd + 1  # the first message, and the ones that do not fit
@@ -535,7 +534,7 @@ def test_fast_path_equals_deserialization_for_velocities_and_poses(tmp_path, fmt
     calls = count_deserialize(monkeypatch)
     fast_wheels, fast_truth = read_bag(path, options)
     assert calls[0] == 2  # one per topic, to check the layout
-    monkeypatch.setattr(bag_module, "_LAYOUT_ATTEMPTS", 0)
+    monkeypatch.setattr(fastpath, "_LAYOUT_ATTEMPTS", 0)
     slow_wheels, slow_truth = read_bag(path, options)
     assert calls[0] == 2 + 2 * n
     assert fast_truth is not None

@@ -14,11 +14,13 @@ import pytest
 from umbmark.errors import InputError
 from umbmark.estimators.trajectory import fit_trajectories
 from umbmark.kinematics import WheelParams
-from umbmark.logged import end_errors, reintegrate, runs_from_recordings, to_start_frame
+from umbmark.outputs.runlog import write_log_csv, write_metadata
 from umbmark.recording import PoseSeries, Recording, WheelSeries
-from umbmark.segmentation import split_by_rests, split_by_windows
+from umbmark.runs import end_errors
 from umbmark.sim.robot import NoiseModel, VirtualRobot
-from umbmark.sources.runlog import LogMetadata, read_runlog, write_log_csv, write_metadata
+from umbmark.sources.logged import runs_from_recordings, to_start_frame
+from umbmark.sources.runlog import LogMetadata, read_runlog
+from umbmark.sources.segmentation import split_by_rests, split_by_windows
 
 from helpers import simulated_session
 
@@ -166,7 +168,7 @@ def test_replay_with_the_true_parameters_removes_the_systematic_error(session):
         wheelbase=ROBOT.wheelbase,
     )
     before = end_errors(loaded.runs)
-    after = end_errors(reintegrate(loaded.runs, truth))
+    after = end_errors([run.reintegrated(truth) for run in loaded.runs])
     assert before.min() > 0.02
     assert after.max() < 2e-4  # what is left is encoder quantization and stop tolerance
 

@@ -197,3 +197,36 @@ def test_square_test_refuses_non_positive_geometry():
         SquareTest(0.0, B)
     with pytest.raises(ValueError, match="wheelbase must be > 0"):
         SquareTest(L, -0.34)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_exact_fit_is_the_least_squares_solution_scipy_finds(seed):
+    """The exact geometry is inverted by a small Gauss-Newton of ours (scipy.optimize
+    stays off the default path); scipy's Levenberg-Marquardt on the same residuals must
+    land on the same point, for noise-free and noisy centres, small and large errors."""
+    from scipy.optimize import least_squares
+
+    from umbmark.estimators.exact import exact_components, exact_end_positions
+
+    rng = np.random.default_rng(seed)
+    test = SquareTest(rng.uniform(0.5, 6.0), rng.uniform(0.1, 0.8))
+    alpha, beta = rng.uniform(-0.07, 0.07, size=2)  # up to 4 degrees
+    z = exact_end_positions(alpha, beta, test)
+    if seed % 2:
+        z = z + rng.normal(0.0, 0.03 * test.side_length, size=4)
+    ours = exact_components(z, test)
+
+    def residuals(p):
+        return (exact_end_positions(p[0], p[1], test) - z) / test.side_length
+
+    start = [ours["alpha"] + 0.01, ours["beta"] - 0.01]
+    fit = least_squares(
+        residuals, start, jac="3-point", method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15
+    )
+    assert ours["alpha"] == pytest.approx(fit.x[0], abs=1e-9)
+    assert ours["beta"] == pytest.approx(fit.x[1], abs=1e-9)
+    ours_residual = residuals([ours["alpha"], ours["beta"]])
+    assert ours_residual @ ours_residual <= (fit.fun @ fit.fun) * (1 + 1e-12) + 1e-28
+    if seed % 2 == 0:  # noise-free: the truth itself, to the last bits
+        assert ours["alpha"] == pytest.approx(alpha, abs=1e-14)
+        assert ours["beta"] == pytest.approx(beta, abs=1e-14)

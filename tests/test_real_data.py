@@ -13,19 +13,17 @@ import shutil
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
-from umbmark.cli.main import app
+import umbmark
 from umbmark.errors import InputError
 from umbmark.sources.load import detect_format
 from umbmark.sources.optiodom import read_optiodom
 
-from helpers import OPTIODOM, cli_json
+from helpers import OPTIODOM, api_error
 
 SQUARE = OPTIODOM / "square" / "230620202042"
 SQUARE2 = OPTIODOM / "square" / "231220200029"
 CIRCLE = OPTIODOM / "circular" / "250620202104"
-runner = CliRunner()
 
 pytestmark = pytest.mark.skipif(not SQUARE.is_dir(), reason="../shared/data is not here")
 
@@ -48,7 +46,7 @@ def test_session_metadata_and_runs_are_read_as_published():
 
 
 def test_directions_come_from_the_heading_not_the_file_order():
-    data = cli_json("calibrate", str(SQUARE))
+    data = umbmark.calibrate(SQUARE).to_dict()
     assert [r["direction"] for r in data["runs"]] == ["cw"] * 3 + ["ccw"] * 3
     assert data["format"] == "optiodom"
     assert data["side_length"] == 0.75
@@ -57,29 +55,41 @@ def test_directions_come_from_the_heading_not_the_file_order():
 
 def test_paper_calibration_lowers_the_error_on_circles(tmp_path):
     result = tmp_path / "square.json"
-    data = cli_json("calibrate", str(SQUARE), "-o", str(result))
+    data = umbmark.calibrate(SQUARE, output=result).to_dict()
     assert 0.19 < data["wheelbase"] < 0.21
     assert data["wheel_diameter_left"] == pytest.approx(0.084 * data["new"]["c_L"])
-    replay = cli_json("replay", str(CIRCLE), "--params", str(result))
-    assert replay["mean_end_error_nominal"] == pytest.approx(0.042, abs=0.002)
-    assert replay["mean_end_error"] == pytest.approx(0.020, abs=0.003)
-    assert len(replay["runs"]) == 6
     plot = tmp_path / "replay.svg"
-    cli_json("replay", str(CIRCLE), "--params", str(result), "--plot", str(plot))
+    replay = umbmark.replay(CIRCLE, params=result, plot=plot)
+    assert replay.mean_end_error_nominal == pytest.approx(0.042, abs=0.002)
+    assert replay.mean_end_error == pytest.approx(0.020, abs=0.003)
+    assert len(replay.runs) == 6
     svg = plot.read_text()
     assert svg.count("ends ") == 12  # six panels, nominal and calibrated in each
+
+
+def test_a_report_replays_like_its_result_file(tmp_path):
+    from dataclasses import replace
+
+    from umbmark.sources.params import read_calibrated_params
+
+    result = tmp_path / "square.json"
+    report = umbmark.calibrate(SQUARE, output=result)
+    assert report.new_params() == replace(read_calibrated_params(result), source=report.source)
+    from_report = umbmark.replay(CIRCLE, report)
+    from_file = umbmark.replay(CIRCLE, result)
+    assert from_report.mean_end_error == from_file.mean_end_error
 
 
 @pytest.mark.parametrize("method", ["exact", "heading", "trajectory"])
 def test_other_estimators_also_help_on_circles(tmp_path, method):
     result = tmp_path / f"{method}.json"
-    cli_json("calibrate", str(SQUARE), "--method", method, "-o", str(result))
-    replay = cli_json("replay", str(CIRCLE), "--params", str(result))
-    assert replay["mean_end_error"] < 0.6 * replay["mean_end_error_nominal"]
+    umbmark.calibrate(SQUARE, method=method, output=result)
+    replay = umbmark.replay(CIRCLE, params=result)
+    assert replay.mean_end_error < 0.6 * replay.mean_end_error_nominal
 
 
 def test_trajectory_method_reports_the_scale_error_with_standard_errors():
-    data = cli_json("calibrate", str(CIRCLE), "--method", "trajectory")
+    data = umbmark.calibrate(CIRCLE, method="trajectory").to_dict()
     assert data["method"] == "trajectory"
     assert 0.98 < data["E_s"] < 1.02
     for key in ("E_d", "E_b", "E_s", "r_left", "r_right", "wheelbase"):
@@ -92,7 +102,7 @@ def test_trajectory_method_reports_the_scale_error_with_standard_errors():
 
 def test_tum_files_for_evo(tmp_path):
     out = tmp_path / "tum"
-    cli_json("calibrate", str(SQUARE), "--tum", str(out))
+    umbmark.calibrate(SQUARE, tum=out)
     files = sorted(p.name for p in out.iterdir())
     assert len(files) == 18
     assert "run-01_truth.tum" in files
@@ -112,16 +122,7 @@ def test_ros1_and_ros2_parameter_files(tmp_path):
     import yaml
 
     ros1, ros2 = tmp_path / "ros1.yaml", tmp_path / "ros2.yaml"
-    data = cli_json(
-        "calibrate",
-        str(SQUARE),
-        "--ros1-yaml",
-        str(ros1),
-        "--yaml",
-        str(ros2),
-        "--controller",
-        "base",
-    )
+    data = umbmark.calibrate(SQUARE, ros1_yaml=ros1, yaml=ros2, controller="base").to_dict()
     one = yaml.safe_load(ros1.read_text())["base"]
     two = yaml.safe_load(ros2.read_text())["base"]["ros__parameters"]
     assert one == two
@@ -143,19 +144,30 @@ def test_a_broken_session_gives_one_line(tmp_path):
     lines = run.read_text(encoding="utf-8-sig").splitlines()
     lines[10] = "0.5,abc,0,0,1,1"
     run.write_text("\n".join(lines) + "\n")
-    result = runner.invoke(app, ["calibrate", str(broken), "--format", "optiodom"])
-    assert result.exit_code == 2
-    assert result.stderr.strip() == (
-        f"umbmark: error: {run}, row 11: has a cell that is not a number"
-    )
+    err = api_error(umbmark.calibrate, broken, format="optiodom")
+    assert err == f"{run}, row 11: has a cell that is not a number"
     (broken / "230620202042_metadata.csv").unlink()
-    result = runner.invoke(app, ["calibrate", str(broken), "--format", "optiodom"])
-    assert result.exit_code == 2
-    assert "has no *_metadata.csv: not an OptiOdom session" in result.stderr
+    err = api_error(umbmark.calibrate, broken, format="optiodom")
+    assert "has no *_metadata.csv: not an OptiOdom session" in err
 
 
 def test_second_session_longer_square():
-    data = cli_json("calibrate", str(SQUARE2))
+    data = umbmark.calibrate(SQUARE2).to_dict()
     assert data["side_length"] == 1.7
     assert data["e_max_syst"] > 0.05
     assert data["second_pass_recommended"] is True
+
+
+def test_sessions_pool_for_the_trajectory_fit_but_not_across_squares():
+    pooled = umbmark.calibrate(SQUARE, CIRCLE, method="trajectory")
+    assert len(pooled.runs) == 12
+    assert pooled.sources == (str(SQUARE), str(CIRCLE))
+    assert pooled.runs[6].label == "250620202104 run-01"
+    # Wheel data of both sessions pin the wheels down better than either alone.
+    alone = umbmark.calibrate(CIRCLE, method="trajectory")
+    assert pooled.estimate.standard_errors["E_d"] < alone.estimate.standard_errors["E_d"]
+    assert "not a square of known side" in api_error(umbmark.calibrate, SQUARE, CIRCLE)
+    err = api_error(umbmark.calibrate, SQUARE, SQUARE2)
+    assert "squares of different sides (0.75 m, 1.7 m)" in err
+    twice = umbmark.calibrate(SQUARE, SQUARE)
+    assert twice.e_max_syst == pytest.approx(umbmark.calibrate(SQUARE).e_max_syst, rel=1e-12)

@@ -102,6 +102,7 @@ def test_straight_line_shows_the_scale_error():
 @settings(max_examples=3, deadline=None)
 @given(st.lists(st.tuples(st.floats(0.98, 1.02), st.floats(0.95, 1.05)), min_size=6, max_size=6))
 @example([(0.98, 0.95), (0.98, 1.05), (1.02, 0.95), (1.02, 1.05), (1.0, 1.0), (1.001, 0.99)])
+@pytest.mark.slow
 def test_repeated_paper_correction_converges_to_the_truth(errors):
     # Noise-free, each pass of the paper's correction is applied on top of the last one
     # (Sec. 5); the odometry's wheel ratio and wheelbase must converge to the true ones.

@@ -11,13 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from umbmark.benchmark import umbmark_benchmark
-from umbmark.calibration import ActiveParams, Calibration
-from umbmark.estimators import SquareTest, estimate_errors
-from umbmark.estimators.trajectory import trajectory_estimate
-from umbmark.kinematics import WheelParams
-from umbmark.logged import end_errors, reintegrate
-from umbmark.sources.load import Loaded, LoadOptions, load_runs
+import umbmark
 
 SESSIONS = ("square/230620202042", "square/231220200029", "circular/250620202104")
 
@@ -28,48 +22,19 @@ def main() -> None:
     parser.add_argument("--data", type=Path, default=default)
     parser.add_argument("--window", type=float, default=1.0, help="trajectory window [s]")
     args = parser.parse_args()
-    loaded: dict[str, Loaded] = {
-        s: load_runs(args.data / s, "optiodom", LoadOptions()) for s in SESSIONS
-    }
 
-    def replay(params: WheelParams) -> list[float]:
-        return [
-            1000 * float(end_errors(reintegrate(loaded[s].runs, params)).mean()) for s in SESSIONS
-        ]
+    def replay(calibration: umbmark.CalibrationReport | None) -> str:
+        errors = [umbmark.replay(args.data / s, calibration) for s in SESSIONS]
+        return "".join(f"{1000 * r.mean_end_error:9.1f}" for r in errors)
 
     names = [s.split("/")[0][:6] + " " + s.split("/")[1][-4:] for s in SESSIONS]
     print("mean end-pose error on replay [mm]; columns: " + ", ".join(names))
-    nominal = loaded[SESSIONS[0]].params
-    assert nominal is not None
-    print(f"{'nominal parameters':42s}" + "".join(f"{e:9.1f}" for e in replay(nominal)))
+    print(f"{'nominal parameters':42s}" + replay(None))
     for source in SESSIONS:
-        data = loaded[source]
-        params = data.params
-        assert params is not None
-        active = ActiveParams(
-            wheelbase=params.wheelbase,
-            c_left=params.c_left,
-            c_right=params.c_right,
-            wheel_diameter=params.wheel_diameter,
-        )
-        methods = (
-            ["paper", "exact", "heading", "trajectory"] if data.side_length else ["trajectory"]
-        )
-        for method in methods:
-            if method == "trajectory":
-                logs = [r.log for r in data.runs if r.log is not None]
-                estimate, _ = trajectory_estimate(logs, params, data.side_length, args.window)
-            else:
-                assert data.side_length is not None
-                bench = umbmark_benchmark(data.runs)
-                test = SquareTest(data.side_length, params.wheelbase)
-                estimate = estimate_errors(method, bench, data.runs, test)  # type: ignore[arg-type]
-            cal = Calibration(estimate, active)
-            new = params.with_corrections(
-                c_left=cal.new_c_left, c_right=cal.new_c_right, wheelbase=cal.wheelbase_corrected
-            )
-            label = f"{method} from {source}"
-            print(f"{label:42s}" + "".join(f"{e:9.1f}" for e in replay(new)))
+        square = source.startswith("square")
+        for method in ["paper", "exact", "heading", "trajectory"] if square else ["trajectory"]:
+            report = umbmark.calibrate(args.data / source, method=method, window=args.window)
+            print(f"{f'{method} from {source}':42s}" + replay(report))
 
 
 if __name__ == "__main__":

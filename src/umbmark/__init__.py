@@ -1,10 +1,24 @@
 """umbmark: measure and correct the systematic odometry errors of differential-drive robots.
 
 Implements Borenstein & Feng (1996), *Measurement and Correction of Systematic Odometry
-Errors in Mobile Robots* (UMBmark), and goes past it. The public names below are imported
-on first use, so that ``import umbmark`` (and ``umbmark --help``) stay fast.
+Errors in Mobile Robots* (UMBmark), and goes past it.
 
-Conventions (frame, signs, units) are in :mod:`umbmark.conventions`.
+Every command is a function here, with the command's options as keywords (lengths in
+metres, angles in radians, times in seconds) and a report as its result::
+
+    import umbmark
+
+    report = umbmark.calibrate("runs.csv", side_length=4, wheelbase=0.34, unit="mm")
+    report.e_max_syst            # [m], Eq. 3.4
+    report.estimate.E_d          # D_R / D_L
+    report.calibration.new_c_left
+    print(report.overlay_yaml())  # the ros2_control overlay
+    report.to_dict()             # exactly what `umbmark calibrate --json` prints
+
+Bad input raises :class:`InputError` (a ``ValueError``) whose message is the one line the
+command prints. The names below are imported on first use, so that ``import umbmark``
+(and ``umbmark --help``) stay fast. Conventions (frame, signs, units) are in
+:mod:`umbmark.conventions`.
 """
 
 from __future__ import annotations
@@ -12,9 +26,24 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 _EXPORTS = {
+    # jobs: one function per command, and their reports
+    "calibrate": "umbmark.jobs.calibrate",
+    "replay": "umbmark.jobs.replay",
+    "simulate": "umbmark.jobs.simulate",
+    "demo": "umbmark.jobs.demo",
+    "reproduce_table1": "umbmark.jobs.reproduce",
+    "reproduce_fig4": "umbmark.jobs.reproduce",
+    "example": "umbmark.jobs.example",
+    "CalibrationReport": "umbmark.jobs.calibrate",
+    "ReplayReport": "umbmark.jobs.replay",
+    "SimulationReport": "umbmark.jobs.simulate",
+    "DemoReport": "umbmark.jobs.demo",
+    "SourceOptions": "umbmark.jobs.inputs",
+    "InputError": "umbmark.errors",
+    # building blocks
     "ActiveParams": "umbmark.calibration",
     "Benchmark": "umbmark.benchmark",
     "Calibration": "umbmark.calibration",
@@ -26,7 +55,7 @@ _EXPORTS = {
     "WheelParams": "umbmark.kinematics",
     "estimate_errors": "umbmark.estimators",
     "integrate_odometry": "umbmark.kinematics",
-    "read_runs_table": "umbmark.io.runs_table",
+    "read_runs_table": "umbmark.sources.runs_table",
     "umbmark_benchmark": "umbmark.benchmark",
 }
 
@@ -34,16 +63,29 @@ __all__ = [
     "ActiveParams",
     "Benchmark",
     "Calibration",
+    "CalibrationReport",
+    "DemoReport",
     "Direction",
     "EndPose",
     "ErrorEstimate",
+    "InputError",
+    "ReplayReport",
     "Run",
+    "SimulationReport",
+    "SourceOptions",
     "SquareTest",
     "WheelParams",
     "__version__",
+    "calibrate",
+    "demo",
     "estimate_errors",
+    "example",
     "integrate_odometry",
     "read_runs_table",
+    "replay",
+    "reproduce_fig4",
+    "reproduce_table1",
+    "simulate",
     "umbmark_benchmark",
 ]
 
@@ -51,10 +93,18 @@ if TYPE_CHECKING:
     from .benchmark import Benchmark, umbmark_benchmark
     from .calibration import ActiveParams, Calibration
     from .conventions import Direction
+    from .errors import InputError
     from .estimators import ErrorEstimate, SquareTest, estimate_errors
-    from .io.runs_table import read_runs_table
+    from .jobs.calibrate import CalibrationReport, calibrate
+    from .jobs.demo import DemoReport, demo
+    from .jobs.example import example
+    from .jobs.inputs import SourceOptions
+    from .jobs.replay import ReplayReport, replay
+    from .jobs.reproduce import reproduce_fig4, reproduce_table1
+    from .jobs.simulate import SimulationReport, simulate
     from .kinematics import WheelParams, integrate_odometry
     from .runs import EndPose, Run
+    from .sources.runs_table import read_runs_table
 
 
 def __getattr__(name: str) -> object:
@@ -62,3 +112,7 @@ def __getattr__(name: str) -> object:
     if module is None:
         raise AttributeError(f"module 'umbmark' has no attribute {name!r}")
     return getattr(importlib.import_module(module), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

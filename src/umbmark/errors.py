@@ -7,11 +7,12 @@ from pathlib import Path
 __all__ = ["InputError"]
 
 
-class InputError(Exception):
+class InputError(ValueError):
     """Input that umbmark cannot use.
 
-    Its text is one line: ``FILE, row N: PROBLEM`` (file and row when known). The CLI
-    prints it and exits with status 2.
+    Its text is one line: ``FILE, row N: PROBLEM`` (file and row when known), the line
+    the command prints before it exits with status 2. It is a ``ValueError``, so code
+    that already catches those catches it too.
     """
 
     def __init__(

@@ -11,15 +11,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .conventions import Direction, wrap_angle
+from .kinematics import IntegrationMethod, WheelParams
 from .recording import RunLog
 
-__all__ = ["EndPose", "Run", "return_errors", "split_by_direction"]
+__all__ = ["EndPose", "Run", "end_errors", "return_errors", "split_by_direction"]
 
 
 @dataclass(frozen=True)
@@ -70,10 +71,28 @@ class Run:
             return None
         return float(wrap_angle(self.true_end.theta - self.odometry_end.theta))
 
+    def reintegrated(self, params: WheelParams, method: IntegrationMethod = "arc") -> Run:
+        """The same run with its odometry integrated anew with ``params`` (replay).
+
+        Raises
+        ------
+        ValueError
+            If the run has no recorded wheel data.
+        """
+        if self.log is None:
+            raise ValueError(f"{self.label or 'a run'} has no recorded wheel data to replay")
+        odo = self.log.odometry(params, method)
+        return replace(self, odometry_end=EndPose(*(float(v) for v in odo[-1])))
+
 
 def return_errors(runs: Sequence[Run]) -> NDArray[np.float64]:
     """Return errors of ``runs`` as an array of shape (n, 2): ``eps_x, eps_y`` [m]."""
     return np.array([run.return_error for run in runs], dtype=np.float64).reshape(-1, 2)
+
+
+def end_errors(runs: Sequence[Run]) -> NDArray[np.float64]:
+    """Distance between true and odometry end position of every run [m], shape (n,)."""
+    return np.array([math.hypot(*run.return_error) for run in runs], dtype=np.float64)
 
 
 def split_by_direction(runs: Sequence[Run]) -> dict[Direction, list[Run]]:

@@ -1,110 +1,48 @@
-"""What every command shares: error reporting, warnings, option checks."""
+"""What every command shares: error and warning lines, progress bars, the console."""
 
 from __future__ import annotations
 
 import contextlib
-import functools
-import math
 import sys
-from collections.abc import Callable, Iterator
-from enum import Enum
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import ParamSpec, TypeVar
+from typing import TYPE_CHECKING
 
-import typer
+if TYPE_CHECKING:
+    from rich.console import Console
 
-from ..errors import InputError
-
-__all__ = [
-    "AngleUnit",
-    "Estimator",
-    "LengthUnit",
-    "check_figure_path",
-    "check_length_flag",
-    "check_positive_flag",
-    "progress_bar",
-    "reports_input_errors",
-    "warn",
-]
-
-P = ParamSpec("P")
-R = TypeVar("R")
+__all__ = ["EXIT_BAD_INPUT", "console", "error_line", "progress_bar", "warn", "wrote"]
 
 #: Exit status for bad input (as for a usage error).
 EXIT_BAD_INPUT = 2
-
-
-class LengthUnit(str, Enum):
-    """Unit of lengths in an input table."""
-
-    m = "m"
-    cm = "cm"
-    mm = "mm"
-
-
-class Estimator(str, Enum):
-    """Estimators a square path test can be evaluated with."""
-
-    paper = "paper"
-    exact = "exact"
-    heading = "heading"
-    trajectory = "trajectory"
-
-
-class AngleUnit(str, Enum):
-    """Unit of angles in an input table."""
-
-    rad = "rad"
-    deg = "deg"
+#: Width of output that goes to a file or a pipe: wide enough that no table wraps.
+_PIPE_WIDTH = 200
 
 
 def error_line(message: str) -> None:
     """Print one error line to stderr (plain text: no wrapping, no colour codes)."""
-    sys.stderr.write(f"umbmark: error: {message}\n")
+    sys.stderr.write(f"umbmark: error: {' '.join(message.split())}\n")
 
 
 def warn(message: str) -> None:
     """Print one warning line to stderr."""
-    sys.stderr.write(f"umbmark: warning: {message}\n")
+    sys.stderr.write(f"umbmark: warning: {' '.join(message.split())}\n")
 
 
-def reports_input_errors(fn: Callable[P, R]) -> Callable[P, R]:
-    """Turn :class:`InputError` into one line on stderr and exit status 2."""
-
-    @functools.wraps(fn)
-    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
-        try:
-            return fn(*args, **kwargs)
-        except InputError as exc:
-            error_line(str(exc))
-            raise typer.Exit(EXIT_BAD_INPUT) from None
-
-    return wrapper
+def wrote(paths: Iterable[str | Path]) -> None:
+    """Say on stderr which files were written (stdout stays for the result)."""
+    for path in paths:
+        sys.stderr.write(f"umbmark: wrote {path}\n")
 
 
-def check_positive_flag(name: str, value: float, unit: str = "") -> None:
-    """Refuse a flag value that is not a positive finite number."""
-    if not (math.isfinite(value) and value > 0):
-        shown = f"{value:g} {unit}".strip()
-        raise InputError(f"{name} must be > 0, got {shown}")
+def console() -> Console:
+    """A console on stdout; not wrapped at 80 columns when piped."""
+    from rich.console import Console
 
-
-def check_figure_path(flag: str, path: Path | None) -> None:
-    """Refuse a figure file name whose extension names no figure format."""
-    from ..plotting import FIGURE_FORMATS
-
-    if path is not None and path.suffix.lower() not in FIGURE_FORMATS:
-        raise InputError(f"{flag} {path}: the file name should end in {', '.join(FIGURE_FORMATS)}")
-
-
-def check_length_flag(name: str, value: float, largest: float) -> None:
-    """Refuse a length flag [m] that is not positive or is implausibly large (unit slip)."""
-    check_positive_flag(name, value, "m")
-    if value > largest:
-        raise InputError(
-            f"{name} {value:g} m is implausibly large: lengths on the command line are in "
-            f"metres (at most {largest:g} m here)"
-        )
+    out = Console(highlight=False)
+    if not out.is_terminal:
+        out = Console(highlight=False, width=_PIPE_WIDTH, soft_wrap=True)
+    return out
 
 
 @contextlib.contextmanager
@@ -116,8 +54,8 @@ def progress_bar(description: str) -> Iterator[Callable[[float], None]]:
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    console = Console(stderr=True)
-    if not console.is_terminal:
+    err = Console(stderr=True)
+    if not err.is_terminal:
         yield lambda fraction: None
         return
     with Progress(
@@ -125,7 +63,7 @@ def progress_bar(description: str) -> Iterator[Callable[[float], None]]:
         BarColumn(),
         TextColumn("{task.percentage:>3.0f}%"),
         TimeElapsedColumn(),
-        console=console,
+        console=err,
         transient=True,
     ) as bar:
         task = bar.add_task(description, total=1.0)

@@ -1,66 +1,73 @@
-"""The ``umbmark`` command line: one subcommand per job.
+"""The ``umbmark`` command line: one subcommand per job, each a thin layer over the
+library function of the same name (parse the options, call, render).
 
-Heavy imports (numpy, scipy, matplotlib, rosbags) happen inside the commands, so that
-``umbmark --help`` answers at once.
+Every failure the user can cause ends as one line on stderr and exit status 2: bad
+input (:class:`umbmark.InputError`) and malformed options alike.
 """
 
 from __future__ import annotations
 
-import typer
+import os
+import sys
+from collections.abc import Sequence
+
+import click
 
 from .. import __version__
+from ..errors import InputError
 from .calibrate import calibrate
+from .common import EXIT_BAD_INPUT, error_line
 from .demo import demo
 from .example import example
 from .replay import replay
-from .reproduce import reproduce_app
+from .reproduce import reproduce
 from .simulate import simulate
 
-app = typer.Typer(
-    name="umbmark",
-    help="Measure and correct the systematic odometry errors of differential-drive robots "
-    "(Borenstein & Feng's UMBmark). Lengths in metres and angles in radians unless a flag "
-    "says otherwise.",
+__all__ = ["cli", "main"]
+
+#: Exit status after Ctrl-C, as shells report it.
+EXIT_INTERRUPTED = 130
+
+
+@click.group(
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
     no_args_is_help=True,
-    rich_markup_mode=None,  # help texts say "[m]" and "[s]": no markup
-    add_completion=False,
-    pretty_exceptions_enable=False,
-    context_settings={"help_option_names": ["-h", "--help"]},
 )
+@click.version_option(__version__, "--version", prog_name="umbmark", message="%(prog)s %(version)s")
+def cli() -> None:
+    """Measure and correct the systematic odometry errors of differential-drive robots
+    (Borenstein & Feng's UMBmark). Lengths in metres and angles in radians unless an
+    option says otherwise; every command has --help."""
 
 
-def _version(value: bool) -> None:
-    if value:
-        typer.echo(f"umbmark {__version__}")
-        raise typer.Exit()
+for command in (demo, calibrate, replay, simulate, reproduce, example):
+    cli.add_command(command)
 
 
-@app.callback()
-def _root(
-    version: bool = typer.Option(
-        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
-    ),
-) -> None:
-    """umbmark: UMBmark and beyond."""
+def _usage(exc: click.UsageError) -> str:
+    command = exc.ctx.command_path if exc.ctx is not None else "umbmark"
+    return f"{exc.format_message()} (see {command} --help)"
 
 
-app.command()(demo)
-app.command()(calibrate)
-app.command()(replay)
-app.command()(simulate)
-app.add_typer(reproduce_app, name="reproduce")
-app.command()(example)
-
-
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     """Entry point of the ``umbmark`` console script."""
-    import os
-    import sys
-
     try:
-        app()
+        code = cli.main(args=argv, prog_name="umbmark", standalone_mode=False)
+    except click.exceptions.NoArgsIsHelpError as exc:
+        click.echo(exc.ctx.get_help() if exc.ctx is not None else cli.get_help(click.Context(cli)))
+        sys.exit(0)
+    except click.UsageError as exc:
+        error_line(_usage(exc))
+        sys.exit(EXIT_BAD_INPUT)
+    except InputError as exc:
+        error_line(str(exc))
+        sys.exit(EXIT_BAD_INPUT)
+    except (click.Abort, KeyboardInterrupt):
+        sys.stderr.write("\numbmark: interrupted\n")
+        sys.exit(EXIT_INTERRUPTED)
     except BrokenPipeError:
         # The reader of our output went away (``umbmark ... | head``): not an error of ours.
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         sys.exit(1)
+    sys.exit(code if isinstance(code, int) else 0)

@@ -10,9 +10,9 @@ from rich.table import Table
 from rich.text import Text
 
 from ..benchmark import Benchmark
-from ..result import CalibrationReport
+from ..jobs.calibrate import CalibrationReport
 
-__all__ = ["render_report", "verdict"]
+__all__ = ["render_calibration", "table", "verdict"]
 
 _MM = 1000.0
 _METHOD_NAMES = {
@@ -47,7 +47,7 @@ def _render_benchmark(report: CalibrationReport, bench: Benchmark, console: Cons
         f"{test.side_length:.3f} m, wheelbase b = {test.wheelbase:.4f} m)",
     )
     console.print(head)
-    clusters = _table("Return errors (Eqs. 3.1-3.4)")
+    clusters = table("Return errors (Eqs. 3.1-3.4)")
     clusters.add_column("")
     clusters.add_column("cw", justify="right")
     clusters.add_column("ccw", justify="right")
@@ -78,10 +78,14 @@ def _plus_minus(value: float, se: float | None, fmt: str) -> str:
     return f"{format(value, fmt)} ± {format(se, fmt)}"
 
 
-def render_report(
-    report: CalibrationReport, console: Console, yaml_text: str | None = None
+def render_calibration(
+    report: CalibrationReport, console: Console, *, overlay: bool = True
 ) -> None:
-    """Print the summary of ``report`` on ``console``."""
+    """Print the summary of ``report`` on ``console`` (with the overlay to paste)."""
+    from ..sources.association import summarize
+
+    for line in summarize(list(report.associations)):
+        console.print(line)
     bench, cal = report.benchmark, report.calibration
     est, active = cal.estimate, cal.active
     se = est.standard_errors
@@ -97,7 +101,7 @@ def render_report(
     else:
         _render_benchmark(report, bench, console)
 
-    errors = _table(f"Systematic errors: {_METHOD_NAMES.get(est.method, est.method)}")
+    errors = table(f"Systematic errors: {_METHOD_NAMES.get(est.method, est.method)}")
     errors.add_column("")
     errors.add_column("value", justify="right")
     errors.add_column("")
@@ -135,7 +139,7 @@ def render_report(
         )
     console.print(errors)
 
-    correction = _table("Correction, composed with the values active during the runs")
+    correction = table("Correction, composed with the values active during the runs")
     correction.add_column("")
     correction.add_column("active", justify="right")
     correction.add_column("this pass", justify="right")
@@ -186,15 +190,15 @@ def render_report(
         )
     console.print(correction)
 
-    if yaml_text is not None:
+    if overlay:
         console.print(
             Text("ros2_control overlay (paste it, or write it with --yaml FILE):", style="bold")
         )
         # Plain text, no box: it must copy and paste as it is.
-        console.print(Text(yaml_text.rstrip()), soft_wrap=True)
+        console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
 
 
-def _table(title: str) -> Table:
+def table(title: str) -> Table:
     """A compact table whose cells are plain text (no markup: ``[mm]`` stays as it is)."""
     return Table(title=Text(title), title_justify="left", box=box.SIMPLE_HEAD, padding=(0, 1))
 

@@ -3,7 +3,7 @@
 Formats
 -------
 ``table``
-    A runs table (CSV of end points, see :mod:`umbmark.io.runs_table`).
+    A runs table (CSV of end points, see :mod:`umbmark.sources.runs_table`).
 ``log``
     An umbmark run log (folder with ``metadata.yaml`` and CSV time series, see
     :mod:`umbmark.sources.runlog`), or one CSV of it.
@@ -22,19 +22,19 @@ Formats
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
 import yaml
 
-from ..association import DEFAULT_MAX_GAP, Association
 from ..errors import InputError
 from ..kinematics import WheelParams
-from ..logged import SplitMode, runs_from_recordings
 from ..recording import Recording
 from ..runs import Run
-from ..segmentation import SplitOptions
+from .association import DEFAULT_MAX_GAP, Association
+from .logged import SplitMode, runs_from_recordings
+from .segmentation import SplitOptions
 
 if TYPE_CHECKING:
     from .bag import BagOptions
@@ -150,7 +150,7 @@ def detect_format(path: str | Path) -> Format:
 
 
 def _looks_like_table(path: Path) -> bool:
-    from ..io.runs_table import content_lines
+    from .text import content_lines
 
     lines = content_lines(path)
     return bool(lines) and "direction" in lines[0][1].lower()
@@ -167,7 +167,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
     source = Path(source)
     kind = detect_format(source) if fmt == "auto" else fmt
     if kind == "table":
-        from ..io.runs_table import read_runs_table
+        from .runs_table import read_runs_table
 
         runs = read_runs_table(
             source,
@@ -228,10 +228,3 @@ def _read_bag(
     wheels, truth = read_bag(source, options.bag or BagOptions())
     recording = Recording(name=source.name, wheels=wheels, truth=truth)
     return [recording], None, None
-
-
-def with_params(loaded: Loaded, params: WheelParams) -> Loaded:
-    """The same runs integrated with other parameters (for replay)."""
-    from ..logged import reintegrate
-
-    return replace(loaded, runs=reintegrate(loaded.runs, params), params=params)

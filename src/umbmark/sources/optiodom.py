@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..io.runs_table import read_text
 from ..kinematics import WheelParams
 from ..recording import PoseSeries, Recording, WheelSeries
+from .text import read_text
 
 __all__ = ["OptiOdomSession", "is_optiodom_session", "read_optiodom"]
 

@@ -1,4 +1,4 @@
-"""The umbmark run log: recorded runs as CSV time series plus a small metadata file.
+"""Reading the umbmark run log: recorded runs as CSV time series plus a small metadata file.
 
 Format
 ------
@@ -33,37 +33,34 @@ file may hold one run or several (separated by rests near the start point).
     c_right: 1.0
 
 Further keys (``truth``, ``notes``) are kept as they are and otherwise ignored.
+:mod:`umbmark.outputs.runlog` writes run logs.
 """
 
 from __future__ import annotations
 
 import csv
-import io
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
-from numpy.typing import NDArray
 
 from ..errors import InputError
-from ..io.atomic import atomic_write_text
-from ..io.runs_table import content_lines, read_text
 from ..kinematics import WheelParams
 from ..recording import PoseSeries, Recording, WheelSeries
+from .text import content_lines, read_text
 
 __all__ = [
+    "FORMAT_NAME",
     "LOG_COLUMNS",
     "METADATA_FILE",
     "LogMetadata",
     "is_runlog",
     "read_metadata",
     "read_runlog",
-    "write_log_csv",
-    "write_metadata",
 ]
 
 LOG_COLUMNS = ("time", "x", "y", "theta", "left", "right")
@@ -96,69 +93,6 @@ class LogMetadata:
             c_left=self.c_left,
             c_right=self.c_right,
         )
-
-    def to_yaml(self) -> str:
-        """The metadata file's text."""
-        body: dict[str, Any] = {
-            "format": FORMAT_NAME,
-            "version": 1,
-            "wheel_data": self.wheel_data,
-            "wheel_diameter": self.wheel_diameter,
-            "wheelbase": self.wheelbase,
-            "encoder_resolution": self.encoder_resolution,
-            "gear_ratio": self.gear_ratio,
-        }
-        if self.side_length is not None:
-            body["side_length"] = self.side_length
-        body["c_left"] = self.c_left
-        body["c_right"] = self.c_right
-        body.update(self.extra)
-        header = "# umbmark run log: lengths in metres, angles in radians, time in seconds\n"
-        return header + yaml.safe_dump(body, sort_keys=False)
-
-
-def write_metadata(folder: str | Path, metadata: LogMetadata) -> Path:
-    """Write ``metadata.yaml`` into ``folder`` (created if missing)."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / METADATA_FILE
-    atomic_write_text(path, metadata.to_yaml())
-    return path
-
-
-def write_log_csv(
-    path: str | Path,
-    time: NDArray[np.float64],
-    pose: NDArray[np.float64] | None,
-    wheels: NDArray[np.float64] | NDArray[np.int64],
-    comment: str = "",
-) -> None:
-    """Write one run-log CSV.
-
-    Parameters
-    ----------
-    time : array, shape (n,)
-        Seconds.
-    pose : array, shape (n, 3), or None
-        Ground truth ``x, y, theta`` [m, rad]; a row of NaN leaves its cells empty.
-    wheels : array, shape (n, 2)
-        Cumulative ``left, right`` counts (integers) or wheel angles [rad].
-    """
-    out = io.StringIO()
-    out.write("".join(f"# {line}\n" for line in comment.splitlines()))
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(LOG_COLUMNS)
-    integer = np.issubdtype(np.asarray(wheels).dtype, np.integer)
-    for i in range(len(time)):
-        row: list[str] = [f"{time[i]:.6f}"]
-        if pose is None or np.isnan(pose[i]).any():
-            row += ["", "", ""]
-        else:
-            row += [f"{pose[i, 0]:.6f}", f"{pose[i, 1]:.6f}", f"{pose[i, 2]:.8f}"]
-        w: Sequence[Any] = wheels[i]
-        row += [str(int(v)) for v in w] if integer else [f"{float(v):.9f}" for v in w]
-        writer.writerow(row)
-    atomic_write_text(path, out.getvalue())
 
 
 def is_runlog(path: Path) -> bool:

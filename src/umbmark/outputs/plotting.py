@@ -13,17 +13,17 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .benchmark import Benchmark
-from .conventions import Direction
-from .io.atomic import atomic_path
-from .kinematics import WheelParams
-from .runs import Run
+from ..benchmark import Benchmark
+from ..conventions import Direction
+from ..kinematics import WheelParams
+from ..runs import Run
+from .atomic import atomic_path
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .sim.engine import Trace
+    from ..sim.engine import Trace
 
 __all__ = [
     "FIGURE_FORMATS",

@@ -9,21 +9,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..conventions import Direction
+from ..errors import InputError
+from ..kinematics import IntegrationMethod, WheelParams
+from ..recording import Recording, RunLog
+from ..runs import EndPose, Run
 from .association import DEFAULT_MAX_GAP, Association, associate
-from .conventions import Direction
-from .errors import InputError
-from .kinematics import IntegrationMethod, WheelParams
-from .recording import Recording, RunLog
-from .runs import EndPose, Run
 from .segmentation import SplitOptions, split_by_rests, split_by_windows
 
-__all__ = ["LoadedRuns", "SplitMode", "end_errors", "reintegrate", "runs_from_recordings"]
+__all__ = ["LoadedRuns", "SplitMode", "runs_from_recordings", "to_start_frame"]
 
 FloatArray = NDArray[np.float64]
 SplitMode = Literal["rests", "none", "windows"]
@@ -157,21 +157,3 @@ def runs_from_recordings(
         names = ", ".join(r.name for r in recordings) or "the recordings"
         raise InputError(f"found no run with ground truth in {names}", source=None)
     return out
-
-
-def reintegrate(
-    runs: Sequence[Run], params: WheelParams, method: IntegrationMethod = "arc"
-) -> list[Run]:
-    """The same runs with their odometry integrated anew with ``params`` (replay)."""
-    out = []
-    for run in runs:
-        if run.log is None:
-            raise ValueError(f"{run.label or 'a run'} has no recorded wheel data to replay")
-        odo = run.log.odometry(params, method)
-        out.append(replace(run, odometry_end=EndPose(*(float(v) for v in odo[-1]))))
-    return out
-
-
-def end_errors(runs: Sequence[Run]) -> FloatArray:
-    """Distance between true and odometry end position of every run [m], shape (n,)."""
-    return np.array([math.hypot(*run.return_error) for run in runs], dtype=np.float64)

@@ -1,4 +1,4 @@
-"""The runs table: one row per run, typed in by hand or written by ``umbmark simulate``.
+"""Reading the runs table: one row per run, typed in by hand or written by ``umbmark simulate``.
 
 Format
 ------
@@ -23,65 +23,21 @@ the caller says otherwise. Rows are numbered as the file's lines, from 1.
 from __future__ import annotations
 
 import csv
-import io
 import math
-from collections.abc import Sequence
 from pathlib import Path
 
 from ..conventions import Direction, angle_to_rad, length_to_m
 from ..errors import InputError
 from ..runs import EndPose, Run
-from .atomic import atomic_write_text
+from .text import content_lines
 
-__all__ = [
-    "OPTIONAL_COLUMNS",
-    "REQUIRED_COLUMNS",
-    "content_lines",
-    "format_runs_table",
-    "read_runs_table",
-    "write_runs_table",
-]
+__all__ = ["OPTIONAL_COLUMNS", "REQUIRED_COLUMNS", "read_runs_table"]
 
 REQUIRED_COLUMNS = ("direction", "x_abs", "y_abs", "x_odo", "y_odo")
 OPTIONAL_COLUMNS = ("theta_abs", "theta_odo")
 _ALIASES = {"x_calc": "x_odo", "y_calc": "y_odo", "theta_calc": "theta_odo"}
 #: Headings beyond this many radians are taken for degrees given as radians.
 _MAX_PLAUSIBLE_RAD = 4.0 * math.pi
-
-
-def read_text(path: str | Path) -> str:
-    """Read a text file as UTF-8 (with or without a byte-order mark).
-
-    Raises
-    ------
-    InputError
-        If the file cannot be read or is not text.
-    """
-    try:
-        return Path(path).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError("no such file", source=path) from None
-    except IsADirectoryError:
-        raise InputError("is a directory, not a file", source=path) from None
-    except UnicodeDecodeError:
-        raise InputError("is not a UTF-8 text file", source=path) from None
-    except OSError as exc:
-        raise InputError(f"cannot be read ({exc.strerror or exc})", source=path) from None
-
-
-def content_lines(path: str | Path) -> list[tuple[int, str]]:
-    """The lines of a text file that are neither blank nor ``#`` comments, numbered from 1.
-
-    Raises
-    ------
-    InputError
-        If the file cannot be read or is not text.
-    """
-    return [
-        (number, line)
-        for number, line in enumerate(read_text(path).splitlines(), start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
 
 
 def read_runs_table(
@@ -206,43 +162,6 @@ def read_runs_table(
     if not runs:
         raise InputError("has a header but no runs", source=path)
     return runs
-
-
-def format_runs_table(runs: Sequence[Run]) -> str:
-    """The runs as a runs table (metres, radians), headings included when all runs have them."""
-    with_theta = all(
-        run.true_end.theta is not None and run.odometry_end.theta is not None for run in runs
-    )
-    columns = (
-        ["direction", "x_abs", "y_abs", "theta_abs", "x_odo", "y_odo", "theta_odo"]
-        if with_theta
-        else list(REQUIRED_COLUMNS)
-    )
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(columns)
-    for run in runs:
-        t, o = run.true_end, run.odometry_end
-        if with_theta:
-            row = [
-                run.direction.value,
-                f"{t.x:.6f}",
-                f"{t.y:.6f}",
-                f"{t.theta:.8f}",
-                f"{o.x:.6f}",
-                f"{o.y:.6f}",
-                f"{o.theta:.8f}",
-            ]
-        else:
-            row = [run.direction.value, f"{t.x:.6f}", f"{t.y:.6f}", f"{o.x:.6f}", f"{o.y:.6f}"]
-        writer.writerow(row)
-    return out.getvalue()
-
-
-def write_runs_table(path: str | Path, runs: Sequence[Run], comment: str = "") -> None:
-    """Write ``runs`` as a runs table, atomically; ``comment`` lines are prefixed with ``#``."""
-    prefix = "".join(f"# {line}\n" for line in comment.splitlines())
-    atomic_write_text(path, prefix + format_runs_table(runs))
 
 
 def _sniff(header_line: str) -> type[csv.Dialect] | csv.Dialect:

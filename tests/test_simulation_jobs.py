@@ -1,84 +1,58 @@
-"""The virtual-robot commands end to end: simulate, demo, reproduce."""
+"""The virtual-robot jobs end to end: simulate, demo, reproduce (through the library;
+the user's view of the same jobs at the end)."""
 
 from __future__ import annotations
 
 import csv
-import json
 import math
+import re
 
 import pytest
 import yaml
-from typer.testing import CliRunner
 
-from umbmark.cli.main import app
+import umbmark
 
-runner = CliRunner()
-
-
-def _ok(*args: str) -> str:
-    result = runner.invoke(app, list(args))
-    assert result.exit_code == 0, result.output
-    return result.stdout
+from helpers import api_error, cli_error, cli_json, run_cli
 
 
-def _calibrate_json(path, *extra: str) -> dict:
-    return json.loads(_ok("calibrate", str(path), "-L", "4", "-b", "0.34", "--json", *extra))
+def _calibrate(path, **options) -> dict:
+    return umbmark.calibrate(path, side_length=4, **{"wheelbase": 0.34, **options}).to_dict()
 
 
 def test_simulate_then_calibrate_recovers_the_errors(tmp_path):
     runs = tmp_path / "runs.csv"
-    _ok("simulate", "--E-d", "1.002", "--E-b", "1.01", "--noise-free", "-o", str(runs))
+    sim = umbmark.simulate(E_d=1.002, E_b=1.01, noise_free=True, output=runs)
+    assert len(sim.runs) == 10
     header = next(line for line in runs.read_text().splitlines() if not line.startswith("#"))
     assert header == "direction,x_abs,y_abs,theta_abs,x_odo,y_odo,theta_odo"
-    exact = _calibrate_json(runs, "--method", "exact")
+    exact = _calibrate(runs, method="exact")
     assert exact["E_d"] == pytest.approx(1.002, abs=2e-6)
     assert exact["E_b"] == pytest.approx(1.01, abs=2e-5)
-    heading = _calibrate_json(runs, "--method", "heading")
+    heading = _calibrate(runs, method="heading")
     # Heading errors are exact in the model; E_d then goes through Eqs. 4.21-4.22.
     assert heading["E_b"] == pytest.approx(1.01, abs=2e-5)
     assert heading["E_d"] == pytest.approx(1.002, abs=2e-5)
-    paper = _calibrate_json(runs)
+    paper = _calibrate(runs)
     assert paper["E_d"] == pytest.approx(1.002, rel=1e-3)
 
 
 def test_second_pass_with_params_from_the_first(tmp_path):
     first, result, second = tmp_path / "first.csv", tmp_path / "r.json", tmp_path / "second.csv"
-    opts = ("--E-d", "1.004", "--E-b", "1.03", "--noise-free")
-    _ok("simulate", *opts, "-o", str(first))
-    before = _calibrate_json(first, "-o", str(result))
-    _ok("simulate", *opts, "--params", str(result), "-o", str(second))
+    opts = {"E_d": 1.004, "E_b": 1.03, "noise_free": True}
+    umbmark.simulate(**opts, output=first)
+    before = _calibrate(first, output=result)
+    umbmark.simulate(**opts, params=result, output=second)
     # The second runs were driven with the first pass's wheelbase and wheel factors.
-    after = json.loads(
-        _ok(
-            "calibrate",
-            str(second),
-            "-L",
-            "4",
-            "-b",
-            str(before["wheelbase"]),
-            "--json",
-            "--current-c-l",
-            str(before["new"]["c_L"]),
-            "--current-c-r",
-            str(before["new"]["c_R"]),
-        )
+    after = _calibrate(
+        second,
+        wheelbase=before["wheelbase"],
+        current_c_l=before["new"]["c_L"],
+        current_c_r=before["new"]["c_R"],
     )
     assert after["e_max_syst"] < before["e_max_syst"] / 10
-    # A previous result names what was active just as well as the flags do, and the
+    # A previous result names what was active just as well as the keywords do, and the
     # composed parameters approach the truth.
-    same = json.loads(
-        _ok(
-            "calibrate",
-            str(second),
-            "-L",
-            "4",
-            "-b",
-            "0.34",
-            "--json",
-            "--current-params",
-            str(result),
-        )
-    )
+    same = _calibrate(second, current_params=result)
     for key in ("c_L", "c_R", "wheelbase"):
         assert same["new"][key] == pytest.approx(after["new"][key], rel=1e-12)
     # Here the wheelbase change lives in the separation multiplier (b stays 0.34).
@@ -91,7 +65,7 @@ def test_second_pass_with_params_from_the_first(tmp_path):
 
 def test_simulate_logs_are_run_logs(tmp_path):
     logs = tmp_path / "logs"
-    _ok("simulate", "--runs", "2", "--seed", "3", "--logs", str(logs), "--side-length", "1")
+    umbmark.simulate(runs=2, seed=3, logs=logs, side_length=1)
     meta = yaml.safe_load((logs / "metadata.yaml").read_text())
     assert meta["format"] == "umbmark-runlog"
     assert meta["wheel_data"] == "counts"
@@ -110,62 +84,39 @@ def test_simulate_logs_are_run_logs(tmp_path):
 
 
 def test_simulate_straight_line_and_turn_report_what_a_tape_measures():
-    data = json.loads(
-        _ok(
-            "simulate",
-            "--path",
-            "straight",
-            "--E-s",
-            "1.01",
-            "--noise-free",
-            "--runs",
-            "1",
-            "--json",
-        )
-    )
+    data = umbmark.simulate(path="straight", E_s=1.01, noise_free=True, runs=1).to_dict()
     assert data["distance_ratio"] == pytest.approx(1.01, rel=1e-5)
-    data = json.loads(
-        _ok(
-            "simulate",
-            "--path",
-            "turn",
-            "--turn-angle",
-            "90",
-            "--E-d",
-            "1.02",
-            "--noise-free",
-            "--runs",
-            "1",
-            "--json",
-        )
-    )
-    assert data["rotation_ratio"] == pytest.approx(1.0, abs=1e-4)
+    turn = umbmark.simulate(
+        path="turn", turn_angle=math.pi / 2, E_d=1.02, noise_free=True, runs=1
+    ).to_dict()
+    assert turn["rotation_ratio"] == pytest.approx(1.0, abs=1e-4)
     # Sec. 2.3: the centre moves by 2 d sin(tau / 2), d = (b/2)(E_d - 1)/(E_d + 1).
     d = 0.17 * 0.02 / 2.02
-    assert data["centre_shift"] == pytest.approx(2 * d * math.sin(math.pi / 4), rel=1e-3)
+    assert turn["centre_shift"] == pytest.approx(2 * d * math.sin(math.pi / 4), rel=1e-3)
 
 
 @pytest.mark.parametrize(
-    ("args", "message"),
+    ("options", "message"),
     [
-        (("--E-d", "0"), "--E-d must be > 0, got 0"),
-        (("--E-b", "3"), "--E-b 3 is not a plausible ratio"),
-        (("--runs", "1"), "--runs must be at least 2 for UMBmark"),
-        (("--slip", "-1"), "--slip must be >= 0"),
-        (("--path", "straight", "-o", "x.csv"), "-o writes a runs table of square runs"),
-        (("--wheelbase", "340"), "--wheelbase 340 m is implausibly large"),
+        ({"E_d": 0}, "--E-d must be > 0, got 0"),
+        ({"E_b": 3}, "--E-b 3 is not a plausible ratio"),
+        ({"runs": 1}, "--runs must be at least 2 for UMBmark"),
+        ({"slip": -1}, "--slip must be >= 0"),
+        ({"path": "straight", "output": "x.csv"}, "-o writes a runs table of square runs"),
+        ({"wheelbase": 340}, "--wheelbase 340 m is implausibly large"),
+        ({"path": "turn", "turn_angle": 0.0}, "--turn-angle 0 deg: give a turn of up to"),
+        ({"path": "circle"}, "--path 'circle': use one of square, straight, turn"),
     ],
 )
-def test_simulate_refuses_bad_options(args, message):
-    result = runner.invoke(app, ["simulate", *args])
-    assert result.exit_code == 2
-    assert message in result.stderr
-    assert result.stderr.count("\n") == 1
+def test_simulate_refuses_bad_options(options, message):
+    assert message in api_error(umbmark.simulate, **options)
 
 
-def test_demo_json_and_files(tmp_path):
+@pytest.mark.slow
+def test_demo_report_and_files(tmp_path):
     out = tmp_path / "demo"
-    data = json.loads(_ok("demo", "--json", "--out", str(out), "--seed", "4"))
+    demo = umbmark.demo(out=out, seed=4)
+    data = demo.to_dict()
     for key in ("true_E_d", "true_E_b", "E_d", "E_b", "e_max_before", "e_max_after"):
         assert isinstance(data[key], float), key
     assert data["true_E_b"] == pytest.approx(336.17 / 340.0)
@@ -175,12 +126,15 @@ def test_demo_json_and_files(tmp_path):
     assert data["e_max_after"] < data["e_max_before"] / 5
     assert (out / "clusters.png").read_bytes().startswith(b"\x89PNG")
     # The runs it wrote calibrate to the same result.
-    again = _calibrate_json(out / "runs_before.csv")
+    again = _calibrate(out / "runs_before.csv")
     assert again["E_d"] == pytest.approx(data["E_d"], rel=1e-9)
+    # Without a folder the library writes nothing.
+    assert umbmark.demo(seed=4).files == {}
 
 
+@pytest.mark.slow
 def test_reproduce_table1_rows():
-    data = json.loads(_ok("reproduce", "table1", "--json", "--seeds", "2"))
+    data = umbmark.reproduce_table1(seeds=2).to_dict()
     rows = data["rows"]
     assert [r["experiment"] for r in rows] == list(range(1, 9))
     for r in rows:
@@ -191,10 +145,9 @@ def test_reproduce_table1_rows():
     assert rows[2]["e_max_before"] == rows[3]["e_max_before"] == rows[4]["e_max_before"]
 
 
+@pytest.mark.slow
 def test_reproduce_table1_with_physical_tape_needs_the_second_pass():
-    data = json.loads(
-        _ok("reproduce", "table1", "--json", "--seeds", "2", "--tape-thickness", "0.15")
-    )
+    data = umbmark.reproduce_table1(seeds=2, tape_thickness=0.15e-3).to_dict()
     seventh = data["rows"][6]
     assert seventh["second_pass_share"] == 1.0
     # The first pass leaves what the small-angle formulas missed; the second removes it.
@@ -202,13 +155,54 @@ def test_reproduce_table1_with_physical_tape_needs_the_second_pass():
     assert seventh["e_max_final"] < 0.75 * seventh["e_max_after"]
 
 
+@pytest.mark.slow
 def test_reproduce_fig4_exposes_the_unidirectional_trap(tmp_path):
     plot = tmp_path / "fig4.svg"
-    data = json.loads(_ok("reproduce", "fig4", "--json", "--plot", str(plot)))
+    data = umbmark.reproduce_fig4(plot=plot).to_dict()
     start, tuned, fixed = data["stages"]
+    assert data["leg_bend"] == pytest.approx(math.radians(1.0))
     assert tuned["wheelbase"] > start["wheelbase"]  # b enlarged: turns more
     assert tuned["r_cw"] < 0.01  # cw looks excellent...
     assert tuned["r_ccw"] > 0.2  # ...and ccw is bad
     assert fixed["r_cw"] < 0.02
     assert fixed["r_ccw"] < 0.02
     assert b"<svg" in plot.read_bytes()
+
+
+# --- the user's view ----------------------------------------------------------------
+
+
+def test_simulate_command_prints_and_writes_what_the_library_returns(tmp_path):
+    runs = tmp_path / "runs.csv"
+    args = ["simulate", "--E-d", "1.002", "--seed", "7", "-o", str(runs), "--runs", "2"]
+    data = cli_json(*args)
+    assert data == umbmark.simulate(E_d=1.002, seed=7, runs=2).to_dict()
+    assert runs.read_text().startswith("# Simulated by umbmark")
+    proc = run_cli("simulate", "--path", "turn", "--turn-angle", "90", "--runs", "1")
+    assert proc.returncode == 0, proc.stderr
+    assert "true over odometry rotation: " in proc.stdout
+    assert "--turn-angle 0 deg" in cli_error("simulate", "--path", "turn", "--turn-angle", "0")
+
+
+@pytest.mark.slow
+def test_demo_command_writes_its_folder(tmp_path):
+    out = tmp_path / "demo"
+    proc = run_cli("demo", "--out", str(out), "--seed", "2")
+    assert proc.returncode == 0, proc.stderr
+    assert re.search(r"E_max,syst before: [\d.]+ mm, after: [\d.]+ mm", proc.stdout)
+    assert f"umbmark: wrote {out / 'clusters.png'}" in proc.stderr
+    assert sorted(p.name for p in out.iterdir()) == [
+        "clusters.png",
+        "overlay.yaml",
+        "result.json",
+        "runs_after.csv",
+        "runs_before.csv",
+    ]
+
+
+@pytest.mark.slow
+def test_reproduce_table1_command(tmp_path):
+    proc = run_cli("reproduce", "table1", "--seeds", "1")
+    assert proc.returncode == 0, proc.stderr
+    assert "Table I on a virtual LabMate: E_max,syst [mm]" in proc.stdout
+    assert "--tape-thickness 5 mm" in cli_error("reproduce", "table1", "--tape-thickness", "5")

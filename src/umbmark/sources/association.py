@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import InputError
-from .recording import PoseSeries, WheelSeries
+from ..errors import InputError
+from ..recording import PoseSeries, WheelSeries
 
 __all__ = ["DEFAULT_MAX_GAP", "Association", "associate", "summarize"]
 

@@ -1,9 +1,9 @@
-"""ROS bags through the command line: real bags written with rosbags, then calibrated.
+"""ROS bags calibrated and replayed: real bags written with rosbags, then read back.
 
 A simulated session (two cw and two ccw runs with rests between) is written as
 ``sensor_msgs/JointState`` at 100 Hz and ``geometry_msgs/PoseStamped`` ground truth at
 50 Hz into ROS 1, ROS 2 sqlite3 and ROS 2 MCAP bags. The bag must calibrate exactly like
-the same session handed over directly.
+the same session handed over directly, through the library and through the command.
 """
 
 from __future__ import annotations
@@ -14,10 +14,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import umbmark
 from umbmark.kinematics import WheelParams
 from umbmark.sim.robot import VirtualRobot
 
-from helpers import cli_error, cli_json, simulated_session
+from helpers import api_error, cli_error, cli_json, simulated_session
 
 rosbags = pytest.importorskip("rosbags")
 from rosbags.rosbag1 import Writer as Writer1  # noqa: E402
@@ -28,16 +29,8 @@ from rosbags.typesys import Stores, get_typestore  # noqa: E402
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
 ROBOT = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
 T0 = 1_750_000_000
-BAG_ARGS = [
-    "--wheelbase",
-    "0.34",
-    "--wheel-diameter",
-    "0.15",
-    "--side-length",
-    "1",
-    "--truth-topic",
-    "/mocap/pose",
-]
+BAG = {"wheelbase": 0.34, "wheel_diameter": 0.15, "side_length": 1.0, "truth_topic": "/mocap/pose"}
+BAG_ARGS = ["-b", "0.34", "--wheel-diameter", "0.15", "-L", "1", "--truth-topic", "/mocap/pose"]
 
 
 @pytest.fixture(scope="module")
@@ -96,7 +89,8 @@ def _write(path: Path, fmt: str, session, truth_shift: float = 0.0) -> Path:
 @pytest.fixture(scope="module")
 def log_result(session, tmp_path_factory):
     """The same session as a run log: the reference the bags must match."""
-    from umbmark.sources.runlog import LogMetadata, write_log_csv, write_metadata
+    from umbmark.outputs.runlog import write_log_csv, write_metadata
+    from umbmark.sources.runlog import LogMetadata
 
     folder = tmp_path_factory.mktemp("log")
     times, counts, poses, _ = session
@@ -114,13 +108,13 @@ def log_result(session, tmp_path_factory):
     keep = np.arange(times.size) % 2 == 0
     truth = np.where(keep[:, None], poses, np.nan)
     write_log_csv(folder / "session.csv", times, truth, counts)
-    return cli_json("calibrate", str(folder))
+    return umbmark.calibrate(folder).to_dict()
 
 
 @pytest.mark.parametrize("fmt", ["ros1", "sqlite3", "mcap"])
 def test_bag_calibrates_like_the_same_session_as_a_log(tmp_path, session, log_result, fmt):
     bag = _write(tmp_path / "session", fmt, session)
-    data = cli_json("calibrate", str(bag), *BAG_ARGS)
+    data = umbmark.calibrate(bag, **BAG).to_dict()
     assert data["format"] == "bag"
     assert [r["direction"] for r in data["runs"]] == ["cw", "cw", "ccw", "ccw"]
     assert data["cg_cw"] == pytest.approx(log_result["cg_cw"], abs=5e-6)
@@ -135,33 +129,41 @@ def test_bag_calibrates_like_the_same_session_as_a_log(tmp_path, session, log_re
 def test_bag_replay_and_trajectory_fit(tmp_path, session):
     bag = _write(tmp_path / "session", "sqlite3", session)
     result = tmp_path / "fit.json"
-    fit = cli_json("calibrate", str(bag), *BAG_ARGS, "--method", "trajectory", "-o", str(result))
+    fit = umbmark.calibrate(bag, **BAG, method="trajectory", output=result).to_dict()
     # Ground truth at half the wheel rate is interpolated linearly; while the robot speeds
     # up and slows down that costs about 1e-4 of the wheelbase (at full rate: 1e-6).
     assert fit["components"]["wheelbase"] == pytest.approx(ROBOT.wheelbase, rel=3e-4)
     assert 2 * fit["components"]["r_right"] == pytest.approx(ROBOT.diameter_right, rel=1e-4)
-    replay = cli_json(
-        "replay", str(bag), *BAG_ARGS[:4], "--truth-topic", "/mocap/pose", "--params", str(result)
+    replay = umbmark.replay(
+        bag, params=result, wheelbase=0.34, wheel_diameter=0.15, truth_topic="/mocap/pose"
     )
-    assert replay["mean_end_error"] < 0.002
-    assert replay["mean_end_error_nominal"] > 0.02
+    assert replay.mean_end_error < 0.002
+    assert replay.mean_end_error_nominal > 0.02
+
+
+def test_the_command_prints_the_reports_dictionary(tmp_path, session):
+    bag = _write(tmp_path / "session", "ros1", session)
+    assert cli_json("calibrate", str(bag), *BAG_ARGS) == umbmark.calibrate(bag, **BAG).to_dict()
+    err = cli_error("calibrate", str(bag), *BAG_ARGS, "--left-joint", "wheel_l")
+    assert err.startswith(f"umbmark: error: {bag}: ")
 
 
 def test_bad_recordings_give_one_line(tmp_path, session):
+    def bad(source, **options) -> str:
+        return api_error(umbmark.calibrate, source, **options)
+
     bag = _write(tmp_path / "session", "mcap", session)
-    err = cli_error("calibrate", str(bag), *BAG_ARGS[:6], "--truth-topic", "/vicon/pose")
+    err = bad(bag, **{**BAG, "truth_topic": "/vicon/pose"})
     assert str(bag) in err
     assert "/vicon/pose" in err
-    err = cli_error("calibrate", str(bag), *BAG_ARGS, "--left-joint", "wheel_l")
+    err = bad(bag, **BAG, left_joint="wheel_l")
     assert "wheel_l" in err
     assert "left_wheel_joint" in err  # the joints that are there
     shifted = _write(tmp_path / "shifted", "mcap", session, truth_shift=1000.0)
-    err = cli_error("calibrate", str(shifted), *BAG_ARGS)
-    assert "do not overlap in time" in err
-    err = cli_error("calibrate", str(bag), *BAG_ARGS, "--windows", "900:950")
-    assert "holds 0 wheel sample(s)" in err
-    err = cli_error("calibrate", str(bag), "--side-length", "1", "--truth-topic", "/mocap/pose")
+    assert "do not overlap in time" in bad(shifted, **BAG)
+    assert "holds 0 wheel sample(s)" in bad(bag, **BAG, windows="900:950")
+    err = bad(bag, side_length=1, truth_topic="/mocap/pose")
     assert "a bag needs the wheel parameters" in err
     not_a_bag = tmp_path / "fake.bag"
     not_a_bag.write_text("hello")
-    assert str(not_a_bag) in cli_error("calibrate", str(not_a_bag), *BAG_ARGS)
+    assert str(not_a_bag) in bad(not_a_bag, **BAG)

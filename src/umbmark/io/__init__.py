@@ -1,1 +1,0 @@
-"""Reading and writing files: runs tables, parameter files, results. No maths here."""

@@ -1,0 +1,473 @@
+"""The calibration job: runs in, UMBmark figures, error estimate and correction out.
+
+:func:`calibrate` is what ``umbmark calibrate`` does; :class:`CalibrationReport` is
+everything it found. The report's :meth:`~CalibrationReport.to_dict` is exactly what
+``umbmark calibrate --json`` prints (metres and radians, whatever units the input came
+in); its texts and figure are what the command writes with ``--yaml``, ``--ros1-yaml``
+and ``--plot``.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+from .. import __version__
+from ..benchmark import Benchmark, Cluster, umbmark_benchmark
+from ..calibration import Calibration
+from ..errors import InputError
+from ..estimators.base import ErrorEstimate, SquareTest
+from ..kinematics import WheelParams
+from ..outputs.atomic import atomic_write_text
+from ..runs import Run
+from ..sources.association import Association
+from ..sources.params import CalibratedParams
+from .inputs import ReadOptions, Runs, RunSource, SourceOptions, read_runs, source_name
+from .outputs import OutputPlan
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+    from typing_extensions import Unpack
+
+__all__ = ["METHODS", "CalibrationReport", "calibrate"]
+
+Method = Literal["paper", "exact", "heading", "trajectory"]
+#: The estimators, in the order the documentation lists them.
+METHODS: tuple[Method, ...] = ("paper", "exact", "heading", "trajectory")
+#: Window length of the trajectory fit [s].
+DEFAULT_WINDOW = 1.0
+
+
+@dataclass(frozen=True)
+class CalibrationReport:
+    """Everything a calibration found.
+
+    Attributes
+    ----------
+    sources : tuple of str
+        What the runs came from (paths, or ``"runs"`` for runs given in memory).
+    format : str
+        The sources' format (``table``, ``log``, ``optiodom``, ``bag``).
+    runs : tuple of Run
+        Every run, in the sources' order.
+    benchmark : Benchmark or None
+        The UMBmark figures (Eqs. 3.1-3.4); None when the runs are not in both
+        directions (trajectory fits of other paths).
+    test : SquareTest
+        Side [m] and wheelbase [m] the estimate assumed.
+    calibration : Calibration
+        The error estimate and the correction, composed with the active parameters.
+    params : WheelParams or None
+        What logged runs were integrated with (None for end points only).
+    controller : str
+        Controller name in the parameter files.
+    associations : tuple of (str, Association)
+        Time matching of each recording.
+    notes : tuple of str
+        What was found and left out while reading, for people.
+    created : datetime
+        When the calibration was made (UTC); stamped into the parameter files' comments,
+        not into :meth:`to_dict`.
+    """
+
+    sources: tuple[str, ...]
+    format: str
+    runs: tuple[Run, ...]
+    benchmark: Benchmark | None
+    test: SquareTest
+    calibration: Calibration
+    params: WheelParams | None = None
+    controller: str = "diff_drive_controller"
+    associations: tuple[tuple[str, Association], ...] = ()
+    notes: tuple[str, ...] = ()
+    created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
+
+    @property
+    def source(self) -> str:
+        """The sources, comma-separated."""
+        return ", ".join(self.sources)
+
+    @property
+    def estimate(self) -> ErrorEstimate:
+        """The error estimate (``alpha``, ``beta``, ``E_d``, ``E_b``, ...)."""
+        return self.calibration.estimate
+
+    @property
+    def e_max_syst(self) -> float | None:
+        """``E_max,syst`` [m] of the runs (Eq. 3.4), None without both directions."""
+        return None if self.benchmark is None else self.benchmark.e_max_syst
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """Everything that makes the result valid but shaky."""
+        return self.calibration.estimate.warnings
+
+    @property
+    def calibrated_params(self) -> WheelParams | None:
+        """The odometry parameters of logged runs with the correction applied."""
+        if self.params is None:
+            return None
+        cal = self.calibration
+        return self.params.with_corrections(
+            c_left=cal.new_c_left, c_right=cal.new_c_right, wheelbase=cal.wheelbase_corrected
+        )
+
+    def new_params(self) -> CalibratedParams:
+        """The new parameters, as :func:`umbmark.replay` and :func:`umbmark.simulate`
+        take them (the same that reading this report's JSON back gives)."""
+        cal = self.calibration
+        return CalibratedParams(
+            wheelbase=cal.wheelbase_corrected,
+            c_left=cal.new_c_left,
+            c_right=cal.new_c_right,
+            wheel_diameter_left=cal.wheel_diameter_left,
+            wheel_diameter_right=cal.wheel_diameter_right,
+            separation_multiplier=cal.new_separation_multiplier,
+            configured_wheelbase=cal.active.wheelbase,
+            wheel_diameter=cal.active.wheel_diameter,
+            source=self.source,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres, radians): what ``calibrate --json`` prints."""
+        bench, cal = self.benchmark, self.calibration
+        est, active = cal.estimate, cal.active
+        out: dict[str, Any] = {
+            "umbmark_version": __version__,
+            "source": self.source,
+            "sources": list(self.sources),
+            "method": est.method,
+            "units": {"length": "m", "angle": "rad"},
+            "side_length": self.test.side_length,
+            "n_runs": len(self.runs),
+        }
+        if bench is not None:
+            out.update(
+                {
+                    "n_cw": bench.cw.n,
+                    "n_ccw": bench.ccw.n,
+                    "e_max_syst": bench.e_max_syst,
+                    "worst_direction": bench.worst.direction.value,
+                }
+            )
+            for cluster in bench.clusters:
+                out.update(_cluster_dict(cluster))
+            out.update(
+                {
+                    "sem": bench.sem,
+                    "second_pass_threshold": bench.second_pass_threshold,
+                    "second_pass_recommended": bench.second_pass_recommended,
+                }
+            )
+        else:
+            out.update({"e_max_syst": None, "second_pass_recommended": None})
+        out.update(
+            {
+                "alpha": est.alpha,
+                "beta": est.beta,
+                "E_d": est.E_d,
+                "E_b": est.E_b,
+                "E_s": est.E_s,
+                "standard_errors": dict(est.standard_errors),
+                "components": dict(est.components),
+                "c_L": cal.c_L,
+                "c_R": cal.c_R,
+                "wheelbase_corrected": cal.wheelbase_corrected,
+                "wheelbase": cal.wheelbase_corrected,
+                "wheel_diameter_left": cal.wheel_diameter_left,
+                "wheel_diameter_right": cal.wheel_diameter_right,
+                "active": {
+                    "wheelbase": active.wheelbase,
+                    "wheel_separation_multiplier": active.separation_multiplier,
+                    "effective_wheelbase": active.effective_wheelbase,
+                    "c_L": active.c_left,
+                    "c_R": active.c_right,
+                    "wheel_diameter": active.wheel_diameter,
+                },
+                "new": {
+                    "c_L": cal.new_c_left,
+                    "c_R": cal.new_c_right,
+                    "wheel_separation_multiplier": cal.new_separation_multiplier,
+                    "left_wheel_radius_multiplier": cal.new_c_left,
+                    "right_wheel_radius_multiplier": cal.new_c_right,
+                    "wheelbase": cal.wheelbase_corrected,
+                },
+                "warnings": list(self.warnings),
+                "runs": [_run_dict(run) for run in self.runs],
+                "format": self.format,
+            }
+        )
+        if self.associations:
+            out["time_association"] = {name: a.to_dict() for name, a in self.associations}
+        if self.notes:
+            out["notes"] = list(self.notes)
+        return out
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+    def provenance(self) -> list[str]:
+        """Comment lines saying where a parameter file came from."""
+        cal = self.calibration
+        active = cal.active
+        stamp = self.created.strftime("%Y-%m-%dT%H:%M:%SZ")
+        e_max = (
+            ""
+            if self.benchmark is None
+            else f"; E_max,syst of these runs = {self.benchmark.e_max_syst * 1000:.1f} mm"
+        )
+        return [
+            f"Written by umbmark {__version__} on {stamp} from {self.source} "
+            f"(method {cal.estimate.method}).",
+            f"E_d = {cal.estimate.E_d:.6f}, E_b = {cal.estimate.E_b:.6f}{e_max}.",
+            "Multiplied into the values active during the runs: separation "
+            f"{active.separation_multiplier:g}, left {active.c_left:g}, right {active.c_right:g}.",
+            "diff_drive_controller reads these on configure: reload or restart the controller.",
+        ]
+
+    def overlay_yaml(self) -> str:
+        """The ros2_control parameter overlay with the new multipliers (what ``--yaml`` writes)."""
+        from ..outputs.controller_params import ros2_control_overlay
+
+        return ros2_control_overlay(self.calibration, self.provenance(), self.controller)
+
+    def ros1_yaml(self) -> str:
+        """ROS 1 ``diff_drive_controller`` parameters (what ``--ros1-yaml`` writes)."""
+        from ..outputs.controller_params import ros1_params
+
+        return ros1_params(self.calibration, self.provenance(), self.controller)
+
+    def figure(self) -> Figure:
+        """The Fig. 6 view of the return errors (what ``--plot`` draws).
+
+        Raises
+        ------
+        InputError
+            Without runs in both directions.
+        """
+        if self.benchmark is None:
+            raise InputError("--plot needs runs in both directions (cw and ccw)")
+        from ..outputs.plotting import cluster_figure
+
+        return cluster_figure([(self.benchmark, self.source)])
+
+    def write(
+        self,
+        *,
+        output: str | os.PathLike[str] | None = None,
+        yaml: str | os.PathLike[str] | None = None,
+        ros1_yaml: str | os.PathLike[str] | None = None,
+        plot: str | os.PathLike[str] | None = None,
+        tum: str | os.PathLike[str] | None = None,
+    ) -> list[Path]:
+        """Write the requested files: every one checked before any is written.
+
+        Parameters
+        ----------
+        output : path, optional
+            The JSON result (:meth:`to_json`).
+        yaml, ros1_yaml : path, optional
+            The ros2_control overlay and the ROS 1 parameters.
+        plot : path, optional
+            The Fig. 6 view (.png, .svg or .pdf).
+        tum : path, optional
+            A folder for TUM trajectories of logged runs (truth, nominal, calibrated).
+
+        Returns
+        -------
+        list of Path
+            The files written.
+
+        Raises
+        ------
+        InputError
+            For a file that cannot be written, or an output this report cannot give.
+        """
+        plan = _plan(
+            self.sources, output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum
+        )
+        if plan.plot is not None and self.benchmark is None:
+            raise InputError(
+                "--plot needs runs in both directions (cw and ccw)", source=self.source
+            )
+        calibrated = self.calibrated_params
+        if plan.tum is not None and (self.params is None or calibrated is None):
+            raise InputError("--tum needs logged runs with time series", source=self.source)
+        written: list[Path] = []
+        if plan.output is not None:
+            atomic_write_text(plan.output, self.to_json())
+            written.append(plan.output)
+        if plan.yaml is not None:
+            atomic_write_text(plan.yaml, self.overlay_yaml())
+            written.append(plan.yaml)
+        if plan.ros1_yaml is not None:
+            atomic_write_text(plan.ros1_yaml, self.ros1_yaml())
+            written.append(plan.ros1_yaml)
+        if plan.plot is not None:
+            from ..outputs.plotting import save_figure
+
+            save_figure(self.figure(), plan.plot)
+            written.append(plan.plot)
+        if plan.tum is not None and self.params is not None and calibrated is not None:
+            from ..outputs.tum import write_tum_runs
+
+            sets = {"nominal": self.params, "calibrated": calibrated}
+            written += write_tum_runs(plan.tum, self.runs, sets)
+        return written
+
+
+def _plan(sources: Sequence[str], **paths: str | os.PathLike[str] | None) -> OutputPlan:
+    plan = OutputPlan.of(**paths)
+    plan.check_not_inputs(sources)
+    return plan
+
+
+def calibrate(
+    source: RunSource,
+    *more_sources: RunSource,
+    side_length: float | None = None,
+    wheelbase: float | None = None,
+    method: str = "paper",
+    window: float = DEFAULT_WINDOW,
+    output: str | os.PathLike[str] | None = None,
+    yaml: str | os.PathLike[str] | None = None,
+    ros1_yaml: str | os.PathLike[str] | None = None,
+    plot: str | os.PathLike[str] | None = None,
+    tum: str | os.PathLike[str] | None = None,
+    **options: Unpack[SourceOptions],
+) -> CalibrationReport:
+    """Benchmark runs around a square (UMBmark) and compute the correction.
+
+    What ``umbmark calibrate`` does, with the same options as keywords (lengths in
+    metres, angles in radians, times in seconds).
+
+    Parameters
+    ----------
+    source, *more_sources : path or sequence of Run
+        A runs table (CSV of end points), a run-log folder, an OptiOdom session folder or
+        a ROS bag; or runs already in memory. Several sources are pooled; they must agree
+        on the square and the parameters active during the runs.
+    side_length : float, optional
+        Side ``L`` of the square [m]. Logged sources may know it.
+    wheelbase : float, optional
+        Wheelbase ``b`` the odometry used during the runs [m] (ros2_control
+        ``wheel_separation``); required for runs tables unless ``current_params`` has it.
+    method : {"paper", "exact", "heading", "trajectory"}
+        Estimator: the paper's Eqs. 4.20-4.27 as printed, the exact square geometry, the
+        final headings (Jung & Chung 2011), or least squares on whole ground-truth
+        trajectories (logged sources only; finds ``E_s`` too).
+    window : float
+        Window length of the trajectory fit [s].
+    output, yaml, ros1_yaml, plot, tum : path, optional
+        Files to write (see :meth:`CalibrationReport.write`); checked before any is written.
+    **options
+        How to read the sources: see :class:`umbmark.jobs.inputs.ReadOptions`
+        (``unit="mm"``, ``current_params="controllers.yaml"``, ``truth_topic=...``).
+
+    Returns
+    -------
+    CalibrationReport
+
+    Raises
+    ------
+    InputError
+        Bad input: one line naming the file (and row) and the problem.
+
+    Examples
+    --------
+    >>> report = umbmark.calibrate("runs.csv", side_length=4, wheelbase=0.34, unit="mm")
+    >>> report.e_max_syst, report.estimate.E_d, report.calibration.new_c_left
+    """
+    read_options = ReadOptions.of(options)
+    if method not in METHODS:
+        raise InputError(f"--method {method!r}: use one of {', '.join(METHODS)}")
+    if not (window > 0 and window < float("inf")):
+        raise InputError(f"--window must be > 0 s, got {window:g}")
+    sources = (source, *more_sources)
+    _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
+          plot=plot, tum=tum)  # fmt: skip
+    if side_length is None and method != "trajectory":
+        from .inputs import is_table
+
+        if any(is_table(s, read_options) for s in sources):
+            raise InputError("--side-length is required: the side of the square path, in metres")
+    read = read_runs(sources, read_options, wheelbase=wheelbase, side_length=side_length)
+    report = _calibrate_runs(read, method, window)
+    report.write(output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum)
+    return report
+
+
+def _calibrate_runs(read: Runs, method: str, window: float) -> CalibrationReport:
+    where = read.sources[0] if len(read.sources) == 1 else None
+    runs, active, side = read.runs, read.active, read.side_length
+    bench = None
+    try:
+        bench = umbmark_benchmark(runs)
+    except ValueError as exc:
+        if method != "trajectory":
+            raise InputError(str(exc), source=where) from None
+    try:
+        if method == "trajectory":
+            from ..estimators.trajectory import trajectory_estimate
+
+            logs = [run.log for run in runs if run.log is not None]
+            if not logs or read.params is None:
+                raise InputError(
+                    "the trajectory method needs logged runs (a run log, an OptiOdom session "
+                    "or a bag), not a runs table",
+                    source=where,
+                )
+            estimate, _ = trajectory_estimate(logs, read.params, side, window)
+            test = SquareTest(side or 1.0, active.effective_wheelbase)
+        else:
+            from ..estimators import estimate_errors
+
+            side = read.square_side()
+            assert bench is not None
+            test = SquareTest(side, active.effective_wheelbase)
+            estimate = estimate_errors(method, bench, runs, test)  # type: ignore[arg-type]
+    except InputError:
+        raise
+    except ValueError as exc:
+        raise InputError(str(exc), source=where) from None
+    return CalibrationReport(
+        sources=read.sources,
+        format=read.format,
+        runs=read.runs,
+        benchmark=bench,
+        test=test,
+        calibration=Calibration(estimate, active),
+        params=read.params,
+        controller=read.controller,
+        associations=read.associations,
+        notes=read.notes,
+    )
+
+
+def _cluster_dict(cluster: Cluster) -> dict[str, Any]:
+    d = cluster.direction.value
+    std = cluster.std_xy
+    return {
+        f"cg_{d}": [float(cluster.cg[0]), float(cluster.cg[1])],
+        f"r_cg_{d}": cluster.r_cg,
+        f"std_{d}": [float(std[0]), float(std[1])],
+        f"sigma_{d}": cluster.sigma,
+        f"sem_{d}": cluster.sem,
+    }
+
+
+def _run_dict(run: Run) -> dict[str, Any]:
+    eps_x, eps_y = run.return_error
+    return {
+        "label": run.label,
+        "direction": run.direction.value,
+        "eps_x": eps_x,
+        "eps_y": eps_y,
+        "eps_theta": run.heading_error,
+    }

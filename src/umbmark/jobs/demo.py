@@ -1,0 +1,206 @@
+"""The demo job: UMBmark before, calibration, UMBmark after, on a virtual LabMate (Sec. 5).
+
+The robot has b = 340 mm, the errors of the paper's Fig. 11 (b 340.00 -> 336.17 mm,
+D_R/D_L = 1.00084) and wheel slip giving the paper's ~25 mm scatter. It drives 5 cw and
+5 ccw runs around a 4 x 4 m square steering by its own odometry, is calibrated from them,
+and drives them again.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..estimators import METHODS, SquareTest
+from ..sim.experiments import Trial
+from ..sim.robot import VirtualRobot
+from .calibrate import CalibrationReport
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["DemoReport", "demo"]
+
+#: The files the demo writes into its folder.
+DEMO_FILES = {
+    "runs_before": "runs_before.csv",
+    "runs_after": "runs_after.csv",
+    "result": "result.json",
+    "overlay": "overlay.yaml",
+    "plot": "clusters.png",
+}
+
+
+@dataclass(frozen=True)
+class DemoReport:
+    """The demo's robot, its test before and after calibration, and the calibration.
+
+    Attributes
+    ----------
+    robot : VirtualRobot
+        The uncalibrated robot (true errors ``robot.E_d``, :attr:`true_E_b`).
+    before, after : Trial
+        The bi-directional square tests before and after the correction.
+    report : CalibrationReport
+        The calibration from the test before.
+    seed : int
+    files : dict of str to Path
+        What was written (empty without a folder).
+    """
+
+    robot: VirtualRobot
+    before: Trial
+    after: Trial
+    report: CalibrationReport
+    seed: int
+    files: dict[str, Path]
+
+    @property
+    def true_E_b(self) -> float:
+        """The robot's true ``b_actual / b``."""
+        return self.robot.wheelbase / self.robot.odometry.wheelbase
+
+    @property
+    def improvement(self) -> float:
+        """``E_max,syst`` before over after."""
+        return self.before.benchmark.e_max_syst / self.after.benchmark.e_max_syst
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres): what ``demo --json`` prints."""
+        cal = self.report.calibration
+        est = cal.estimate
+        b0, b1 = self.before.benchmark, self.after.benchmark
+        return {
+            "true_E_d": self.robot.E_d,
+            "true_E_b": self.true_E_b,
+            "E_d": est.E_d,
+            "E_b": est.E_b,
+            "method": est.method,
+            "e_max_before": b0.e_max_syst,
+            "e_max_after": b1.e_max_syst,
+            "improvement": self.improvement,
+            "sem_after": b1.sem,
+            "second_pass_recommended_after": b1.second_pass_recommended,
+            "wheelbase_corrected": cal.wheelbase_corrected,
+            "c_L": cal.new_c_left,
+            "c_R": cal.new_c_right,
+            "seed": self.seed,
+            "files": {k: str(v) for k, v in self.files.items()},
+            "warnings": list(est.warnings),
+        }
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+    def figure(self) -> Figure:
+        """Before and after, side by side (the view of Fig. 11)."""
+        from ..outputs.plotting import cluster_figure
+
+        cal = self.report.calibration
+        odo = self.robot.odometry
+        return cluster_figure(
+            [
+                (
+                    self.before.benchmark,
+                    f"before: b = {odo.wheelbase * 1000:.2f} mm, D_R/D_L = 1.00000",
+                ),
+                (
+                    self.after.benchmark,
+                    f"after: b = {cal.wheelbase_corrected * 1000:.2f} mm, "
+                    f"D_R/D_L = {cal.new_c_right / cal.new_c_left:.5f}",
+                ),
+            ],
+            title="Virtual LabMate, 4 x 4 m bi-directional square (cf. Fig. 11)",
+        )
+
+
+def demo(
+    *,
+    out: str | os.PathLike[str] | None = None,
+    seed: int = 1,
+    method: str = "paper",
+    runs: int = 5,
+    progress: Callable[[float], None] | None = None,
+) -> DemoReport:
+    """UMBmark before, calibration, UMBmark after, on a virtual LabMate.
+
+    What ``umbmark demo`` does. Unlike the command, which writes into ``umbmark-demo/``,
+    the function writes files only when given a folder.
+
+    Parameters
+    ----------
+    out : path, optional
+        Folder for the runs tables, the result, the overlay and the plot.
+    seed : int
+        Seed of the non-systematic errors.
+    method : {"paper", "exact", "heading"}
+        Estimator to calibrate with.
+    runs : int
+        Runs in each direction.
+    progress : callable, optional
+        Called with the fraction done (0 to 1).
+
+    Raises
+    ------
+    InputError
+        For an option out of range, or a folder that cannot be written.
+    """
+    from ..outputs.atomic import atomic_write_text
+    from ..outputs.plotting import save_figure
+    from ..outputs.runs_table import write_runs_table
+    from ..sim.experiments import calibrate_robot, umbmark_trials
+    from ..sim.reproduce import FIG11_E_B, FIG11_E_D, PAPER_NOISE, SIDE
+    from ..sim.robot import LABMATE
+
+    if runs < 2:
+        raise InputError(f"--runs must be at least 2, got {runs}")
+    if method not in METHODS:
+        raise InputError("the demo calibrates from end points: use paper, exact or heading")
+    folder = None if out is None else Path(out)
+    if folder is not None and folder.exists() and not folder.is_dir():
+        raise InputError("exists and is not a folder", source=folder)
+
+    def stage(start: float) -> Callable[[float], None] | None:
+        return None if progress is None else (lambda f: progress(start + 0.5 * f))
+
+    robot = VirtualRobot.with_errors(LABMATE, E_d=FIG11_E_D, E_b=FIG11_E_B, noise=PAPER_NOISE)
+    rng = np.random.default_rng(seed)
+    (before,) = umbmark_trials([robot], SIDE, runs, rng=rng, progress=stage(0.0))
+    calibration, calibrated = calibrate_robot(before, SIDE, method)
+    (after,) = umbmark_trials([calibrated], SIDE, runs, rng=rng, progress=stage(0.5))
+
+    files = {} if folder is None else {k: folder / v for k, v in DEMO_FILES.items()}
+    report = CalibrationReport(
+        sources=(str(files.get("runs_before", "demo runs before")),),
+        format="table",
+        runs=tuple(before.runs),
+        benchmark=before.benchmark,
+        test=SquareTest(SIDE, LABMATE.wheelbase),
+        calibration=calibration,
+    )
+    result = DemoReport(
+        robot=robot, before=before, after=after, report=report, seed=seed, files=files
+    )
+    if folder is not None:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"cannot be made ({exc.strerror or exc})", source=folder) from None
+        note = (
+            f"umbmark demo, seed {seed}: virtual LabMate, true E_d = {robot.E_d:.6f}, "
+            f"E_b = {result.true_E_b:.6f}"
+        )
+        write_runs_table(files["runs_before"], before.runs, comment=note + "; before calibration")
+        write_runs_table(files["runs_after"], after.runs, comment=note + "; after calibration")
+        atomic_write_text(files["result"], report.to_json())
+        atomic_write_text(files["overlay"], report.overlay_yaml())
+        save_figure(result.figure(), files["plot"])
+    return result

@@ -1,0 +1,548 @@
+"""Reading runs for a job: the options that say how to read a source, and the step that
+turns a source and those options into runs and the odometry parameters that were active.
+
+Every keyword here is an option of ``umbmark calibrate`` and ``umbmark replay`` with the
+same name and meaning (``--current-c-l`` is ``current_c_l``); lengths in metres, times in
+seconds. Messages name the options as the command line spells them.
+
+Parameters come from three places, later ones winning: the source itself (a run log's
+``metadata.yaml``, an OptiOdom session's metadata; a runs table or a bag says nothing), a
+parameter file (``current_params``: a ros2_control or ROS 1 YAML, or a previous result),
+and the keywords.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal, TypeAlias, TypedDict, cast
+
+from ..calibration import ActiveParams
+from ..errors import InputError
+from ..kinematics import WheelParams
+from ..runs import Run
+from ..sources.association import DEFAULT_MAX_GAP, Association
+from ..sources.load import FORMATS, Format, Loaded, LoadOptions, detect_format, load_runs
+from ..sources.logged import SplitMode
+from ..sources.params import (
+    CalibratedParams,
+    ControllerParams,
+    read_calibrated_params,
+    read_parameter_file,
+)
+
+if TYPE_CHECKING:
+    from ..sources.bag import BagOptions
+    from .calibrate import CalibrationReport
+
+__all__ = [
+    "MAX_SIDE_LENGTH",
+    "MAX_WHEELBASE",
+    "Calibrated",
+    "ReadOptions",
+    "RunSource",
+    "Runs",
+    "SourceOptions",
+    "calibrated_params",
+    "check_length",
+    "check_positive_option",
+    "read_runs",
+]
+
+#: Largest plausible square side [m]: beyond, a unit slip is likelier.
+MAX_SIDE_LENGTH = 100.0
+#: Largest plausible wheelbase or wheel diameter [m].
+MAX_WHEELBASE = 10.0
+
+#: What can be read: a path to a runs table, run log, OptiOdom session or bag, or runs
+#: already in memory (a runs table's worth of end points).
+RunSource = str | os.PathLike[str] | Sequence[Run]
+
+PathLike = str | os.PathLike[str]
+#: A calibration to replay or simulate with: a result file, or what it holds.
+Calibrated: TypeAlias = "PathLike | CalibratedParams | CalibrationReport"
+
+
+class SourceOptions(TypedDict, total=False):
+    """How to read a source: the keywords of :func:`umbmark.calibrate` and
+    :func:`umbmark.replay` beyond the square's geometry (see :class:`ReadOptions`)."""
+
+    format: Literal["auto", "table", "log", "optiodom", "bag"]
+    unit: Literal["m", "cm", "mm"]
+    angle_unit: Literal["rad", "deg"]
+    wheel_diameter: float | None
+    current_c_l: float | None
+    current_c_r: float | None
+    current_separation_multiplier: float | None
+    current_params: PathLike | None
+    controller: str | None
+    split: Literal["rests", "none", "windows"]
+    windows: str | Sequence[tuple[float, float]] | None
+    max_gap: float
+    min_rest: float
+    wheel_topic: str
+    left_joint: str
+    right_joint: str
+    left_ticks_topic: str | None
+    right_ticks_topic: str | None
+    ticks_per_rev: float | None
+    truth_topic: str | None
+    tf_parent: str | None
+    tf_child: str | None
+    time_source: Literal["header", "bag"]
+
+
+@dataclass(frozen=True)
+class ReadOptions:
+    """The values of :class:`SourceOptions`, with their defaults, checked.
+
+    Attributes
+    ----------
+    format : {"auto", "table", "log", "optiodom", "bag"}
+        Source format; ``auto`` decides by the path.
+    unit, angle_unit : str
+        Units of a runs table's lengths (``m``, ``cm``, ``mm``) and headings (``rad``,
+        ``deg``).
+    wheel_diameter : float or None
+        Nominal wheel diameter ``D_n`` [m]; for logged sources, overrides the source's.
+    current_c_l, current_c_r, current_separation_multiplier : float or None
+        The wheel factors and ``wheel_separation_multiplier`` active during the runs
+        (default 1.0, or from ``current_params``).
+    current_params : path or None
+        A ros2_control / ROS 1 parameter YAML, or a previous result whose new values were
+        applied during the runs.
+    controller : str or None
+        Controller name in parameter files.
+    split : {"rests", "none", "windows"}
+        How to find runs in a recording.
+    windows : str or sequence of (float, float) or None
+        Runs as time windows [s from the recording's start]: ``"0:95,100:190"`` or
+        ``[(0, 95), (100, 190)]``.
+    max_gap : float
+        Longest ground-truth gap to interpolate across [s].
+    min_rest : float
+        Shortest rest between runs [s].
+    wheel_topic, left_joint, right_joint : str
+        Bags: the ``sensor_msgs/JointState`` topic and the wheel joints.
+    left_ticks_topic, right_ticks_topic : str or None
+        Bags: cumulative encoder counts instead of joint states.
+    ticks_per_rev : float or None
+        Encoder counts per wheel revolution (with the ticks topics).
+    truth_topic : str or None
+        Bags: ground-truth pose topic.
+    tf_parent, tf_child : str or None
+        Bags: ground truth from a transform on ``/tf`` instead.
+    time_source : {"header", "bag"}
+        Bags: message header stamps or receive times.
+    """
+
+    format: str = "auto"
+    unit: str = "m"
+    angle_unit: str = "rad"
+    wheel_diameter: float | None = None
+    current_c_l: float | None = None
+    current_c_r: float | None = None
+    current_separation_multiplier: float | None = None
+    current_params: PathLike | None = None
+    controller: str | None = None
+    split: str = "rests"
+    windows: str | Sequence[tuple[float, float]] | None = None
+    max_gap: float = DEFAULT_MAX_GAP
+    min_rest: float = 1.0
+    wheel_topic: str = "/joint_states"
+    left_joint: str = "left_wheel_joint"
+    right_joint: str = "right_wheel_joint"
+    left_ticks_topic: str | None = None
+    right_ticks_topic: str | None = None
+    ticks_per_rev: float | None = None
+    truth_topic: str | None = None
+    tf_parent: str | None = None
+    tf_child: str | None = None
+    time_source: str = "header"
+
+    def __post_init__(self) -> None:
+        _check_choice("--format", self.format, FORMATS)
+        _check_choice("--unit", self.unit, ("m", "cm", "mm"))
+        _check_choice("--angle-unit", self.angle_unit, ("rad", "deg"))
+        _check_choice("--split", self.split, ("rests", "none", "windows"))
+        _check_choice("--time-source", self.time_source, ("header", "bag"))
+        for flag, value in (
+            ("--current-c-l", self.current_c_l),
+            ("--current-c-r", self.current_c_r),
+            ("--current-separation-multiplier", self.current_separation_multiplier),
+            ("--ticks-per-rev", self.ticks_per_rev),
+        ):
+            if value is not None:
+                check_positive_option(flag, value)
+        check_positive_option("--max-gap", self.max_gap, "s")
+        check_positive_option("--min-rest", self.min_rest, "s")
+        if self.wheel_diameter is not None:
+            check_length("--wheel-diameter", self.wheel_diameter, MAX_WHEELBASE)
+        if self.split == "windows" and not self.windows:
+            raise InputError("--split windows needs --windows start:end[,start:end...]")
+
+    @classmethod
+    def of(cls, options: Mapping[str, object]) -> ReadOptions:
+        """Build from keywords, refusing names that are no option (as Python would)."""
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(options) - known)
+        if unknown:
+            raise TypeError(f"unexpected keyword argument {unknown[0]!r}")
+        return cls(**options)  # type: ignore[arg-type]
+
+    @property
+    def time_windows(self) -> list[tuple[float, float]]:
+        """``windows`` as ``(start, end)`` pairs [s]."""
+        if not self.windows:
+            return []
+        if isinstance(self.windows, str):
+            return _parse_windows(self.windows)
+        return [(float(a), float(b)) for a, b in self.windows]
+
+
+@dataclass(frozen=True)
+class Runs:
+    """Runs read from one or more sources, and the parameters active while they were driven.
+
+    Attributes
+    ----------
+    sources : tuple of str
+        What was read (paths, or ``"runs"`` for runs given in memory).
+    formats : tuple of str
+        The format of each source.
+    runs : tuple of Run
+    active : ActiveParams
+        The controller's view of the parameters active during the runs.
+    params : WheelParams or None
+        What logged runs were integrated with; None for end points only.
+    side_length : float or None
+        The square's side [m], if given or known to the sources and the same for all.
+    controller : str
+        Controller name for parameter files.
+    associations : tuple of (str, Association)
+        Time matching of each recording.
+    notes : tuple of str
+        What was found and left out, for people.
+    """
+
+    sources: tuple[str, ...]
+    formats: tuple[str, ...]
+    runs: tuple[Run, ...]
+    active: ActiveParams
+    params: WheelParams | None
+    side_length: float | None
+    controller: str
+    associations: tuple[tuple[str, Association], ...] = ()
+    notes: tuple[str, ...] = field(default=())
+    sides: tuple[float | None, ...] = ()
+
+    def square_side(self) -> float:
+        """The side [m] of the square every source drove.
+
+        Raises
+        ------
+        InputError
+            If it is not known, or the sources are not all squares of one side.
+        """
+        known = {s for s in self.sides if s is not None}
+        if len(known) > 1:
+            shown = ", ".join(f"{s:g} m" for s in sorted(known))
+            raise InputError(
+                f"the sources are squares of different sides ({shown}): UMBmark compares "
+                "runs of one square; calibrate them separately or with --method trajectory"
+            )
+        if known and None in self.sides:
+            other = self.sources[self.sides.index(None)]
+            raise InputError(
+                f"{other} is not a square of known side, unlike the other sources; give "
+                "--side-length if it is one, or calibrate with --method trajectory"
+            )
+        if self.side_length is None:
+            raise InputError(
+                "--side-length is required: the side of the square path, in metres",
+                source=self.sources[0] if len(self.sources) == 1 else None,
+            )
+        return self.side_length
+
+    @property
+    def format(self) -> str:
+        """The sources' format (``+``-joined where they differ)."""
+        return "+".join(dict.fromkeys(self.formats))
+
+
+def calibrated_params(params: Calibrated) -> CalibratedParams:
+    """The new parameters of a calibration: read from a result file, or taken from a report."""
+    from .calibrate import CalibrationReport
+
+    if isinstance(params, CalibratedParams):
+        return params
+    if isinstance(params, CalibrationReport):
+        return params.new_params()
+    return read_calibrated_params(Path(params))
+
+
+def check_positive_option(flag: str, value: float, unit: str = "") -> None:
+    """Refuse an option value that is not a positive finite number."""
+    if not (math.isfinite(value) and value > 0):
+        shown = f"{value:g} {unit}".strip()
+        raise InputError(f"{flag} must be > 0, got {shown}")
+
+
+def check_length(flag: str, value: float, largest: float) -> None:
+    """Refuse a length option [m] that is not positive or is implausibly large (unit slip)."""
+    check_positive_option(flag, value, "m")
+    if value > largest:
+        raise InputError(
+            f"{flag} {value:g} m is implausibly large: lengths are in metres "
+            f"(at most {largest:g} m here)"
+        )
+
+
+def _check_choice(flag: str, value: object, choices: Sequence[str]) -> None:
+    if value not in choices:
+        raise InputError(f"{flag} {value!r}: use one of {', '.join(choices)}")
+
+
+def _parse_windows(text: str) -> list[tuple[float, float]]:
+    out = []
+    for part in text.split(","):
+        try:
+            a, b = (float(v) for v in part.split(":"))
+        except ValueError:
+            raise InputError(
+                f"--windows {text!r}: write start:end pairs in seconds, e.g. '0:95,100:190'"
+            ) from None
+        out.append((a, b))
+    return out
+
+
+def source_name(source: RunSource) -> str:
+    """How a source is named in messages and results."""
+    return "runs" if _is_runs(source) else os.fspath(cast("PathLike", source))
+
+
+def _is_runs(source: object) -> bool:
+    return (
+        isinstance(source, Sequence)
+        and not isinstance(source, str)
+        and all(isinstance(run, Run) for run in source)
+    )
+
+
+def is_table(source: RunSource, options: ReadOptions) -> bool:
+    """Whether ``source`` holds end points only (a runs table, or runs in memory)."""
+    if _is_runs(source):
+        return True
+    if options.format != "auto":
+        return options.format == "table"
+    return detect_format(Path(cast("PathLike", source))) == "table"
+
+
+def read_runs(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    *,
+    wheelbase: float | None = None,
+    side_length: float | None = None,
+) -> Runs:
+    """Read the runs of every source, with the odometry parameters the options say.
+
+    Several sources must agree on the square's side and on the parameters that were
+    active; their runs are pooled (labels then start with the source's name).
+
+    Raises
+    ------
+    InputError
+        For bad options, a bad source, or sources that disagree.
+    """
+    if not sources:
+        raise InputError("no source given: name a runs table, run log, OptiOdom session or bag")
+    if wheelbase is not None:
+        check_length("--wheelbase", wheelbase, MAX_WHEELBASE)
+    if side_length is not None:
+        check_length("--side-length", side_length, MAX_SIDE_LENGTH)
+    file = _parameter_file(options)
+    read = [_read_one(source, options, file, wheelbase, side_length) for source in sources]
+    if len(read) == 1:
+        return read[0]
+    return _pool(read)
+
+
+def _parameter_file(options: ReadOptions) -> ControllerParams:
+    if options.current_params is None:
+        return ControllerParams(controller=options.controller or "diff_drive_controller")
+    return read_parameter_file(Path(options.current_params), options.controller)
+
+
+def _read_one(
+    source: RunSource,
+    options: ReadOptions,
+    file: ControllerParams,
+    wheelbase: float | None,
+    side_length: float | None,
+) -> Runs:
+    name = source_name(source)
+    controller = options.controller or file.controller
+    separation = _first(options.current_separation_multiplier, file.wheel_separation_multiplier)
+    c_left = _first(options.current_c_l, file.left_wheel_radius_multiplier)
+    c_right = _first(options.current_c_r, file.right_wheel_radius_multiplier)
+    configured = wheelbase if wheelbase is not None else file.wheel_separation
+    diameter = options.wheel_diameter
+    if diameter is None and file.wheel_radius is not None:
+        diameter = 2.0 * file.wheel_radius
+
+    if _is_runs(source):
+        loaded = Loaded(format="runs", runs=list(cast("Sequence[Run]", source)))
+        kind: Format = "table"
+    else:
+        path = Path(cast("PathLike", source))
+        kind = detect_format(path) if options.format == "auto" else cast("Format", options.format)
+        given = None
+        if kind == "bag":
+            if configured is None or diameter is None:
+                raise InputError(
+                    "a bag needs the wheel parameters: give --wheelbase and --wheel-diameter "
+                    "(or --current-params with wheel_separation and wheel_radius)",
+                    source=name,
+                )
+            given = WheelParams(
+                wheelbase=configured * separation,
+                wheel_diameter=diameter,
+                c_left=c_left,
+                c_right=c_right,
+            )
+        loaded = load_runs(path, kind, _load_options(options, kind, side_length, given))
+
+    if loaded.params is None:  # end points: the options are all there is
+        if configured is None:
+            raise InputError(
+                "--wheelbase is required: the wheelbase the odometry used during the runs, "
+                "in metres"
+            )
+        active = ActiveParams(
+            wheelbase=configured,
+            c_left=c_left,
+            c_right=c_right,
+            separation_multiplier=separation,
+            wheel_diameter=diameter,
+        )
+        return Runs(
+            sources=(name,),
+            formats=(loaded.format,),
+            runs=tuple(loaded.runs),
+            active=active,
+            params=None,
+            side_length=side_length,
+            controller=controller,
+            notes=tuple(loaded.notes),
+            sides=(side_length,),
+        )
+
+    # Logged runs: the source's parameters, with whatever the options or files override.
+    base = loaded.params
+    from_file = options.current_params is not None
+    configured = configured if configured is not None else base.wheelbase
+    params = WheelParams(
+        wheelbase=configured * separation,
+        wheel_diameter=diameter if diameter is not None else base.wheel_diameter,
+        encoder_resolution=base.encoder_resolution,
+        gear_ratio=base.gear_ratio,
+        c_left=c_left if options.current_c_l is not None or from_file else base.c_left,
+        c_right=c_right if options.current_c_r is not None or from_file else base.c_right,
+    )
+    runs = loaded.runs
+    if params != base:
+        runs = [run.reintegrated(params) for run in runs]
+    active = ActiveParams(
+        wheelbase=configured,
+        c_left=params.c_left,
+        c_right=params.c_right,
+        separation_multiplier=separation,
+        wheel_diameter=params.wheel_diameter,
+    )
+    return Runs(
+        sources=(name,),
+        formats=(loaded.format,),
+        runs=tuple(runs),
+        active=active,
+        params=params,
+        side_length=loaded.side_length,
+        controller=controller,
+        associations=tuple(loaded.associations),
+        notes=tuple(loaded.notes),
+        sides=(loaded.side_length,),
+    )
+
+
+def _load_options(
+    options: ReadOptions, kind: Format, side_length: float | None, params: WheelParams | None
+) -> LoadOptions:
+    from ..sources.segmentation import SplitOptions
+
+    windows = options.time_windows
+    return LoadOptions(
+        unit=options.unit,
+        angle_unit=options.angle_unit,
+        side_length=side_length,
+        params=params,
+        split=cast("SplitMode", "windows" if windows else options.split),
+        windows=windows,
+        split_options=SplitOptions(min_rest=options.min_rest),
+        max_gap=options.max_gap,
+        bag=_bag_options(options) if kind == "bag" else None,
+    )
+
+
+def _bag_options(options: ReadOptions) -> BagOptions:
+    from ..sources.bag import BagOptions
+
+    return BagOptions(
+        wheel_topic=options.wheel_topic,
+        left_joint=options.left_joint,
+        right_joint=options.right_joint,
+        left_ticks_topic=options.left_ticks_topic,
+        right_ticks_topic=options.right_ticks_topic,
+        ticks_per_revolution=options.ticks_per_rev,
+        truth_topic=options.truth_topic,
+        tf_parent=options.tf_parent,
+        tf_child=options.tf_child,
+        time_source=cast("Literal['header', 'bag']", options.time_source),
+    )
+
+
+def _first(value: float | None, fallback: float) -> float:
+    return fallback if value is None else value
+
+
+def _pool(read: Sequence[Runs]) -> Runs:
+    """One set of runs from several sources that agree on side and parameters."""
+    first = read[0]
+    for other in read[1:]:
+        if other.active != first.active or other.params != first.params:
+            raise InputError(
+                f"{first.sources[0]} and {other.sources[0]} were driven with different "
+                "odometry parameters; calibrate them separately",
+                source=None,
+            )
+    sides = tuple(r.side_length for r in read)
+    known = set(sides) - {None}
+    runs = tuple(
+        replace(run, label=f"{Path(r.sources[0]).name} {run.label}".strip())
+        for r in read
+        for run in r.runs
+    )
+    return Runs(
+        sources=tuple(s for r in read for s in r.sources),
+        formats=tuple(f for r in read for f in r.formats),
+        runs=runs,
+        active=first.active,
+        params=first.params,
+        side_length=known.pop() if len(known) == 1 and None not in sides else None,
+        controller=first.controller,
+        associations=tuple(a for r in read for a in r.associations),
+        notes=tuple(n for r in read for n in r.notes),
+        sides=sides,
+    )

@@ -1,0 +1,223 @@
+"""The replay job: integrate recorded runs again with other parameters, and compare.
+
+Each run's end-pose error (odometry end against ground truth) is computed with the
+source's nominal parameters and, given a calibration, with the calibrated ones. Use it to
+check a calibration on runs that were not used to compute it: calibrate on one session,
+replay another (a circle, another day).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InputError
+from ..kinematics import WheelParams
+from ..runs import Run, end_errors
+from ..sources.association import Association
+from .inputs import (
+    Calibrated,
+    PathLike,
+    ReadOptions,
+    SourceOptions,
+    calibrated_params,
+    is_table,
+    read_runs,
+    source_name,
+)
+from .outputs import OutputPlan
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+    from typing_extensions import Unpack
+
+__all__ = ["ReplayReport", "replay"]
+
+
+@dataclass(frozen=True)
+class ReplayReport:
+    """Recorded runs integrated again with one or more parameter sets.
+
+    Attributes
+    ----------
+    source : str
+        The recording.
+    format : str
+        Its format (``log``, ``optiodom``, ``bag``).
+    params_file : str or None
+        The calibration result replayed, if any.
+    runs : tuple of Run
+        The runs as integrated with the nominal parameters, with their time series.
+    parameter_sets : mapping of str to WheelParams
+        ``nominal`` and, with a calibration, ``calibrated``.
+    end_errors : mapping of str to array, shape (n,)
+        Each run's end-position error [m] under each parameter set.
+    heading_errors : mapping of str to tuple of (float or None)
+        Each run's end-heading error [rad] (true minus odometry) under each set.
+    associations : tuple of (str, Association)
+        Time matching of each recording.
+    notes : tuple of str
+        What was found and left out while reading.
+    """
+
+    source: str
+    format: str
+    params_file: str | None
+    runs: tuple[Run, ...]
+    parameter_sets: Mapping[str, WheelParams]
+    end_errors: Mapping[str, NDArray[np.float64]]
+    heading_errors: Mapping[str, tuple[float | None, ...]]
+    associations: tuple[tuple[str, Association], ...] = ()
+    notes: tuple[str, ...] = ()
+
+    @property
+    def final(self) -> str:
+        """The parameter set the replay is about: ``calibrated`` if given, else ``nominal``."""
+        return "calibrated" if "calibrated" in self.parameter_sets else "nominal"
+
+    @property
+    def mean_end_error(self) -> float:
+        """Mean end-position error [m] with the calibrated (else nominal) parameters."""
+        return float(self.end_errors[self.final].mean())
+
+    @property
+    def mean_end_error_nominal(self) -> float:
+        """Mean end-position error [m] with the nominal parameters."""
+        return float(self.end_errors["nominal"].mean())
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres, radians): what ``replay --json`` prints."""
+        sets = self.parameter_sets
+        out: dict[str, Any] = {
+            "source": self.source,
+            "format": self.format,
+            "params": self.params_file,
+            "runs": [
+                {
+                    "label": run.label,
+                    "direction": run.direction.value,
+                    **{f"end_error_{name}": float(self.end_errors[name][i]) for name in sets},
+                    **{f"heading_error_{name}": self.heading_errors[name][i] for name in sets},
+                }
+                for i, run in enumerate(self.runs)
+            ],
+            "mean_end_error": self.mean_end_error,
+            "mean_end_error_nominal": self.mean_end_error_nominal,
+            "parameters": {
+                name: {
+                    "wheelbase": p.wheelbase,
+                    "wheel_diameter_left": p.diameter_left,
+                    "wheel_diameter_right": p.diameter_right,
+                }
+                for name, p in sets.items()
+            },
+            "time_association": {name: a.to_dict() for name, a in self.associations},
+        }
+        if "calibrated" in sets:
+            out["mean_end_error_calibrated"] = float(self.end_errors["calibrated"].mean())
+        return out
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+    def figure(self) -> Figure:
+        """Every run's true path against its odometry paths (what ``--plot`` draws)."""
+        from ..outputs.plotting import replay_figure
+
+        return replay_figure(self.runs, self.parameter_sets, title=f"Replay of {self.source}")
+
+    def write(
+        self,
+        *,
+        plot: str | os.PathLike[str] | None = None,
+        tum: str | os.PathLike[str] | None = None,
+    ) -> list[Path]:
+        """Write the figure and the TUM trajectories, each checked before any is written."""
+        plan = OutputPlan.of(plot=plot, tum=tum)
+        plan.check_not_inputs([self.source])
+        written: list[Path] = []
+        if plan.tum is not None:
+            from ..outputs.tum import write_tum_runs
+
+            written += write_tum_runs(plan.tum, self.runs, self.parameter_sets)
+        if plan.plot is not None:
+            from ..outputs.plotting import save_figure
+
+            save_figure(self.figure(), plan.plot)
+            written.append(plan.plot)
+        return written
+
+
+def replay(
+    source: PathLike,
+    params: Calibrated | None = None,
+    *,
+    wheelbase: float | None = None,
+    plot: str | os.PathLike[str] | None = None,
+    tum: str | os.PathLike[str] | None = None,
+    **options: Unpack[SourceOptions],
+) -> ReplayReport:
+    """Replay recorded runs: integrate their wheel data again and compare with the truth.
+
+    What ``umbmark replay`` does, with the same options as keywords.
+
+    Parameters
+    ----------
+    source : path
+        A run log, an OptiOdom session or a ROS bag (recorded wheel data and ground truth).
+    params : path, CalibrationReport or CalibratedParams, optional
+        A calibration to replay with: a result file (``calibrate -o result.json``) or a
+        report from :func:`umbmark.calibrate`; without it, only the source's nominal
+        parameters are replayed.
+    wheelbase : float, optional
+        Wheelbase [m] of the nominal parameters; overrides the source's.
+    plot : path, optional
+        Draw every run's true path and odometry paths (.png, .svg, .pdf).
+    tum : path, optional
+        A folder for TUM trajectories of every run (truth, nominal, calibrated).
+    **options
+        How to read the source: see :class:`umbmark.jobs.inputs.ReadOptions`.
+
+    Raises
+    ------
+    InputError
+        Bad input: one line naming the file and the problem.
+    """
+    read_options = ReadOptions.of(options)
+    OutputPlan.of(plot=plot, tum=tum).check_not_inputs([source_name(source)])
+    if is_table(source, read_options):
+        raise InputError(
+            "replay needs recorded wheel data (a run log, an OptiOdom session or a bag), "
+            "not a runs table",
+            source=source_name(source),
+        )
+    calibrated = None if params is None else calibrated_params(params)
+    read = read_runs([source], read_options, wheelbase=wheelbase)
+    nominal = read.params
+    if nominal is None:  # pragma: no cover - is_table() refused end points above
+        raise InputError("has no recorded wheel data", source=read.sources[0])
+    sets = {"nominal": nominal}
+    if calibrated is not None:
+        sets["calibrated"] = calibrated.applied_to(nominal)
+    results = {name: [run.reintegrated(p) for run in read.runs] for name, p in sets.items()}
+    report = ReplayReport(
+        source=read.sources[0],
+        format=read.format,
+        params_file=None if calibrated is None else calibrated.source or None,
+        runs=read.runs,
+        parameter_sets=sets,
+        end_errors={name: end_errors(r) for name, r in results.items()},
+        heading_errors={name: tuple(run.heading_error for run in r) for name, r in results.items()},
+        associations=read.associations,
+        notes=read.notes,
+    )
+    report.write(plot=plot, tum=tum)
+    return report

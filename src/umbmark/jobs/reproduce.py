@@ -1,0 +1,152 @@
+"""The paper's experiments on virtual robots, as jobs: Table I and the trap of Fig. 4.
+
+The experiments themselves are :mod:`umbmark.sim.reproduce`; these functions check the
+options and return reports that serialize (``reproduce table1 --json``, ``reproduce fig4
+--json``) and draw.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from ..errors import InputError
+from ..sim.reproduce import Fig4Result, Table1Row
+from .outputs import OutputPlan
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["Fig4Report", "Table1Report", "reproduce_fig4", "reproduce_table1"]
+
+#: Most seeds ``reproduce_table1`` runs: each costs about a second.
+MAX_SEEDS = 1000
+
+
+@dataclass(frozen=True)
+class Table1Report:
+    """Table I on virtual robots: one row per experiment, statistics over the seeds."""
+
+    rows: tuple[Table1Row, ...]
+    seeds: int
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres): what ``reproduce table1 --json`` prints."""
+        return {"rows": [row.to_dict() for row in self.rows]}
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+
+@dataclass(frozen=True)
+class Fig4Report:
+    """The uni-directional trap: a robot with curved legs tuned on cw runs only."""
+
+    result: Fig4Result
+    leg_bend: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres, radians): what ``reproduce fig4 --json`` prints."""
+        return {
+            "true_E_d": self.result.robot.E_d,
+            "leg_bend": self.leg_bend,
+            "stages": [
+                {
+                    "stage": s.name,
+                    "wheelbase": s.wheelbase,
+                    "cw_return_error": list(s.cw),
+                    "ccw_return_error": list(s.ccw),
+                    "r_cw": s.r_cw,
+                    "r_ccw": s.r_ccw,
+                }
+                for s in self.result.stages
+            ],
+        }
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+    def figure(self) -> Figure:
+        """The tuned robot's cw and ccw paths (the view of Figs. 4 and 5)."""
+        from ..outputs.plotting import trajectory_figure
+
+        tuned = self.result.stages[1]
+        return trajectory_figure(
+            [(t, d) for t, d in zip(self.result.tuned_traces, ("cw", "ccw"), strict=True)],
+            title=f"Wheelbase tuned on cw runs only (b = {tuned.wheelbase * 1000:.1f} mm): "
+            "cw comes home, ccw does not (cf. Figs. 4, 5)",
+        )
+
+
+def reproduce_table1(
+    *,
+    seeds: int = 10,
+    seed: int = 1,
+    tape_thickness: float | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> Table1Report:
+    """Table I: eight experiments, E_max,syst before and after the correction.
+
+    Parameters
+    ----------
+    seeds : int
+        Repetitions of every experiment (random seeds).
+    seed : int
+        Base seed.
+    tape_thickness : float, optional
+        Model the tape of experiments 7 and 8 by its physical thickness [m] (the
+        command's ``--tape-thickness`` is in mm) instead of sizing it by the paper's
+        figures before correction.
+    progress : callable, optional
+        Called with the fraction done.
+    """
+    from ..sim.reproduce import EXPERIMENTS, table1, with_tape
+
+    if not 1 <= seeds <= MAX_SEEDS:
+        raise InputError(f"--seeds must be 1 to {MAX_SEEDS}, got {seeds}")
+    experiments = EXPERIMENTS
+    if tape_thickness is not None:
+        if not 0 < tape_thickness <= 0.001:
+            raise InputError(f"--tape-thickness {tape_thickness * 1000:g} mm: give 0 to 1 mm")
+        experiments = with_tape(tape_thickness)
+    rows = table1(seeds=seeds, seed=seed, progress=progress, experiments=experiments)
+    return Table1Report(rows=tuple(rows), seeds=seeds)
+
+
+def reproduce_fig4(
+    *,
+    leg_bend: float = math.radians(1.0),
+    plot: str | os.PathLike[str] | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> Fig4Report:
+    """Fig. 4: tune only the wheelbase on cw runs, then look at ccw runs too.
+
+    Parameters
+    ----------
+    leg_bend : float
+        How much each leg bends left [rad] (the command's ``--leg-bend`` is in degrees).
+    plot : path, optional
+        Draw the tuned robot's paths (:meth:`Fig4Report.figure`) to a .png, .svg or .pdf.
+    progress : callable, optional
+        Called with the fraction done.
+    """
+    from ..sim.reproduce import fig4
+
+    if not (math.isfinite(leg_bend) and 0 < abs(leg_bend) <= math.radians(10)):
+        raise InputError(
+            f"--leg-bend {math.degrees(leg_bend):g} deg: give a bend between 0 and 10 deg"
+        )
+    plan = OutputPlan.of(plot=plot)
+    result = fig4(leg_bend_deg=math.degrees(leg_bend), progress=progress)
+    report = Fig4Report(result=result, leg_bend=leg_bend)
+    if plan.plot is not None:
+        from ..outputs.plotting import save_figure
+
+        save_figure(report.figure(), plan.plot)
+    return report

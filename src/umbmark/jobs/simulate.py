@@ -1,0 +1,352 @@
+"""The simulation job: drive a virtual robot with known errors, keep what it measured.
+
+:func:`simulate` is what ``umbmark simulate`` does. The robot's controller follows the
+path in its **odometry** frame; its wheels move it by their true diameters; its encoders
+quantize the rotation (see ``docs/simulator.md``). The report holds the runs (end points,
+and with ``record`` or ``logs`` the time series) and writes the runs table and run logs
+that ``calibrate`` reads.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from .. import __version__
+from ..conventions import Direction
+from ..errors import InputError
+from ..kinematics import WheelParams
+from ..recording import RunLog
+from ..runs import Run
+from ..sim.engine import SimResult
+from ..sim.robot import NoiseModel, VirtualRobot
+from .inputs import (
+    MAX_SIDE_LENGTH,
+    MAX_WHEELBASE,
+    Calibrated,
+    calibrated_params,
+    check_length,
+    check_positive_option,
+)
+from .outputs import OutputPlan
+
+__all__ = ["PATHS", "SimulationReport", "simulate"]
+
+PathKind = Literal["square", "straight", "turn"]
+PATHS: tuple[PathKind, ...] = ("square", "straight", "turn")
+DIRECTIONS = ("both", "cw", "ccw")
+#: Largest on-the-spot turn [rad]: ten turns.
+MAX_TURN = 20.0 * math.pi
+
+
+@dataclass(frozen=True)
+class SimulationReport:
+    """What a simulation drove and measured.
+
+    Attributes
+    ----------
+    robot : VirtualRobot
+        The robot: its true geometry, its odometry parameters, its noise.
+    path : {"square", "straight", "turn"}
+        The kind of path.
+    path_name : str
+        The path, for people (``"4 x 4 m square"``).
+    side_length : float
+        Side of the square, or length of the straight line [m].
+    seed : int
+        Seed of the non-systematic errors.
+    result : SimResult
+        End poses and, when recorded, the time series of every run.
+    runs : tuple of Run
+        Every run; with its time series (``run.log``) when recorded.
+    """
+
+    robot: VirtualRobot
+    path: str
+    path_name: str
+    side_length: float
+    seed: int
+    result: SimResult
+    runs: tuple[Run, ...]
+
+    @property
+    def provenance(self) -> str:
+        """Comment lines for the files written: where these runs came from."""
+        robot, o = self.robot, self.robot.odometry
+        return (
+            f"Simulated by umbmark {__version__}: {self.path_name}, seed {self.seed}.\n"
+            f"True robot: D_L = {robot.diameter_left:.6f} m, D_R = {robot.diameter_right:.6f} m, "
+            f"b = {robot.wheelbase:.6f} m (E_d = {robot.E_d:.6f}, E_s = {robot.E_s:.6f}).\n"
+            f"Odometry: D_n = {o.wheel_diameter:g} m, b = {o.wheelbase:.6f} m, "
+            f"c_L = {o.c_left:.6f}, c_R = {o.c_right:.6f}, "
+            f"{o.encoder_resolution:g} pulses x {o.gear_ratio:g}.\n"
+            f"Noise: {robot.noise}"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres, radians): what ``simulate --json`` prints."""
+        from ..sim.summary import describe_simulation
+
+        out = describe_simulation(self.robot, self.result, self.path_name, self.path)
+        out["seed"] = self.seed
+        return out
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+    def write(
+        self,
+        *,
+        output: str | os.PathLike[str] | None = None,
+        logs: str | os.PathLike[str] | None = None,
+    ) -> list[Path]:
+        """Write the runs table (``output``) and the run logs (``logs``, a folder).
+
+        Raises
+        ------
+        InputError
+            If a file cannot be written, or the runs have no time series for ``logs``.
+        """
+        plan = OutputPlan.of(output=output, logs=logs)
+        if plan.output is not None and self.path != "square":
+            raise InputError("-o writes a runs table of square runs: use --path square")
+        if plan.logs is not None:
+            if self.result.trace is None:
+                raise InputError("--logs needs the time series: simulate with record=True")
+            if plan.logs.exists() and not plan.logs.is_dir():
+                raise InputError("exists and is not a folder", source=plan.logs)
+        written: list[Path] = []
+        if plan.output is not None:
+            from ..outputs.runs_table import write_runs_table
+
+            write_runs_table(plan.output, self.runs, comment=self.provenance)
+            written.append(plan.output)
+        if plan.logs is not None:
+            written += self._write_logs(plan.logs)
+        return written
+
+    def _write_logs(self, folder: Path) -> list[Path]:
+        from ..outputs.runlog import write_log_csv, write_metadata
+        from ..sources.runlog import LogMetadata
+
+        trace = self.result.trace
+        assert trace is not None
+        robot, odo = self.robot, self.robot.odometry
+        metadata = LogMetadata(
+            wheel_diameter=odo.wheel_diameter,
+            wheelbase=odo.wheelbase,
+            wheel_data="counts",
+            encoder_resolution=odo.encoder_resolution,
+            gear_ratio=odo.gear_ratio,
+            side_length=self.side_length,
+            c_left=odo.c_left,
+            c_right=odo.c_right,
+            extra={
+                "truth": {
+                    "wheel_diameter_left": robot.diameter_left,
+                    "wheel_diameter_right": robot.diameter_right,
+                    "wheelbase": robot.wheelbase,
+                }
+            },
+        )
+        written = [write_metadata(folder, metadata)]
+        for i in range(len(self.result.directions)):
+            end = int(self.result.samples_used[i])
+            path = folder / f"run-{i + 1:02d}.csv"
+            write_log_csv(
+                path,
+                trace.time[: end + 1],
+                trace.true_pose[i, : end + 1],
+                trace.counts[i, : end + 1],
+                comment=self.provenance,
+            )
+            written.append(path)
+        return written
+
+
+def simulate(
+    *,
+    E_d: float = 1.0,
+    E_b: float = 1.0,
+    E_s: float = 1.0,
+    side_length: float = 4.0,
+    wheelbase: float = 0.34,
+    wheel_diameter: float = 0.15,
+    encoder_resolution: float = 2000.0,
+    gear_ratio: float = 20.0,
+    runs: int = 5,
+    direction: str = "both",
+    path: str = "square",
+    turn_angle: float = 2.0 * math.pi,
+    noise_free: bool = False,
+    slip: float = 0.0004,
+    bump_rate: float = 0.0,
+    bump_size: float = 0.002,
+    params: Calibrated | None = None,
+    dt: float = 0.01,
+    speed: float = 0.2,
+    seed: int = 1,
+    record: bool = False,
+    output: str | os.PathLike[str] | None = None,
+    logs: str | os.PathLike[str] | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> SimulationReport:
+    """Drive a virtual robot with known errors around a path, steering by its own odometry.
+
+    What ``umbmark simulate`` does, with the same options as keywords (SI units: the
+    command's ``--turn-angle`` in degrees is ``turn_angle`` in radians here).
+
+    Parameters
+    ----------
+    E_d, E_b, E_s : float
+        True ``D_R / D_L`` (Eq. 2.3), ``b_actual / b`` (Eq. 2.4), ``D_avg / D_n``.
+    side_length : float
+        Side of the square, or length of the straight line [m].
+    wheelbase, wheel_diameter : float
+        Nominal ``b`` and ``D_n`` [m], what the robot's odometry uses.
+    encoder_resolution, gear_ratio : float
+        Encoder pulses per motor revolution; motor revolutions per wheel revolution.
+    runs : int
+        Runs in each direction.
+    direction : {"both", "cw", "ccw"}
+        Both (UMBmark), or one direction only (the uni-directional test).
+    path : {"square", "straight", "turn"}
+        A square (UMBmark), a straight leg of ``side_length`` (shows ``E_s``) or an
+        on-the-spot turn by ``turn_angle`` [rad], ccw positive (shows Sec. 2.3).
+    noise_free : bool
+        No slip and no bumps (only quantization).
+    slip, bump_rate, bump_size : float
+        Wheel slip [m^0.5], floor bumps per metre of wheel travel, extra wheel rotation
+        per bump as a length [m].
+    params : path, CalibrationReport or CalibratedParams, optional
+        A calibration (result file or report) whose ``c_L``, ``c_R`` and wheelbase the
+        robot's odometry uses; the truth stays relative to the nominal values.
+    dt, speed : float
+        Sampling period [s], speed on the legs [m/s].
+    seed : int
+        Seed of the non-systematic errors.
+    record : bool
+        Keep every run's time series (``run.log``); implied by ``logs``.
+    output, logs : path, optional
+        Write the runs table (CSV, metres, radians) and the run logs (a folder).
+    progress : callable, optional
+        Called with the fraction done (0 to 1).
+
+    Raises
+    ------
+    InputError
+        For an option out of range.
+    """
+    for name, value in (("--E-d", E_d), ("--E-b", E_b), ("--E-s", E_s)):
+        check_positive_option(name, value)
+        if not 0.5 < value < 2.0:
+            raise InputError(f"{name} {value:g} is not a plausible ratio (0.5 to 2)")
+    check_length("--side-length", side_length, MAX_SIDE_LENGTH)
+    check_length("--wheelbase", wheelbase, MAX_WHEELBASE)
+    check_length("--wheel-diameter", wheel_diameter, MAX_WHEELBASE)
+    for name, value in (
+        ("--encoder-resolution", encoder_resolution),
+        ("--gear-ratio", gear_ratio),
+        ("--dt", dt),
+        ("--speed", speed),
+    ):
+        check_positive_option(name, value)
+    if direction not in DIRECTIONS:
+        raise InputError(f"--direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
+    if path not in PATHS:
+        raise InputError(f"--path {path!r}: use one of {', '.join(PATHS)}")
+    if runs < 1:
+        raise InputError(f"--runs must be at least 1, got {runs}")
+    if path == "square" and direction == "both" and runs < 2:
+        raise InputError("--runs must be at least 2 for UMBmark (the paper uses 5)")
+    for name, value in (("--slip", slip), ("--bump-rate", bump_rate), ("--bump-size", bump_size)):
+        if not (math.isfinite(value) and value >= 0):
+            raise InputError(f"{name} must be >= 0, got {value:g}")
+    if path == "turn" and not (0 < abs(turn_angle) <= MAX_TURN):
+        raise InputError(
+            f"--turn-angle {math.degrees(turn_angle):g} deg: give a turn of up to "
+            f"{math.degrees(MAX_TURN):g} deg either way, not zero"
+        )
+    plan = OutputPlan.of(output=output, logs=logs)
+    if plan.output is not None and path != "square":
+        raise InputError("-o writes a runs table of square runs: use --path square")
+
+    from ..sim import paths
+    from ..sim.engine import simulate as run_simulation
+    from ..sim.robot import ControlConfig
+
+    odometry = WheelParams(
+        wheelbase=wheelbase,
+        wheel_diameter=wheel_diameter,
+        encoder_resolution=encoder_resolution,
+        gear_ratio=gear_ratio,
+    )
+    noise = NoiseModel() if noise_free else NoiseModel(slip, bump_rate, bump_size)
+    robot = VirtualRobot.with_errors(odometry, E_d=E_d, E_b=E_b, E_s=E_s, noise=noise)
+    if params is not None:
+        applied = calibrated_params(params).applied_to(odometry)
+        robot = robot.calibrated(applied.c_left, applied.c_right, applied.wheelbase)
+
+    if path == "square":
+        chosen = paths.square(side_length)
+        directions = {
+            "both": [Direction.CW] * runs + [Direction.CCW] * runs,
+            "cw": [Direction.CW] * runs,
+            "ccw": [Direction.CCW] * runs,
+        }[direction]
+    elif path == "straight":
+        chosen = paths.straight_line(side_length)
+        directions = [Direction.CCW] * runs
+    else:
+        chosen = paths.spot_turn(turn_angle)
+        directions = [Direction.CCW] * runs
+
+    recorded = record or logs is not None
+    result = run_simulation(
+        robot,
+        chosen,
+        directions,
+        ControlConfig(dt=dt, speed=speed),
+        np.random.default_rng(seed),
+        record=recorded,
+        progress=progress,
+    )
+    report = SimulationReport(
+        robot=robot,
+        path=path,
+        path_name=chosen.name,
+        side_length=side_length,
+        seed=seed,
+        result=result,
+        runs=tuple(_runs_with_logs(result, odometry) if recorded else result.runs()),
+    )
+    report.write(output=output, logs=logs)
+    return report
+
+
+def _runs_with_logs(result: SimResult, odometry: WheelParams) -> list[Run]:
+    """The runs with their time series: wheel angles from the counts, truth as driven."""
+    from dataclasses import replace
+
+    trace = result.trace
+    assert trace is not None
+    out = []
+    for i, run in enumerate(result.runs()):
+        end = int(result.samples_used[i]) + 1
+        counts = trace.counts[i, :end]
+        log = RunLog(
+            time=trace.time[:end].copy(),
+            wheel_angles=(counts - counts[0]) * odometry.radians_per_pulse,
+            truth=trace.true_pose[i, :end].copy(),
+            source=run.label,
+        )
+        out.append(replace(run, log=log))
+    return out

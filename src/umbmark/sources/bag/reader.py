@@ -1,0 +1,194 @@
+"""Opening bags with rosbags, listing their topics and iterating raw messages.
+
+Everything that touches rosbags' reader lives here, and every failure of it becomes an
+:class:`umbmark.errors.InputError` of one line naming the bag: a path that is not a bag,
+a missing rosbags (``pip install 'umbmark[ros]'``), a bag that cannot be opened, a topic
+that is absent or of the wrong type (the message lists the topics present), a storage
+error while reading messages, or a message that cannot be deserialized.
+
+rosbags is imported only when a bag is opened, so importing :mod:`umbmark.sources.bag`
+works without it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ...errors import InputError
+
+if TYPE_CHECKING:
+    from rosbags.highlevel import AnyReader
+    from rosbags.interfaces import Connection
+
+__all__ = [
+    "deserialize",
+    "listing",
+    "messages",
+    "open_bag",
+    "topic_connections",
+    "topic_types",
+]
+
+_LISTED = 25  # names listed in an error message at most
+
+
+def listing(items: Sequence[str]) -> str:
+    """``items`` separated by ``", "``, the first 25 of them and how many more there are."""
+    shown = ", ".join(items[:_LISTED])
+    more = len(items) - _LISTED
+    return f"{shown}, and {more} more" if more > 0 else shown
+
+
+def _one_line(err: BaseException) -> str:
+    text = " ".join(str(err).split())
+    return text or type(err).__name__
+
+
+def _bag_location(path: Path, src: str) -> Path:
+    """The path to give rosbags: a ``.bag`` file, a ROS 2 folder or a storage file."""
+    if not path.exists():
+        raise InputError("no such bag: the file or folder does not exist", source=src)
+    if path.is_dir():
+        if (path / "metadata.yaml").is_file():
+            return path
+        raise InputError("not a bag: a ROS 2 bag folder needs a metadata.yaml", source=src)
+    if path.suffix == ".bag":
+        return path
+    if path.suffix in (".db3", ".mcap"):
+        return path.parent if (path.parent / "metadata.yaml").is_file() else path
+    if path.name == "metadata.yaml":
+        return path.parent
+    try:
+        with path.open("rb") as file:
+            magic = file.read(13)
+    except OSError as err:
+        raise InputError(f"cannot read the bag: {_one_line(err)}", source=src) from None
+    if magic.startswith(b"#ROSBAG"):
+        raise InputError(
+            "this looks like a ROS 1 bag, but it must be named *.bag to be read", source=src
+        )
+    raise InputError(
+        "not a bag: expected a ROS 1 .bag file, a ROS 2 bag folder, or its .db3/.mcap file",
+        source=src,
+    )
+
+
+def _missing_rosbags(src: str) -> InputError:
+    return InputError("reading bags needs rosbags: pip install 'umbmark[ros]'", source=src)
+
+
+@contextmanager
+def open_bag(path: Path, src: str) -> Iterator[AnyReader]:
+    """An open ``AnyReader``; every failure to open becomes an :class:`InputError`.
+
+    Parameters
+    ----------
+    path : Path
+        A ROS 1 ``.bag`` file, a ROS 2 bag folder, or its ``.db3``/``.mcap`` file or
+        ``metadata.yaml``.
+    src : str
+        The path as the user gave it, for error messages.
+    """
+    location = _bag_location(path, src)
+    try:
+        from rosbags.highlevel import AnyReader
+        from rosbags.typesys import Stores, get_typestore
+    except ImportError:
+        raise _missing_rosbags(src) from None
+    try:
+        reader = AnyReader([location], default_typestore=get_typestore(Stores.LATEST))
+        reader.open()
+    except Exception as err:  # rosbags, sqlite, mcap, yaml, decompression: all bad input
+        problem = f"cannot read the bag: {_one_line(err)}"
+        if location.suffix == ".bag" and "index" in problem.lower():
+            problem += " (a recording that was cut short needs `rosbag reindex` first)"
+        raise InputError(problem, source=src) from None
+    try:
+        yield reader
+    finally:
+        reader.close()
+
+
+def topic_types(reader: AnyReader) -> dict[str, str]:
+    """Topic name to message type, sorted by topic; several types joined by ``", "``."""
+    out: dict[str, str] = {}
+    for topic, info in sorted(reader.topics.items()):
+        if info.msgtype is not None:
+            out[topic] = info.msgtype
+        else:
+            out[topic] = ", ".join(sorted({c.msgtype for c in info.connections}))
+    return out
+
+
+def topic_connections(
+    reader: AnyReader,
+    topics: dict[str, str],
+    topic: str,
+    allowed: Sequence[str],
+    what: str,
+    src: str,
+) -> tuple[list[Connection], str]:
+    """The connections of ``topic`` and its message type, checked against ``allowed``.
+
+    Parameters
+    ----------
+    reader : AnyReader
+        The open bag.
+    topics : dict
+        Its :func:`topic_types`.
+    topic : str
+        The topic wanted.
+    allowed : sequence of str
+        The message types it may have.
+    what : str
+        What the topic is for (``"wheel joint states"``), for error messages.
+    src : str
+        The bag's path, for error messages.
+
+    Raises
+    ------
+    InputError
+        The topic is not in the bag (the message lists the topics present), or has a
+        type not in ``allowed``.
+    """
+    if topic not in topics:
+        present = [f"{name} ({typ})" for name, typ in topics.items()]
+        listed = f"topics present: {listing(present)}" if present else "the bag has no topics"
+        raise InputError(f"no topic {topic} ({what}) in the bag; {listed}", source=src)
+    msgtype = topics[topic]
+    if msgtype not in allowed:
+        raise InputError(
+            f"topic {topic} has messages of type {msgtype}; {what} must be " + " or ".join(allowed),
+            source=src,
+        )
+    return [c for c in reader.connections if c.topic == topic], msgtype
+
+
+def messages(
+    reader: AnyReader, conns: Sequence[Connection], topic: str, src: str
+) -> Iterator[tuple[int, bytes]]:
+    """``(bag time [ns], raw message)`` of ``conns``; read errors become InputError."""
+    stream = reader.messages(connections=conns)
+    while True:
+        try:
+            _, timestamp, raw = next(stream)
+        except StopIteration:
+            return
+        except Exception as err:  # corrupt storage, truncated chunk, bad compression
+            raise InputError(
+                f"cannot read the messages of {topic}: {_one_line(err)}", source=src
+            ) from None
+        yield timestamp, raw
+
+
+def deserialize(reader: AnyReader, raw: bytes, msgtype: str, topic: str, src: str) -> object:
+    """The message ``raw`` of ``topic`` deserialized by rosbags; failures become InputError."""
+    try:
+        return reader.deserialize(raw, msgtype)
+    except Exception as err:  # malformed message bytes
+        raise InputError(
+            f"a message of {topic} cannot be decoded: {_one_line(err)}", source=src
+        ) from None

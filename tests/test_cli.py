@@ -1,0 +1,211 @@
+"""The user's view: the installed ``umbmark`` command, run as a user runs it.
+
+The maths are tested through the library (``test_calibrate.py`` and the others); here the
+command must print what the library found, with units, write what it is asked to, and
+fail with one line.
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import typing
+import xml.etree.ElementTree as ET
+
+import click
+import pytest
+
+import umbmark
+from umbmark.cli.main import cli
+from umbmark.jobs.inputs import SourceOptions
+
+from helpers import OPTIODOM, cli_error, cli_json, linear_cgs, run_cli, runs_around
+
+L = 4.0
+ALPHA, BETA = math.radians(-1.0254), math.radians(0.566)
+SQUARE = OPTIODOM / "square" / "230620202042"
+
+
+def _rows():
+    return runs_around(linear_cgs(ALPHA, BETA, L), 0.025)
+
+
+def test_summary_states_every_figure_with_its_unit(table):
+    proc = run_cli("calibrate", str(table(_rows())), "--side-length", "4", "--wheelbase", "0.34")
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    e_max = math.hypot(*linear_cgs(ALPHA, BETA, L)["ccw"]) * 1000
+    assert f"E_max,syst = {e_max:.1f} mm" in out
+    assert "centre of gravity x [mm]" in out
+    assert "SEM = sigma / sqrt(n) [mm]" in out
+    assert "> 3 x SEM" in out
+    assert re.search(r"alpha, Type A error per turn +-1\.0254 ± \d\.\d+ deg", out)
+    assert "wheelbase [mm] (Eq. 4.26)" in out
+    assert "ros__parameters:" in out
+    assert "wheel_separation_multiplier:" in out
+    # Piped output is not wrapped at 80 columns: the verdict is one line.
+    assert re.search(r"run UMBmark again; another pass is worth it while E_max,syst stays", out)
+    assert proc.stderr == ""
+
+
+def _same_as_the_library(args: list[str], *sources, **options) -> None:
+    printed = cli_json(*args)
+    assert printed == umbmark.calibrate(*sources, **options).to_dict()
+
+
+def test_json_is_the_reports_dictionary_for_the_bundled_example(tmp_path):
+    path = tmp_path / "runs.csv"
+    proc = run_cli("example", str(path))
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == f"umbmark: wrote {path}\n"
+    assert "now run: umbmark calibrate" in proc.stdout
+    args = ["calibrate", str(path), "-L", "4", "-b", "0.34", "--unit", "mm"]
+    _same_as_the_library(args, path, side_length=4, wheelbase=0.34, unit="mm")
+
+
+@pytest.mark.skipif(not SQUARE.is_dir(), reason="../shared/data is not here")
+def test_json_is_the_reports_dictionary_for_a_real_session():
+    _same_as_the_library(["calibrate", str(SQUARE), "-m", "exact"], SQUARE, method="exact")
+
+
+def test_output_files_and_what_was_written(table, tmp_path):
+    out, overlay = tmp_path / "result.json", tmp_path / "overlay.yaml"
+    proc = run_cli(
+        "calibrate", str(table(_rows())), "-L", "4", "-b", "0.34", "-o", str(out),
+        "--yaml", str(overlay), "--json",
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(out.read_text()) == json.loads(proc.stdout)
+    assert proc.stderr == f"umbmark: wrote {out}\numbmark: wrote {overlay}\n"
+    assert overlay.read_text().startswith("# Written by umbmark")
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg"])
+def test_plot_on_a_machine_without_display(table, tmp_path, suffix):
+    out = tmp_path / f"clusters{suffix}"
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "MPLBACKEND")}
+    args = ["calibrate", str(table(_rows())), "-L", "4", "-b", "0.34", "--plot", str(out)]
+    proc = run_cli(*args, env=env)
+    assert proc.returncode == 0, proc.stderr
+    data = out.read_bytes()
+    if suffix == ".png":
+        assert data.startswith(b"\x89PNG\r\n\x1a\n")
+        assert len(data) > 20_000
+    else:
+        root = ET.fromstring(data)
+        assert root.tag.endswith("svg")
+        assert b"E_max,syst" in data  # the circle's legend entry
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".clusters")]
+
+
+def test_bad_input_gives_one_line_and_exit_2(table, tmp_path):
+    good = str(table(_rows(), name="good.csv"))
+    assert cli_error("calibrate", good, "-L", "0", "-b", "0.34") == (
+        "umbmark: error: --side-length must be > 0, got 0 m\n"
+    )
+    broken = table([("cw", 1, 2, 3), ("ccw", 1, 2, 3, 4)], name="broken.csv")
+    err = cli_error("calibrate", str(broken), "-L", "4", "-b", "0.34")
+    assert err == f"umbmark: error: {broken}, row 2: has 4 cells, the header has 5\n"
+    err = cli_error("calibrate", good, "-L", "4", "-b", "0.34", "-o", good)
+    assert "would overwrite an input" in err
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["calibrate", "x.csv", "-L", "four"], "Invalid value for '--side-length' / '-L'"),
+        (
+            ["calibrate", "x.csv", "--sidelength", "4"],
+            "No such option '--sidelength'. Did you mean '--side-length'?",
+        ),
+        (["calibrate", "x.csv", "--method", "median"], "Invalid value for '--method'"),
+        (["calibrate", "x.csv", "-L"], "Option '-L' requires an argument"),
+        (["simulate", "--runs", "many"], "'many' is not a valid integer"),
+        (["calibrat"], "No such command 'calibrat'"),
+    ],
+)
+def test_malformed_options_give_one_line_and_exit_2(args, message):
+    err = cli_error(*args)
+    assert message in err
+    assert "--help)" in err
+
+
+def test_help_lists_options_by_section_tape_measure_first():
+    proc = run_cli("calibrate", "--help")
+    assert proc.returncode == 0
+    sections = re.findall(r"^([A-Z][^\n:]*):$", proc.stdout, flags=re.MULTILINE)
+    assert sections == [
+        "The square test",
+        "Runs table",
+        "Parameters active during the runs",
+        "Logged runs (run logs, OptiOdom sessions, ROS bags)",
+        "ROS bags",
+        "Outputs",
+        "Other options",
+    ]
+    square = proc.stdout.split("The square test:")[1].split("Runs table:")[0]
+    for name in ("--side-length", "--wheelbase", "--method"):
+        assert name in square
+
+
+def test_version():
+    proc = run_cli("--version")
+    assert proc.stdout == f"umbmark {umbmark.__version__}\n"
+
+
+def test_help_does_not_import_numpy():
+    code = "import sys, umbmark.cli.main; print('numpy' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_a_runs_table_calibration_loads_no_heavy_library(table):
+    """scipy only for fits that call it, matplotlib only for figures, rosbags only for bags."""
+    code = (
+        "import sys, umbmark\n"
+        f"umbmark.calibrate({str(table(_rows()))!r}, side_length=4, wheelbase=0.34)\n"
+        "print(sorted(m for m in ('scipy', 'matplotlib', 'rosbags') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+# Options whose command-line unit differs from the library's SI keyword.
+_CONVERTED = {("simulate", "turn_angle"), ("fig4", "leg_bend"), ("table1", "tape_thickness")}
+_RENDERING = {"json_out", "help"}
+
+
+def _commands() -> list[tuple[str, click.Command, object]]:
+    reproduce = typing.cast("click.Group", cli.commands["reproduce"])
+    return [
+        ("calibrate", cli.commands["calibrate"], umbmark.calibrate),
+        ("replay", cli.commands["replay"], umbmark.replay),
+        ("simulate", cli.commands["simulate"], umbmark.simulate),
+        ("demo", cli.commands["demo"], umbmark.demo),
+        ("example", cli.commands["example"], umbmark.example),
+        ("table1", reproduce.commands["table1"], umbmark.reproduce_table1),
+        ("fig4", reproduce.commands["fig4"], umbmark.reproduce_fig4),
+    ]
+
+
+@pytest.mark.parametrize(("name", "command", "function"), _commands(), ids=lambda v: str(v)[:12])
+def test_every_option_is_a_keyword_of_the_library_function(name, command, function):
+    signature = inspect.signature(function)
+    keywords = set(signature.parameters)
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in signature.parameters.values()):
+        keywords |= set(SourceOptions.__annotations__)
+    for param in command.params:
+        if param.name in _RENDERING or (name, param.name) in _CONVERTED:
+            continue
+        if isinstance(param, click.Argument):
+            assert param.name in keywords or param.nargs == -1, (name, param.name)
+            continue
+        assert param.name in keywords, f"{name} --{param.name} is no keyword of the library"
+    for converted_command, keyword in _CONVERTED:
+        if converted_command == name:
+            assert keyword in keywords
