@@ -43,7 +43,7 @@ METHODS: tuple[Method, ...] = ("paper", "exact", "heading", "trajectory")
 DEFAULT_WINDOW = 1.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CalibrationReport:
     """Everything a calibration found.
 
@@ -86,6 +86,15 @@ class CalibrationReport:
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = ()
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
+
+    def __repr__(self) -> str:
+        est = self.estimate
+        e_max = "None" if self.e_max_syst is None else f"{self.e_max_syst:.6g} m"
+        return (
+            f"CalibrationReport(source={self.source!r}, method={est.method!r}, "
+            f"runs={len(self.runs)}, e_max_syst={e_max}, E_d={est.E_d:.6f}, "
+            f"E_b={est.E_b:.6f}, warnings={len(self.warnings)})"
+        )
 
     @property
     def source(self) -> str:

@@ -38,7 +38,7 @@ DEMO_FILES = {
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class DemoReport:
     """The demo's robot, its test before and after calibration, and the calibration.
 
@@ -61,6 +61,12 @@ class DemoReport:
     report: CalibrationReport
     seed: int
     files: dict[str, Path]
+
+    def __repr__(self) -> str:
+        return (
+            f"DemoReport(e_max_before={self.before.benchmark.e_max_syst:.6g} m, "
+            f"e_max_after={self.after.benchmark.e_max_syst:.6g} m, seed={self.seed})"
+        )
 
     @property
     def true_E_b(self) -> float:

@@ -41,7 +41,7 @@ if TYPE_CHECKING:
 __all__ = ["ReplayReport", "replay"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class ReplayReport:
     """Recorded runs integrated again with one or more parameter sets.
 
@@ -76,6 +76,14 @@ class ReplayReport:
     heading_errors: Mapping[str, tuple[float | None, ...]]
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        means = ", ".join(
+            f"{name}={float(errors.mean()):.6g} m" for name, errors in self.end_errors.items()
+        )
+        return (
+            f"ReplayReport(source={self.source!r}, runs={len(self.runs)}, mean_end_error: {means})"
+        )
 
     @property
     def final(self) -> str:

@@ -46,7 +46,7 @@ DIRECTIONS = ("both", "cw", "ccw")
 MAX_TURN = 20.0 * math.pi
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class SimulationReport:
     """What a simulation drove and measured.
 
@@ -75,6 +75,15 @@ class SimulationReport:
     seed: int
     result: SimResult
     runs: tuple[Run, ...]
+
+    def __repr__(self) -> str:
+        robot = self.robot
+        return (
+            f"SimulationReport(path={self.path_name!r}, runs={len(self.runs)}, "
+            f"E_d={robot.E_d:.6f}, E_b={robot.wheelbase / robot.odometry.wheelbase:.6f}, "
+            f"E_s={robot.E_s:.6f}, seed={self.seed}, "
+            f"recorded={self.result.trace is not None})"
+        )
 
     @property
     def provenance(self) -> str:
