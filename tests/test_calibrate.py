@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import re
 
+import numpy as np
 import pytest
 import yaml
 
@@ -247,3 +248,42 @@ def test_example_runs_calibrate_as_the_readme_says(tmp_path):
     data = _json(path, side_length=4, wheelbase=0.34, unit="mm")
     assert 0.2 < data["e_max_syst"] < 0.5  # the size of the paper's Fig. 11, before
     assert data["second_pass_recommended"]
+
+
+def test_straight_runs_measure_the_scale_and_compose_into_the_diameters(table):
+    # Three straight runs: the odometry counted 2 m each time, the tape says 2.04 m.
+    straights = [("straight", 2.04, 0.01, 2.0, 0.0), ("straight", 2.038, -0.01, 2.0, 0.0)]
+    straights.append(("straight", 2.042, 0.0, 2.0, 0.0))
+    squares = _rows()
+    both = _json(table(squares + straights), side_length=4, wheelbase=0.34, method="paper")
+    alone = _json(table(squares, name="squares.csv"), side_length=4, wheelbase=0.34)
+    driven = [math.hypot(2.04, 0.01), math.hypot(2.038, 0.01), 2.042]
+    E_s = sum(driven) / 3 / 2.0
+    assert both["E_s"] == pytest.approx(E_s, rel=1e-12)
+    # The turns saw E_b / E_s: the wheelbase is E_b itself, the diameters carry E_s.
+    assert both["E_b"] == pytest.approx(alone["E_b"] * E_s, rel=1e-12)
+    assert both["E_d"] == pytest.approx(alone["E_d"], rel=1e-12)
+    assert both["new"]["c_L"] == pytest.approx(alone["new"]["c_L"] * E_s, rel=1e-12)
+    assert both["wheelbase_corrected"] == pytest.approx(alone["wheelbase_corrected"] * E_s)
+    se_ratio = np.std(driven, ddof=1) / math.sqrt(3) / 2.0
+    assert both["standard_errors"]["E_s"] == pytest.approx(se_ratio, rel=1e-9)
+    assert both["n_runs"] == 13
+    assert both["n_cw"] == both["n_ccw"] == 5
+    assert [r["kind"] for r in both["runs"]][-3:] == ["straight"] * 3
+
+
+def test_straight_runs_alone_correct_the_diameters_only(table):
+    rows = [("straight", 4.02, 0.0, 4.0, 0.0), ("straight", 4.03, 0.0, 4.0, 0.0)]
+    report = umbmark.calibrate(table(rows), side_length=4, wheelbase=0.34)
+    assert report.estimate.E_s == pytest.approx(1.00625)
+    assert report.calibration.new_c_left == pytest.approx(1.00625)
+    assert report.calibration.new_separation_multiplier == 1.0
+    assert report.benchmark is None
+    assert "Drive UMBmark next" in report.warnings[0]
+    err = api_error(
+        umbmark.calibrate,
+        table([("straight", 4.0, 0.0, 0.001, 0.0)] * 2),
+        side_length=4,
+        wheelbase=1,
+    )
+    assert "row 2: its odometry distance 0.001 m is too short" in err

@@ -1,4 +1,4 @@
-"""Logged runs: splitting recordings, run logs, start frames, trajectory fits, replay.
+"""Logged runs: splitting recordings, run logs, start frames, replay.
 
 Recordings come from the closed-loop simulator, whose truth is known; expected values are
 the simulator's own run results or hand-derived quantities, never the code under test.
@@ -12,12 +12,11 @@ import numpy as np
 import pytest
 
 from umbmark.errors import InputError
-from umbmark.estimators.trajectory import fit_trajectories
 from umbmark.kinematics import WheelParams
 from umbmark.outputs.runlog import write_log_csv, write_metadata
 from umbmark.recording import PoseSeries, Recording, WheelSeries
 from umbmark.runs import end_errors
-from umbmark.sim.robot import NoiseModel, VirtualRobot
+from umbmark.sim.robot import VirtualRobot
 from umbmark.sources.logged import runs_from_recordings, to_start_frame
 from umbmark.sources.runlog import LogMetadata, read_runlog
 from umbmark.sources.segmentation import split_by_rests, split_by_windows
@@ -130,34 +129,6 @@ def test_ground_truth_and_wheels_on_separate_rows(tmp_path):
     # From the first matched sample (t = 0.02) to the last (t = 2.0): 0.99 m both ways.
     assert run.true_end.x == pytest.approx(0.99, abs=1e-6)
     assert run.odometry_end.x == pytest.approx(0.99, abs=1e-9)
-
-
-def test_trajectory_fit_recovers_the_simulated_robot(session):
-    loaded = runs_from_recordings([_recording(session)], ODO)
-    fit = fit_trajectories([r.log for r in loaded.runs], window=1.0)
-    # Encoders quantize to 12 micrometres per count; the fit recovers the truth to well
-    # below that.
-    assert fit.r_left == pytest.approx(ROBOT.diameter_left / 2, rel=2e-6)
-    assert fit.r_right == pytest.approx(ROBOT.diameter_right / 2, rel=2e-6)
-    assert fit.wheelbase == pytest.approx(ROBOT.wheelbase, rel=2e-5)
-
-
-def test_trajectory_fit_standard_errors_are_honest():
-    # With slip, the error of each estimate stays within a few standard errors.
-    robot = VirtualRobot.with_errors(
-        ODO, E_d=0.997, E_b=1.02, E_s=1.01, noise=NoiseModel(slip=0.0005)
-    )
-    session = simulated_session(robot, ["cw", "ccw"] * 3, side=1.5, rest=2.0, seed=4)
-    loaded = runs_from_recordings([_recording(session)], ODO)
-    fit = fit_trajectories([r.log for r in loaded.runs])
-    for key, truth in (
-        ("r_left", robot.diameter_left / 2),
-        ("r_right", robot.diameter_right / 2),
-        ("wheelbase", robot.wheelbase),
-    ):
-        value = getattr(fit, key)
-        assert abs(value - truth) < 5 * fit.standard_errors[key], key
-        assert fit.standard_errors[key] < 0.01 * truth
 
 
 def test_replay_with_the_true_parameters_removes_the_systematic_error(session):

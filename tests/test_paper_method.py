@@ -132,11 +132,16 @@ def test_disagreeing_x_and_y_give_a_warning():
     rows = [
         ("cw", -0.08, 0.08, 0, 0),
         ("cw", -0.081, 0.081, 0, 0),
+        ("cw", -0.079, 0.080, 0, 0),
         ("ccw", -0.08, -0.08, 0, 0),
         ("ccw", -0.081, -0.079, 0, 0),
+        ("ccw", -0.080, -0.081, 0, 0),
     ]
-    est = paper_estimate(umbmark_benchmark(_runs(rows)), SquareTest(L, B))
-    assert any("alpha from x" in w and "disagree" in w for w in est.warnings)
+    runs = _runs(rows)
+    est = paper_estimate(umbmark_benchmark(runs), SquareTest(L, B), runs)
+    (warning,) = est.warnings
+    assert "positions do not fit one robot of the model" in warning
+    assert "on 2 degrees of freedom" in warning  # four centre coordinates, two unknowns
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -150,7 +155,8 @@ def test_consistent_noisy_runs_give_no_warning(seed):
         rows += [
             (d, x + rng.normal(0, 0.018), y + rng.normal(0, 0.018), 0.0, 0.0) for _ in range(5)
         ]
-    est = paper_estimate(umbmark_benchmark(_runs(rows)), SquareTest(L, B))
+    runs = _runs(rows)
+    est = paper_estimate(umbmark_benchmark(runs), SquareTest(L, B), runs)
     assert est.warnings == ()
 
 
@@ -159,10 +165,11 @@ def test_errors_too_large_for_small_angles_give_a_warning_but_a_result():
     rows = []
     for d in ("cw", "ccw"):
         x, y, _ = turtle_square(86.0, 2.0, L, d, steps=500)
-        rows += [(d, x + dx, y, 0.0, 0.0) for dx in (-0.005, 0.005)]
-    est = paper_estimate(umbmark_benchmark(_runs(rows)), SquareTest(L, B))
+        rows += [(d, x + dx, y + dy, 0.0, 0.0) for dx, dy in ((-0.005, 0), (0.005, 0), (0, 0.005))]
+    runs = _runs(rows)
+    est = paper_estimate(umbmark_benchmark(runs), SquareTest(L, B), runs)
     assert any("small-angle" in w for w in est.warnings)
-    assert not any("disagree" in w for w in est.warnings)  # explained by the geometry
+    assert not any("do not fit" in w for w in est.warnings)  # explained by the geometry
     assert est.E_b > 1
 
 

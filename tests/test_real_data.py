@@ -163,9 +163,11 @@ def test_sessions_pool_for_the_trajectory_fit_but_not_across_squares():
     assert len(pooled.runs) == 12
     assert pooled.sources == (str(SQUARE), str(CIRCLE))
     assert pooled.runs[6].label == "250620202104 run-01"
-    # Wheel data of both sessions pin the wheels down better than either alone.
+    # Two sessions of one day pin the wheels down better than either alone.
+    circles = OPTIODOM / "circular" / "250620202251"
+    same_day = umbmark.calibrate(CIRCLE, circles, method="trajectory")
     alone = umbmark.calibrate(CIRCLE, method="trajectory")
-    assert pooled.estimate.standard_errors["E_d"] < alone.estimate.standard_errors["E_d"]
+    assert same_day.estimate.standard_errors["E_d"] < alone.estimate.standard_errors["E_d"]
     assert "not a square of known side" in api_error(umbmark.calibrate, SQUARE, CIRCLE)
     err = api_error(umbmark.calibrate, SQUARE, SQUARE2)
     assert "squares of different sides (0.75 m, 1.7 m)" in err

@@ -114,18 +114,6 @@ def test_bad_tables_name_file_row_and_problem(table, rows, header, message):
     assert "\n" not in text
 
 
-def test_errors_larger_than_the_square_suggest_a_unit_slip(table):
-    path = table([("cw", 312.0, 40.0, 0.0, 0.0)])
-    with pytest.raises(
-        InputError,
-        match=r"row 2: return error 314.6 m is larger than the "
-        r"square's side 4 m; are the lengths in mm\? \(use --unit mm\)",
-    ):
-        read_runs_table(path, side_length=4.0)
-    # In millimetres the same numbers are fine.
-    assert read_runs_table(path, unit="mm", side_length=4.0)[0].return_error[0] == 0.312
-
-
 @pytest.mark.parametrize(
     ("content", "message"),
     [

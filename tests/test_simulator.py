@@ -73,6 +73,99 @@ def test_vectorized_simulator_equals_the_plain_loop():
         assert result.samples_used[i] == samples
 
 
+def test_a_run_alone_ends_as_in_a_large_batch():
+    # Runs in one pass share nothing but the generator: a noise-free run ends where it
+    # ends alone, whatever the batch. Robots with different odometry reach their corners
+    # in different periods, so the batch reorders and drops runs as it goes.
+    draw = np.random.default_rng(2).uniform
+    errors = draw([0.99, 0.96, 0.995, 0.995, 0.33], [1.01, 1.04, 1.005, 1.005, 0.35], (48, 5))
+    robots = [
+        VirtualRobot.with_errors(FINE, E_d=e_d, E_b=e_b).calibrated(c_l, c_r, b)
+        for e_d, e_b, c_l, c_r, b in errors
+    ]
+    directions = [CW, CCW] * 24
+    batch = simulate(robots, square(1.0), directions)
+    assert len(set(batch.samples_used.tolist())) > 10  # they do finish apart
+    few = simulate(robots[:5], square(1.0), directions[:5])
+    singles = [simulate(robots[i], square(1.0), [directions[i]]) for i in (0, 7, 30, 47)]
+    for i, alone in [*zip((0, 7, 30, 47), singles, strict=True), (3, few)]:
+        k = 3 if alone is few else 0
+        np.testing.assert_allclose(batch.true_end[i], alone.true_end[k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(batch.odometry_end[i], alone.odometry_end[k], rtol=0, atol=1e-12)
+        assert batch.samples_used[i] == alone.samples_used[k]
+
+
+def test_a_finished_run_stands_still_while_the_others_drive():
+    # A wider odometry wheelbase turns slower: the first robot finishes first.
+    fleet = [VirtualRobot.with_errors(FINE), VirtualRobot.with_errors(FINE).calibrated(1, 1, 0.36)]
+    result = simulate(fleet, square(0.5), [CCW, CW], FAST, record=True)
+    trace = result.trace
+    assert trace is not None
+    end = int(result.samples_used[0])
+    assert end < result.samples == result.samples_used[1]
+    for series in (trace.true_pose, trace.counts, trace.odometry_pose):
+        assert (series[0, end:] == series[0, end]).all()
+        assert (series[1, end:] != series[1, end]).any()
+
+
+@pytest.mark.parametrize("noise", [NoiseModel(slip=0.001), NoiseModel(0.001, 1.0, 0.001)])
+def test_noise_is_drawn_for_every_run_in_every_period(noise):
+    # Seeded results repeat: each period draws for every run, finished or not, in the
+    # caller's order: the left wheels' slip (and bumps), then the right wheels'.
+    noisy = VirtualRobot.with_errors(FINE, noise=noise)
+    quiet = VirtualRobot.with_errors(FINE, E_d=1.01).calibrated(1.0, 1.0, 0.35)
+    rng = np.random.default_rng(4)
+    result = simulate([noisy, quiet, noisy], square(1.0), [CW, CCW, CW], FAST, rng)
+    assert len(set(result.samples_used.tolist())) == 2
+    replay = np.random.default_rng(4)
+    for _ in range(result.samples):
+        for _wheel in range(2):
+            replay.standard_normal(3)
+            if noise.bump_rate:
+                replay.random(3)
+    assert rng.random() == replay.random()
+
+
+def test_seeded_noisy_runs_repeat():
+    # End poses of a seeded batch with slip and bumps whose runs finish apart, as
+    # simulated when the engine was written: every draw goes to the same run and wheel.
+    noise = NoiseModel(slip=0.001, bump_rate=1.0, bump_size=0.001)
+    robots = [
+        VirtualRobot.with_errors(FINE, E_d=1 + 0.002 * k, E_b=1 - 0.01 * k, noise=noise).calibrated(
+            1 - 0.001 * k, 1 + 0.001 * k, 0.34 + 0.002 * k
+        )
+        for k in range(6)
+    ]
+    result = simulate(robots, square(1.0), [CW, CCW] * 3, FAST, np.random.default_rng(11))
+    assert result.samples_used.tolist() == [820, 820, 824, 824, 824, 824]
+    expected = [
+        [-1.9511875906997420e-03, 4.1196566465502450e-03, -6.2884698624621445e00],
+        [4.2990558837951887e-02, -2.7727679185407375e-02, 6.3709379900929157e00],
+        [1.0687082585420134e-01, 7.6686193837985417e-02, -6.4809761211369521e00],
+        [1.5287813775048903e-01, -1.1765073604976177e-01, 6.5688315751604591e00],
+        [2.2039890253603772e-01, 1.5974983778825955e-01, -6.6874372148434640e00],
+        [2.8034100851631355e-01, -1.9022118718337441e-01, 6.7946762021394127e00],
+    ]
+    np.testing.assert_allclose(result.true_end, expected, rtol=0, atol=1e-12)
+
+
+def test_the_engines_arc_step_is_chord_step_to_the_bit():
+    # The engine computes chord_step's series for sin(h)/h inline, halved.
+    from umbmark.kinematics import chord_step
+    from umbmark.sim.engine import _half_sinc_series
+
+    rng = np.random.default_rng(0)
+    ds, theta = rng.uniform(-0.01, 0.01, (2, 2, 64))
+    d_theta = rng.uniform(-0.0199, 0.0199, (2, 64))
+    h = 0.5 * d_theta
+    half_sinc = np.empty_like(h)
+    work = np.empty_like(h), np.empty((3, *h.shape)), np.ones_like(h), np.full_like(h, 0.5)
+    _half_sinc_series(h, *work, half_sinc)()
+    chord, heading = chord_step(ds, d_theta, theta, "arc")
+    assert np.array_equal((ds + ds) * half_sinc, chord)
+    assert np.array_equal(theta + h, heading)
+
+
 @pytest.mark.parametrize(("E_d", "E_s"), [(1.0, 1.02), (1.03, 1.0), (1.03, 0.97)])
 def test_on_the_spot_turn_section_2_3(E_d, E_s):
     # tau = tau_n D_avg / D_n (Eq. 2.13), and the centre circles a point

@@ -20,7 +20,6 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     default = Path(__file__).resolve().parents[2] / "shared" / "data" / "optiodom"
     parser.add_argument("--data", type=Path, default=default)
-    parser.add_argument("--window", type=float, default=1.0, help="trajectory window [s]")
     args = parser.parse_args()
 
     def replay(calibration: umbmark.CalibrationReport | None) -> str:
@@ -33,7 +32,7 @@ def main() -> None:
     for source in SESSIONS:
         square = source.startswith("square")
         for method in ["paper", "exact", "heading", "trajectory"] if square else ["trajectory"]:
-            report = umbmark.calibrate(args.data / source, method=method, window=args.window)
+            report = umbmark.calibrate(args.data / source, method=method)
             print(f"{f'{method} from {source}':42s}" + replay(report))
 
 

@@ -32,6 +32,10 @@ _EXPORTS = {
     # jobs: one function per command, and their reports
     "calibrate": "umbmark.jobs.calibrate",
     "replay": "umbmark.jobs.replay",
+    "validate": "umbmark.jobs.validate",
+    "study": "umbmark.jobs.study",
+    "StudyReport": "umbmark.jobs.study",
+    "ValidationReport": "umbmark.jobs.validate",
     "simulate": "umbmark.jobs.simulate",
     "demo": "umbmark.jobs.demo",
     "reproduce_table1": "umbmark.jobs.reproduce",
@@ -74,6 +78,8 @@ __all__ = [
     "SimulationReport",
     "SourceOptions",
     "SquareTest",
+    "StudyReport",
+    "ValidationReport",
     "WheelParams",
     "__version__",
     "calibrate",
@@ -86,7 +92,9 @@ __all__ = [
     "reproduce_fig4",
     "reproduce_table1",
     "simulate",
+    "study",
     "umbmark_benchmark",
+    "validate",
 ]
 
 if TYPE_CHECKING:
@@ -102,6 +110,8 @@ if TYPE_CHECKING:
     from .jobs.replay import ReplayReport, replay
     from .jobs.reproduce import reproduce_fig4, reproduce_table1
     from .jobs.simulate import SimulationReport, simulate
+    from .jobs.study import StudyReport, study
+    from .jobs.validate import ValidationReport, validate
     from .kinematics import WheelParams, integrate_odometry
     from .runs import EndPose, Run
     from .sources.runs_table import read_runs_table

@@ -12,6 +12,24 @@ Equations (Borenstein & Feng 1996)
   constant over the interval (``"arc"``), or as the straight segment of Borenstein et al.
   1996 (``"segment"``: heading updated first, then ``x += ds cos(theta_new)``), or as a
   straight segment along the mid-interval heading (``"midpoint"``, second-order).
+
+Tyre scrub (beyond the paper)
+-----------------------------
+A real robot's effective wheelbase depends on how it moves: on the spot the tyres scrub
+sideways about contact patches other than while rolling along an arc. The optional
+*scrub model* gives each sampling interval its own wheelbase. With wheel travels
+``dU_L``, ``dU_R`` over the interval, the turning share
+
+``w = |dU_R - dU_L| / (|dU_R| + |dU_L|)``  (``w = 0`` when neither wheel moves)
+
+is 0 on a straight line and 1 on an on-the-spot turn, and
+
+``b_eff = b_arc + (b_spot - b_arc) * w``,  ``dtheta = (dU_R - dU_L) / b_eff``.
+
+``b_arc`` is :attr:`WheelParams.wheelbase`, ``b_spot`` is
+:attr:`WheelParams.spot_wheelbase`; without ``spot_wheelbase`` every interval uses
+``wheelbase`` (the paper's model). See :func:`turning_share` and
+:func:`effective_wheelbase`; :func:`integrate_odometry` takes a wheelbase per interval.
 """
 
 from __future__ import annotations
@@ -29,8 +47,10 @@ __all__ = [
     "IntegrationMethod",
     "WheelParams",
     "chord_step",
+    "effective_wheelbase",
     "integrate_odometry",
     "pose_increments",
+    "turning_share",
     "wheel_displacements",
 ]
 
@@ -57,6 +77,10 @@ class WheelParams:
     c_left, c_right : float
         Wheel correction factors ``c_L``, ``c_R`` (Eq. 4.33): the effective diameters are
         ``c_L * D_n`` and ``c_R * D_n``.
+    spot_wheelbase : float or None
+        ``b_spot`` [m] of the scrub model (module documentation): the wheelbase of
+        on-the-spot turns, ``wheelbase`` then being that of straight motion and arcs
+        (``b_arc``). None (the default): one wheelbase for all motion.
     """
 
     wheelbase: float
@@ -65,6 +89,7 @@ class WheelParams:
     gear_ratio: float = 1.0
     c_left: float = 1.0
     c_right: float = 1.0
+    spot_wheelbase: float | None = None
 
     def __post_init__(self) -> None:
         require_positive(
@@ -76,6 +101,8 @@ class WheelParams:
             "c_left",
             "c_right",
         )
+        if self.spot_wheelbase is not None:
+            check_positive("spot_wheelbase", self.spot_wheelbase, unit="m")
 
     @property
     def conversion_factor(self) -> float:
@@ -104,13 +131,31 @@ class WheelParams:
         c_right: float | None = None,
         wheelbase: float | None = None,
     ) -> WheelParams:
-        """A copy with some of ``c_L``, ``c_R`` and ``b`` replaced."""
+        """A copy with some of ``c_L``, ``c_R`` and ``b`` replaced (``spot_wheelbase`` kept)."""
         return replace(
             self,
             c_left=self.c_left if c_left is None else c_left,
             c_right=self.c_right if c_right is None else c_right,
             wheelbase=self.wheelbase if wheelbase is None else wheelbase,
         )
+
+    def step_wheelbase(self, d_left: ArrayLike, d_right: ArrayLike) -> float | FloatArray:
+        """The wheelbase of each sampling interval [m].
+
+        Parameters
+        ----------
+        d_left, d_right : array, shape (..., n)
+            Wheel travel per interval [m].
+
+        Returns
+        -------
+        float or array, shape (..., n)
+            ``wheelbase`` without a ``spot_wheelbase``; else the scrub model's ``b_eff``
+            per interval (:func:`effective_wheelbase`).
+        """
+        if self.spot_wheelbase is None:
+            return self.wheelbase
+        return effective_wheelbase(d_left, d_right, self.wheelbase, self.spot_wheelbase)
 
 
 def wheel_displacements(
@@ -135,8 +180,67 @@ def wheel_displacements(
     return d_left, d_right
 
 
+def turning_share(d_left: ArrayLike, d_right: ArrayLike) -> FloatArray:
+    """How much of each interval's motion is turning: ``|dU_R - dU_L| / (|dU_R| + |dU_L|)``.
+
+    Parameters
+    ----------
+    d_left, d_right : array, shape (..., n)
+        Wheel travel per interval [m].
+
+    Returns
+    -------
+    w : array, shape (..., n)
+        0 for straight motion, 1 for an on-the-spot turn (and for one wheel standing),
+        in between on arcs; 0 where neither wheel moves.
+    """
+    left = np.asarray(d_left, dtype=np.float64)
+    right = np.asarray(d_right, dtype=np.float64)
+    total = np.abs(right) + np.abs(left)
+    out = np.zeros(np.broadcast(left, right).shape)
+    np.divide(np.abs(right - left), total, out=out, where=total > 0.0)
+    return out
+
+
+def effective_wheelbase(
+    d_left: ArrayLike, d_right: ArrayLike, wheelbase: float, spot_wheelbase: float
+) -> FloatArray:
+    """The scrub model's wheelbase per interval: ``b_arc + (b_spot - b_arc) * w``.
+
+    Parameters
+    ----------
+    d_left, d_right : array, shape (..., n)
+        Wheel travel per interval [m].
+    wheelbase, spot_wheelbase : float
+        ``b_arc`` and ``b_spot`` [m] (module documentation).
+
+    Returns
+    -------
+    b_eff : array, shape (..., n)
+        [m], with ``w`` of :func:`turning_share`.
+    """
+    check_positive("wheelbase", wheelbase, unit="m")
+    check_positive("spot_wheelbase", spot_wheelbase, unit="m")
+    w = turning_share(d_left, d_right)
+    return np.asarray(wheelbase + (spot_wheelbase - wheelbase) * w)
+
+
+def _check_wheelbases(wheelbase: float | ArrayLike) -> float | FloatArray:
+    """A scalar wheelbase checked as one, an array of them checked element by element."""
+    if np.ndim(wheelbase) == 0:
+        value = float(wheelbase)  # type: ignore[arg-type]
+        check_positive("wheelbase", value, unit="m")
+        return value
+    values = np.asarray(wheelbase, dtype=np.float64)
+    bad = ~(np.isfinite(values) & (values > 0))
+    if np.any(bad):
+        first = float(values[bad].flat[0])
+        raise ValueError(f"wheelbase must be > 0 in every interval, got {first!r} m")
+    return values
+
+
 def pose_increments(
-    d_left: ArrayLike, d_right: ArrayLike, wheelbase: float
+    d_left: ArrayLike, d_right: ArrayLike, wheelbase: float | ArrayLike
 ) -> tuple[FloatArray, FloatArray]:
     """Travel of the axle centre ``ds`` [m] and heading change ``dtheta`` [rad] per interval.
 
@@ -144,8 +248,8 @@ def pose_increments(
     ----------
     d_left, d_right : array, shape (..., n)
         Wheel travel per interval [m].
-    wheelbase : float
-        ``b`` [m].
+    wheelbase : float or array broadcastable to shape (..., n)
+        ``b`` [m], one for all intervals or one per interval (the scrub model's ``b_eff``).
 
     Returns
     -------
@@ -157,7 +261,7 @@ def pose_increments(
         raise ValueError(
             f"left and right wheel data differ in shape: {left.shape} vs {right.shape}"
         )
-    return 0.5 * (right + left), (right - left) / wheelbase
+    return 0.5 * (right + left), (right - left) / np.asarray(wheelbase, dtype=np.float64)
 
 
 def chord_step(
@@ -203,7 +307,7 @@ def _sinc(h: FloatArray) -> FloatArray:
 def integrate_odometry(
     d_left: ArrayLike,
     d_right: ArrayLike,
-    wheelbase: float,
+    wheelbase: float | ArrayLike,
     method: IntegrationMethod = "arc",
     initial_pose: ArrayLike | None = None,
 ) -> FloatArray:
@@ -213,8 +317,9 @@ def integrate_odometry(
     ----------
     d_left, d_right : array, shape (..., n)
         Wheel travel per sampling interval [m] (see :func:`wheel_displacements`).
-    wheelbase : float
-        ``b`` [m].
+    wheelbase : float or array broadcastable to shape (..., n)
+        ``b`` [m]: one for all intervals, or one per interval (the scrub model's
+        ``b_eff``, :meth:`WheelParams.step_wheelbase`).
     method : {"arc", "midpoint", "segment"}
         ``"arc"`` integrates each interval as an exact circular arc, ``"midpoint"`` as a
         chord along the mid-interval heading, ``"segment"`` as the straight segment of
@@ -230,8 +335,7 @@ def integrate_odometry(
     """
     if method not in INTEGRATION_METHODS:
         raise ValueError(f"unknown integration method {method!r}; use arc, midpoint or segment")
-    check_positive("wheelbase", wheelbase, unit="m")
-    ds, dtheta = pose_increments(d_left, d_right, wheelbase)
+    ds, dtheta = pose_increments(d_left, d_right, _check_wheelbases(wheelbase))
     batch = ds.shape[:-1]
     start = (
         np.zeros((*batch, 3))

@@ -139,9 +139,12 @@ class RunLog:
         """Odometry poses, shape (n, 3), from the wheel rotation and ``params``.
 
         Wheel travel per interval is ``c * D_n / 2 * dphi`` (Eqs. 2.2, 4.33 with
-        ``c_m N = (D_n / 2) dphi``).
+        ``c_m N = (D_n / 2) dphi``). With ``params.spot_wheelbase`` set, each interval
+        turns with the scrub model's wheelbase ``b_eff``
+        (:meth:`umbmark.kinematics.WheelParams.step_wheelbase`).
         """
         dphi = np.diff(self.wheel_angles, axis=0)
         d_left = params.c_left * 0.5 * params.wheel_diameter * dphi[:, 0]
         d_right = params.c_right * 0.5 * params.wheel_diameter * dphi[:, 1]
-        return integrate_odometry(d_left, d_right, params.wheelbase, method=method)
+        wheelbase = params.step_wheelbase(d_left, d_right)
+        return integrate_odometry(d_left, d_right, wheelbase, method=method)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,6 +52,12 @@ class Run:
         End pose as the robot's odometry computed it (``x_calc``, ``y_calc``).
     label : str
         Where the run came from, for messages (``runs.csv row 3``, ``run-04``).
+    log : RunLog or None
+        The recorded time series, for logged runs.
+    kind : {"square", "straight"}
+        A run around the square (UMBmark), or a straight run whose odometry distance is
+        compared with the distance measured (the scale error ``E_s``); a straight run's
+        ``direction`` means nothing.
     """
 
     direction: Direction
@@ -58,6 +65,7 @@ class Run:
     odometry_end: EndPose
     label: str = ""
     log: RunLog | None = field(default=None, repr=False, compare=False)
+    kind: Literal["square", "straight"] = "square"
 
     @property
     def return_error(self) -> tuple[float, float]:
@@ -96,8 +104,9 @@ def end_errors(runs: Sequence[Run]) -> NDArray[np.float64]:
 
 
 def split_by_direction(runs: Sequence[Run]) -> dict[Direction, list[Run]]:
-    """The runs of each direction, in their original order."""
+    """The square runs of each direction, in their original order (straight runs left out)."""
     groups: dict[Direction, list[Run]] = {Direction.CW: [], Direction.CCW: []}
     for run in runs:
-        groups[run.direction].append(run)
+        if run.kind == "square":
+            groups[run.direction].append(run)
     return groups

@@ -36,27 +36,24 @@ __all__ = ["calibrate"]
             "--method",
             "-m",
             section=TEST,
-            type=click.Choice(["paper", "exact", "heading", "trajectory"]),
+            type=click.Choice(
+                ["paper", "exact", "heading", "endpose", "trajectory", "trajectory-scrub", "auto"]
+            ),
             default="paper",
             show_default=True,
             help="Estimator: paper (Eqs. 4.20-4.27 as printed), exact (exact square "
             "geometry, for large errors), heading (final headings, Jung & Chung 2011; needs "
-            "headings), trajectory (least squares on whole ground-truth trajectories of any "
-            "shape, logged runs only; finds E_s too).",
+            "headings), endpose (maximum likelihood on every run's end pose, exact "
+            "geometry), trajectory (least squares on whole ground-truth trajectories of any "
+            "shape, logged runs only; finds E_s too), trajectory-scrub (the same with a "
+            "wheelbase that depends on how much each step turns; exports the single-wheelbase "
+            "set), auto (the one that predicts held-out recorded runs best: umbmark validate).",
         ),
     ]
 )
 @source_options(wheelbase=False)
 @apply(
     [
-        option(
-            "--window",
-            section="Logged runs (run logs, OptiOdom sessions, ROS bags)",
-            type=float,
-            default=1.0,
-            show_default=True,
-            help="Window length of --method trajectory [s].",
-        ),
         option(
             "--json",
             "json_out",

@@ -22,6 +22,8 @@ from .example import example
 from .replay import replay
 from .reproduce import reproduce
 from .simulate import simulate
+from .study import study
+from .validate import validate
 
 __all__ = ["cli", "main"]
 
@@ -40,7 +42,7 @@ def cli() -> None:
     option says otherwise; every command has --help."""
 
 
-for command in (demo, calibrate, replay, simulate, reproduce, example):
+for command in (demo, calibrate, replay, validate, simulate, study, reproduce, example):
     cli.add_command(command)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 from rich import box
 from rich.console import Console
@@ -19,7 +20,10 @@ _METHOD_NAMES = {
     "paper": "the paper's equations (Eqs. 4.20-4.27, x and y averaged)",
     "exact": "exact square geometry, inverted numerically",
     "heading": "final heading errors (Jung & Chung 2011)",
-    "trajectory": "trajectory least squares (Antonelli et al. 2005)",
+    "endpose": "maximum likelihood on the runs' end poses, exact geometry",
+    "straight": "straight runs against a tape (scale only)",
+    "trajectory": "least squares on whole recorded trajectories",
+    "trajectory-scrub": "least squares on whole trajectories, turn-dependent wheelbase",
 }
 
 
@@ -95,7 +99,8 @@ def render_calibration(
             Text.assemble(
                 ("Calibration of ", "bold"),
                 (report.source, "bold cyan"),
-                f"  ({len(report.runs)} runs; not both directions, so no UMBmark figures)",
+                f"  ({len(report.runs)} runs, not squares of a known side in both directions: "
+                "no UMBmark figures)",
             )
         )
     else:
@@ -123,21 +128,17 @@ def render_calibration(
     _row(errors, "E_d = D_R / D_L", _plus_minus(est.E_d, se.get("E_d"), ".6f"), "Eq. 4.22")
     if est.E_s is not None:
         _row(errors, "E_s = D_avg / D_active", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "scale")
-    if est.method == "trajectory":
-        comp = est.components
-        for key, label in (
-            ("r_left", "left wheel radius [mm]"),
-            ("r_right", "right wheel radius [mm]"),
-            ("wheelbase", "wheelbase [mm]"),
-        ):
-            _row(errors, label, _plus_minus(comp[key] * _MM, se[key] * _MM, ".3f"), "fitted")
-        _row(
-            errors,
-            "residual per window",
-            f"{comp['rms_position'] * _MM:.2f} mm, {math.degrees(comp['rms_heading']):.3f} deg",
-            f"{comp['windows']:.0f} windows",
-        )
+    if est.method.startswith("trajectory"):
+        _trajectory_rows(errors, est.components, se)
     console.print(errors)
+    intervals = [
+        f"{name} [{low:.6f}, {high:.6f}]"
+        for name in ("E_d", "E_b", "E_s")
+        if (interval := est.interval(name)) is not None
+        for low, high in [interval]
+    ]
+    if intervals:
+        console.print("95 % intervals: " + ", ".join(intervals))
 
     correction = table("Correction, composed with the values active during the runs")
     correction.add_column("")
@@ -196,6 +197,35 @@ def render_calibration(
         )
         # Plain text, no box: it must copy and paste as it is.
         console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
+
+
+def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:
+    """The trajectory fit's own figures: radii, wheelbase(s), time offset, residuals."""
+    for key, label, note in (
+        ("r_left", "left wheel radius [mm]", "fitted"),
+        ("r_right", "right wheel radius [mm]", "fitted"),
+        ("wheelbase", "wheelbase [mm]", "fitted: the single set exported"),
+        ("arc_wheelbase", "wheelbase on straights and arcs [mm]", "scrub model"),
+        ("spot_wheelbase", "wheelbase turning on the spot [mm]", "scrub model"),
+    ):
+        if key in comp:
+            _row(
+                errors,
+                label,
+                _plus_minus(comp[key] * _MM, se.get(key, math.nan) * _MM, ".3f"),
+                note,
+            )
+    if "time_offset" in comp:
+        offset = _plus_minus(
+            comp["time_offset"] * _MM, se.get("time_offset", math.nan) * _MM, ".1f"
+        )
+        _row(errors, "time offset [ms]", offset, "> 0: ground truth lags the wheels")
+    _row(
+        errors,
+        "residual along the runs (rms)",
+        f"{comp['rms_position'] * _MM:.2f} mm, {math.degrees(comp['rms_heading']):.3f} deg",
+        f"{comp['runs']:.0f} runs, {comp['samples']:.0f} samples",
+    )
 
 
 def table(title: str) -> Table:

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -12,7 +12,15 @@ from numpy.typing import NDArray
 from ..benchmark import Benchmark
 from ..validation import check_positive
 
-__all__ = ["ErrorEstimate", "SquareTest", "cg_vector", "propagate"]
+__all__ = [
+    "ErrorEstimate",
+    "SquareTest",
+    "cg_blocks",
+    "cg_vector",
+    "propagate",
+    "propagate_blocks",
+    "welch_dof",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -58,6 +66,10 @@ class ErrorEstimate:
         The result is valid but shaky, and why.
     E_s : float or None
         Scale error ``D_avg / D_n``, for estimators that can see it.
+    dof : float, mapping of str to float, or None
+        Degrees of freedom of the standard errors (of the scatter they come from), one for
+        all or one per figure, for Student's t intervals; None: large-sample (normal)
+        intervals.
     """
 
     method: str
@@ -69,6 +81,30 @@ class ErrorEstimate:
     standard_errors: Mapping[str, float] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
     E_s: float | None = None
+    dof: float | Mapping[str, float] | None = None
+
+    def with_scale(self, E_s: float) -> ErrorEstimate:
+        """This estimate of a square test, completed by a scale error ``E_s`` measured
+        apart (straight runs): the turns saw ``E_b / E_s``, so ``E_b`` is scaled by it."""
+        errors = dict(self.standard_errors)
+        if "E_b" in errors:
+            errors["E_b"] = errors["E_b"] * E_s
+        return replace(self, E_b=self.E_b * E_s, E_s=E_s, standard_errors=errors)
+
+    def interval(self, name: str, level: float = 0.95) -> tuple[float, float] | None:
+        """The ``level`` confidence interval of ``name`` (``E_d``, ``E_b``, ...), or None
+        without a standard error: estimate -/+ Student's t quantile times the standard error."""
+        from ..stats import t_quantile
+
+        se = self.standard_errors.get(name)
+        value = getattr(self, name, self.components.get(name))
+        if se is None or value is None or not math.isfinite(se):
+            return None
+        value = float(value)
+        dof = self.dof.get(name) if isinstance(self.dof, Mapping) else self.dof
+        dof = math.inf if dof is None or dof < 1 else dof
+        half = t_quantile(0.5 + 0.5 * level, dof) * se
+        return (value - half, value + half)
 
 
 def cg_vector(bench: Benchmark) -> tuple[FloatArray, FloatArray]:
@@ -88,6 +124,68 @@ def cg_vector(bench: Benchmark) -> tuple[FloatArray, FloatArray]:
             np.cov(cluster.errors, rowvar=False, ddof=1) / cluster.n
         )
     return z, cov
+
+
+def welch_dof(parts: Sequence[tuple[float, float]]) -> float:
+    """Degrees of freedom of a sum of independent variance estimates (Welch-Satterthwaite).
+
+    ``parts`` holds each estimate's value and degrees of freedom.
+    """
+    total = sum(v for v, _ in parts)
+    spread = sum(v * v / dof for v, dof in parts if dof > 0)
+    return math.inf if spread <= 0.0 else total * total / spread
+
+
+def cg_blocks(bench: Benchmark) -> tuple[FloatArray, list[tuple[FloatArray, float]]]:
+    """Centres of gravity as one vector, and each cluster's covariance of its centre.
+
+    Returns
+    -------
+    z : array, shape (4,)
+        ``(x_cw, y_cw, x_ccw, y_ccw)`` [m].
+    blocks : list of (array, shape (2, 2), float)
+        Each cluster's sample covariance over its size, and its degrees of freedom
+        (``n - 1``).
+    """
+    z = np.concatenate([bench.cw.cg, bench.ccw.cg])
+    blocks = [
+        (np.cov(c.errors, rowvar=False, ddof=1) / c.n, float(c.n - 1)) for c in bench.clusters
+    ]
+    return z, blocks
+
+
+def propagate_blocks(
+    fn: Callable[[FloatArray], Mapping[str, float]],
+    z: FloatArray,
+    blocks: Sequence[tuple[FloatArray, float]],
+    step: float = 1e-6,
+) -> tuple[dict[str, float], dict[str, float]]:
+    """First-order standard errors of every output of ``fn`` at ``z``, and their degrees
+    of freedom.
+
+    ``z`` is the concatenation of independent blocks of variables, each with its
+    covariance and the degrees of freedom it was estimated with. Each output's variance is
+    the sum of the blocks' contributions; its degrees of freedom follow by
+    Welch-Satterthwaite (:func:`welch_dof`).
+    """
+    keys = list(fn(z))
+    jac = np.zeros((len(keys), len(z)))
+    for j in range(len(z)):
+        dz = np.zeros_like(z)
+        dz[j] = step
+        plus, minus = fn(z + dz), fn(z - dz)
+        jac[:, j] = [(plus[k] - minus[k]) / (2.0 * step) for k in keys]
+    errors, dofs = {}, {}
+    for i, key in enumerate(keys):
+        parts, start = [], 0
+        for cov, dof in blocks:
+            size = cov.shape[0]
+            g = jac[i, start : start + size]
+            parts.append((max(float(g @ cov @ g), 0.0), dof))
+            start += size
+        errors[key] = math.sqrt(sum(v for v, _ in parts))
+        dofs[key] = welch_dof(parts)
+    return errors, dofs
 
 
 def propagate(

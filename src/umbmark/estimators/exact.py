@@ -8,25 +8,23 @@ both centres of gravity in the least-squares sense, starting from the paper's es
 ``E_b`` then follows exactly from ``alpha`` (Eq. 4.27) and ``E_d`` from ``beta`` for an arc
 of length ``L`` and the actual wheelbase ``E_b b``.
 
-The fit has two unknowns and four smooth residuals, and starts at the first-order
-solution: Gauss-Newton with a step-halving line search converges in a handful of steps,
-to the last bits for noise-free centres. It is written out here rather than taken from
-``scipy.optimize`` because the paper's method runs it on every calibration (for its
-warnings), and importing ``scipy.optimize`` would cost three times the whole
-calibration's run time. ``tests/test_paper_method.py`` checks it against
-``scipy.optimize.least_squares``.
+The fit (:mod:`umbmark.estimators.solve`) has two unknowns and four smooth residuals.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 
 from ..benchmark import Benchmark
 from ..conventions import Direction
 from ..model import E_b_from_alpha, E_d_from_beta_arc
+from ..runs import Run
 from ..square import icr_offset, square_end_pose
-from .base import ErrorEstimate, FloatArray, SquareTest, cg_vector, propagate
+from .base import ErrorEstimate, FloatArray, SquareTest, cg_blocks, propagate_blocks
 from .formulas import paper_components
+from .solve import gauss_newton, jacobian
 
 __all__ = ["exact_components", "exact_end_positions", "exact_estimate", "fit_exact_geometry"]
 
@@ -44,46 +42,17 @@ def exact_end_positions(alpha: float, beta: float, test: SquareTest) -> FloatArr
     )
 
 
-#: Gauss-Newton iterations at most; from the first-order start a handful are used.
-_MAX_ITERATIONS = 60
-#: Step [rad] of the central differences of the Jacobian: truncation (~step^2) and
-#: rounding (~1e-16 / step) errors both stay near 1e-11.
-_JACOBIAN_STEP = 1e-5
-
-
 def fit_exact_geometry(z: FloatArray, test: SquareTest, start: FloatArray) -> FloatArray:
     """The ``(alpha, beta)`` [rad] whose exact end positions best match ``z``.
 
     Least squares on the residuals ``(exact_end_positions(alpha, beta) - z) / L``, shape
-    (4,), by Gauss-Newton from ``start`` (shape (2,)). A step that clearly raises the
-    residual is halved; iteration stops when the step falls to the last bits of the
-    solution, so that the solution is a smooth function of ``z`` (the standard errors
-    differentiate it).
+    (4,), from ``start`` (shape (2,)); see :func:`umbmark.estimators.solve.gauss_newton`.
     """
 
     def residuals(p: FloatArray) -> FloatArray:
         return (exact_end_positions(float(p[0]), float(p[1]), test) - z) / test.side_length
 
-    p = np.asarray(start, dtype=np.float64).copy()
-    r = residuals(p)
-    cost = float(r @ r)
-    for _ in range(_MAX_ITERATIONS):
-        jac = np.empty((4, 2))
-        for j in range(2):
-            dp = np.zeros(2)
-            dp[j] = _JACOBIAN_STEP
-            jac[:, j] = (residuals(p + dp) - residuals(p - dp)) / (2.0 * _JACOBIAN_STEP)
-        step = np.linalg.lstsq(jac, -r, rcond=None)[0]
-        for _ in range(40):
-            r_trial = residuals(p + step)
-            cost_trial = float(r_trial @ r_trial)
-            if cost_trial <= cost * (1.0 + 1e-9):
-                break
-            step = 0.5 * step
-        p, r, cost = p + step, r_trial, cost_trial
-        if float(np.max(np.abs(step))) <= 1e-15 * (1.0 + float(np.max(np.abs(p)))):
-            break
-    return np.asarray(p, dtype=np.float64)
+    return gauss_newton(residuals, start)[0]
 
 
 def exact_components(z: FloatArray, test: SquareTest) -> dict[str, float]:
@@ -103,11 +72,34 @@ def exact_components(z: FloatArray, test: SquareTest) -> dict[str, float]:
     }
 
 
-def exact_estimate(bench: Benchmark, test: SquareTest) -> ErrorEstimate:
-    """``alpha``, ``beta``, ``E_d``, ``E_b`` from the exact square geometry."""
-    z, cov = cg_vector(bench)
+def _errors_of(angles: FloatArray, test: SquareTest) -> dict[str, float]:
+    """``alpha``, ``beta``, ``E_b`` (Eq. 4.27) and ``E_d`` (an arc with ``E_b b``)."""
+    alpha, beta = float(angles[0]), float(angles[1])
+    E_b = float(E_b_from_alpha(alpha))
+    E_d = float(E_d_from_beta_arc(beta, test.side_length, E_b * test.wheelbase))
+    return {"alpha": alpha, "beta": beta, "E_b": E_b, "E_d": E_d}
+
+
+def exact_estimate(
+    bench: Benchmark, test: SquareTest, runs: Sequence[Run] | None = None
+) -> ErrorEstimate:
+    """``alpha``, ``beta``, ``E_d``, ``E_b`` from the exact square geometry.
+
+    With ``runs`` (the same runs) the model check of
+    :func:`umbmark.estimators.checks.model_warnings` is made.
+    """
+    from .checks import model_warnings
+
+    z, blocks = cg_blocks(bench)
     parts = exact_components(z, test)
-    errors = propagate(lambda v: exact_components(v, test), z, cov)
+    # The fit's response to the centres, by the implicit function theorem at the solution
+    # (Gauss-Newton's linearization): d(alpha, beta)/dz = (J^T J)^-1 J^T, J = d(ends)/d(a, b).
+    angles = np.array([parts["alpha"], parts["beta"]])
+    jac = jacobian(lambda p: exact_end_positions(float(p[0]), float(p[1]), test), angles)
+    response = np.linalg.solve(jac.T @ jac, jac.T)
+    errors, dofs = propagate_blocks(
+        lambda v: _errors_of(angles + response @ (v - z), test), z, blocks, step=1e-7
+    )
     return ErrorEstimate(
         method="exact",
         alpha=parts["alpha"],
@@ -116,4 +108,6 @@ def exact_estimate(bench: Benchmark, test: SquareTest) -> ErrorEstimate:
         E_b=parts["E_b"],
         components={"residual_rms": parts["residual_rms"]},
         standard_errors={k: errors[k] for k in ("alpha", "beta", "E_d", "E_b")},
+        warnings=() if runs is None else tuple(model_warnings(bench, runs, test)),
+        dof={k: dofs[k] for k in ("alpha", "beta", "E_d", "E_b")},
     )

@@ -3,7 +3,9 @@
 A cw run ends with ``eps_theta,cw = 4 alpha + 4 beta`` and a ccw run with
 ``eps_theta,ccw = -4 alpha + 4 beta`` (four turns, four legs; exact, no small-angle
 approximation), so ``alpha = (eps_cw - eps_ccw) / 8`` and ``beta = (eps_cw + eps_ccw) / 8``.
-``E_b`` and ``E_d`` then follow by Eqs. 4.27 and 4.21-4.22, as in the paper's method.
+``E_b`` then follows by Eq. 4.27, and ``E_d`` from ``beta`` for a leg that is an arc of
+length ``L`` driven with the actual wheelbase ``E_b b`` (as the exact method does; the
+paper's Eqs. 4.21-4.22 with the nominal wheelbase would be off by about ``E_b - 1``).
 Needs ``theta_abs`` and ``theta_odo`` for every run.
 """
 
@@ -12,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..benchmark import Benchmark
-from ..model import E_b_from_alpha, E_d_from_beta
+from ..model import E_b_from_alpha, E_d_from_beta_arc
 from ..runs import Run, split_by_direction
-from .base import ErrorEstimate, FloatArray, SquareTest, propagate
+from .base import ErrorEstimate, FloatArray, SquareTest, propagate_blocks
 
 __all__ = ["heading_components", "heading_estimate"]
 
@@ -24,27 +26,30 @@ def heading_components(m: FloatArray, test: SquareTest) -> dict[str, float]:
     cw, ccw = float(m[0]), float(m[1])
     alpha = (cw - ccw) / 8.0
     beta = (cw + ccw) / 8.0
+    E_b = float(E_b_from_alpha(alpha))
     return {
         "alpha": alpha,
         "beta": beta,
-        "E_b": float(E_b_from_alpha(alpha)),
-        "E_d": float(E_d_from_beta(beta, test.side_length, test.wheelbase)),
+        "E_b": E_b,
+        "E_d": float(E_d_from_beta_arc(beta, test.side_length, E_b * test.wheelbase)),
         "eps_theta_cw": cw,
         "eps_theta_ccw": ccw,
     }
 
 
 def heading_estimate(bench: Benchmark, runs: list[Run], test: SquareTest) -> ErrorEstimate:
-    """Jung & Chung's estimate from the runs' heading errors.
+    """Jung & Chung's estimate from the runs' heading errors (the positions only check it).
 
     Raises
     ------
     ValueError
         If a run has no headings.
     """
-    del bench  # the heading method does not use the position clusters
+    from .checks import model_warnings
+
     means = []
     variances = []
+    counts = []
     for direction, group in split_by_direction(runs).items():
         headings = [run.heading_error for run in group]
         missing = [
@@ -59,9 +64,11 @@ def heading_estimate(bench: Benchmark, runs: list[Run], test: SquareTest) -> Err
             raise ValueError(f"fewer than 2 {direction.value} runs")
         means.append(values.mean())
         variances.append(values.var(ddof=1) / len(values))
+        counts.append(len(values))
     m = np.array(means)
     parts = heading_components(m, test)
-    errors = propagate(lambda v: heading_components(v, test), m, np.diag(variances), step=1e-7)
+    blocks = [(np.array([[v]]), float(n - 1)) for v, n in zip(variances, counts, strict=True)]
+    errors, dofs = propagate_blocks(lambda v: heading_components(v, test), m, blocks, step=1e-7)
     return ErrorEstimate(
         method="heading",
         alpha=parts["alpha"],
@@ -70,4 +77,6 @@ def heading_estimate(bench: Benchmark, runs: list[Run], test: SquareTest) -> Err
         E_b=parts["E_b"],
         components={k: parts[k] for k in ("eps_theta_cw", "eps_theta_ccw")},
         standard_errors={k: errors[k] for k in ("alpha", "beta", "E_d", "E_b")},
+        warnings=tuple(model_warnings(bench, runs, test)),
+        dof={k: dofs[k] for k in ("alpha", "beta", "E_d", "E_b")},
     )

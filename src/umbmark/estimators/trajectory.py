@@ -4,253 +4,817 @@ Runs of any shape (squares, circles, anything driven) with a recorded ground tru
 calibrate the wheel radii ``r_L``, ``r_R`` and the wheelbase ``b`` absolutely, and with
 them the scale error ``E_s`` that UMBmark cannot see.
 
-The trajectories are cut into windows of ``window`` seconds. Over a window, with wheel
-rotations ``dphi_L``, ``dphi_R`` per sample:
+The fit
+-------
+Each run's wheel rotation is integrated from the run's start into odometry poses (exact
+arcs, :mod:`umbmark.kinematics`) with the parameters being fitted, and compared with the
+ground truth at **every** matched sample of the whole run: the sideways drift that a
+wheel-diameter error accumulates along a run (which pins ``E_d``), the heading that a
+wheelbase error accumulates over the turns (which pins ``b``) and the distance travelled
+(which pins the scale) are all seen. Per sample ``k`` the residual is the true pose minus
+the odometry pose placed in the run's start frame: two position components [m] and the
+heading [rad] (unwrapped). ``scipy.optimize.least_squares`` (Levenberg-Marquardt)
+minimizes ``sum_k |dp_k|^2 / sigma_p^2 + dtheta_k^2 / sigma_theta^2`` over all samples of
+all runs.
 
-1. **Heading, linear.** ``dtheta = (r_R/b) sum dphi_R - (r_L/b) sum dphi_L`` is linear in
-   ``(r_L/b, r_R/b)``: ordinary least squares against the ground truth's heading changes.
-2. **Position, linear in b.** With those ratios the heading along the window is known;
-   each sample moves the robot by ``b`` times a known vector
-   ``((r_R/b) dphi_R + (r_L/b) dphi_L)/2 * sinc(dtheta/2) * (cos, sin)(theta_mid)``, so the
-   window's displacement (in the frame of the window's first ground-truth pose) is
-   linear in ``b``: least squares again.
-3. **Nonlinear refinement.** ``(r_L, r_R, b)`` minimize the weighted residuals of every
-   window's displacement and heading change together (``scipy.optimize.least_squares``),
-   each kind weighted by its residual spread; the standard errors come from the Jacobian
-   at the solution and the residual variance.
+**Where the odometry starts** (``start_pose``). The odometry starts at the origin of
+the run's start frame, but where the robot really was, and which way it faced, when the
+wheel data begin is known only as well as the ground truth's first samples say, and
+recordings may begin while the robot already moves. ``"fitted"`` (the default): every
+run's start pose ``(x_0, y_0, theta_0)`` is fitted as well (a nuisance: for given wheel
+parameters the best start pose of each run is found by a weighted 2-D alignment, a few
+Newton steps, so the solver sees only the wheel parameters). ``"truth"``: the odometry
+starts exactly at the ground truth's first matched sample, and both are compared in that
+sample's frame.
 
-Windows are relative motions, so errors do not accumulate along a run and the start
-pose is not needed.
+**Weights.** Positions and headings are put on one scale by their own residual spread:
+a first fit weighs a heading error like a position error of ``dtheta * b`` (``b`` the
+starting wheelbase); ``sigma_p`` (RMS per coordinate) and ``sigma_theta`` are the RMS
+residuals of that fit, and the final fit uses them, so that each sample's heading counts
+as much as each of its two coordinates. The weights are reported
+(:attr:`TrajectoryFit.position_scale`, :attr:`TrajectoryFit.heading_scale`).
+
+**Models.** ``"diff"``: one wheelbase for all motion (the paper's model; parameters
+``r_L, r_R, b``). ``"scrub"``: the effective wheelbase of each sampling interval depends on
+its turning share ``w = |dU_R - dU_L| / (|dU_R| + |dU_L|)``, ``b_eff = b_arc + (b_spot -
+b_arc) w`` (:mod:`umbmark.kinematics`; parameters ``r_L, r_R, b_arc, b_spot``), so that
+on-the-spot turns and arcs need not share one wheelbase. ``b_arc`` is pinned only by
+runs with arcs or straights that turn, ``b_spot`` only by turns on the spot: a session
+of squares alone (straight legs, spot turns) leaves ``b_arc`` loose, and its standard
+error says so.
+
+**Time offset** (``fit_time_offset``). One time offset ``delta`` [s] between wheel data
+and ground truth, shared by all runs, is fitted as a nuisance: the odometry at wheel time
+``t`` is compared with the ground truth at ``t + delta``, interpolated by a cubic Hermite
+spline through the run's matched ground-truth samples and continued beyond the first and
+last along the tangent there (held still when the robot rests), so the cost is smooth in
+``delta`` and the same samples are compared whatever ``delta``. ``delta > 0``: the ground
+truth's time stamps are late (the motion capture lags the wheels). ``|delta| <
+max_time_offset`` (``delta = max_time_offset * tanh(u)``). A path of constant curvature
+at constant speed cannot tell a time shift from a rotation, so ``delta`` is pinned by
+starts, stops and changes of curvature; its standard error says how well.
+
+**Standard errors.** Errors accumulate along a run, so the residuals of one run are
+strongly autocorrelated and the textbook ``sigma^2 (J^T J)^-1`` is far too small (tens of
+times, see ``tests/test_trajectory.py``). Runs are independent of each other, so the
+covariance is cluster-robust with the runs as clusters, in its jackknife form (CR3):
+leaving run ``g`` out moves the solution by ``d_g = (A - A_g)^-1 s_g`` (``A = J^T J``,
+``A_g = J_g^T J_g``, ``s_g = J_g^T r_g`` the run's score) and ``cov = (G - 1)/G sum_g d_g
+d_g^T``. It holds whatever the correlation within a run, and unlike the plain sandwich
+it does not shrink when a few runs dominate. Such an estimate from ``G`` runs has about
+``G - 1`` degrees of freedom, which the estimate carries (``ErrorEstimate.dof``): its 95 %
+intervals are Student-t intervals (with 3 runs 2.2 times wider than the normal ones, with
+6 runs 1.3 times). A single run is cut into its two halves, taken as the clusters (wide
+but, in simulations, still honest intervals).
+
+Assumptions: the effective radii and wheelbase(s) are constant over the runs (wear,
+load and floor do not change them; random slip is allowed and is what the standard
+errors see); the ground truth measures the position of the point midway between the
+wheels' contact points and a heading along the robot's forward axis (a marker off that
+point biases ``b``; a constant yaw between marker body and robot is absorbed by the
+fitted start pose, not by ``start_pose="truth"``); the ground truth's noise is small
+against the odometry's accumulated error; one time offset serves all runs.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
 
-from ..kinematics import WheelParams
+from ..kinematics import WheelParams, chord_step, turning_share
 from ..model import alpha_from_E_b, beta_from_E_d
 from ..recording import RunLog
 from .base import ErrorEstimate
 
-__all__ = ["DEFAULT_WINDOW", "TrajectoryFit", "fit_trajectories", "trajectory_estimate"]
+__all__ = [
+    "DEFAULT_MAX_TIME_OFFSET",
+    "MODELS",
+    "START_POSES",
+    "StartPose",
+    "TrajectoryFit",
+    "TrajectoryModel",
+    "fit_trajectories",
+    "trajectory_estimate",
+]
 
 FloatArray = NDArray[np.float64]
-#: Window length [s].
-DEFAULT_WINDOW = 1.0
+IntArray = NDArray[np.intp]
+
+TrajectoryModel = Literal["diff", "scrub"]
+MODELS: tuple[TrajectoryModel, ...] = ("diff", "scrub")
+StartPose = Literal["fitted", "truth"]
+START_POSES: tuple[StartPose, ...] = ("fitted", "truth")
+#: Bound of the fitted time offset between wheels and ground truth [s].
+DEFAULT_MAX_TIME_OFFSET = 0.5
+#: Fewest matched ground-truth samples a run needs to take part.
+MIN_SAMPLES = 5
+#: A single run is cut into this many pieces to stand in for independent runs.
+_ONE_RUN_PIECES = 2
+#: Newton steps of the start-pose alignment (quadratic convergence from a close start).
+_ALIGN_STEPS = 6
+#: Largest condition number of the scaled normal matrix: beyond, a parameter is not pinned.
+_MAX_CONDITION = 1e12
 
 
 @dataclass(frozen=True)
 class TrajectoryFit:
-    """Absolute wheel radii and wheelbase from ground-truth trajectories.
+    """Wheel radii and wheelbase(s) fitted to ground-truth trajectories.
 
     Attributes
     ----------
-    r_left, r_right, wheelbase : float
-        Effective wheel radii and wheelbase [m].
-    standard_errors : dict
-        One-sigma uncertainty of ``r_left``, ``r_right``, ``wheelbase`` [m].
-    windows : int
-        Windows used.
-    rms_position, rms_heading : float
-        Residual spread per window after the fit [m], [rad].
-    linear : tuple of float
-        ``(r_left, r_right, wheelbase)`` after the two linear steps, before refinement.
+    model : {"diff", "scrub"}
+        One wheelbase for all motion, or the scrub model's two.
+    r_left, r_right : float
+        Effective wheel radii [m].
+    wheelbase : float
+        ``b`` [m]; with the scrub model ``b_arc``, the wheelbase of straight motion and
+        arcs.
+    spot_wheelbase : float or None
+        ``b_spot`` [m] of the scrub model, the wheelbase of on-the-spot turns; None for
+        ``"diff"``.
+    time_offset : float
+        ``delta`` [s]: the ground truth at ``t + delta`` matches the wheels at ``t``
+        (> 0: the ground truth lags); 0 when not fitted.
+    standard_errors : mapping of str to float
+        One-sigma uncertainty, scaled to Student's t (module documentation), of
+        ``r_left``, ``r_right``, ``wheelbase`` [m], ``spot_wheelbase`` [m] (scrub model)
+        and ``time_offset`` [s] (0 when not fitted).
+    parameters : tuple of str
+        The fitted parameters, in the order of ``covariance``: ``r_left``, ``r_right``,
+        ``wheelbase``, then ``spot_wheelbase`` and ``time_offset`` when fitted.
+    covariance : array, shape (k, k)
+        Their covariance [m^2, m s, s^2], scaled like the standard errors.
+    start_pose : {"fitted", "truth"}
+        Where each run's odometry started.
+    time_offset_fitted : bool
+        Whether ``time_offset`` was fitted.
+    runs : int
+        Runs used.
+    samples : int
+        Ground-truth samples compared (each a position and a heading).
+    rms_position : float
+        Root mean square distance between odometry and true positions [m].
+    rms_heading : float
+        Root mean square heading difference [rad].
+    position_scale, heading_scale : float
+        ``sigma_p`` [m] and ``sigma_theta`` [rad], the weights of the final fit.
+    clusters : int
+        Independent groups behind the standard errors: the runs, or the two halves of a
+        single run.
     """
 
+    model: TrajectoryModel
     r_left: float
     r_right: float
     wheelbase: float
-    standard_errors: dict[str, float]
-    windows: int
-    rms_position: float
-    rms_heading: float
-    linear: tuple[float, float, float]
+    spot_wheelbase: float | None
+    time_offset: float
+    standard_errors: Mapping[str, float]
+    parameters: tuple[str, ...]
+    covariance: FloatArray = field(compare=False, repr=False)
+    start_pose: StartPose = "fitted"
+    time_offset_fitted: bool = True
+    runs: int = 0
+    samples: int = 0
+    rms_position: float = 0.0
+    rms_heading: float = 0.0
+    position_scale: float = 0.0
+    heading_scale: float = 0.0
+    clusters: int = 0
+
+    def params(self, base: WheelParams) -> WheelParams:
+        """The fitted model as odometry parameters, for replays.
+
+        Parameters
+        ----------
+        base : WheelParams
+            Supplies the nominal diameter ``D_n`` (and the encoder figures).
+
+        Returns
+        -------
+        WheelParams
+            ``base`` with ``c_left = 2 r_L / D_n``, ``c_right = 2 r_R / D_n``,
+            ``wheelbase`` and, for the scrub model, ``spot_wheelbase`` (else None).
+        """
+        return replace(
+            base,
+            c_left=2.0 * self.r_left / base.wheel_diameter,
+            c_right=2.0 * self.r_right / base.wheel_diameter,
+            wheelbase=self.wheelbase,
+            spot_wheelbase=self.spot_wheelbase,
+        )
+
+
+# --- the runs, laid end to end ----------------------------------------------------------
 
 
 @dataclass(frozen=True)
-class _Windows:
-    """All windows' samples, flattened; ``start[w]`` indexes window w's first sample."""
+class _Data:
+    """Every run's wheel steps and compared samples, concatenated.
 
-    dphi: FloatArray  # (k, 2) wheel rotation per sample, left and right
-    start: NDArray[np.intp]  # (w,) first sample of each window in dphi
-    displacement: FloatArray  # (w, 2) ground-truth displacement in the window's frame
-    turn: FloatArray  # (w,) ground-truth heading change
+    Run ``g`` owns poses ``run_start[g] .. run_start[g] + run_length[g] - 1``. Times are
+    on a global clock on which the runs lie far apart.
+    """
+
+    dphi: FloatArray  # (m, 2) wheel rotation into each pose [rad]; 0 at a run's first
+    run_start: IntArray  # (G,) first pose of each run
+    run_length: IntArray  # (G,) poses of each run
+    sample: IntArray  # (s,) compared poses
+    sample_run: IntArray  # (s,) run of each, 0 .. G-1
+    sample_time: FloatArray  # (s,) [s]
+    anchor: IntArray  # (G,) each run's first compared pose
+    anchor_time: FloatArray  # (G,) [s]
+    truth_time: FloatArray  # (q,) matched ground-truth samples [s]
+    truth: FloatArray  # (q, 3) [m, m, rad]
+    truth_slope: FloatArray  # (q, 3) their time derivatives (Hermite tangents)
+    truth_ends: IntArray  # (G, 2) index of each run's first and last in truth_time
+
+    @property
+    def runs(self) -> int:
+        return int(self.run_start.size)
 
 
-def _windows(logs: Sequence[RunLog], window: float) -> _Windows:
-    dphi_parts: list[FloatArray] = []
+def _tangents(t: FloatArray, v: FloatArray) -> FloatArray:
+    """Central-difference slopes of ``v`` (n, 3) over ``t`` (n,), one-sided at the ends."""
+    slope = np.empty_like(v)
+    slope[1:-1] = (v[2:] - v[:-2]) / (t[2:] - t[:-2])[:, None]
+    slope[0] = (v[1] - v[0]) / (t[1] - t[0])
+    slope[-1] = (v[-1] - v[-2]) / (t[-1] - t[-2])
+    return slope
+
+
+def _prepare(logs: Sequence[RunLog]) -> _Data:
+    """Collect the runs that have at least :data:`MIN_SAMPLES` matched samples."""
+    span = max((float(log.time[-1] - log.time[0]) for log in logs if log.time.size), default=0.0)
+    gap = span + 10.0  # runs this far apart on the global clock never mix
+    parts: dict[str, list[Any]] = {
+        k: []
+        for k in ("dphi", "sample", "sample_run", "sample_time", "truth", "slope", "truth_time")
+    }
     starts: list[int] = []
-    disp: list[FloatArray] = []
-    turns: list[float] = []
-    offset = 0
+    lengths: list[int] = []
+    anchors: list[int] = []
+    anchor_times: list[float] = []
+    ends: list[tuple[int, int]] = []
+    base = 0
+    n_truth = 0
     for log in logs:
-        matched = np.flatnonzero(log.matched)
-        if matched.size < 2:
+        k = np.flatnonzero(log.matched)
+        if k.size < MIN_SAMPLES:
             continue
-        t = log.time[matched]
-        # Window boundaries: the first matched sample at or after each multiple of window.
-        marks = np.unique(np.searchsorted(t, np.arange(t[0], t[-1] + window, window)))
-        marks = marks[marks < matched.size]
-        bounds = matched[marks]
-        for i, j in itertools.pairwise(bounds):
-            if j - i < 1:
-                continue
-            step = np.diff(log.wheel_angles[i : j + 1], axis=0)
-            p0, p1 = log.truth[i], log.truth[j]
-            c, s = math.cos(p0[2]), math.sin(p0[2])
-            dx, dy = p1[0] - p0[0], p1[1] - p0[1]
-            dphi_parts.append(step)
-            starts.append(offset)
-            offset += step.shape[0]
-            disp.append(np.array([c * dx + s * dy, -s * dx + c * dy]))
-            turns.append(float(p1[2] - p0[2]))
-    if len(starts) < 3:
+        g = len(starts)
+        t = np.asarray(log.time, dtype=np.float64)[k] + g * gap
+        truth = np.asarray(log.truth, dtype=np.float64)[k]
+        steps = np.diff(np.asarray(log.wheel_angles, dtype=np.float64), axis=0)
+        parts["dphi"].append(np.vstack([np.zeros((1, 2)), steps]))
+        parts["sample"].append(base + k)
+        parts["sample_run"].append(np.full(k.size, g, dtype=np.intp))
+        parts["sample_time"].append(t)
+        parts["truth_time"].append(t)
+        parts["truth"].append(truth)
+        parts["slope"].append(_tangents(t, truth))
+        starts.append(base)
+        lengths.append(log.time.size)
+        anchors.append(base + int(k[0]))
+        anchor_times.append(float(t[0]))
+        ends.append((n_truth, n_truth + k.size - 1))
+        base += log.time.size
+        n_truth += k.size
+    if not starts:
         raise ValueError(
-            f"only {len(starts)} window(s) of {window:g} s with ground truth at both ends: "
-            "the trajectory fit needs more recorded motion"
+            f"no run has {MIN_SAMPLES} or more samples with ground truth: the trajectory "
+            "fit needs recorded motion with ground truth"
         )
-    return _Windows(
-        dphi=np.concatenate(dphi_parts),
-        start=np.array(starts, dtype=np.intp),
-        displacement=np.array(disp),
-        turn=np.array(turns),
+    return _Data(
+        dphi=np.concatenate(parts["dphi"]),
+        run_start=np.array(starts, dtype=np.intp),
+        run_length=np.array(lengths, dtype=np.intp),
+        sample=np.concatenate(parts["sample"]),
+        sample_run=np.concatenate(parts["sample_run"]),
+        sample_time=np.concatenate(parts["sample_time"]),
+        anchor=np.array(anchors, dtype=np.intp),
+        anchor_time=np.array(anchor_times),
+        truth_time=np.concatenate(parts["truth_time"]),
+        truth=np.concatenate(parts["truth"]),
+        truth_slope=np.concatenate(parts["slope"]),
+        truth_ends=np.array(ends, dtype=np.intp),
     )
 
 
-def _predict(params: FloatArray, w: _Windows) -> tuple[FloatArray, FloatArray]:
-    """Model displacement (w, 2) and heading change (w,) of every window."""
-    r_left, r_right, b = (float(v) for v in params)
-    travel_l = r_left * w.dphi[:, 0]
-    travel_r = r_right * w.dphi[:, 1]
-    ds = 0.5 * (travel_l + travel_r)
-    dth = (travel_r - travel_l) / b
-    # Heading since the window's start, before each sample: a cumulative sum restarted at
-    # every window.
-    total = np.cumsum(dth)
-    before = total - dth
-    base = before[w.start]
-    counts = np.diff(np.append(w.start, dth.size))
-    before = before - np.repeat(base, counts)
-    half = 0.5 * dth
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sinc = np.where(np.abs(half) > 1e-12, np.sin(half) / half, 1.0)
-    chord = ds * sinc
-    heading = before + half
-    dx = np.add.reduceat(chord * np.cos(heading), w.start)
-    dy = np.add.reduceat(chord * np.sin(heading), w.start)
-    turn = np.add.reduceat(dth, w.start)
-    return np.column_stack([dx, dy]), turn
+def _truth_at(data: _Data, times: FloatArray, run: IntArray) -> FloatArray:
+    """Ground truth of runs ``run`` (s,) at ``times`` (s,), shape (s, 3).
+
+    A cubic Hermite spline through the run's matched samples, continued beyond its first
+    and last sample along the tangent there.
+    """
+    tt = data.truth_time
+    ends = data.truth_ends[run]
+    inside = np.clip(times, tt[ends[:, 0]], tt[ends[:, 1]])
+    i = np.clip(np.searchsorted(tt, inside, side="right") - 1, 0, tt.size - 2)
+    h = tt[i + 1] - tt[i]
+    u = ((inside - tt[i]) / h)[:, None]
+    u2 = u * u
+    u3 = u2 * u
+    beyond = times - inside
+    end = np.where(beyond < 0.0, ends[:, 0], ends[:, 1])
+    return np.asarray(
+        (2 * u3 - 3 * u2 + 1) * data.truth[i]
+        + (u3 - 2 * u2 + u) * h[:, None] * data.truth_slope[i]
+        + (3 * u2 - 2 * u3) * data.truth[i + 1]
+        + (u3 - u2) * h[:, None] * data.truth_slope[i + 1]
+        + beyond[:, None] * data.truth_slope[end]
+    )
 
 
-def fit_trajectories(logs: Sequence[RunLog], window: float = DEFAULT_WINDOW) -> TrajectoryFit:
-    """Fit ``r_L``, ``r_R``, ``b`` to recorded runs (see the module's documentation).
+# --- odometry and frames ----------------------------------------------------------------
+
+
+def _restart(values: FloatArray, data: _Data) -> FloatArray:
+    """Cumulative sums restarted at every run's first pose (whose own value is 0)."""
+    total = np.cumsum(values)
+    return np.asarray(total - np.repeat(total[data.run_start], data.run_length))
+
+
+def _odometry(
+    r_left: float, r_right: float, b: float, b_spot: float | None, data: _Data
+) -> FloatArray:
+    """Odometry poses of all runs, shape (m, 3), each run from its own origin (exact arcs,
+    the scrub model's ``b_eff`` when ``b_spot`` is given)."""
+    d_left = r_left * data.dphi[:, 0]
+    d_right = r_right * data.dphi[:, 1]
+    b_eff: float | FloatArray = b
+    if b_spot is not None:
+        b_eff = b + (b_spot - b) * turning_share(d_left, d_right)
+    ds = 0.5 * (d_left + d_right)
+    dth = (d_right - d_left) / b_eff
+    theta = _restart(dth, data)
+    chord, heading = chord_step(ds, dth, theta - dth, "arc")
+    poses = np.empty((ds.size, 3))
+    poses[:, 0] = _restart(chord * np.cos(heading), data)
+    poses[:, 1] = _restart(chord * np.sin(heading), data)
+    poses[:, 2] = theta
+    return poses
+
+
+def _relative(poses: FloatArray, frames: FloatArray) -> FloatArray:
+    """``poses`` (s, 3) seen from ``frames`` (s, 3)."""
+    c, s = np.cos(frames[:, 2]), np.sin(frames[:, 2])
+    dx = poses[:, 0] - frames[:, 0]
+    dy = poses[:, 1] - frames[:, 1]
+    return np.column_stack([c * dx + s * dy, -s * dx + c * dy, poses[:, 2] - frames[:, 2]])
+
+
+def _compose(frames: FloatArray, local: FloatArray) -> FloatArray:
+    """Poses ``local`` (s, 3) given in ``frames`` (s, 3), in the frames' parent frame."""
+    c, s = np.cos(frames[:, 2]), np.sin(frames[:, 2])
+    return np.column_stack(
+        [
+            frames[:, 0] + c * local[:, 0] - s * local[:, 1],
+            frames[:, 1] + s * local[:, 0] + c * local[:, 1],
+            frames[:, 2] + local[:, 2],
+        ]
+    )
+
+
+def _align(
+    truth: FloatArray, odo: FloatArray, run: IntArray, runs: int, sigma: tuple[float, float]
+) -> FloatArray:
+    """Each run's start pose, shape (G, 3), that lays ``odo`` (s, 3) best onto ``truth``.
+
+    Minimizes ``sum |t_k - p - R(theta) o_k|^2 / sigma_p^2 + (t_theta,k - theta -
+    o_theta,k)^2 / sigma_theta^2`` per run: ``p`` follows from ``theta`` in closed form
+    (the centroids), and ``theta`` solves ``-2 w_p (A cos + B sin)(theta) + w_theta
+    sum (e_k - theta)^2 = min`` by Newton steps from the mean heading difference.
+    """
+    count = np.bincount(run, minlength=runs).astype(np.float64)
+
+    def total(v: FloatArray) -> FloatArray:
+        return np.asarray(np.bincount(run, weights=v, minlength=runs), dtype=np.float64)
+
+    t_mean = np.column_stack([total(truth[:, 0]), total(truth[:, 1])]) / count[:, None]
+    o_mean = np.column_stack([total(odo[:, 0]), total(odo[:, 1])]) / count[:, None]
+    a = truth[:, :2] - t_mean[run]
+    c = odo[:, :2] - o_mean[run]
+    A = total(a[:, 0] * c[:, 0] + a[:, 1] * c[:, 1])
+    B = total(a[:, 1] * c[:, 0] - a[:, 0] * c[:, 1])
+    e_mean = total(truth[:, 2] - odo[:, 2]) / count
+    w_p, w_t = sigma[0] ** -2, sigma[1] ** -2
+    theta = e_mean.copy()
+    for _ in range(_ALIGN_STEPS):
+        grad = w_p * (A * np.sin(theta) - B * np.cos(theta)) + w_t * count * (theta - e_mean)
+        curv = w_p * (A * np.cos(theta) + B * np.sin(theta)) + w_t * count
+        theta = theta - grad / np.maximum(curv, w_t * count)
+    cos, sin = np.cos(theta), np.sin(theta)
+    return np.column_stack(
+        [
+            t_mean[:, 0] - (cos * o_mean[:, 0] - sin * o_mean[:, 1]),
+            t_mean[:, 1] - (sin * o_mean[:, 0] + cos * o_mean[:, 1]),
+            theta,
+        ]
+    )
+
+
+# --- the least-squares problem ----------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """The solver's parameter vector ``x`` and what it means.
+
+    ``x = (r_L / r0, r_R / r0, b / b0[, b_spot / b0][, u])``, each near 1 (``u`` near 0):
+    ``r0 = D_n / 2`` and ``b0`` scale the starting values, and the time offset is
+    ``delta = max_offset * tanh(u)`` (smooth and bounded).
+    """
+
+    data: _Data
+    model: TrajectoryModel
+    start_pose: StartPose
+    fit_offset: bool
+    scale: FloatArray  # (3,) or (4,): physical radius / wheelbase = x * scale
+    max_offset: float
+    names: tuple[str, ...]
+
+    def physical(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The named parameters [m, m, m(, m)(, s)] and their derivatives by ``x``."""
+        k = self.scale.size
+        values = list(x[:k] * self.scale)
+        slopes = list(self.scale)
+        if self.fit_offset:
+            t = math.tanh(float(x[k]))
+            values.append(self.max_offset * t)
+            slopes.append(self.max_offset * (1.0 - t * t))
+        return np.array(values), np.array(slopes)
+
+    def unpack(self, x: FloatArray) -> tuple[float, float, float, float | None, float]:
+        """``(r_left, r_right, wheelbase, spot_wheelbase or None, time_offset)``."""
+        p, _ = self.physical(x)
+        b_spot = float(p[3]) if self.model == "scrub" else None
+        delta = float(p[-1]) if self.fit_offset else 0.0
+        return float(p[0]), float(p[1]), float(p[2]), b_spot, delta
+
+    def errors(self, x: FloatArray, sigma: tuple[float, float]) -> FloatArray:
+        """Residuals, true minus odometry, shape (s, 3) [m, m, rad].
+
+        ``sigma`` (``sigma_p``, ``sigma_theta``) weighs the start-pose alignment.
+        """
+        r_left, r_right, b, b_spot, delta = self.unpack(x)
+        d = self.data
+        poses = _odometry(r_left, r_right, b, b_spot, d)
+        truth = _truth_at(d, d.sample_time + delta, d.sample_run)
+        if self.start_pose == "truth":
+            at_anchor = _truth_at(d, d.anchor_time + delta, np.arange(d.runs))
+            run = d.sample_run
+            odo = _relative(poses[d.sample], poses[d.anchor][run])
+            return np.asarray(_relative(truth, at_anchor[run]) - odo)
+        odo = poses[d.sample]
+        start = _align(truth, odo, d.sample_run, d.runs, sigma)
+        return np.asarray(truth - _compose(start[d.sample_run], odo))
+
+
+@dataclass(frozen=True)
+class _Solution:
+    x: FloatArray  # (k,)
+    residuals: FloatArray  # (3 s,) weighted
+    jac: FloatArray  # (3 s, k) of the weighted residuals
+
+
+def _solve(problem: _Problem, x0: FloatArray, sigma: tuple[float, float]) -> _Solution:
+    """Weighted least squares from ``x0`` (Levenberg-Marquardt, numerical Jacobian)."""
+    from scipy.optimize import least_squares
+
+    weight = np.array([1.0 / sigma[0], 1.0 / sigma[0], 1.0 / sigma[1]])
+
+    def residuals(x: FloatArray) -> FloatArray:
+        return np.asarray((problem.errors(x, sigma) * weight).ravel())
+
+    fit = least_squares(residuals, x0, method="lm", x_scale="jac", ftol=1e-10, xtol=1e-10)
+    x = np.asarray(fit.x, dtype=np.float64)
+    if not np.all(np.isfinite(x)):
+        raise ValueError("the trajectory fit did not converge")
+    return _Solution(
+        x=x,
+        residuals=np.asarray(fit.fun, dtype=np.float64),
+        jac=np.asarray(fit.jac, dtype=np.float64),
+    )
+
+
+def _clusters(data: _Data) -> tuple[IntArray, int]:
+    """The cluster of every compared sample, shape (s,), and the number of clusters: the
+    runs, or the two halves of a single run."""
+    if data.runs >= 2:
+        return data.sample_run, data.runs
+    n = data.sample_run.size
+    return np.asarray(np.arange(n) * _ONE_RUN_PIECES // n, dtype=np.intp), _ONE_RUN_PIECES
+
+
+def _cluster_covariance(
+    jac: FloatArray, res: FloatArray, cluster: IntArray, clusters: int
+) -> FloatArray:
+    """Cluster-robust covariance (CR3, one-step jackknife) of the solver's ``x``.
+
+    Parameters
+    ----------
+    jac : array, shape (N, k)
+        Jacobian of the weighted residuals at the solution.
+    res : array, shape (N,)
+        Weighted residuals at the solution.
+    cluster : array of int, shape (N,)
+        Cluster of every residual, 0 .. clusters - 1.
+    clusters : int
+        ``G`` >= 2.
+
+    Returns
+    -------
+    array, shape (k, k)
+        ``(G - 1)/G sum_g d_g d_g^T`` with ``d_g = (A - A_g)^-1 J_g^T r_g`` (module
+        documentation).
+    """
+    info = jac.T @ jac
+    steps = []
+    for g in range(clusters):
+        rows = cluster == g
+        j_g = jac[rows]
+        steps.append(np.linalg.pinv(info - j_g.T @ j_g) @ (j_g.T @ res[rows]))
+    step = np.array(steps)
+    return np.asarray(step.T @ step * ((clusters - 1) / clusters))
+
+
+def _check_pinned(jac: FloatArray, names: Sequence[str]) -> None:
+    """Refuse a fit whose data leave a parameter undetermined (a singular normal matrix)."""
+    norms = np.linalg.norm(jac, axis=0)
+    if np.any(norms == 0.0) or np.linalg.cond(jac / norms) ** 2 > _MAX_CONDITION:
+        loose = names[int(np.argmin(norms))] if np.any(norms == 0.0) else "the parameters"
+        raise ValueError(
+            f"the recorded motion does not pin down {loose.replace('_', ' ')}: the runs "
+            "must drive and turn (a wheelbase needs turns; the scrub model needs both "
+            "turns on the spot and arcs)"
+        )
+
+
+#: Largest relative standard error of a length the fit may report: beyond, the recorded
+#: motion does not pin it down.
+_LOOSE = 0.05
+
+
+def _check_physical(values: dict[str, float | None], errors: dict[str, float]) -> None:
+    """Refuse lengths that are not positive, or so loose that the data do not see them."""
+    for name, value in values.items():
+        if value is None:
+            continue
+        se = errors.get(name, 0.0)
+        if not (value > 0.0 and se <= _LOOSE * value):
+            shown = name.replace("_", " ")
+            raise ValueError(
+                f"the recorded motion does not pin down the {shown} ({1000 * value:.1f} ± "
+                f"{1000 * se:.1f} mm): the scrub model needs both turns on the spot and arcs"
+                if name in ("spot_wheelbase", "wheelbase") and values.get("spot_wheelbase")
+                else f"the recorded motion does not pin down the {shown} ({1000 * value:.1f} "
+                f"± {1000 * se:.1f} mm)"
+            )
+
+
+def fit_trajectories(
+    logs: Sequence[RunLog],
+    start: WheelParams,
+    *,
+    model: TrajectoryModel = "diff",
+    fit_time_offset: bool = True,
+    start_pose: StartPose = "fitted",
+    max_time_offset: float = DEFAULT_MAX_TIME_OFFSET,
+) -> TrajectoryFit:
+    """Fit the wheel radii and wheelbase(s) to recorded runs (module documentation).
+
+    Parameters
+    ----------
+    logs : sequence of RunLog
+        The runs' time series: wheel angles (n, 2) [rad] and ground truth (n, 3) in the
+        run's start frame [m, m, rad] (NaN rows where none matched). Runs with fewer
+        than :data:`MIN_SAMPLES` matched samples are left out.
+    start : WheelParams
+        Starting values: the radii ``c D_n / 2``, ``wheelbase`` and ``spot_wheelbase``
+        (else ``wheelbase``); usually the parameters active during the runs.
+    model : {"diff", "scrub"}
+        One wheelbase, or the scrub model's ``b_arc`` (``wheelbase``) and ``b_spot``.
+    fit_time_offset : bool
+        Fit a time offset between wheels and ground truth.
+    start_pose : {"fitted", "truth"}
+        Fit every run's start pose, or start the odometry at the ground truth's first
+        matched sample.
+    max_time_offset : float
+        Bound of ``|time_offset|`` [s].
+
+    Returns
+    -------
+    TrajectoryFit
 
     Raises
     ------
     ValueError
-        If there is too little recorded motion to fit.
+        If the runs have too little recorded motion to pin the parameters down.
     """
-    w = _windows(logs, window)
-    # 1. Heading: turn = c_R sum dphi_R - c_L sum dphi_L, c = r / b.
-    sums = np.add.reduceat(w.dphi, w.start, axis=0)
-    design = np.column_stack([-sums[:, 0], sums[:, 1]])
-    (c_left, c_right), *_ = np.linalg.lstsq(design, w.turn, rcond=None)
-    if not (c_left > 0 and c_right > 0):
-        raise ValueError(
-            "the heading fit gave a non-positive wheel radius: do the runs turn both ways, "
-            "and are the wheels' signs right?"
-        )
-    # 2. Position: displacement = b * unit, with unit the model at b = 1.
-    unit, _ = _predict(np.array([c_left, c_right, 1.0]), w)
-    b = float(np.sum(unit * w.displacement) / np.sum(unit * unit))
-    linear = np.array([c_left * b, c_right * b, b])
-    # 3. Refinement, residuals weighted by their spread after the linear steps.
-    disp, turn = _predict(linear, w)
-    sigma_p = max(float(np.sqrt(np.mean((disp - w.displacement) ** 2))), 1e-6)
-    sigma_t = max(float(np.sqrt(np.mean((turn - w.turn) ** 2))), 1e-7)
-
-    def residuals(p: FloatArray) -> FloatArray:
-        d, t = _predict(p, w)
-        return np.concatenate([((d - w.displacement) / sigma_p).ravel(), (t - w.turn) / sigma_t])
-
-    fit = least_squares(residuals, linear, x_scale=linear, method="lm")
-    d, t = _predict(fit.x, w)
-    dof = max(fit.fun.size - 3, 1)
-    variance = float(np.sum(fit.fun**2)) / dof
-    try:
-        cov = np.linalg.inv(fit.jac.T @ fit.jac) * variance
-        se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    except np.linalg.LinAlgError:
-        se = np.full(3, np.nan)
-    return TrajectoryFit(
-        r_left=float(fit.x[0]),
-        r_right=float(fit.x[1]),
-        wheelbase=float(fit.x[2]),
-        standard_errors={
-            "r_left": float(se[0]),
-            "r_right": float(se[1]),
-            "wheelbase": float(se[2]),
-        },
-        windows=int(w.start.size),
-        rms_position=float(np.sqrt(np.mean((d - w.displacement) ** 2))),
-        rms_heading=float(np.sqrt(np.mean((t - w.turn) ** 2))),
-        linear=(float(linear[0]), float(linear[1]), float(linear[2])),
+    if model not in MODELS:
+        raise ValueError(f"unknown trajectory model {model!r}; use diff or scrub")
+    if start_pose not in START_POSES:
+        raise ValueError(f"unknown start pose {start_pose!r}; use fitted or truth")
+    if not (0.0 < max_time_offset < math.inf):
+        raise ValueError(f"max time offset must be > 0 s, got {max_time_offset!r}")
+    data = _prepare(logs)
+    r0 = 0.5 * start.wheel_diameter
+    b0 = start.wheelbase
+    names = ["r_left", "r_right", "wheelbase"]
+    scale = [r0, r0, b0]
+    x0 = [start.c_left, start.c_right, 1.0]
+    if model == "scrub":
+        names.append("spot_wheelbase")
+        scale.append(b0)
+        x0.append((start.spot_wheelbase or b0) / b0)
+    if fit_time_offset:
+        names.append("time_offset")
+        x0.append(0.0)
+    problem = _Problem(
+        data, model, start_pose, fit_time_offset, np.array(scale), max_time_offset, tuple(names)
     )
+    # First pass: a heading error weighs like a position error of dtheta * b.
+    rough = (1.0, 1.0 / b0)
+    first = _solve(problem, np.array(x0), rough)
+    err = problem.errors(first.x, rough)
+    sigma = (
+        max(float(np.sqrt(np.mean(err[:, :2] ** 2))), 1e-12),
+        max(float(np.sqrt(np.mean(err[:, 2] ** 2))), 1e-12),
+    )
+    fit = _solve(problem, first.x, sigma)
+    _check_pinned(fit.jac, names)
+    cluster, clusters = _clusters(data)
+    cov_x = _cluster_covariance(fit.jac, fit.residuals, np.repeat(cluster, 3), clusters)
+    _, slopes = problem.physical(fit.x)
+    cov = cov_x * np.outer(slopes, slopes)
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    standard_errors = {name: float(v) for name, v in zip(names, se, strict=True)}
+    standard_errors.setdefault("time_offset", 0.0)
+    r_left, r_right, b, b_spot, delta = problem.unpack(fit.x)
+    _check_physical(
+        {"r_left": r_left, "r_right": r_right, "wheelbase": b, "spot_wheelbase": b_spot},
+        standard_errors,
+    )
+    err = problem.errors(fit.x, sigma)
+    return TrajectoryFit(
+        model=model,
+        r_left=r_left,
+        r_right=r_right,
+        wheelbase=b,
+        spot_wheelbase=b_spot,
+        time_offset=delta,
+        standard_errors=standard_errors,
+        parameters=tuple(names),
+        covariance=cov,
+        start_pose=start_pose,
+        time_offset_fitted=fit_time_offset,
+        runs=data.runs,
+        samples=int(data.sample.size),
+        rms_position=float(np.sqrt(np.mean(np.sum(err[:, :2] ** 2, axis=1)))),
+        rms_heading=float(np.sqrt(np.mean(err[:, 2] ** 2))),
+        position_scale=sigma[0],
+        heading_scale=sigma[1],
+        clusters=clusters,
+    )
+
+
+# --- errors relative to the active parameters -------------------------------------------
+
+
+def _relative_errors(radii_and_b: FloatArray, active: WheelParams, side: float) -> FloatArray:
+    """``(E_d, E_b, E_s, alpha, beta)`` of ``(r_left, r_right, wheelbase)`` against the
+    active parameters, for a square of side ``side`` [m]."""
+    r_left, r_right, b = (float(v) for v in radii_and_b)
+    f_left = r_left / (0.5 * active.diameter_left)
+    f_right = r_right / (0.5 * active.diameter_right)
+    E_d = f_right / f_left
+    E_b = b / active.wheelbase
+    E_s = 0.5 * (f_left + f_right)
+    alpha = float(alpha_from_E_b(E_b, E_s))
+    beta = float(beta_from_E_d(E_d, side, b))
+    return np.array([E_d, E_b, E_s, alpha, beta])
 
 
 def trajectory_estimate(
     logs: Sequence[RunLog],
     active: WheelParams,
     side_length: float | None = None,
-    window: float = DEFAULT_WINDOW,
+    *,
+    model: TrajectoryModel = "diff",
+    fit_time_offset: bool = True,
+    start_pose: StartPose = "fitted",
 ) -> tuple[ErrorEstimate, TrajectoryFit]:
     """The trajectory fit as errors relative to the ``active`` odometry parameters.
 
-    ``E_d`` and ``E_s`` compare the fitted radii with the active effective ones
-    (``c D_n / 2``), ``E_b`` the fitted wheelbase with the active one, so that the usual
-    composition (:class:`umbmark.calibration.Calibration`) yields the fitted values.
-    ``alpha`` and ``beta`` are what these errors would make of a square of side
-    ``side_length`` (1 m when unknown).
+    ``E_d = f_R / f_L`` and ``E_s = (f_L + f_R) / 2`` with ``f = r_fit / (c D_n / 2)``
+    compare the fitted radii with the active effective ones, ``E_b = b_fit / b_active``
+    the fitted wheelbase with the active one, so that the usual composition
+    (:class:`umbmark.calibration.Calibration`) yields the fitted values. ``alpha`` and
+    ``beta`` are what these errors make of a square of side ``side_length`` (1 m when
+    unknown).
+
+    Parameters
+    ----------
+    logs : sequence of RunLog
+        The runs' time series.
+    active : WheelParams
+        The parameters active during the runs.
+    side_length : float, optional
+        Side of the square [m] for ``alpha`` and ``beta``.
+    model : {"diff", "scrub"}
+        ``"diff"``: method ``"trajectory"``, one wheelbase. ``"scrub"``: method
+        ``"trajectory-scrub"``; the errors are still those of the best single set
+        ``(D_L, D_R, b)`` (the ``"diff"`` fit: a controller such as ros2_control's has one
+        wheelbase), and the components add the scrub fit's ``arc_wheelbase`` and
+        ``spot_wheelbase`` with their standard errors: what the richer model finds for
+        arcs and for turns on the spot.
+    fit_time_offset : bool
+        Fit a time offset between wheels and ground truth.
+    start_pose : {"fitted", "truth"}
+        See :func:`fit_trajectories`.
+
+    Returns
+    -------
+    estimate : ErrorEstimate
+        Components: ``r_left``, ``r_right``, ``wheelbase`` [m] (the single set),
+        ``time_offset`` [s], ``rms_position`` [m], ``rms_heading`` [rad], ``runs``,
+        ``samples``; for ``"scrub"`` also ``arc_wheelbase``, ``spot_wheelbase`` [m],
+        ``scrub_r_left``, ``scrub_r_right`` [m], ``scrub_rms_position`` [m] and
+        ``scrub_rms_heading`` [rad]. Standard errors of ``E_d``, ``E_b``, ``E_s``,
+        ``alpha``, ``beta``, ``r_left``, ``r_right``, ``wheelbase``, ``time_offset`` (and
+        ``arc_wheelbase``, ``spot_wheelbase``).
+    fit : TrajectoryFit
+        The fit of ``model``: :meth:`TrajectoryFit.params` replays it.
+
+    Raises
+    ------
+    ValueError
+        See :func:`fit_trajectories`.
     """
-    fit = fit_trajectories(logs, window)
-    f_left = fit.r_left / (0.5 * active.diameter_left)
-    f_right = fit.r_right / (0.5 * active.diameter_right)
-    E_d = f_right / f_left
-    E_s = 0.5 * (f_left + f_right)
-    E_b = fit.wheelbase / active.wheelbase
-    # Relative uncertainties of the radii carry over to E_d; of b to E_b.
-    rl = fit.standard_errors["r_left"] / fit.r_left
-    rr = fit.standard_errors["r_right"] / fit.r_right
+    if model not in MODELS:
+        raise ValueError(f"unknown trajectory model {model!r}; use diff or scrub")
+    options: dict[str, Any] = {"fit_time_offset": fit_time_offset, "start_pose": start_pose}
+    single = fit_trajectories(logs, active, model="diff", **options)
     side = side_length or 1.0
+    v0 = np.array([single.r_left, single.r_right, single.wheelbase])
+    values = _relative_errors(v0, active, side)
+    # First-order propagation through central differences.
+    grad = np.empty((values.size, 3))
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = 1e-6 * v0[j]
+        plus = _relative_errors(v0 + step, active, side)
+        minus = _relative_errors(v0 - step, active, side)
+        grad[:, j] = (plus - minus) / (2.0 * step[j])
+    variance = np.einsum("ij,jk,ik->i", grad, single.covariance[:3, :3], grad)
+    spread = np.sqrt(np.clip(variance, 0.0, None))
+    se = dict(zip(("E_d", "E_b", "E_s", "alpha", "beta"), spread, strict=True))
+    components: dict[str, float] = {
+        "r_left": single.r_left,
+        "r_right": single.r_right,
+        "wheelbase": single.wheelbase,
+        "time_offset": single.time_offset,
+        "rms_position": single.rms_position,
+        "rms_heading": single.rms_heading,
+        "runs": float(single.runs),
+        "samples": float(single.samples),
+    }
+    standard_errors: dict[str, float] = {k: float(v) for k, v in se.items()}
+    for key in ("r_left", "r_right", "wheelbase", "time_offset"):
+        standard_errors[key] = single.standard_errors[key]
+    fit = single
+    method = "trajectory"
+    if model == "scrub":
+        method = "trajectory-scrub"
+        fit = fit_trajectories(logs, active, model="scrub", **options)
+        assert fit.spot_wheelbase is not None
+        components.update(
+            arc_wheelbase=fit.wheelbase,
+            spot_wheelbase=fit.spot_wheelbase,
+            scrub_r_left=fit.r_left,
+            scrub_r_right=fit.r_right,
+            scrub_rms_position=fit.rms_position,
+            scrub_rms_heading=fit.rms_heading,
+        )
+        standard_errors.update(
+            arc_wheelbase=fit.standard_errors["wheelbase"],
+            spot_wheelbase=fit.standard_errors["spot_wheelbase"],
+        )
     estimate = ErrorEstimate(
-        method="trajectory",
-        alpha=float(alpha_from_E_b(E_b, E_s)),
-        beta=float(beta_from_E_d(E_d, side, fit.wheelbase)),
-        E_d=E_d,
-        E_b=E_b,
-        E_s=E_s,
-        components={
-            "r_left": fit.r_left,
-            "r_right": fit.r_right,
-            "wheelbase": fit.wheelbase,
-            "windows": float(fit.windows),
-            "rms_position": fit.rms_position,
-            "rms_heading": fit.rms_heading,
-        },
-        standard_errors={
-            "E_d": E_d * math.hypot(rl, rr),
-            "E_b": fit.standard_errors["wheelbase"] / active.wheelbase,
-            "E_s": 0.5 * math.hypot(f_left * rl, f_right * rr),
-            "r_left": fit.standard_errors["r_left"],
-            "r_right": fit.standard_errors["r_right"],
-            "wheelbase": fit.standard_errors["wheelbase"],
-        },
+        method=method,
+        alpha=float(values[3]),
+        beta=float(values[4]),
+        E_d=float(values[0]),
+        E_b=float(values[1]),
+        E_s=float(values[2]),
+        components=components,
+        standard_errors=standard_errors,
+        dof=float(single.clusters - 1),
     )
     return estimate, fit

@@ -13,7 +13,7 @@ import datetime as dt
 import json
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -34,13 +34,22 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from typing_extensions import Unpack
 
+    from ..estimators.trajectory import TrajectoryFit
+
 __all__ = ["METHODS", "CalibrationReport", "calibrate"]
 
-Method = Literal["paper", "exact", "heading", "trajectory"]
+Method = Literal["paper", "exact", "heading", "endpose", "trajectory", "trajectory-scrub"]
+#: The estimator used unless another is asked for (see README, "Estimators").
+DEFAULT_METHOD: Method = "paper"
 #: The estimators, in the order the documentation lists them.
-METHODS: tuple[Method, ...] = ("paper", "exact", "heading", "trajectory")
-#: Window length of the trajectory fit [s].
-DEFAULT_WINDOW = 1.0
+METHODS: tuple[Method, ...] = (
+    "paper",
+    "exact",
+    "heading",
+    "endpose",
+    "trajectory",
+    "trajectory-scrub",
+)
 
 
 @dataclass(frozen=True, repr=False)
@@ -70,6 +79,9 @@ class CalibrationReport:
         Time matching of each recording.
     notes : tuple of str
         What was found and left out while reading, for people.
+    model_fit : TrajectoryFit or None
+        The trajectory methods' fit of the odometry model (the richer model of
+        ``trajectory-scrub``), which replays use.
     created : datetime
         When the calibration was made (UTC); stamped into the parameter files' comments,
         not into :meth:`to_dict`.
@@ -85,6 +97,7 @@ class CalibrationReport:
     controller: str = "diff_drive_controller"
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = ()
+    model_fit: TrajectoryFit | None = field(default=None, compare=False)
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
 
     def __repr__(self) -> str:
@@ -128,8 +141,20 @@ class CalibrationReport:
 
     def new_params(self) -> CalibratedParams:
         """The new parameters, as :func:`umbmark.replay` and :func:`umbmark.simulate`
-        take them (the same that reading this report's JSON back gives)."""
+        take them (the same that reading this report's JSON back gives): the fitted model
+        where the method fits a richer one than controllers take."""
         cal = self.calibration
+        model = self._model()
+        if model is not None:
+            return CalibratedParams(
+                wheelbase=model["wheelbase"],
+                c_left=cal.new_c_left,
+                c_right=cal.new_c_right,
+                wheel_diameter_left=model["wheel_diameter_left"],
+                wheel_diameter_right=model["wheel_diameter_right"],
+                spot_wheelbase=model["spot_wheelbase"],
+                source=self.source,
+            )
         return CalibratedParams(
             wheelbase=cal.wheelbase_corrected,
             c_left=cal.new_c_left,
@@ -141,6 +166,18 @@ class CalibrationReport:
             wheel_diameter=cal.active.wheel_diameter,
             source=self.source,
         )
+
+    def _model(self) -> dict[str, float] | None:
+        """The richer model a method fitted (absolute values [m]), if any."""
+        fit = self.model_fit
+        if fit is None or fit.spot_wheelbase is None:
+            return None
+        return {
+            "wheel_diameter_left": 2.0 * fit.r_left,
+            "wheel_diameter_right": 2.0 * fit.r_right,
+            "wheelbase": fit.wheelbase,
+            "spot_wheelbase": fit.spot_wheelbase,
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (metres, radians): what ``calibrate --json`` prints."""
@@ -183,6 +220,7 @@ class CalibrationReport:
                 "E_b": est.E_b,
                 "E_s": est.E_s,
                 "standard_errors": dict(est.standard_errors),
+                "intervals_95": _intervals(est),
                 "components": dict(est.components),
                 "c_L": cal.c_L,
                 "c_R": cal.c_R,
@@ -211,6 +249,9 @@ class CalibrationReport:
                 "format": self.format,
             }
         )
+        model = self._model()
+        if model is not None:
+            out["model"] = {"kind": "scrub", **model}
         if self.associations:
             out["time_association"] = {name: a.to_dict() for name, a in self.associations}
         if self.notes:
@@ -343,7 +384,6 @@ def calibrate(
     side_length: float | None = None,
     wheelbase: float | None = None,
     method: str = "paper",
-    window: float = DEFAULT_WINDOW,
     output: str | os.PathLike[str] | None = None,
     yaml: str | os.PathLike[str] | None = None,
     ros1_yaml: str | os.PathLike[str] | None = None,
@@ -367,12 +407,12 @@ def calibrate(
     wheelbase : float, optional
         Wheelbase ``b`` the odometry used during the runs [m] (ros2_control
         ``wheel_separation``); required for runs tables unless ``current_params`` has it.
-    method : {"paper", "exact", "heading", "trajectory"}
+    method : {"paper", "exact", "heading", "endpose", "trajectory", "auto"}
         Estimator: the paper's Eqs. 4.20-4.27 as printed, the exact square geometry, the
-        final headings (Jung & Chung 2011), or least squares on whole ground-truth
-        trajectories (logged sources only; finds ``E_s`` too).
-    window : float
-        Window length of the trajectory fit [s].
+        final headings (Jung & Chung 2011), maximum likelihood on every run's end pose
+        (exact geometry), least squares on whole ground-truth trajectories (logged
+        sources only; finds ``E_s`` too), or ``auto``: the one that predicts held-out
+        recorded runs best (:func:`umbmark.validate`; runs tables take the default).
     output, yaml, ros1_yaml, plot, tum : path, optional
         Files to write (see :meth:`CalibrationReport.write`); checked before any is written.
     **options
@@ -394,53 +434,95 @@ def calibrate(
     >>> report.e_max_syst, report.estimate.E_d, report.calibration.new_c_left
     """
     read_options = ReadOptions.of(options)
-    if method not in METHODS:
-        raise InputError(f"--method {method!r}: use one of {', '.join(METHODS)}")
-    if not (window > 0 and window < float("inf")):
-        raise InputError(f"--window must be > 0 s, got {window:g}")
+    if method not in (*METHODS, "auto"):
+        raise InputError(f"--method {method!r}: use one of {', '.join(METHODS)} or auto")
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
           plot=plot, tum=tum)  # fmt: skip
-    if side_length is None and method != "trajectory":
+    if side_length is None and not method.startswith("trajectory") and method != "auto":
         from .inputs import is_table
 
         if any(is_table(s, read_options) for s in sources):
             raise InputError("--side-length is required: the side of the square path, in metres")
     read = read_runs(sources, read_options, wheelbase=wheelbase, side_length=side_length)
-    report = _calibrate_runs(read, method, window)
+    chosen, note = method, None
+    if method == "auto":
+        chosen, note = _auto_method(sources, read, side_length, wheelbase, options)
+    report = _calibrate_runs(read, chosen)
+    if note is not None:
+        report = replace(report, notes=(*report.notes, note))
     report.write(output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum)
     return report
 
 
-def _calibrate_runs(read: Runs, method: str, window: float) -> CalibrationReport:
+def _auto_method(
+    sources: Sequence[RunSource],
+    read: Runs,
+    side_length: float | None,
+    wheelbase: float | None,
+    options: SourceOptions,
+) -> tuple[str, str]:
+    """The estimator that predicts held-out recorded runs best, and a note saying so."""
+    if read.params is None or any(run.log is None for run in read.runs):
+        return DEFAULT_METHOD, (
+            f"method auto: runs tables cannot be replayed to compare estimators; "
+            f"calibrated with the default, {DEFAULT_METHOD}"
+        )
+    from .validate import validate
+
+    checked = validate(
+        *(Path(str(s)) for s in sources),
+        side_length=side_length,
+        wheelbase=wheelbase,
+        **options,
+    )
+    best = checked.recommended
+    if best is None:
+        return DEFAULT_METHOD, (
+            "method auto: no estimator predicted held-out runs better than the nominal "
+            f"parameters ({checked.scheme}); calibrated with the default, {DEFAULT_METHOD}"
+        )
+    ranking = ", ".join(f"{name} {1000 * error:.1f} mm" for name, error in checked.ranking)
+    return best, f"method auto: {best}, by held-out end error ({checked.scheme}): {ranking}"
+
+
+def _calibrate_runs(read: Runs, method: str) -> CalibrationReport:
     where = read.sources[0] if len(read.sources) == 1 else None
-    runs, active, side = read.runs, read.active, read.side_length
+    runs, active = read.runs, read.active
     bench = None
+    fit = None
     try:
-        bench = umbmark_benchmark(runs)
-    except ValueError as exc:
-        if method != "trajectory":
-            raise InputError(str(exc), source=where) from None
-    try:
-        if method == "trajectory":
+        if method.startswith("trajectory"):
             from ..estimators.trajectory import trajectory_estimate
 
             logs = [run.log for run in runs if run.log is not None]
             if not logs or read.params is None:
                 raise InputError(
-                    "the trajectory method needs logged runs (a run log, an OptiOdom session "
+                    f"the {method} method needs logged runs (a run log, an OptiOdom session "
                     "or a bag), not a runs table",
                     source=where,
                 )
-            estimate, _ = trajectory_estimate(logs, read.params, side, window)
-            test = SquareTest(side or 1.0, active.effective_wheelbase)
+            estimate, fit = trajectory_estimate(
+                logs,
+                read.params,
+                read.side_length,
+                model="scrub" if method == "trajectory-scrub" else "diff",
+            )
+            test = SquareTest(read.side_length or 1.0, active.effective_wheelbase)
+            # UMBmark's figures where the runs are squares of a known side.
+            directions = {run.direction for run in runs if run.kind == "square"}
+            if read.side_length is not None and len(directions) == 2:
+                try:
+                    bench = umbmark_benchmark(runs)
+                except ValueError:
+                    bench = None
         else:
-            from ..estimators import estimate_errors
+            from ..estimators import estimate_square_test
 
-            side = read.square_side()
-            assert bench is not None
+            squares = any(run.kind == "square" for run in runs)
+            side = read.square_side() if squares else (read.side_length or 1.0)
             test = SquareTest(side, active.effective_wheelbase)
-            estimate = estimate_errors(method, bench, runs, test)  # type: ignore[arg-type]
+            estimate, bench = estimate_square_test(method, runs, test)
     except InputError:
         raise
     except ValueError as exc:
@@ -456,7 +538,18 @@ def _calibrate_runs(read: Runs, method: str, window: float) -> CalibrationReport
         controller=read.controller,
         associations=read.associations,
         notes=read.notes,
+        model_fit=fit,
     )
+
+
+def _intervals(estimate: ErrorEstimate) -> dict[str, list[float]]:
+    """95 % confidence intervals of the estimate's figures that have a standard error."""
+    out = {}
+    for name in ("E_d", "E_b", "E_s", "alpha", "beta"):
+        interval = estimate.interval(name)
+        if interval is not None:
+            out[name] = [interval[0], interval[1]]
+    return out
 
 
 def _cluster_dict(cluster: Cluster) -> dict[str, Any]:
@@ -475,6 +568,7 @@ def _run_dict(run: Run) -> dict[str, Any]:
     eps_x, eps_y = run.return_error
     return {
         "label": run.label,
+        "kind": run.kind,
         "direction": run.direction.value,
         "eps_x": eps_x,
         "eps_y": eps_y,

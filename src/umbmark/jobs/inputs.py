@@ -49,6 +49,7 @@ __all__ = [
     "calibrated_params",
     "check_length",
     "check_positive_option",
+    "pool_runs",
     "read_runs",
 ]
 
@@ -368,7 +369,7 @@ def read_runs(
     read = [_read_one(source, options, file, wheelbase, side_length) for source in sources]
     if len(read) == 1:
         return read[0]
-    return _pool(read)
+    return pool_runs(read)
 
 
 def _parameter_file(options: ReadOptions) -> ControllerParams:
@@ -517,16 +518,41 @@ def _first(value: float | None, fallback: float) -> float:
     return fallback if value is None else value
 
 
-def _pool(read: Sequence[Runs]) -> Runs:
-    """One set of runs from several sources that agree on side and parameters."""
+def pool_runs(read: Sequence[Runs]) -> Runs:
+    """One set of runs from several sources.
+
+    Runs tables must have been driven with the same parameters (their return errors are
+    relative to them). Recorded runs may come with different nominal parameters (a
+    session recorded with ``Li = 0.205``): their wheel data is integrated anew with the
+    first source's, so that one fit sees one odometry.
+
+    Raises
+    ------
+    InputError
+        For tables driven with different parameters.
+    """
     first = read[0]
-    for other in read[1:]:
-        if other.active != first.active or other.params != first.params:
+    notes: list[str] = []
+    for k, other in enumerate(read[1:], start=1):
+        if other.active == first.active and other.params == first.params:
+            continue
+        if first.params is None or other.params is None:
             raise InputError(
                 f"{first.sources[0]} and {other.sources[0]} were driven with different "
                 "odometry parameters; calibrate them separately",
                 source=None,
             )
+        notes.append(
+            f"{other.sources[0]}: integrated with the parameters of {first.sources[0]} "
+            f"(b = {first.params.wheelbase:g} m, D = {first.params.wheel_diameter:g} m) "
+            f"instead of its own (b = {other.params.wheelbase:g} m, "
+            f"D = {other.params.wheel_diameter:g} m)"
+        )
+        read = [
+            *read[:k],
+            replace(other, runs=tuple(run.reintegrated(first.params) for run in other.runs)),
+            *read[k + 1 :],
+        ]
     sides = tuple(r.side_length for r in read)
     known = set(sides) - {None}
     runs = tuple(
@@ -543,6 +569,6 @@ def _pool(read: Sequence[Runs]) -> Runs:
         side_length=known.pop() if len(known) == 1 and None not in sides else None,
         controller=first.controller,
         associations=tuple(a for r in read for a in r.associations),
-        notes=tuple(n for r in read for n in r.notes),
+        notes=(*(n for r in read for n in r.notes), *notes),
         sides=sides,
     )

@@ -54,7 +54,7 @@ class LoadOptions:
     unit, angle_unit : str
         Units of a runs table.
     side_length : float or None
-        The square's side [m] (a runs table checks its return errors against it).
+        The square's side [m]; overrides what the source says.
     params : WheelParams or None
         Odometry parameters to integrate logged wheel data with; overrides what the
         source says.
@@ -173,7 +173,6 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
             source,
             unit=options.unit,
             angle_unit=options.angle_unit,
-            side_length=options.side_length,
         )
         return Loaded(format="table", runs=runs, side_length=options.side_length)
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -89,6 +89,10 @@ class CalibratedParams:
         The configured wheelbase [m] the multiplier scales (``wheel_separation``).
     wheel_diameter : float or None
         The nominal diameter ``D_n`` [m] the result knew.
+    spot_wheelbase : float or None
+        For a model whose wheelbase depends on turning (``trajectory-scrub``): the
+        wheelbase of turns on the spot [m]; ``wheelbase`` is then the arcs' (see
+        :class:`umbmark.kinematics.WheelParams`).
     source : str
         The file.
     """
@@ -101,10 +105,11 @@ class CalibratedParams:
     separation_multiplier: float = 1.0
     configured_wheelbase: float | None = None
     wheel_diameter: float | None = None
+    spot_wheelbase: float | None = None
     source: str = ""
 
     def applied_to(self, nominal: WheelParams) -> WheelParams:
-        """``nominal`` with this result's wheelbase and wheel factors.
+        """``nominal`` with this result's wheelbase(s) and wheel factors.
 
         Where the result knows the absolute diameters, they carry over even to a robot
         description with another nominal diameter.
@@ -113,7 +118,10 @@ class CalibratedParams:
         if self.wheel_diameter_left is not None and self.wheel_diameter_right is not None:
             c_left = self.wheel_diameter_left / nominal.wheel_diameter
             c_right = self.wheel_diameter_right / nominal.wheel_diameter
-        return nominal.with_corrections(c_left=c_left, c_right=c_right, wheelbase=self.wheelbase)
+        corrected = nominal.with_corrections(
+            c_left=c_left, c_right=c_right, wheelbase=self.wheelbase
+        )
+        return replace(corrected, spot_wheelbase=self.spot_wheelbase)
 
 
 # --- results ---------------------------------------------------------------------------
@@ -158,6 +166,18 @@ def read_calibrated_params(path: str | Path) -> CalibratedParams:
     active = data.get("active")
     if not isinstance(active, dict):
         active = {}
+    model = data.get("model")
+    if isinstance(model, dict):
+        # The fitted model replays as fitted; "new" holds the single set for controllers.
+        return CalibratedParams(
+            wheelbase=number(model, "wheelbase", "model."),
+            c_left=number(new, "c_L", "new."),
+            c_right=number(new, "c_R", "new."),
+            wheel_diameter_left=number(model, "wheel_diameter_left", "model."),
+            wheel_diameter_right=number(model, "wheel_diameter_right", "model."),
+            spot_wheelbase=optional(model, "spot_wheelbase", "model."),
+            source=str(path),
+        )
     return CalibratedParams(
         wheelbase=number(new, "wheelbase", "new."),
         c_left=number(new, "c_L", "new."),

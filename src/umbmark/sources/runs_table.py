@@ -8,7 +8,7 @@ first non-comment line is a header. Lines starting with ``#`` and blank lines ar
 =============  ========  ==================================================
 column         required  meaning
 =============  ========  ==================================================
-direction      yes       ``cw`` or ``ccw`` (any case)
+direction      yes       ``cw`` or ``ccw`` (any case); ``straight`` for a straight run
 x_abs, y_abs   yes       true (measured) end position
 x_odo, y_odo   yes       end position computed by the robot's odometry
 theta_abs      no        true end heading (with theta_odo)
@@ -16,8 +16,12 @@ theta_odo      no        odometry end heading
 =============  ========  ==================================================
 
 ``x_calc``, ``y_calc``, ``theta_calc`` (the paper's names) are accepted for the odometry
-columns. Other columns are ignored. Lengths are in metres and headings in radians unless
-the caller says otherwise. Rows are numbered as the file's lines, from 1.
+columns. A ``straight`` run (driven straight by the odometry, from the origin along x)
+compares the distance the odometry counted, ``|(x_odo, y_odo)|``, with the distance
+measured, ``|(x_abs, y_abs)|``: their ratio is the scale error ``E_s`` (Sec. 2.2); straight
+and square runs may share a table. Other columns are ignored. Lengths are in metres and
+headings in radians unless the caller says otherwise. Rows are numbered as the file's
+lines, from 1.
 """
 
 from __future__ import annotations
@@ -34,6 +38,8 @@ from .text import content_lines
 __all__ = ["OPTIONAL_COLUMNS", "REQUIRED_COLUMNS", "read_runs_table"]
 
 REQUIRED_COLUMNS = ("direction", "x_abs", "y_abs", "x_odo", "y_odo")
+#: Direction labels of straight runs (measured against a tape for the scale error E_s).
+STRAIGHT_LABELS = ("straight", "line")
 OPTIONAL_COLUMNS = ("theta_abs", "theta_odo")
 _ALIASES = {"x_calc": "x_odo", "y_calc": "y_odo", "theta_calc": "theta_odo"}
 #: Headings beyond this many radians are taken for degrees given as radians.
@@ -45,7 +51,6 @@ def read_runs_table(
     *,
     unit: str = "m",
     angle_unit: str = "rad",
-    side_length: float | None = None,
 ) -> list[Run]:
     """Read a runs table into runs, converting to metres and radians.
 
@@ -57,9 +62,6 @@ def read_runs_table(
         Unit of the length columns.
     angle_unit : {"rad", "deg"}
         Unit of the heading columns.
-    side_length : float, optional
-        Side of the square [m]: a return error larger than it is refused as implausible
-        (most likely a unit mix-up).
 
     Raises
     ------
@@ -104,10 +106,14 @@ def read_runs_table(
             raise InputError(
                 f"has {len(cells)} cells, the header has {len(header)}", source=path, row=number
             )
+        label = cells[index["direction"]]
+        straight = label.strip().lower() in STRAIGHT_LABELS
         try:
-            direction = Direction.parse(cells[index["direction"]])
+            direction = Direction.CCW if straight else Direction.parse(label)
         except ValueError as exc:
-            raise InputError(str(exc), source=path, row=number) from None
+            raise InputError(
+                f"{exc} (nor straight, for a straight run)", source=path, row=number
+            ) from None
         value = {
             name: _number(cells[index[name]], name, path, number) for name in REQUIRED_COLUMNS[1:]
         }
@@ -155,9 +161,8 @@ def read_runs_table(
                 None if theta_odo is None else angle_to_rad(theta_odo, angle_unit),
             ),
             label=f"row {number}",
+            kind="straight" if straight else "square",
         )
-        if side_length is not None:
-            _check_plausible(run, side_length, unit, path, number)
         runs.append(run)
     if not runs:
         raise InputError("has a header but no runs", source=path)
@@ -187,16 +192,3 @@ def _number(cell: str, name: str, path: str | Path, row: int) -> float:
     if not math.isfinite(value):
         raise InputError(f"{name} is {text} (not a finite number)", source=path, row=row)
     return value
-
-
-def _check_plausible(run: Run, side_length: float, unit: str, path: str | Path, row: int) -> None:
-    """Refuse a return error larger than the square itself: a unit mix-up, most likely."""
-    error = math.hypot(*run.return_error)
-    if error > side_length:
-        hint = "are the lengths in mm? (use --unit mm)" if unit == "m" else "check --unit"
-        raise InputError(
-            f"return error {error:.4g} m is larger than the square's side "
-            f"{side_length:g} m; {hint}",
-            source=path,
-            row=row,
-        )

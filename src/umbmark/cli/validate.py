@@ -1,0 +1,78 @@
+"""``umbmark validate``: parse the options, call :func:`umbmark.validate`, render."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from .options import OUTPUTS, TEST, Command, apply, option, source_options
+
+__all__ = ["validate"]
+
+
+@click.command(cls=Command, no_args_is_help=True)
+@click.argument("sources", nargs=-1, required=True, type=click.Path())
+@apply(
+    [
+        option(
+            "--methods",
+            section=TEST,
+            help="Estimators to compare, comma-separated [default: all: paper, exact, "
+            "heading, endpose, trajectory].",
+        ),
+        option("--side-length", "-L", section=TEST, type=float, help="Side of squares [m]."),
+    ]
+)
+@source_options()
+@option("--json", "json_out", section=OUTPUTS, is_flag=True, help="Print one JSON object.")
+def validate(sources: tuple[str, ...], json_out: bool, methods: str | None, **options: Any) -> None:
+    """Which estimator predicts this robot best? Held-out replay on its own recordings.
+
+    SOURCES: recorded runs (run logs, OptiOdom sessions, ROS bags). Each source is held
+    out in turn (with one source: each run), the rest calibrated with every estimator,
+    and the held-out runs replayed with each calibration. Prints the mean end-position
+    error of the held-out runs [mm] per estimator and recommends the lowest; calibrate
+    --method auto uses it.
+    """
+    from rich.table import Table
+    from rich.text import Text
+
+    from .. import validate as run_validation
+    from .common import console, progress_bar, warn
+
+    chosen = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
+    with progress_bar("validating") as progress:
+        report = run_validation(*sources, methods=chosen, progress=progress, **options)
+    for note in report.notes:
+        warn(note)
+    if json_out:
+        click.echo(report.to_json(), nl=False)
+        return
+    grid = Table(title=Text(f"Held-out end error [mm], {report.scheme}"), title_justify="left")
+    grid.add_column(Text("held out"))
+    for candidate in report.candidates:
+        grid.add_column(Text(candidate), justify="right")
+    for fold in report.folds:
+        cells = [f"{fold.held_out} ({fold.runs})"]
+        cells += [
+            "-" if fold.errors[c] is None else f"{1000 * (fold.errors[c] or 0.0):.1f}"
+            for c in report.candidates
+        ]
+        grid.add_row(*(Text(c) for c in cells))
+    means = [report.mean_error(c) for c in report.candidates]
+    grid.add_row(
+        Text("mean", style="bold"),
+        *(Text("-" if m is None else f"{1000 * m:.2f}", style="bold") for m in means),
+    )
+    out = console()
+    out.print(grid)
+    best = report.recommended
+    if best is None:
+        out.print("No estimator predicts the held-out runs better than the nominal parameters.")
+    else:
+        out.print(
+            f"Recommended: {best} ({1000 * (report.mean_error(best) or 0.0):.2f} mm held out, "
+            f"nominal {1000 * (report.mean_error('nominal') or 0.0):.2f} mm); "
+            f"calibrate with --method {best} (or --method auto)."
+        )

@@ -1,0 +1,196 @@
+"""Checks that the runs are what the square estimators assume, and warnings that say why not.
+
+- :func:`check_within_side` and :func:`check_reachable`: the plausibility of the return
+  errors belongs to the method. The paper's small-angle formulas mean nothing for errors
+  larger than the square's side; the exact geometry inverts anything a robot driving the
+  square can do, and only refuses errors farther from the start than the whole path is
+  long (a unit slip).
+- :func:`model_warnings`: the model check of the end-pose fit
+  (:mod:`umbmark.estimators.endpose`) tests whether one robot of the model explains both
+  clusters (and the headings); it fires on one in a thousand sets of runs with Gaussian
+  scatter. When it fires, the warning gives the numbers and looks for the usual causes: a
+  run whose direction label contradicts its cluster, headings in other units.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..benchmark import Benchmark
+from ..conventions import Direction
+from ..runs import Run, split_by_direction
+from .base import SquareTest
+from .endpose import FLOOR
+
+if TYPE_CHECKING:
+    from .endpose import EndPoseFit
+
+__all__ = ["check_reachable", "check_within_side", "model_warnings"]
+
+_MM = 1000.0
+#: A run this many standard deviations from its own cluster but inside the other one is
+#: taken for a swapped label.
+_OUTLIER_SIGMA = 5.0
+#: Heading and position estimates of alpha differing by about this factor: a unit slip.
+_DEGREE = 180.0 / math.pi
+
+
+def _farthest(runs: Sequence[Run]) -> tuple[Run, float]:
+    errors = [math.hypot(*run.return_error) for run in runs]
+    k = int(np.argmax(errors))
+    return runs[k], errors[k]
+
+
+def check_within_side(runs: Sequence[Run], test: SquareTest) -> None:
+    """Refuse return errors larger than the square's side: beyond the paper's formulas.
+
+    Raises
+    ------
+    ValueError
+        Naming the run and the likely cause.
+    """
+    run, error = _farthest(runs)
+    if error > test.side_length:
+        raise ValueError(
+            f"the return error of {run.label or 'a run'} ({error:.4g} m) is larger than the "
+            f"square's side ({test.side_length:g} m): are the lengths in the right unit "
+            "(--unit mm)? For errors this large use --method exact or endpose"
+        )
+
+
+def check_reachable(runs: Sequence[Run], test: SquareTest) -> None:
+    """Refuse return errors no robot driving the square can make (a unit slip).
+
+    Raises
+    ------
+    ValueError
+        Naming the run.
+    """
+    run, error = _farthest(runs)
+    if error > 4.0 * test.side_length:
+        raise ValueError(
+            f"the return error of {run.label or 'a run'} ({error:.4g} m) is farther from the "
+            f"start than the whole {4 * test.side_length:g} m path is long: are the lengths "
+            "in the right unit (--unit mm) and the side length right?"
+        )
+
+
+def _misfit_text(fit: EndPoseFit) -> str:
+    parts = []
+    for direction, misfit in fit.check.misfit.items():
+        shown = f"{misfit[0] * _MM:+.1f}, {misfit[1] * _MM:+.1f} mm"
+        if len(misfit) > 2:
+            shown += f", {math.degrees(misfit[2]):+.3f} deg"
+        parts.append(f"{direction} ({shown})")
+    return " and ".join(parts)
+
+
+def _swapped_labels(runs: Sequence[Run]) -> list[str]:
+    """Runs that sit far outside their own cluster and inside the other one.
+
+    Each run is measured against its cluster without it (Mahalanobis distance with the
+    pooled scatter of the other runs, positions only) and against the other cluster;
+    the clusters must be well apart for a label to matter.
+    """
+    groups = {d: [np.array(r.return_error) for r in g] for d, g in split_by_direction(runs).items()}
+    found = []
+    for direction, other in ((Direction.CW, Direction.CCW), (Direction.CCW, Direction.CW)):
+        own_group, other_group = groups[direction], groups[other]
+        if len(own_group) < 3 or len(other_group) < 2:
+            continue
+        other_mean = np.mean(other_group, axis=0)
+        for k, point in enumerate(own_group):
+            rest = [q for j, q in enumerate(own_group) if j != k]
+            deviations = [q - np.mean(rest, axis=0) for q in rest]
+            deviations += [q - other_mean for q in other_group]
+            dof = len(deviations) - 2
+            scatter = np.einsum("ki,kj->ij", deviations, deviations) / dof
+            scatter += np.diag(np.square(FLOOR[:2]))
+            inverse = np.linalg.inv(scatter)
+            d_own = point - np.mean(rest, axis=0)
+            d_other = point - other_mean
+            d_centres = np.mean(rest, axis=0) - other_mean
+            own = math.sqrt(float(d_own @ inverse @ d_own))
+            near = math.sqrt(float(d_other @ inverse @ d_other))
+            apart = math.sqrt(float(d_centres @ inverse @ d_centres))
+            if own > _OUTLIER_SIGMA and near < 2.0 and apart > 2.0 * _OUTLIER_SIGMA:
+                found.append(
+                    f"{runs_label(runs, direction, k)}, labelled {direction.value}, sits in "
+                    f"the {other.value} cluster ({own:.0f} standard deviations from its own): "
+                    "check its direction label"
+                )
+    return found
+
+
+def runs_label(runs: Sequence[Run], direction: Direction, k: int) -> str:
+    """The label of the ``k``-th run of ``direction``."""
+    return split_by_direction(runs)[direction][k].label or f"{direction.value} run {k + 1}"
+
+
+def _heading_units(
+    bench: Benchmark, runs: Sequence[Run], test: SquareTest, fit: EndPoseFit
+) -> list[str]:
+    """Headings whose alpha differs from the positions' by a degree/radian factor."""
+    from .endpose import fit_end_poses
+
+    if not fit.headings:
+        return []
+    positions = fit_end_poses(bench, runs, test, headings=False)
+    alpha_positions = 0.5 * math.pi * (1.0 - 1.0 / positions.E_b)
+    groups = split_by_direction(runs)
+    # Unwrapped: a heading in the wrong unit may be many turns large.
+    mean = {
+        d: float(np.mean([(r.true_end.theta or 0.0) - (r.odometry_end.theta or 0.0) for r in g]))
+        for d, g in groups.items()
+    }
+    alpha_headings = (mean[Direction.CW] - mean[Direction.CCW]) / 8.0
+    if min(abs(alpha_positions), abs(alpha_headings)) < 1e-6:
+        return []
+    ratio = abs(alpha_headings / alpha_positions)
+    said = (
+        f"the headings say alpha = {math.degrees(alpha_headings):.3g} deg, the positions "
+        f"{math.degrees(alpha_positions):.3g} deg"
+    )
+    if 0.7 * _DEGREE < ratio < 1.3 * _DEGREE:
+        return [f"{said}: are the headings in degrees? (--angle-unit deg)"]
+    if 0.7 / _DEGREE < ratio < 1.3 / _DEGREE:
+        return [f"{said}: are the headings in radians? (--angle-unit rad)"]
+    return []
+
+
+def model_warnings(
+    bench: Benchmark, runs: Sequence[Run], test: SquareTest, fit: EndPoseFit | None = None
+) -> list[str]:
+    """Warnings when one robot of the model does not explain the runs (see the module).
+
+    ``fit`` is the end-pose fit of the runs, made here when not given.
+    """
+    from .endpose import LEVEL, fit_end_poses
+
+    if fit is None:
+        try:
+            fit = fit_end_poses(bench, runs, test)
+        except ValueError:
+            return _swapped_labels(runs)
+    swapped = _swapped_labels(runs)
+    check = fit.check
+    if not check.failed:
+        return swapped
+    what = "positions and headings" if fit.headings else "positions"
+    causes = swapped + _heading_units(bench, runs, test, fit)
+    likely = (
+        "; ".join(causes)
+        if causes
+        else "check the runs' direction labels, axes and signs, the heading units and the "
+        "side length; if they are right, the robot has errors the model leaves out (slip on "
+        "the turns, a marker off the axle centre, E_s)"
+    )
+    return [
+        f"the runs' {what} do not fit one robot of the model: the centres miss it by "
+        f"{_misfit_text(fit)} (model check {check.statistic:.1f} on {check.dof} degrees of "
+        f"freedom, p = {check.p_value:.2g} < {LEVEL:g}); {likely}"
+    ]

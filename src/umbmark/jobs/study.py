@@ -1,0 +1,397 @@
+"""The study job: estimators compared by Monte Carlo on virtual robots with known errors.
+
+For every cell of a grid (scatter, square side, runs per direction, wheelbase) and every
+trial, a virtual robot draws ``E_d`` and ``E_b`` uniformly within the given spreads and
+drives the bi-directional square test, steering by its own odometry (the closed-loop
+simulator of :mod:`umbmark.sim`). Each estimator calibrates it; the calibrated robot
+drives the test again (pass 1), is calibrated again, and drives it a third time (pass 2).
+Per cell and estimator the study reports:
+
+- the share of trials at the noise floor after one and after two passes
+  (``E_max,syst <= 3 SEM``, Sec. 5's rule), and the share the estimator refused;
+- the coverage of its 95 % intervals of ``E_d`` and ``E_b`` (the truth inside them);
+- its noise-free bias [ppm]: the same robots driven without slip (encoder quantization
+  and the controller only).
+
+Trials run in chunks, each with its own seed from one ``SeedSequence``, so the result
+does not depend on how many processes share the work.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import itertools
+import json
+import math
+import multiprocessing
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..calibration import Calibration
+from ..errors import InputError
+from ..estimators import METHODS
+from .inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
+
+if TYPE_CHECKING:
+    from ..sim.experiments import Trial
+    from ..sim.robot import VirtualRobot
+
+__all__ = ["Cell", "CellResult", "StudyReport", "study"]
+
+#: Trials simulated together in one vectorized pass (and given one seed).
+CHUNK = 125
+#: Most trials a study runs per cell.
+MAX_TRIALS = 100_000
+#: The reference "estimator": the robot calibrated with its true parameters.
+TRUTH = "truth"
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One point of the study's grid.
+
+    Attributes
+    ----------
+    slip : float
+        Wheel slip [m^0.5] (``0.0004`` gives the paper's ~25 mm scatter on a 4 m square).
+    side_length : float
+        Square side [m].
+    runs : int
+        Runs per direction.
+    wheelbase : float
+        Nominal wheelbase [m].
+    """
+
+    slip: float
+    side_length: float
+    runs: int
+    wheelbase: float
+
+
+@dataclass(frozen=True)
+class CellResult:
+    """One estimator in one cell, over all trials (shares in 0..1, biases in ppm)."""
+
+    cell: Cell
+    method: str
+    trials: int
+    refused: float
+    floor_after_one: float
+    floor_after_two: float
+    coverage_E_d: float
+    coverage_E_b: float
+    bias_E_d_ppm: float
+    bias_E_b_ppm: float
+    worst_bias_E_d_ppm: float
+    worst_bias_E_b_ppm: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready figures (None where no trial gave one)."""
+        return {
+            k: None if isinstance(v, float) and not math.isfinite(v) else v
+            for k, v in {
+                "slip": self.cell.slip,
+                "side_length": self.cell.side_length,
+                "runs_per_direction": self.cell.runs,
+                "wheelbase": self.cell.wheelbase,
+                "method": self.method,
+                "trials": self.trials,
+                "refused": self.refused,
+                "floor_after_one_pass": self.floor_after_one,
+                "floor_after_two_passes": self.floor_after_two,
+                "coverage_95_E_d": self.coverage_E_d,
+                "coverage_95_E_b": self.coverage_E_b,
+                "noise_free_bias_E_d_ppm": self.bias_E_d_ppm,
+                "noise_free_bias_E_b_ppm": self.bias_E_b_ppm,
+                "noise_free_worst_E_d_ppm": self.worst_bias_E_d_ppm,
+                "noise_free_worst_E_b_ppm": self.worst_bias_E_b_ppm,
+            }.items()
+        }
+
+
+@dataclass(frozen=True, repr=False)
+class StudyReport:
+    """The study's settings and one :class:`CellResult` per cell and estimator."""
+
+    E_d_spread: float
+    E_b_spread: float
+    trials: int
+    seed: int
+    results: tuple[CellResult, ...]
+
+    def __repr__(self) -> str:
+        return (
+            f"StudyReport(cells={len({r.cell for r in self.results})}, "
+            f"methods={sorted({r.method for r in self.results})}, trials={self.trials})"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary: what ``study --json`` prints."""
+        return {
+            "E_d_spread": self.E_d_spread,
+            "E_b_spread": self.E_b_spread,
+            "trials_per_cell": self.trials,
+            "seed": self.seed,
+            "results": [r.to_dict() for r in self.results],
+        }
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+
+@dataclass(frozen=True)
+class _Chunk:
+    cell: Cell
+    methods: tuple[str, ...]
+    trials: int
+    E_d_spread: float
+    E_b_spread: float
+    seed: np.random.SeedSequence
+
+
+@dataclass(frozen=True)
+class _Outcome:
+    """Per trial and method: refused, floor after 1 and 2 passes, covered E_d, E_b,
+    noise-free errors of E_d and E_b (NaN where refused)."""
+
+    method: str
+    values: np.ndarray  # (trials, 7)
+
+
+def study(
+    *,
+    methods: Sequence[str] = METHODS,
+    trials: int = 200,
+    E_d_spread: float = 0.02,
+    E_b_spread: float = 0.05,
+    slip: Sequence[float] = (0.0004,),
+    side_length: Sequence[float] = (4.0,),
+    runs: Sequence[int] = (5,),
+    wheelbase: Sequence[float] = (0.34,),
+    seed: int = 1,
+    workers: int | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> StudyReport:
+    """Compare estimators by Monte Carlo (see the module's documentation).
+
+    Parameters
+    ----------
+    methods : sequence of str
+        Estimators of square tests (``paper``, ``exact``, ``heading``, ``endpose``), and
+        ``truth``: the robot calibrated with its true parameters, the ceiling.
+    trials : int
+        Trials per grid cell.
+    E_d_spread, E_b_spread : float
+        The robots' ``E_d`` and ``E_b`` are drawn uniformly from ``1 +- spread``.
+    slip, side_length, runs, wheelbase : sequences
+        The grid: wheel slip [m^0.5], square side [m], runs per direction, wheelbase [m].
+    seed : int
+        Seed of the whole study.
+    workers : int, optional
+        Processes (default: the machine's cores).
+    progress : callable, optional
+        Called with the fraction done.
+
+    Raises
+    ------
+    InputError
+        For options out of range.
+    """
+    for name in methods:
+        if name not in (*METHODS, TRUTH):
+            raise InputError(f"--methods {name!r}: use some of {', '.join(METHODS)}, {TRUTH}")
+    if not methods:
+        raise InputError("--methods: name at least one estimator")
+    if not 1 <= trials <= MAX_TRIALS:
+        raise InputError(f"--trials must be 1 to {MAX_TRIALS}, got {trials}")
+    for name, spread in (("--E-d-spread", E_d_spread), ("--E-b-spread", E_b_spread)):
+        if not 0.0 <= spread <= 0.2:
+            raise InputError(f"{name} {spread:g}: give 0 to 0.2")
+    for value in slip:
+        if not (math.isfinite(value) and 0.0 <= value <= 0.01):
+            raise InputError(f"--slip {value:g}: give 0 to 0.01 m^0.5")
+    for value in side_length:
+        check_length("--side-length", value, MAX_SIDE_LENGTH)
+    for value in wheelbase:
+        check_length("--wheelbase", value, MAX_WHEELBASE)
+    for count in runs:
+        if not 2 <= count <= 100:
+            raise InputError(f"--runs must be 2 to 100 per direction, got {count}")
+    if workers is not None and not 1 <= workers <= 64:
+        raise InputError(f"--workers must be 1 to 64, got {workers}")
+
+    cells = [Cell(*c) for c in itertools.product(slip, side_length, runs, wheelbase)]
+    seeds = iter(np.random.SeedSequence(seed).spawn(len(cells) * math.ceil(trials / CHUNK)))
+    chunks = [
+        _Chunk(
+            cell, tuple(methods), min(CHUNK, trials - start), E_d_spread, E_b_spread, next(seeds)
+        )
+        for cell in cells
+        for start in range(0, trials, CHUNK)
+    ]
+    outcomes = _run_all(chunks, workers, progress)
+    results = []
+    for cell in cells:
+        for method in methods:
+            parts = [
+                o.values
+                for chunk, per_chunk in zip(chunks, outcomes, strict=True)
+                if chunk.cell == cell
+                for o in per_chunk
+                if o.method == method
+            ]
+            results.append(_summarize(cell, method, np.vstack(parts)))
+    return StudyReport(
+        E_d_spread=E_d_spread,
+        E_b_spread=E_b_spread,
+        trials=trials,
+        seed=seed,
+        results=tuple(results),
+    )
+
+
+def _run_all(
+    chunks: Sequence[_Chunk], workers: int | None, progress: Callable[[float], None] | None
+) -> list[list[_Outcome]]:
+    count = workers or os.cpu_count() or 1
+    if count == 1 or len(chunks) == 1:
+        out = []
+        for k, chunk in enumerate(chunks):
+            out.append(_run_chunk(chunk))
+            if progress is not None:
+                progress((k + 1) / len(chunks))
+        return out
+    # fork where there is one: works from notebooks and stdin, where spawn cannot re-import.
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    with concurrent.futures.ProcessPoolExecutor(max_workers=count, mp_context=context) as pool:
+        futures = [pool.submit(_run_chunk, chunk) for chunk in chunks]
+        for done, _ in enumerate(concurrent.futures.as_completed(futures), start=1):
+            if progress is not None:
+                progress(done / len(chunks))
+        return [f.result() for f in futures]
+
+
+def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
+    """Every trial of a chunk, every method: three tests each, simulated in batches."""
+    from ..kinematics import WheelParams
+    from ..sim.experiments import calibrate_robot, umbmark_trials
+    from ..sim.robot import NoiseModel, VirtualRobot
+
+    rng = np.random.default_rng(chunk.seed)
+    cell = chunk.cell
+    odometry = WheelParams(
+        wheelbase=cell.wheelbase,
+        wheel_diameter=0.15 * cell.wheelbase / 0.34,
+        encoder_resolution=2000,
+        gear_ratio=20.0,
+    )
+    E_d = 1.0 + rng.uniform(-chunk.E_d_spread, chunk.E_d_spread, chunk.trials)
+    E_b = 1.0 + rng.uniform(-chunk.E_b_spread, chunk.E_b_spread, chunk.trials)
+    noise = NoiseModel(slip=cell.slip)
+    robots = [
+        VirtualRobot.with_errors(odometry, E_d=d, E_b=b, noise=noise)
+        for d, b in zip(E_d, E_b, strict=True)
+    ]
+    quiet = [
+        VirtualRobot.with_errors(odometry, E_d=d, E_b=b) for d, b in zip(E_d, E_b, strict=True)
+    ]
+    L, n = cell.side_length, cell.runs
+    before = umbmark_trials(robots, L, n, rng=rng)
+    noise_free = umbmark_trials(quiet, L, n)
+
+    def calibrate(trial: Trial, method: str) -> tuple[Any, VirtualRobot] | None:
+        if method == TRUTH:
+            return _truth(trial)
+        try:
+            return calibrate_robot(trial, L, method)  # type: ignore[arg-type]
+        except ValueError:
+            return None
+
+    outcomes = []
+    for method in chunk.methods:
+        values = np.full((chunk.trials, 7), np.nan)
+        values[:, 1:3] = 0.0  # a refused robot stays uncalibrated: not at the floor
+        first = [calibrate(t, method) for t in before]
+        ok = [k for k, c in enumerate(first) if c is not None]
+        values[:, 0] = [c is None for c in first]
+        for k in ok:
+            calibration = first[k]
+            assert calibration is not None
+            estimate = calibration[0].estimate
+            truth = before[k].robot
+            true_E_b = truth.wheelbase / truth.odometry.wheelbase
+            for col, name, true in ((3, "E_d", truth.E_d), (4, "E_b", true_E_b)):
+                interval = estimate.interval(name)
+                if interval is not None:
+                    values[k, col] = interval[0] <= true <= interval[1]
+        after_one = umbmark_trials([first[k][1] for k in ok], L, n, rng=rng)  # type: ignore[index]
+        second = [calibrate(t, method) for t in after_one]
+        after_two_robots = [
+            c[1] if c is not None else t.robot for c, t in zip(second, after_one, strict=True)
+        ]
+        after_two = umbmark_trials(after_two_robots, L, n, rng=rng)
+        for k, one, two in zip(ok, after_one, after_two, strict=True):
+            values[k, 1] = not one.benchmark.second_pass_recommended
+            values[k, 2] = not two.benchmark.second_pass_recommended
+        for k, trial in enumerate(noise_free):
+            result = calibrate(trial, method)
+            if result is not None:
+                estimate = result[0].estimate
+                values[k, 5] = estimate.E_d - trial.robot.E_d
+                values[k, 6] = estimate.E_b - trial.robot.wheelbase / trial.robot.odometry.wheelbase
+        outcomes.append(_Outcome(method, values))
+    return outcomes
+
+
+def _truth(trial: Trial) -> tuple[Calibration, VirtualRobot]:
+    """The robot calibrated with its true parameters: the ceiling any estimator can reach."""
+    from ..calibration import ActiveParams
+    from ..estimators.base import ErrorEstimate
+
+    robot = trial.robot
+    odo = robot.odometry
+    E_d = robot.E_d / (odo.c_right / odo.c_left)
+    E_b = robot.wheelbase / odo.wheelbase
+    estimate = ErrorEstimate(method=TRUTH, alpha=0.0, beta=0.0, E_d=E_d, E_b=E_b)
+    calibration = Calibration(
+        estimate, ActiveParams(wheelbase=odo.wheelbase, c_left=odo.c_left, c_right=odo.c_right)
+    )
+    exact = robot.calibrated(
+        robot.diameter_left / odo.wheel_diameter,
+        robot.diameter_right / odo.wheel_diameter,
+        robot.wheelbase,
+    )
+    return calibration, exact
+
+
+def _share(column: np.ndarray) -> float:
+    known = column[np.isfinite(column)]
+    return float(known.mean()) if known.size else math.nan
+
+
+def _summarize(cell: Cell, method: str, values: np.ndarray) -> CellResult:
+    accepted = values[values[:, 0] == 0]
+    bias = values[:, 5:7] * 1e6
+    finite = np.all(np.isfinite(bias), axis=1)
+    mean_bias = bias[finite].mean(axis=0) if finite.any() else np.array([math.nan, math.nan])
+    worst = np.abs(bias[finite]).max(axis=0) if finite.any() else np.array([math.nan, math.nan])
+    return CellResult(
+        cell=cell,
+        method=method,
+        trials=int(values.shape[0]),
+        refused=float(values[:, 0].mean()),
+        floor_after_one=float(values[:, 1].mean()),
+        floor_after_two=float(values[:, 2].mean()),
+        coverage_E_d=_share(accepted[:, 3]) if accepted.size else math.nan,
+        coverage_E_b=_share(accepted[:, 4]) if accepted.size else math.nan,
+        bias_E_d_ppm=float(mean_bias[0]),
+        bias_E_b_ppm=float(mean_bias[1]),
+        worst_bias_E_d_ppm=float(worst[0]),
+        worst_bias_E_b_ppm=float(worst[1]),
+    )

@@ -1,0 +1,255 @@
+"""The validation job: which estimator and model predict the robot best, on its own data.
+
+Calibrating and checking on the same runs says little. :func:`validate` holds each source
+out in turn (leave one source out; with a single source, leave one run out), calibrates on
+the rest with every estimator that can use them, replays the held-out runs with each
+calibration, and compares their mean end-position errors: the held-out error is what a
+user will see on runs the calibration never saw. The estimator with the lowest mean
+held-out error is recommended; ``umbmark calibrate --method auto`` calibrates with it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..kinematics import WheelParams
+from ..runs import Run, end_errors
+from .inputs import (
+    ReadOptions,
+    Runs,
+    SourceOptions,
+    is_table,
+    pool_runs,
+    read_runs,
+    source_name,
+)
+
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
+__all__ = ["CANDIDATES", "Fold", "ValidationReport", "validate"]
+
+#: What is compared: the nominal parameters and every estimator.
+CANDIDATES = (
+    "nominal",
+    "paper",
+    "exact",
+    "heading",
+    "endpose",
+    "trajectory",
+    "trajectory-scrub",
+)
+_MM = 1000.0
+
+
+@dataclass(frozen=True)
+class Fold:
+    """One held-out part and how each candidate predicted it.
+
+    Attributes
+    ----------
+    held_out : str
+        The source (or run) held out.
+    runs : int
+        Runs held out.
+    errors : dict of str to float or None
+        Mean end-position error [m] of the held-out runs with each candidate's
+        calibration from the rest; None where the candidate could not calibrate (square
+        estimators need squares in both directions).
+    """
+
+    held_out: str
+    runs: int
+    errors: dict[str, float | None]
+
+
+@dataclass(frozen=True, repr=False)
+class ValidationReport:
+    """Held-out end errors of every candidate, and the recommendation.
+
+    Attributes
+    ----------
+    sources : tuple of str
+    scheme : str
+        ``leave one source out`` or ``leave one run out``.
+    candidates : tuple of str
+    folds : tuple of Fold
+    notes : tuple of str
+    """
+
+    sources: tuple[str, ...]
+    scheme: str
+    candidates: tuple[str, ...]
+    folds: tuple[Fold, ...]
+    notes: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        return (
+            f"ValidationReport(sources={len(self.sources)}, scheme={self.scheme!r}, "
+            f"folds={len(self.folds)}, recommended={self.recommended!r})"
+        )
+
+    def mean_error(self, candidate: str) -> float | None:
+        """Mean over the folds of the held-out end error [m]; None unless the candidate
+        could calibrate in every fold."""
+        values = [fold.errors.get(candidate) for fold in self.folds]
+        if not values or any(v is None for v in values):
+            return None
+        return float(np.mean([v for v in values if v is not None]))
+
+    @property
+    def ranking(self) -> list[tuple[str, float]]:
+        """Candidates that calibrated in every fold, best first, with their mean error [m]."""
+        scored = [(c, self.mean_error(c)) for c in self.candidates]
+        return sorted(((c, e) for c, e in scored if e is not None), key=lambda item: item[1])
+
+    @property
+    def recommended(self) -> str | None:
+        """The estimator with the lowest mean held-out error (None if no estimator beats
+        the nominal parameters)."""
+        for candidate, _ in self.ranking:
+            return None if candidate == "nominal" else candidate
+        return None
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres): what ``validate --json`` prints."""
+        return {
+            "sources": list(self.sources),
+            "scheme": self.scheme,
+            "folds": [
+                {"held_out": f.held_out, "runs": f.runs, "end_error": dict(f.errors)}
+                for f in self.folds
+            ],
+            "mean_end_error": {c: self.mean_error(c) for c in self.candidates},
+            "recommended": self.recommended,
+            "notes": list(self.notes),
+        }
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+
+def validate(
+    source: str | os.PathLike[str],
+    *more_sources: str | os.PathLike[str],
+    methods: Sequence[str] | None = None,
+    side_length: float | None = None,
+    wheelbase: float | None = None,
+    progress: Callable[[float], None] | None = None,
+    **options: Unpack[SourceOptions],
+) -> ValidationReport:
+    """Hold out each source (or, from one source, each run), calibrate on the rest with
+    every estimator, replay what was held out, and compare the end errors.
+
+    Parameters
+    ----------
+    source, *more_sources : path
+        Recorded runs (run logs, OptiOdom sessions, bags): replaying needs their wheel
+        data.
+    methods : sequence of str, optional
+        The estimators to compare (default: all of :data:`CANDIDATES`).
+    side_length, wheelbase : float, optional
+        As for :func:`umbmark.calibrate`.
+    progress : callable, optional
+        Called with the fraction done.
+    **options
+        How to read the sources (:class:`umbmark.jobs.inputs.ReadOptions`).
+
+    Raises
+    ------
+    InputError
+        For sources without recorded wheel data, or too little to hold anything out.
+    """
+    read_options = ReadOptions.of(options)
+    chosen = tuple(CANDIDATES if methods is None else ("nominal", *methods))
+    for name in chosen:
+        if name not in CANDIDATES:
+            raise InputError(f"--methods {name!r}: use some of {', '.join(CANDIDATES[1:])}")
+    paths = (source, *more_sources)
+    for path in paths:
+        if is_table(path, read_options):
+            raise InputError(
+                "validation replays recorded runs: give run logs, OptiOdom sessions or bags, "
+                "not a runs table",
+                source=source_name(path),
+            )
+    read = [
+        read_runs([path], read_options, wheelbase=wheelbase, side_length=side_length)
+        for path in paths
+    ]
+    for one in read:
+        if one.params is None:
+            raise InputError(
+                "validation replays recorded runs: give run logs, OptiOdom sessions or bags, "
+                "not a runs table",
+                source=one.sources[0],
+            )
+    if len(read) > 1:
+        scheme = "leave one source out"
+        parts = [(r.sources[0], [r], [o for o in read if o is not r]) for r in read]
+    else:
+        scheme = "leave one run out"
+        whole = read[0]
+        if len(whole.runs) < 3:
+            raise InputError(
+                f"holds {len(whole.runs)} run(s): leaving one out needs at least 3",
+                source=whole.sources[0],
+            )
+        parts = [
+            (
+                run.label,
+                [replace(whole, runs=(run,))],
+                [replace(whole, runs=tuple(r for r in whole.runs if r is not run))],
+            )
+            for run in whole.runs
+        ]
+    folds = []
+    for k, (name, held, training) in enumerate(parts):
+        folds.append(_fold(name, held[0], pool_runs(training), chosen))
+        if progress is not None:
+            progress((k + 1) / len(parts))
+    return ValidationReport(
+        sources=tuple(source_name(p) for p in paths),
+        scheme=scheme,
+        candidates=chosen,
+        folds=tuple(folds),
+        notes=tuple(n for r in read for n in r.notes),
+    )
+
+
+def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> Fold:
+    assert held.params is not None
+    errors: dict[str, float | None] = {}
+    for candidate in candidates:
+        params = _calibrated(training, candidate, held.params)
+        errors[candidate] = None if params is None else _mean_error(held.runs, params)
+    return Fold(held_out=name, runs=len(held.runs), errors=errors)
+
+
+def _calibrated(training: Runs, candidate: str, nominal: WheelParams) -> WheelParams | None:
+    """The held-out source's parameters after calibrating on ``training`` (None: the
+    candidate cannot calibrate on it)."""
+    from .calibrate import _calibrate_runs
+
+    if candidate == "nominal":
+        return nominal
+    try:
+        report = _calibrate_runs(training, candidate)
+        return report.new_params().applied_to(nominal)
+    except ValueError:  # InputError included: the candidate cannot calibrate on these runs
+        return None
+
+
+def _mean_error(runs: Sequence[Run], params: WheelParams) -> float:
+    errors = end_errors([run.reintegrated(params) for run in runs])
+    value = float(errors.mean())
+    return value if math.isfinite(value) else math.inf
