@@ -36,7 +36,8 @@ def _rows():
 
 
 def test_summary_states_every_figure_with_its_unit(table):
-    proc = run_cli("calibrate", str(table(_rows())), "--side-length", "4", "--wheelbase", "0.34")
+    args = ["calibrate", str(table(_rows())), "--side-length", "4", "--wheelbase", "0.34"]
+    proc = run_cli(*args, "--method", "paper")
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
     e_max = math.hypot(*linear_cgs(ALPHA, BETA, L)["ccw"]) * 1000
@@ -185,6 +186,8 @@ def _commands() -> list[tuple[str, click.Command, object]]:
     return [
         ("calibrate", cli.commands["calibrate"], umbmark.calibrate),
         ("replay", cli.commands["replay"], umbmark.replay),
+        ("validate", cli.commands["validate"], umbmark.validate),
+        ("study", cli.commands["study"], umbmark.study),
         ("simulate", cli.commands["simulate"], umbmark.simulate),
         ("demo", cli.commands["demo"], umbmark.demo),
         ("example", cli.commands["example"], umbmark.example),

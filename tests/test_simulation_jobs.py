@@ -32,8 +32,9 @@ def test_simulate_then_calibrate_recovers_the_errors(tmp_path):
     # Heading errors are exact in the model; E_d then goes through Eqs. 4.21-4.22.
     assert heading["E_b"] == pytest.approx(1.01, abs=2e-5)
     assert heading["E_d"] == pytest.approx(1.002, abs=2e-5)
-    paper = _calibrate(runs)
+    paper = _calibrate(runs, method="paper")
     assert paper["E_d"] == pytest.approx(1.002, rel=1e-3)
+    assert _calibrate(runs)["method"] == "exact"  # the default
 
 
 def test_second_pass_with_params_from_the_first(tmp_path):

@@ -37,17 +37,26 @@ __all__ = ["calibrate"]
             "-m",
             section=TEST,
             type=click.Choice(
-                ["paper", "exact", "heading", "endpose", "trajectory", "trajectory-scrub", "auto"]
+                [
+                    "paper",
+                    "exact",
+                    "heading",
+                    "endpose",
+                    "endpoints",
+                    "trajectory",
+                    "trajectory-scrub",
+                    "auto",
+                ]
             ),
-            default="paper",
+            default="exact",
             show_default=True,
-            help="Estimator: paper (Eqs. 4.20-4.27 as printed), exact (exact square "
-            "geometry, for large errors), heading (final headings, Jung & Chung 2011; needs "
-            "headings), endpose (maximum likelihood on every run's end pose, exact "
-            "geometry), trajectory (least squares on whole ground-truth trajectories of any "
-            "shape, logged runs only; finds E_s too), trajectory-scrub (the same with a "
-            "wheelbase that depends on how much each step turns; exports the single-wheelbase "
-            "set), auto (the one that predicts held-out recorded runs best: umbmark validate).",
+            help="Estimator. Square tests: paper (Eqs. 4.20-4.27 as printed), exact (the "
+            "exact square geometry inverted, no small-angle approximation), heading (final "
+            "headings, Jung & Chung 2011), endpose (maximum likelihood on every run's end "
+            "pose). Recorded runs of any shape: endpoints (least squares on where they end), "
+            "trajectory (on whole trajectories; finds E_s too), trajectory-scrub (with a "
+            "turn-dependent wheelbase; exports the single-wheelbase set). auto: the one that "
+            "predicts held-out recorded runs best (umbmark validate).",
         ),
     ]
 )

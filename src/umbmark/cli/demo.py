@@ -27,8 +27,8 @@ __all__ = ["demo"]
     "--method",
     "-m",
     section="Options",
-    type=click.Choice(["paper", "exact", "heading"]),
-    default="paper",
+    type=click.Choice(["paper", "exact", "heading", "endpose"]),
+    default="exact",
     show_default=True,
     help="Estimator to calibrate with.",
 )

@@ -22,6 +22,7 @@ _METHOD_NAMES = {
     "heading": "final heading errors (Jung & Chung 2011)",
     "endpose": "maximum likelihood on the runs' end poses, exact geometry",
     "straight": "straight runs against a tape (scale only)",
+    "endpoints": "least squares on where the recorded runs end",
     "trajectory": "least squares on whole recorded trajectories",
     "trajectory-scrub": "least squares on whole trajectories, turn-dependent wheelbase",
 }
@@ -128,7 +129,7 @@ def render_calibration(
     _row(errors, "E_d = D_R / D_L", _plus_minus(est.E_d, se.get("E_d"), ".6f"), "Eq. 4.22")
     if est.E_s is not None:
         _row(errors, "E_s = D_avg / D_active", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "scale")
-    if est.method.startswith("trajectory"):
+    if est.method.startswith("trajectory") or est.method == "endpoints":
         _trajectory_rows(errors, est.components, se)
     console.print(errors)
     intervals = [
@@ -220,11 +221,15 @@ def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, 
             comp["time_offset"] * _MM, se.get("time_offset", math.nan) * _MM, ".1f"
         )
         _row(errors, "time offset [ms]", offset, "> 0: ground truth lags the wheels")
+    where = "along the runs" if "samples" in comp else "at the runs' ends"
+    counted = f"{comp['runs']:.0f} runs" + (
+        f", {comp['samples']:.0f} samples" if "samples" in comp else ""
+    )
     _row(
         errors,
-        "residual along the runs (rms)",
+        f"residual {where} (rms)",
         f"{comp['rms_position'] * _MM:.2f} mm, {math.degrees(comp['rms_heading']):.3f} deg",
-        f"{comp['runs']:.0f} runs, {comp['samples']:.0f} samples",
+        counted,
     )
 
 

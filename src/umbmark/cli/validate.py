@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import click
@@ -54,7 +55,7 @@ def validate(sources: tuple[str, ...], json_out: bool, methods: str | None, **op
     for candidate in report.candidates:
         grid.add_column(Text(candidate), justify="right")
     for fold in report.folds:
-        cells = [f"{fold.held_out} ({fold.runs})"]
+        cells = [f"{Path(fold.held_out).name} ({fold.runs} runs)"]
         cells += [
             "-" if fold.errors[c] is None else f"{1000 * (fold.errors[c] or 0.0):.1f}"
             for c in report.candidates

@@ -45,7 +45,15 @@ from .base import ErrorEstimate, FloatArray, SquareTest, welch_dof
 from .exact import exact_components
 from .solve import gauss_newton, jacobian
 
-__all__ = ["FLOOR", "LEVEL", "EndPoseFit", "ModelCheck", "endpose_estimate", "fit_end_poses"]
+__all__ = [
+    "FLOOR",
+    "LEVEL",
+    "EndPoseFit",
+    "ModelCheck",
+    "endpose_estimate",
+    "fit_end_poses",
+    "heading_errors",
+]
 
 #: Least standard deviation of a measured end position [m] and heading [rad]: what a tape
 #: measure and a protractor resolve.
@@ -116,22 +124,44 @@ class EndPoseFit:
     check: ModelCheck
 
 
+def heading_errors(
+    bench: Benchmark, runs: Sequence[Run], test: SquareTest
+) -> dict[Direction, FloatArray] | None:
+    """Each direction's heading errors [rad], shape (n,), unwrapped to the turns the
+    positions say: None unless every run has headings.
+
+    A heading error is known only up to whole turns (Eq. 3.1 wraps it into [-pi, pi)). A
+    robot whose legs curve by tens of degrees ends a square more than half a turn off, so
+    each error is taken as the one, of all that differ by whole turns, nearest to what the
+    exact geometry of the positions predicts.
+    """
+    if not all(run.heading_error is not None for run in runs):
+        return None
+    start = exact_components(np.concatenate([bench.cw.cg, bench.ccw.cg]), test)
+    out = {}
+    for direction, group in split_by_direction(runs).items():
+        predicted = float(
+            square_run_end(
+                start["E_d"], start["E_b"], 1.0, test.side_length, test.wheelbase, direction
+            )[2]
+        )
+        theta = np.array([run.heading_error for run in group], dtype=np.float64)
+        out[direction] = theta + 2.0 * np.pi * np.round((predicted - theta) / (2.0 * np.pi))
+    return out
+
+
 def _observations(
-    bench: Benchmark, runs: Sequence[Run], headings: bool | None
+    bench: Benchmark, runs: Sequence[Run], test: SquareTest, headings: bool | None
 ) -> tuple[dict[Direction, FloatArray], bool]:
     """Each direction's end observations, shape (n, m): return errors and heading errors."""
-    groups = split_by_direction(runs)
-    with_headings = all(run.heading_error is not None for run in runs)
-    use = with_headings if headings is None else headings and with_headings
+    theta = heading_errors(bench, runs, test) if headings is not False else None
     out: dict[Direction, FloatArray] = {}
     for cluster in bench.clusters:
-        group = groups[cluster.direction]
-        if use:
-            theta = np.array([run.heading_error for run in group], dtype=np.float64)
-            out[cluster.direction] = np.column_stack([cluster.errors, theta])
+        if theta is not None:
+            out[cluster.direction] = np.column_stack([cluster.errors, theta[cluster.direction]])
         else:
             out[cluster.direction] = cluster.errors
-    return out, use
+    return out, theta is not None
 
 
 #: A ccw run is the mirror image of a cw run (y and headings change sign): so is its
@@ -193,7 +223,7 @@ def fit_end_poses(
     ValueError
         If the fit does not converge to a robot (errors beyond any square's geometry).
     """
-    observations, use_headings = _observations(bench, runs, headings)
+    observations, use_headings = _observations(bench, runs, test, headings)
     pooled, scatter_dof = _pooled_scatter(observations)
     scatter = pooled[Direction.CW]
     means = {d: y.mean(axis=0) for d, y in observations.items()}

@@ -6,7 +6,9 @@ approximation), so ``alpha = (eps_cw - eps_ccw) / 8`` and ``beta = (eps_cw + eps
 ``E_b`` then follows by Eq. 4.27, and ``E_d`` from ``beta`` for a leg that is an arc of
 length ``L`` driven with the actual wheelbase ``E_b b`` (as the exact method does; the
 paper's Eqs. 4.21-4.22 with the nominal wheelbase would be off by about ``E_b - 1``).
-Needs ``theta_abs`` and ``theta_odo`` for every run.
+Needs ``theta_abs`` and ``theta_odo`` for every run. Heading errors are known only up to
+whole turns: they are unwrapped to the turns the positions say
+(:func:`umbmark.estimators.endpose.heading_errors`).
 """
 
 from __future__ import annotations
@@ -14,8 +16,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..benchmark import Benchmark
+from ..conventions import Direction
 from ..model import E_b_from_alpha, E_d_from_beta_arc
-from ..runs import Run, split_by_direction
+from ..runs import Run
 from .base import ErrorEstimate, FloatArray, SquareTest, propagate_blocks
 
 __all__ = ["heading_components", "heading_estimate"]
@@ -46,20 +49,20 @@ def heading_estimate(bench: Benchmark, runs: list[Run], test: SquareTest) -> Err
         If a run has no headings.
     """
     from .checks import model_warnings
+    from .endpose import heading_errors
 
+    missing = [run.label or "a run" for run in runs if run.heading_error is None]
+    if missing:
+        raise ValueError(
+            f"the heading method needs theta_abs and theta_odo; missing for {missing[0]}"
+        )
+    unwrapped = heading_errors(bench, runs, test)
+    assert unwrapped is not None
     means = []
     variances = []
     counts = []
-    for direction, group in split_by_direction(runs).items():
-        headings = [run.heading_error for run in group]
-        missing = [
-            run.label or "a run" for run, e in zip(group, headings, strict=True) if e is None
-        ]
-        if missing:
-            raise ValueError(
-                f"the heading method needs theta_abs and theta_odo; missing for {missing[0]}"
-            )
-        values = np.array(headings, dtype=np.float64)
+    for direction in (Direction.CW, Direction.CCW):
+        values = unwrapped[direction]
         if len(values) < 2:
             raise ValueError(f"fewer than 2 {direction.value} runs")
         means.append(values.mean())

@@ -98,6 +98,7 @@ __all__ = [
     "StartPose",
     "TrajectoryFit",
     "TrajectoryModel",
+    "disagreement_warnings",
     "fit_trajectories",
     "trajectory_estimate",
 ]
@@ -818,3 +819,39 @@ def trajectory_estimate(
         dof=float(single.clusters - 1),
     )
     return estimate, fit
+
+
+def disagreement_warnings(
+    fits: Sequence[tuple[str, TrajectoryFit]], level: float = 0.001
+) -> list[str]:
+    """Sources whose separate fits differ by more than their standard errors explain.
+
+    One robot driven in several sessions (squares, circles, another day) should give one
+    set of radii and one wheelbase. Each pair of sessions' fits is compared, for each of
+    ``r_left``, ``r_right`` and ``wheelbase``, with Student's t of the smaller degrees of
+    freedom at ``level`` (two-sided, shared among the comparisons): with honest standard
+    errors this fires on about ``level`` of sessions that do agree.
+    """
+    from ..stats import t_quantile
+
+    out = []
+    pairs = [(a, b) for i, a in enumerate(fits) for b in fits[i + 1 :]]
+    names = ("r_left", "r_right", "wheelbase")
+    tests = max(len(pairs) * len(names), 1)
+    for (name_a, fit_a), (name_b, fit_b) in pairs:
+        for key in names:
+            a, b = float(getattr(fit_a, key)), float(getattr(fit_b, key))
+            se_a, se_b = fit_a.standard_errors[key], fit_b.standard_errors[key]
+            se = math.hypot(se_a, se_b)
+            dof = max(min(fit_a.clusters, fit_b.clusters) - 1, 1)
+            limit = t_quantile(1.0 - 0.5 * level / tests, dof)
+            if se > 0.0 and abs(a - b) > limit * se:
+                what = key.replace("_", " ")
+                out.append(
+                    f"{name_a} and {name_b} want different {what}s: {1000 * a:.2f} ± "
+                    f"{1000 * se_a:.2f} mm and {1000 * b:.2f} ± {1000 * se_b:.2f} mm, more "
+                    "than their scatter explains: different days, loads or floors, or a "
+                    "wheelbase that depends on how the robot turns (compare "
+                    "trajectory-scrub with umbmark validate)"
+                )
+    return out

@@ -38,18 +38,24 @@ if TYPE_CHECKING:
 
 __all__ = ["METHODS", "CalibrationReport", "calibrate"]
 
-Method = Literal["paper", "exact", "heading", "endpose", "trajectory", "trajectory-scrub"]
-#: The estimator used unless another is asked for (see README, "Estimators").
-DEFAULT_METHOD: Method = "paper"
+Method = Literal[
+    "paper", "exact", "heading", "endpose", "endpoints", "trajectory", "trajectory-scrub"
+]
+#: The estimator used unless another is asked for: chosen by the evidence of
+#: ``umbmark study`` and ``umbmark validate`` (README, "Choosing an estimator").
+DEFAULT_METHOD: Method = "exact"
 #: The estimators, in the order the documentation lists them.
 METHODS: tuple[Method, ...] = (
     "paper",
     "exact",
     "heading",
     "endpose",
+    "endpoints",
     "trajectory",
     "trajectory-scrub",
 )
+#: The methods that need recorded runs (time series).
+LOGGED_METHODS = ("endpoints", "trajectory", "trajectory-scrub")
 
 
 @dataclass(frozen=True, repr=False)
@@ -383,7 +389,7 @@ def calibrate(
     *more_sources: RunSource,
     side_length: float | None = None,
     wheelbase: float | None = None,
-    method: str = "paper",
+    method: str = DEFAULT_METHOD,
     output: str | os.PathLike[str] | None = None,
     yaml: str | os.PathLike[str] | None = None,
     ros1_yaml: str | os.PathLike[str] | None = None,
@@ -407,12 +413,15 @@ def calibrate(
     wheelbase : float, optional
         Wheelbase ``b`` the odometry used during the runs [m] (ros2_control
         ``wheel_separation``); required for runs tables unless ``current_params`` has it.
-    method : {"paper", "exact", "heading", "endpose", "trajectory", "auto"}
-        Estimator: the paper's Eqs. 4.20-4.27 as printed, the exact square geometry, the
-        final headings (Jung & Chung 2011), maximum likelihood on every run's end pose
-        (exact geometry), least squares on whole ground-truth trajectories (logged
-        sources only; finds ``E_s`` too), or ``auto``: the one that predicts held-out
-        recorded runs best (:func:`umbmark.validate`; runs tables take the default).
+    method : str
+        Estimator (README, "Estimators"). Square tests: ``paper`` (Eqs. 4.20-4.27 as
+        printed), ``exact`` (the default: the exact square geometry inverted), ``heading``
+        (final headings, Jung & Chung 2011), ``endpose`` (maximum likelihood on every
+        run's end pose). Recorded runs of any shape: ``endpoints`` (least squares on where
+        they end), ``trajectory`` (on whole trajectories; finds ``E_s`` too),
+        ``trajectory-scrub`` (with a turn-dependent wheelbase). ``auto``: the one that
+        predicts held-out recorded runs best (:func:`umbmark.validate`; runs tables take
+        the default).
     output, yaml, ros1_yaml, plot, tum : path, optional
         Files to write (see :meth:`CalibrationReport.write`); checked before any is written.
     **options
@@ -439,7 +448,7 @@ def calibrate(
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
           plot=plot, tum=tum)  # fmt: skip
-    if side_length is None and not method.startswith("trajectory") and method != "auto":
+    if side_length is None and method not in (*LOGGED_METHODS, "auto"):
         from .inputs import is_table
 
         if any(is_table(s, read_options) for s in sources):
@@ -451,8 +460,26 @@ def calibrate(
     report = _calibrate_runs(read, chosen)
     if note is not None:
         report = replace(report, notes=(*report.notes, note))
+    if chosen.startswith("trajectory") and len(read.parts) > 1:
+        report = replace(report, notes=(*report.notes, *_sessions_disagree(read.parts)))
     report.write(output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum)
     return report
+
+
+def _sessions_disagree(parts: Sequence[Runs]) -> list[str]:
+    """Warnings where the sources, fitted one by one, want different wheels."""
+    from ..estimators.trajectory import disagreement_warnings, fit_trajectories
+
+    fits = []
+    for part in parts:
+        logs = [run.log for run in part.runs if run.log is not None]
+        if part.params is None or not logs:
+            continue
+        try:
+            fits.append((part.sources[0], fit_trajectories(logs, part.params)))
+        except ValueError:
+            continue  # a source too small to fit alone says nothing against the others
+    return disagreement_warnings(fits)
 
 
 def _auto_method(
@@ -492,9 +519,7 @@ def _calibrate_runs(read: Runs, method: str) -> CalibrationReport:
     bench = None
     fit = None
     try:
-        if method.startswith("trajectory"):
-            from ..estimators.trajectory import trajectory_estimate
-
+        if method in LOGGED_METHODS:
             logs = [run.log for run in runs if run.log is not None]
             if not logs or read.params is None:
                 raise InputError(
@@ -502,12 +527,19 @@ def _calibrate_runs(read: Runs, method: str) -> CalibrationReport:
                     "or a bag), not a runs table",
                     source=where,
                 )
-            estimate, fit = trajectory_estimate(
-                logs,
-                read.params,
-                read.side_length,
-                model="scrub" if method == "trajectory-scrub" else "diff",
-            )
+            if method == "endpoints":
+                from ..estimators.endpoints import endpoints_estimate
+
+                estimate, _ = endpoints_estimate(logs, read.params, read.side_length)
+            else:
+                from ..estimators.trajectory import trajectory_estimate
+
+                estimate, fit = trajectory_estimate(
+                    logs,
+                    read.params,
+                    read.side_length,
+                    model="scrub" if method == "trajectory-scrub" else "diff",
+                )
             test = SquareTest(read.side_length or 1.0, active.effective_wheelbase)
             # UMBmark's figures where the runs are squares of a known side.
             directions = {run.direction for run in runs if run.kind == "square"}

@@ -132,7 +132,7 @@ def demo(
     *,
     out: str | os.PathLike[str] | None = None,
     seed: int = 1,
-    method: str = "paper",
+    method: str = "exact",
     runs: int = 5,
     progress: Callable[[float], None] | None = None,
 ) -> DemoReport:
@@ -147,7 +147,7 @@ def demo(
         Folder for the runs tables, the result, the overlay and the plot.
     seed : int
         Seed of the non-systematic errors.
-    method : {"paper", "exact", "heading"}
+    method : {"paper", "exact", "heading", "endpose"}
         Estimator to calibrate with.
     runs : int
         Runs in each direction.
@@ -169,7 +169,9 @@ def demo(
     if runs < 2:
         raise InputError(f"--runs must be at least 2, got {runs}")
     if method not in METHODS:
-        raise InputError("the demo calibrates from end points: use paper, exact or heading")
+        raise InputError(
+            "the demo calibrates from end points: use paper, exact, heading or endpose"
+        )
     folder = None if out is None else Path(out)
     if folder is not None and folder.exists() and not folder.is_dir():
         raise InputError("exists and is not a folder", source=folder)

@@ -227,6 +227,10 @@ class Runs:
         Time matching of each recording.
     notes : tuple of str
         What was found and left out, for people.
+    sides : tuple of (float or None)
+        The side [m] each source knows.
+    parts : tuple of Runs
+        Pooled from several sources: each source's runs as read (empty for one source).
     """
 
     sources: tuple[str, ...]
@@ -239,6 +243,7 @@ class Runs:
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = field(default=())
     sides: tuple[float | None, ...] = ()
+    parts: tuple[Runs, ...] = field(default=(), repr=False, compare=False)
 
     def square_side(self) -> float:
         """The side [m] of the square every source drove.
@@ -262,8 +267,14 @@ class Runs:
                 "--side-length if it is one, or calibrate with --method trajectory"
             )
         if self.side_length is None:
+            hint = (
+                "; if the runs are not squares, calibrate with --method endpoints or "
+                "trajectory (any shape), or auto"
+                if self.params is not None
+                else ""
+            )
             raise InputError(
-                "--side-length is required: the side of the square path, in metres",
+                f"--side-length is required: the side of the square path, in metres{hint}",
                 source=self.sources[0] if len(self.sources) == 1 else None,
             )
         return self.side_length
@@ -532,6 +543,7 @@ def pool_runs(read: Sequence[Runs]) -> Runs:
         For tables driven with different parameters.
     """
     first = read[0]
+    original = list(read)
     notes: list[str] = []
     for k, other in enumerate(read[1:], start=1):
         if other.active == first.active and other.params == first.params:
@@ -571,4 +583,5 @@ def pool_runs(read: Sequence[Runs]) -> Runs:
         associations=tuple(a for r in read for a in r.associations),
         notes=(*(n for r in read for n in r.notes), *notes),
         sides=sides,
+        parts=tuple(original),
     )

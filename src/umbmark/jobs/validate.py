@@ -44,6 +44,7 @@ CANDIDATES = (
     "exact",
     "heading",
     "endpose",
+    "endpoints",
     "trajectory",
     "trajectory-scrub",
 )
