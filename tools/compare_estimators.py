@@ -1,7 +1,7 @@
 """Compare the estimators on the real OptiOdom sessions by replay.
 
-Every estimator calibrates on each session it can use (the paper's, exact and heading
-methods need the square sessions; the trajectory fit takes any), and every calibration is
+Every estimator calibrates on each session it can use (the square-test estimators need the
+square sessions; endpoints and trajectory take any), and every calibration is
 replayed on every session: the mean end-pose error of the runs [mm], against the nominal
 parameters' error. Run: python tools/compare_estimators.py [--data ../shared/data/optiodom]
 """
@@ -31,7 +31,8 @@ def main() -> None:
     print(f"{'nominal parameters':42s}" + replay(None))
     for source in SESSIONS:
         square = source.startswith("square")
-        for method in ["paper", "exact", "heading", "trajectory"] if square else ["trajectory"]:
+        logged = ["endpoints", "trajectory"]
+        for method in ["paper", "exact", "heading", "endpose", *logged] if square else logged:
             report = umbmark.calibrate(args.data / source, method=method)
             print(f"{f'{method} from {source}':42s}" + replay(report))
 

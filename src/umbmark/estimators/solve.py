@@ -1,8 +1,8 @@
 """A small least-squares solver for the estimators' fits of a few smooth parameters.
 
 The square-path fits have two or three unknowns and a handful of smooth residuals, and
-start at the first-order solution: Gauss-Newton with a step-halving line search converges
-in a few steps, to the last bits for noise-free data. It is written out here rather than
+start at the first-order solution: damped Gauss-Newton (Levenberg-Marquardt) converges in
+a few steps, to the last bits for noise-free data. It is written out here rather than
 taken from ``scipy.optimize`` because the default estimators run it on every calibration,
 and importing ``scipy.optimize`` costs three times a whole calibration.
 ``tests/test_paper_method.py`` checks it against ``scipy.optimize.least_squares``.
@@ -42,9 +42,10 @@ def gauss_newton(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Minimize ``|residuals(p)|^2`` from ``start``.
 
-    A step that clearly raises the residual is halved; iteration stops when the step falls
-    below ``1e-13`` of the solution, or stalls at rounding level (``1e-11``) without
-    shrinking.
+    Gauss-Newton steps, damped as Levenberg and Marquardt do where the problem is nearly
+    singular (the damping grows tenfold while a step raises the residual, and shrinks
+    after each step that lowers it); iteration stops when the step falls below ``1e-13``
+    of the solution, or stalls at rounding level (``1e-11``) without shrinking.
 
     Returns
     -------
@@ -59,15 +60,25 @@ def gauss_newton(
     r = residuals(p)
     cost = float(r @ r)
     jac = jacobian(residuals, p)
+    damping = 1e-6
     previous = np.inf
     for _ in range(MAX_ITERATIONS):
-        step = np.linalg.lstsq(jac, -r, rcond=None)[0]
-        for _ in range(40):
+        normal = jac.T @ jac
+        gradient = jac.T @ r
+        scale = np.diag(np.diag(normal)) + 1e-300 * np.eye(p.size)
+        while True:
+            try:
+                step = np.linalg.solve(normal + damping * scale, -gradient)
+            except np.linalg.LinAlgError:
+                step = np.linalg.lstsq(normal + damping * scale, -gradient, rcond=None)[0]
             r_trial = residuals(p + step)
             cost_trial = float(r_trial @ r_trial)
             if cost_trial <= cost * (1.0 + 1e-9):
+                damping = max(damping / 10.0, 1e-12)
                 break
-            step = 0.5 * step
+            damping *= 10.0
+            if damping > 1e12:
+                return p, r, jac  # no step lowers the residual: converged
         p, r, cost = p + step, r_trial, cost_trial
         jac = jacobian(residuals, p)
         size = float(np.max(np.abs(step))) / (1.0 + float(np.max(np.abs(p))))

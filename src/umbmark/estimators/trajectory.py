@@ -557,6 +557,32 @@ def _check_pinned(jac: FloatArray, names: Sequence[str]) -> None:
         )
 
 
+#: Least share of the recorded wheel travel the scrub model needs in turns on the spot and
+#: in arcs, each.
+_MIN_MOTION_SHARE = 0.02
+
+
+def _check_both_motions(logs: Sequence[RunLog]) -> None:
+    """Refuse, before fitting, runs without both turns on the spot and arcs."""
+    from ..kinematics import turning_share
+
+    spot = arcs = total = 0.0
+    for log in logs:
+        step = np.abs(np.diff(log.wheel_angles, axis=0))
+        travel = step.sum(axis=1)
+        # The wheels' rotation stands for their travel: only its split between them counts.
+        share = turning_share(*np.diff(log.wheel_angles, axis=0).T)
+        total += float(travel.sum())
+        spot += float(travel[share > 0.9].sum())
+        arcs += float(travel[(share > 0.02) & (share <= 0.9)].sum())
+    if total <= 0.0 or min(spot, arcs) < _MIN_MOTION_SHARE * total:
+        raise ValueError(
+            "the scrub model needs both turns on the spot and arcs: "
+            f"{100 * spot / max(total, 1e-300):.0f} % of the wheel travel turns on the spot, "
+            f"{100 * arcs / max(total, 1e-300):.0f} % is on arcs"
+        )
+
+
 #: Largest relative standard error of a length the fit may report: beyond, the recorded
 #: motion does not pin it down.
 _LOOSE = 0.05
@@ -624,6 +650,8 @@ def fit_trajectories(
         raise ValueError(f"unknown start pose {start_pose!r}; use fitted or truth")
     if not (0.0 < max_time_offset < math.inf):
         raise ValueError(f"max time offset must be > 0 s, got {max_time_offset!r}")
+    if model == "scrub":
+        _check_both_motions(logs)
     data = _prepare(logs)
     r0 = 0.5 * start.wheel_diameter
     b0 = start.wheelbase
