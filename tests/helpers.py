@@ -143,6 +143,28 @@ def simulated_session(
     return np.array(times), np.array(counts), np.array(poses), ends
 
 
+def session_log(folder: Path, session, truth, wheelbase: float = 0.34, side: float = 1.0):  # type: ignore[no-untyped-def]
+    """Write a :func:`simulated_session` as a run-log folder, with ``truth`` (n, 3) as its
+    ground truth (D_n 0.15 m, 2000 counts per motor turn, gear 20)."""
+    from umbmark.outputs.runlog import write_log_csv, write_metadata
+    from umbmark.sources.runlog import LogMetadata
+
+    times, counts, _, _ = session
+    folder.mkdir()
+    write_metadata(
+        folder,
+        LogMetadata(
+            wheel_diameter=0.15,
+            wheelbase=wheelbase,
+            encoder_resolution=2000,
+            gear_ratio=20,
+            side_length=side,
+        ),
+    )
+    write_log_csv(folder / "session.csv", times, truth, counts)
+    return folder
+
+
 def umbmark_command() -> str:
     """The installed ``umbmark`` console script of this Python environment."""
     import shutil

@@ -441,10 +441,22 @@ def test_ground_truth_from_tf_pair(tmp_path, fmt):
     np.testing.assert_allclose(truth.poses[:, :2], np.column_stack([x, y]), atol=1e-12)
     np.testing.assert_allclose(wrap_angle(truth.poses[:, 2] - yaw), 0.0, atol=1e-12)
 
+    # a chain: map -> odom (fixed at x 1, y 2, yaw 0.3) -> base_link, composed by hand
+    _, chained = read_bag(path, BagOptions(tf_parent="map", tf_child="base_link"))
+    assert chained is not None
+    c, s_ = math.cos(0.3), math.sin(0.3)
+    expected = np.column_stack([1.0 + c * x - s_ * y, 2.0 + s_ * x + c * y])
+    np.testing.assert_allclose(chained.poses[:, :2], expected, atol=1e-12)
+    np.testing.assert_allclose(wrap_angle(chained.poses[:, 2] - (yaw + 0.3)), 0.0, atol=1e-12)
+    # walked backwards: base_link in laser's frame is 0.1 m behind it
+    _, back = read_bag(path, BagOptions(tf_parent="laser", tf_child="base_link"))
+    assert back is not None
+    np.testing.assert_allclose(back.poses, np.tile([-0.1, 0.0, 0.0], (times.size, 1)), atol=1e-12)
+
     with pytest.raises(InputError) as err:
-        read_bag(path, BagOptions(tf_parent="odom", tf_child="laser"))
+        read_bag(path, BagOptions(tf_parent="odom", tf_child="camera"))
     assert_one_line(
-        err.value, path, "odom->laser", "map->odom", "odom->base_link", "base_link->laser"
+        err.value, path, "odom", "camera", "map->odom", "odom->base_link", "base_link->laser"
     )
 
 
@@ -545,6 +557,71 @@ def test_fast_path_equals_deserialization_for_velocities_and_poses(tmp_path, fmt
     np.testing.assert_array_equal(fast_truth.poses, slow_truth.poses)
     x, _, _ = truth_path(0.01 * np.arange(n))
     np.testing.assert_array_equal(fast_truth.poses[:, 0], x)
+
+
+# --- which joints are the wheels -------------------------------------------------------
+
+
+def joints_bag(tmp_path: Path, fmt: str, names: Sequence[str], rates: Sequence[float]) -> Path:
+    """Joint states with ``names`` turning at ``rates`` [rad/s], 20 Hz for 5 s, shuffled
+    order in every other message."""
+    messages = []
+    for k in range(100):
+        t = 0.05 * k
+        sec, nsec = split(t)
+        order = list(range(len(names)))
+        if k % 2:
+            order.reverse()
+        msg = joint_state(fmt, sec, nsec, [names[i] for i in order], [rates[i] * t for i in order])
+        messages.append(("/joint_states", ns(t), msg))
+    return write_bag(tmp_path, fmt, {"/joint_states": JS}, messages)
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "sqlite3"])
+def test_wheel_joints_found_by_name_when_not_given(tmp_path, fmt):
+    # TurtleBot names, a caster that turns little and a gripper that does not move
+    path = joints_bag(
+        tmp_path,
+        fmt,
+        ["caster_joint", "wheel_left_joint", "gripper", "wheel_right_joint"],
+        [0.1, 2.0, 0.0, 3.0],
+    )
+    wheels, _ = read_bag(path, BagOptions())
+    t = 0.05 * np.arange(100)
+    np.testing.assert_allclose(wheels.angles, np.column_stack([2.0 * t, 3.0 * t]), atol=1e-12)
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "mcap"])
+def test_several_wheels_per_side_are_averaged(tmp_path, fmt):
+    # a skid-steer: front and rear wheels of a side slip differently
+    names = ["front_left_wheel", "rear_left_wheel", "front_right_wheel", "rear_right_wheel"]
+    path = joints_bag(tmp_path, fmt, names, [2.0, 2.2, 3.0, 3.4])
+    t = 0.05 * np.arange(100)
+    expected = np.column_stack([2.1 * t, 3.2 * t])
+    found, _ = read_bag(path, BagOptions())  # found by their names
+    np.testing.assert_allclose(found.angles, expected, atol=1e-12)
+    given, _ = read_bag(
+        path,
+        BagOptions(
+            left_joint="front_left_wheel, rear_left_wheel",
+            right_joint=("front_right_wheel", "rear_right_wheel"),
+        ),
+    )
+    np.testing.assert_allclose(given.angles, expected, atol=1e-12)
+    one, _ = read_bag(
+        path, BagOptions(left_joint="rear_left_wheel", right_joint="rear_right_wheel")
+    )
+    np.testing.assert_allclose(one.angles, np.column_stack([2.2 * t, 3.4 * t]), atol=1e-12)
+
+
+def test_wheel_joints_that_cannot_be_told_apart_are_named(tmp_path):
+    path = joints_bag(tmp_path, "sqlite3", ["wheel_a", "wheel_b", "lidar"], [2.0, 3.0, 10.0])
+    with pytest.raises(InputError) as err:
+        read_bag(path, BagOptions())
+    assert_one_line(err.value, path, "--left-joint", "wheel_a", "wheel_b", "lidar")
+    with pytest.raises(InputError) as err:
+        read_bag(path, BagOptions(left_joint="wheel_a", right_joint="wheel_c"))
+    assert_one_line(err.value, path, "no joint 'wheel_c'", "lidar")
 
 
 # --- bad input --------------------------------------------------------------------------

@@ -130,3 +130,42 @@ def test_runs_helper_centres_are_exact():
     rows = runs_around({"cw": (0.1, -0.2), "ccw": (0.3, 0.4)}, spread=0.05)
     cw = np.array([r[1:3] for r in rows if r[0] == "cw"])
     np.testing.assert_allclose(cw.mean(axis=0), [0.1, -0.2], atol=1e-15)
+
+
+def test_tracked_point_off_the_axle_adds_rotated_offset_to_return_errors(tmp_path):
+    """A marker at d in the robot frame: eps_marker = eps_axle + (R(dtheta) - I) d, with
+    dtheta the run's true heading change; --truth-offset d takes it away."""
+    import umbmark
+    from umbmark.kinematics import WheelParams
+    from umbmark.sim.robot import VirtualRobot
+
+    from helpers import session_log, simulated_session
+
+    odo = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
+    robot = VirtualRobot.with_errors(odo, E_d=1.004, E_b=1.02)
+    session = simulated_session(robot, ["cw", "cw", "ccw", "ccw"], side=1.0, rest=2.0)
+    axle = session[2]
+    d = (0.25, -0.08)
+    # the marker's pose, by hand: the axle's position plus d turned by the heading
+    c, s = np.cos(axle[:, 2]), np.sin(axle[:, 2])
+    marker = np.column_stack(
+        [axle[:, 0] + c * d[0] - s * d[1], axle[:, 1] + s * d[0] + c * d[1], axle[:, 2]]
+    )
+    at_axle = umbmark.calibrate(session_log(tmp_path / "axle", session, axle))
+    at_marker = umbmark.calibrate(session_log(tmp_path / "marker", session, marker))
+    for run_axle, run_marker in zip(at_axle.runs, at_marker.runs, strict=True):
+        dtheta = run_axle.true_end.theta
+        bias = (
+            (math.cos(dtheta) - 1.0) * d[0] - math.sin(dtheta) * d[1],
+            math.sin(dtheta) * d[0] + (math.cos(dtheta) - 1.0) * d[1],
+        )
+        eps_axle, eps_marker = run_axle.return_error, run_marker.return_error
+        # the run log keeps micrometres
+        assert eps_marker[0] - eps_axle[0] == pytest.approx(bias[0], abs=3e-6)
+        assert eps_marker[1] - eps_axle[1] == pytest.approx(bias[1], abs=3e-6)
+        assert abs(bias[0]) + abs(bias[1]) > 1e-3  # the bias is there to see
+    moved = umbmark.calibrate(tmp_path / "marker", truth_offset=d)
+    for run_axle, run_moved in zip(at_axle.runs, moved.runs, strict=True):
+        assert run_moved.return_error == pytest.approx(run_axle.return_error, abs=3e-6)
+    assert moved.estimate.E_b == pytest.approx(at_axle.estimate.E_b, abs=1e-5)
+    assert abs(at_marker.estimate.E_b - at_axle.estimate.E_b) > 1e-4

@@ -79,17 +79,28 @@ def test_namespaced_controller_is_found_by_its_name(tmp_path):
         (
             "dd:\n  ros__parameters:\n    wheel_separation: 0.3\n",
             "other",
-            "has no diff-drive parameters for controller 'other' (controllers with them: dd)",
+            "has no single diff-drive controller 'other' (none matches; controllers with "
+            "diff-drive parameters: dd)",
         ),
         (
             "dd:\n  ros__parameters:\n    wheel_separation_multiplier: fast\n",
             None,
-            "wheel_separation_multiplier is 'fast', not a positive number",
+            "wheel_separation_multiplier is 'fast', not a number",
         ),
         (
             "dd:\n  ros__parameters:\n    wheel_radius: -0.05\n",
             None,
-            "wheel_radius is -0.05, not a positive number",
+            "wheel_radius is -0.05 m, outside 0.001 to 10 m",
+        ),
+        (
+            "dd:\n  ros__parameters:\n    wheel_separation: 340.0\n",
+            None,
+            "wheel_separation is 340 m, outside 0.001 to 10 m (lengths are in metres)",
+        ),
+        (
+            "dd:\n  ros__parameters:\n    left_wheel_names: [a, b]\n    right_wheel_names: [c]\n",
+            None,
+            "names 2 left and 1 right wheel joints",
         ),
     ],
 )

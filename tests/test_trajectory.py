@@ -8,14 +8,18 @@ code under test.
 
 from __future__ import annotations
 
+import io
 import math
+import re
 import subprocess
 import sys
 
 import numpy as np
 import pytest
+from rich.console import Console
 
 import umbmark
+from umbmark.cli.render import render_calibration
 from umbmark.estimators.trajectory import (
     _cluster_covariance,
     fit_trajectories,
@@ -28,11 +32,11 @@ from umbmark.kinematics import (
     turning_share,
 )
 from umbmark.recording import PoseSeries, Recording, RunLog, WheelSeries
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import NoiseModel, VirtualRobot
 from umbmark.sources.logged import runs_from_recordings
 from umbmark.stats import t_quantile
 
-from helpers import simulated_session
+from helpers import cli_error, simulated_session
 
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
 ROBOT = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
@@ -366,3 +370,164 @@ def test_scrub_fit_of_a_robot_without_scrub_finds_one_wheelbase():
     assert abs(fit.spot_wheelbase - fit.wheelbase) < 3 * se_difference
     assert abs(fit.spot_wheelbase - fit.wheelbase) < 5e-4
     assert fit.wheelbase == pytest.approx(0.203, abs=5e-4)
+
+
+# --- a tracked point off the axle centre --------------------------------------------------
+
+#: Where the simulated marker sits in the robot frame [m]: 250 mm ahead of the axle
+#: centre and 80 mm to its right.
+MARKER = (0.25, -0.08)
+
+
+def _marker_poses(poses: np.ndarray, offset: tuple[float, float]) -> np.ndarray:
+    """Poses (n, 3) of a point at ``offset`` in the robot frame, from axle poses (n, 3),
+    written out by hand: ``x + cos(th) d_x - sin(th) d_y``, ``y + sin(th) d_x + cos(th) d_y``,
+    the heading unchanged."""
+    x, y, th = poses[:, 0], poses[:, 1], poses[:, 2]
+    dx, dy = offset
+    return np.column_stack(
+        [x + np.cos(th) * dx - np.sin(th) * dy, y + np.sin(th) * dx + np.cos(th) * dy, th]
+    )
+
+
+def _axle_and_marker_runs(robot: VirtualRobot, seed: int = 0):
+    """One simulated session (2 cw + 2 ccw runs around 1 m squares) cut into runs twice:
+    with the axle centre's ground truth and with the marker's."""
+    t, counts, poses, _ = simulated_session(robot, ["cw", "cw", "ccw", "ccw"], side=1.0, seed=seed)
+    out = []
+    for truth in (poses, _marker_poses(poses, MARKER)):
+        recording = Recording(
+            name="session.csv",
+            wheels=WheelSeries(t, counts * ODO.radians_per_pulse),
+            truth=PoseSeries(t, truth),
+            params=ODO,
+        )
+        out.append(runs_from_recordings([recording], ODO).runs)
+    return out
+
+
+@pytest.fixture(scope="module")
+def marker_session():
+    return _axle_and_marker_runs(ROBOT)[1]
+
+
+@pytest.mark.parametrize(("start_pose", "rel"), [("fitted", 1e-6), ("truth", 1e-5)])
+def test_fit_finds_the_tracked_point(marker_session, start_pose, rel):
+    logs = [r.log for r in marker_session]
+    fit = fit_trajectories(logs, ODO, start_pose=start_pose, fit_truth_offset=True)
+    assert fit.parameters == ("r_left", "r_right", "wheelbase", "time_offset",
+                              "truth_offset_x", "truth_offset_y")  # fmt: skip
+    assert fit.truth_offset_fitted
+    assert fit.truth_offset_x == pytest.approx(MARKER[0], abs=1e-3)
+    assert fit.truth_offset_y == pytest.approx(MARKER[1], abs=1e-3)
+    assert fit.standard_errors["truth_offset_x"] > 0
+    assert fit.standard_errors["truth_offset_y"] > 0
+    # The wheels come out as from the axle centre's truth (test_fit_recovers_the_simulated_robot).
+    assert fit.r_left == pytest.approx(ROBOT.diameter_left / 2, rel=rel)
+    assert fit.r_right == pytest.approx(ROBOT.diameter_right / 2, rel=rel)
+    assert fit.wheelbase == pytest.approx(ROBOT.wheelbase, rel=rel)
+    estimate, _ = trajectory_estimate(logs, ODO, 1.0, start_pose=start_pose, fit_truth_offset=True)
+    assert estimate.E_d == pytest.approx(1.002, abs=10 * rel)
+    assert estimate.E_b == pytest.approx(1.01, abs=10 * rel)
+    for key, true in zip(("truth_offset_x", "truth_offset_y"), MARKER, strict=True):
+        assert estimate.components[key] == pytest.approx(true, abs=1e-3)
+        assert estimate.standard_errors[key] == fit.standard_errors[key]
+
+
+def test_truth_offset_at_its_bound_is_refused(marker_session):
+    # The marker sits 250 mm ahead: a bound of 100 mm cannot hold it.
+    with pytest.raises(
+        ValueError, match=r"truth offset \(100, -?\d+\) mm reaches its bound of 0.1 m"
+    ):
+        fit_trajectories([r.log for r in marker_session], ODO, fit_truth_offset=True,
+                         max_truth_offset=0.1)  # fmt: skip
+
+
+def test_offset_left_alone_is_not_fitted(session):
+    fit = fit_trajectories([r.log for r in session], ODO)
+    assert not fit.truth_offset_fitted
+    assert (fit.truth_offset_x, fit.truth_offset_y) == (0.0, 0.0)
+    assert fit.standard_errors["truth_offset_x"] == fit.standard_errors["truth_offset_y"] == 0.0
+    estimate, _ = trajectory_estimate([r.log for r in session], ODO)
+    assert "truth_offset_x" not in estimate.components
+
+
+def test_offset_on_noisy_runs_is_honest():
+    """With slip: axle truth gives an offset of zero within its standard error and the
+    errors of the plain fit; the marker's truth gives the marker's offset and the same
+    errors. Four runs: the 95 % interval is +- t_3 = 3.18 standard errors."""
+    noisy = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01, noise=NoiseModel(slip=0.0004))
+    axle, marker = _axle_and_marker_runs(noisy, seed=2)
+    limit = t_quantile(0.975, 3)
+    plain, _ = trajectory_estimate([r.log for r in axle], ODO, 1.0)
+    true = {"E_d": noisy.diameter_right / noisy.diameter_left, "E_b": 1.01}
+    for runs, offset in ((axle, (0.0, 0.0)), (marker, MARKER)):
+        estimate, fit = trajectory_estimate([r.log for r in runs], ODO, 1.0, fit_truth_offset=True)
+        assert estimate.dof == 3
+        for key, expected in zip(("truth_offset_x", "truth_offset_y"), offset, strict=True):
+            se = fit.standard_errors[key]
+            assert 0 < se < 1e-3
+            assert abs(estimate.components[key] - expected) < min(limit * se, 1e-3)
+        for key in ("E_d", "E_b"):
+            se = estimate.standard_errors[key]
+            assert abs(getattr(estimate, key) - true[key]) < limit * se
+            # Fitting the offset moves the wheel errors little: over 30 seeds the median
+            # shift from the plain fit is 0.06 standard errors for E_d, the largest 1.4.
+            assert abs(getattr(estimate, key) - getattr(plain, key)) < 0.5 * se
+
+
+def _arc_run(turn_deg: float, radius: float = 2.0, samples: int = 50) -> RunLog:
+    """One run along a circular arc of ``radius`` [m] turning left by ``turn_deg``: wheel
+    angles of the nominal wheels (``ODO``) and the axle centre's true poses, by hand."""
+    s = np.linspace(0.0, radius * math.radians(turn_deg), samples)  # arc length [m]
+    half = ODO.wheelbase / (2 * radius)
+    angles = np.column_stack([s * (1 - half), s * (1 + half)]) / (ODO.wheel_diameter / 2)
+    truth = np.column_stack([radius * np.sin(s / radius), radius * (1 - np.cos(s / radius)),
+                             s / radius])  # fmt: skip
+    return RunLog(np.arange(float(samples)), angles, truth)
+
+
+def test_truth_offset_needs_turns():
+    t = np.arange(50.0)
+    line = RunLog(t, np.column_stack([t, t]), np.column_stack([0.075 * t, 0 * t, 0 * t]))
+    arc = _arc_run(20.0)
+    for runs in ([line, line], [arc, arc], [line, arc]):
+        with pytest.raises(ValueError, match="does not pin down the truth offset: no run turns"):
+            fit_trajectories(runs, ODO, fit_truth_offset=True)
+    with pytest.raises(ValueError, match="does not pin down the truth offset"):
+        trajectory_estimate([arc, arc], ODO, fit_truth_offset=True)
+
+
+def test_calibrate_fits_the_truth_offset_of_run_logs(tmp_path):
+    """The whole path: run logs written by the simulator, their ground truth moved to the
+    marker by hand, calibrated and summarized; other methods refuse the flag (exit 2)."""
+    logs = tmp_path / "logs"
+    sim = umbmark.simulate(E_d=1.002, E_b=1.01, runs=2, side_length=1.0, seed=2, logs=logs)
+    robot = sim.robot
+    for path in sorted(logs.glob("run-*.csv")):
+        lines = path.read_text(encoding="utf-8").splitlines()
+        head = [line for line in lines if line.startswith("#") or line.startswith("time")]
+        table = np.loadtxt(path, delimiter=",", comments="#", skiprows=len(head))
+        assert head[-1] == "time,x,y,theta,left,right"
+        table[:, 1:4] = _marker_poses(table[:, 1:4], MARKER)
+        rows = [",".join(repr(float(v)) for v in row) for row in table]
+        path.write_text("\n".join([*head, *rows]) + "\n", encoding="utf-8")
+    report = umbmark.calibrate(logs, method="trajectory", fit_truth_offset=True)
+    data = report.to_dict()  # what --json prints
+    comp, se = data["components"], data["standard_errors"]
+    for key, true in zip(("truth_offset_x", "truth_offset_y"), MARKER, strict=True):
+        assert comp[key] == pytest.approx(true, abs=1e-3)
+        assert 0 < se[key] < 1e-3
+    limit = t_quantile(0.975, 3)
+    assert abs(data["E_d"] - robot.diameter_right / robot.diameter_left) < limit * se["E_d"]
+    assert abs(data["E_b"] - 1.01) < limit * se["E_b"]
+    # The printed summary (what the command prints without --json), in millimetres.
+    shown = io.StringIO()
+    render_calibration(report, Console(file=shown, width=120))
+    for key, label in (("truth_offset_x", "forward"), ("truth_offset_y", "left")):
+        found = re.search(rf"tracked point {label} \[mm\] +(-?[\d.]+) ± ([\d.]+)", shown.getvalue())
+        assert found, shown.getvalue()
+        assert found.group(1) == f"{1000 * comp[key]:.1f}"
+        assert found.group(2) == f"{1000 * se[key]:.1f}"
+    line = cli_error("calibrate", str(logs), "--method", "exact", "--fit-truth-offset")
+    assert "--fit-truth-offset needs --method trajectory or trajectory-scrub" in line

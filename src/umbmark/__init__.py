@@ -32,6 +32,7 @@ _EXPORTS = {
     # jobs: one function per command, and their reports
     "calibrate": "umbmark.jobs.calibrate",
     "replay": "umbmark.jobs.replay",
+    "info": "umbmark.jobs.info",
     "validate": "umbmark.jobs.validate",
     "study": "umbmark.jobs.study",
     "StudyReport": "umbmark.jobs.study",
@@ -43,6 +44,7 @@ _EXPORTS = {
     "example": "umbmark.jobs.example",
     "CalibrationReport": "umbmark.jobs.calibrate",
     "ReplayReport": "umbmark.jobs.replay",
+    "InfoReport": "umbmark.jobs.info",
     "SimulationReport": "umbmark.jobs.simulate",
     "DemoReport": "umbmark.jobs.demo",
     "SourceOptions": "umbmark.jobs.inputs",
@@ -72,6 +74,7 @@ __all__ = [
     "Direction",
     "EndPose",
     "ErrorEstimate",
+    "InfoReport",
     "InputError",
     "ReplayReport",
     "Run",
@@ -86,6 +89,7 @@ __all__ = [
     "demo",
     "estimate_errors",
     "example",
+    "info",
     "integrate_odometry",
     "read_runs_table",
     "replay",
@@ -106,6 +110,7 @@ if TYPE_CHECKING:
     from .jobs.calibrate import CalibrationReport, calibrate
     from .jobs.demo import DemoReport, demo
     from .jobs.example import example
+    from .jobs.info import InfoReport, info
     from .jobs.inputs import SourceOptions
     from .jobs.replay import ReplayReport, replay
     from .jobs.reproduce import reproduce_fig4, reproduce_table1

@@ -14,6 +14,11 @@ Type A error ``alpha`` (per 90 degree turn)
     ``alpha > 0``: the robot turns *less* than commanded, so ``E_b > 1``.
 Type B error ``beta`` (per leg)
     ``beta > 0``: every straight leg curves to the *left*, so ``D_R > D_L`` and ``E_d > 1``.
+Tracked point
+    Ground truth is the pose of the axle centre. A tracked point (a motion-capture
+    marker, a GNSS antenna) at ``offset = (d_x, d_y)`` in the robot frame is moved to the
+    axle centre by :func:`axle_poses`; left where it is, it adds ``(R(dtheta) - I) d`` to
+    each return error, ``dtheta`` the run's true heading change.
 Units
     SI inside and in every file umbmark writes: metres, radians, seconds. Input files may
     say otherwise through a flag (``--unit mm``, ``--angle-unit deg``).
@@ -33,6 +38,7 @@ __all__ = [
     "LENGTH_UNITS",
     "Direction",
     "angle_to_rad",
+    "axle_poses",
     "length_to_m",
     "wrap_angle",
 ]
@@ -115,3 +121,28 @@ def angle_to_rad(value: _T, unit: str) -> _T:
 def wrap_angle(angle: _T) -> _T:
     """Wrap an angle [rad] (or an array of them) into ``[-pi, pi)``."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def axle_poses(tracked: NDArray[np.float64], offset: tuple[float, float]) -> NDArray[np.float64]:
+    """Poses of the axle centre from poses of a point fixed on the robot.
+
+    Parameters
+    ----------
+    tracked : array, shape (n, 3)
+        ``x, y`` [m] and heading [rad] of the tracked point (its heading is the robot's).
+    offset : (float, float)
+        Where the point sits in the robot frame [m]: ``d_x`` forward of the axle centre,
+        ``d_y`` to its left.
+
+    Returns
+    -------
+    array, shape (n, 3)
+        ``x - cos(theta) d_x + sin(theta) d_y``, ``y - sin(theta) d_x - cos(theta) d_y``,
+        ``theta``.
+    """
+    poses = np.array(tracked, dtype=np.float64)
+    dx, dy = offset
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    poses[:, 0] -= c * dx - s * dy
+    poses[:, 1] -= s * dx + c * dy
+    return poses

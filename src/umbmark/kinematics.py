@@ -52,6 +52,7 @@ __all__ = [
     "pose_increments",
     "turning_share",
     "wheel_displacements",
+    "wheel_travel_from_poses",
 ]
 
 IntegrationMethod = Literal["arc", "segment", "midpoint"]
@@ -350,3 +351,48 @@ def integrate_odometry(
     poses[..., 1:, 1] = start[..., 1:2] + np.cumsum(chord * np.sin(heading), axis=-1)
     poses[..., 1:, 2] = theta_after
     return poses
+
+
+def wheel_travel_from_poses(
+    poses: ArrayLike, wheelbase: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The wheel travel between consecutive odometry poses: the inverse of the arc step.
+
+    A differential-drive odometry (umbmark's ``"arc"`` method, and ros2_controllers' and
+    ROS 1's ``diff_drive_controller``, whose exact integration moves along the same arc)
+    advances between two poses along one circular arc: the heading changes by
+    ``dtheta = (dU_R - dU_L) / b`` and the axle centre moves by the chord
+    ``ds sinc(dtheta/2)`` along the mid-interval heading, ``ds = (dU_R + dU_L) / 2``. So,
+    given the poses, ``dtheta`` is their heading change, ``ds`` the displacement's
+    component along the mid-interval heading over ``sinc(dtheta/2)``, and
+    ``dU_{R/L} = ds +- dtheta b / 2``. The displacement's component across that heading
+    is what no single arc explains (several controller steps with different curvatures
+    between two messages): it is returned, to judge whether the poses are dense enough.
+
+    Parameters
+    ----------
+    poses : array, shape (n, 3)
+        ``x, y`` [m] and heading [rad], unwrapped.
+    wheelbase : float
+        ``b`` [m] the odometry used.
+
+    Returns
+    -------
+    d_left, d_right : array, shape (n - 1,)
+        Wheel travel per interval [m].
+    lateral : array, shape (n - 1,)
+        The displacement across the mid-interval heading [m] (0 for exact arcs).
+    """
+    check_positive("wheelbase", wheelbase, unit="m")
+    p = np.asarray(poses, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 3:
+        raise ValueError(f"poses must have shape (n, 3), got {p.shape}")
+    dx, dy = np.diff(p[:, 0]), np.diff(p[:, 1])
+    dtheta = np.diff(p[:, 2])
+    mid = p[:-1, 2] + 0.5 * dtheta
+    c, s = np.cos(mid), np.sin(mid)
+    along = c * dx + s * dy
+    lateral = -s * dx + c * dy
+    ds = along / _sinc(0.5 * dtheta)
+    half = 0.5 * dtheta * wheelbase
+    return ds - half, ds + half, lateral

@@ -123,12 +123,18 @@ class RunLog:
         NaN rows where no ground truth matched the wheel sample.
     source : str
         Where it came from.
+    start : float
+        The absolute time [s] of the run's first sample on the recording's own clock
+        (a bag's header or receive times, a run log's CSV time): ``start + time`` are the
+        recording's timestamps, for matching with other trajectories of the same
+        recording (TUM exports). 0.0 when the source has no clock of its own.
     """
 
     time: FloatArray
     wheel_angles: FloatArray
     truth: FloatArray
     source: str = ""
+    start: float = 0.0
 
     @property
     def matched(self) -> NDArray[np.bool_]:

@@ -58,6 +58,14 @@ __all__ = ["calibrate"]
             "turn-dependent wheelbase; exports the single-wheelbase set). auto: the one that "
             "predicts held-out recorded runs best (umbmark validate).",
         ),
+        option(
+            "--fit-truth-offset",
+            section=TEST,
+            is_flag=True,
+            help="With --method trajectory or trajectory-scrub: fit where the ground truth's "
+            "tracked point (a motion-capture marker) sits in the robot frame, instead of "
+            "taking it as the axle centre (see --truth-offset to give it).",
+        ),
     ]
 )
 @source_options(wheelbase=False)
@@ -90,6 +98,16 @@ __all__ = ["calibrate"]
             type=click.Path(),
             help="Logged runs: write TUM trajectories of every run (ground truth, nominal and "
             "calibrated odometry) into this folder, for evo.",
+        ),
+        option(
+            "--tum-time",
+            section=OUTPUTS,
+            type=click.Choice(["recording", "run"]),
+            default="recording",
+            show_default=True,
+            help="Timestamps of the TUM files: the recording's own clock (bag stamps, run-log "
+            "time; evo matches them with other trajectories of the same bag) or seconds from "
+            "each run's start.",
         ),
     ]
 )

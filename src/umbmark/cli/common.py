@@ -4,14 +4,24 @@ from __future__ import annotations
 
 import contextlib
 import sys
+import time
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from rich.console import Console
+    from rich.progress import Progress, TaskID
 
-__all__ = ["EXIT_BAD_INPUT", "console", "error_line", "progress_bar", "warn", "wrote"]
+__all__ = [
+    "EXIT_BAD_INPUT",
+    "console",
+    "error_line",
+    "progress_bar",
+    "reading_bar",
+    "warn",
+    "wrote",
+]
 
 #: Exit status for bad input (as for a usage error).
 EXIT_BAD_INPUT = 2
@@ -67,4 +77,111 @@ def progress_bar(description: str) -> Iterator[Callable[[float], None]]:
         transient=True,
     ) as bar:
         task = bar.add_task(description, total=1.0)
-        yield lambda fraction: bar.update(task, completed=fraction)
+        _LIVE.append(bar)  # a bag read meanwhile shows its bar in this display
+        try:
+            yield lambda fraction: bar.update(task, completed=fraction)
+        finally:
+            _LIVE.remove(bar)
+
+
+#: The progress displays of :func:`progress_bar` on screen, innermost last.
+_LIVE: list[Progress] = []
+#: Reading a bag of at least this many messages shows a bar at once ...
+BAR_MESSAGES = 200_000
+#: ... reading a smaller one, once it has taken this long [s].
+BAR_AFTER = 1.0
+
+
+class _ReadingBar:
+    """The callback of :func:`reading_bar`: ``(messages read, messages to read)``.
+
+    A bar appears when a read is long (:data:`BAR_MESSAGES`, :data:`BAR_AFTER`) and
+    stderr is a terminal, and goes when the read is done. Inside a :func:`progress_bar`
+    (``validate``) it is one more line of that display.
+    """
+
+    def __init__(self, console: Console | None = None) -> None:
+        self.start = time.monotonic()
+        self.console = console  # stderr's, made when first needed
+        self.bar: Progress | None = None
+        self.task: TaskID | None = None
+        self.own = False
+
+    def __call__(self, read: int, total: int) -> None:
+        if read == 0:  # a read begins
+            self.start = time.monotonic()
+        if self.task is None:
+            if read >= total:
+                return
+            if total < BAR_MESSAGES and time.monotonic() - self.start < BAR_AFTER:
+                return
+            if not self._show(read, total):
+                return
+        assert self.bar is not None
+        assert self.task is not None
+        self.bar.update(self.task, completed=read, total=total)
+        if read >= total:
+            self.close()
+
+    def _show(self, read: int, total: int) -> bool:
+        from rich.console import Console
+
+        if self.console is None:
+            self.console = Console(stderr=True)
+        if not self.console.is_terminal:
+            return False
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        if _LIVE:
+            self.bar, self.own = _LIVE[-1], False
+            self.task = self.bar.add_task("reading bag", total=total, completed=read)
+        else:
+            self.bar = Progress(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TextColumn("messages"),
+                TimeElapsedColumn(),
+                TimeRemainingColumn(),
+                console=self.console,
+                transient=True,
+            )
+            self.own = True
+            self.task = self.bar.add_task("reading bag", total=total, completed=read)
+            self.bar.start()
+        return True
+
+    def close(self) -> None:
+        """Take the bar off the screen."""
+        if self.bar is not None and self.task is not None:
+            if self.own:
+                self.bar.stop()
+            else:
+                self.bar.remove_task(self.task)
+        self.bar, self.task = None, None
+
+
+@contextlib.contextmanager
+def reading_bar() -> Iterator[None]:
+    """Show the progress of the bags read inside the block, on stderr.
+
+    Only long reads get a bar, and only on a terminal: pipes, ``--json`` output and the
+    output captured by tests stay clean. The library reports the progress
+    (:func:`umbmark.sources.progress.reading_progress`); rich is imported only when a
+    bar is shown.
+    """
+    from ..sources.progress import reading_progress
+
+    callback = _ReadingBar()
+    try:
+        with reading_progress(callback):
+            yield
+    finally:
+        callback.close()

@@ -16,9 +16,10 @@ import click
 from .. import __version__
 from ..errors import InputError
 from .calibrate import calibrate
-from .common import EXIT_BAD_INPUT, error_line
+from .common import EXIT_BAD_INPUT, error_line, reading_bar
 from .demo import demo
 from .example import example
+from .info import info
 from .replay import replay
 from .reproduce import reproduce
 from .simulate import simulate
@@ -42,7 +43,7 @@ def cli() -> None:
     option says otherwise; every command has --help."""
 
 
-for command in (demo, calibrate, replay, validate, simulate, study, reproduce, example):
+for command in (demo, calibrate, replay, validate, info, simulate, study, reproduce, example):
     cli.add_command(command)
 
 
@@ -54,7 +55,8 @@ def _usage(exc: click.UsageError) -> str:
 def main(argv: Sequence[str] | None = None) -> None:
     """Entry point of the ``umbmark`` console script."""
     try:
-        code = cli.main(args=argv, prog_name="umbmark", standalone_mode=False)
+        with reading_bar():  # long bags show their progress on a terminal's stderr
+            code = cli.main(args=argv, prog_name="umbmark", standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as exc:
         click.echo(exc.ctx.get_help() if exc.ctx is not None else cli.get_help(click.Context(cli)))
         sys.exit(0)

@@ -193,21 +193,34 @@ def source_options(*, wheelbase: bool = True) -> Callable[[F], F]:
             section=BAGS,
             default="/joint_states",
             show_default=True,
-            help="sensor_msgs/JointState topic.",
+            help="sensor_msgs/JointState topic; with --left-field/--right-field, a topic of "
+            "any type.",
         ),
         option(
             "--left-joint",
             section=BAGS,
-            default="left_wheel_joint",
-            show_default=True,
-            help="Left wheel joint name.",
+            help="Left wheel joint, or several separated by commas (averaged, as ros2_control "
+            "does) [default: left_wheel_names of --current-params, else left_wheel_joint, "
+            "else the moving joints named left].",
         ),
         option(
             "--right-joint",
             section=BAGS,
-            default="right_wheel_joint",
-            show_default=True,
-            help="Right wheel joint name.",
+            help="Right wheel joint(s) [default: as for --left-joint].",
+        ),
+        option(
+            "--odom-topic",
+            section=BAGS,
+            help="No wheel data? The controller's odometry (nav_msgs/Odometry), turned back "
+            "into wheel rotation with the controller's geometry (--current-params, or "
+            "--wheelbase and --wheel-diameter).",
+        ),
+        option(
+            "--odom-tf",
+            section=BAGS,
+            nargs=2,
+            metavar="PARENT CHILD",
+            help="... or the controller's odometry as a /tf chain, e.g. odom base_link.",
         ),
         option(
             "--left-ticks-topic",
@@ -216,8 +229,31 @@ def source_options(*, wheelbase: bool = True) -> Callable[[F], F]:
             "JointState.",
         ),
         option("--right-ticks-topic", section=BAGS, help="Cumulative right encoder counts."),
+        option(
+            "--left-field",
+            section=BAGS,
+            metavar="PATH",
+            help="Wheel data in a message of any type on --wheel-topic: the field with the "
+            "left wheel's angle [rad], or its encoder counts with --ticks-per-rev, e.g. "
+            "left_ticks, wheels.left.position, positions[0].",
+        ),
+        option(
+            "--right-field",
+            section=BAGS,
+            metavar="PATH",
+            help="... and the right wheel's field.",
+        ),
+        option(
+            "--msg-dir",
+            section=BAGS,
+            type=click.Path(file_okay=False),
+            metavar="DIR",
+            help="The .msg files of --wheel-topic's type (<pkg>/msg/<Name>.msg, searched "
+            "recursively), for bags that do not carry its definition (ROS 2 sqlite3 bags "
+            "before Iron).",
+        ),
         _float(
-            "Encoder counts per wheel revolution (with the ticks topics).",
+            "Encoder counts per wheel revolution (with the ticks topics or fields).",
             "--ticks-per-rev",
             section=BAGS,
         ),
@@ -230,9 +266,20 @@ def source_options(*, wheelbase: bool = True) -> Callable[[F], F]:
         option(
             "--tf-parent",
             section=BAGS,
-            help="Ground truth from /tf instead: the parent frame (e.g. world).",
+            help="Ground truth from /tf and /tf_static instead: the parent frame (e.g. map); "
+            "any chain of transforms to the child is followed and interpolated in time.",
         ),
         option("--tf-child", section=BAGS, help="... and the child frame (e.g. base_link)."),
+        option(
+            "--truth-offset",
+            section=LOGS,
+            type=float,
+            nargs=2,
+            metavar="X Y",
+            help="The ground truth tracks a point X forward and Y left of the axle centre "
+            "[m] (a marker, an antenna): move it to the axle centre. Left in place, it adds "
+            "(R(dtheta) - I)(X, Y) to every return error.",
+        ),
         option(
             "--time-source",
             section=BAGS,

@@ -201,7 +201,8 @@ def render_calibration(
 
 
 def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:
-    """The trajectory fit's own figures: radii, wheelbase(s), time offset, residuals."""
+    """The trajectory fit's own figures: radii, wheelbase(s), time and truth offsets,
+    residuals."""
     for key, label, note in (
         ("r_left", "left wheel radius [mm]", "fitted"),
         ("r_right", "right wheel radius [mm]", "fitted"),
@@ -221,6 +222,17 @@ def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, 
             comp["time_offset"] * _MM, se.get("time_offset", math.nan) * _MM, ".1f"
         )
         _row(errors, "time offset [ms]", offset, "> 0: ground truth lags the wheels")
+    for key, label, note in (
+        ("truth_offset_x", "tracked point forward [mm]", "fitted: truth offset d_x"),
+        ("truth_offset_y", "tracked point left [mm]", "fitted: truth offset d_y"),
+    ):
+        if key in comp:
+            _row(
+                errors,
+                label,
+                _plus_minus(comp[key] * _MM, se.get(key, math.nan) * _MM, ".1f"),
+                note,
+            )
     where = "along the runs" if "samples" in comp else "at the runs' ends"
     counted = f"{comp['runs']:.0f} runs" + (
         f", {comp['samples']:.0f} samples" if "samples" in comp else ""

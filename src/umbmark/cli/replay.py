@@ -37,6 +37,16 @@ __all__ = ["replay"]
             help="Write TUM trajectories of every run (ground truth, nominal, calibrated).",
         ),
         option(
+            "--tum-time",
+            section=OUTPUTS,
+            type=click.Choice(["recording", "run"]),
+            default="recording",
+            show_default=True,
+            help="Timestamps of the TUM files: the recording's own clock (bag stamps, run-log "
+            "time; evo matches them with other trajectories of the same bag) or seconds from "
+            "each run's start.",
+        ),
+        option(
             "--plot",
             section=OUTPUTS,
             type=click.Path(),
@@ -48,7 +58,8 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
     """Replay recorded runs: integrate their wheel data again and compare with the truth.
 
     SOURCE: a run log, an OptiOdom session or a ROS bag. Each run's end-pose error
-    (odometry end against ground truth) is computed with the source's nominal parameters
+    (odometry end against ground truth) and whole-trajectory RMSE (odometry against ground
+    truth over every matched sample) are computed with the source's nominal parameters
     and, with --params, with a calibration result. Use it to check a calibration on runs
     that were not used to compute it: calibrate on one session, replay another (a circle,
     another day).
@@ -71,7 +82,7 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
     out = console()
     sets = report.parameter_sets
     grid = Table(
-        title=Text(f"Replay of {report.source}: odometry end against ground truth"),
+        title=Text(f"Replay of {report.source}: odometry against ground truth"),
         title_justify="left",
     )
     grid.add_column(Text("run"))
@@ -79,6 +90,7 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
     for name in sets:
         grid.add_column(Text(f"{name}\nend [mm]"), justify="right")
         grid.add_column(Text(f"{name}\nheading [deg]"), justify="right")
+        grid.add_column(Text(f"{name}\nRMSE [mm]"), justify="right")
     for i, run in enumerate(report.runs):
         cells = [run.label, run.direction.value]
         for name in sets:
@@ -86,11 +98,16 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
             cells += [
                 f"{1000 * report.end_errors[name][i]:.1f}",
                 "" if h is None else f"{math.degrees(h):+.2f}",
+                f"{1000 * report.rmse[name][i]:.1f}",
             ]
         grid.add_row(*(Text(c) for c in cells))
     cells = ["mean", ""]
     for name in sets:
-        cells += [f"{1000 * report.end_errors[name].mean():.1f}", ""]
+        cells += [
+            f"{1000 * report.end_errors[name].mean():.1f}",
+            "",
+            f"{1000 * report.rmse[name].mean():.1f}",
+        ]
     grid.add_row(*(Text(c, style="bold") for c in cells))
     out.print(grid)
     for name, p in sets.items():

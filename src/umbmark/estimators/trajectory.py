@@ -54,6 +54,16 @@ max_time_offset`` (``delta = max_time_offset * tanh(u)``). A path of constant cu
 at constant speed cannot tell a time shift from a rotation, so ``delta`` is pinned by
 starts, stops and changes of curvature; its standard error says how well.
 
+**Tracked point** (``fit_truth_offset``). The ground truth may track a point (a
+motion-capture marker) at ``d = (d_x, d_y)`` [m] in the robot frame (forward, left) rather
+than the axle centre (``docs/conventions.md``, "Tracked point"). ``d``, shared by all runs,
+is then fitted as well: every odometry pose ``(x, y, theta)`` is moved to the point it
+predicts, ``(x, y) + R(theta) d`` with the heading unchanged, before it is compared.
+``|d_x|, |d_y| < max_truth_offset`` (``d = max_truth_offset * tanh(v)``). A run that does
+not turn moves ``R(theta) d`` by nothing its start pose cannot absorb, so ``d`` is pinned
+only by turning within runs: the fit refuses runs none of which turns by
+:data:`MIN_OFFSET_TURN` or more.
+
 **Standard errors.** Errors accumulate along a run, so the residuals of one run are
 strongly autocorrelated and the textbook ``sigma^2 (J^T J)^-1`` is far too small (tens of
 times, see ``tests/test_trajectory.py``). Runs are independent of each other, so the
@@ -70,9 +80,10 @@ but, in simulations, still honest intervals).
 Assumptions: the effective radii and wheelbase(s) are constant over the runs (wear,
 load and floor do not change them; random slip is allowed and is what the standard
 errors see); the ground truth measures the position of the point midway between the
-wheels' contact points and a heading along the robot's forward axis (a marker off that
-point biases ``b``; a constant yaw between marker body and robot is absorbed by the
-fitted start pose, not by ``start_pose="truth"``); the ground truth's noise is small
+wheels' contact points, or of a point fixed on the robot with ``fit_truth_offset``, and a
+heading along the robot's forward axis (a marker off that point, not fitted, biases
+``b``; a constant yaw between marker body and robot is absorbed by the fitted start
+pose, not by ``start_pose="truth"``); the ground truth's noise is small
 against the odometry's accumulated error; one time offset serves all runs.
 """
 
@@ -93,6 +104,8 @@ from .base import ErrorEstimate
 
 __all__ = [
     "DEFAULT_MAX_TIME_OFFSET",
+    "DEFAULT_MAX_TRUTH_OFFSET",
+    "MIN_OFFSET_TURN",
     "MODELS",
     "START_POSES",
     "StartPose",
@@ -112,6 +125,11 @@ StartPose = Literal["fitted", "truth"]
 START_POSES: tuple[StartPose, ...] = ("fitted", "truth")
 #: Bound of the fitted time offset between wheels and ground truth [s].
 DEFAULT_MAX_TIME_OFFSET = 0.5
+#: Bound of each component of the fitted tracked-point offset [m].
+DEFAULT_MAX_TRUTH_OFFSET = 2.0
+#: Least heading change [rad] within some run (the ground truth's range of headings) that
+#: a fitted tracked-point offset needs: 30 degrees.
+MIN_OFFSET_TURN = math.radians(30.0)
 #: Fewest matched ground-truth samples a run needs to take part.
 MIN_SAMPLES = 5
 #: A single run is cut into this many pieces to stand in for independent runs.
@@ -143,11 +161,13 @@ class TrajectoryFit:
         (> 0: the ground truth lags); 0 when not fitted.
     standard_errors : mapping of str to float
         One-sigma uncertainty, scaled to Student's t (module documentation), of
-        ``r_left``, ``r_right``, ``wheelbase`` [m], ``spot_wheelbase`` [m] (scrub model)
-        and ``time_offset`` [s] (0 when not fitted).
+        ``r_left``, ``r_right``, ``wheelbase`` [m], ``spot_wheelbase`` [m] (scrub model),
+        ``time_offset`` [s] and ``truth_offset_x``, ``truth_offset_y`` [m] (0 when not
+        fitted).
     parameters : tuple of str
         The fitted parameters, in the order of ``covariance``: ``r_left``, ``r_right``,
-        ``wheelbase``, then ``spot_wheelbase`` and ``time_offset`` when fitted.
+        ``wheelbase``, then ``spot_wheelbase``, ``time_offset`` and ``truth_offset_x``,
+        ``truth_offset_y`` when fitted.
     covariance : array, shape (k, k)
         Their covariance [m^2, m s, s^2], scaled like the standard errors.
     start_pose : {"fitted", "truth"}
@@ -167,6 +187,11 @@ class TrajectoryFit:
     clusters : int
         Independent groups behind the standard errors: the runs, or the two halves of a
         single run.
+    truth_offset_x, truth_offset_y : float
+        ``d_x``, ``d_y`` [m]: where the tracked point sits in the robot frame, forward of
+        and to the left of the axle centre; 0 when not fitted.
+    truth_offset_fitted : bool
+        Whether the tracked-point offset was fitted.
     """
 
     model: TrajectoryModel
@@ -187,6 +212,9 @@ class TrajectoryFit:
     position_scale: float = 0.0
     heading_scale: float = 0.0
     clusters: int = 0
+    truth_offset_x: float = 0.0
+    truth_offset_y: float = 0.0
+    truth_offset_fitted: bool = False
 
     def params(self, base: WheelParams) -> WheelParams:
         """The fitted model as odometry parameters, for replays.
@@ -427,9 +455,10 @@ def _align(
 class _Problem:
     """The solver's parameter vector ``x`` and what it means.
 
-    ``x = (r_L / r0, r_R / r0, b / b0[, b_spot / b0][, u])``, each near 1 (``u`` near 0):
-    ``r0 = D_n / 2`` and ``b0`` scale the starting values, and the time offset is
-    ``delta = max_offset * tanh(u)`` (smooth and bounded).
+    ``x = (r_L / r0, r_R / r0, b / b0[, b_spot / b0][, u][, v_x, v_y])``, each near 1
+    (``u``, ``v`` near 0): ``r0 = D_n / 2`` and ``b0`` scale the starting values, the time
+    offset is ``delta = max_offset * tanh(u)`` and the tracked point's offset ``d =
+    max_truth_offset * tanh(v)`` (smooth and bounded).
     """
 
     data: _Data
@@ -439,24 +468,35 @@ class _Problem:
     scale: FloatArray  # (3,) or (4,): physical radius / wheelbase = x * scale
     max_offset: float
     names: tuple[str, ...]
+    fit_truth_offset: bool = False
+    max_truth_offset: float = DEFAULT_MAX_TRUTH_OFFSET
 
     def physical(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """The named parameters [m, m, m(, m)(, s)] and their derivatives by ``x``."""
+        """The named parameters [m, m, m(, m)(, s)(, m, m)] and their derivatives by ``x``."""
         k = self.scale.size
         values = list(x[:k] * self.scale)
         slopes = list(self.scale)
-        if self.fit_offset:
-            t = math.tanh(float(x[k]))
-            values.append(self.max_offset * t)
-            slopes.append(self.max_offset * (1.0 - t * t))
+        bounded = [self.max_offset] if self.fit_offset else []
+        bounded += [self.max_truth_offset] * (2 if self.fit_truth_offset else 0)
+        for j, bound in enumerate(bounded):
+            t = math.tanh(float(x[k + j]))
+            values.append(bound * t)
+            slopes.append(bound * (1.0 - t * t))
         return np.array(values), np.array(slopes)
 
     def unpack(self, x: FloatArray) -> tuple[float, float, float, float | None, float]:
         """``(r_left, r_right, wheelbase, spot_wheelbase or None, time_offset)``."""
         p, _ = self.physical(x)
         b_spot = float(p[3]) if self.model == "scrub" else None
-        delta = float(p[-1]) if self.fit_offset else 0.0
+        delta = float(p[self.scale.size]) if self.fit_offset else 0.0
         return float(p[0]), float(p[1]), float(p[2]), b_spot, delta
+
+    def truth_offset(self, x: FloatArray) -> tuple[float, float]:
+        """``(d_x, d_y)`` [m], the tracked point in the robot frame; (0, 0) if not fitted."""
+        if not self.fit_truth_offset:
+            return 0.0, 0.0
+        p, _ = self.physical(x)
+        return float(p[-2]), float(p[-1])
 
     def errors(self, x: FloatArray, sigma: tuple[float, float]) -> FloatArray:
         """Residuals, true minus odometry, shape (s, 3) [m, m, rad].
@@ -466,6 +506,12 @@ class _Problem:
         r_left, r_right, b, b_spot, delta = self.unpack(x)
         d = self.data
         poses = _odometry(r_left, r_right, b, b_spot, d)
+        if self.fit_truth_offset:
+            # The tracked point the odometry predicts: the pose composed with (d, 0).
+            dx, dy = self.truth_offset(x)
+            c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+            poses[:, 0] += c * dx - s * dy
+            poses[:, 1] += s * dx + c * dy
         truth = _truth_at(d, d.sample_time + delta, d.sample_run)
         if self.start_pose == "truth":
             at_anchor = _truth_at(d, d.anchor_time + delta, np.arange(d.runs))
@@ -605,6 +651,39 @@ def _check_physical(values: dict[str, float | None], errors: dict[str, float]) -
             )
 
 
+def _check_turning(data: _Data) -> None:
+    """Refuse, before fitting, a tracked-point offset that no run turns enough to pin.
+
+    Parameters
+    ----------
+    data : _Data
+        The runs' matched ground truth, headings [rad] unwrapped.
+
+    Raises
+    ------
+    ValueError
+        If no run's ground-truth headings span :data:`MIN_OFFSET_TURN` or more.
+    """
+    swing = max(float(np.ptp(data.truth[first : last + 1, 2])) for first, last in data.truth_ends)
+    if not swing >= MIN_OFFSET_TURN:
+        raise ValueError(
+            "the recorded motion does not pin down the truth offset: no run turns by "
+            f"{math.degrees(MIN_OFFSET_TURN):.0f} deg or more (the most is "
+            f"{math.degrees(swing):.1f} deg), and a tracked point off the axle shows only "
+            "as the robot turns; give the offset (--truth-offset X Y) or record turns"
+        )
+
+
+def _check_truth_offset_inside(d: tuple[float, float], bound: float) -> None:
+    """Refuse a fitted tracked-point offset ``d`` [m] stuck at its bound [m]."""
+    if max(abs(d[0]), abs(d[1])) > 0.99 * bound:
+        raise ValueError(
+            f"the fitted truth offset ({1000 * d[0]:.0f}, {1000 * d[1]:.0f}) mm reaches its "
+            f"bound of {bound:g} m: the ground truth does not follow a point fixed on the "
+            "robot, or the runs do not match the wheel data"
+        )
+
+
 def fit_trajectories(
     logs: Sequence[RunLog],
     start: WheelParams,
@@ -613,6 +692,8 @@ def fit_trajectories(
     fit_time_offset: bool = True,
     start_pose: StartPose = "fitted",
     max_time_offset: float = DEFAULT_MAX_TIME_OFFSET,
+    fit_truth_offset: bool = False,
+    max_truth_offset: float = DEFAULT_MAX_TRUTH_OFFSET,
 ) -> TrajectoryFit:
     """Fit the wheel radii and wheelbase(s) to recorded runs (module documentation).
 
@@ -634,6 +715,12 @@ def fit_trajectories(
         matched sample.
     max_time_offset : float
         Bound of ``|time_offset|`` [s].
+    fit_truth_offset : bool
+        Fit where the tracked point of the ground truth sits in the robot frame,
+        ``(truth_offset_x, truth_offset_y)`` [m] (module documentation); False: the ground
+        truth is the axle centre's.
+    max_truth_offset : float
+        Bound of ``|truth_offset_x|`` and ``|truth_offset_y|`` [m].
 
     Returns
     -------
@@ -642,7 +729,9 @@ def fit_trajectories(
     Raises
     ------
     ValueError
-        If the runs have too little recorded motion to pin the parameters down.
+        If the runs have too little recorded motion to pin the parameters down (for the
+        truth offset: no run turns by :data:`MIN_OFFSET_TURN`), or the fitted truth
+        offset reaches its bound.
     """
     if model not in MODELS:
         raise ValueError(f"unknown trajectory model {model!r}; use diff or scrub")
@@ -650,9 +739,13 @@ def fit_trajectories(
         raise ValueError(f"unknown start pose {start_pose!r}; use fitted or truth")
     if not (0.0 < max_time_offset < math.inf):
         raise ValueError(f"max time offset must be > 0 s, got {max_time_offset!r}")
+    if not (0.0 < max_truth_offset < math.inf):
+        raise ValueError(f"max truth offset must be > 0 m, got {max_truth_offset!r}")
     if model == "scrub":
         _check_both_motions(logs)
     data = _prepare(logs)
+    if fit_truth_offset:
+        _check_turning(data)
     r0 = 0.5 * start.wheel_diameter
     b0 = start.wheelbase
     names = ["r_left", "r_right", "wheelbase"]
@@ -665,8 +758,19 @@ def fit_trajectories(
     if fit_time_offset:
         names.append("time_offset")
         x0.append(0.0)
+    if fit_truth_offset:
+        names += ["truth_offset_x", "truth_offset_y"]
+        x0 += [0.0, 0.0]
     problem = _Problem(
-        data, model, start_pose, fit_time_offset, np.array(scale), max_time_offset, tuple(names)
+        data,
+        model,
+        start_pose,
+        fit_time_offset,
+        np.array(scale),
+        max_time_offset,
+        tuple(names),
+        fit_truth_offset,
+        max_truth_offset,
     )
     # First pass: a heading error weighs like a position error of dtheta * b.
     rough = (1.0, 1.0 / b0)
@@ -677,6 +781,9 @@ def fit_trajectories(
         max(float(np.sqrt(np.mean(err[:, 2] ** 2))), 1e-12),
     )
     fit = _solve(problem, first.x, sigma)
+    truth_offset = problem.truth_offset(fit.x)
+    if fit_truth_offset:  # before the check of the Jacobian, which a bound flattens
+        _check_truth_offset_inside(truth_offset, max_truth_offset)
     _check_pinned(fit.jac, names)
     cluster, clusters = _clusters(data)
     cov_x = _cluster_covariance(fit.jac, fit.residuals, np.repeat(cluster, 3), clusters)
@@ -684,7 +791,8 @@ def fit_trajectories(
     cov = cov_x * np.outer(slopes, slopes)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     standard_errors = {name: float(v) for name, v in zip(names, se, strict=True)}
-    standard_errors.setdefault("time_offset", 0.0)
+    for name in ("time_offset", "truth_offset_x", "truth_offset_y"):
+        standard_errors.setdefault(name, 0.0)
     r_left, r_right, b, b_spot, delta = problem.unpack(fit.x)
     _check_physical(
         {"r_left": r_left, "r_right": r_right, "wheelbase": b, "spot_wheelbase": b_spot},
@@ -710,6 +818,9 @@ def fit_trajectories(
         position_scale=sigma[0],
         heading_scale=sigma[1],
         clusters=clusters,
+        truth_offset_x=truth_offset[0],
+        truth_offset_y=truth_offset[1],
+        truth_offset_fitted=fit_truth_offset,
     )
 
 
@@ -738,6 +849,7 @@ def trajectory_estimate(
     model: TrajectoryModel = "diff",
     fit_time_offset: bool = True,
     start_pose: StartPose = "fitted",
+    fit_truth_offset: bool = False,
 ) -> tuple[ErrorEstimate, TrajectoryFit]:
     """The trajectory fit as errors relative to the ``active`` odometry parameters.
 
@@ -767,16 +879,21 @@ def trajectory_estimate(
         Fit a time offset between wheels and ground truth.
     start_pose : {"fitted", "truth"}
         See :func:`fit_trajectories`.
+    fit_truth_offset : bool
+        Fit where the ground truth's tracked point sits in the robot frame (both fits of
+        ``"scrub"``); see :func:`fit_trajectories`.
 
     Returns
     -------
     estimate : ErrorEstimate
         Components: ``r_left``, ``r_right``, ``wheelbase`` [m] (the single set),
         ``time_offset`` [s], ``rms_position`` [m], ``rms_heading`` [rad], ``runs``,
-        ``samples``; for ``"scrub"`` also ``arc_wheelbase``, ``spot_wheelbase`` [m],
-        ``scrub_r_left``, ``scrub_r_right`` [m], ``scrub_rms_position`` [m] and
-        ``scrub_rms_heading`` [rad]. Standard errors of ``E_d``, ``E_b``, ``E_s``,
-        ``alpha``, ``beta``, ``r_left``, ``r_right``, ``wheelbase``, ``time_offset`` (and
+        ``samples``; with ``fit_truth_offset`` also ``truth_offset_x``,
+        ``truth_offset_y`` [m] (of the single set's fit); for ``"scrub"`` also
+        ``arc_wheelbase``, ``spot_wheelbase`` [m], ``scrub_r_left``, ``scrub_r_right``
+        [m], ``scrub_rms_position`` [m] and ``scrub_rms_heading`` [rad]. Standard errors
+        of ``E_d``, ``E_b``, ``E_s``, ``alpha``, ``beta``, ``r_left``, ``r_right``,
+        ``wheelbase``, ``time_offset`` (and ``truth_offset_x``, ``truth_offset_y``,
         ``arc_wheelbase``, ``spot_wheelbase``).
     fit : TrajectoryFit
         The fit of ``model``: :meth:`TrajectoryFit.params` replays it.
@@ -788,7 +905,11 @@ def trajectory_estimate(
     """
     if model not in MODELS:
         raise ValueError(f"unknown trajectory model {model!r}; use diff or scrub")
-    options: dict[str, Any] = {"fit_time_offset": fit_time_offset, "start_pose": start_pose}
+    options: dict[str, Any] = {
+        "fit_time_offset": fit_time_offset,
+        "start_pose": start_pose,
+        "fit_truth_offset": fit_truth_offset,
+    }
     single = fit_trajectories(logs, active, model="diff", **options)
     side = side_length or 1.0
     v0 = np.array([single.r_left, single.r_right, single.wheelbase])
@@ -817,6 +938,12 @@ def trajectory_estimate(
     standard_errors: dict[str, float] = {k: float(v) for k, v in se.items()}
     for key in ("r_left", "r_right", "wheelbase", "time_offset"):
         standard_errors[key] = single.standard_errors[key]
+    if fit_truth_offset:
+        components.update(
+            truth_offset_x=single.truth_offset_x, truth_offset_y=single.truth_offset_y
+        )
+        for key in ("truth_offset_x", "truth_offset_y"):
+            standard_errors[key] = single.standard_errors[key]
     fit = single
     method = "trajectory"
     if model == "scrub":

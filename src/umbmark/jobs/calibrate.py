@@ -26,7 +26,7 @@ from ..kinematics import WheelParams
 from ..outputs.atomic import atomic_write_text
 from ..runs import Run
 from ..sources.association import Association
-from ..sources.params import CalibratedParams
+from ..sources.params import CalibratedParams, ControllerParams
 from .inputs import ReadOptions, Runs, RunSource, SourceOptions, read_runs, source_name
 from .outputs import OutputPlan
 
@@ -35,6 +35,7 @@ if TYPE_CHECKING:
     from typing_extensions import Unpack
 
     from ..estimators.trajectory import TrajectoryFit
+    from ..outputs.tum import TumTime
 
 __all__ = ["METHODS", "CalibrationReport", "calibrate"]
 
@@ -79,8 +80,9 @@ class CalibrationReport:
         The error estimate and the correction, composed with the active parameters.
     params : WheelParams or None
         What logged runs were integrated with (None for end points only).
-    controller : str
-        Controller name in the parameter files.
+    controller : ControllerParams
+        The controller the parameters are for, as its file says (name, keys, flavour,
+        ``open_loop``...); a default one when no file was given.
     associations : tuple of (str, Association)
         Time matching of each recording.
     notes : tuple of str
@@ -100,7 +102,7 @@ class CalibrationReport:
     test: SquareTest
     calibration: Calibration
     params: WheelParams | None = None
-    controller: str = "diff_drive_controller"
+    controller: ControllerParams = field(default_factory=ControllerParams)
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = ()
     model_fit: TrajectoryFit | None = field(default=None, compare=False)
@@ -285,19 +287,36 @@ class CalibrationReport:
             "Multiplied into the values active during the runs: separation "
             f"{active.separation_multiplier:g}, left {active.c_left:g}, right {active.c_right:g}.",
             "diff_drive_controller reads these on configure: reload or restart the controller.",
+            *(
+                [
+                    "open_loop is true: the controller's odometry integrates its commands, "
+                    "so these change its wheel speeds, not its odometry; set it false."
+                ]
+                if self.controller.open_loop
+                else []
+            ),
         ]
 
     def overlay_yaml(self) -> str:
         """The ros2_control parameter overlay with the new multipliers (what ``--yaml`` writes)."""
         from ..outputs.controller_params import ros2_control_overlay
 
-        return ros2_control_overlay(self.calibration, self.provenance(), self.controller)
+        return ros2_control_overlay(self.calibration, self.provenance(), self.controller.key_path)
 
     def ros1_yaml(self) -> str:
         """ROS 1 ``diff_drive_controller`` parameters (what ``--ros1-yaml`` writes)."""
         from ..outputs.controller_params import ros1_params
 
-        return ros1_params(self.calibration, self.provenance(), self.controller)
+        controller = self.controller
+        comments = self.provenance()
+        if controller.radius_multiplier is not None:
+            comments.append(
+                f"Delete wheel_radius_multiplier ({controller.radius_multiplier:g}) from the "
+                "controller's parameters: ROS 1's diff_drive_controller uses it instead of "
+                "the left and right ones, which here include it."
+            )
+        keys = controller.key_path if not controller.ros2 else (controller.controller,)
+        return ros1_params(self.calibration, comments, keys)
 
     def figure(self) -> Figure:
         """The Fig. 6 view of the return errors (what ``--plot`` draws).
@@ -321,6 +340,7 @@ class CalibrationReport:
         ros1_yaml: str | os.PathLike[str] | None = None,
         plot: str | os.PathLike[str] | None = None,
         tum: str | os.PathLike[str] | None = None,
+        tum_time: TumTime = "recording",
     ) -> list[Path]:
         """Write the requested files: every one checked before any is written.
 
@@ -334,6 +354,9 @@ class CalibrationReport:
             The Fig. 6 view (.png, .svg or .pdf).
         tum : path, optional
             A folder for TUM trajectories of logged runs (truth, nominal, calibrated).
+        tum_time : {"recording", "run"}
+            Timestamps of the TUM files: the recording's own clock [s] (default), or
+            seconds from each run's start.
 
         Returns
         -------
@@ -345,6 +368,9 @@ class CalibrationReport:
         InputError
             For a file that cannot be written, or an output this report cannot give.
         """
+        from ..outputs.tum import check_tum_time
+
+        time = check_tum_time(tum_time)
         plan = _plan(
             self.sources, output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum
         )
@@ -374,7 +400,7 @@ class CalibrationReport:
             from ..outputs.tum import write_tum_runs
 
             sets = {"nominal": self.params, "calibrated": calibrated}
-            written += write_tum_runs(plan.tum, self.runs, sets)
+            written += write_tum_runs(plan.tum, self.runs, sets, time=time)
         return written
 
 
@@ -390,11 +416,13 @@ def calibrate(
     side_length: float | None = None,
     wheelbase: float | None = None,
     method: str = DEFAULT_METHOD,
+    fit_truth_offset: bool = False,
     output: str | os.PathLike[str] | None = None,
     yaml: str | os.PathLike[str] | None = None,
     ros1_yaml: str | os.PathLike[str] | None = None,
     plot: str | os.PathLike[str] | None = None,
     tum: str | os.PathLike[str] | None = None,
+    tum_time: TumTime = "recording",
     **options: Unpack[SourceOptions],
 ) -> CalibrationReport:
     """Benchmark runs around a square (UMBmark) and compute the correction.
@@ -422,8 +450,17 @@ def calibrate(
         ``trajectory-scrub`` (with a turn-dependent wheelbase). ``auto``: the one that
         predicts held-out recorded runs best (:func:`umbmark.validate`; runs tables take
         the default).
+    fit_truth_offset : bool
+        ``trajectory`` and ``trajectory-scrub`` only: fit where the ground truth's tracked
+        point (a motion-capture marker) sits in the robot frame, the components
+        ``truth_offset_x``, ``truth_offset_y`` [m] (``docs/conventions.md``, "Tracked
+        point"), instead of taking the ground truth as the axle centre's.
     output, yaml, ros1_yaml, plot, tum : path, optional
         Files to write (see :meth:`CalibrationReport.write`); checked before any is written.
+    tum_time : {"recording", "run"}
+        Timestamps of the TUM files: the recording's own clock [s] (default, so that evo
+        can match them with other trajectories of the same recording), or seconds from
+        each run's start.
     **options
         How to read the sources: see :class:`umbmark.jobs.inputs.ReadOptions`
         (``unit="mm"``, ``current_params="controllers.yaml"``, ``truth_topic=...``).
@@ -443,8 +480,15 @@ def calibrate(
     >>> report.e_max_syst, report.estimate.E_d, report.calibration.new_c_left
     """
     read_options = ReadOptions.of(options)
+    from ..outputs.tum import check_tum_time
+
+    check_tum_time(tum_time)
     if method not in (*METHODS, "auto"):
         raise InputError(f"--method {method!r}: use one of {', '.join(METHODS)} or auto")
+    if fit_truth_offset and not method.startswith("trajectory"):
+        raise InputError(
+            f"--fit-truth-offset needs --method trajectory or trajectory-scrub, not {method}"
+        )
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
           plot=plot, tum=tum)  # fmt: skip
@@ -457,16 +501,19 @@ def calibrate(
     chosen, note = method, None
     if method == "auto":
         chosen, note = _auto_method(sources, read, side_length, wheelbase, options)
-    report = _calibrate_runs(read, chosen)
+    report = _calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
     if note is not None:
         report = replace(report, notes=(*report.notes, note))
     if chosen.startswith("trajectory") and len(read.parts) > 1:
-        report = replace(report, notes=(*report.notes, *_sessions_disagree(read.parts)))
-    report.write(output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum)
+        disagree = _sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
+        report = replace(report, notes=(*report.notes, *disagree))
+    report.write(
+        output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum, tum_time=tum_time
+    )
     return report
 
 
-def _sessions_disagree(parts: Sequence[Runs]) -> list[str]:
+def _sessions_disagree(parts: Sequence[Runs], *, fit_truth_offset: bool = False) -> list[str]:
     """Warnings where the sources, fitted one by one, want different wheels."""
     from ..estimators.trajectory import disagreement_warnings, fit_trajectories
 
@@ -476,7 +523,8 @@ def _sessions_disagree(parts: Sequence[Runs]) -> list[str]:
         if part.params is None or not logs:
             continue
         try:
-            fits.append((part.sources[0], fit_trajectories(logs, part.params)))
+            fit = fit_trajectories(logs, part.params, fit_truth_offset=fit_truth_offset)
+            fits.append((part.sources[0], fit))
         except ValueError:
             continue  # a source too small to fit alone says nothing against the others
     return disagreement_warnings(fits)
@@ -513,7 +561,9 @@ def _auto_method(
     return best, f"method auto: {best}, by held-out end error ({checked.scheme}): {ranking}"
 
 
-def _calibrate_runs(read: Runs, method: str) -> CalibrationReport:
+def _calibrate_runs(
+    read: Runs, method: str, *, fit_truth_offset: bool = False
+) -> CalibrationReport:
     where = read.sources[0] if len(read.sources) == 1 else None
     runs, active = read.runs, read.active
     bench = None
@@ -539,6 +589,7 @@ def _calibrate_runs(read: Runs, method: str) -> CalibrationReport:
                     read.params,
                     read.side_length,
                     model="scrub" if method == "trajectory-scrub" else "diff",
+                    fit_truth_offset=fit_truth_offset,
                 )
             test = SquareTest(read.side_length or 1.0, active.effective_wheelbase)
             # UMBmark's figures where the runs are squares of a known side.

@@ -57,6 +57,8 @@ __all__ = [
 MAX_SIDE_LENGTH = 100.0
 #: Largest plausible wheelbase or wheel diameter [m].
 MAX_WHEELBASE = 10.0
+#: Farthest a tracked point may sit from the axle centre [m].
+MAX_TRUTH_OFFSET = 5.0
 
 #: What can be read: a path to a runs table, run log, OptiOdom session or bag, or runs
 #: already in memory (a runs table's worth of end points).
@@ -85,8 +87,8 @@ class SourceOptions(TypedDict, total=False):
     max_gap: float
     min_rest: float
     wheel_topic: str
-    left_joint: str
-    right_joint: str
+    left_joint: str | Sequence[str] | None
+    right_joint: str | Sequence[str] | None
     left_ticks_topic: str | None
     right_ticks_topic: str | None
     ticks_per_rev: float | None
@@ -94,6 +96,12 @@ class SourceOptions(TypedDict, total=False):
     tf_parent: str | None
     tf_child: str | None
     time_source: Literal["header", "bag"]
+    odom_topic: str | None
+    odom_tf: tuple[str, str] | None
+    truth_offset: tuple[float, float] | None
+    left_field: str | None
+    right_field: str | None
+    msg_dir: PathLike | None
 
 
 @dataclass(frozen=True)
@@ -126,8 +134,12 @@ class ReadOptions:
         Longest ground-truth gap to interpolate across [s].
     min_rest : float
         Shortest rest between runs [s].
-    wheel_topic, left_joint, right_joint : str
-        Bags: the ``sensor_msgs/JointState`` topic and the wheel joints.
+    wheel_topic : str
+        Bags: the ``sensor_msgs/JointState`` topic (any type with ``left_field``).
+    left_joint, right_joint : str, sequence of str or None
+        Bags: the wheel joints, several per side averaged (a sequence, or names separated
+        by commas); None: the controller file's ``left_wheel_names`` /
+        ``right_wheel_names``, else found in the bag.
     left_ticks_topic, right_ticks_topic : str or None
         Bags: cumulative encoder counts instead of joint states.
     ticks_per_rev : float or None
@@ -138,6 +150,22 @@ class ReadOptions:
         Bags: ground truth from a transform on ``/tf`` instead.
     time_source : {"header", "bag"}
         Bags: message header stamps or receive times.
+    odom_topic : str or None
+        Bags without wheel data: the controller's odometry topic, turned back into wheel
+        rotation with the controller's geometry.
+    odom_tf : (str, str) or None
+        ... or the controller's odometry as a transform chain ``(parent, child)``.
+    truth_offset : (float, float) or None
+        Recorded ground truth tracks a point this far forward and to the left of the axle
+        centre [m] (a motion-capture marker, an antenna): it is moved to the axle centre.
+    left_field, right_field : str or None
+        Bags: the wheels as field paths into ``wheel_topic``'s messages, of any type
+        (``left_ticks``, ``wheels.left.position``, ``positions[0]``): angles [rad], or
+        encoder counts with ``ticks_per_rev``. Both or neither.
+    msg_dir : path or None
+        Bags that do not carry the definition of ``wheel_topic``'s type: a folder of its
+        ``.msg`` files (``<pkg>/msg/<Name>.msg`` or ``<pkg>/<Name>.msg``, searched
+        recursively). Only with the fields.
     """
 
     format: str = "auto"
@@ -154,8 +182,8 @@ class ReadOptions:
     max_gap: float = DEFAULT_MAX_GAP
     min_rest: float = 1.0
     wheel_topic: str = "/joint_states"
-    left_joint: str = "left_wheel_joint"
-    right_joint: str = "right_wheel_joint"
+    left_joint: str | Sequence[str] | None = None
+    right_joint: str | Sequence[str] | None = None
     left_ticks_topic: str | None = None
     right_ticks_topic: str | None = None
     ticks_per_rev: float | None = None
@@ -163,6 +191,12 @@ class ReadOptions:
     tf_parent: str | None = None
     tf_child: str | None = None
     time_source: str = "header"
+    odom_topic: str | None = None
+    odom_tf: tuple[str, str] | None = None
+    truth_offset: tuple[float, float] | None = None
+    left_field: str | None = None
+    right_field: str | None = None
+    msg_dir: PathLike | None = None
 
     def __post_init__(self) -> None:
         _check_choice("--format", self.format, FORMATS)
@@ -182,8 +216,45 @@ class ReadOptions:
         check_positive_option("--min-rest", self.min_rest, "s")
         if self.wheel_diameter is not None:
             check_length("--wheel-diameter", self.wheel_diameter, MAX_WHEELBASE)
+        if self.truth_offset is not None:
+            for value in self.truth_offset:
+                if not (math.isfinite(value) and abs(value) <= MAX_TRUTH_OFFSET):
+                    raise InputError(
+                        f"--truth-offset must be within {MAX_TRUTH_OFFSET:g} m of the axle "
+                        f"centre, not {value!r}"
+                    )
+        self._check_fields()
         if self.split == "windows" and not self.windows:
             raise InputError("--split windows needs --windows start:end[,start:end...]")
+
+    def _check_fields(self) -> None:
+        """Refuse wheel fields that are malformed or given with other wheel data."""
+        from ..sources.bag.custom import parse_path
+
+        if (self.left_field is None) != (self.right_field is None):
+            raise InputError("--left-field and --right-field go together: give both or neither")
+        if self.left_field is None or self.right_field is None:
+            if self.msg_dir is not None:
+                raise InputError(
+                    "--msg-dir is for wheel data in a custom message type: give it with "
+                    "--left-field and --right-field"
+                )
+            return
+        parse_path(self.left_field, "--left-field")
+        parse_path(self.right_field, "--right-field")
+        for flag, value in (
+            ("--left-joint", self.left_joint),
+            ("--right-joint", self.right_joint),
+            ("--left-ticks-topic", self.left_ticks_topic),
+            ("--right-ticks-topic", self.right_ticks_topic),
+            ("--odom-topic", self.odom_topic),
+            ("--odom-tf", self.odom_tf),
+        ):
+            if value:
+                raise InputError(
+                    f"--left-field/--right-field read the wheels from --wheel-topic: leave "
+                    f"out {flag}"
+                )
 
     @classmethod
     def of(cls, options: Mapping[str, object]) -> ReadOptions:
@@ -221,8 +292,9 @@ class Runs:
         What logged runs were integrated with; None for end points only.
     side_length : float or None
         The square's side [m], if given or known to the sources and the same for all.
-    controller : str
-        Controller name for parameter files.
+    controller : ControllerParams
+        The controller the parameters are for (from ``current_params``, or a default one
+        named by ``controller``).
     associations : tuple of (str, Association)
         Time matching of each recording.
     notes : tuple of str
@@ -239,7 +311,7 @@ class Runs:
     active: ActiveParams
     params: WheelParams | None
     side_length: float | None
-    controller: str
+    controller: ControllerParams
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = field(default=())
     sides: tuple[float | None, ...] = ()
@@ -385,7 +457,8 @@ def read_runs(
 
 def _parameter_file(options: ReadOptions) -> ControllerParams:
     if options.current_params is None:
-        return ControllerParams(controller=options.controller or "diff_drive_controller")
+        name = options.controller or "diff_drive_controller"
+        return ControllerParams(controller=name.strip("/").rsplit("/", 1)[-1], key_path=(name,))
     return read_parameter_file(Path(options.current_params), options.controller)
 
 
@@ -397,7 +470,7 @@ def _read_one(
     side_length: float | None,
 ) -> Runs:
     name = source_name(source)
-    controller = options.controller or file.controller
+    controller = file
     separation = _first(options.current_separation_multiplier, file.wheel_separation_multiplier)
     c_left = _first(options.current_c_l, file.left_wheel_radius_multiplier)
     c_right = _first(options.current_c_r, file.right_wheel_radius_multiplier)
@@ -426,7 +499,9 @@ def _read_one(
                 c_left=c_left,
                 c_right=c_right,
             )
-        loaded = load_runs(path, kind, _load_options(options, kind, side_length, given))
+            if options.odom_topic is not None or options.odom_tf is not None:
+                _check_invertible(file, name)
+        loaded = load_runs(path, kind, _load_options(options, kind, side_length, given, file))
 
     if loaded.params is None:  # end points: the options are all there is
         if configured is None:
@@ -489,8 +564,23 @@ def _read_one(
     )
 
 
+def _check_invertible(file: ControllerParams, name: str) -> None:
+    """Refuse odometry that does not come from the wheels."""
+    if file.open_loop:
+        raise InputError(
+            "the controller has open_loop: true, so its odometry integrates the velocity "
+            "commands, not the wheels: it cannot be turned back into wheel rotation; record "
+            "the wheel joint states, or set open_loop: false for the runs",
+            source=name,
+        )
+
+
 def _load_options(
-    options: ReadOptions, kind: Format, side_length: float | None, params: WheelParams | None
+    options: ReadOptions,
+    kind: Format,
+    side_length: float | None,
+    params: WheelParams | None,
+    file: ControllerParams,
 ) -> LoadOptions:
     from ..sources.segmentation import SplitOptions
 
@@ -504,17 +594,36 @@ def _load_options(
         windows=windows,
         split_options=SplitOptions(min_rest=options.min_rest),
         max_gap=options.max_gap,
-        bag=_bag_options(options) if kind == "bag" else None,
+        bag=_bag_options(options, params, file) if kind == "bag" else None,
+        truth_offset=(
+            (float(options.truth_offset[0]), float(options.truth_offset[1]))
+            if options.truth_offset is not None
+            else None
+        ),
     )
 
 
-def _bag_options(options: ReadOptions) -> BagOptions:
+def _bag_options(
+    options: ReadOptions, params: WheelParams | None, file: ControllerParams
+) -> BagOptions:
     from ..sources.bag import BagOptions
+    from ..sources.controller_odometry import OdometryGeometry
 
+    geometry = None
+    if params is not None:
+        radius = 0.5 * params.wheel_diameter
+        geometry = OdometryGeometry(
+            left_radius=params.c_left * radius,
+            right_radius=params.c_right * radius,
+            separation=params.wheelbase,
+        )
     return BagOptions(
         wheel_topic=options.wheel_topic,
-        left_joint=options.left_joint,
-        right_joint=options.right_joint,
+        left_joint=_joints(options.left_joint) or file.left_joints or None,
+        right_joint=_joints(options.right_joint) or file.right_joints or None,
+        odom_topic=options.odom_topic,
+        odom_tf=(options.odom_tf[0], options.odom_tf[1]) if options.odom_tf else None,
+        odom_geometry=geometry,
         left_ticks_topic=options.left_ticks_topic,
         right_ticks_topic=options.right_ticks_topic,
         ticks_per_revolution=options.ticks_per_rev,
@@ -522,7 +631,15 @@ def _bag_options(options: ReadOptions) -> BagOptions:
         tf_parent=options.tf_parent,
         tf_child=options.tf_child,
         time_source=cast("Literal['header', 'bag']", options.time_source),
+        left_field=options.left_field,
+        right_field=options.right_field,
+        msg_dir=Path(options.msg_dir) if options.msg_dir is not None else None,
     )
+
+
+def _joints(value: str | Sequence[str] | None) -> str | tuple[str, ...] | None:
+    """Joint names as :class:`BagOptions` takes them (it splits and strips them)."""
+    return value if value is None or isinstance(value, str) else tuple(value)
 
 
 def _first(value: float | None, fallback: float) -> float:

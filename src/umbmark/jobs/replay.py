@@ -1,6 +1,7 @@
 """The replay job: integrate recorded runs again with other parameters, and compare.
 
-Each run's end-pose error (odometry end against ground truth) is computed with the
+Each run's end-pose error (odometry end against ground truth) and its whole-trajectory
+RMSE (odometry against ground truth over every matched sample) are computed with the
 source's nominal parameters and, given a calibration, with the calibrated ones. Use it to
 check a calibration on runs that were not used to compute it: calibrate on one session,
 replay another (a circle, another day).
@@ -19,7 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputError
-from ..kinematics import WheelParams
+from ..kinematics import IntegrationMethod, WheelParams
+from ..recording import RunLog
 from ..runs import Run, end_errors
 from ..sources.association import Association
 from .inputs import (
@@ -38,7 +40,39 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from typing_extensions import Unpack
 
-__all__ = ["ReplayReport", "replay"]
+    from ..outputs.tum import TumTime
+
+__all__ = ["ReplayReport", "replay", "trajectory_rmse"]
+
+
+def trajectory_rmse(log: RunLog, params: WheelParams, method: IntegrationMethod = "arc") -> float:
+    """Root-mean-square position error [m] of the odometry over a whole run.
+
+    ``sqrt(mean((x_odo - x_true)^2 + (y_odo - y_true)^2))`` over the samples with ground
+    truth (``log.matched``), both in the run's start frame: what ``evo_ape`` reports as
+    the RMSE of the translation without alignment, given the TUM files of the run.
+
+    Parameters
+    ----------
+    log : RunLog
+        The run's time series: ``wheel_angles`` shape (n, 2) [rad], ``truth`` shape
+        (n, 3) (``x, y`` [m], ``theta`` [rad]; NaN rows where no ground truth matched).
+    params : WheelParams
+        The odometry parameters to integrate the wheels with.
+    method : {"arc", ...}
+        The integration (:func:`umbmark.kinematics.integrate_odometry`).
+
+    Returns
+    -------
+    float
+        The RMSE [m]; NaN if no sample has ground truth.
+    """
+    odometry = log.odometry(params, method)
+    matched = log.matched
+    if not np.any(matched):
+        return float("nan")
+    diff = odometry[matched, :2] - log.truth[matched, :2]
+    return float(np.sqrt(np.mean(np.sum(diff * diff, axis=1))))
 
 
 @dataclass(frozen=True, repr=False)
@@ -61,6 +95,10 @@ class ReplayReport:
         Each run's end-position error [m] under each parameter set.
     heading_errors : mapping of str to tuple of (float or None)
         Each run's end-heading error [rad] (true minus odometry) under each set.
+    rmse : mapping of str to array, shape (n,)
+        Each run's whole-trajectory RMSE [m] under each set: the root-mean-square
+        distance between odometry and ground-truth positions over the run's matched
+        samples (:func:`trajectory_rmse`).
     associations : tuple of (str, Association)
         Time matching of each recording.
     notes : tuple of str
@@ -74,6 +112,7 @@ class ReplayReport:
     parameter_sets: Mapping[str, WheelParams]
     end_errors: Mapping[str, NDArray[np.float64]]
     heading_errors: Mapping[str, tuple[float | None, ...]]
+    rmse: Mapping[str, NDArray[np.float64]]
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = ()
 
@@ -81,8 +120,10 @@ class ReplayReport:
         means = ", ".join(
             f"{name}={float(errors.mean()):.6g} m" for name, errors in self.end_errors.items()
         )
+        rmse = ", ".join(f"{name}={float(v.mean()):.6g} m" for name, v in self.rmse.items())
         return (
-            f"ReplayReport(source={self.source!r}, runs={len(self.runs)}, mean_end_error: {means})"
+            f"ReplayReport(source={self.source!r}, runs={len(self.runs)}, mean_end_error: "
+            f"{means}; mean_rmse: {rmse})"
         )
 
     @property
@@ -100,6 +141,11 @@ class ReplayReport:
         """Mean end-position error [m] with the nominal parameters."""
         return float(self.end_errors["nominal"].mean())
 
+    @property
+    def mean_rmse(self) -> float:
+        """Mean over runs of the whole-trajectory RMSE [m], calibrated (else nominal)."""
+        return float(self.rmse[self.final].mean())
+
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (metres, radians): what ``replay --json`` prints."""
         sets = self.parameter_sets
@@ -113,11 +159,13 @@ class ReplayReport:
                     "direction": run.direction.value,
                     **{f"end_error_{name}": float(self.end_errors[name][i]) for name in sets},
                     **{f"heading_error_{name}": self.heading_errors[name][i] for name in sets},
+                    **{f"rmse_{name}": float(self.rmse[name][i]) for name in sets},
                 }
                 for i, run in enumerate(self.runs)
             ],
             "mean_end_error": self.mean_end_error,
             "mean_end_error_nominal": self.mean_end_error_nominal,
+            **{f"mean_rmse_{name}": float(self.rmse[name].mean()) for name in sets},
             "parameters": {
                 name: {
                     "wheelbase": p.wheelbase,
@@ -147,15 +195,35 @@ class ReplayReport:
         *,
         plot: str | os.PathLike[str] | None = None,
         tum: str | os.PathLike[str] | None = None,
+        tum_time: TumTime = "recording",
     ) -> list[Path]:
-        """Write the figure and the TUM trajectories, each checked before any is written."""
+        """Write the figure and the TUM trajectories, each checked before any is written.
+
+        Parameters
+        ----------
+        plot : path, optional
+            The figure (.png, .svg, .pdf).
+        tum : path, optional
+            A folder for TUM trajectories of every run (truth and each parameter set).
+        tum_time : {"recording", "run"}
+            Timestamps of the TUM files: the recording's own clock [s] (default), or
+            seconds from each run's start.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+        """
+        from ..outputs.tum import check_tum_time
+
+        time = check_tum_time(tum_time)
         plan = OutputPlan.of(plot=plot, tum=tum)
         plan.check_not_inputs([self.source])
         written: list[Path] = []
         if plan.tum is not None:
             from ..outputs.tum import write_tum_runs
 
-            written += write_tum_runs(plan.tum, self.runs, self.parameter_sets)
+            written += write_tum_runs(plan.tum, self.runs, self.parameter_sets, time=time)
         if plan.plot is not None:
             from ..outputs.plotting import save_figure
 
@@ -171,6 +239,7 @@ def replay(
     wheelbase: float | None = None,
     plot: str | os.PathLike[str] | None = None,
     tum: str | os.PathLike[str] | None = None,
+    tum_time: TumTime = "recording",
     **options: Unpack[SourceOptions],
 ) -> ReplayReport:
     """Replay recorded runs: integrate their wheel data again and compare with the truth.
@@ -191,6 +260,10 @@ def replay(
         Draw every run's true path and odometry paths (.png, .svg, .pdf).
     tum : path, optional
         A folder for TUM trajectories of every run (truth, nominal, calibrated).
+    tum_time : {"recording", "run"}
+        Timestamps of the TUM files: the recording's own clock [s] (default, so that evo
+        can match them with other trajectories of the same recording), or seconds from
+        each run's start.
     **options
         How to read the source: see :class:`umbmark.jobs.inputs.ReadOptions`.
 
@@ -200,6 +273,9 @@ def replay(
         Bad input: one line naming the file and the problem.
     """
     read_options = ReadOptions.of(options)
+    from ..outputs.tum import check_tum_time
+
+    check_tum_time(tum_time)
     OutputPlan.of(plot=plot, tum=tum).check_not_inputs([source_name(source)])
     if is_table(source, read_options):
         raise InputError(
@@ -224,8 +300,18 @@ def replay(
         parameter_sets=sets,
         end_errors={name: end_errors(r) for name, r in results.items()},
         heading_errors={name: tuple(run.heading_error for run in r) for name, r in results.items()},
+        rmse={
+            name: np.array([_run_rmse(run, p) for run in read.runs], dtype=np.float64)
+            for name, p in sets.items()
+        },
         associations=read.associations,
         notes=read.notes,
     )
-    report.write(plot=plot, tum=tum)
+    report.write(plot=plot, tum=tum, tum_time=tum_time)
     return report
+
+
+def _run_rmse(run: Run, params: WheelParams) -> float:
+    if run.log is None:  # pragma: no cover - logged sources always attach their series
+        raise InputError(f"{run.label} has no recorded wheel data to replay")
+    return trajectory_rmse(run.log, params)

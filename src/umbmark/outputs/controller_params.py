@@ -43,15 +43,37 @@ def _document(body: Mapping[str, Any], comments: Sequence[str]) -> str:
     return header + text
 
 
+def _nested(keys: Sequence[str], leaf: Mapping[str, Any]) -> dict[str, Any]:
+    """``leaf`` under the keys ``keys`` (outermost first)."""
+    out: dict[str, Any] = dict(leaf)
+    for key in reversed(keys):
+        out = {key: out}
+    return out
+
+
 def ros2_control_overlay(
-    calibration: Calibration, comments: Sequence[str] = (), controller: str = DEFAULT_CONTROLLER
+    calibration: Calibration,
+    comments: Sequence[str] = (),
+    key_path: Sequence[str] = (DEFAULT_CONTROLLER,),
 ) -> str:
-    """A ros2_control parameter overlay with the new multipliers (YAML text)."""
-    return _document({controller: {"ros__parameters": _multipliers(calibration)}}, comments)
+    """A ros2_control parameter overlay with the new multipliers (YAML text).
+
+    ``key_path`` are the keys of the controller in the user's file (``("robot1",
+    "diff_cont")``, ``("/robot1/diff_cont",)``, ``("/**",)``): the overlay is keyed the
+    same way, so that the parameter server applies it to the same node.
+    """
+    return _document(_nested(key_path, {"ros__parameters": _multipliers(calibration)}), comments)
 
 
 def ros1_params(
-    calibration: Calibration, comments: Sequence[str] = (), controller: str = DEFAULT_CONTROLLER
+    calibration: Calibration,
+    comments: Sequence[str] = (),
+    key_path: Sequence[str] = (DEFAULT_CONTROLLER,),
 ) -> str:
-    """ROS 1 ``diff_drive_controller`` parameters with the new multipliers (YAML text)."""
-    return _document({controller: _multipliers(calibration)}, comments)
+    """ROS 1 ``diff_drive_controller`` parameters with the new multipliers (YAML text).
+
+    ROS 1's controller takes ``wheel_radius_multiplier``, when it is set, for both wheels
+    and ignores the left and right ones: these left and right values work only once it is
+    deleted (the caller says so in ``comments``).
+    """
+    return _document(_nested(key_path, _multipliers(calibration)), comments)

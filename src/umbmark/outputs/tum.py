@@ -1,8 +1,12 @@
 """TUM trajectory files (``timestamp tx ty tz qx qy qz qw``), as evo reads them.
 
-Planar poses become 3-D ones with ``z = 0`` and a rotation about z. Timestamps are
-seconds from the run's start, the same for every file of a run, so that
-``evo_traj tum truth.tum nominal.tum calibrated.tum --plot`` lines them up.
+Planar poses become 3-D ones with ``z = 0`` and a rotation about z, in the run's start
+frame. Every file of a run has the same timestamps, one per wheel sample (the truth file
+only those with ground truth), so that ``evo_ape tum truth.tum calibrated.tum`` matches
+them exactly. The timestamps are, by default, the recording's own (``time="recording"``:
+a bag's header or receive times, a run log's CSV time), so that evo can also associate
+them with other trajectories of the same recording; ``time="run"`` writes seconds from
+the run's start instead.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ import io
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -20,7 +25,26 @@ from ..kinematics import WheelParams
 from ..runs import Run
 from .atomic import atomic_write_text
 
-__all__ = ["format_tum", "write_tum_runs"]
+__all__ = ["TUM_TIMES", "TumTime", "check_tum_time", "format_tum", "write_tum_runs"]
+
+TumTime = Literal["recording", "run"]
+#: The timestamps a TUM export can have.
+TUM_TIMES: tuple[TumTime, ...] = ("recording", "run")
+
+
+def check_tum_time(time: str) -> TumTime:
+    """``time`` if it is one of :data:`TUM_TIMES`.
+
+    Raises
+    ------
+    InputError
+        Naming the option ``--tum-time`` and the choices.
+    """
+    if time == "recording":
+        return "recording"
+    if time == "run":
+        return "run"
+    raise InputError(f"--tum-time {time!r}: use recording or run")
 
 
 def format_tum(time: NDArray[np.float64], poses: NDArray[np.float64]) -> str:
@@ -29,7 +53,7 @@ def format_tum(time: NDArray[np.float64], poses: NDArray[np.float64]) -> str:
     Parameters
     ----------
     time : array, shape (n,)
-        Seconds.
+        Timestamps [s]; written with nanosecond digits.
     poses : array, shape (n, 3)
         ``x, y`` [m], ``theta`` [rad]; rows with NaN are left out.
     """
@@ -58,15 +82,38 @@ def _slug(label: str) -> str:
 
 
 def write_tum_runs(
-    folder: str | Path, runs: Sequence[Run], odometry: Mapping[str, WheelParams]
+    folder: str | Path,
+    runs: Sequence[Run],
+    odometry: Mapping[str, WheelParams],
+    *,
+    time: TumTime = "recording",
 ) -> list[Path]:
     """Write ``<run>_truth.tum`` and ``<run>_<name>.tum`` for each odometry parameter set.
+
+    Parameters
+    ----------
+    folder : path
+        Where to write; made if missing.
+    runs : sequence of Run
+        Runs with their time series (``run.log``).
+    odometry : mapping of str to WheelParams
+        The parameter sets to integrate the odometry with, by name (``nominal``,
+        ``calibrated``): one file each.
+    time : {"recording", "run"}
+        Timestamps: the recording's own (``log.start + log.time`` [s]) or seconds from
+        the run's start (``log.time``).
+
+    Returns
+    -------
+    list of Path
+        The files written.
 
     Raises
     ------
     InputError
         If the folder cannot be made, or a run has no time series.
     """
+    time = check_tum_time(time)
     folder = Path(folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -80,8 +127,9 @@ def write_tum_runs(
         files = {f"{stem}_truth.tum": run.log.truth}
         for name, params in odometry.items():
             files[f"{stem}_{name}.tum"] = run.log.odometry(params)
+        stamps = run.log.time + run.log.start if time == "recording" else run.log.time
         for filename, poses in files.items():
             path = folder / filename
-            atomic_write_text(path, format_tum(run.log.time, poses))
+            atomic_write_text(path, format_tum(stamps, poses))
             written.append(path)
     return written

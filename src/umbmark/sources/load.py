@@ -22,15 +22,16 @@ Formats
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
 import yaml
 
+from ..conventions import axle_poses
 from ..errors import InputError
 from ..kinematics import WheelParams
-from ..recording import Recording
+from ..recording import PoseSeries, Recording
 from ..runs import Run
 from .association import DEFAULT_MAX_GAP, Association
 from .logged import SplitMode, runs_from_recordings
@@ -67,6 +68,9 @@ class LoadOptions:
         Longest ground-truth gap [s] to interpolate across.
     bag : BagOptions or None
         Topics and joints of a bag.
+    truth_offset : (float, float) or None
+        Where the ground truth's tracked point sits in the robot frame [m] (forward,
+        left of the axle centre); the ground truth is moved to the axle centre.
     """
 
     unit: str = "m"
@@ -78,6 +82,7 @@ class LoadOptions:
     split_options: SplitOptions | None = None
     max_gap: float = DEFAULT_MAX_GAP
     bag: BagOptions | None = None
+    truth_offset: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -169,6 +174,13 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
     if kind == "table":
         from .runs_table import read_runs_table
 
+        if options.truth_offset is not None:
+            raise InputError(
+                "--truth-offset moves recorded ground truth to the axle centre; a runs table "
+                "holds end points already: measure them at the axle centre",
+                source=source,
+            )
+
         runs = read_runs_table(
             source,
             unit=options.unit,
@@ -201,6 +213,8 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         )
     if options.side_length is not None:
         side = options.side_length
+    if options.truth_offset is not None:
+        recordings = [_at_axle(recording, options.truth_offset) for recording in recordings]
     found = runs_from_recordings(
         recordings,
         params,
@@ -224,6 +238,29 @@ def _read_bag(
 ) -> tuple[list[Recording], WheelParams | None, float | None]:
     from .bag import BagOptions, read_bag
 
-    wheels, truth = read_bag(source, options.bag or BagOptions())
+    bag = options.bag or BagOptions()
+    if bag.truth_topic is None and bag.tf_parent is None and bag.tf_child is None:
+        from .bag.info import truth_candidates
+        from .bag.reader import listing
+
+        found = [c.label for c in truth_candidates(source)]
+        named = (
+            f"candidates: {listing(found)}"
+            if found
+            else "the bag has no pose, odometry or TF topics"
+        )
+        raise InputError(
+            f"no ground truth given (--truth-topic or --tf-parent/--tf-child); {named}",
+            source=source,
+        )
+    wheels, truth = read_bag(source, bag)
     recording = Recording(name=source.name, wheels=wheels, truth=truth)
     return [recording], None, None
+
+
+def _at_axle(recording: Recording, offset: tuple[float, float]) -> Recording:
+    """``recording`` with its ground truth moved from the tracked point to the axle."""
+    if recording.truth is None:
+        return recording
+    truth = PoseSeries(time=recording.truth.time, poses=axle_poses(recording.truth.poses, offset))
+    return replace(recording, truth=truth)

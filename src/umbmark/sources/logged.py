@@ -79,6 +79,7 @@ def _run(
         wheel_angles=wheels.angles[sl] - wheels.angles[a],
         truth=rel,
         source=label,
+        start=float(wheels.time[a]),
     )
     odo = log.odometry(params, method)
     turned = float(rel[-1, 2])

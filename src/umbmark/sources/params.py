@@ -45,22 +45,49 @@ MULTIPLIER_KEYS = (
     "wheel_separation_multiplier",
     "left_wheel_radius_multiplier",
     "right_wheel_radius_multiplier",
+    "wheel_radius_multiplier",
 )
 GEOMETRY_KEYS = ("wheel_separation", "wheel_radius")
+#: Keys that mark a mapping as a differential-drive controller's parameters.
+DIFF_DRIVE_KEYS = frozenset(
+    {*MULTIPLIER_KEYS, *GEOMETRY_KEYS, "left_wheel_names", "right_wheel_names", "open_loop"}
+)
+#: Bounds of a plausible multiplier (skid-steer wheelbases reach about 2).
+MULTIPLIER_RANGE = (0.2, 5.0)
+#: Bounds of a plausible configured length [m].
+LENGTH_RANGE = (0.001, 10.0)
 
 
 @dataclass(frozen=True)
 class ControllerParams:
-    """The ``diff_drive_controller`` parameters a file says were active during the runs.
+    """The ``diff_drive_controller`` parameters a file says were active during the runs,
+    as the controller itself reads them.
 
     Attributes
     ----------
     wheel_separation_multiplier, left_wheel_radius_multiplier, right_wheel_radius_multiplier : float
-        The multipliers (1.0 where the file does not set them).
+        The multipliers in effect (1.0 where the file does not set them). ROS 1's
+        controller takes ``wheel_radius_multiplier``, when it is set, for both wheels and
+        ignores the left and right ones; so does this.
     wheel_separation, wheel_radius : float or None
         Configured geometry [m], where the file has it.
     controller : str
         The controller's node name (its last part, without namespaces).
+    key_path : tuple of str
+        The keys leading to the controller's parameters in the file (``("robot1",
+        "diff_cont")``, ``("/robot1/diff_cont",)``, ``("/**",)``), so that an overlay is
+        keyed as the file is and the parameter server matches it.
+    ros2 : bool
+        A ros2_control file (``ros__parameters``), else ROS 1.
+    open_loop : bool
+        The controller's odometry integrates its commands, not the wheels.
+    left_joints, right_joints : tuple of str
+        The wheel joints (ros2_control ``left_wheel_names``, ROS 1 ``left_wheel``): several
+        per side are averaged, as the controller does.
+    radius_multiplier : float or None
+        ROS 1's ``wheel_radius_multiplier`` when the file sets it.
+    odom_frame_id, base_frame_id : str or None
+        The frames of the controller's odometry (for ``--odom-tf``).
     """
 
     wheel_separation_multiplier: float = 1.0
@@ -69,6 +96,14 @@ class ControllerParams:
     wheel_separation: float | None = None
     wheel_radius: float | None = None
     controller: str = DEFAULT_CONTROLLER
+    key_path: tuple[str, ...] = (DEFAULT_CONTROLLER,)
+    ros2: bool = True
+    open_loop: bool = False
+    left_joints: tuple[str, ...] = ()
+    right_joints: tuple[str, ...] = ()
+    radius_multiplier: float | None = None
+    odom_frame_id: str | None = None
+    base_frame_id: str | None = None
 
 
 @dataclass(frozen=True)
@@ -217,31 +252,34 @@ def read_parameter_file(path: str | Path, controller: str | None = None) -> Cont
     if not is_result_file(path):
         return read_controller_params(path, controller)
     new = read_calibrated_params(path)
+    name = controller or DEFAULT_CONTROLLER
     return ControllerParams(
         wheel_separation_multiplier=new.separation_multiplier,
         left_wheel_radius_multiplier=new.c_left,
         right_wheel_radius_multiplier=new.c_right,
         wheel_separation=new.configured_wheelbase,
         wheel_radius=None if new.wheel_diameter is None else 0.5 * new.wheel_diameter,
-        controller=controller or DEFAULT_CONTROLLER,
+        controller=name.strip("/").rsplit("/", 1)[-1],
+        key_path=(name,),
     )
 
 
 def read_controller_params(path: str | Path, controller: str | None = None) -> ControllerParams:
-    """Read the multipliers (and geometry) a ros2_control or ROS 1 parameter file sets.
+    """Read a ros2_control or ROS 1 ``diff_drive_controller`` parameter file.
 
     Parameters
     ----------
     path : path
-        A YAML parameter file.
+        A YAML parameter file: ``node: ros__parameters: {...}`` (ros2_control, with or
+        without namespaces, ``/**`` wildcards allowed) or ``node: {...}`` (ROS 1).
     controller : str, optional
-        The controller's node name; by default the one node that has diff-drive
-        parameters.
+        The controller's node name (its last part, or the namespaced name); by default
+        the one node that has diff-drive parameters.
 
     Raises
     ------
     InputError
-        If the file is not YAML, or names no such controller.
+        If the file is not YAML, names no such controller, or sets an implausible value.
     """
     try:
         data = yaml.safe_load(read_text(path))
@@ -252,25 +290,28 @@ def read_controller_params(path: str | Path, controller: str | None = None) -> C
             source=path,
             row=None if mark is None else mark.line + 1,
         ) from None
-    candidates = dict(_parameter_blocks(data))
+    blocks = _parameter_blocks(data)
+    candidates = {
+        "/".join(k.strip("/") for k in keys): (keys, ros2, params) for keys, ros2, params in blocks
+    }
     if controller is not None:
-        # A namespaced node matches by its last part as well.
-        matches = [n for n in candidates if controller in (n, n.rsplit("/", 1)[-1])]
-        if len(matches) == 1:
-            controller = matches[0]
-        if controller not in candidates:
+        wanted = controller.strip("/")
+        matches = [n for n in candidates if wanted in (n, n.rsplit("/", 1)[-1])]
+        if len(matches) != 1:
             found = ", ".join(sorted(candidates)) or "none"
+            many = "several match" if matches else "none matches"
             raise InputError(
-                f"has no diff-drive parameters for controller {controller!r} "
-                f"(controllers with them: {found})",
+                f"has no single diff-drive controller {controller!r} ({many}; controllers "
+                f"with diff-drive parameters: {found})",
                 source=path,
             )
-        name = controller
+        name = matches[0]
     elif len(candidates) == 1:
         name = next(iter(candidates))
     elif not candidates:
         raise InputError(
-            "has no diff_drive_controller parameters (wheel_separation, *_multiplier)",
+            "has no diff_drive_controller parameters (wheel_separation, *_multiplier, "
+            "*_wheel_names)",
             source=path,
         )
     else:
@@ -279,30 +320,100 @@ def read_controller_params(path: str | Path, controller: str | None = None) -> C
             "name one with --controller",
             source=path,
         )
-    params = candidates[name]
-    values: dict[str, float] = {}
-    for key in (*MULTIPLIER_KEYS, *GEOMETRY_KEYS):
-        if key in params:
-            value = params[key]
-            if isinstance(value, bool) or not isinstance(value, int | float) or value <= 0:
-                raise InputError(f"{key} is {value!r}, not a positive number", source=path)
-            values[key] = float(value)
-    return ControllerParams(**values, controller=name.rsplit("/", 1)[-1])
+    keys, ros2, params = candidates[name]
+    return _controller(params, keys, ros2, path)
 
 
-def _parameter_blocks(data: object, prefix: str = "") -> list[tuple[str, dict[str, Any]]]:
-    """Every mapping that holds diff-drive keys, named by its node (``ros__parameters``
-    levels and namespaces skipped)."""
-    found: list[tuple[str, dict[str, Any]]] = []
-    if not isinstance(data, dict):
+def _number(
+    params: dict[str, Any], key: str, bounds: tuple[float, float], path: object
+) -> float | None:
+    if key not in params:
+        return None
+    value = params[key]
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise InputError(f"{key} is {value!r}, not a number", source=str(path))
+    low, high = bounds
+    if not low <= value <= high:
+        unit = " m" if key in GEOMETRY_KEYS else ""
+        raise InputError(
+            f"{key} is {value:g}{unit}, outside {low:g} to {high:g}{unit}"
+            + (" (lengths are in metres)" if key in GEOMETRY_KEYS and value > high else ""),
+            source=str(path),
+        )
+    return float(value)
+
+
+def _names(params: dict[str, Any], *keys: str) -> tuple[str, ...]:
+    for key in keys:
+        value = params.get(key)
+        if isinstance(value, str) and value:
+            return (value,)
+        if isinstance(value, list) and all(isinstance(v, str) for v in value):
+            return tuple(value)
+    return ()
+
+
+def _controller(
+    params: dict[str, Any], keys: tuple[str, ...], ros2: bool, path: object
+) -> ControllerParams:
+    """The parameters as ``diff_drive_controller`` reads them (ROS 1 and 2)."""
+    multiplier = {k: _number(params, k, MULTIPLIER_RANGE, path) for k in MULTIPLIER_KEYS}
+    both = multiplier["wheel_radius_multiplier"]
+    # ROS 1: wheel_radius_multiplier, when set, is both wheels' and the others are ignored.
+    left = both if both is not None else multiplier["left_wheel_radius_multiplier"]
+    right = both if both is not None else multiplier["right_wheel_radius_multiplier"]
+    open_loop = params.get("open_loop", False)
+    if not isinstance(open_loop, bool):
+        raise InputError(f"open_loop is {open_loop!r}, not true or false", source=str(path))
+    left_joints = _names(params, "left_wheel_names", "left_wheel")
+    right_joints = _names(params, "right_wheel_names", "right_wheel")
+    if len(left_joints) != len(right_joints):
+        raise InputError(
+            f"names {len(left_joints)} left and {len(right_joints)} right wheel joints: the "
+            "controller needs as many on each side",
+            source=str(path),
+        )
+    frames = {k: params.get(k) for k in ("odom_frame_id", "base_frame_id")}
+    name = "/".join(k.strip("/") for k in keys).rsplit("/", 1)[-1] or keys[-1]
+    return ControllerParams(
+        wheel_separation_multiplier=multiplier["wheel_separation_multiplier"] or 1.0,
+        left_wheel_radius_multiplier=left or 1.0,
+        right_wheel_radius_multiplier=right or 1.0,
+        wheel_separation=_number(params, "wheel_separation", LENGTH_RANGE, path),
+        wheel_radius=_number(params, "wheel_radius", LENGTH_RANGE, path),
+        controller=name,
+        key_path=keys,
+        ros2=ros2,
+        open_loop=open_loop,
+        left_joints=left_joints,
+        right_joints=right_joints,
+        radius_multiplier=both,
+        odom_frame_id=frames["odom_frame_id"] if isinstance(frames["odom_frame_id"], str) else None,
+        base_frame_id=frames["base_frame_id"] if isinstance(frames["base_frame_id"], str) else None,
+    )
+
+
+#: Deepest nesting of parameter files searched (namespaces in namespaces).
+_MAX_DEPTH = 16
+
+
+def _parameter_blocks(
+    data: object, keys: tuple[str, ...] = (), depth: int = 0
+) -> list[tuple[tuple[str, ...], bool, dict[str, Any]]]:
+    """Every mapping that holds diff-drive parameters: its key path (``ros__parameters``
+    levels left out), whether it is a ros2_control block, and the parameters."""
+    found: list[tuple[tuple[str, ...], bool, dict[str, Any]]] = []
+    if not isinstance(data, dict) or depth > _MAX_DEPTH:
         return found
-    keys = set(MULTIPLIER_KEYS) | set(GEOMETRY_KEYS)
     for name, value in data.items():
         if not isinstance(value, dict):
             continue
-        inner = value.get("ros__parameters", value)
-        if isinstance(inner, dict) and keys & set(inner):
-            found.append((str(name) if not prefix else f"{prefix}/{name}", inner))
+        path = (*keys, str(name))
+        inner = value.get("ros__parameters")
+        if isinstance(inner, dict) and DIFF_DRIVE_KEYS & set(inner):
+            found.append((path, True, inner))
+        elif DIFF_DRIVE_KEYS & set(value):
+            found.append((path, False, value))
         else:
-            found.extend(_parameter_blocks(value, str(name)))
+            found.extend(_parameter_blocks(value, path, depth + 1))
     return found

@@ -18,7 +18,7 @@ is left is reading the bag's storage, which both share.
 
 What it reads
 -------------
-- ``sensor_msgs/JointState``: the left and right joints' positions (kind
+- ``sensor_msgs/JointState``: the wheel joints' positions (kind
   :data:`POSITION`) if ``position`` has one entry per name, or their velocities (kind
   :data:`VELOCITY`) if ``position`` is empty and ``velocity`` has one per name;
 - ``geometry_msgs/PoseStamped``, ``geometry_msgs/PoseWithCovarianceStamped`` and
@@ -291,8 +291,8 @@ class _Cursor:
 # --- the layouts of the supported message types ----------------------------------------
 
 
-def _joint_state_layout(left: str, right: str) -> LayoutOf:
-    """``sensor_msgs/JointState``: the two joints' positions, or velocities if no position.
+def _joint_state_layout(joints: tuple[str, ...]) -> LayoutOf:
+    """``sensor_msgs/JointState``: the joints' positions, or velocities if no position.
 
     Checked: the ``frame_id`` length, the names (count, lengths, text), the position
     count and, for velocities, the velocity count. Velocities (after positions) and
@@ -303,7 +303,7 @@ def _joint_state_layout(left: str, right: str) -> LayoutOf:
         cur = _Cursor(raw, ros2)
         stamp = cur.header()
         names = [cur.string(same=True) for _ in range(cur.uint32())]
-        i, j = names.index(left), names.index(right)
+        where = [names.index(joint) for joint in joints]
         at, count = cur.float64_array()
         kind = POSITION
         if count != len(names):
@@ -313,7 +313,7 @@ def _joint_state_layout(left: str, right: str) -> LayoutOf:
             kind = VELOCITY
             if count != len(names):
                 raise ValueError("velocity and name differ in length")
-        return cur.layout(stamp, (at + 8 * i, at + 8 * j), "f8", kind)
+        return cur.layout(stamp, tuple(at + 8 * i for i in where), "f8", kind)
 
     return layout_of
 
@@ -354,28 +354,29 @@ def _pose_layout(msgtype: str) -> LayoutOf:
     return layout_of
 
 
-def fast_layout(msgtype: str, joints: tuple[str, str] | None = None) -> LayoutOf | None:
+def fast_layout(msgtype: str, joints: tuple[str, ...] | None = None) -> LayoutOf | None:
     """The layout derivation for messages of ``msgtype``, or None if it has none.
 
     Parameters
     ----------
     msgtype : str
         rosbags' name of the message type (``"sensor_msgs/msg/JointState"``).
-    joints : (str, str), optional
-        The left and right joint names; required for ``sensor_msgs/JointState``.
+    joints : tuple of str, optional
+        The joint names (the left wheels', then the right wheels'); required for
+        ``sensor_msgs/JointState``.
 
     Returns
     -------
     LayoutOf or None
         For ``decode_messages(layout_of=...)``. The samples it reads are:
-        ``sensor_msgs/JointState``: width 2, the joints' positions or velocities;
+        ``sensor_msgs/JointState``: one value per joint, its position or velocity;
         pose types: width 6, ``x, y`` and quaternion ``x, y, z, w``; ``std_msgs``
         numbers: width 1, ``data``, no stamp (zeros). None for other types.
     """
     if msgtype == JOINT_STATE:
         if joints is None:
-            raise ValueError("the layout of sensor_msgs/JointState needs the two joint names")
-        return _joint_state_layout(*joints)
+            raise ValueError("the layout of sensor_msgs/JointState needs the joint names")
+        return _joint_state_layout(joints)
     if msgtype in TRUTH_TYPES:
         return _pose_layout(msgtype)
     if msgtype in TICK_TYPES:

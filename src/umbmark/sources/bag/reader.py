@@ -7,7 +7,8 @@ that is absent or of the wrong type (the message lists the topics present), a st
 error while reading messages, or a message that cannot be deserialized.
 
 rosbags is imported only when a bag is opened, so importing :mod:`umbmark.sources.bag`
-works without it.
+works without it. :func:`messages` counts the messages it yields for the progress of the
+read under way (:mod:`umbmark.sources.progress`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ...errors import InputError
+from ..progress import current_tracker
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
@@ -26,7 +28,9 @@ if TYPE_CHECKING:
 __all__ = [
     "deserialize",
     "listing",
+    "message_count",
     "messages",
+    "one_line",
     "open_bag",
     "topic_connections",
     "topic_types",
@@ -42,7 +46,8 @@ def listing(items: Sequence[str]) -> str:
     return f"{shown}, and {more} more" if more > 0 else shown
 
 
-def _one_line(err: BaseException) -> str:
+def one_line(err: BaseException) -> str:
+    """An exception's text on one line (its type's name if it has none)."""
     text = " ".join(str(err).split())
     return text or type(err).__name__
 
@@ -65,7 +70,7 @@ def _bag_location(path: Path, src: str) -> Path:
         with path.open("rb") as file:
             magic = file.read(13)
     except OSError as err:
-        raise InputError(f"cannot read the bag: {_one_line(err)}", source=src) from None
+        raise InputError(f"cannot read the bag: {one_line(err)}", source=src) from None
     if magic.startswith(b"#ROSBAG"):
         raise InputError(
             "this looks like a ROS 1 bag, but it must be named *.bag to be read", source=src
@@ -102,7 +107,7 @@ def open_bag(path: Path, src: str) -> Iterator[AnyReader]:
         reader = AnyReader([location], default_typestore=get_typestore(Stores.LATEST))
         reader.open()
     except Exception as err:  # rosbags, sqlite, mcap, yaml, decompression: all bad input
-        problem = f"cannot read the bag: {_one_line(err)}"
+        problem = f"cannot read the bag: {one_line(err)}"
         if location.suffix == ".bag" and "index" in problem.lower():
             problem += " (a recording that was cut short needs `rosbag reindex` first)"
         raise InputError(problem, source=src) from None
@@ -167,10 +172,42 @@ def topic_connections(
     return [c for c in reader.connections if c.topic == topic], msgtype
 
 
+def message_count(conns: Sequence[Connection]) -> int:
+    """How many messages ``conns`` hold, as the bag's index or metadata says."""
+    return sum(int(getattr(conn, "msgcount", 0) or 0) for conn in conns)
+
+
 def messages(
     reader: AnyReader, conns: Sequence[Connection], topic: str, src: str
 ) -> Iterator[tuple[int, bytes]]:
-    """``(bag time [ns], raw message)`` of ``conns``; read errors become InputError."""
+    """``(bag time [ns], raw message)`` of ``conns``; read errors become InputError.
+
+    Inside a read that reports progress (:func:`umbmark.sources.progress.tracking`), the
+    messages yielded are counted and reported every
+    :data:`~umbmark.sources.progress.REPORT_EVERY` messages.
+    """
+    tracker = current_tracker()
+    if tracker is None:
+        yield from _raw_messages(reader, conns, topic, src)
+        return
+    tracker.begin(topic, message_count(conns))
+    every = max(1, tracker.every)
+    pending = 0
+    try:
+        for item in _raw_messages(reader, conns, topic, src):
+            yield item
+            pending += 1
+            if pending == every:
+                tracker.advance(pending)
+                pending = 0
+    finally:
+        if pending:
+            tracker.advance(pending)
+
+
+def _raw_messages(
+    reader: AnyReader, conns: Sequence[Connection], topic: str, src: str
+) -> Iterator[tuple[int, bytes]]:
     stream = reader.messages(connections=conns)
     while True:
         try:
@@ -179,7 +216,7 @@ def messages(
             return
         except Exception as err:  # corrupt storage, truncated chunk, bad compression
             raise InputError(
-                f"cannot read the messages of {topic}: {_one_line(err)}", source=src
+                f"cannot read the messages of {topic}: {one_line(err)}", source=src
             ) from None
         yield timestamp, raw
 
@@ -190,5 +227,5 @@ def deserialize(reader: AnyReader, raw: bytes, msgtype: str, topic: str, src: st
         return reader.deserialize(raw, msgtype)
     except Exception as err:  # malformed message bytes
         raise InputError(
-            f"a message of {topic} cannot be decoded: {_one_line(err)}", source=src
+            f"a message of {topic} cannot be decoded: {one_line(err)}", source=src
         ) from None

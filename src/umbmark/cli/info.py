@@ -1,0 +1,222 @@
+"""``umbmark info``: parse the options, call :func:`umbmark.info`, render."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import TYPE_CHECKING, Any
+
+import click
+
+from .options import LOGS, OUTPUTS, Command, apply, option
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from ..jobs.info import InfoReport, LoggedInfo
+    from ..sources.bag.info import BagInfo, Candidate
+
+__all__ = ["info"]
+
+
+@click.command(cls=Command, no_args_is_help=True)
+@click.argument("source", type=click.Path())
+@apply(
+    [
+        option(
+            "--max-messages",
+            section=LOGS,
+            type=click.IntRange(min=1),
+            help="Bags: messages looked into per topic at most, spread over the topic's "
+            "time span [default: 2000].",
+        ),
+        option(
+            "--format",
+            "-f",
+            "format",
+            section=LOGS,
+            type=click.Choice(["auto", "bag", "log", "optiodom"]),
+            default="auto",
+            show_default=True,
+            help="Source format (auto: by the path).",
+        ),
+        option("--json", "json_out", section=OUTPUTS, is_flag=True, help="Print one JSON object."),
+    ]
+)
+def info(source: str, json_out: bool, **options: Any) -> None:
+    """What is in a ROS bag, a run log or an OptiOdom session: pick the options from it.
+
+    SOURCE: a ROS 1 .bag file, a ROS 2 bag folder (sqlite3 or MCAP), a run-log folder or
+    an OptiOdom session folder. For a bag: every topic with its type, message count,
+    rate and duration; the joints of the JointState topics and which of them move; the
+    /tf and /tf_static transforms and their chains; the candidates for the wheels, the
+    controller's odometry and the ground truth; and the options to calibrate with. Only
+    a bounded number of messages per topic is looked into (--max-messages).
+    """
+    from .. import info as run_info
+    from .common import console, warn
+
+    report = run_info(source, **options)
+    for note in report.notes:
+        warn(note)
+    if json_out:
+        click.echo(report.to_json(), nl=False)
+        return
+    out = console()
+    if report.bag is not None:
+        _render_bag(report, report.bag, out)
+    elif report.logged is not None:
+        _render_logged(report, report.logged, out)
+
+
+def _number(value: float | None, fmt: str) -> str:
+    return "" if value is None else format(value, fmt)
+
+
+def _more(count: int, what: str) -> str:
+    return f"... and {count} more {what}" if count > 0 else ""
+
+
+def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
+    from rich.table import Table
+    from rich.text import Text
+
+    when = (
+        ""
+        if bag.start is None
+        else ", from "
+        + dt.datetime.fromtimestamp(bag.start, dt.timezone.utc).isoformat(timespec="seconds")
+    )
+    out.print(
+        Text(
+            f"{report.source}: ROS bag ({bag.storage}), {bag.messages} messages, "
+            f"{bag.duration:.1f} s{when}"
+        )
+    )
+    topics = Table(title=Text("Topics"), title_justify="left")
+    topics.add_column(Text("topic"))
+    topics.add_column(Text("type"))
+    for name in ("messages", "rate [Hz]", "duration [s]"):
+        topics.add_column(Text(name), justify="right")
+    for topic in bag.topics:
+        topics.add_row(
+            *(
+                Text(c)
+                for c in (
+                    topic.name,
+                    topic.msgtype,
+                    str(topic.count),
+                    _number(topic.rate, ".1f"),
+                    _number(topic.duration, ".1f"),
+                )
+            )
+        )
+    out.print(topics)
+    if bag.topics_not_listed:
+        out.print(Text(_more(bag.topics_not_listed, "topics")))
+
+    for js in bag.joint_states:
+        scanned = "all" if js.complete else f"{js.scanned} spread over the topic"
+        joints = Table(
+            title=Text(f"Joints of {js.topic} ({scanned} messages looked into)"),
+            title_justify="left",
+        )
+        joints.add_column(Text("joint"))
+        joints.add_column(Text("messages"), justify="right")
+        joints.add_column(Text("position range [rad]"), justify="right")
+        joints.add_column(Text("max speed [rad/s]"), justify="right")
+        joints.add_column(Text("moves"))
+        for joint in js.joints:
+            joints.add_row(
+                Text(joint.name),
+                Text(str(joint.samples)),
+                Text(_number(joint.position_range, ".3f")),
+                Text(_number(joint.max_speed, ".3f")),
+                Text("yes" if joint.moving else "no"),
+            )
+        out.print(joints)
+        if js.not_listed:
+            out.print(Text(_more(js.not_listed, "joints")))
+
+    if bag.transforms:
+        tfs = Table(title=Text("Transforms (parent -> child)"), title_justify="left")
+        tfs.add_column(Text("parent -> child"))
+        tfs.add_column(Text("topic"))
+        tfs.add_column(Text("rate [Hz]"), justify="right")
+        tfs.add_column(Text("moves"))
+        for tf in bag.transforms:
+            tfs.add_row(
+                Text(f"{tf.parent} -> {tf.child}"),
+                Text(tf.topic),
+                Text("static" if tf.static else _number(tf.rate, ".1f")),
+                Text("yes" if tf.moving else "no"),
+            )
+        out.print(tfs)
+        if bag.transforms_not_listed:
+            out.print(Text(_more(bag.transforms_not_listed, "transforms")))
+    if bag.chains:
+        out.print(Text("TF chains:"))
+        for chain in bag.chains:
+            out.print(Text("  " + " -> ".join(chain)))
+        if bag.chains_not_listed:
+            out.print(Text("  " + _more(bag.chains_not_listed, "chains")))
+
+    _render_candidates("Wheels", bag.wheels, out)
+    _render_candidates("Controller odometry", bag.odometry, out)
+    _render_candidates("Ground truth", bag.truth, out)
+    if bag.suggested_options is not None:
+        out.print(Text(f"Suggested options: {bag.suggested_options}", style="bold"))
+    else:
+        out.print(Text("No wheel data or ground truth found to suggest options for."))
+    looked = (
+        "every message of the topics looked into was read"
+        if bag.complete
+        else f"at most {bag.max_messages} messages per topic were looked into"
+        " (--max-messages), spread over each topic's time span"
+    )
+    out.print(Text(f"Counts and rates are the bag's own; {looked}."))
+
+
+def _render_candidates(title: str, candidates: tuple[Candidate, ...], out: Console) -> None:
+    from rich.text import Text
+
+    if not candidates:
+        out.print(Text(f"{title}: none found"))
+        return
+    out.print(Text(f"{title}:"))
+    for candidate in candidates:
+        moves = {True: "", False: " [does not move]", None: ""}[candidate.moving]
+        options = f"   {candidate.command_line}" if candidate.options else ""
+        out.print(Text(f"  {candidate.label}{moves}{options}"))
+
+
+def _render_logged(report: InfoReport, logged: LoggedInfo, out: Console) -> None:
+    from rich.table import Table
+    from rich.text import Text
+
+    kind = "run log" if report.format == "log" else "OptiOdom session"
+    runs = "no runs found" if logged.runs is None else f"{logged.runs} runs"
+    out.print(Text(f"{report.source}: {kind}, {runs}, {logged.duration:.1f} s recorded"))
+    files = Table(title=Text("Files"), title_justify="left")
+    files.add_column(Text("file"))
+    files.add_column(Text("wheel samples"), justify="right")
+    files.add_column(Text("ground truth samples"), justify="right")
+    files.add_column(Text("duration [s]"), justify="right")
+    for f in logged.files:
+        files.add_row(
+            Text(f.name),
+            Text(str(f.wheel_samples)),
+            Text(str(f.truth_samples)),
+            Text(f"{f.duration:.1f}"),
+        )
+    out.print(files)
+    if logged.files_not_listed:
+        out.print(Text(_more(logged.files_not_listed, "files")))
+    p = logged.params
+    side = "" if logged.side_length is None else f", square side {logged.side_length:g} m"
+    out.print(
+        Text(
+            f"Wheel parameters: b = {1000 * p.wheelbase:.2f} mm, D_L = "
+            f"{1000 * p.diameter_left:.3f} mm, D_R = {1000 * p.diameter_right:.3f} mm, "
+            f"{p.encoder_resolution:g} pulses per motor turn, gear ratio {p.gear_ratio:g}{side}"
+        )
+    )
