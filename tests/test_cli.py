@@ -212,3 +212,30 @@ def test_every_option_is_a_keyword_of_the_library_function(name, command, functi
     for converted_command, keyword in _CONVERTED:
         if converted_command == name:
             assert keyword in keywords
+
+
+def test_a_full_disk_is_one_line_with_its_own_exit_status(tmp_path):
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full on this system")
+    from helpers import umbmark_command
+
+    table = tmp_path / "runs.csv"
+    umbmark.example(table)
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run(
+            [umbmark_command(), "calibrate", str(table), "-b", "0.34", "-L", "4", "--unit", "mm",
+             "--json"],
+            stdout=full, stderr=subprocess.PIPE, text=True, check=False, timeout=60,
+        )  # fmt: skip
+    assert proc.returncode == 3, proc.stderr
+    assert proc.stderr == "umbmark: error: No space left on device\n"
+
+
+def test_an_ascii_only_terminal_gets_escapes_not_a_traceback(tmp_path):
+    table = tmp_path / "runs.csv"
+    umbmark.example(table)
+    env = {**os.environ, "PYTHONIOENCODING": "ascii"}
+    proc = run_cli("calibrate", str(table), "-b", "0.34", "-L", "4", "--unit", "mm", env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert "E_max,syst" in proc.stdout

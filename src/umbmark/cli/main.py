@@ -30,6 +30,10 @@ __all__ = ["cli", "main"]
 
 #: Exit status after Ctrl-C, as shells report it.
 EXIT_INTERRUPTED = 130
+#: Exit status when the environment fails us: a full disk, a folder we may not write.
+EXIT_ENVIRONMENT = 3
+#: Exit status of a failure of umbmark itself (a bug): BSD's EX_SOFTWARE.
+EXIT_INTERNAL = 70
 
 
 @click.group(
@@ -53,7 +57,16 @@ def _usage(exc: click.UsageError) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """Entry point of the ``umbmark`` console script."""
+    """Entry point of the ``umbmark`` console script.
+
+    Exit status: 0 done, 2 bad input or options (one line on stderr naming the file or
+    flag), 3 the environment failed (disk full, permission denied, a path too long), 70 a
+    failure of umbmark itself (one line; please report it), 130 interrupted.
+    """
+    for stream in (sys.stdout, sys.stderr):  # an ASCII-only terminal: escape, never crash
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None:
+            reconfigure(errors="backslashreplace")
     try:
         with reading_bar():  # long bags show their progress on a terminal's stderr
             code = cli.main(args=argv, prog_name="umbmark", standalone_mode=False)
@@ -74,4 +87,17 @@ def main(argv: Sequence[str] | None = None) -> None:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         sys.exit(1)
+    except OSError as exc:
+        where = f"{exc.filename}: " if exc.filename else ""
+        error_line(f"{where}{exc.strerror or exc}")
+        sys.exit(EXIT_ENVIRONMENT)
+    except MemoryError:
+        error_line("out of memory: the input is too large for this machine")
+        sys.exit(EXIT_ENVIRONMENT)
+    except Exception as exc:  # a bug of ours: still one line, never a traceback
+        error_line(
+            f"internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+            "; please report it with the command that caused it"
+        )
+        sys.exit(EXIT_INTERNAL)
     sys.exit(code if isinstance(code, int) else 0)
