@@ -18,17 +18,13 @@ parameters of the same names, without the ``ros__parameters`` level. Writing the
 
 from __future__ import annotations
 
-import json
-import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from ..errors import InputError
 from ..kinematics import WheelParams
-from .text import read_text
+from .text import finite, load_json, load_yaml
 
 __all__ = [
     "DEFAULT_CONTROLLER",
@@ -163,10 +159,7 @@ class CalibratedParams:
 
 
 def _result_data(path: str | Path) -> dict[str, Any]:
-    try:
-        data = json.loads(read_text(path))
-    except json.JSONDecodeError as exc:
-        raise InputError(f"is not JSON ({exc.msg})", source=path, row=exc.lineno) from None
+    data = load_json(path)
     if not isinstance(data, dict) or not isinstance(data.get("new"), dict):
         raise InputError(
             "is not an umbmark calibration result (no 'new' parameters; write one with "
@@ -188,12 +181,22 @@ def read_calibrated_params(path: str | Path) -> CalibratedParams:
     new = data["new"]
 
     def number(container: dict[str, object], key: str, where: str) -> float:
-        value = container.get(key)
-        if isinstance(value, bool) or not isinstance(value, int | float):
+        raw = container.get(key)
+        if isinstance(raw, bool) or not isinstance(raw, int | float):
             raise InputError(f"{where}{key} is missing or not a number", source=path)
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(f"{where}{key} is {value!r}, not a positive number", source=path)
-        return float(value)
+        value = finite(raw)
+        if value is None or value <= 0:
+            shown = f"{raw!r}"[:24]
+            raise InputError(f"{where}{key} is {shown}, not a positive number", source=path)
+        low, high = (
+            MULTIPLIER_RANGE if key.startswith(("c_", "wheel_separation_m")) else LENGTH_RANGE
+        )
+        if not low <= value <= high:
+            raise InputError(
+                f"{where}{key} is {value:g}, outside the plausible {low:g} to {high:g}",
+                source=path,
+            )
+        return value
 
     def optional(container: dict[str, object], key: str, where: str) -> float | None:
         return None if container.get(key) is None else number(container, key, where)
@@ -249,7 +252,7 @@ def read_parameter_file(path: str | Path, controller: str | None = None) -> Cont
     InputError
         If the file is neither, or names no such controller.
     """
-    if not is_result_file(path):
+    if Path(path).suffix.lower() != ".json" and not is_result_file(path):
         return read_controller_params(path, controller)
     new = read_calibrated_params(path)
     name = controller or DEFAULT_CONTROLLER
@@ -281,15 +284,7 @@ def read_controller_params(path: str | Path, controller: str | None = None) -> C
     InputError
         If the file is not YAML, names no such controller, or sets an implausible value.
     """
-    try:
-        data = yaml.safe_load(read_text(path))
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise InputError(
-            f"is not valid YAML ({getattr(exc, 'problem', None) or exc})",
-            source=path,
-            row=None if mark is None else mark.line + 1,
-        ) from None
+    data = load_yaml(path)
     blocks = _parameter_blocks(data)
     candidates = {
         "/".join(k.strip("/") for k in keys): (keys, ros2, params) for keys, ros2, params in blocks
@@ -329,9 +324,10 @@ def _number(
 ) -> float | None:
     if key not in params:
         return None
-    value = params[key]
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise InputError(f"{key} is {value!r}, not a number", source=str(path))
+    value = finite(params[key])
+    if value is None:
+        shown = f"{params[key]!r}"[:24]
+        raise InputError(f"{key} is {shown}, not a number", source=str(path))
     low, high = bounds
     if not low <= value <= high:
         unit = " m" if key in GEOMETRY_KEYS else ""

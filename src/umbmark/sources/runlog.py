@@ -46,12 +46,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from ..errors import InputError
 from ..kinematics import WheelParams
 from ..recording import PoseSeries, Recording, WheelSeries
-from .text import content_lines, read_text
+from .text import content_lines, finite, load_yaml
 
 __all__ = [
     "FORMAT_NAME",
@@ -110,10 +109,7 @@ def read_metadata(path: str | Path) -> LogMetadata:
         For a missing file, invalid YAML, or missing or implausible values.
     """
     path = Path(path)
-    try:
-        data = yaml.safe_load(read_text(path))
-    except yaml.YAMLError as exc:
-        raise InputError(f"is not valid YAML ({exc})".splitlines()[0], source=path) from None
+    data = load_yaml(path)
     if not isinstance(data, dict):
         raise InputError("is not a mapping of keys to values", source=path)
     wheel_data = str(data.get("wheel_data", "counts"))
@@ -126,9 +122,10 @@ def read_metadata(path: str | Path) -> LogMetadata:
             raise InputError(f"has no {key}", source=path)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise InputError(f"{key} is {value!r}, not a number", source=path)
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(f"{key} is {value!r}, not a positive number", source=path)
-        return float(value)
+        number = finite(value)
+        if number is None or number <= 0:
+            raise InputError(f"{key} is {f'{value!r}'[:24]}, not a positive number", source=path)
+        return number
 
     counts = wheel_data == "counts"
     side = data.get("side_length")

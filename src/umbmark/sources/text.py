@@ -1,17 +1,45 @@
 """Reading text files: the one place every text reader (runs tables, run logs, OptiOdom
 sessions, parameter files, results) gets its lines from.
 
-Files are UTF-8, with or without a byte-order mark. Every failure to read becomes an
-:class:`umbmark.errors.InputError` naming the file.
+Files are UTF-8, with or without a byte-order mark, of at most :data:`MAX_TEXT_BYTES`
+(read with that bound, so ``/dev/zero`` or a FIFO cannot exhaust memory). YAML and JSON
+are parsed with bounds on nesting (:data:`MAX_DEPTH`), on YAML aliases
+(:data:`MAX_ALIASES`: an alias bomb cannot expand) and on the digits of a number
+(:data:`MAX_DIGITS`). Every failure to read becomes an :class:`umbmark.errors.InputError`
+naming the file.
 """
 
 from __future__ import annotations
 
+import json
+import math
 from pathlib import Path
+from typing import Any
+
+import yaml
 
 from ..errors import InputError
 
-__all__ = ["content_lines", "read_text"]
+__all__ = [
+    "MAX_ALIASES",
+    "MAX_DEPTH",
+    "MAX_DIGITS",
+    "MAX_TEXT_BYTES",
+    "content_lines",
+    "finite",
+    "load_json",
+    "load_yaml",
+    "read_text",
+]
+
+#: Largest text file read [bytes]: runs tables, logs and parameter files are far smaller.
+MAX_TEXT_BYTES = 512 * 1024 * 1024
+#: Deepest nesting of YAML or JSON read.
+MAX_DEPTH = 64
+#: Most YAML aliases (``*name``) read in one file.
+MAX_ALIASES = 16
+#: Most digits of a JSON number.
+MAX_DIGITS = 40
 
 
 def read_text(path: str | Path) -> str:
@@ -23,7 +51,14 @@ def read_text(path: str | Path) -> str:
         If the file cannot be read or is not text.
     """
     try:
-        return Path(path).read_text(encoding="utf-8-sig")
+        with Path(path).open("rb") as file:
+            raw = file.read(MAX_TEXT_BYTES + 1)
+        if len(raw) > MAX_TEXT_BYTES:
+            raise InputError(
+                f"is larger than {MAX_TEXT_BYTES // (1024 * 1024)} MB: not a file umbmark reads",
+                source=path,
+            )
+        return raw.decode("utf-8-sig")
     except FileNotFoundError:
         raise InputError("no such file", source=path) from None
     except IsADirectoryError:
@@ -47,3 +82,112 @@ def content_lines(path: str | Path) -> list[tuple[int, str]]:
         for number, line in enumerate(read_text(path).splitlines(), start=1)
         if line.strip() and not line.lstrip().startswith("#")
     ]
+
+
+def finite(value: object) -> float | None:
+    """``value`` as a finite float, or None if it is no number, not finite, or too large.
+
+    Booleans are no numbers; integers too large for a float (401 digits) are refused
+    instead of raising ``OverflowError``.
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
+class _BoundedLoader(yaml.SafeLoader):
+    """PyYAML's safe loader with bounds on nesting and aliases."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self._depth = 0
+        self._aliases = 0
+
+    def compose_node(self, parent: Any, index: Any) -> Any:  # noqa: ANN401 (PyYAML's API)
+        if self.check_event(yaml.AliasEvent):
+            self._aliases += 1
+            if self._aliases > MAX_ALIASES:
+                raise yaml.YAMLError(f"more than {MAX_ALIASES} aliases")
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                raise yaml.YAMLError(f"nested more than {MAX_DEPTH} deep")
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+
+def load_yaml(path: str | Path, text: str | None = None) -> object:
+    """The YAML document of ``path`` (or ``text``, read from it), bounded.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read, is not YAML, or exceeds the bounds.
+    """
+    content = read_text(path) if text is None else text
+    try:
+        return yaml.load(content, Loader=_BoundedLoader)
+    except yaml.YAMLError as exc:
+        problem = getattr(exc, "problem", None) or str(exc)
+        mark = getattr(exc, "problem_mark", None)
+        row = mark.line + 1 if mark is not None else None
+        raise InputError(
+            f"is not valid YAML ({problem})".splitlines()[0], source=path, row=row
+        ) from None
+    except RecursionError:
+        raise InputError(f"is nested more than {MAX_DEPTH} deep", source=path) from None
+    except (ValueError, OverflowError) as exc:  # an integer of thousands of digits
+        raise InputError(f"has a value umbmark cannot read ({exc})"[:160], source=path) from None
+
+
+def _bounded_number(text: str) -> float:
+    if len(text.lstrip("-")) > MAX_DIGITS:
+        raise ValueError(f"a number of more than {MAX_DIGITS} digits")
+    return float(text)
+
+
+def _depth(value: object, limit: int) -> int:
+    """Nesting depth of parsed JSON, stopping past ``limit``."""
+    depth, level = 0, [value]
+    while level and depth <= limit:
+        depth += 1
+        level = [
+            child
+            for item in level
+            if isinstance(item, dict | list)
+            for child in (item.values() if isinstance(item, dict) else item)
+        ]
+        level = [item for item in level if isinstance(item, dict | list)]
+    return depth
+
+
+def load_json(path: str | Path) -> object:
+    """The JSON document of ``path``, bounded in depth and in the digits of its numbers.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read, is not JSON, or exceeds the bounds.
+    """
+    text = read_text(path)
+    try:
+        data = json.loads(
+            text,
+            parse_int=_bounded_number,
+            parse_float=_bounded_number,
+            parse_constant=lambda name: math.nan,
+        )
+    except json.JSONDecodeError as exc:
+        raise InputError(f"is not JSON ({exc.msg})", source=path, row=exc.lineno) from None
+    except ValueError as exc:
+        raise InputError(f"is not JSON umbmark reads ({exc})", source=path) from None
+    except RecursionError:
+        raise InputError(f"is JSON nested more than {MAX_DEPTH} deep", source=path) from None
+    if _depth(data, MAX_DEPTH) > MAX_DEPTH:
+        raise InputError(f"is JSON nested more than {MAX_DEPTH} deep", source=path)
+    return data
