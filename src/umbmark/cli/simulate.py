@@ -73,6 +73,9 @@ def _number(*decls: str, section: str, default: float, help_text: str) -> Any:
         option("--logs", section=OUTPUTS, type=click.Path(file_okay=False),
                help="Write each run's time series (time, true pose, encoder counts) into "
                "this folder, in the run-log format that calibrate reads."),
+        option("--force", section=OUTPUTS, is_flag=True,
+               help="Write --logs into a folder that is not empty (its other runs would be "
+               "calibrated together with these)."),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print a JSON summary."),
     ]

@@ -44,6 +44,16 @@ PATHS: tuple[PathKind, ...] = ("square", "straight", "turn")
 DIRECTIONS = ("both", "cw", "ccw")
 #: Largest on-the-spot turn [rad]: ten turns.
 MAX_TURN = 20.0 * math.pi
+#: Bounds of the options that set how much work a simulation is (and of plausibility).
+MAX_RUNS = 1000
+SEED_RANGE = (0, 2**63 - 1)
+DT_RANGE = (1e-4, 0.1)  # s
+SPEED_RANGE = (0.01, 5.0)  # m/s
+MAX_ENCODER_RESOLUTION = 1e7  # counts per motor revolution
+MAX_GEAR_RATIO = 1e4
+MAX_SLIP = 0.1  # standard deviation of the relative wheel slip
+MAX_BUMP_SIZE = 0.05  # m
+MAX_BUMP_RATE = 100.0  # per metre
 
 
 @dataclass(frozen=True, repr=False)
@@ -116,13 +126,17 @@ class SimulationReport:
         *,
         output: str | os.PathLike[str] | None = None,
         logs: str | os.PathLike[str] | None = None,
+        force: bool = False,
     ) -> list[Path]:
         """Write the runs table (``output``) and the run logs (``logs``, a folder).
+
+        ``logs`` must be an empty or new folder unless ``force``.
 
         Raises
         ------
         InputError
-            If a file cannot be written, or the runs have no time series for ``logs``.
+            If a file cannot be written, the runs have no time series for ``logs``, or
+            ``logs`` holds files already (without ``force``).
         """
         plan = OutputPlan.of(output=output, logs=logs)
         if plan.output is not None and self.path != "square":
@@ -132,6 +146,13 @@ class SimulationReport:
                 raise InputError("--logs needs the time series: simulate with record=True")
             if plan.logs.exists() and not plan.logs.is_dir():
                 raise InputError("exists and is not a folder", source=plan.logs)
+            if plan.logs.is_dir() and any(plan.logs.iterdir()) and not force:
+                raise InputError(
+                    "is not empty: run logs written into it would mix with what it holds "
+                    "(calibrate reads every run in the folder); choose an empty folder or "
+                    "give --force",
+                    source=plan.logs,
+                )
         written: list[Path] = []
         if plan.output is not None:
             from ..outputs.runs_table import write_runs_table
@@ -206,6 +227,7 @@ def simulate(
     record: bool = False,
     output: str | os.PathLike[str] | None = None,
     logs: str | os.PathLike[str] | None = None,
+    force: bool = False,
     progress: Callable[[float], None] | None = None,
 ) -> SimulationReport:
     """Drive a virtual robot with known errors around a path, steering by its own odometry.
@@ -268,6 +290,23 @@ def simulate(
         ("--speed", speed),
     ):
         check_positive_option(name, value)
+    for name, value, (low, high) in (
+        ("--dt", dt, DT_RANGE),
+        ("--speed", speed, SPEED_RANGE),
+        ("--encoder-resolution", encoder_resolution, (1.0, MAX_ENCODER_RESOLUTION)),
+        ("--gear-ratio", gear_ratio, (1e-3, MAX_GEAR_RATIO)),
+        ("--slip", slip, (0.0, MAX_SLIP)),
+        ("--bump-size", bump_size, (0.0, MAX_BUMP_SIZE)),
+        ("--bump-rate", bump_rate, (0.0, MAX_BUMP_RATE)),
+    ):
+        if not (math.isfinite(value) and low <= value <= high):
+            raise InputError(f"{name} {value:g} is outside {low:g} to {high:g}")
+    if isinstance(seed, bool) or not SEED_RANGE[0] <= seed <= SEED_RANGE[1]:
+        raise InputError(f"--seed {seed} is outside {SEED_RANGE[0]} to {SEED_RANGE[1]}")
+    if runs > MAX_RUNS:
+        raise InputError(f"--runs {runs} is more than {MAX_RUNS}")
+    if not math.isfinite(turn_angle):
+        raise InputError(f"--turn-angle {turn_angle!r} is not a finite number")
     if direction not in DIRECTIONS:
         raise InputError(f"--direction {direction!r}: use one of {', '.join(DIRECTIONS)}")
     if path not in PATHS:
@@ -287,6 +326,12 @@ def simulate(
     plan = OutputPlan.of(output=output, logs=logs)
     if plan.output is not None and path != "square":
         raise InputError("-o writes a runs table of square runs: use --path square")
+    if plan.logs is not None and plan.logs.is_dir() and any(plan.logs.iterdir()) and not force:
+        raise InputError(
+            "is not empty: run logs written into it would mix with what it holds (calibrate "
+            "reads every run in the folder); choose an empty folder or give --force",
+            source=plan.logs,
+        )
 
     from ..sim import paths
     from ..sim.engine import simulate as run_simulation
@@ -337,7 +382,7 @@ def simulate(
         result=result,
         runs=tuple(_runs_with_logs(result, odometry) if recorded else result.runs()),
     )
-    report.write(output=output, logs=logs)
+    report.write(output=output, logs=logs, force=force)
     return report
 
 
