@@ -413,29 +413,6 @@ def _topic_of(candidate: Candidate) -> str | None:
 # --- reading a topic -------------------------------------------------------------------
 
 
-def _messages_from(
-    reader: AnyReader, conns: Sequence[Connection], start: int, topic: str, src: str
-) -> Iterator[tuple[int, bytes]]:
-    """``(bag time [ns], raw message)`` of ``conns`` from ``start`` [ns] on.
-
-    :func:`umbmark.sources.bag.reader.messages` from a time: the same errors.
-    """
-    stream = reader.messages(connections=conns, start=start)
-    try:
-        while True:
-            try:
-                _, timestamp, raw = next(stream)
-            except StopIteration:
-                return
-            except Exception as err:  # corrupt storage, truncated chunk, bad compression
-                raise InputError(
-                    f"cannot read the messages of {topic}: {bag_reader.one_line(err)}", source=src
-                ) from None
-            yield timestamp, raw
-    finally:
-        stream.close()
-
-
 def _take(stream: Iterator[tuple[int, bytes]], n: int) -> list[tuple[int, bytes]]:
     """The first ``n`` items of ``stream``, which is closed after."""
     out: list[tuple[int, bytes]] = []
@@ -469,7 +446,9 @@ def _last_time(
     step = max((hi - lo) // 1024, 1)
     while hi - lo > 1:
         start = max(hi - step, lo + 1)
-        times = [t for t, _ in _take(_messages_from(reader, conns, start, topic, src), _PROBE)]
+        times = [
+            t for t, _ in _take(bag_reader.raw_messages(reader, conns, topic, src, start), _PROBE)
+        ]
         if not times:
             hi = start
             step *= 2
@@ -522,7 +501,7 @@ def _scan_topic(
         span = last - scan.first
         for k in range(1, CHUNKS):
             start = scan.first + span * k // CHUNKS
-            taken = _take(_messages_from(reader, conns, start, topic, src), per_chunk)
+            taken = _take(bag_reader.raw_messages(reader, conns, topic, src, start), per_chunk)
             scan.items.extend(taken)
             if len(scan.items) >= content:
                 break

@@ -32,6 +32,7 @@ __all__ = [
     "messages",
     "one_line",
     "open_bag",
+    "raw_messages",
     "topic_connections",
     "topic_types",
 ]
@@ -188,13 +189,13 @@ def messages(
     """
     tracker = current_tracker()
     if tracker is None:
-        yield from _raw_messages(reader, conns, topic, src)
+        yield from raw_messages(reader, conns, topic, src)
         return
     tracker.begin(topic, message_count(conns))
     every = max(1, tracker.every)
     pending = 0
     try:
-        for item in _raw_messages(reader, conns, topic, src):
+        for item in raw_messages(reader, conns, topic, src):
             yield item
             pending += 1
             if pending == every:
@@ -205,20 +206,31 @@ def messages(
             tracker.advance(pending)
 
 
-def _raw_messages(
-    reader: AnyReader, conns: Sequence[Connection], topic: str, src: str
+def raw_messages(
+    reader: AnyReader,
+    conns: Sequence[Connection],
+    topic: str,
+    src: str,
+    start: int | None = None,
 ) -> Iterator[tuple[int, bytes]]:
-    stream = reader.messages(connections=conns)
-    while True:
-        try:
-            _, timestamp, raw = next(stream)
-        except StopIteration:
-            return
-        except Exception as err:  # corrupt storage, truncated chunk, bad compression
-            raise InputError(
-                f"cannot read the messages of {topic}: {one_line(err)}", source=src
-            ) from None
-        yield timestamp, raw
+    """``(bag time [ns], raw message)`` of ``conns`` (from ``start`` [ns] on, if given),
+    uncounted; read errors become InputError. The stream is closed when left early."""
+    stream = reader.messages(connections=conns, start=start)
+    try:
+        while True:
+            try:
+                _, timestamp, raw = next(stream)
+            except StopIteration:
+                return
+            except Exception as err:  # corrupt storage, truncated chunk, bad compression
+                raise InputError(
+                    f"cannot read the messages of {topic}: {one_line(err)}", source=src
+                ) from None
+            yield timestamp, raw
+    finally:
+        close = getattr(stream, "close", None)
+        if close is not None:
+            close()
 
 
 def deserialize(reader: AnyReader, raw: bytes, msgtype: str, topic: str, src: str) -> object:
