@@ -9,6 +9,7 @@ square/230620202042.
 from __future__ import annotations
 
 import math
+import re
 import shutil
 
 import numpy as np
@@ -19,7 +20,7 @@ from umbmark.errors import InputError
 from umbmark.sources.load import detect_format
 from umbmark.sources.optiodom import read_optiodom
 
-from helpers import OPTIODOM, api_error
+from helpers import OPTIODOM, api_error, cli_error
 
 SQUARE = OPTIODOM / "square" / "230620202042"
 SQUARE2 = OPTIODOM / "square" / "231220200029"
@@ -178,3 +179,28 @@ def test_sessions_pool_for_the_trajectory_fit_but_not_across_squares():
     assert "squares of different sides (0.75 m, 1.7 m)" in err
     twice = umbmark.calibrate(SQUARE, SQUARE)
     assert twice.e_max_syst == pytest.approx(umbmark.calibrate(SQUARE).e_max_syst, rel=1e-12)
+
+
+def test_real_sessions_ship_with_the_package(tmp_path):
+    """``umbmark example --real DIR`` writes two sessions identical to the data set's."""
+    written = umbmark.example_sessions(tmp_path / "real")
+    assert [p.relative_to(tmp_path / "real").as_posix() for p in written] == [
+        "square/230620202042",
+        "circular/250620202104",
+    ]
+    for session in written:
+        original = OPTIODOM / session.relative_to(tmp_path / "real")
+        names = sorted(p.name for p in session.iterdir())
+        assert names == sorted(
+            p.name
+            for p in original.iterdir()
+            if p.name.endswith("_metadata.csv") or re.fullmatch(r".*_run-\d+\.csv", p.name)
+        )
+        for name in names:
+            assert (session / name).read_bytes() == (original / name).read_bytes()
+    assert "MIT License" in (tmp_path / "real" / "LICENSE").read_text()
+    assert "Sousa" in (tmp_path / "real" / "README.md").read_text()
+    message = api_error(umbmark.example_sessions, tmp_path / "real")
+    assert "is not empty" in message
+    line = cli_error("example", "--real", str(tmp_path / "real"))
+    assert "--force" in line

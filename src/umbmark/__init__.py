@@ -42,6 +42,7 @@ _EXPORTS = {
     "reproduce_table1": "umbmark.jobs.reproduce",
     "reproduce_fig4": "umbmark.jobs.reproduce",
     "example": "umbmark.jobs.example",
+    "example_sessions": "umbmark.jobs.example",
     "CalibrationReport": "umbmark.jobs.calibrate",
     "ReplayReport": "umbmark.jobs.replay",
     "InfoReport": "umbmark.jobs.info",
@@ -89,6 +90,7 @@ __all__ = [
     "demo",
     "estimate_errors",
     "example",
+    "example_sessions",
     "info",
     "integrate_odometry",
     "read_runs_table",
@@ -109,7 +111,7 @@ if TYPE_CHECKING:
     from .estimators import ErrorEstimate, SquareTest, estimate_errors
     from .jobs.calibrate import CalibrationReport, calibrate
     from .jobs.demo import DemoReport, demo
-    from .jobs.example import example
+    from .jobs.example import example, example_sessions
     from .jobs.info import InfoReport, info
     from .jobs.inputs import SourceOptions
     from .jobs.replay import ReplayReport, replay

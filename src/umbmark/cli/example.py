@@ -8,17 +8,42 @@ __all__ = ["example"]
 
 
 @click.command()
-@click.argument("path", required=False, type=click.Path(dir_okay=False))
-@click.option("--force", is_flag=True, help="Overwrite an existing file.")
-def example(path: str | None, force: bool) -> None:
+@click.argument("path", required=False, type=click.Path())
+@click.option(
+    "--force",
+    is_flag=True,
+    help="Overwrite an existing file (or write into a folder that is not empty, with --real).",
+)
+@click.option(
+    "--real",
+    is_flag=True,
+    help="Write the two real OptiOdom sessions shipped with "
+    "umbmark (a square and circles, motion-capture ground truth, MIT) into the "
+    "folder PATH instead.",
+)
+def example(path: str | None, force: bool, real: bool) -> None:
     """Write the bundled example runs table (five cw and five ccw runs, in mm).
 
     PATH: where to write it; prints it when omitted. Its header says where its numbers
     come from. Calibrate it with:
     umbmark calibrate PATH --side-length 4 --wheelbase 0.34 --unit mm
+
+    With --real, PATH is a folder that receives two real sessions of the OptiOdom data
+    set: square/230620202042 (calibrate on it) and circular/250620202104 (check on it).
     """
     from .. import example as bundled_example
     from .common import wrote
+
+    if real:
+        from .. import example_sessions
+
+        if path is None:
+            raise click.UsageError("--real needs the folder to write the sessions into")
+        square, circles = example_sessions(path, force=force)
+        wrote([path])
+        click.echo(f"now run: umbmark calibrate {square} -o square.json")
+        click.echo(f"    and: umbmark replay {circles} --params square.json")
+        return
 
     text = bundled_example(path, force=force)
     if path is None:

@@ -1,4 +1,5 @@
-"""The bundled example runs table: five cw and five ccw runs of a virtual LabMate, in mm."""
+"""The bundled examples: a runs table of a virtual LabMate (in mm), and two real OptiOdom
+sessions (a square and circles, with motion-capture ground truth; MIT licence)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,12 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["EXAMPLE_RUNS", "example"]
+__all__ = ["EXAMPLE_RUNS", "REAL_SESSIONS", "example", "example_sessions"]
 
 #: The bundled example, in ``umbmark/data``.
 EXAMPLE_RUNS = "labmate_runs_mm.csv"
+#: The real sessions shipped in ``umbmark/data/optiodom``, as written out.
+REAL_SESSIONS = ("square/230620202042", "circular/250620202104")
 
 
 def example(path: str | os.PathLike[str] | None = None, *, force: bool = False) -> str:
@@ -34,3 +37,51 @@ def example(path: str | os.PathLike[str] | None = None, *, force: bool = False) 
             raise InputError("exists already; pass --force to overwrite it", source=target)
         atomic_write_text(target, text)
     return text
+
+
+def example_sessions(folder: str | os.PathLike[str], *, force: bool = False) -> tuple[Path, ...]:
+    """Write the two real OptiOdom sessions shipped with umbmark into ``folder``.
+
+    ``folder/square/230620202042`` (a 0.75 m UMBmark square, 3 cw + 3 ccw runs) and
+    ``folder/circular/250620202104`` (6 circles) of the OptiOdom data set, with its
+    ``LICENSE`` (MIT) and a ``README.md`` saying where they come from. Calibrate with
+    ``umbmark.calibrate(folder / "square/230620202042")``.
+
+    Returns
+    -------
+    tuple of Path
+        The session folders written, in the order of :data:`REAL_SESSIONS`.
+
+    Raises
+    ------
+    InputError
+        If ``folder`` holds files already and ``force`` is not set, or cannot be written.
+    """
+    from ..outputs.atomic import atomic_path
+
+    def write(path: Path, data: bytes) -> None:
+        with atomic_path(path) as tmp:
+            tmp.write_bytes(data)
+
+    target = Path(folder)
+    if target.exists() and not target.is_dir():
+        raise InputError("exists and is not a folder", source=target)
+    if target.is_dir() and any(target.iterdir()) and not force:
+        raise InputError("is not empty; pass --force to write the sessions into it", source=target)
+    shipped = resources.files("umbmark.data").joinpath("optiodom")
+    sessions = []
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        for name in ("LICENSE", "README.md"):
+            write(target / name, shipped.joinpath(name).read_bytes())
+        for session in REAL_SESSIONS:
+            source = shipped.joinpath(session)
+            out = target / session
+            out.mkdir(parents=True, exist_ok=True)
+            for item in sorted(source.iterdir(), key=lambda entry: entry.name):
+                if item.name.endswith(".csv"):
+                    write(out / item.name, item.read_bytes())
+            sessions.append(out)
+    except OSError as exc:
+        raise InputError(f"cannot be written ({exc.strerror or exc})", source=target) from None
+    return tuple(sessions)
