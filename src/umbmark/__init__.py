@@ -33,6 +33,8 @@ _EXPORTS = {
     "calibrate": "umbmark.jobs.calibrate",
     "replay": "umbmark.jobs.replay",
     "info": "umbmark.jobs.info",
+    "plan": "umbmark.jobs.plan",
+    "PlanReport": "umbmark.jobs.plan",
     "validate": "umbmark.jobs.validate",
     "study": "umbmark.jobs.study",
     "StudyReport": "umbmark.jobs.study",
@@ -77,6 +79,7 @@ __all__ = [
     "ErrorEstimate",
     "InfoReport",
     "InputError",
+    "PlanReport",
     "ReplayReport",
     "Run",
     "SimulationReport",
@@ -93,6 +96,7 @@ __all__ = [
     "example_sessions",
     "info",
     "integrate_odometry",
+    "plan",
     "read_runs_table",
     "replay",
     "reproduce_fig4",
@@ -114,6 +118,7 @@ if TYPE_CHECKING:
     from .jobs.example import example, example_sessions
     from .jobs.info import InfoReport, info
     from .jobs.inputs import SourceOptions
+    from .jobs.plan import PlanReport, plan
     from .jobs.replay import ReplayReport, replay
     from .jobs.reproduce import reproduce_fig4, reproduce_table1
     from .jobs.simulate import SimulationReport, simulate

@@ -20,6 +20,7 @@ from .common import EXIT_BAD_INPUT, error_line, reading_bar
 from .demo import demo
 from .example import example
 from .info import info
+from .plan import plan
 from .replay import replay
 from .reproduce import reproduce
 from .simulate import simulate
@@ -47,7 +48,7 @@ def cli() -> None:
     option says otherwise; every command has --help."""
 
 
-for command in (demo, calibrate, replay, validate, info, simulate, study, reproduce, example):
+for command in (demo, calibrate, replay, validate, info, plan, simulate, study, reproduce, example):
     cli.add_command(command)
 
 
