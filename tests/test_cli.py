@@ -191,6 +191,7 @@ def _commands() -> list[tuple[str, click.Command, object]]:
         ("simulate", cli.commands["simulate"], umbmark.simulate),
         ("demo", cli.commands["demo"], umbmark.demo),
         ("example", cli.commands["example"], umbmark.example),
+        ("plan", cli.commands["plan"], umbmark.plan),
         ("table1", reproduce.commands["table1"], umbmark.reproduce_table1),
         ("fig4", reproduce.commands["fig4"], umbmark.reproduce_fig4),
     ]

@@ -35,12 +35,13 @@ def example(path: str | None, force: bool, real: bool) -> None:
     from .common import wrote
 
     if real:
-        from .. import example_sessions
+        from pathlib import Path
 
-        if path is None:
-            raise click.UsageError("--real needs the folder to write the sessions into")
-        square, circles = example_sessions(path, force=force)
-        wrote([path])
+        from ..jobs.example import REAL_SESSIONS
+
+        bundled_example(path, force=force, real=True)
+        square, circles = (Path(str(path)) / session for session in REAL_SESSIONS)
+        wrote([str(path)])
         click.echo(f"now run: umbmark calibrate {square} -o square.json")
         click.echo(f"    and: umbmark replay {circles} --params square.json")
         return

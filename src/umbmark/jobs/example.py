@@ -17,11 +17,16 @@ EXAMPLE_RUNS = "labmate_runs_mm.csv"
 REAL_SESSIONS = ("square/230620202042", "circular/250620202104")
 
 
-def example(path: str | os.PathLike[str] | None = None, *, force: bool = False) -> str:
+def example(
+    path: str | os.PathLike[str] | None = None, *, force: bool = False, real: bool = False
+) -> str:
     """The bundled example runs table; written to ``path`` when given.
 
     Its header says where its numbers come from. Calibrate it with
     ``umbmark.calibrate(path, side_length=4, wheelbase=0.34, unit="mm")``.
+
+    With ``real``, ``path`` is a folder that receives the two real OptiOdom sessions
+    (:func:`example_sessions`), and the text returned is their README.
 
     Raises
     ------
@@ -29,6 +34,14 @@ def example(path: str | os.PathLike[str] | None = None, *, force: bool = False) 
         If ``path`` exists and ``force`` is not set, or cannot be written.
     """
     from ..outputs.atomic import atomic_write_text
+
+    if real:
+        if path is None:
+            raise InputError("--real needs the folder to write the sessions into")
+        example_sessions(path, force=force)
+        return str(
+            resources.files("umbmark.data").joinpath("optiodom/README.md").read_text("utf-8")
+        )
 
     text = resources.files("umbmark.data").joinpath(EXAMPLE_RUNS).read_text(encoding="utf-8")
     if path is not None:
