@@ -23,10 +23,21 @@ from ..runs import EndPose, Run
 from .association import DEFAULT_MAX_GAP, Association, associate
 from .segmentation import SplitOptions, split_by_rests, split_by_windows
 
-__all__ = ["LoadedRuns", "SplitMode", "runs_from_recordings", "to_start_frame"]
+__all__ = ["LoadedRuns", "SplitMode", "check_motion", "runs_from_recordings", "to_start_frame"]
 
 FloatArray = NDArray[np.float64]
 SplitMode = Literal["rests", "none", "windows"]
+
+#: A wheel turning by more than this in one sample is a corrupt sample, not motion [rad].
+MAX_WHEEL_STEP = 50.0
+#: A wheel step this many times the 99th percentile of the steps, and above
+#: :data:`MIN_JUMP` [rad], is a jump too.
+JUMP_FACTOR = 10.0
+MIN_JUMP = 10.0
+#: Spreads of the wheel angles [rad] and of the ground truth [m, rad] below these are
+#: taken for no motion at all.
+STILL_WHEELS = 1e-9
+STILL_TRUTH = 1e-9
 
 
 @dataclass(frozen=True)
@@ -56,6 +67,61 @@ def to_start_frame(poses: FloatArray) -> FloatArray:
     return np.column_stack([c * dx + s * dy, -s * dx + c * dy, poses[:, 2] - th0])
 
 
+def check_motion(name: str, time: FloatArray, angles: FloatArray, truth: FloatArray | None) -> None:
+    """Refuse a recording or run whose wheels never turn or jump, or whose truth never moves.
+
+    A jump is one sample step of a wheel angle above :data:`MAX_WHEEL_STEP`, or above both
+    :data:`MIN_JUMP` and :data:`JUMP_FACTOR` times the 99th percentile of the steps.
+
+    Parameters
+    ----------
+    name : str
+        The recording or run, for the message.
+    time : array, shape (n,)
+        Wheel sample times [s].
+    angles : array, shape (n, 2)
+        Wheel angles [rad].
+    truth : array, shape (m, 3), or None
+        Ground-truth poses; rows with NaN are left out.
+
+    Raises
+    ------
+    InputError
+        Naming ``name`` and the problem.
+    """
+    if not np.all(np.isfinite(angles)):
+        raise InputError("wheel angles are not finite numbers (an overflow?)", source=name)
+    if angles.shape[0] < 2 or float(np.max(np.ptp(angles, axis=0))) <= STILL_WHEELS:
+        raise InputError(
+            "the wheels never turn (every wheel angle is constant): no motion to calibrate "
+            "from; check the wheel columns or topic",
+            source=name,
+        )
+    steps = np.abs(np.diff(angles, axis=0))
+    limit = min(MAX_WHEEL_STEP, max(MIN_JUMP, JUMP_FACTOR * float(np.percentile(steps, 99))))
+    if float(np.max(steps)) > limit:
+        k, wheel = np.unravel_index(int(np.argmax(steps)), steps.shape)
+        raise InputError(
+            f"the {('left', 'right')[int(wheel)]} wheel jumps by {float(steps[k, wheel]):.4g} "
+            f"rad in one sample at {float(time[k + 1] - time[0]):.2f} s (more than "
+            f"{limit:.3g} rad): a corrupt sample or wrong encoder units",
+            source=name,
+        )
+    if truth is None:
+        return
+    rows = truth[np.all(np.isfinite(truth), axis=1)]
+    if rows.shape[0] < 2:
+        return
+    if not np.all(np.isfinite(np.ptp(rows, axis=0))):
+        raise InputError("ground-truth poses are not finite numbers (an overflow?)", source=name)
+    if float(np.max(np.ptp(rows, axis=0))) <= STILL_TRUTH:
+        raise InputError(
+            "the ground truth never moves (every pose is the same): check the ground-truth "
+            "columns or topic",
+            source=name,
+        )
+
+
 def _run(
     recording: Recording,
     truth: FloatArray,
@@ -71,6 +137,7 @@ def _run(
         return None
     a, b = int(matched[0]), int(matched[-1])
     sl = slice(a, b + 1)
+    check_motion(label, wheels.time[sl], wheels.angles[sl], truth[sl])
     rel = np.full((b - a + 1, 3), np.nan)
     ok = np.all(np.isfinite(truth[sl]), axis=1)
     rel[ok] = to_start_frame(truth[sl][ok])
@@ -82,6 +149,12 @@ def _run(
         start=float(wheels.time[a]),
     )
     odo = log.odometry(params, method)
+    if not np.all(np.isfinite(odo[-1])):
+        raise InputError(
+            "the odometry overflows (not a finite number): check the wheel parameters and "
+            "the encoder units",
+            source=label,
+        )
     turned = float(rel[-1, 2])
     direction = Direction.CCW if turned >= 0 else Direction.CW
     return Run(
@@ -118,7 +191,9 @@ def runs_from_recordings(
     Raises
     ------
     InputError
-        If a recording has no ground truth, or no run is found at all.
+        If a recording has no ground truth, its wheels never turn, its ground truth never
+        moves, a wheel jumps in one sample (see :func:`check_motion`), a run has no motion,
+        its odometry overflows, or no run is found at all.
     """
     out = LoadedRuns(runs=[])
     for recording in recordings:
@@ -130,6 +205,7 @@ def runs_from_recordings(
         truth, association = associate(
             recording.wheels, recording.truth, max_gap=max_gap, source=recording.name
         )
+        check_motion(recording.name, recording.wheels.time, recording.wheels.angles, truth)
         out.associations.append((recording.name, association))
         if association.fraction < 0.9:
             out.notes.append(f"{recording.name}: only {association.describe()}")

@@ -132,7 +132,14 @@ def read_optiodom(folder: str | Path) -> tuple[list[Recording], OptiOdomSession]
     for number, path in runs:
         data = _read_run(path)
         ticks = data[:, [5, 4]]  # left, right
-        angles = np.cumsum(ticks, axis=0) * rad_per_tick
+        with np.errstate(over="ignore", invalid="ignore"):
+            angles = np.cumsum(ticks, axis=0) * rad_per_tick
+        if not np.all(np.isfinite(angles)):
+            raise InputError(
+                f"wheel angles overflow: the ticks times {rad_per_tick:.3g} rad per tick "
+                "(from encRes and ngear in the metadata) are not finite numbers",
+                source=path,
+            )
         time = data[:, 0]
         recordings.append(
             Recording(

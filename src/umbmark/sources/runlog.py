@@ -255,6 +255,12 @@ def _read_log_csv(
     if len(wheel_rows) < 2:
         raise InputError("has fewer than 2 rows with wheel data", source=path)
     wheels = np.array(wheel_rows)
+    if not np.all(np.isfinite(wheels)):
+        raise InputError(
+            f"wheel angles overflow: the wheel data times {scale:.3g} rad per count are not "
+            "finite numbers",
+            source=path,
+        )
     truth = np.array(truth_rows).reshape(-1, 4)
     for name, array in (("wheel", wheels), ("ground-truth", truth)):
         if array.shape[0] > 1 and not np.all(np.diff(array[:, 0]) > 0):
