@@ -33,6 +33,9 @@ _EXPORTS = {
     "calibrate": "umbmark.jobs.calibrate",
     "replay": "umbmark.jobs.replay",
     "info": "umbmark.jobs.info",
+    "history": "umbmark.jobs.history",
+    "HistoryReport": "umbmark.jobs.history",
+    "History": "umbmark.history_store",
     "plan": "umbmark.jobs.plan",
     "PlanReport": "umbmark.jobs.plan",
     "validate": "umbmark.jobs.validate",
@@ -77,6 +80,8 @@ __all__ = [
     "Direction",
     "EndPose",
     "ErrorEstimate",
+    "History",
+    "HistoryReport",
     "InfoReport",
     "InputError",
     "PlanReport",
@@ -94,6 +99,7 @@ __all__ = [
     "estimate_errors",
     "example",
     "example_sessions",
+    "history",
     "info",
     "integrate_odometry",
     "plan",
@@ -113,9 +119,11 @@ if TYPE_CHECKING:
     from .conventions import Direction
     from .errors import InputError
     from .estimators import ErrorEstimate, SquareTest, estimate_errors
+    from .history_store import History
     from .jobs.calibrate import CalibrationReport, calibrate
     from .jobs.demo import DemoReport, demo
     from .jobs.example import example, example_sessions
+    from .jobs.history import HistoryReport, history
     from .jobs.info import InfoReport, info
     from .jobs.inputs import SourceOptions
     from .jobs.plan import PlanReport, plan

@@ -66,6 +66,27 @@ __all__ = ["calibrate"]
             "tracked point (a motion-capture marker) sits in the robot frame, instead of "
             "taking it as the axle centre (see --truth-offset to give it).",
         ),
+        option(
+            "--force",
+            section=TEST,
+            is_flag=True,
+            help="Take --current-params even when it is a result for another nominal "
+            "wheelbase or wheel diameter than the sources' own (more than 1 % apart).",
+        ),
+        option(
+            "--robot",
+            section=TEST,
+            help="Record the calibration in the history under this robot's name (umbmark "
+            "history NAME lists them); refused when the robot is known with another nominal "
+            "wheelbase or wheel diameter.",
+        ),
+        option(
+            "--history",
+            section=TEST,
+            type=click.Path(),
+            help="The history file [default: $UMBMARK_HISTORY, else "
+            "~/.local/share/umbmark/history.sqlite3].",
+        ),
     ]
 )
 @source_options(wheelbase=False)
@@ -91,6 +112,13 @@ __all__ = ["calibrate"]
             section=OUTPUTS,
             type=click.Path(),
             help="Draw the clusters (Fig. 6 view) to a .png, .svg or .pdf file.",
+        ),
+        option(
+            "--report",
+            section=OUTPUTS,
+            type=click.Path(),
+            help="Write one self-contained HTML page (.html): the verdict, the clusters, the "
+            "runs, the estimates with 95 % intervals, the overlay and the provenance.",
         ),
         option(
             "--tum",
@@ -130,7 +158,8 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
         warn(note)
     for message in report.warnings:
         warn(message)
-    wrote(options[key] for key in ("output", "yaml", "ros1_yaml", "plot", "tum") if options[key])
+    outputs = ("output", "yaml", "ros1_yaml", "plot", "tum", "report")
+    wrote(options[key] for key in outputs if options[key])
     if json_out:
         click.echo(report.to_json(), nl=False)
     else:

@@ -19,6 +19,7 @@ from .calibrate import calibrate
 from .common import EXIT_BAD_INPUT, error_line, reading_bar
 from .demo import demo
 from .example import example
+from .history import history
 from .info import info
 from .plan import plan
 from .replay import replay
@@ -48,7 +49,19 @@ def cli() -> None:
     option says otherwise; every command has --help."""
 
 
-for command in (demo, calibrate, replay, validate, info, plan, simulate, study, reproduce, example):
+for command in (
+    demo,
+    calibrate,
+    replay,
+    validate,
+    info,
+    plan,
+    simulate,
+    study,
+    reproduce,
+    example,
+    history,
+):
     cli.add_command(command)
 
 

@@ -23,7 +23,15 @@ __all__ = ["replay"]
             type=click.Path(dir_okay=False),
             help="Calibration result (calibrate -o result.json) to replay with; without it, "
             "only the source's nominal parameters are replayed.",
-        )
+        ),
+        option(
+            "--force",
+            section=PARAMETERS,
+            is_flag=True,
+            help="Replay --params (or take --current-params) even when it is a result for "
+            "another nominal wheelbase or wheel diameter than the source's own (more than "
+            "1 % apart).",
+        ),
     ]
 )
 @source_options()

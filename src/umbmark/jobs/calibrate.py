@@ -27,7 +27,16 @@ from ..outputs.atomic import atomic_write_text
 from ..runs import Run
 from ..sources.association import Association
 from ..sources.params import CalibratedParams, ControllerParams
-from .inputs import ReadOptions, Runs, RunSource, SourceOptions, read_runs, source_name
+from .inputs import (
+    ReadOptions,
+    Runs,
+    RunSource,
+    SourceOptions,
+    check_calibration,
+    check_square_geometry,
+    read_runs,
+    source_name,
+)
 from .outputs import OutputPlan
 
 if TYPE_CHECKING:
@@ -332,6 +341,12 @@ class CalibrationReport:
 
         return cluster_figure([(self.benchmark, self.source)])
 
+    def html(self) -> str:
+        """One self-contained HTML page of the calibration (what ``--report`` writes)."""
+        from ..outputs.html_report import calibration_html
+
+        return calibration_html(self)
+
     def write(
         self,
         *,
@@ -341,6 +356,7 @@ class CalibrationReport:
         plot: str | os.PathLike[str] | None = None,
         tum: str | os.PathLike[str] | None = None,
         tum_time: TumTime = "recording",
+        report: str | os.PathLike[str] | None = None,
     ) -> list[Path]:
         """Write the requested files: every one checked before any is written.
 
@@ -357,6 +373,8 @@ class CalibrationReport:
         tum_time : {"recording", "run"}
             Timestamps of the TUM files: the recording's own clock [s] (default), or
             seconds from each run's start.
+        report : path, optional
+            One self-contained HTML page of the calibration (:meth:`html`).
 
         Returns
         -------
@@ -372,7 +390,13 @@ class CalibrationReport:
 
         time = check_tum_time(tum_time)
         plan = _plan(
-            self.sources, output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum
+            self.sources,
+            output=output,
+            yaml=yaml,
+            ros1_yaml=ros1_yaml,
+            plot=plot,
+            tum=tum,
+            report=report,
         )
         if plan.plot is not None and self.benchmark is None:
             raise InputError(
@@ -396,6 +420,9 @@ class CalibrationReport:
 
             save_figure(self.figure(), plan.plot)
             written.append(plan.plot)
+        if plan.report is not None:
+            atomic_write_text(plan.report, self.html())
+            written.append(plan.report)
         if plan.tum is not None and self.params is not None and calibrated is not None:
             from ..outputs.tum import write_tum_runs
 
@@ -423,6 +450,10 @@ def calibrate(
     plot: str | os.PathLike[str] | None = None,
     tum: str | os.PathLike[str] | None = None,
     tum_time: TumTime = "recording",
+    report: str | os.PathLike[str] | None = None,
+    force: bool = False,
+    robot: str | None = None,
+    history: str | os.PathLike[str] | None = None,
     **options: Unpack[SourceOptions],
 ) -> CalibrationReport:
     """Benchmark runs around a square (UMBmark) and compute the correction.
@@ -455,12 +486,23 @@ def calibrate(
         point (a motion-capture marker) sits in the robot frame, the components
         ``truth_offset_x``, ``truth_offset_y`` [m] (``docs/conventions.md``, "Tracked
         point"), instead of taking the ground truth as the axle centre's.
-    output, yaml, ros1_yaml, plot, tum : path, optional
+    output, yaml, ros1_yaml, plot, tum, report : path, optional
         Files to write (see :meth:`CalibrationReport.write`); checked before any is written.
     tum_time : {"recording", "run"}
         Timestamps of the TUM files: the recording's own clock [s] (default, so that evo
         can match them with other trajectories of the same recording), or seconds from
         each run's start.
+    force : bool
+        Take ``current_params`` even when it is a result for other nominal parameters
+        (wheelbase, wheel diameter) than the sources' own.
+    robot : str, optional
+        Record the calibration in the history under this robot's name
+        (:class:`umbmark.history_store.History`); refused when the robot is known with another
+        nominal wheelbase or wheel diameter. Without ``current_params`` and the
+        ``current_*`` multipliers, the robot's last applied calibration's new parameters
+        are taken as those active during the runs (a second pass; a note says so).
+    history : path, optional
+        The history file (default: ``$UMBMARK_HISTORY``, else the per-user file).
     **options
         How to read the sources: see :class:`umbmark.jobs.inputs.ReadOptions`
         (``unit="mm"``, ``current_params="controllers.yaml"``, ``truth_topic=...``).
@@ -479,6 +521,12 @@ def calibrate(
     >>> report = umbmark.calibrate("runs.csv", side_length=4, wheelbase=0.34, unit="mm")
     >>> report.e_max_syst, report.estimate.E_d, report.calibration.new_c_left
     """
+    store, composed = None, None
+    if robot is not None:
+        from ..history_store import History, compose_last_applied
+
+        store = History(history)
+        options, composed = compose_last_applied(store, robot, options)
     read_options = ReadOptions.of(options)
     from ..outputs.tum import check_tum_time
 
@@ -491,26 +539,37 @@ def calibrate(
         )
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
-          plot=plot, tum=tum)  # fmt: skip
+          plot=plot, tum=tum, report=report)  # fmt: skip
     if side_length is None and method not in (*LOGGED_METHODS, "auto"):
         from .inputs import is_table
 
         if any(is_table(s, read_options) for s in sources):
             raise InputError("--side-length is required: the side of the square path, in metres")
-    read = read_runs(sources, read_options, wheelbase=wheelbase, side_length=side_length)
+    read = read_runs(
+        sources, read_options, wheelbase=wheelbase, side_length=side_length, force=force
+    )
+    if any(run.kind == "square" for run in read.runs):
+        check_square_geometry(read.side_length, read.active.effective_wheelbase)
     chosen, note = method, None
     if method == "auto":
         chosen, note = _auto_method(sources, read, side_length, wheelbase, options)
-    report = _calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
+    result = _calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
     if note is not None:
-        report = replace(report, notes=(*report.notes, note))
+        result = replace(result, notes=(*result.notes, note))
     if chosen.startswith("trajectory") and len(read.parts) > 1:
         disagree = _sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
-        report = replace(report, notes=(*report.notes, *disagree))
-    report.write(
-        output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum, tum_time=tum_time
-    )
-    return report
+        result = replace(result, notes=(*result.notes, *disagree))
+    if store is not None and robot is not None:
+        store.check_identity(robot, result)
+        if composed is not None:
+            result = replace(result, notes=(*result.notes, composed))
+    result.write(
+        output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum, tum_time=tum_time,
+        report=report,
+    )  # fmt: skip
+    if store is not None and robot is not None:
+        store.record(robot, result, [source_name(s) for s in sources if source_name(s) != "runs"])
+    return result
 
 
 def _sessions_disagree(parts: Sequence[Runs], *, fit_truth_offset: bool = False) -> list[str]:
@@ -610,6 +669,7 @@ def _calibrate_runs(
         raise
     except ValueError as exc:
         raise InputError(str(exc), source=where) from None
+    check_calibration(Calibration(estimate, active))
     return CalibrationReport(
         sources=read.sources,
         format=read.format,

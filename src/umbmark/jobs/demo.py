@@ -173,8 +173,10 @@ def demo(
             "the demo calibrates from end points: use paper, exact, heading or endpose"
         )
     folder = None if out is None else Path(out)
-    if folder is not None and folder.exists() and not folder.is_dir():
-        raise InputError("exists and is not a folder", source=folder)
+    if folder is not None:
+        from .outputs import check_folder_output
+
+        check_folder_output(folder)  # before anything is computed or written
 
     def stage(start: float) -> Callable[[float], None] | None:
         return None if progress is None else (lambda f: progress(start + 0.5 * f))

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal, TypeAlias, TypedDict, cast
 
-from ..calibration import ActiveParams
+from ..calibration import ActiveParams, Calibration
 from ..errors import InputError
 from ..kinematics import WheelParams
 from ..runs import Run
@@ -28,10 +28,13 @@ from ..sources.association import DEFAULT_MAX_GAP, Association
 from ..sources.load import FORMATS, Format, Loaded, LoadOptions, detect_format, load_runs
 from ..sources.logged import SplitMode
 from ..sources.params import (
+    MULTIPLIER_RANGE,
     CalibratedParams,
     ControllerParams,
+    is_result_file,
     read_calibrated_params,
     read_parameter_file,
+    result_nominal,
 )
 
 if TYPE_CHECKING:
@@ -46,9 +49,16 @@ __all__ = [
     "RunSource",
     "Runs",
     "SourceOptions",
+    "calibrated_name",
+    "calibrated_nominal",
     "calibrated_params",
+    "check_calibration",
     "check_length",
+    "check_multiplier",
     "check_positive_option",
+    "check_same_robot",
+    "check_square_geometry",
+    "option_float",
     "pool_runs",
     "read_runs",
 ]
@@ -57,6 +67,10 @@ __all__ = [
 MAX_SIDE_LENGTH = 100.0
 #: Largest plausible wheelbase or wheel diameter [m].
 MAX_WHEELBASE = 10.0
+#: How far a result's nominal parameters may be from a source's (relative).
+SAME_ROBOT_TOLERANCE = 0.01
+#: Smallest plausible length option [m].
+MIN_LENGTH = 0.001
 #: Farthest a tracked point may sit from the axle centre [m].
 MAX_TRUTH_OFFSET = 5.0
 
@@ -210,14 +224,17 @@ class ReadOptions:
             ("--current-separation-multiplier", self.current_separation_multiplier),
             ("--ticks-per-rev", self.ticks_per_rev),
         ):
-            if value is not None:
+            if value is not None and flag == "--ticks-per-rev":
                 check_positive_option(flag, value)
+            elif value is not None:
+                check_multiplier(flag, value)
         check_positive_option("--max-gap", self.max_gap, "s")
         check_positive_option("--min-rest", self.min_rest, "s")
         if self.wheel_diameter is not None:
             check_length("--wheel-diameter", self.wheel_diameter, MAX_WHEELBASE)
         if self.truth_offset is not None:
-            for value in self.truth_offset:
+            for given in self.truth_offset:
+                value = option_float("--truth-offset", given)
                 if not (math.isfinite(value) and abs(value) <= MAX_TRUTH_OFFSET):
                     raise InputError(
                         f"--truth-offset must be within {MAX_TRUTH_OFFSET:g} m of the axle "
@@ -303,6 +320,8 @@ class Runs:
         The side [m] each source knows.
     parts : tuple of Runs
         Pooled from several sources: each source's runs as read (empty for one source).
+    nominal : WheelParams or None
+        A logged source's own nominal parameters, before any option or file overrides.
     """
 
     sources: tuple[str, ...]
@@ -316,6 +335,7 @@ class Runs:
     notes: tuple[str, ...] = field(default=())
     sides: tuple[float | None, ...] = ()
     parts: tuple[Runs, ...] = field(default=(), repr=False, compare=False)
+    nominal: WheelParams | None = field(default=None, repr=False, compare=False)
 
     def square_side(self) -> float:
         """The side [m] of the square every source drove.
@@ -368,21 +388,146 @@ def calibrated_params(params: Calibrated) -> CalibratedParams:
     return read_calibrated_params(Path(params))
 
 
+def calibrated_nominal(params: Calibrated) -> tuple[float | None, float | None]:
+    """The nominal wheelbase and wheel diameter [m] a calibration was computed for."""
+    from .calibrate import CalibrationReport
+
+    if isinstance(params, CalibratedParams):
+        return params.configured_wheelbase, params.wheel_diameter
+    if isinstance(params, CalibrationReport):
+        active = params.calibration.active
+        return active.wheelbase, active.wheel_diameter
+    return result_nominal(Path(params))
+
+
+def calibrated_name(params: Calibrated) -> str:
+    """How a calibration is named in messages."""
+    if isinstance(params, CalibratedParams):
+        return params.source or "the calibration"
+    if isinstance(params, str | os.PathLike):
+        return os.fspath(params)
+    return "the calibration"
+
+
+def option_float(flag: str, value: float) -> float:
+    """An option's number as a float, refusing what is no number or too large for one (a
+    Python ``int`` of hundreds of digits)."""
+    if isinstance(value, bool):
+        raise InputError(f"{flag} must be a number, not {value!r}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise InputError(f"{flag} is far too large ({len(str(abs(int(value))))} digits)") from None
+    except (TypeError, ValueError):
+        raise InputError(f"{flag} must be a number, not {str(value)[:24]!r}") from None
+
+
 def check_positive_option(flag: str, value: float, unit: str = "") -> None:
     """Refuse an option value that is not a positive finite number."""
+    value = option_float(flag, value)
     if not (math.isfinite(value) and value > 0):
         shown = f"{value:g} {unit}".strip()
         raise InputError(f"{flag} must be > 0, got {shown}")
 
 
-def check_length(flag: str, value: float, largest: float) -> None:
-    """Refuse a length option [m] that is not positive or is implausibly large (unit slip)."""
+def check_length(flag: str, value: float, largest: float, smallest: float = MIN_LENGTH) -> None:
+    """Refuse a length option [m] that is not positive, or implausibly small or large (a
+    unit slip); the message names the plausible range."""
     check_positive_option(flag, value, "m")
+    value = float(value)
     if value > largest:
         raise InputError(
             f"{flag} {value:g} m is implausibly large: lengths are in metres "
-            f"(at most {largest:g} m here)"
+            f"(at most {largest:g} m here; plausible: {smallest:g} to {largest:g} m)"
         )
+    if value < smallest:
+        raise InputError(
+            f"{flag} {value:g} m is implausibly small: lengths are in metres "
+            f"(plausible: {smallest:g} to {largest:g} m)"
+        )
+
+
+def check_multiplier(flag: str, value: float) -> None:
+    """Refuse a wheel factor or multiplier outside the plausible range (``MULTIPLIER_RANGE``)."""
+    low, high = MULTIPLIER_RANGE
+    value = option_float(flag, value)
+    if not (math.isfinite(value) and low <= value <= high):
+        raise InputError(
+            f"{flag} {value:g} is not a plausible factor: it must be within {low:g} to {high:g}"
+        )
+
+
+def check_square_geometry(side_length: float | None, wheelbase: float) -> None:
+    """Refuse a wheelbase [m] that is not smaller than the square's side [m].
+
+    A robot whose wheelbase reaches half the side cannot drive the square as UMBmark
+    assumes (its wheels would cross the square's centre on the turns): the usual cause is
+    swapped or mistyped ``--side-length`` and ``--wheelbase``.
+    """
+    if side_length is not None and wheelbase >= side_length / 2:
+        raise InputError(
+            f"--wheelbase {wheelbase:g} m is not smaller than the square: it must be below "
+            f"half the side (--side-length {side_length:g} m, so b < {side_length / 2:g} m); "
+            "are the two swapped or in other units?"
+        )
+
+
+def check_calibration(calibration: Calibration) -> None:
+    """Refuse a calibration whose new factors are not positive finite numbers.
+
+    Raises
+    ------
+    InputError
+        Naming the first such factor: the runs and the options contradict each other.
+    """
+    for name, value in (
+        ("E_d", calibration.estimate.E_d),
+        ("E_b", calibration.estimate.E_b),
+        ("c_L", calibration.new_c_left),
+        ("c_R", calibration.new_c_right),
+        ("wheel_separation_multiplier", calibration.new_separation_multiplier),
+        ("wheelbase", calibration.wheelbase_corrected),
+    ):
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(
+                f"the runs give {name} = {value:.6g}, which no robot can have: check "
+                "--side-length, --wheelbase and the runs' units and directions"
+            )
+
+
+def check_same_robot(
+    result: str,
+    theirs: tuple[float | None, float | None],
+    source: str,
+    ours: tuple[float | None, float | None],
+) -> None:
+    """Refuse a result computed for other nominal parameters than a source's.
+
+    Parameters
+    ----------
+    result : str
+        The result (a file name) as messages name it.
+    theirs : (float or None, float or None)
+        The result's nominal wheelbase and wheel diameter [m] (its ``active`` block).
+    source : str
+        The source as messages name it.
+    ours : (float or None, float or None)
+        The source's own nominal wheelbase and wheel diameter [m].
+
+    Raises
+    ------
+    InputError
+        Naming both values, where one pair differs by more than 1 %.
+    """
+    for name, their, our in zip(("wheelbase", "wheel diameter"), theirs, ours, strict=True):
+        if their is None or our is None:
+            continue
+        if abs(their - our) > SAME_ROBOT_TOLERANCE * our:
+            raise InputError(
+                f"{result} is a calibration for a nominal {name} of {their:g} m, but "
+                f"{source} has {our:g} m (more than 1 % apart): a result of another robot "
+                "or setup; give --force to use it anyway"
+            )
 
 
 def _check_choice(flag: str, value: object, choices: Sequence[str]) -> None:
@@ -431,11 +576,14 @@ def read_runs(
     *,
     wheelbase: float | None = None,
     side_length: float | None = None,
+    force: bool = False,
 ) -> Runs:
     """Read the runs of every source, with the odometry parameters the options say.
 
     Several sources must agree on the square's side and on the parameters that were
-    active; their runs are pooled (labels then start with the source's name).
+    active; their runs are pooled (labels then start with the source's name). A result
+    file as ``current_params`` must be for the sources' nominal wheelbase and wheel
+    diameter (within 1 %), unless ``force``.
 
     Raises
     ------
@@ -450,6 +598,18 @@ def read_runs(
         check_length("--side-length", side_length, MAX_SIDE_LENGTH)
     file = _parameter_file(options)
     read = [_read_one(source, options, file, wheelbase, side_length) for source in sources]
+    if options.current_params is not None and not force:
+        path = Path(options.current_params)
+        if is_result_file(path):
+            theirs = result_nominal(path)
+            for one in read:
+                if one.nominal is not None:
+                    check_same_robot(
+                        str(path),
+                        theirs,
+                        one.sources[0],
+                        (one.nominal.wheelbase, one.nominal.wheel_diameter),
+                    )
     if len(read) == 1:
         return read[0]
     return pool_runs(read)
@@ -561,6 +721,7 @@ def _read_one(
         associations=tuple(loaded.associations),
         notes=tuple(loaded.notes),
         sides=(loaded.side_length,),
+        nominal=base,
     )
 
 

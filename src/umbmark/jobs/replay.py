@@ -29,7 +29,10 @@ from .inputs import (
     PathLike,
     ReadOptions,
     SourceOptions,
+    calibrated_name,
+    calibrated_nominal,
     calibrated_params,
+    check_same_robot,
     is_table,
     read_runs,
     source_name,
@@ -240,6 +243,7 @@ def replay(
     plot: str | os.PathLike[str] | None = None,
     tum: str | os.PathLike[str] | None = None,
     tum_time: TumTime = "recording",
+    force: bool = False,
     **options: Unpack[SourceOptions],
 ) -> ReplayReport:
     """Replay recorded runs: integrate their wheel data again and compare with the truth.
@@ -264,6 +268,9 @@ def replay(
         Timestamps of the TUM files: the recording's own clock [s] (default, so that evo
         can match them with other trajectories of the same recording), or seconds from
         each run's start.
+    force : bool
+        Replay ``params`` (or take ``current_params``) even when it is a result for other
+        nominal parameters (wheelbase, wheel diameter) than the source's own.
     **options
         How to read the source: see :class:`umbmark.jobs.inputs.ReadOptions`.
 
@@ -284,10 +291,17 @@ def replay(
             source=source_name(source),
         )
     calibrated = None if params is None else calibrated_params(params)
-    read = read_runs([source], read_options, wheelbase=wheelbase)
+    read = read_runs([source], read_options, wheelbase=wheelbase, force=force)
     nominal = read.params
     if nominal is None:  # pragma: no cover - is_table() refused end points above
         raise InputError("has no recorded wheel data", source=read.sources[0])
+    if params is not None and read.nominal is not None and not force:
+        check_same_robot(
+            calibrated_name(params),
+            calibrated_nominal(params),
+            read.sources[0],
+            (read.nominal.wheelbase, read.nominal.wheel_diameter),
+        )
     sets = {"nominal": nominal}
     if calibrated is not None:
         sets["calibrated"] = calibrated.applied_to(nominal)

@@ -34,6 +34,7 @@ from .inputs import (
     calibrated_params,
     check_length,
     check_positive_option,
+    option_float,
 )
 from .outputs import OutputPlan
 
@@ -276,6 +277,14 @@ def simulate(
     InputError
         For an option out of range.
     """
+    E_d, E_b, E_s = (
+        option_float(n, v) for n, v in (("--E-d", E_d), ("--E-b", E_b), ("--E-s", E_s))
+    )
+    slip, bump_rate, bump_size = (
+        option_float(n, v)
+        for n, v in (("--slip", slip), ("--bump-rate", bump_rate), ("--bump-size", bump_size))
+    )
+    turn_angle = option_float("--turn-angle", turn_angle)
     for name, value in (("--E-d", E_d), ("--E-b", E_b), ("--E-s", E_s)):
         check_positive_option(name, value)
         if not 0.5 < value < 2.0:
@@ -324,6 +333,8 @@ def simulate(
             f"{math.degrees(MAX_TURN):g} deg either way, not zero"
         )
     plan = OutputPlan.of(output=output, logs=logs)
+    if isinstance(params, (str, os.PathLike)):
+        plan.check_not_inputs([params])
     if plan.output is not None and path != "square":
         raise InputError("-o writes a runs table of square runs: use --path square")
     if plan.logs is not None and plan.logs.is_dir() and any(plan.logs.iterdir()) and not force:

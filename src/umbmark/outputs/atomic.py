@@ -1,9 +1,21 @@
-"""Write files whole or not at all: into a temporary file beside the target, then rename."""
+"""Write files whole or not at all: into a temporary file beside the target, then rename.
+
+The guarantees of every file umbmark writes:
+
+* the new contents appear at once (a temporary file in the same folder, flushed to disk
+  with ``fsync``, then :func:`os.replace` onto the target), so a reader never sees half
+  a file and a crash leaves the old file;
+* a target that is a symbolic link keeps the link: the file it points to is replaced;
+* a target that exists keeps its permission bits (a 0600 file stays 0600); a new file
+  gets the usual mode (0666 less the umask);
+* on any exception, ``KeyboardInterrupt`` included, the temporary file is removed.
+"""
 
 from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -13,41 +25,62 @@ from ..errors import InputError
 __all__ = ["atomic_path", "atomic_write_text"]
 
 
+def _new_mode(target: Path) -> int:
+    """The mode for the file replacing ``target``: its own if it exists, else 0666 - umask."""
+    try:
+        return stat.S_IMODE(target.stat().st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _fsync(path: Path) -> None:
+    """Flush ``path``'s contents to disk."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
 @contextlib.contextmanager
 def atomic_path(target: str | Path) -> Iterator[Path]:
     """Yield a temporary path beside ``target``; on success rename it onto ``target``.
 
     The temporary file keeps ``target``'s extension, so writers that choose a format by
-    extension (matplotlib) still do. On an exception the temporary file is removed and
-    ``target`` is left as it was.
+    extension (matplotlib) still do. On success it is flushed to disk, given ``target``'s
+    mode (when ``target`` exists) and renamed onto ``target``; a symbolic link is
+    followed, so the file it points to is replaced and the link kept. On any exception
+    (``KeyboardInterrupt`` too) the temporary file is removed and ``target`` is left as
+    it was.
 
     Raises
     ------
     InputError
         If ``target`` cannot be written (no such folder, no permission, a directory).
     """
-    target = Path(target)
-    if target.is_dir():
-        raise InputError("is a directory; give a file name to write", source=target)
+    shown = Path(target)
+    real = shown.resolve()  # follow links: replace the file, keep the link
+    if real.is_dir():
+        raise InputError("is a directory; give a file name to write", source=shown)
     try:
         fd, tmp_name = tempfile.mkstemp(
-            prefix=f".{target.stem}.", suffix=target.suffix, dir=target.parent
+            prefix=f".{real.stem}.", suffix=real.suffix, dir=real.parent
         )
     except OSError as exc:
-        raise InputError(f"cannot be written ({exc.strerror or exc})", source=target) from None
-    os.close(fd)
+        raise InputError(f"cannot be written ({exc.strerror or exc})", source=shown) from None
     tmp = Path(tmp_name)
     try:
+        os.close(fd)
         yield tmp
+        _fsync(tmp)
         with contextlib.suppress(OSError):
-            # mkstemp creates files readable only by their owner; give the usual mode.
-            umask = os.umask(0)
-            os.umask(umask)
-            tmp.chmod(0o666 & ~umask)
+            tmp.chmod(_new_mode(real))
         try:
-            os.replace(tmp, target)
+            os.replace(tmp, real)
         except OSError as exc:
-            raise InputError(f"cannot be written ({exc.strerror or exc})", source=target) from None
+            raise InputError(f"cannot be written ({exc.strerror or exc})", source=shown) from None
     except BaseException:
         with contextlib.suppress(OSError):
             tmp.unlink()
@@ -55,6 +88,6 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
 
 
 def atomic_write_text(target: str | Path, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``target`` atomically."""
+    """Write ``text`` (UTF-8) to ``target`` atomically (see :func:`atomic_path`)."""
     with atomic_path(target) as tmp:
         tmp.write_text(text, encoding="utf-8")

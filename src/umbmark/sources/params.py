@@ -34,6 +34,7 @@ __all__ = [
     "read_calibrated_params",
     "read_controller_params",
     "read_parameter_file",
+    "result_nominal",
 ]
 
 DEFAULT_CONTROLLER = "diff_drive_controller"
@@ -227,6 +228,37 @@ def read_calibrated_params(path: str | Path) -> CalibratedParams:
         wheel_diameter=optional(active, "wheel_diameter", "active."),
         source=str(path),
     )
+
+
+def result_nominal(path: str | Path) -> tuple[float | None, float | None]:
+    """The nominal wheelbase and wheel diameter [m] a result file was computed for (its
+    ``active`` block: ``wheelbase``, ``wheel_diameter``), None where it does not say.
+
+    Raises
+    ------
+    InputError
+        If the file is not a result, or the values are not plausible lengths.
+    """
+    data = _result_data(path)
+    active = data.get("active")
+    if not isinstance(active, dict):
+        return None, None
+    out: list[float | None] = []
+    for key in ("wheelbase", "wheel_diameter"):
+        raw = active.get(key)
+        if raw is None:
+            out.append(None)
+            continue
+        value = finite(raw) if isinstance(raw, int | float) and not isinstance(raw, bool) else None
+        low, high = LENGTH_RANGE
+        if value is None or not low <= value <= high:
+            shown = f"{raw!r}"[:24]
+            raise InputError(
+                f"active.{key} is {shown}, not a plausible length ({low:g} to {high:g} m)",
+                source=path,
+            )
+        out.append(value)
+    return out[0], out[1]
 
 
 def is_result_file(path: str | Path) -> bool:

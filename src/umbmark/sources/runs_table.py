@@ -22,12 +22,18 @@ measured, ``|(x_abs, y_abs)|``: their ratio is the scale error ``E_s`` (Sec. 2.2
 and square runs may share a table. Other columns are ignored. Lengths are in metres and
 headings in radians unless the caller says otherwise. Rows are numbered as the file's
 lines, from 1.
+
+Numbers are ASCII decimals (``-12.5``, ``1e-3``): ``1_000``, other scripts' digits and
+``0x10`` are refused, though Python would read them. A semicolon-separated table may use
+decimal commas (``-12,5``), as European spreadsheets write them; a row with more
+non-empty cells than the header is refused.
 """
 
 from __future__ import annotations
 
 import csv
 import math
+import re
 from pathlib import Path
 
 from ..conventions import Direction, angle_to_rad, length_to_m
@@ -73,6 +79,7 @@ def read_runs_table(
         raise InputError("is empty: expected a header and one row per run", source=path)
     header_number, header_line = lines[0]
     dialect = _sniff(header_line)
+    comma = dialect.delimiter == ";"
     header = [_column_name(cell) for cell in next(csv.reader([header_line], dialect))]
     duplicated = sorted({h for h in header if h and header.count(h) > 1})
     if duplicated:
@@ -102,9 +109,16 @@ def read_runs_table(
     runs = []
     for number, line in lines[1:]:
         cells = next(csv.reader([line], dialect))
-        if len(cells) < len(header):
+        if len(cells) < len(header) or any(cell.strip() for cell in cells[len(header) :]):
+            hint = (
+                " (a decimal comma? only ;-separated tables may use one)"
+                if len(cells) > len(header) and dialect.delimiter == ","
+                else ""
+            )
             raise InputError(
-                f"has {len(cells)} cells, the header has {len(header)}", source=path, row=number
+                f"has {len(cells)} cells, the header has {len(header)}{hint}",
+                source=path,
+                row=number,
             )
         label = cells[index["direction"]]
         straight = label.strip().lower() in STRAIGHT_LABELS
@@ -115,10 +129,11 @@ def read_runs_table(
                 f"{exc} (nor straight, for a straight run)", source=path, row=number
             ) from None
         value = {
-            name: _number(cells[index[name]], name, path, number) for name in REQUIRED_COLUMNS[1:]
+            name: _number(cells[index[name]], name, path, number, comma)
+            for name in REQUIRED_COLUMNS[1:]
         }
         theta = {
-            name: _number(cells[index[name]], name, path, number)
+            name: _number(cells[index[name]], name, path, number, comma)
             if cells[index[name]].strip()
             else None
             for name in OPTIONAL_COLUMNS
@@ -181,14 +196,45 @@ def _column_name(cell: str) -> str:
     return _ALIASES.get(name, name)
 
 
-def _number(cell: str, name: str, path: str | Path, row: int) -> float:
+#: A number as the table may write it: ASCII decimal digits only (no ``1_000``, no other
+#: scripts' digits, which Python's ``float`` would take), optionally with an exponent.
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+#: The same with a decimal comma (``1,5``), as spreadsheets write it beside ``;``.
+_COMMA_NUMBER = re.compile(r"[+-]?\d+,\d+(?:[eE][+-]?\d+)?", re.ASCII)
+
+
+def _number(cell: str, name: str, path: str | Path, row: int, decimal_comma: bool = False) -> float:
+    """A cell as a finite number, refusing anything but ASCII decimals.
+
+    Parameters
+    ----------
+    cell : str
+        The cell's text.
+    name : str
+        Its column, for messages.
+    path : path
+        The file, for messages.
+    row : int
+        Its line, for messages.
+    decimal_comma : bool
+        The table is separated by ``;``: ``1,5`` is one and a half.
+
+    Raises
+    ------
+    InputError
+        If the cell is empty, no number, or not finite.
+    """
     text = cell.strip()
     if not text:
         raise InputError(f"{name} is empty", source=path, row=row)
-    try:
-        value = float(text)
-    except ValueError:
-        raise InputError(f"{name} {text!r} is not a number", source=path, row=row) from None
+    if decimal_comma and _COMMA_NUMBER.fullmatch(text):
+        text = text.replace(",", ".")
+    if text.lower().lstrip("+-") in ("nan", "inf", "infinity"):
+        raise InputError(f"{name} is {text} (not a finite number)", source=path, row=row)
+    if not _NUMBER.fullmatch(text):
+        shown = repr(text) if len(text) <= 40 else repr(text[:40]) + "..."
+        raise InputError(f"{name} {shown} is not a number", source=path, row=row)
+    value = float(text)
     if not math.isfinite(value):
         raise InputError(f"{name} is {text} (not a finite number)", source=path, row=row)
     return value

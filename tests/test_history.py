@@ -1,0 +1,181 @@
+"""The robot history (SQLite): recording calibrations, listing them, refusing another
+robot's parameters, the schema version, drift, and concurrent writers."""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+import umbmark
+from umbmark.history_store import SCHEMA_VERSION, History, default_history_path
+
+from helpers import api_error, cli_error, cli_json, run_cli
+
+
+def _table(tmp_path: Path) -> Path:
+    path = tmp_path / "runs.csv"
+    umbmark.example(str(path))
+    return path
+
+
+def _calibrate(table: Path, db: Path, robot: str = "r1", wheelbase: float = 0.34):  # type: ignore[no-untyped-def]
+    return umbmark.calibrate(
+        str(table), side_length=4, wheelbase=wheelbase, unit="mm", robot=robot, history=db
+    )
+
+
+def test_calibrate_records_and_api_lists(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.sqlite3"
+    report = _calibrate(table, db)
+    _calibrate(table, db)
+    store = History(db)
+    assert [r.name for r in store.robots()] == ["r1"]
+    assert store.robots()[0].wheelbase == 0.34
+    assert store.robots()[0].calibrations == 2
+    calibrations = store.calibrations("r1")
+    assert [c.id for c in calibrations] == [1, 2]
+    first = calibrations[0]
+    assert first.method == "exact"
+    assert first.E_d == pytest.approx(report.estimate.E_d)
+    assert first.E_b == pytest.approx(report.estimate.E_b)
+    assert first.e_max_syst == pytest.approx(report.e_max_syst)
+    assert first.standard_errors["E_d"] == pytest.approx(report.estimate.standard_errors["E_d"])
+    assert first.new["c_L"] == pytest.approx(report.calibration.new_c_left)
+    assert first.active["wheelbase"] == 0.34
+    assert first.inputs[0]["name"] == str(table)
+    assert len(first.inputs[0]["sha256"]) == 64
+    assert not first.applied
+    assert store.last_applied("r1") is None
+    store.mark_applied("r1", 1)
+    last = store.last_applied("r1")
+    assert last is not None
+    assert last.id == 1
+    assert store.drift("r1") is None  # two calibrations are too few
+    assert store.calibrations("nobody") == []
+
+
+def test_history_command_lists_robots_and_calibrations(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.sqlite3"
+    for _ in range(3):
+        _calibrate(table, db)
+    robots = cli_json("history", "--history", str(db))
+    assert [r["name"] for r in robots["robots"]] == ["r1"]
+    listed = cli_json("history", "r1", "--history", str(db))
+    assert listed["robot"] == "r1"
+    assert len(listed["calibrations"]) == 3
+    for key in ("time", "method", "E_d", "E_b", "e_max_syst", "applied"):
+        assert key in listed["calibrations"][0]
+    assert listed["drift"].startswith("no drift")  # the same runs three times
+    marked = cli_json("history", "r1", "--history", str(db), "--applied", "2")
+    assert [c["applied"] for c in marked["calibrations"]] == [False, True, False]
+    text = run_cli("history", "r1", "--history", str(db))
+    assert text.returncode == 0, text.stderr
+    assert "E_max,syst [mm]" in text.stdout
+    assert "no drift" in text.stdout
+    report = umbmark.history("r1", history=db)
+    assert json.loads(report.to_json()) == report.to_dict()
+    assert "no calibration 9" in cli_error("history", "r1", "--history", str(db), "--applied", "9")
+    assert "no robot 'r2'" in api_error(umbmark.history, "r2", history=db)
+    assert "not a usable history file" in api_error(umbmark.history, history=table)
+
+
+def test_calibrate_command_records(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.sqlite3"
+    args = ("calibrate", str(table), "-L", "4", "-b", "0.34", "--unit", "mm")
+    cli_json(*args, "--robot", "bot", "--history", str(db))
+    assert [c.method for c in History(db).calibrations("bot")] == ["exact"]
+    line = cli_error(
+        *args[:-4], "-b", "0.30", "--unit", "mm", "--robot", "bot", "--history", str(db)
+    )
+    assert "is not robot bot: nominal wheelbase 0.3 m vs 0.34 m" in line
+
+
+def test_refuses_another_robots_parameters(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.sqlite3"
+    _calibrate(table, db)
+    message = api_error(_calibrate, table, db, wheelbase=0.30)
+    assert "is not robot r1: nominal wheelbase 0.3 m vs 0.34 m" in message
+    assert len(History(db).calibrations("r1")) == 1  # nothing recorded
+    _calibrate(table, db, robot="r2", wheelbase=0.30)  # under its own name it is fine
+    assert [r.name for r in History(db).robots()] == ["r1", "r2"]
+
+
+def test_schema_version_and_wal(tmp_path: Path) -> None:
+    db = tmp_path / "deep" / "history.sqlite3"
+    assert History(db).schema_version == SCHEMA_VERSION == 1
+    with sqlite3.connect(db) as raw:
+        assert raw.execute("PRAGMA user_version").fetchone()[0] == 1
+        assert raw.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+        raw.execute("PRAGMA user_version = 99")
+    raw.close()
+    assert "newer than this umbmark's" in api_error(History, db)
+
+
+def test_default_location(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("UMBMARK_HISTORY", str(tmp_path / "h.db"))
+    assert default_history_path() == tmp_path / "h.db"
+    monkeypatch.delenv("UMBMARK_HISTORY")
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    assert default_history_path() == tmp_path / "data" / "umbmark" / "history.sqlite3"
+    monkeypatch.delenv("XDG_DATA_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path))
+    assert default_history_path() == tmp_path / ".local/share/umbmark/history.sqlite3"
+
+
+def test_drift_is_flagged(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.sqlite3"
+    for _ in range(3):
+        _calibrate(table, db)
+    with sqlite3.connect(db) as raw:  # the robot's wheels wore: E_b moved by far more than 3 se
+        raw.execute("UPDATE calibrations SET E_b = E_b + 0.01 WHERE id = 3")
+    raw.close()
+    verdict = History(db).drift("r1")
+    assert verdict is not None
+    assert verdict.startswith("drift between calibrations 1 and 3: E_b")
+
+
+def _record_ten(table: str, db: str) -> None:
+    for _ in range(10):
+        umbmark.calibrate(table, side_length=4, wheelbase=0.34, unit="mm", robot="r1", history=db)
+
+
+def test_concurrent_writers(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.sqlite3"
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    workers = [context.Process(target=_record_ten, args=(str(table), str(db))) for _ in range(4)]
+    for worker in workers:
+        worker.start()
+    for worker in workers:
+        worker.join(timeout=60)
+        assert worker.exitcode == 0
+    assert len(History(db).calibrations("r1")) == 40
+    with sqlite3.connect(db) as raw:
+        assert raw.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        assert raw.execute("SELECT COUNT(*) FROM robots").fetchone()[0] == 1
+    raw.close()
+
+
+def test_second_pass_composes_with_last_applied(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.sqlite3"
+    first = _calibrate(table, db)
+    History(db).mark_applied("r1", 1)
+    second = _calibrate(table, db)
+    active = second.calibration.active
+    assert active.c_left == pytest.approx(first.calibration.new_c_left)
+    assert active.c_right == pytest.approx(first.calibration.new_c_right)
+    assert active.separation_multiplier == pytest.approx(
+        first.calibration.new_separation_multiplier
+    )
+    assert any("last applied calibration 1" in note for note in second.notes)
+    # Said otherwise: the options win.
+    third = umbmark.calibrate(
+        str(table), side_length=4, wheelbase=0.34, unit="mm", robot="r1", history=db,
+        current_c_l=1.0, current_c_r=1.0, current_separation_multiplier=1.0,
+    )  # fmt: skip
+    assert third.calibration.active.c_left == 1.0
+    assert not any("last applied" in note for note in third.notes)
