@@ -6,7 +6,7 @@ from typing import Any
 
 import click
 
-from .options import OUTPUTS, TEST, Command, apply, option, source_options
+from .options import OUTPUTS, TEST, Command, apply, option, source_options, tum_time_option
 
 __all__ = ["calibrate"]
 
@@ -127,16 +127,7 @@ __all__ = ["calibrate"]
             help="Logged runs: write TUM trajectories of every run (ground truth, nominal and "
             "calibrated odometry) into this folder, for evo.",
         ),
-        option(
-            "--tum-time",
-            section=OUTPUTS,
-            type=click.Choice(["recording", "run"]),
-            default="recording",
-            show_default=True,
-            help="Timestamps of the TUM files: the recording's own clock (bag stamps, run-log "
-            "time; evo matches them with other trajectories of the same bag) or seconds from "
-            "each run's start.",
-        ),
+        tum_time_option(),
     ]
 )
 def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:

@@ -23,6 +23,7 @@ __all__ = [
     "apply",
     "option",
     "source_options",
+    "tum_time_option",
 ]
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -77,6 +78,20 @@ def apply(decorators: Sequence[Callable[[F], F]]) -> Callable[[F], F]:
 
 def _float(help_text: str, *decls: str, section: str, **attrs: Any) -> Callable[[F], F]:
     return option(*decls, section=section, type=float, help=help_text, **attrs)
+
+
+def tum_time_option() -> Callable[[F], F]:
+    """``--tum-time``: the clock of the TUM files (calibrate and replay)."""
+    return option(
+        "--tum-time",
+        section=OUTPUTS,
+        type=click.Choice(["recording", "run"]),
+        default="recording",
+        show_default=True,
+        help="Timestamps of the TUM files: the recording's own clock (bag stamps, run-log "
+        "time; evo matches them with other trajectories of the same bag) or seconds from "
+        "each run's start.",
+    )
 
 
 def source_options(*, wheelbase: bool = True) -> Callable[[F], F]:

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from .options import OUTPUTS, PARAMETERS, Command, apply, option, source_options
+from .options import OUTPUTS, PARAMETERS, Command, apply, option, source_options, tum_time_option
 
 __all__ = ["replay"]
 
@@ -44,16 +44,7 @@ __all__ = ["replay"]
             type=click.Path(),
             help="Write TUM trajectories of every run (ground truth, nominal, calibrated).",
         ),
-        option(
-            "--tum-time",
-            section=OUTPUTS,
-            type=click.Choice(["recording", "run"]),
-            default="recording",
-            show_default=True,
-            help="Timestamps of the TUM files: the recording's own clock (bag stamps, run-log "
-            "time; evo matches them with other trajectories of the same bag) or seconds from "
-            "each run's start.",
-        ),
+        tum_time_option(),
         option(
             "--plot",
             section=OUTPUTS,
