@@ -18,7 +18,9 @@ four such coordinates divided by ``4L``, so
 ``se(E_b) ~ 1/L`` and ``se(E_d) ~ b/L^2``: a small square hurts ``E_d`` most. The scatter
 itself grows with the path (wheel slip) and does not (a tape's reading error); ``plan``
 takes it as given, for the side it is given at. ``tests/test_plan.py`` checks these
-figures against a Monte Carlo of the exact estimator within 10 %.
+figures against a Monte Carlo of the exact estimator within 10 %. The x and y scatter are
+taken as independent; wheel slip correlates them, and on the slip simulator the estimates
+spread about 1.2x what these figures say (``tools/plan_vs_simulation.py``).
 """
 
 from __future__ import annotations
