@@ -240,3 +240,10 @@ def test_an_ascii_only_terminal_gets_escapes_not_a_traceback(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr
     assert "E_max,syst" in proc.stdout
+
+
+def test_the_method_choices_are_the_librarys_methods():
+    from umbmark.jobs.calibrate import METHODS
+
+    method = next(p for p in cli.commands["calibrate"].params if p.name == "method")
+    assert list(typing.cast("click.Choice", method.type).choices) == [*METHODS, "auto"]

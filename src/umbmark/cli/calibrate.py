@@ -36,6 +36,8 @@ __all__ = ["calibrate"]
             "--method",
             "-m",
             section=TEST,
+            # umbmark.jobs.calibrate.METHODS and "auto", spelt out so that the command
+            # starts without importing numpy (tests/test_cli.py keeps them equal)
             type=click.Choice(
                 [
                     "paper",
