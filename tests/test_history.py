@@ -179,3 +179,121 @@ def test_second_pass_composes_with_last_applied(tmp_path: Path) -> None:
     )  # fmt: skip
     assert third.calibration.active.c_left == 1.0
     assert not any("last applied" in note for note in third.notes)
+
+
+# The trend plot: three calibrations of a robot whose wheels wear (known E_d, E_b).
+
+#: True (E_d, E_b) of each calibration's runs, and the date it is set to.
+WEAR = (
+    (1.000, 0.990, "2026-01-05T10:00:00.000000Z"),
+    (1.002, 0.980, "2026-03-10T15:30:00.000000Z"),
+    (1.004, 0.970, "2026-06-20T08:00:00.000000Z"),
+)
+
+
+def _wearing_robot(db: Path, robot: str = "wear-bot") -> list[float]:
+    """Record three calibrations of simulated runs with the errors of :data:`WEAR`, dated
+    as there, the second marked applied. Returns each calibration's E_max,syst [m]."""
+    e_max = []
+    for seed, (E_d, E_b, _) in enumerate(WEAR, start=1):
+        sim = umbmark.simulate(E_d=E_d, E_b=E_b, seed=seed)
+        report = umbmark.calibrate(sim.runs, side_length=4, wheelbase=0.34, robot=robot, history=db)
+        e_max.append(report.e_max_syst)
+    with sqlite3.connect(db) as raw:
+        for id, (_, _, time) in enumerate(WEAR, start=1):
+            raw.execute("UPDATE calibrations SET time = ? WHERE id = ?", (time, id))
+    raw.close()
+    History(db).mark_applied(robot, 2)
+    return e_max
+
+
+def _line(ax, label: str):  # type: ignore[no-untyped-def]
+    (line,) = [line for line in ax.get_lines() if line.get_label() == label]
+    return line
+
+
+def test_trend_figure_draws_the_recorded_calibrations(tmp_path: Path) -> None:
+    import datetime as dt
+
+    from matplotlib.dates import date2num
+
+    db = tmp_path / "history.sqlite3"
+    e_max = _wearing_robot(db)
+    fig = umbmark.history("wear-bot", history=db).figure()
+    e_d_ax, e_b_ax, e_max_ax = fig.axes[:3]
+    days = [date2num(dt.datetime(2026, 1, 5, 10)), date2num(dt.datetime(2026, 3, 10, 15, 30))]
+    days.append(date2num(dt.datetime(2026, 6, 20, 8)))
+    for ax, name, column, tolerance in ((e_d_ax, "E_d", 0, 3e-4), (e_b_ax, "E_b", 1, 2e-3)):
+        line = _line(ax, name)
+        assert list(line.get_xdata()) == pytest.approx(days)
+        # The estimates of noisy runs: within a few standard errors of the truth, which
+        # moves by 0.002 (E_d) and 0.01 (E_b) between calibrations.
+        truth = [w[column] for w in WEAR]
+        assert list(line.get_ydata()) == pytest.approx(truth, abs=tolerance)
+        assert list(_line(ax, "applied").get_xdata()) == pytest.approx(days[1:2])
+        assert list(_line(ax, "not applied").get_xdata()) == pytest.approx(days[::2])
+        assert "[dimensionless]" in ax.get_ylabel()
+        (bars,) = [c for c in ax.containers if c.get_label() == "±1.96 standard errors (95 %)"]
+        records = History(db).calibrations("wear-bot")
+        _, _, (collection,) = bars.lines
+        for segment, record in zip(collection.get_segments(), records, strict=True):
+            half = (segment[1][1] - segment[0][1]) / 2
+            assert half == pytest.approx(1.96 * record.standard_errors[name], rel=1e-9)
+    line = _line(e_max_ax, "E_max,syst")
+    assert list(line.get_ydata()) == pytest.approx([1000 * e for e in e_max])
+    assert "[mm]" in e_max_ax.get_ylabel()
+    assert "UTC" in e_max_ax.get_xlabel()
+    title = fig._suptitle.get_text()
+    assert "wear-bot" in title
+    assert "340.00 mm" in title  # the nominal wheelbase
+    assert "drift between calibrations 1 and 3" in title  # E_b moved by 0.02, ~40 se
+
+
+def test_history_plot_command_writes_png_svg_pdf(tmp_path: Path) -> None:
+    from matplotlib.image import imread
+
+    db = tmp_path / "history.sqlite3"
+    _wearing_robot(db)
+    png = tmp_path / "trend.png"
+    proc = run_cli("history", "wear-bot", "--history", str(db), "--plot", str(png))
+    assert proc.returncode == 0, proc.stderr
+    assert f"umbmark: wrote {png}" in proc.stderr
+    pixels = imread(png)[..., :3]
+    assert min(pixels.shape[:2]) > 500
+    assert float(pixels.std()) > 0.05  # not blank
+    assert float((pixels.min(axis=2) < 0.5).mean()) > 0.01  # dark ink: text, lines
+    svg, pdf = tmp_path / "trend.svg", tmp_path / "trend.pdf"
+    cli_json("history", "wear-bot", "--history", str(db), "--plot", str(svg))
+    cli_json("history", "wear-bot", "--history", str(db), "--plot", str(pdf))
+    assert "<svg" in svg.read_text(encoding="utf-8")
+    assert pdf.read_bytes().startswith(b"%PDF")
+
+
+def test_history_plot_refusals(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.png"  # a history named like a figure
+    _calibrate(table, db)
+    before = db.read_bytes()
+    line = cli_error("history", "r1", "--history", str(db), "--plot", str(db))
+    assert "would overwrite an input" in line
+    assert History(db).calibrations("r1")[0].method == "exact"  # still a history
+    assert db.read_bytes() == before
+    line = cli_error("history", "r1", "--history", str(db), "--plot", str(tmp_path / "t.txt"))
+    assert line.startswith("umbmark: error: --plot")
+    assert ".png" in line
+    line = cli_error("history", "--history", str(db), "--plot", str(tmp_path / "t.png"))
+    assert "needs the robot's NAME" in line
+    # Refused before the calibration is marked applied.
+    cli_error("history", "r1", "--history", str(db), "--applied", "1", "--plot", str(db))
+    assert not History(db).calibrations("r1")[0].applied
+    assert not (tmp_path / "t.png").exists()
+    assert not (tmp_path / "t.txt").exists()
+
+
+def test_trend_figure_of_one_calibration(tmp_path: Path) -> None:
+    table, db = _table(tmp_path), tmp_path / "history.sqlite3"
+    report = _calibrate(table, db)
+    fig = umbmark.history("r1", history=db).figure()
+    assert list(_line(fig.axes[0], "E_d").get_ydata()) == pytest.approx([report.estimate.E_d])
+    lo, hi = fig.axes[2].get_xlim()
+    assert hi - lo == pytest.approx(1.0)  # one instant: a day's span around it
+    assert "drift" not in fig._suptitle.get_text()

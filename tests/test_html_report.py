@@ -94,6 +94,13 @@ def test_html_report_structure(report: umbmark.CalibrationReport, runs_csv: Path
     assert f"method: {d['method']}" in body
 
 
+def test_html_report_of_a_runs_table_predicts_nothing(report: umbmark.CalibrationReport) -> None:
+    """End points alone cannot be replayed: no predicted after, said nowhere."""
+    body = "".join(_parse(report.html().split("<body>", 1)[1]).text)
+    assert "Predicted after" not in body
+    assert "predicted" not in body.lower()
+
+
 def test_html_report_escapes_text(report: umbmark.CalibrationReport) -> None:
     from dataclasses import replace
 

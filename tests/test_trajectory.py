@@ -168,6 +168,21 @@ def test_errors_relative_to_the_active_parameters():
     assert estimate.components["wheelbase"] == fit.wheelbase
 
 
+def test_long_recordings_are_compared_at_a_bounded_number_of_samples(session, monkeypatch):
+    # Thinning the comparison to 150 samples a run (of several hundred) keeps the fit on
+    # the simulated robot's truth: the wheel data are still integrated whole.
+    from umbmark.estimators import trajectory
+
+    counts = [int(r.log.matched.sum()) for r in session]
+    assert min(counts) > 300
+    monkeypatch.setattr(trajectory, "MAX_COMPARED_PER_RUN", 150)
+    fit = fit_trajectories([r.log for r in session], ODO)
+    assert fit.samples == 150 * len(session)
+    assert fit.r_left == pytest.approx(ROBOT.diameter_left / 2, rel=1e-5)
+    assert fit.r_right == pytest.approx(ROBOT.diameter_right / 2, rel=1e-5)
+    assert fit.wheelbase == pytest.approx(ROBOT.wheelbase, rel=1e-5)
+
+
 def _delayed(log: RunLog, delay: float) -> RunLog:
     """The same run with the ground truth's time stamps ``delay`` seconds late."""
     t = log.time

@@ -32,6 +32,8 @@ _EXPORTS = {
     # jobs: one function per command, and their reports
     "calibrate": "umbmark.jobs.calibrate",
     "replay": "umbmark.jobs.replay",
+    "report": "umbmark.jobs.report",
+    "PassesReport": "umbmark.jobs.report",
     "info": "umbmark.jobs.info",
     "history": "umbmark.jobs.history",
     "HistoryReport": "umbmark.jobs.history",
@@ -84,6 +86,7 @@ __all__ = [
     "HistoryReport",
     "InfoReport",
     "InputError",
+    "PassesReport",
     "PlanReport",
     "ReplayReport",
     "Run",
@@ -105,6 +108,7 @@ __all__ = [
     "plan",
     "read_runs_table",
     "replay",
+    "report",
     "reproduce_fig4",
     "reproduce_table1",
     "simulate",
@@ -128,6 +132,7 @@ if TYPE_CHECKING:
     from .jobs.inputs import SourceOptions
     from .jobs.plan import PlanReport, plan
     from .jobs.replay import ReplayReport, replay
+    from .jobs.report import PassesReport, report
     from .jobs.reproduce import reproduce_fig4, reproduce_table1
     from .jobs.simulate import SimulationReport, simulate
     from .jobs.study import StudyReport, study

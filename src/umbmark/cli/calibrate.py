@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import click
@@ -144,9 +145,15 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     active during the runs, and the ros2_control overlay.
     """
     from .. import calibrate as run_calibration
-    from .common import console, warn, wrote
+    from .common import command_line, console, warn, working, wrote
 
-    report = run_calibration(*sources, **options)
+    options["command"] = command_line(sys.argv)
+    method = str(options.get("method"))
+    if method.startswith("trajectory") or method == "auto":  # fits that can take minutes
+        with working(f"calibrating, --method {method}"):
+            report = run_calibration(*sources, **options)
+    else:
+        report = run_calibration(*sources, **options)
     for note in report.notes:
         warn(note)
     for message in report.warnings:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import shlex
 import sys
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -15,23 +16,35 @@ if TYPE_CHECKING:
 
 __all__ = [
     "EXIT_BAD_INPUT",
+    "command_line",
     "console",
     "error_line",
     "progress_bar",
     "reading_bar",
     "warn",
+    "working",
     "wrote",
 ]
 
 #: Exit status for bad input (as for a usage error).
 EXIT_BAD_INPUT = 2
-#: Width of output that goes to a file or a pipe: wide enough that no table wraps.
-_PIPE_WIDTH = 200
+#: Width of output that goes to a file or a pipe: wide enough that no table is narrowed
+#: (a long path in a cell would otherwise be cut, or a value split across lines).
+_PIPE_WIDTH = 10_000
+
+
+#: Longest error line [characters]: a value of megabytes is not echoed whole.
+LONGEST_LINE = 1000
 
 
 def error_line(message: str) -> None:
-    """Print one error line to stderr (plain text: no wrapping, no colour codes)."""
-    sys.stderr.write(f"umbmark: error: {' '.join(message.split())}\n")
+    """Print one error line to stderr (plain text: no wrapping, no colour codes; at most
+    :data:`LONGEST_LINE` characters of the message, the rest left out and counted)."""
+    text = " ".join(message.split())
+    if len(text) > LONGEST_LINE:
+        half = LONGEST_LINE // 2
+        text = f"{text[:half]} ... ({len(text) - 2 * half} characters left out) ... {text[-half:]}"
+    sys.stderr.write(f"umbmark: error: {text}\n")
 
 
 def warn(message: str) -> None:
@@ -80,6 +93,32 @@ def progress_bar(description: str) -> Iterator[Callable[[float], None]]:
         _LIVE.append(bar)  # a bag read meanwhile shows its bar in this display
         try:
             yield lambda fraction: bar.update(task, completed=fraction)
+        finally:
+            _LIVE.remove(bar)
+
+
+@contextlib.contextmanager
+def working(description: str) -> Iterator[None]:
+    """A spinner with the time elapsed on stderr, for work whose fraction done is unknown
+    (an iterative fit): shown only on a terminal, gone when the block ends."""
+    from rich.console import Console
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    err = Console(stderr=True)
+    if not err.is_terminal:
+        yield
+        return
+    with Progress(
+        SpinnerColumn(),
+        TextColumn("{task.description}"),
+        TimeElapsedColumn(),
+        console=err,
+        transient=True,
+    ) as bar:
+        bar.add_task(f"{description} (Ctrl-C stops)", total=None)
+        _LIVE.append(bar)  # a bag read meanwhile shows its bar in this display
+        try:
+            yield
         finally:
             _LIVE.remove(bar)
 
@@ -185,3 +224,8 @@ def reading_bar() -> Iterator[None]:
             yield
     finally:
         callback.close()
+
+
+def command_line(argv: list[str]) -> str:
+    """The command line as a shell would take it back: ``umbmark`` and the quoted args."""
+    return " ".join(shlex.quote(arg) for arg in ["umbmark", *argv[1:]])

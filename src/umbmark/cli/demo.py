@@ -22,7 +22,7 @@ __all__ = ["demo"]
     help="Folder for the plots, runs tables, result and overlay.",
 )
 @option("--seed", section="Options", type=int, default=1, show_default=True,
-        help="Seed of the non-systematic errors.")  # fmt: skip
+        help="Seed of the non-systematic errors (0 to 2^63-1).")  # fmt: skip
 @option(
     "--method",
     "-m",
@@ -33,7 +33,7 @@ __all__ = ["demo"]
     help="Estimator to calibrate with.",
 )
 @option("--runs", "-n", section="Options", type=int, default=5, show_default=True,
-        help="Runs in each direction.")  # fmt: skip
+        help="Runs in each direction (2 to 1000).")  # fmt: skip
 def demo(json_out: bool, out: str, seed: int, method: str, runs: int) -> None:
     """UMBmark before, calibration, UMBmark after, on a virtual LabMate (Sec. 5).
 

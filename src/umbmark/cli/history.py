@@ -22,45 +22,69 @@ __all__ = ["history"]
                help="Mark this calibration (its id) of the robot as applied."),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print one JSON object (metres)."),
+        option("--plot", section=OUTPUTS, type=click.Path(),
+               help="Draw the robot's E_d, E_b (95 % error bars) and E_max,syst over time "
+               "to a .png, .svg or .pdf file."),
     ]
 )  # fmt: skip
 def history(robot: str | None, json_out: bool, **options: Any) -> None:
     """The robots' calibration history: without ROBOT, the robots; with it, its
-    calibrations (calibrate --robot records them) and whether E_d or E_b drift.
+    calibrations (calibrate --robot records them) and whether E_d or E_b drift; --plot
+    draws their trend.
     """
     from .. import history as run_history
-    from .common import console, warn
+    from .common import console, warn, wrote
+    from .render import row, table
 
     report = run_history(robot, **options)
     for note in report.notes:
         warn(note)
+    wrote([options["plot"]] if options["plot"] else [])
     if json_out:
         click.echo(report.to_json(), nl=False)
         return
     out = console()
     if report.robot is None:
         if not report.robots:
-            out.print(f"No robots in {report.path} yet (umbmark calibrate --robot NAME).")
+            out.print(
+                f"No robots in {report.path} yet (umbmark calibrate --robot NAME).", markup=False
+            )
+            return
+        robots = table(
+            f"Robots in {report.path}",
+            ["robot", "wheelbase [m]", "wheel diameter [m]", "calibrations", "since (UTC)"],
+            left=("robot", "since (UTC)"),
+        )
         for r in report.robots:
             diameter = "?" if r.wheel_diameter is None else f"{r.wheel_diameter:.4f}"
-            out.print(
-                f"{r.name}: wheelbase {r.wheelbase:.4f} m, wheel diameter {diameter} m, "
-                f"{r.calibrations} calibration(s) since {r.created[:10]}",
-                markup=False,
+            row(
+                robots,
+                r.name,
+                f"{r.wheelbase:.4f}",
+                diameter,
+                str(r.calibrations),
+                r.created[:10],
             )
+        out.print(robots)
         return
-    out.print(
-        f"{'id':>4}  {'time (UTC)':<20}  {'method':<16}  {'E_d':>9}  {'E_b':>9}  "
-        f"{'E_max,syst [mm]':>15}  applied",
-        markup=False,
+    grid = table(
+        f"Calibrations of {report.robot}",
+        ["id", "time (UTC)", "method", "E_d", "E_b", "E_max,syst [mm]", "applied"],
+        left=("time (UTC)", "method", "applied"),
     )
     for c in report.calibrations:
         e_max = "-" if c.e_max_syst is None else f"{c.e_max_syst * 1000:.1f}"
-        out.print(
-            f"{c.id:>4}  {c.time[:19]:<20}  {c.method:<16}  {c.E_d:9.6f}  {c.E_b:9.6f}  "
-            f"{e_max:>15}  {'yes' if c.applied else 'no'}",
-            markup=False,
+        row(
+            grid,
+            str(c.id),
+            c.time[:19],
+            c.method,
+            f"{c.E_d:.6f}",
+            f"{c.E_b:.6f}",
+            e_max,
+            "yes" if c.applied else "no",
         )
+    out.print(grid)
     if report.drift is not None:
         out.print(report.drift, markup=False)
     else:

@@ -25,7 +25,7 @@ __all__ = ["info"]
         option(
             "--max-messages",
             section=LOGS,
-            type=click.IntRange(min=1),
+            type=click.IntRange(min=1, max=1_000_000),
             help="Bags: messages looked into per topic at most, spread over the topic's "
             "time span [default: 2000].",
         ),
@@ -77,8 +77,9 @@ def _more(count: int, what: str) -> str:
 
 
 def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
-    from rich.table import Table
     from rich.text import Text
+
+    from .render import row, table
 
     when = (
         ""
@@ -92,23 +93,19 @@ def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
             f"{bag.duration:.1f} s{when}"
         )
     )
-    topics = Table(title=Text("Topics"), title_justify="left")
-    topics.add_column(Text("topic"))
-    topics.add_column(Text("type"))
-    for name in ("messages", "rate [Hz]", "duration [s]"):
-        topics.add_column(Text(name), justify="right")
+    topics = table(
+        "Topics",
+        ["topic", "type", "messages", "rate [Hz]", "duration [s]"],
+        left=("topic", "type"),
+    )
     for topic in bag.topics:
-        topics.add_row(
-            *(
-                Text(c)
-                for c in (
-                    topic.name,
-                    topic.msgtype,
-                    str(topic.count),
-                    _number(topic.rate, ".1f"),
-                    _number(topic.duration, ".1f"),
-                )
-            )
+        row(
+            topics,
+            topic.name,
+            topic.msgtype,
+            str(topic.count),
+            _number(topic.rate, ".1f"),
+            _number(topic.duration, ".1f"),
         )
     out.print(topics)
     if bag.topics_not_listed:
@@ -116,39 +113,37 @@ def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
 
     for js in bag.joint_states:
         scanned = "all" if js.complete else f"{js.scanned} spread over the topic"
-        joints = Table(
-            title=Text(f"Joints of {js.topic} ({scanned} messages looked into)"),
-            title_justify="left",
+        joints = table(
+            f"Joints of {js.topic} ({scanned} messages looked into)",
+            ["joint", "messages", "position range [rad]", "max speed [rad/s]", "moves"],
+            left=("joint", "moves"),
         )
-        joints.add_column(Text("joint"))
-        joints.add_column(Text("messages"), justify="right")
-        joints.add_column(Text("position range [rad]"), justify="right")
-        joints.add_column(Text("max speed [rad/s]"), justify="right")
-        joints.add_column(Text("moves"))
         for joint in js.joints:
-            joints.add_row(
-                Text(joint.name),
-                Text(str(joint.samples)),
-                Text(_number(joint.position_range, ".3f")),
-                Text(_number(joint.max_speed, ".3f")),
-                Text("yes" if joint.moving else "no"),
+            row(
+                joints,
+                joint.name,
+                str(joint.samples),
+                _number(joint.position_range, ".3f"),
+                _number(joint.max_speed, ".3f"),
+                "yes" if joint.moving else "no",
             )
         out.print(joints)
         if js.not_listed:
             out.print(Text(_more(js.not_listed, "joints")))
 
     if bag.transforms:
-        tfs = Table(title=Text("Transforms (parent -> child)"), title_justify="left")
-        tfs.add_column(Text("parent -> child"))
-        tfs.add_column(Text("topic"))
-        tfs.add_column(Text("rate [Hz]"), justify="right")
-        tfs.add_column(Text("moves"))
+        tfs = table(
+            "Transforms (parent -> child)",
+            ["parent -> child", "topic", "rate [Hz]", "moves"],
+            left=("parent -> child", "topic", "moves"),
+        )
         for tf in bag.transforms:
-            tfs.add_row(
-                Text(f"{tf.parent} -> {tf.child}"),
-                Text(tf.topic),
-                Text("static" if tf.static else _number(tf.rate, ".1f")),
-                Text("yes" if tf.moving else "no"),
+            row(
+                tfs,
+                f"{tf.parent} -> {tf.child}",
+                tf.topic,
+                "static" if tf.static else _number(tf.rate, ".1f"),
+                "yes" if tf.moving else "no",
             )
         out.print(tfs)
         if bag.transforms_not_listed:
@@ -190,24 +185,16 @@ def _render_candidates(title: str, candidates: tuple[Candidate, ...], out: Conso
 
 
 def _render_logged(report: InfoReport, logged: LoggedInfo, out: Console) -> None:
-    from rich.table import Table
     from rich.text import Text
+
+    from .render import row, table
 
     kind = "run log" if report.format == "log" else "OptiOdom session"
     runs = "no runs found" if logged.runs is None else f"{logged.runs} runs"
     out.print(Text(f"{report.source}: {kind}, {runs}, {logged.duration:.1f} s recorded"))
-    files = Table(title=Text("Files"), title_justify="left")
-    files.add_column(Text("file"))
-    files.add_column(Text("wheel samples"), justify="right")
-    files.add_column(Text("ground truth samples"), justify="right")
-    files.add_column(Text("duration [s]"), justify="right")
+    files = table("Files", ["file", "wheel samples", "ground truth samples", "duration [s]"])
     for f in logged.files:
-        files.add_row(
-            Text(f.name),
-            Text(str(f.wheel_samples)),
-            Text(str(f.truth_samples)),
-            Text(f"{f.duration:.1f}"),
-        )
+        row(files, f.name, str(f.wheel_samples), str(f.truth_samples), f"{f.duration:.1f}")
     out.print(files)
     if logged.files_not_listed:
         out.print(Text(_more(logged.files_not_listed, "files")))

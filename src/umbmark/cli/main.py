@@ -23,6 +23,7 @@ from .history import history
 from .info import info
 from .plan import plan
 from .replay import replay
+from .report import report
 from .reproduce import reproduce
 from .simulate import simulate
 from .study import study
@@ -38,7 +39,22 @@ EXIT_ENVIRONMENT = 3
 EXIT_INTERNAL = 70
 
 
+class _InterruptedError(Exception):
+    """A Ctrl-C inside a command, kept from click (which would print a blank line)."""
+
+
+class _Group(click.Group):
+    """The ``umbmark`` group: a Ctrl-C inside a command reaches :func:`main` whole."""
+
+    def invoke(self, ctx: click.Context) -> object:
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            raise _InterruptedError from None
+
+
 @click.group(
+    cls=_Group,
     context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
     no_args_is_help=True,
 )
@@ -53,6 +69,7 @@ for command in (
     demo,
     calibrate,
     replay,
+    report,
     validate,
     info,
     plan,
@@ -93,8 +110,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     except InputError as exc:
         error_line(str(exc))
         sys.exit(EXIT_BAD_INPUT)
-    except (click.Abort, KeyboardInterrupt):
-        sys.stderr.write("\numbmark: interrupted\n")
+    except (click.Abort, KeyboardInterrupt, _InterruptedError):
+        # One line; on a terminal after a line break, as the ^C the terminal echoed has none.
+        sys.stderr.write(("\n" if sys.stderr.isatty() else "") + "umbmark: interrupted\n")
         sys.exit(EXIT_INTERRUPTED)
     except BrokenPipeError:
         # The reader of our output went away (``umbmark ... | head``): not an error of ours.

@@ -190,14 +190,14 @@ def source_options(*, wheelbase: bool = True) -> Callable[[F], F]:
             help="Runs as time windows, seconds from the recording's start: '0:95,100:190'.",
         ),
         _float(
-            "Longest ground-truth gap to interpolate across [s].",
+            "Longest ground-truth gap to interpolate across [s], at most 60.",
             "--max-gap",
             section=LOGS,
             default=0.25,
             show_default=True,
         ),
         _float(
-            "Shortest rest between runs [s] (for --split rests).",
+            "Shortest rest between runs [s] (for --split rests), at most 600.",
             "--min-rest",
             section=LOGS,
             default=1.0,

@@ -14,16 +14,29 @@ __all__ = ["plan"]
 @click.command(cls=Command)
 @apply(
     [
-        option("--scatter", section=TEST, type=float, required=True,
-               help="Standard deviation of the return error per axis [m] (a previous "
-               "calibration's spread; the paper's runs: about 0.01)."),
-        option("--wheelbase", "-b", section=TEST, type=float, default=0.34, show_default=True,
-               help="Wheelbase [m]."),
+        option("--scatter", section=TEST, type=float,
+               help="Standard deviation of the return error per axis [m], as measured (a "
+               "previous calibration's spread; the paper's runs: about 0.01)."),
+        option("--from", "previous", section=TEST, type=click.Path(dir_okay=False),
+               help="A previous calibrate --json result: its scatter (std_cw, std_ccw), "
+               "the side it was measured on and its wheelbase."),
+        option("--noise", section=TEST, type=click.Choice(["slip", "tape"]), default="slip",
+               show_default=True,
+               help="slip: scatter driven by the path (x and y correlated, growing with "
+               "the side); tape: a reading error only (independent, the same on any side)."),
+        option("--scatter-side", section=TEST, type=float,
+               help="Side of the square the scatter was measured on [m] (default: the "
+               "planned side; --from: the result's)."),
+        option("--reading-error", section=TEST, type=float, default=0.0, show_default=True,
+               help="slip: the part of the scatter per axis [m] that is a reading or "
+               "placement error (independent in x and y, the same on any side)."),
+        option("--wheelbase", "-b", section=TEST, type=float,
+               help="Wheelbase [m] (default: the --from result's, else 0.34)."),
         option("--side-length", "-L", section=TEST, type=float,
                help="Side of the square [m]: with --runs, predict instead of recommend."),
         option("--runs", section=TEST, type=int, help="Runs per direction."),
         option("--floor", section=TEST, type=float,
-               help="Side of the free floor [m]: recommend the largest square that fits."),
+               help="Side of the free floor [m]: recommend the square that fits."),
         option("--margin", section=TEST, type=float, default=0.6, show_default=True,
                help="Room the robot and the start area need beyond the square [m]."),
         option("--target-E-d", "target_E_d", section=TEST, type=float,
@@ -41,7 +54,8 @@ def plan(json_out: bool, **options: Any) -> None:
 
     Give --side-length and --runs to predict the standard errors of E_d and E_b and the
     3 x SEM threshold; give --floor and a target (--target-E-d, --target-E-b,
-    --target-e-max) to be recommended the square and the runs per direction.
+    --target-e-max) to be recommended the square and the runs per direction. The scatter
+    comes from --scatter or from a previous result (--from).
     """
     from .. import plan as run_plan
     from .common import console, warn
@@ -59,10 +73,25 @@ def plan(json_out: bool, **options: Any) -> None:
         f"{report.runs} ccw (wheelbase {report.wheelbase:.3f} m, scatter "
         f"{report.scatter * 1000:.1f} mm per axis)"
     )
-    out.print(f"  se(E_d)  = {report.se_E_d:.2e}   (E_d's standard error, dimensionless)")
-    out.print(f"  se(E_b)  = {report.se_E_b:.2e}   (E_b's standard error, dimensionless)")
-    out.print(f"  se(alpha) = se(beta) = {report.se_alpha * 1e3:.3f} mrad")
-    out.print(
-        f"  SEM of a cluster {report.sem * 1000:.1f} mm; another pass is worth it while "
-        f"E_max,syst > 3 x SEM = {report.threshold * 1000:.1f} mm"
-    )
+    if report.slip is not None:
+        out.print(
+            f"  noise model slip: x-y correlation {report.correlation:.2f}, wheel slip "
+            f"{report.slip * 1e3:.3f} mm/sqrt(m), reading error "
+            f"{report.reading_error * 1000:.1f} mm per axis"
+        )
+    else:
+        out.print("  noise model tape: x and y scatter independent")
+    from .render import table
+
+    rows = [
+        ("se(E_d), E_d's standard error", f"{report.se_E_d:.2e}", "1"),
+        ("se(E_b), E_b's standard error", f"{report.se_E_b:.2e}", "1"),
+        ("se(alpha) = se(beta)", f"{report.se_alpha * 1e3:.3f}", "mrad"),
+        ("SEM of a cluster", f"{report.sem * 1000:.1f}", "mm"),
+        (
+            "3 x SEM: another pass while E_max,syst exceeds it",
+            f"{report.threshold * 1000:.1f}",
+            "mm",
+        ),
+    ]
+    out.print(table("Expected accuracy", ("", "value", "unit"), rows, left=("", "unit")))

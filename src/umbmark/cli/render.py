@@ -1,9 +1,10 @@
-"""The human-readable summary of a calibration: rich tables, every figure with its unit."""
+"""The human-readable summaries: the one table style of every command (:func:`table`), and
+the calibration's summary, every figure with its unit."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Collection, Iterable, Mapping, Sequence
 
 from rich import box
 from rich.console import Console
@@ -13,7 +14,7 @@ from rich.text import Text
 from ..benchmark import Benchmark
 from ..jobs.calibrate import CalibrationReport
 
-__all__ = ["render_calibration", "table", "verdict"]
+__all__ = ["column", "render_calibration", "row", "table", "verdict"]
 
 _MM = 1000.0
 _METHOD_NAMES = {
@@ -52,10 +53,7 @@ def _render_benchmark(report: CalibrationReport, bench: Benchmark, console: Cons
         f"{test.side_length:.3f} m, wheelbase b = {test.wheelbase:.4f} m)",
     )
     console.print(head)
-    clusters = table("Return errors (Eqs. 3.1-3.4)")
-    clusters.add_column("")
-    clusters.add_column("cw", justify="right")
-    clusters.add_column("ccw", justify="right")
+    clusters = table("Return errors (Eqs. 3.1-3.4)", ["", "cw", "ccw"])
     cw, ccw = bench.cw, bench.ccw
     rows = [
         ("centre of gravity x [mm]", cw.cg[0] * _MM, ccw.cg[0] * _MM),
@@ -107,10 +105,8 @@ def render_calibration(
     else:
         _render_benchmark(report, bench, console)
 
-    errors = table(f"Systematic errors: {_METHOD_NAMES.get(est.method, est.method)}")
-    errors.add_column("")
-    errors.add_column("value", justify="right")
-    errors.add_column("")
+    errors = table(f"Systematic errors: {_METHOD_NAMES.get(est.method, est.method)}", ["", "value"])
+    column(errors, "", text=True)
     _row(
         errors,
         "alpha, Type A error per turn",
@@ -141,11 +137,10 @@ def render_calibration(
     if intervals:
         console.print("95 % intervals: " + ", ".join(intervals))
 
-    correction = table("Correction, composed with the values active during the runs")
-    correction.add_column("")
-    correction.add_column("active", justify="right")
-    correction.add_column("this pass", justify="right")
-    correction.add_column("new", justify="right")
+    correction = table(
+        "Correction, composed with the values active during the runs",
+        ["", "active", "this pass", "new"],
+    )
     _row(
         correction,
         "c_L, left wheel (Eq. 4.31)",
@@ -245,13 +240,58 @@ def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, 
     )
 
 
-def table(title: str) -> Table:
-    """A compact table whose cells are plain text (no markup: ``[mm]`` stays as it is)."""
-    return Table(title=Text(title), title_justify="left", box=box.SIMPLE_HEAD, padding=(0, 1))
+def table(
+    title: str,
+    columns: Sequence[str] = (),
+    rows: Iterable[Sequence[str]] = (),
+    *,
+    left: Collection[str] | None = None,
+) -> Table:
+    """A table in the one style of every command: a title line, a rule under the headers.
+
+    Cells and headers are plain text (no markup: ``[mm]`` stays as it is); headers carry
+    the units. Text columns (by default the first, the row's label) are left-aligned, the
+    others (numbers) right-aligned. On a narrow terminal rich wraps headers and text
+    between words, so that a number stays whole; piped output is not narrowed at all
+    (:func:`umbmark.cli.common.console`).
+
+    Parameters
+    ----------
+    title : str
+        The table's title.
+    columns : sequence of str
+        The column headers (may be added later with :func:`column`).
+    rows : iterable of sequence of str
+        Rows of cells (may be added later with :func:`row`).
+    left : collection of str, optional
+        Headers of the text columns [default: the first column].
+    """
+    grid = Table(
+        title=Text(title),
+        title_justify="left",
+        box=box.SIMPLE_HEAD,
+        padding=(0, 1),
+        header_style="bold",
+    )
+    for index, name in enumerate(columns):
+        column(grid, name, text=index == 0 if left is None else name in left)
+    for cells in rows:
+        row(grid, *cells)
+    return grid
+
+
+def column(grid: Table, header: str, *, text: bool = False) -> None:
+    """Add a column: ``text`` left-aligned, else a number column, right-aligned."""
+    grid.add_column(Text(header), justify="left" if text else "right")
+
+
+def row(grid: Table, *cells: str, bold: bool = False) -> None:
+    """Add a row of plain-text cells (``bold``: a total or mean row)."""
+    grid.add_row(*(Text(cell, style="bold" if bold else "") for cell in cells))
 
 
 def _row(table: Table, *cells: str) -> None:
-    table.add_row(*(Text(cell) for cell in cells))
+    row(table, *cells)
 
 
 def _deg(value: float | None) -> float | None:

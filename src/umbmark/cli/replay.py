@@ -63,12 +63,10 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
     that were not used to compute it: calibrate on one session, replay another (a circle,
     another day).
     """
-    from rich.table import Table
-    from rich.text import Text
-
     from .. import replay as run_replay
     from ..sources.association import summarize
     from .common import console, warn, wrote
+    from .render import row, table
 
     report = run_replay(source, **options)
     for note in report.notes:
@@ -80,16 +78,14 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
 
     out = console()
     sets = report.parameter_sets
-    grid = Table(
-        title=Text(f"Replay of {report.source}: odometry against ground truth"),
-        title_justify="left",
-    )
-    grid.add_column(Text("run"))
-    grid.add_column(Text("dir"))
+    columns = ["run", "dir"]
     for name in sets:
-        grid.add_column(Text(f"{name}\nend [mm]"), justify="right")
-        grid.add_column(Text(f"{name}\nheading [deg]"), justify="right")
-        grid.add_column(Text(f"{name}\nRMSE [mm]"), justify="right")
+        columns += [f"{name}\nend [mm]", f"{name}\nheading [deg]", f"{name}\nRMSE [mm]"]
+    grid = table(
+        f"Replay of {report.source}: odometry against ground truth",
+        columns,
+        left=("run", "dir"),
+    )
     for i, run in enumerate(report.runs):
         cells = [run.label, run.direction.value]
         for name in sets:
@@ -99,7 +95,7 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
                 "" if h is None else f"{math.degrees(h):+.2f}",
                 f"{1000 * report.rmse[name][i]:.1f}",
             ]
-        grid.add_row(*(Text(c) for c in cells))
+        row(grid, *cells)
     cells = ["mean", ""]
     for name in sets:
         cells += [
@@ -107,7 +103,7 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
             "",
             f"{1000 * report.rmse[name].mean():.1f}",
         ]
-    grid.add_row(*(Text(c, style="bold") for c in cells))
+    row(grid, *cells, bold=True)
     out.print(grid)
     for name, p in sets.items():
         out.print(

@@ -19,14 +19,16 @@ def reproduce() -> None:
 @reproduce.command("table1", cls=Command)
 @option("--json", "json_out", section=OUTPUTS, is_flag=True, help="Print one JSON object instead.")
 @option("--seeds", section="Options", type=int, default=10, show_default=True,
-        help="Repetitions of every experiment (random seeds).")  # fmt: skip
-@option("--seed", section="Options", type=int, default=1, show_default=True, help="Base seed.")
+        help="Repetitions of every experiment (random seeds), 1 to 1000 (about a second "
+        "each).")  # fmt: skip
+@option("--seed", section="Options", type=int, default=1, show_default=True,
+        help="Base seed (0 to 2^63-1).")  # fmt: skip
 @option(
     "--tape-thickness",
     section="Options",
     type=float,
     help="Model the tape of experiments 7 and 8 by its physical thickness [mm] (for example "
-    "0.15) instead of sizing it by the paper's figures before correction.",
+    "0.15; at most 0.3) instead of sizing it by the paper's figures before correction.",
 )
 def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) -> None:
     """Table I: eight experiments, E_max,syst before and after the correction.
@@ -36,12 +38,9 @@ def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) 
     left. A second pass is made wherever the 3 x SEM rule asks for one. Figures are means
     over the seeds, with their standard deviation.
     """
-    from rich import box
-    from rich.table import Table
-    from rich.text import Text
-
     from .. import reproduce_table1
     from .common import console, progress_bar
+    from .render import row, table
 
     thickness = None if tape_thickness is None else tape_thickness / 1000.0
     with progress_bar(f"Table I, {seeds} seed(s)") as progress:
@@ -51,16 +50,14 @@ def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) 
     if json_out:
         click.echo(report.to_json(), nl=False)
         return
-    grid = Table(
-        title=Text(f"Table I on a virtual LabMate: E_max,syst [mm], mean ± sd over {seeds} seeds"),
-        title_justify="left",
-        box=box.SIMPLE_HEAD,
+    grid = table(
+        f"Table I on a virtual LabMate: E_max,syst [mm], mean ± sd over {seeds} seeds",
+        ["#", "paper [mm]", "before [mm]", "after [mm]", "2nd pass", "final [mm]", "gain"],
+        left=(),
     )
-    for name in ("#", "paper", "before", "after", "2nd pass", "final", "gain"):
-        grid.add_column(Text(name), justify="right")
-    for row in report.rows:
-        st = row.stats()
-        e = row.experiment
+    for result in report.rows:
+        st = result.stats()
+        e = result.experiment
         cells = (
             str(e.number),
             f"{e.paper_before_mm:.0f} -> {e.paper_after_mm:.0f}",
@@ -70,11 +67,11 @@ def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) 
             f"{1000 * st['e_max_final']:.0f} ± {1000 * st['e_max_final_sd']:.0f}",
             f"{st['improvement']:.0f}x",
         )
-        grid.add_row(*(Text(c) for c in cells))
+        row(grid, *cells)
     out = console()
     out.print(grid)
-    for row in report.rows:
-        e = row.experiment
+    for result in report.rows:
+        e = result.experiment
         out.print(
             f"  {e.number}: {e.comment or 'as 3'}; true E_d = {e.E_d:.5f}, E_b = {e.E_b:.5f}"
             + (f", E_s = {e.E_s:.5f}" if e.E_s != 1.0 else "")
@@ -103,11 +100,9 @@ def fig4(json_out: bool, plot: str | None, leg_bend: float) -> None:
     wheelbase until its cw squares come home. Its cw result then looks excellent and its
     ccw result is bad: the bi-directional test exposes what the uni-directional one hid.
     """
-    from rich.table import Table
-    from rich.text import Text
-
     from .. import reproduce_fig4
     from .common import console, progress_bar, wrote
+    from .render import row, table
 
     with progress_bar("Fig. 4: tuning the wheelbase on cw runs") as progress:
         report = reproduce_fig4(leg_bend=math.radians(leg_bend), plot=plot, progress=progress)
@@ -116,21 +111,18 @@ def fig4(json_out: bool, plot: str | None, leg_bend: float) -> None:
         click.echo(report.to_json(), nl=False)
         return
     robot = report.result.robot
-    grid = Table(
-        title=Text(
-            f"Fig. 4 on a virtual robot whose legs bend {leg_bend:g} deg left "
-            f"(E_d = {robot.E_d:.5f}, E_b = 1), noise-free"
-        ),
-        title_justify="left",
+    grid = table(
+        f"Fig. 4 on a virtual robot whose legs bend {leg_bend:g} deg left "
+        f"(E_d = {robot.E_d:.5f}, E_b = 1), noise-free",
+        ["stage", "wheelbase [mm]", "cw return error [mm]", "ccw return error [mm]"],
     )
-    for name in ("stage", "wheelbase [mm]", "cw return error [mm]", "ccw return error [mm]"):
-        grid.add_column(Text(name), justify="left" if name == "stage" else "right")
     for s in report.result.stages:
-        grid.add_row(
-            Text(s.name),
-            Text(f"{s.wheelbase * 1000:.2f}"),
-            Text(f"{s.r_cw * 1000:.1f}"),
-            Text(f"{s.r_ccw * 1000:.1f}"),
+        row(
+            grid,
+            s.name,
+            f"{s.wheelbase * 1000:.2f}",
+            f"{s.r_cw * 1000:.1f}",
+            f"{s.r_ccw * 1000:.1f}",
         )
     out = console()
     out.print(grid)

@@ -49,7 +49,8 @@ def _number(*decls: str, section: str, default: float, help_text: str) -> Any:
         _number("--side-length", "-L", section=DRIVE, default=4.0,
                 help_text="Side of the square [m]."),
         option("--runs", "-n", section=DRIVE, type=int, default=5, show_default=True,
-               help="Runs in each direction."),
+               help="Runs in each direction (1 to 1000; a run may take at most 2 million "
+               "sampling periods, all runs 1e9, with --logs 5 million)."),
         option("--direction", section=DRIVE, type=click.Choice(["both", "cw", "ccw"]),
                default="both", show_default=True,
                help="both (UMBmark), or cw / ccw only (uni-directional)."),
@@ -67,7 +68,7 @@ def _number(*decls: str, section: str, default: float, help_text: str) -> Any:
         _number("--bump-size", section=NOISE, default=0.002,
                 help_text="Extra wheel rotation per bump, as a length [m]."),
         option("--seed", section=NOISE, type=int, default=1, show_default=True,
-               help="Seed of the random errors."),
+               help="Seed of the random errors (0 to 2^63-1)."),
         option("--output", "-o", section=OUTPUTS, type=click.Path(),
                help="Write the runs table (CSV, metres, radians)."),
         option("--logs", section=OUTPUTS, type=click.Path(file_okay=False),

@@ -13,7 +13,7 @@ from .options import OUTPUTS, Command, option
 __all__ = ["study"]
 
 T = TypeVar("T")
-GRID = "The grid (comma-separated values)"
+GRID = "The grid (comma-separated values, at most 20 each)"
 ROBOTS = "The robots"
 
 
@@ -34,7 +34,7 @@ def _list(kind: Callable[[str], T]) -> Callable[[click.Context, click.Parameter,
         show_default=True, help="Estimators to compare; truth: calibrated with the true "
         "parameters, the ceiling.")  # fmt: skip
 @option("--trials", section=ROBOTS, type=int, default=200, show_default=True,
-        help="Robots per grid cell.")  # fmt: skip
+        help="Robots per grid cell (1 to 100000, and 100000 in all cells).")  # fmt: skip
 @option("--E-d-spread", "E_d_spread", section=ROBOTS, type=float, default=0.02,
         show_default=True, help="E_d drawn uniformly from 1 +- this.")  # fmt: skip
 @option("--E-b-spread", "E_b_spread", section=ROBOTS, type=float, default=0.05,
@@ -48,9 +48,9 @@ def _list(kind: Callable[[str], T]) -> Callable[[click.Context, click.Parameter,
 @option("--wheelbase", "-b", section=GRID, default="0.34", show_default=True,
         callback=_list(float), help="Nominal wheelbases [m] (wheel diameter alike).")  # fmt: skip
 @option("--seed", section="Other options", type=int, default=1, show_default=True,
-        help="Seed of the whole study.")  # fmt: skip
+        help="Seed of the whole study (0 to 2^63-1).")  # fmt: skip
 @option("--workers", section="Other options", type=int,
-        help="Processes [default: the machine's cores].")  # fmt: skip
+        help="Processes, 1 to 64 [default: the machine's cores].")  # fmt: skip
 @option("--json", "json_out", section=OUTPUTS, is_flag=True, help="Print one JSON object.")
 def study(json_out: bool, methods: str, **options: Any) -> None:
     """Compare the estimators by Monte Carlo on virtual robots with known errors.
@@ -61,11 +61,9 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
     and two passes (E_max,syst <= 3 x SEM), the share refused, the coverage of the 95 %
     intervals of E_d and E_b, and the noise-free bias [ppm].
     """
-    from rich.table import Table
-    from rich.text import Text
-
     from .. import study as run_study
     from .common import console, progress_bar
+    from .render import row, table
 
     chosen = [m.strip() for m in methods.split(",") if m.strip()]
     with progress_bar("study") as progress:
@@ -73,17 +71,15 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
     if json_out:
         click.echo(report.to_json(), nl=False)
         return
-    table = Table(
-        title=Text(
-            f"{report.trials} robots per cell, E_d in 1 ± {report.E_d_spread:g}, E_b in 1 ± "
-            f"{report.E_b_spread:g}; shares in %, noise-free bias in ppm"
-        ),
-        title_justify="left",
+    columns = ("slip [m^0.5]", "L [m]", "runs", "b [m]", "method", "floor 1 pass [%]",
+               "floor 2 passes [%]", "refused [%]", "95 % cover E_d [%]",
+               "95 % cover E_b [%]", "bias E_d [ppm]", "bias E_b [ppm]")  # fmt: skip
+    grid = table(
+        f"{report.trials} robots per cell, E_d in 1 ± {report.E_d_spread:g}, E_b in 1 ± "
+        f"{report.E_b_spread:g}; shares in %, noise-free bias in ppm",
+        columns,
+        left=("method",),
     )
-    columns = ("slip", "L [m]", "runs", "b [m]", "method", "floor 1 pass", "floor 2 passes",
-               "refused", "95 % cover E_d", "95 % cover E_b", "bias E_d", "bias E_b")  # fmt: skip
-    for name in columns:
-        table.add_column(Text(name), justify="left" if name == "method" else "right")
 
     def pct(value: float) -> str:
         return "-" if not math.isfinite(value) else f"{100 * value:.1f}"
@@ -98,5 +94,5 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
             pct(r.refused), pct(r.coverage_E_d), pct(r.coverage_E_b), ppm(r.bias_E_d_ppm),
             ppm(r.bias_E_b_ppm),
         )  # fmt: skip
-        table.add_row(*(Text(c) for c in cells))
-    console().print(table)
+        row(grid, *cells)
+    console().print(grid)

@@ -23,6 +23,13 @@ __all__ = ["validate"]
             "heading, endpose, trajectory].",
         ),
         option("--side-length", "-L", section=TEST, type=float, help="Side of squares [m]."),
+        option(
+            "--force",
+            section=TEST,
+            is_flag=True,
+            help="Take --current-params even when it is a result for another nominal "
+            "wheelbase or wheel diameter than the sources' own (more than 1 % apart).",
+        ),
     ]
 )
 @source_options()
@@ -36,11 +43,9 @@ def validate(sources: tuple[str, ...], json_out: bool, methods: str | None, **op
     error of the held-out runs [mm] per estimator and recommends the lowest; calibrate
     --method auto uses it.
     """
-    from rich.table import Table
-    from rich.text import Text
-
     from .. import validate as run_validation
     from .common import console, progress_bar, warn
+    from .render import row, table
 
     chosen = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
     with progress_bar("validating") as progress:
@@ -50,22 +55,19 @@ def validate(sources: tuple[str, ...], json_out: bool, methods: str | None, **op
     if json_out:
         click.echo(report.to_json(), nl=False)
         return
-    grid = Table(title=Text(f"Held-out end error [mm], {report.scheme}"), title_justify="left")
-    grid.add_column(Text("held out"))
-    for candidate in report.candidates:
-        grid.add_column(Text(candidate), justify="right")
+    grid = table(
+        f"Held-out end error [mm], {report.scheme}",
+        ["held out", *(f"{candidate} [mm]" for candidate in report.candidates)],
+    )
     for fold in report.folds:
         cells = [f"{Path(fold.held_out).name} ({fold.runs} runs)"]
         cells += [
             "-" if fold.errors[c] is None else f"{1000 * (fold.errors[c] or 0.0):.1f}"
             for c in report.candidates
         ]
-        grid.add_row(*(Text(c) for c in cells))
+        row(grid, *cells)
     means = [report.mean_error(c) for c in report.candidates]
-    grid.add_row(
-        Text("mean", style="bold"),
-        *(Text("-" if m is None else f"{1000 * m:.2f}", style="bold") for m in means),
-    )
+    row(grid, "mean", *("-" if m is None else f"{1000 * m:.2f}" for m in means), bold=True)
     out = console()
     out.print(grid)
     best = report.recommended

@@ -35,6 +35,8 @@ _MM = 1000.0
 #: A run this many standard deviations from its own cluster but inside the other one is
 #: taken for a swapped label.
 _OUTLIER_SIGMA = 5.0
+#: ... and at most this many from the other cluster's centre.
+_INSIDE_SIGMA = 4.5
 #: Heading and position estimates of alpha differing by about this factor: a unit slip.
 _DEGREE = 180.0 / math.pi
 
@@ -96,28 +98,44 @@ def _swapped_labels(runs: Sequence[Run]) -> list[str]:
     pooled scatter of the other runs, positions only) and against the other cluster;
     the clusters must be well apart for a label to matter.
     """
-    groups = {d: [np.array(r.return_error) for r in g] for d, g in split_by_direction(runs).items()}
+    groups = {
+        d: np.array([r.return_error for r in g], dtype=np.float64).reshape(len(g), -1)
+        for d, g in split_by_direction(runs).items()
+    }
     found = []
     for direction, other in ((Direction.CW, Direction.CCW), (Direction.CCW, Direction.CW)):
         own_group, other_group = groups[direction], groups[other]
-        if len(own_group) < 3 or len(other_group) < 2:
+        n, m = len(own_group), len(other_group)
+        if n < 3 or m < 2:
             continue
-        other_mean = np.mean(other_group, axis=0)
-        for k, point in enumerate(own_group):
-            rest = [q for j, q in enumerate(own_group) if j != k]
-            deviations = [q - np.mean(rest, axis=0) for q in rest]
-            deviations += [q - other_mean for q in other_group]
-            dof = len(deviations) - 2
-            scatter = np.einsum("ki,kj->ij", deviations, deviations) / dof
-            scatter += np.diag(np.square(FLOOR[:2]))
-            inverse = np.linalg.inv(scatter)
-            d_own = point - np.mean(rest, axis=0)
-            d_other = point - other_mean
-            d_centres = np.mean(rest, axis=0) - other_mean
-            own = math.sqrt(float(d_own @ inverse @ d_own))
-            near = math.sqrt(float(d_other @ inverse @ d_other))
-            apart = math.sqrt(float(d_centres @ inverse @ d_centres))
-            if own > _OUTLIER_SIGMA and near < 2.0 and apart > 2.0 * _OUTLIER_SIGMA:
+        # Every run left out at once, in O(n): the mean of the rest and the scatter of the
+        # rest about it follow from the sums over the cluster (centred, for precision).
+        other_mean = other_group.mean(axis=0)
+        other_dev = other_group - other_mean
+        other_scatter = np.einsum("ki,kj->ij", other_dev, other_dev)
+        centre = own_group.mean(axis=0)
+        dev = own_group - centre  # (n, 2)
+        rest_mean = (dev.sum(axis=0) - dev) / (n - 1)  # (n, 2), relative to centre
+        rest_scatter = (
+            np.einsum("ki,kj->ij", dev, dev)
+            - np.einsum("ki,kj->kij", dev, dev)
+            - (n - 1) * np.einsum("ki,kj->kij", rest_mean, rest_mean)
+        )
+        scatter = (rest_scatter + other_scatter) / (n - 1 + m - 2) + np.diag(np.square(FLOOR[:2]))
+        inverse = np.linalg.inv(scatter)  # (n, 2, 2)
+        d_own = dev - rest_mean
+        d_other = own_group - other_mean
+        d_centres = rest_mean + centre - other_mean
+        owns, nears, aparts = (
+            np.sqrt(np.einsum("ki,kij,kj->k", d, inverse, d)) for d in (d_own, d_other, d_centres)
+        )
+        for k in range(n):
+            own, near, apart = float(owns[k]), float(nears[k]), float(aparts[k])
+            # Near the other cluster: within a few of the pooled standard deviations
+            # (the pooled scatter is round, the clusters need not be) and far nearer
+            # than to its own.
+            inside = near < min(_INSIDE_SIGMA, own / 3.0)
+            if own > _OUTLIER_SIGMA and inside and apart > 2.0 * _OUTLIER_SIGMA:
                 found.append(
                     f"{runs_label(runs, direction, k)}, labelled {direction.value}, sits in "
                     f"the {other.value} cluster ({own:.0f} standard deviations from its own): "

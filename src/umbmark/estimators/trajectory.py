@@ -132,6 +132,11 @@ DEFAULT_MAX_TRUTH_OFFSET = 2.0
 MIN_OFFSET_TURN = math.radians(30.0)
 #: Fewest matched ground-truth samples a run needs to take part.
 MIN_SAMPLES = 5
+#: Most samples of one run the fit compares (evenly spread over the run, its first and
+#: last always among them). The wheel data are integrated whole and the ground truth is
+#: interpolated through all its samples; only the comparison is thinned, so that the
+#: work and the memory of the fit (its Jacobian) stay bounded on very long recordings.
+MAX_COMPARED_PER_RUN = 20_000
 #: A single run is cut into this many pieces to stand in for independent runs.
 _ONE_RUN_PIECES = 2
 #: Newton steps of the start-pose alignment (quadratic convergence from a close start).
@@ -277,6 +282,15 @@ def _tangents(t: FloatArray, v: FloatArray) -> FloatArray:
     return slope
 
 
+def _thinned(count: int) -> IntArray:
+    """Indices of at most :data:`MAX_COMPARED_PER_RUN` of ``count`` samples, evenly
+    spread, the first and the last among them (all of them when there are few)."""
+    if count <= MAX_COMPARED_PER_RUN:
+        return np.arange(count, dtype=np.intp)
+    picks = np.rint(np.linspace(0.0, count - 1.0, MAX_COMPARED_PER_RUN)).astype(np.intp)
+    return np.unique(picks)
+
+
 def _prepare(logs: Sequence[RunLog]) -> _Data:
     """Collect the runs that have at least :data:`MIN_SAMPLES` matched samples."""
     span = max((float(log.time[-1] - log.time[0]) for log in logs if log.time.size), default=0.0)
@@ -301,9 +315,10 @@ def _prepare(logs: Sequence[RunLog]) -> _Data:
         truth = np.asarray(log.truth, dtype=np.float64)[k]
         steps = np.diff(np.asarray(log.wheel_angles, dtype=np.float64), axis=0)
         parts["dphi"].append(np.vstack([np.zeros((1, 2)), steps]))
-        parts["sample"].append(base + k)
-        parts["sample_run"].append(np.full(k.size, g, dtype=np.intp))
-        parts["sample_time"].append(t)
+        kept = _thinned(k.size)
+        parts["sample"].append(base + k[kept])
+        parts["sample_run"].append(np.full(kept.size, g, dtype=np.intp))
+        parts["sample_time"].append(t[kept])
         parts["truth_time"].append(t)
         parts["truth"].append(truth)
         parts["slope"].append(_tangents(t, truth))

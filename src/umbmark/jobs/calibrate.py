@@ -116,6 +116,8 @@ class CalibrationReport:
     notes: tuple[str, ...] = ()
     model_fit: TrajectoryFit | None = field(default=None, compare=False)
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
+    robot: str | None = None
+    command: str | None = field(default=None, compare=False)
 
     def __repr__(self) -> str:
         est = self.estimate
@@ -339,7 +341,8 @@ class CalibrationReport:
             raise InputError("--plot needs runs in both directions (cw and ccw)")
         from ..outputs.plotting import cluster_figure
 
-        return cluster_figure([(self.benchmark, self.source)])
+        title = "UMBmark return errors" + (f": {self.robot}" if self.robot else "")
+        return cluster_figure([(self.benchmark, self.source)], title=title)
 
     def html(self) -> str:
         """One self-contained HTML page of the calibration (what ``--report`` writes)."""
@@ -454,6 +457,7 @@ def calibrate(
     force: bool = False,
     robot: str | None = None,
     history: str | os.PathLike[str] | None = None,
+    command: str | None = None,
     **options: Unpack[SourceOptions],
 ) -> CalibrationReport:
     """Benchmark runs around a square (UMBmark) and compute the correction.
@@ -503,6 +507,8 @@ def calibrate(
         are taken as those active during the runs (a second pass; a note says so).
     history : path, optional
         The history file (default: ``$UMBMARK_HISTORY``, else the per-user file).
+    command : str, optional
+        The command line (or call) to state in the ``report`` page's provenance.
     **options
         How to read the sources: see :class:`umbmark.jobs.inputs.ReadOptions`
         (``unit="mm"``, ``current_params="controllers.yaml"``, ``truth_topic=...``).
@@ -552,8 +558,9 @@ def calibrate(
         check_square_geometry(read.side_length, read.active.effective_wheelbase)
     chosen, note = method, None
     if method == "auto":
-        chosen, note = _auto_method(sources, read, side_length, wheelbase, options)
+        chosen, note = _auto_method(sources, read, side_length, wheelbase, options, force=force)
     result = _calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
+    result = replace(result, robot=robot, command=command)
     if note is not None:
         result = replace(result, notes=(*result.notes, note))
     if chosen.startswith("trajectory") and len(read.parts) > 1:
@@ -595,8 +602,13 @@ def _auto_method(
     side_length: float | None,
     wheelbase: float | None,
     options: SourceOptions,
+    *,
+    force: bool = False,
 ) -> tuple[str, str]:
-    """The estimator that predicts held-out recorded runs best, and a note saying so."""
+    """The estimator that predicts held-out recorded runs best, and a note saying so.
+
+    ``force`` is the caller's: the validation reads the sources as the calibration does.
+    """
     if read.params is None or any(run.log is None for run in read.runs):
         return DEFAULT_METHOD, (
             f"method auto: runs tables cannot be replayed to compare estimators; "
@@ -608,6 +620,7 @@ def _auto_method(
         *(Path(str(s)) for s in sources),
         side_length=side_length,
         wheelbase=wheelbase,
+        force=force,
         **options,
     )
     best = checked.recommended

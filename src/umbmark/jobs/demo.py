@@ -22,6 +22,8 @@ from ..estimators import METHODS, SquareTest
 from ..sim.experiments import Trial
 from ..sim.robot import VirtualRobot
 from .calibrate import CalibrationReport
+from .inputs import check_int_option
+from .simulate import MAX_RUNS, SEED_RANGE
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -146,11 +148,11 @@ def demo(
     out : path, optional
         Folder for the runs tables, the result, the overlay and the plot.
     seed : int
-        Seed of the non-systematic errors.
+        Seed of the non-systematic errors, 0 to 2**63 - 1.
     method : {"paper", "exact", "heading", "endpose"}
         Estimator to calibrate with.
     runs : int
-        Runs in each direction.
+        Runs in each direction, 2 to :data:`umbmark.jobs.simulate.MAX_RUNS` (1000).
     progress : callable, optional
         Called with the fraction done (0 to 1).
 
@@ -166,8 +168,8 @@ def demo(
     from ..sim.reproduce import FIG11_E_B, FIG11_E_D, PAPER_NOISE, SIDE
     from ..sim.robot import LABMATE
 
-    if runs < 2:
-        raise InputError(f"--runs must be at least 2, got {runs}")
+    runs = check_int_option("--runs", runs, 2, MAX_RUNS)
+    seed = check_int_option("--seed", seed, *SEED_RANGE)
     if method not in METHODS:
         raise InputError(
             "the demo calibrates from end points: use paper, exact, heading or endpose"

@@ -9,10 +9,15 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
 from ..history_store import CalibrationRecord, History, RobotRecord
+from .outputs import OutputPlan
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["HistoryReport", "history"]
 
@@ -34,6 +39,8 @@ class HistoryReport:
     drift : str or None
         The drift verdict (3 calibrations or more).
     notes : tuple of str
+    nominal : RobotRecord or None
+        The robot asked for, with its nominal wheelbase and wheel diameter.
     """
 
     path: str
@@ -42,6 +49,7 @@ class HistoryReport:
     calibrations: tuple[CalibrationRecord, ...] = ()
     drift: str | None = None
     notes: tuple[str, ...] = ()
+    nominal: RobotRecord | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (metres): what ``history --json`` prints."""
@@ -61,12 +69,50 @@ class HistoryReport:
         """The JSON text of :meth:`to_dict`."""
         return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
+    def figure(self) -> Figure:
+        """The robot's E_d, E_b and E_max,syst over time (what ``--plot`` draws).
+
+        Raises
+        ------
+        InputError
+            For a report that lists the robots instead of one robot's calibrations.
+        """
+        if self.nominal is None or not self.calibrations:
+            raise InputError("--plot needs the robot's NAME (umbmark history NAME --plot FILE)")
+        from ..outputs.plotting import history_figure
+
+        return history_figure(self.nominal, self.calibrations)
+
+    def write(self, *, plot: str | os.PathLike[str] | None = None) -> list[Path]:
+        """Write the trend figure (.png, .svg, .pdf), checked before it is drawn.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+
+        Raises
+        ------
+        InputError
+            For a bad or unwritable name, or one that is the history file itself.
+        """
+        plan = OutputPlan.of(plot=plot)
+        plan.check_not_inputs([self.path])
+        written: list[Path] = []
+        if plan.plot is not None:
+            from ..outputs.plotting import save_figure
+
+            save_figure(self.figure(), plan.plot)
+            written.append(plan.plot)
+        return written
+
 
 def history(
     robot: str | None = None,
     *,
     history: str | os.PathLike[str] | None = None,
     applied: int | None = None,
+    plot: str | os.PathLike[str] | None = None,
 ) -> HistoryReport:
     """The robots of a history file, or one robot's calibrations and drift verdict.
 
@@ -78,6 +124,9 @@ def history(
         The history file (default: ``$UMBMARK_HISTORY``, else the per-user file).
     applied : int, optional
         Mark this calibration of ``robot`` as applied first.
+    plot : path, optional
+        Draw the robot's E_d, E_b and E_max,syst over time (:meth:`HistoryReport.figure`)
+        to a .png, .svg or .pdf file (written atomically, never onto the history file).
 
     Returns
     -------
@@ -88,24 +137,35 @@ def history(
     InputError
         For an unknown robot or calibration, or a file that is not a history.
     """
+    if plot is not None and robot is None:
+        raise InputError("--plot needs the robot's NAME (umbmark history NAME --plot FILE)")
     store = History(history)
     path = str(store.path)
+    if plot is not None:  # the output is checked before a calibration is marked applied
+        OutputPlan.of(plot=plot).check_not_inputs([store.path])
     if robot is None:
         if applied is not None:
             raise InputError("--applied needs the robot's NAME")
         return HistoryReport(path=path, robots=tuple(store.robots()))
-    if store.robot(robot) is None:
+    nominal = store.robot(robot)
+    if nominal is None:
         known = ", ".join(r.name for r in store.robots()) or "none yet"
         raise InputError(f"no robot {robot!r} in the history (robots: {known})", source=path)
     notes: tuple[str, ...] = ()
     if applied is not None:
-        store.mark_applied(robot, applied)
+        from .inputs import check_int_option
+
+        store.mark_applied(robot, check_int_option("--applied", applied, 1, 2**63 - 1))
         notes = (f"calibration {applied} of {robot} marked applied",)
     calibrations = tuple(store.calibrations(robot))
-    return HistoryReport(
+    report = HistoryReport(
         path=path,
         robot=robot,
         calibrations=calibrations,
         drift=store.drift(robot),
         notes=notes,
+        nominal=nominal,
     )
+    if plot is not None:
+        report.write(plot=plot)
+    return report

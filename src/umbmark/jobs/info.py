@@ -28,6 +28,9 @@ __all__ = ["FileInfo", "InfoReport", "LoggedInfo", "info"]
 
 #: Files of a run log or session listed at most.
 MAX_FILES = 50
+#: Most messages --max-messages may ask to deserialize per topic (time and memory grow
+#: with it; a topic with more is sampled).
+MAX_MESSAGES = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -210,8 +213,9 @@ def info(
         run-log folder (or one CSV of it) or an OptiOdom session folder.
     max_messages : int, optional
         Bags: messages deserialized per topic at most (default
-        :data:`umbmark.sources.bag.info.DEFAULT_MAX_MESSAGES`); a topic with more is
-        sampled in stretches spread over its time span.
+        :data:`umbmark.sources.bag.info.DEFAULT_MAX_MESSAGES`, at most
+        :data:`MAX_MESSAGES`); a topic with more is sampled in stretches spread over its
+        time span.
     format : {"auto", "bag", "log", "optiodom"}
         The source's format; ``auto`` decides by the path.
 
@@ -233,8 +237,15 @@ def info(
     name = os.fspath(source)
     if format not in FORMATS:
         raise InputError(f"--format {format!r}: use one of {', '.join(FORMATS)}")
-    if max_messages is not None and max_messages < 1:
-        raise InputError(f"--max-messages {max_messages}: must be at least 1")
+    if max_messages is not None and (
+        isinstance(max_messages, bool)
+        or not isinstance(max_messages, int)
+        or not 1 <= max_messages <= MAX_MESSAGES
+    ):
+        raise InputError(
+            f"--max-messages {str(max_messages)[:24]}: must be at least 1 and at most "
+            f"{MAX_MESSAGES}"
+        )
     kind = detect_format(name) if format == "auto" else format
     if kind == "table":
         raise InputError(

@@ -6,15 +6,20 @@ same name and meaning (``--current-c-l`` is ``current_c_l``); lengths in metres,
 seconds. Messages name the options as the command line spells them.
 
 Parameters come from three places, later ones winning: the source itself (a run log's
-``metadata.yaml``, an OptiOdom session's metadata; a runs table or a bag says nothing), a
-parameter file (``current_params``: a ros2_control or ROS 1 YAML, or a previous result),
-and the keywords.
+``metadata.yaml``, an OptiOdom session's metadata, a runs table's ``# umbmark-active:``
+line; a bag says nothing), a parameter file (``current_params``: a ros2_control or ROS 1
+YAML, or a previous result), and the keywords. The wheel factors and separation
+multiplier a source records as active are used only where no ``current_...`` keyword or
+file is given (with a note); given ones that differ from them are warned of. A runs
+table's end points are checked against the square's side for a unit slip.
 """
 
 from __future__ import annotations
 
 import math
+import operator
 import os
+import statistics
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -36,6 +41,7 @@ from ..sources.params import (
     read_parameter_file,
     result_nominal,
 )
+from ..sources.runs_table import RecordedActive, read_table_active
 
 if TYPE_CHECKING:
     from ..sources.bag import BagOptions
@@ -53,6 +59,7 @@ __all__ = [
     "calibrated_nominal",
     "calibrated_params",
     "check_calibration",
+    "check_int_option",
     "check_length",
     "check_multiplier",
     "check_positive_option",
@@ -73,6 +80,10 @@ SAME_ROBOT_TOLERANCE = 0.01
 MIN_LENGTH = 0.001
 #: Farthest a tracked point may sit from the axle centre [m].
 MAX_TRUTH_OFFSET = 5.0
+#: Largest --max-gap [s]: interpolating ground truth across longer gaps is guessing.
+LONGEST_GAP = 60.0
+#: Largest --min-rest [s].
+LONGEST_REST = 600.0
 
 #: What can be read: a path to a runs table, run log, OptiOdom session or bag, or runs
 #: already in memory (a runs table's worth of end points).
@@ -228,8 +239,13 @@ class ReadOptions:
                 check_positive_option(flag, value)
             elif value is not None:
                 check_multiplier(flag, value)
-        check_positive_option("--max-gap", self.max_gap, "s")
-        check_positive_option("--min-rest", self.min_rest, "s")
+        for flag, value, high in (
+            ("--max-gap", self.max_gap, LONGEST_GAP),
+            ("--min-rest", self.min_rest, LONGEST_REST),
+        ):
+            check_positive_option(flag, value, "s")
+            if float(value) > high:
+                raise InputError(f"{flag} must be at most {high:g} s, got {float(value):g} s")
         if self.wheel_diameter is not None:
             check_length("--wheel-diameter", self.wheel_diameter, MAX_WHEELBASE)
         if self.truth_offset is not None:
@@ -428,6 +444,22 @@ def check_positive_option(flag: str, value: float, unit: str = "") -> None:
     if not (math.isfinite(value) and value > 0):
         shown = f"{value:g} {unit}".strip()
         raise InputError(f"{flag} must be > 0, got {shown}")
+
+
+def check_int_option(flag: str, value: int, low: int, high: int) -> int:
+    """An integer option within ``low`` to ``high``, or :class:`InputError` naming the
+    flag and the range (also for a ``bool``, a float and an integer of any size)."""
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        number = operator.index(value)  # int and numpy integers; not float, not str
+    except TypeError:
+        raise InputError(f"{flag} must be a whole number, not {str(value)[:24]!r}") from None
+    if not low <= number <= high:
+        digits = len(str(abs(number))) if abs(number) >= 10**24 else 0
+        shown = f"a number of {digits} digits" if digits else str(number)
+        raise InputError(f"{flag} must be between {low} and {high}, got {shown}")
+    return number
 
 
 def check_length(flag: str, value: float, largest: float, smallest: float = MIN_LENGTH) -> None:
@@ -631,20 +663,21 @@ def _read_one(
 ) -> Runs:
     name = source_name(source)
     controller = file
-    separation = _first(options.current_separation_multiplier, file.wheel_separation_multiplier)
-    c_left = _first(options.current_c_l, file.left_wheel_radius_multiplier)
-    c_right = _first(options.current_c_r, file.right_wheel_radius_multiplier)
-    configured = wheelbase if wheelbase is not None else file.wheel_separation
-    diameter = options.wheel_diameter
-    if diameter is None and file.wheel_radius is not None:
-        diameter = 2.0 * file.wheel_radius
-
-    if _is_runs(source):
-        loaded = Loaded(format="runs", runs=list(cast("Sequence[Run]", source)))
-        kind: Format = "table"
-    else:
+    recorded: RecordedActive | None = None
+    path: Path | None = None
+    kind: Format = "table"
+    if not _is_runs(source):
         path = Path(cast("PathLike", source))
         kind = detect_format(path) if options.format == "auto" else cast("Format", options.format)
+        recorded = _recorded_active(path, kind)
+    chosen = _choose_active(options, file, wheelbase, recorded, note_wheelbase=kind == "table")
+    separation = _first(chosen.separation, 1.0)
+    c_left, c_right = _first(chosen.c_left, 1.0), _first(chosen.c_right, 1.0)
+    configured, diameter = chosen.wheelbase, chosen.wheel_diameter
+
+    if path is None:
+        loaded = Loaded(format="runs", runs=list(cast("Sequence[Run]", source)))
+    else:
         given = None
         if kind == "bag":
             if configured is None or diameter is None:
@@ -662,6 +695,11 @@ def _read_one(
             if options.odom_topic is not None or options.odom_tf is not None:
                 _check_invertible(file, name)
         loaded = load_runs(path, kind, _load_options(options, kind, side_length, given, file))
+        if kind == "table":
+            loaded = replace(
+                loaded,
+                notes=[*loaded.notes, *_unit_hints(loaded.runs, options, side_length, name)],
+            )
 
     if loaded.params is None:  # end points: the options are all there is
         if configured is None:
@@ -684,21 +722,20 @@ def _read_one(
             params=None,
             side_length=side_length,
             controller=controller,
-            notes=tuple(loaded.notes),
+            notes=(*chosen.notes, *loaded.notes),
             sides=(side_length,),
         )
 
     # Logged runs: the source's parameters, with whatever the options or files override.
     base = loaded.params
-    from_file = options.current_params is not None
     configured = configured if configured is not None else base.wheelbase
     params = WheelParams(
         wheelbase=configured * separation,
         wheel_diameter=diameter if diameter is not None else base.wheel_diameter,
         encoder_resolution=base.encoder_resolution,
         gear_ratio=base.gear_ratio,
-        c_left=c_left if options.current_c_l is not None or from_file else base.c_left,
-        c_right=c_right if options.current_c_r is not None or from_file else base.c_right,
+        c_left=_first(chosen.c_left, base.c_left),
+        c_right=_first(chosen.c_right, base.c_right),
     )
     runs = loaded.runs
     if params != base:
@@ -710,6 +747,9 @@ def _read_one(
         separation_multiplier=separation,
         wheel_diameter=params.wheel_diameter,
     )
+    nominal = base
+    if recorded is not None and recorded.wheelbase is not None:
+        nominal = replace(base, wheelbase=recorded.wheelbase)
     return Runs(
         sources=(name,),
         formats=(loaded.format,),
@@ -719,10 +759,332 @@ def _read_one(
         side_length=loaded.side_length,
         controller=controller,
         associations=tuple(loaded.associations),
-        notes=tuple(loaded.notes),
+        notes=(*chosen.notes, *loaded.notes),
         sides=(loaded.side_length,),
-        nominal=base,
+        nominal=nominal,
     )
+
+
+def _recorded_active(path: Path, kind: Format) -> RecordedActive | None:
+    """The active parameters a runs table's header or a run log's metadata records."""
+    if kind == "table":
+        if path.is_dir():
+            return None  # reading the table says what is wrong
+        return read_table_active(path)
+    if kind == "log":
+        from ..sources.runlog import METADATA_FILE, read_metadata
+
+        meta_path = (path if path.is_dir() else path.parent) / METADATA_FILE
+        if not meta_path.is_file():
+            return None  # reading the log says what is wrong
+        meta = read_metadata(meta_path)
+        if not meta.active_recorded:
+            return None
+        return RecordedActive(
+            c_left=meta.c_left,
+            c_right=meta.c_right,
+            separation_multiplier=meta.separation_multiplier,
+            wheelbase=meta.wheelbase,
+            wheel_diameter=meta.wheel_diameter,
+            where=f"the run log's {METADATA_FILE}",
+        )
+    return None
+
+
+#: Length units a table may be in, in metres.
+_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+#: End points and return errors of a square run beyond this fraction of the side look
+#: like a unit slip (the paper's uncalibrated robot: 7 %); beyond the side, they are
+#: meaningless for UMBmark.
+_PLAUSIBLE_REACH = 0.25
+#: ... and below this fraction (0.4 mm on a 4 m square) no tape measure resolves them.
+_TINY_REACH = 1e-4
+#: Another unit is suggested only if it puts them between this fraction (4 mm on a 4 m
+#: square) and :data:`_PLAUSIBLE_REACH`.
+_SMALLEST_REACH = 1e-3
+
+
+def _unit_hints(
+    runs: Sequence[Run], options: ReadOptions, side: float | None, name: str
+) -> list[str]:
+    """Warnings where a table's runs look like other units than it says: the whole table
+    (:func:`_table_unit_hints`), single rows (:func:`_mixed_unit_rows`) or the headings
+    (:func:`_heading_unit_hints`)."""
+    unit = options.unit
+    squares = [run for run in runs if run.kind == "square"]
+    if not squares or unit not in _UNITS:
+        return []
+    return [
+        *_table_unit_hints(squares, unit, side, name),
+        *_mixed_unit_rows(squares, unit),
+        *_heading_unit_hints(squares, options.angle_unit),
+    ]
+
+
+def _heading_unit_hints(squares: Sequence[Run], angle_unit: str) -> list[str]:
+    """A warning where unwrapped headings given as degrees are a full loop in radians.
+
+    A square driven once round turns the robot by 360 degrees; odometry headings of about
+    6.28 "degrees" in every run are radians. (Degrees given as radians are refused by the
+    table reader: 360 rad is no heading.)
+    """
+    if angle_unit != "deg":
+        return []
+    loops = [abs(run.odometry_end.theta) for run in squares if run.odometry_end.theta is not None]
+    if not loops or len(loops) < len(squares):
+        return []
+    full_turn = math.radians(2.0 * math.pi)  # 6.28 read as degrees, in radians
+    if all(0.97 * full_turn < loop < 1.03 * full_turn for loop in loops):
+        shown = statistics.median(math.degrees(loop) for loop in loops)
+        return [
+            f"theta_odo is about {shown:.2f} deg in every run, where a square driven once "
+            "round turns the robot by 360 deg: are the headings in radians? "
+            "(--angle-unit rad)"
+        ]
+    return []
+
+
+#: A run's return error this many times smaller or larger than the median of the others'
+#: is taken for a row in another unit, if a unit's factor brings it near them.
+_ROW_FACTOR = 100.0
+
+
+def _mixed_unit_rows(squares: Sequence[Run], unit: str) -> list[str]:
+    """Rows whose return error is some hundred times off the others' and that another
+    unit's factor brings back among them (one row typed in metres in a mm table).
+
+    A return error scatters about its cluster, so one 100 times smaller than the median of
+    the other runs' of its direction (or larger) is rare by chance; only factors of the
+    units read here count, and the row must land within 3 times of the median when
+    rescaled.
+    """
+    hints = []
+    for direction in ("cw", "ccw"):
+        runs = [run for run in squares if run.direction.value == direction]
+        if len(runs) < 3:
+            continue
+        errors = [math.hypot(*run.return_error) for run in runs]
+        for k, error in enumerate(errors):
+            typical = statistics.median(errors[:k] + errors[k + 1 :])
+            if typical == 0.0 or error == 0.0:
+                continue
+            ratio = typical / error
+            if 1.0 / _ROW_FACTOR < ratio < _ROW_FACTOR:
+                continue
+            for other, scale in _UNITS.items():
+                factor = scale / _UNITS[unit]  # this row's numbers, read as ``other``
+                if other != unit and 1.0 / 3.0 < error * factor / typical < 3.0:
+                    hints.append(
+                        f"{runs[k].label or f'{direction} run {k + 1}'}: its return error "
+                        f"({1000 * error:.3g} mm) is {max(ratio, 1 / ratio):.0f} times "
+                        f"{'smaller' if ratio > 1 else 'larger'} than the other {direction} "
+                        f"runs' (median {1000 * typical:.3g} mm): is this row in {other}, not "
+                        f"{unit}? (a table has one unit: --unit)"
+                    )
+                    break
+    return hints
+
+
+def _table_unit_hints(
+    squares: Sequence[Run], unit: str, side: float | None, name: str
+) -> list[str]:
+    """Warnings where a table's square runs reach implausibly far or short for its unit and
+    the square's side, naming the unit the numbers look like.
+
+    Raises
+    ------
+    InputError
+        Where a return error is larger than the side and another unit explains it.
+    """
+    if side is None:
+        return []
+    errors = [math.hypot(*run.return_error) for run in squares]
+    worst = int(max(range(len(errors)), key=errors.__getitem__))
+    reach = max(
+        *errors,
+        *(math.hypot(r.true_end.x, r.true_end.y) for r in squares),
+        *(math.hypot(r.odometry_end.x, r.odometry_end.y) for r in squares),
+    )
+    if reach == 0.0:
+        return []
+
+    def looks_like(plausible: bool, smaller: bool) -> str | None:
+        """The unit that makes ``reach`` plausible: the nearest one, smaller or larger."""
+        candidates = [
+            other
+            for other in _UNITS
+            if (_UNITS[other] < _UNITS[unit]) == smaller
+            and other != unit
+            and _SMALLEST_REACH * side
+            <= reach * _UNITS[other] / _UNITS[unit]
+            <= _PLAUSIBLE_REACH * side
+        ]
+        if not candidates or not plausible:
+            return None
+        return min(candidates, key=lambda other: abs(math.log(_UNITS[other] / _UNITS[unit])))
+
+    if errors[worst] > side:
+        other = looks_like(True, smaller=True)
+        if other is not None:
+            factor = _UNITS[unit] / _UNITS[other]
+            raise InputError(
+                f"the return error of {squares[worst].label or 'a run'} "
+                f"({errors[worst]:.4g} m) is larger than the square's side ({side:g} m): are "
+                f"the lengths in the right unit? Read as {other}, they would reach "
+                f"{reach / factor:.4g} m: are these {other}, not {unit}? (--unit {other})",
+                source=name,
+            )
+        return []
+    if reach > _PLAUSIBLE_REACH * side:
+        other = looks_like(True, smaller=True)
+        if other is not None:
+            factor = _UNITS[unit] / _UNITS[other]
+            return [
+                f"the end points and return errors reach {reach:.4g} m, "
+                f"{100 * reach / side:.0f} % of the {side:g} m side (a square's reach a few "
+                f"%); read as {other}, they would reach {reach / factor:.4g} m: are these "
+                f"{other}, not {unit}? (--unit {other})"
+            ]
+    if reach < _TINY_REACH * side:
+        other = looks_like(True, smaller=False)
+        if other is not None:
+            factor = _UNITS[other] / _UNITS[unit]
+            return [
+                f"the end points and return errors reach only {1000 * reach:.3g} mm on a "
+                f"{side:g} m square, less than a tape measure resolves; read as {other}, "
+                f"they would reach {reach * factor:.4g} m: are these {other}, not {unit}? "
+                f"(--unit {other})"
+            ]
+    return []
+
+
+@dataclass(frozen=True)
+class _Chosen:
+    """The active parameters as given or recorded (None: neither), and notes saying so."""
+
+    c_left: float | None
+    c_right: float | None
+    separation: float | None
+    wheelbase: float | None
+    wheel_diameter: float | None
+    notes: tuple[str, ...]
+
+
+#: Given and recorded active parameters closer than this (relative) agree.
+_SAME_ACTIVE = 1e-6
+
+
+def _choose_active(
+    options: ReadOptions,
+    file: ControllerParams,
+    wheelbase: float | None,
+    recorded: RecordedActive | None,
+    *,
+    note_wheelbase: bool = True,
+) -> _Chosen:
+    """The active parameters: the options' and the parameter file's; where none of the
+    ``--current-...`` options is given, what the source records (with a note). Warns where
+    the given ones differ from the recorded ones."""
+    from_file = options.current_params is not None
+    in_file = f"--current-params {os.fspath(options.current_params or '')}"
+    diameter = options.wheel_diameter
+    if diameter is None and file.wheel_radius is not None:
+        diameter = 2.0 * file.wheel_radius
+    if diameter is None and recorded is not None:
+        diameter = recorded.wheel_diameter
+    user_b = wheelbase if wheelbase is not None else file.wheel_separation
+    b_flag = "--wheelbase" if wheelbase is not None else in_file
+    factors = [
+        (options.current_c_l, "--current-c-l", file.left_wheel_radius_multiplier),
+        (options.current_c_r, "--current-c-r", file.right_wheel_radius_multiplier),
+        (
+            options.current_separation_multiplier,
+            "--current-separation-multiplier",
+            file.wheel_separation_multiplier,
+        ),
+    ]
+    given = [
+        (option, flag) if option is not None else (value, in_file) if from_file else (None, "")
+        for option, flag, value in factors
+    ]
+    if recorded is None:
+        return _Chosen(given[0][0], given[1][0], given[2][0], user_b, diameter, ())
+
+    def shown(value: float, unit: str = "") -> str:
+        return f"{value:.6g}{unit}"
+
+    where, notes = recorded.where, []
+    recorded_b = recorded.wheelbase
+    if all(value is None for value, _ in given):
+        # Nothing said what was active: what the source records was.
+        used = [
+            f"{label} = {shown(value)}"
+            for label, value in (
+                ("c_L", recorded.c_left),
+                ("c_R", recorded.c_right),
+                ("wheel_separation_multiplier", recorded.separation_multiplier),
+            )
+            if value != 1.0
+        ]
+        if user_b is None and recorded_b is not None and note_wheelbase:
+            used.append(f"wheelbase = {shown(recorded_b, ' m')}")
+        if used:
+            notes.append(
+                f"active parameters from {where}: {', '.join(used)} (the correction is "
+                "composed with them; give --current-params or --current-c-l, --current-c-r, "
+                "--current-separation-multiplier to override)"
+            )
+        if (
+            user_b is not None
+            and recorded_b is not None
+            and not math.isclose(user_b, recorded_b, rel_tol=_SAME_ACTIVE)
+        ):
+            notes.append(
+                f"{b_flag} gives wheelbase = {shown(user_b, ' m')}, but {where} records "
+                f"wheelbase = {shown(recorded_b, ' m')} (times wheel_separation_multiplier "
+                f"{shown(recorded.separation_multiplier)}) as active during the runs; "
+                f"using {shown(user_b, ' m')} times the recorded multiplier"
+            )
+        return _Chosen(
+            recorded.c_left,
+            recorded.c_right,
+            recorded.separation_multiplier,
+            user_b if user_b is not None else recorded_b,
+            diameter,
+            tuple(notes),
+        )
+
+    # Something was given: it wins; say where it contradicts the record.
+    for (value, flag), label, record in zip(
+        given[:2], ("c_L", "c_R"), (recorded.c_left, recorded.c_right), strict=True
+    ):
+        if value is not None and not math.isclose(value, record, rel_tol=_SAME_ACTIVE):
+            notes.append(
+                f"{flag} gives {label} = {shown(value)}, but {where} records {label} = "
+                f"{shown(record)} as active during the runs; using {shown(value)}"
+            )
+    separation = given[2][0]
+    configured = user_b
+    if configured is None and recorded_b is not None:
+        # The recorded wheelbase, as the odometry used it unless a multiplier is given.
+        configured = (
+            recorded_b if separation is not None else recorded_b * (recorded.separation_multiplier)
+        )
+    if configured is not None and recorded_b is not None:
+        used_b = configured * (1.0 if separation is None else separation)
+        record_b = recorded_b * recorded.separation_multiplier
+        if not math.isclose(used_b, record_b, rel_tol=_SAME_ACTIVE):
+            flags = " and ".join(
+                f for f in (b_flag if user_b is not None else "", given[2][1]) if f
+            )
+            notes.append(
+                f"the odometry's wheelbase from {flags or 'the options'} is "
+                f"{shown(used_b, ' m')}, but {where} records {shown(record_b, ' m')} "
+                f"(wheelbase {shown(recorded_b, ' m')} times wheel_separation_multiplier "
+                f"{shown(recorded.separation_multiplier)}) as active during the runs; "
+                f"using {shown(used_b, ' m')}"
+            )
+    return _Chosen(given[0][0], given[1][0], separation, configured, diameter, tuple(notes))
 
 
 def _check_invertible(file: ControllerParams, name: str) -> None:

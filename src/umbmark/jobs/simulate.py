@@ -15,7 +15,7 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -26,7 +26,7 @@ from ..kinematics import WheelParams
 from ..recording import RunLog
 from ..runs import Run
 from ..sim.engine import SimResult
-from ..sim.robot import NoiseModel, VirtualRobot
+from ..sim.robot import ControlConfig, NoiseModel, VirtualRobot
 from .inputs import (
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
@@ -37,6 +37,9 @@ from .inputs import (
     option_float,
 )
 from .outputs import OutputPlan
+
+if TYPE_CHECKING:
+    from ..sim.paths import Path as SimPath
 
 __all__ = ["PATHS", "SimulationReport", "simulate"]
 
@@ -55,6 +58,18 @@ MAX_GEAR_RATIO = 1e4
 MAX_SLIP = 0.1  # standard deviation of the relative wheel slip
 MAX_BUMP_SIZE = 0.05  # m
 MAX_BUMP_RATE = 100.0  # per metre
+#: Most sampling periods one run may take (path length / --speed / --dt and the turns):
+#: the simulation's time grows with it (about 15 us a period on one core).
+MAX_SAMPLES_PER_RUN = 2_000_000
+#: Most sampling periods of all runs together (the work of the vectorized runs) ...
+MAX_SAMPLES = 1_000_000_000
+#: ... and when the time series are kept (--logs, ``record``): about 130 bytes each.
+MAX_RECORDED_SAMPLES = 5_000_000
+#: Fewest encoder counts per wheel revolution (--encoder-resolution x --gear-ratio) ...
+MIN_COUNTS_PER_REVOLUTION = 16
+#: ... and per path: fewer, and the robot stops before it starts (it stops within two
+#: counts of its goal), so that its runs would measure nothing.
+MIN_COUNTS_PER_PATH = 20
 
 
 @dataclass(frozen=True, repr=False)
@@ -77,6 +92,9 @@ class SimulationReport:
         End poses and, when recorded, the time series of every run.
     runs : tuple of Run
         Every run; with its time series (``run.log``) when recorded.
+    configured_wheelbase : float or None
+        The odometry's configured wheelbase [m] before a calibration's
+        ``wheel_separation_multiplier``, recorded with the active parameters in the files.
     """
 
     robot: VirtualRobot
@@ -86,6 +104,7 @@ class SimulationReport:
     seed: int
     result: SimResult
     runs: tuple[Run, ...]
+    configured_wheelbase: float | None = None
 
     def __repr__(self) -> str:
         robot = self.robot
@@ -156,9 +175,10 @@ class SimulationReport:
                 )
         written: list[Path] = []
         if plan.output is not None:
-            from ..outputs.runs_table import write_runs_table
+            from ..outputs.runs_table import active_of, write_runs_table
 
-            write_runs_table(plan.output, self.runs, comment=self.provenance)
+            active = active_of(self.robot.odometry, self.configured_wheelbase)
+            write_runs_table(plan.output, self.runs, comment=self.provenance, active=active)
             written.append(plan.output)
         if plan.logs is not None:
             written += self._write_logs(plan.logs)
@@ -166,14 +186,17 @@ class SimulationReport:
 
     def _write_logs(self, folder: Path) -> list[Path]:
         from ..outputs.runlog import write_log_csv, write_metadata
+        from ..outputs.runs_table import active_of
         from ..sources.runlog import LogMetadata
 
         trace = self.result.trace
         assert trace is not None
         robot, odo = self.robot, self.robot.odometry
+        active = active_of(odo, self.configured_wheelbase)
         metadata = LogMetadata(
             wheel_diameter=odo.wheel_diameter,
-            wheelbase=odo.wheelbase,
+            wheelbase=active.wheelbase,
+            separation_multiplier=active.separation_multiplier,
             wheel_data="counts",
             encoder_resolution=odo.encoder_resolution,
             gear_ratio=odo.gear_ratio,
@@ -346,7 +369,6 @@ def simulate(
 
     from ..sim import paths
     from ..sim.engine import simulate as run_simulation
-    from ..sim.robot import ControlConfig
 
     odometry = WheelParams(
         wheelbase=wheelbase,
@@ -375,6 +397,8 @@ def simulate(
         directions = [Direction.CCW] * runs
 
     recorded = record or logs is not None
+    _check_resolution(chosen, odometry)
+    _check_work(chosen, len(directions), wheelbase, ControlConfig(dt=dt, speed=speed), recorded)
     result = run_simulation(
         robot,
         chosen,
@@ -392,9 +416,73 @@ def simulate(
         seed=seed,
         result=result,
         runs=tuple(_runs_with_logs(result, odometry) if recorded else result.runs()),
+        configured_wheelbase=wheelbase,
     )
     report.write(output=output, logs=logs, force=force)
     return report
+
+
+def _check_resolution(path: SimPath, odometry: WheelParams) -> None:
+    """Refuse encoders too coarse for the robot to drive the path by them.
+
+    A wheel count is ``pi D_n / (resolution x gear ratio)`` of wheel travel; a leg needs
+    :data:`MIN_COUNTS_PER_PATH` counts of it, an on-the-spot turn as many counts of each
+    wheel's arc (``|angle| b / 2``).
+    """
+    per_revolution = odometry.encoder_resolution * odometry.gear_ratio
+    if per_revolution < MIN_COUNTS_PER_REVOLUTION:
+        raise InputError(
+            f"--encoder-resolution {odometry.encoder_resolution:g} x --gear-ratio "
+            f"{odometry.gear_ratio:g} is {per_revolution:.3g} encoder counts per wheel "
+            f"revolution: at least {MIN_COUNTS_PER_REVOLUTION}"
+        )
+    count = math.pi * odometry.wheel_diameter / per_revolution  # m of wheel travel
+    for segment in path.segments:
+        travel = segment.amount if segment.kind == "straight" else 0.5 * odometry.wheelbase
+        if segment.kind == "turn":
+            travel *= abs(segment.amount)
+        if travel < MIN_COUNTS_PER_PATH * count:
+            what = (
+                f"--side-length {segment.amount:g} m"
+                if segment.kind == "straight"
+                else f"--turn-angle {math.degrees(segment.amount):g} deg"
+            )
+            raise InputError(
+                f"{what} is {travel / count:.3g} encoder counts of wheel travel: at least "
+                f"{MIN_COUNTS_PER_PATH} (one count is {count * 1000:.3g} mm); the robot "
+                "would stop before it moves"
+            )
+
+
+def _check_work(
+    path: SimPath, runs: int, wheelbase: float, control: ControlConfig, recorded: bool
+) -> None:
+    """Refuse a simulation whose work or memory exceeds the documented bounds.
+
+    A run takes about (legs / speed + turns / turning rate) / dt sampling periods; the
+    limits are :data:`MAX_SAMPLES_PER_RUN`, :data:`MAX_SAMPLES` for all runs and
+    :data:`MAX_RECORDED_SAMPLES` when the time series are kept.
+    """
+    turning = sum(abs(s.amount) for s in path.segments if s.kind == "turn")
+    seconds = path.length / control.speed + turning * 0.5 * wheelbase / control.turn_wheel_speed
+    per_run = seconds / control.dt
+    if per_run > MAX_SAMPLES_PER_RUN:
+        raise InputError(
+            f"a run of the {path.name} path at --speed {control.speed:g} m/s and --dt "
+            f"{control.dt:g} s takes about {per_run:.3g} sampling periods: at most "
+            f"{MAX_SAMPLES_PER_RUN:.3g}; raise --speed or --dt, or shorten the path"
+        )
+    if per_run * runs > MAX_SAMPLES:
+        raise InputError(
+            f"{runs} runs of about {per_run:.3g} sampling periods each are more than "
+            f"{MAX_SAMPLES:.3g} in all; give fewer --runs, or raise --speed or --dt"
+        )
+    if recorded and per_run * runs > MAX_RECORDED_SAMPLES:
+        raise InputError(
+            f"keeping the time series of {runs} runs of about {per_run:.3g} samples each "
+            f"needs {per_run * runs * 130 / 1e9:.1f} GB: at most {MAX_RECORDED_SAMPLES:.3g} "
+            "samples in all; give fewer --runs, a larger --dt, or no --logs"
+        )
 
 
 def _runs_with_logs(result: SimResult, odometry: WheelParams) -> list[Run]:

@@ -19,12 +19,12 @@ does not depend on how many processes share the work.
 
 from __future__ import annotations
 
-import concurrent.futures
 import itertools
 import json
 import math
 import multiprocessing
 import os
+import signal
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -34,7 +34,8 @@ import numpy as np
 from ..calibration import Calibration
 from ..errors import InputError
 from ..estimators import METHODS
-from .inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
+from .inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_int_option, check_length, option_float
+from .simulate import SEED_RANGE
 
 if TYPE_CHECKING:
     from ..sim.experiments import Trial
@@ -44,8 +45,12 @@ __all__ = ["Cell", "CellResult", "StudyReport", "study"]
 
 #: Trials simulated together in one vectorized pass (and given one seed).
 CHUNK = 125
-#: Most trials a study runs per cell.
+#: Most trials a study runs per cell ...
 MAX_TRIALS = 100_000
+#: ... and in all, over every cell of the grid (each robot costs about 0.05 s per method).
+MAX_ROBOTS = 100_000
+#: Most values of one grid option (--slip, --side-length, --runs, --wheelbase).
+MAX_GRID_VALUES = 20
 #: The reference "estimator": the robot calibrated with its true parameters.
 TRUTH = "truth"
 
@@ -185,15 +190,18 @@ def study(
         Estimators of square tests (``paper``, ``exact``, ``heading``, ``endpose``), and
         ``truth``: the robot calibrated with its true parameters, the ceiling.
     trials : int
-        Trials per grid cell.
+        Trials per grid cell, 1 to :data:`MAX_TRIALS`; trials times grid cells at most
+        :data:`MAX_ROBOTS`.
     E_d_spread, E_b_spread : float
         The robots' ``E_d`` and ``E_b`` are drawn uniformly from ``1 +- spread``.
     slip, side_length, runs, wheelbase : sequences
-        The grid: wheel slip [m^0.5], square side [m], runs per direction, wheelbase [m].
+        The grid: wheel slip [m^0.5], square side [m], runs per direction, wheelbase [m];
+        at most :data:`MAX_GRID_VALUES` values each.
     seed : int
-        Seed of the whole study.
+        Seed of the whole study, 0 to 2**63 - 1.
     workers : int, optional
-        Processes (default: the machine's cores).
+        Processes, 1 to 64 (default: the machine's cores). On ``KeyboardInterrupt``
+        they are terminated before it propagates.
     progress : callable, optional
         Called with the fraction done.
 
@@ -207,12 +215,28 @@ def study(
             raise InputError(f"--methods {name!r}: use some of {', '.join(METHODS)}, {TRUTH}")
     if not methods:
         raise InputError("--methods: name at least one estimator")
-    if not 1 <= trials <= MAX_TRIALS:
-        raise InputError(f"--trials must be 1 to {MAX_TRIALS}, got {trials}")
+    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:
+        raise InputError(f"--trials must be 1 to {MAX_TRIALS}, got {str(trials)[:24]}")
+    for name, values in (
+        ("--slip", slip),
+        ("--side-length", side_length),
+        ("--runs", runs),
+        ("--wheelbase", wheelbase),
+    ):
+        if not 1 <= len(values) <= MAX_GRID_VALUES:
+            raise InputError(f"{name} must list 1 to {MAX_GRID_VALUES} values, got {len(values)}")
+    cell_count = len(slip) * len(side_length) * len(runs) * len(wheelbase)
+    if trials * cell_count > MAX_ROBOTS:
+        raise InputError(
+            f"--trials {trials} in {cell_count} grid cells are {trials * cell_count} robots: "
+            f"at most {MAX_ROBOTS} in all"
+        )
+    seed = check_int_option("--seed", seed, *SEED_RANGE)
     for name, spread in (("--E-d-spread", E_d_spread), ("--E-b-spread", E_b_spread)):
-        if not 0.0 <= spread <= 0.2:
+        if not 0.0 <= option_float(name, spread) <= 0.2:
             raise InputError(f"{name} {spread:g}: give 0 to 0.2")
-    for value in slip:
+    for given in slip:
+        value = option_float("--slip", given)
         if not (math.isfinite(value) and 0.0 <= value <= 0.01):
             raise InputError(f"--slip {value:g}: give 0 to 0.01 m^0.5")
     for value in side_length:
@@ -220,10 +244,10 @@ def study(
     for value in wheelbase:
         check_length("--wheelbase", value, MAX_WHEELBASE)
     for count in runs:
-        if not 2 <= count <= 100:
-            raise InputError(f"--runs must be 2 to 100 per direction, got {count}")
-    if workers is not None and not 1 <= workers <= 64:
-        raise InputError(f"--workers must be 1 to 64, got {workers}")
+        if isinstance(count, bool) or not isinstance(count, int) or not 2 <= count <= 100:
+            raise InputError(f"--runs must be 2 to 100 per direction, got {str(count)[:24]}")
+    if workers is not None:
+        workers = check_int_option("--workers", workers, 1, 64)
 
     cells = [Cell(*c) for c in itertools.product(slip, side_length, runs, wheelbase)]
     seeds = iter(np.random.SeedSequence(seed).spawn(len(cells) * math.ceil(trials / CHUNK)))
@@ -258,8 +282,13 @@ def study(
 def _run_all(
     chunks: Sequence[_Chunk], workers: int | None, progress: Callable[[float], None] | None
 ) -> list[list[_Outcome]]:
-    count = workers or os.cpu_count() or 1
-    if count == 1 or len(chunks) == 1:
+    """Every chunk's outcomes, in the chunks' order, on ``workers`` processes.
+
+    An exception here (``KeyboardInterrupt`` of a Ctrl-C included) terminates the
+    worker processes and waits for them before it propagates: nothing keeps running.
+    """
+    count = min(workers or os.cpu_count() or 1, len(chunks))
+    if count == 1:
         out = []
         for k, chunk in enumerate(chunks):
             out.append(_run_chunk(chunk))
@@ -269,12 +298,30 @@ def _run_all(
     # fork where there is one: works from notebooks and stdin, where spawn cannot re-import.
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    with concurrent.futures.ProcessPoolExecutor(max_workers=count, mp_context=context) as pool:
-        futures = [pool.submit(_run_chunk, chunk) for chunk in chunks]
-        for done, _ in enumerate(concurrent.futures.as_completed(futures), start=1):
+    results: list[list[_Outcome] | None] = [None] * len(chunks)
+    pool = context.Pool(count, initializer=_ignore_interrupts)
+    try:
+        work = pool.imap_unordered(_run_numbered, enumerate(chunks))
+        for done, (k, outcome) in enumerate(work, start=1):
+            results[k] = outcome
             if progress is not None:
                 progress(done / len(chunks))
-        return [f.result() for f in futures]
+        pool.close()
+    finally:
+        pool.terminate()  # a no-op for workers that are done; stops the others at once
+        pool.join()
+    return [r for r in results if r is not None]
+
+
+def _ignore_interrupts() -> None:
+    """In a worker: leave Ctrl-C to the parent, which terminates the workers (a Ctrl-C
+    on a terminal reaches every process of the group, and each would print a traceback)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _run_numbered(item: tuple[int, _Chunk]) -> tuple[int, list[_Outcome]]:
+    """:func:`_run_chunk` of a numbered chunk, keeping its number."""
+    return item[0], _run_chunk(item[1])
 
 
 def _run_chunk(chunk: _Chunk) -> list[_Outcome]:

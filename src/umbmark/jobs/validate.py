@@ -145,6 +145,7 @@ def validate(
     methods: Sequence[str] | None = None,
     side_length: float | None = None,
     wheelbase: float | None = None,
+    force: bool = False,
     progress: Callable[[float], None] | None = None,
     **options: Unpack[SourceOptions],
 ) -> ValidationReport:
@@ -160,6 +161,9 @@ def validate(
         The estimators to compare (default: all of :data:`CANDIDATES`).
     side_length, wheelbase : float, optional
         As for :func:`umbmark.calibrate`.
+    force : bool
+        Take ``current_params`` even when it is a result for another robot's nominal
+        wheelbase or wheel diameter (as for :func:`umbmark.calibrate`).
     progress : callable, optional
         Called with the fraction done.
     **options
@@ -184,7 +188,7 @@ def validate(
                 source=source_name(path),
             )
     read = [
-        read_runs([path], read_options, wheelbase=wheelbase, side_length=side_length)
+        read_runs([path], read_options, wheelbase=wheelbase, side_length=side_length, force=force)
         for path in paths
     ]
     for one in read:

@@ -1,17 +1,18 @@
-"""One self-contained HTML page of a calibration (what ``calibrate --report`` writes).
+"""One self-contained HTML page of UMBmark passes on one robot.
 
-The page needs no network: the Fig. 6 view is inline SVG, the style a small inline
-sheet that reads on a phone (viewport, a maximum width, tables that scroll) and prints.
-Every text from the report is escaped.
+What ``umbmark report`` writes (:func:`passes_html`, one or more passes) and what
+``calibrate --report`` writes (:func:`calibration_html`, one pass): the same page. It
+needs no network: the Fig. 6 view is inline SVG (:mod:`umbmark.outputs.report_figures`),
+the style a small inline sheet that reads on a phone (viewport, a maximum width, tables
+that scroll) and prints. Every text from the reports is escaped.
 """
 
 from __future__ import annotations
 
 import datetime as dt
 import hashlib
-import io
 import math
-import re
+from collections.abc import Sequence
 from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,9 +20,12 @@ from typing import TYPE_CHECKING
 from .. import __version__
 
 if TYPE_CHECKING:
+    from ..benchmark import Benchmark
     from ..jobs.calibrate import CalibrationReport
+    from ..jobs.report import PassesReport
+    from ..jobs.validate import ValidationReport
 
-__all__ = ["calibration_html", "file_sha256"]
+__all__ = ["calibration_html", "file_sha256", "pass_name", "passes_html"]
 
 _MM = 1000.0
 #: Files of an input folder listed with their SHA-256 at most.
@@ -31,7 +35,8 @@ _CSS = """
 :root { color-scheme: light; }
 body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; line-height: 1.45;
   margin: 0 auto; padding: 1rem; max-width: 60rem; color: #111; background: #fff; }
-h1 { font-size: 1.5rem; } h2 { font-size: 1.2rem; margin-top: 2rem;
+h1 { font-size: 1.5rem; }
+h1, h3, p, li, figcaption { overflow-wrap: anywhere; } h2 { font-size: 1.2rem; margin-top: 2rem;
   border-bottom: 1px solid #ccc; }
 .verdict { padding: .75rem 1rem; border-left: .4rem solid #c60; background: #fff6ec; }
 .verdict.ok { border-color: #2a7; background: #eefaf3; }
@@ -44,6 +49,7 @@ th:first-child, td:first-child { text-align: left; }
 pre { background: #f4f4f4; padding: .75rem; overflow-x: auto; font-size: .85rem; }
 figure { margin: 0; } figure svg { max-width: 100%; height: auto; }
 code { word-break: break-all; }
+.predicted { color: #555; font-style: italic; }
 @media print {
   body { max-width: none; padding: 0; font-size: 10pt; }
   .scroll, pre { overflow: visible; } pre { white-space: pre-wrap; }
@@ -80,85 +86,229 @@ def _table(head: list[str], rows: list[list[str]]) -> str:
     )
 
 
-def _svg(report: CalibrationReport) -> str | None:
-    """The Fig. 6 view as an inline ``<svg>`` element, or None without a benchmark."""
-    if report.benchmark is None:
-        return None
-    buffer = io.StringIO()
-    report.figure().savefig(buffer, format="svg", bbox_inches="tight", metadata={"Date": None})
-    text = buffer.getvalue()
-    start = text.find("<svg")
-    if start < 0:
-        return None
-    # The metadata names matplotlib's web site; the page keeps no address it could fetch.
-    return re.sub(r"\s*<metadata>.*?</metadata>", "", text[start:], flags=re.DOTALL)
+def pass_name(k: int, n: int) -> str:
+    """The name of pass ``k`` (1-based) of ``n``: ``pass 1 (before)``, ``pass 2 (after)``."""
+    if k == 1:
+        return "pass 1 (before)"
+    if k == 2:
+        return "pass 2 (after)"
+    return f"pass {k} (after pass {k - 1})"
 
 
-def _verdict(report: CalibrationReport) -> str:
-    bench = report.benchmark
-    if bench is None:
-        return (
-            '<div class="verdict" id="verdict-text"><p>'
-            f"{len(report.runs)} runs, not squares of a known side in both directions: no "
-            "UMBmark figures (E_max,syst, the 3 x SEM rule).</p></div>\n"
-        )
+def _passes(page: PassesReport) -> list[tuple[str, CalibrationReport]]:
+    n = len(page.passes)
+    if n == 1:
+        return [("measured", page.passes[0])]
+    return [(pass_name(k, n), one) for k, one in enumerate(page.passes, 1)]
+
+
+_PREDICTED = "predicted after (replayed)"
+_PREDICTED_WORDS = (
+    "a prediction from replaying the recorded wheel data of these runs with the new "
+    "parameters, not a measured pass: the robot steered by its old odometry"
+)
+
+
+def _rule(bench: Benchmark) -> str:
+    """The 3 x SEM rule of Sec. 5 on one benchmark, in words (HTML)."""
     e, t = bench.e_max_syst * _MM, bench.second_pass_threshold * _MM
     if bench.second_pass_recommended:
-        cls = "verdict"
-        words = (
+        return (
             f"E_max,syst = {e:.1f} mm &gt; 3 x SEM = {t:.1f} mm: the systematic error stands "
             "well above the scatter of the runs. Apply the correction, then run UMBmark "
             "again; another pass is worth it while E_max,syst stays above 3 x SEM."
         )
-    else:
-        cls = "verdict ok"
-        words = (
-            f"E_max,syst = {e:.1f} mm &lt;= 3 x SEM = {t:.1f} mm: what remains is within the "
-            "scatter of the runs; a further pass is unlikely to improve it (Sec. 5)."
-        )
     return (
-        f'<div class="{cls}" id="verdict-text">'
-        f'<p class="big">E_max,syst = <span id="e-max-syst">{e:.1f}</span> mm '
-        f"({escape(bench.worst.direction.value)} cluster)</p>"
-        f"<p>{words}</p></div>\n"
+        f"E_max,syst = {e:.1f} mm &lt;= 3 x SEM = {t:.1f} mm: what remains is within the "
+        "scatter of the runs; a further pass is unlikely to improve it (Sec. 5)."
     )
 
 
-def _clusters(report: CalibrationReport) -> str:
-    bench = report.benchmark
-    if bench is None:
-        return ""
+def _verdict(page: PassesReport) -> str:
+    passes = _passes(page)
+    last = page.last.benchmark
+    if last is None:
+        return (
+            '<div class="verdict" id="verdict-text"><p>'
+            f"{len(page.last.runs)} runs, not squares of a known side in both directions: no "
+            "UMBmark figures (E_max,syst, the 3 x SEM rule).</p></div>\n"
+        )
+    figures = []
+    for k, (name, one) in enumerate(passes, 1):
+        bench = one.benchmark
+        if bench is None:  # pragma: no cover - umbmark.report refuses such passes
+            continue
+        label = "E_max,syst" if len(passes) == 1 else f"{escape(name)}: E_max,syst"
+        figures.append(
+            f'<p class="big">{label} = <span class="e-max-syst" data-pass="{k}">'
+            f"{bench.e_max_syst * _MM:.1f}</span> mm "
+            f"({escape(bench.worst.direction.value)} cluster)</p>"
+        )
+    if len(passes) > 1:
+        first = page.passes[0].benchmark
+        if first is not None and last.e_max_syst > 0:
+            figures.append(
+                f"<p>E_max,syst went from {first.e_max_syst * _MM:.1f} mm to "
+                f"{last.e_max_syst * _MM:.1f} mm over {len(passes)} passes: "
+                f"{first.e_max_syst / last.e_max_syst:.1f} times smaller.</p>"
+            )
+    rule = f"<p>{'Last pass: ' if len(passes) > 1 else ''}{_rule(last)}</p>"
+    predicted = ""
+    if page.predicted is not None:
+        p = page.predicted.benchmark
+        predicted = (
+            f'<p class="predicted" id="predicted-text">Predicted after: E_max,syst = '
+            f'<span id="predicted-e-max-syst">{p.e_max_syst * _MM:.1f}</span> mm '
+            f"({escape(_PREDICTED_WORDS)}). Drive UMBmark again with the new parameters "
+            "to measure it.</p>"
+        )
+    cls = "verdict" if last.second_pass_recommended else "verdict ok"
+    return f'<div class="{cls}" id="verdict-text">{"".join(figures)}{rule}{predicted}</div>\n'
+
+
+def _cluster_rows(bench: Benchmark) -> list[str]:
     cw, ccw = bench.cw, bench.ccw
-    rows = [
-        ["runs", str(cw.n), str(ccw.n)],
-        ["centre of gravity x [mm]", f"{cw.cg[0] * _MM:.1f}", f"{ccw.cg[0] * _MM:.1f}"],
-        ["centre of gravity y [mm]", f"{cw.cg[1] * _MM:.1f}", f"{ccw.cg[1] * _MM:.1f}"],
-        ["r_cg [mm]", f"{cw.r_cg * _MM:.1f}", f"{ccw.r_cg * _MM:.1f}"],
-        ["spread sigma (radial) [mm]", f"{cw.sigma * _MM:.1f}", f"{ccw.sigma * _MM:.1f}"],
-        ["SEM = sigma / sqrt(n) [mm]", f"{cw.sem * _MM:.1f}", f"{ccw.sem * _MM:.1f}"],
+    worst = "another pass is worth it" if bench.second_pass_recommended else "within scatter"
+    return [
+        f"{cw.n} / {ccw.n}",
+        f"{cw.cg[0] * _MM:.1f}, {cw.cg[1] * _MM:.1f}",
+        f"{ccw.cg[0] * _MM:.1f}, {ccw.cg[1] * _MM:.1f}",
+        f"{cw.r_cg * _MM:.1f}",
+        f"{ccw.r_cg * _MM:.1f}",
+        f"{cw.sigma * _MM:.1f}",
+        f"{ccw.sigma * _MM:.1f}",
+        f"{cw.sem * _MM:.1f}",
+        f"{ccw.sem * _MM:.1f}",
+        f"{bench.e_max_syst * _MM:.1f}",
+        f"{bench.second_pass_threshold * _MM:.1f}",
+        worst,
     ]
-    return "<h3>Return errors (Eqs. 3.1-3.4)</h3>\n" + _table(["", "cw", "ccw"], rows)
 
 
-def _runs(report: CalibrationReport) -> str:
-    rows = [
-        [
-            str(i),
-            run.label,
-            run.kind,
-            run.direction.value,
-            f"{run.return_error[0] * _MM:.1f}",
-            f"{run.return_error[1] * _MM:.1f}",
-            _num(None if run.heading_error is None else math.degrees(run.heading_error), ".3f"),
-        ]
-        for i, run in enumerate(report.runs, 1)
+def _clusters(page: PassesReport) -> str:
+    """The per-pass table of Eqs. 3.1-3.4: one column per pass (and the prediction)."""
+    names = [
+        "runs cw / ccw",
+        "centre of gravity cw x, y [mm]",
+        "centre of gravity ccw x, y [mm]",
+        "r_cg cw [mm]",
+        "r_cg ccw [mm]",
+        "spread sigma cw (radial) [mm]",
+        "spread sigma ccw (radial) [mm]",
+        "SEM cw = sigma / sqrt(n) [mm]",
+        "SEM ccw [mm]",
+        "E_max,syst [mm]",
+        "3 x SEM (of that cluster) [mm]",
+        "3 x SEM rule",
     ]
+    columns: list[tuple[str, list[str]]] = [
+        (name, _cluster_rows(one.benchmark))
+        for name, one in _passes(page)
+        if one.benchmark is not None
+    ]
+    if not columns:
+        return ""
+    if page.predicted is not None:
+        columns.append((_PREDICTED, _cluster_rows(page.predicted.benchmark)))
+    rows = [[name, *(col[1][i] for col in columns)] for i, name in enumerate(names)]
+    note = (
+        f'<p class="predicted">The last column is {escape(_PREDICTED_WORDS)}.</p>\n'
+        if page.predicted is not None
+        else ""
+    )
+    return (
+        "<h3>Return errors (Eqs. 3.1-3.4)</h3>\n"
+        + _table(["", *(name for name, _ in columns)], rows)
+        + note
+    )
+
+
+def _figure(page: PassesReport) -> str:
+    from .report_figures import (
+        PASS_COLOURS,
+        PREDICTED_COLOUR,
+        ClusterSet,
+        inline_svg,
+        passes_figure,
+    )
+
+    n = len(page.passes)
+    sets = [
+        ClusterSet(
+            one.benchmark,
+            "before" if n == 1 else pass_name(k, n),
+            PASS_COLOURS[(k - 1) % len(PASS_COLOURS)],
+        )
+        for k, one in enumerate(page.passes, 1)
+        if one.benchmark is not None
+    ]
+    if page.predicted is not None:
+        sets.append(
+            ClusterSet(page.predicted.benchmark, _PREDICTED, PREDICTED_COLOUR, predicted=True)
+        )
+    if not sets:
+        return "<p>No runs in both directions: no cluster view.</p>\n"
+    svg = inline_svg(passes_figure(sets, "UMBmark return errors"), "umbmark-clusters")
+    predicted = (
+        f" Grey, dashed: the {escape(_PREDICTED)}, {escape(_PREDICTED_WORDS)}."
+        if page.predicted is not None
+        else ""
+    )
+    return (
+        f'<figure id="figure">{svg}<figcaption>The return errors of the cw (circles) and '
+        "ccw (squares) runs, their centres of gravity (crosses) and E_max,syst (the "
+        f"circle about the origin) of every pass, in mm (the paper's Fig. 6 view); a second "
+        f"panel, where there is one, zooms on the later sets.{predicted}"
+        "</figcaption></figure>\n"
+    )
+
+
+def _runs(page: PassesReport) -> str:
+    many = len(page.passes) > 1
     head = ["#", "run", "kind", "direction", "eps_x [mm]", "eps_y [mm]", "eps_theta [deg]"]
-    return _table(head, rows)
+    if many:
+        head.insert(0, "pass")
+    predicted: list[Sequence[float] | None] = []
+    if page.predicted is not None:
+        head += ["predicted eps_x [mm]", "predicted eps_y [mm]"]
+        replayed = iter(page.predicted.runs)
+        predicted = [
+            next(replayed).return_error if run.kind == "square" else None
+            for run in page.passes[0].runs
+        ]
+    rows = []
+    for k, one in enumerate(page.passes, 1):
+        for i, run in enumerate(one.runs, 1):
+            heading = None if run.heading_error is None else math.degrees(run.heading_error)
+            row = [
+                str(i),
+                run.label,
+                run.kind,
+                run.direction.value,
+                f"{run.return_error[0] * _MM:.1f}",
+                f"{run.return_error[1] * _MM:.1f}",
+                _num(heading, ".3f"),
+            ]
+            if many:
+                row.insert(0, str(k))
+            if predicted:
+                after = predicted[i - 1]
+                row += (
+                    ["–", "–"]
+                    if after is None
+                    else [f"{after[0] * _MM:.1f}", f"{after[1] * _MM:.1f}"]
+                )
+            rows.append(row)
+    note = (
+        f'<p class="predicted">The predicted columns are {escape(_PREDICTED_WORDS)}.</p>\n'
+        if predicted
+        else ""
+    )
+    return _table(head, rows) + note
 
 
-def _estimates(report: CalibrationReport) -> str:
-    cal = report.calibration
+def _estimate(one: CalibrationReport) -> str:
+    cal = one.calibration
     est = cal.estimate
     se = est.standard_errors
     rows = []
@@ -194,18 +344,80 @@ def _estimates(report: CalibrationReport) -> str:
     ]
     return (
         f"<p>Method: <code>{escape(est.method)}</code></p>\n{table}"
-        "<h3>Correction, composed with the values active during the runs</h3>\n"
+        "<p>Correction, composed with the values active during the runs:</p>\n"
         + _table(["", "active", "new"], correction)
     )
 
 
-def _messages(report: CalibrationReport) -> str:
+def _estimates(page: PassesReport) -> str:
+    passes = _passes(page)
+    if len(passes) == 1:
+        return _estimate(passes[0][1])
+    return "".join(f"<h3>{escape(name)}</h3>\n{_estimate(one)}" for name, one in passes)
+
+
+def _checks(one: CalibrationReport) -> str:
     parts = []
-    for title, items in (("Warnings", report.warnings), ("Notes", report.notes)):
+    components = sorted(one.estimate.components.items())
+    if components:
+        rows = [[name, _num(float(value), ".6g")] for name, value in components]
+        parts.append(
+            "<p>Figures of the estimate and its model check (angles in rad, lengths in m; "
+            "<code>model_check_p</code>: probability of runs this far from any robot of "
+            "the model, Hotelling):</p>\n" + _table(["", "value"], rows)
+        )
+    for title, items in (("Warnings", one.warnings), ("Notes", one.notes)):
         if items:
             lis = "".join(f"<li>{escape(item)}</li>\n" for item in items)
-            parts.append(f"<h3>{title}</h3>\n<ul>\n{lis}</ul>\n")
-    return "".join(parts) or "<p>None.</p>\n"
+            parts.append(f"<p>{title}:</p>\n<ul>\n{lis}</ul>\n")
+    if not one.warnings:
+        parts.append("<p>Warnings: none.</p>\n")
+    return "".join(parts)
+
+
+def _validation(validation: ValidationReport) -> str:
+    candidates = list(validation.candidates)
+    rows = [
+        [f"{fold.held_out} ({fold.runs} runs)", *(_mm(fold.errors.get(c)) for c in candidates)]
+        for fold in validation.folds
+    ]
+    rows.append(["mean", *(_mm(validation.mean_error(c)) for c in candidates)])
+    best = validation.recommended
+    words = (
+        f"Recommended: <code>{escape(best)}</code> (the lowest mean held-out end error)."
+        if best is not None
+        else "No estimator predicted held-out runs better than the nominal parameters."
+    )
+    return (
+        f"<h3>Validation: held-out end error [mm], {escape(validation.scheme)}</h3>\n"
+        + _table(["held out", *candidates], rows)
+        + f"<p>{words}</p>\n"
+    )
+
+
+def _mm(value: float | None) -> str:
+    return "–" if value is None else f"{value * _MM:.1f}"
+
+
+def _messages(page: PassesReport) -> str:
+    passes = _passes(page)
+    if len(passes) == 1:
+        body = _checks(passes[0][1])
+    else:
+        body = "".join(f"<h3>{escape(name)}</h3>\n{_checks(one)}" for name, one in passes)
+    if page.validation is not None:
+        body += _validation(page.validation)
+    return body
+
+
+def _overlay(page: PassesReport) -> str:
+    n = len(page.passes)
+    which = "" if n == 1 else f" of the last pass (pass {n})"
+    return (
+        f"<p>The correction{which}, composed with the values active during its runs; "
+        "copy it into the controller's parameters:</p>\n"
+        f'<pre id="overlay-yaml">{escape(page.last.overlay_yaml())}</pre>\n'
+    )
 
 
 def _inputs(report: CalibrationReport) -> list[list[str]]:
@@ -226,58 +438,85 @@ def _inputs(report: CalibrationReport) -> list[list[str]]:
     return rows
 
 
-def _provenance(report: CalibrationReport) -> str:
-    cal = report.calibration
-    active = cal.active
-    params = [
-        ["side length L [m]", _num(report.test.side_length, ".4f")],
-        ["wheelbase b [m]", _num(report.test.wheelbase, ".4f")],
-        ["active wheelbase [m]", f"{active.wheelbase:.6f}"],
-        ["active wheel_separation_multiplier", f"{active.separation_multiplier:g}"],
-        ["active c_L", f"{active.c_left:g}"],
-        ["active c_R", f"{active.c_right:g}"],
-        ["active wheel diameter [m]", _num(active.wheel_diameter, "g")],
+def _parameters(one: CalibrationReport) -> list[str]:
+    active = one.calibration.active
+    return [
+        _num(one.test.side_length, ".4f"),
+        _num(one.test.wheelbase, ".4f"),
+        f"{active.wheelbase:.6f}",
+        f"{active.separation_multiplier:g}",
+        f"{active.c_left:g}",
+        f"{active.c_right:g}",
+        _num(active.wheel_diameter, "g"),
+        one.format,
+        one.estimate.method,
     ]
-    created = report.created.astimezone(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _provenance(page: PassesReport) -> str:
+    passes = _passes(page)
+    many = len(passes) > 1
+    inputs = [[name, *row] if many else row for name, one in passes for row in _inputs(one)]
+    names = [
+        "side length L [m]",
+        "wheelbase b [m]",
+        "active wheelbase [m]",
+        "active wheel_separation_multiplier",
+        "active c_L",
+        "active c_R",
+        "active wheel diameter [m]",
+        "format",
+        "method",
+    ]
+    columns = [_parameters(one) for _, one in passes]
+    params = [[name, *(col[i] for col in columns)] for i, name in enumerate(names)]
+    created = page.created.astimezone(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    command = (
+        f'<p>Command: <code id="command">{escape(page.command)}</code></p>\n'
+        if page.command
+        else "<p>Command: not given (made from Python).</p>\n"
+    )
+    methods = ", ".join(sorted({one.estimate.method for _, one in passes}))
     return (
         "<h3>Inputs</h3>\n"
-        + _table(["file", "SHA-256"], _inputs(report))
+        + _table(["pass", "file", "SHA-256"] if many else ["file", "SHA-256"], inputs)
         + "<h3>Parameters active during the runs</h3>\n"
-        + _table(["", ""], params)
-        + f"<p>Format: <code>{escape(report.format)}</code>; method: "
-        f"<code>{escape(cal.estimate.method)}</code>; umbmark "
+        + _table(["", *(name for name, _ in passes)] if many else ["", ""], params)
+        + command
+        + f"<p>Format: <code>{escape(page.passes[0].format)}</code>; method: "
+        f"<code>{escape(methods)}</code>; umbmark "
         f'<span id="umbmark-version">{escape(__version__)}</span>; made {created}.</p>\n'
     )
 
 
-def calibration_html(report: CalibrationReport) -> str:
-    """The calibration as one self-contained HTML page (no external resources).
+def passes_html(page: PassesReport) -> str:
+    """UMBmark passes on one robot as one self-contained HTML page (no external resources).
 
-    Sections: the verdict (E_max,syst and the 3 x SEM rule), the Fig. 6 cluster view
-    (inline SVG), the runs, the estimates with their 95 % intervals and the correction,
-    warnings and notes, the ros2_control overlay and the provenance (inputs with their
-    SHA-256, the parameters active, the umbmark version and the method).
+    Sections: the verdict (E_max,syst of every pass and the 3 x SEM rule, with the
+    per-pass table of Eqs. 3.1-3.4), the Fig. 6 cluster view of every pass in one inline
+    SVG figure (and the predicted after of a single pass of recorded runs, marked as a
+    prediction), every run, the estimates with their 95 % intervals and the correction,
+    the model checks, warnings, notes and any validation table, the ros2_control overlay
+    of the last pass and the provenance (inputs with their SHA-256, the parameters active,
+    the command, the umbmark version and the method).
     """
-    svg = _svg(report)
-    figure = (
-        f'<figure id="figure">{svg}<figcaption>The return errors of the cw and ccw runs '
-        "and their centres of gravity (the paper's Fig. 6 view).</figcaption></figure>\n"
-        if svg is not None
-        else "<p>No runs in both directions: no cluster view.</p>\n"
+    n = len(page.passes)
+    title = (
+        f"umbmark calibration: {page.passes[0].source}"
+        if n == 1
+        else f"umbmark: {n} UMBmark passes, {page.passes[0].source} to {page.last.source}"
     )
-    title = f"umbmark calibration: {report.source}"
+    robot = page.passes[0].robot
+    if robot:
+        title = f"{robot}: {title}"
     sections = [
-        ("verdict", "Verdict", _verdict(report) + _clusters(report)),
-        ("clusters", "Cluster view (Fig. 6)", figure),
-        ("runs", "Runs", _runs(report)),
-        ("estimates", "Estimates and 95 % intervals", _estimates(report)),
-        ("messages", "Warnings and notes", _messages(report)),
-        (
-            "overlay",
-            "ros2_control overlay",
-            f'<pre id="overlay-yaml">{escape(report.overlay_yaml())}</pre>\n',
-        ),
-        ("provenance", "Provenance", _provenance(report)),
+        ("verdict", "Verdict", _verdict(page) + _clusters(page)),
+        ("clusters", "Cluster view (Fig. 6)", _figure(page)),
+        ("runs", "Runs", _runs(page)),
+        ("estimates", "Estimates and 95 % intervals", _estimates(page)),
+        ("messages", "Model checks, warnings and notes", _messages(page)),
+        ("overlay", "ros2_control overlay", _overlay(page)),
+        ("provenance", "Provenance", _provenance(page)),
     ]
     body = "".join(
         f'<section id="{key}">\n<h2>{escape(name)}</h2>\n{content}</section>\n'
@@ -290,3 +529,20 @@ def calibration_html(report: CalibrationReport) -> str:
         f"<title>{escape(title)}</title>\n<style>{_CSS}</style>\n</head>\n<body>\n"
         f"<h1>{escape(title)}</h1>\n{body}</body>\n</html>\n"
     )
+
+
+def calibration_html(report: CalibrationReport) -> str:
+    """One calibration as the page of :func:`passes_html` (what ``--report`` writes).
+
+    With recorded runs the page shows the predicted after too
+    (:func:`umbmark.jobs.report.predict_after`).
+    """
+    from ..jobs.report import PassesReport, predict_after
+
+    page = PassesReport(
+        passes=(report,),
+        predicted=predict_after(report),
+        created=report.created,
+        command=report.command,
+    )
+    return passes_html(page)

@@ -3,18 +3,24 @@
 :func:`cluster_figure` draws the view of the paper's Fig. 6 and Fig. 11: every run's
 return error, cw and ccw marked differently, both centres of gravity and the
 ``E_max,syst`` circle. Axes are in millimetres, as in the paper's figures.
+:func:`replay_figure` draws recorded runs against their odometry, with a zoom on where
+they end [mm]; :func:`history_figure` a robot's calibrations over time.
 """
 
 from __future__ import annotations
 
+import datetime as dt
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..benchmark import Benchmark
 from ..conventions import Direction
+from ..history_store import CalibrationRecord, RobotRecord, drift_verdict
 from ..kinematics import WheelParams
 from ..runs import Run
 from .atomic import atomic_path
@@ -29,6 +35,7 @@ __all__ = [
     "FIGURE_FORMATS",
     "cluster_figure",
     "draw_clusters",
+    "history_figure",
     "replay_figure",
     "save_figure",
     "trajectory_figure",
@@ -42,6 +49,10 @@ _STYLE = {
     Direction.CCW: {"marker": "s", "color": "#d62728", "label": "ccw runs"},
 }
 _MM = 1000.0
+#: Characters per line of a cluster panel's title (a long source path is wrapped).
+_PANEL_TITLE_WIDTH = 60
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
 
 
 def draw_clusters(ax: Axes, bench: Benchmark, title: str = "", tag: str = "") -> None:
@@ -93,7 +104,9 @@ def draw_clusters(ax: Axes, bench: Benchmark, title: str = "", tag: str = "") ->
     ax.set_ylabel("return error y [mm]")
     ax.set_aspect("equal", adjustable="box")
     if title:
-        ax.set_title(title)
+        import textwrap
+
+        ax.set_title(textwrap.fill(title, _PANEL_TITLE_WIDTH, break_on_hyphens=False))
 
 
 def cluster_figure(
@@ -116,7 +129,7 @@ def cluster_figure(
         draw_clusters(ax, bench, panel_title)
         _fit_limits(ax, bench)
         ax.legend(loc="best", fontsize="small")
-    fig.suptitle(title)
+    _suptitle(fig, title)
     return fig
 
 
@@ -161,14 +174,18 @@ def trajectory_figure(
         )
         ax.legend(loc="center", fontsize="small")
     if title:
-        fig.suptitle(title)
+        _suptitle(fig, title)
     return fig
 
 
 def replay_figure(
     runs: Sequence[Run], odometry: Mapping[str, WheelParams], title: str = ""
 ) -> Figure:
-    """Every recorded run's true path against its odometry, one panel per run.
+    """Every recorded run's true path against its odometry, two panels per run.
+
+    The left panel is the whole path [m]; the right one zooms on where the run ends
+    [mm], equal aspect: the true end point and the odometry's end points under each
+    parameter set, so that millimetre differences show next to the path in metres.
 
     Parameters
     ----------
@@ -177,43 +194,229 @@ def replay_figure(
     odometry : mapping of str to WheelParams
         Named parameter sets to integrate the wheel data with (``nominal``,
         ``calibrated``).
+    title : str
+        The figure's title (the robot's or the recording's name).
     """
     from matplotlib.figure import Figure
 
     logged = [run for run in runs if run.log is not None]
     if not logged:
         raise ValueError("no run has a time series to draw")
-    columns = min(3, len(logged))
+    columns = min(2, len(logged))  # runs per row, each a path and a zoom panel
     rows = -(-len(logged) // columns)
-    fig = Figure(figsize=(4.6 * columns, 4.4 * rows), layout="constrained")
-    axes = fig.subplots(rows, columns, squeeze=False).ravel()
-    colours = ["#1f77b4", "#2ca02c", "#9467bd", "#8c564b"]
-    for ax, run in zip(axes, logged, strict=False):
-        log = run.log
-        assert log is not None
-        truth = log.truth[log.matched]
-        ax.plot(truth[:, 0], truth[:, 1], color="black", linewidth=2, label="ground truth")
-        for colour, (name, params) in zip(colours, odometry.items(), strict=False):
-            odo = log.odometry(params)
-            end = float(np.hypot(*(odo[-1, :2] - truth[-1, :2])) * _MM)
-            ax.plot(
-                odo[:, 0],
-                odo[:, 1],
-                color=colour,
-                linewidth=1,
-                label=f"{name}: ends {end:.0f} mm off",
-            )
-        ax.plot(0.0, 0.0, "k+", markersize=12)
-        ax.set_title(f"{run.label} ({run.direction.value})", fontsize="medium")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.legend(loc="best", fontsize="x-small")
-    for ax in axes[len(logged) :]:
-        ax.set_visible(False)
+    fig = Figure(figsize=(4.2 * 2 * columns, 4.2 * rows), layout="constrained")
+    axes = fig.subplots(rows, 2 * columns, squeeze=False)
+    for index, run in enumerate(logged):
+        row, column = divmod(index, columns)
+        _draw_replay(axes[row, 2 * column], axes[row, 2 * column + 1], run, odometry)
+    for index in range(len(logged), rows * columns):
+        row, column = divmod(index, columns)
+        axes[row, 2 * column].set_visible(False)
+        axes[row, 2 * column + 1].set_visible(False)
     if title:
-        fig.suptitle(title)
+        _suptitle(fig, title)
     return fig
+
+
+_REPLAY_COLOURS = ("#1f77b4", "#2ca02c", "#9467bd", "#8c564b")
+#: Smallest half-width of a replay's end-point zoom [mm].
+_ZOOM_MIN_HALF = 5.0
+
+
+def _draw_replay(ax: Axes, zoom: Axes, run: Run, odometry: Mapping[str, WheelParams]) -> None:
+    """One run: its whole path on ``ax`` [m], its end points on ``zoom`` [mm]."""
+    log = run.log
+    assert log is not None
+    truth = log.truth[log.matched]
+    ax.plot(truth[:, 0], truth[:, 1], color="black", linewidth=2, label="ground truth")
+    zoom.plot(truth[:, 0] * _MM, truth[:, 1] * _MM, color="black", linewidth=2)
+    ends = [truth[-1, :2] * _MM]
+    for colour, (name, params) in zip(_REPLAY_COLOURS, odometry.items(), strict=False):
+        odo = log.odometry(params)
+        end = float(np.hypot(*(odo[-1, :2] - truth[-1, :2])) * _MM)
+        ax.plot(
+            odo[:, 0], odo[:, 1], color=colour, linewidth=1, label=f"{name}: ends {end:.0f} mm off"
+        )
+        zoom.plot(odo[:, 0] * _MM, odo[:, 1] * _MM, color=colour, linewidth=1)
+        zoom.plot(
+            odo[-1, 0] * _MM,
+            odo[-1, 1] * _MM,
+            "o",
+            color=colour,
+            label=f"{name} end: {end:.1f} mm off",
+            zorder=4,
+        )
+        ends.append(odo[-1, :2] * _MM)
+    zoom.plot(
+        truth[-1, 0] * _MM,
+        truth[-1, 1] * _MM,
+        "*",
+        color="black",
+        markersize=12,
+        label="true end",
+        zorder=5,
+    )
+    ax.plot(0.0, 0.0, "k+", markersize=12)
+    ax.set_title(f"{run.label} ({run.direction.value})", fontsize="medium")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(loc="best", fontsize="x-small")
+    points = np.array(ends)
+    centre = (points.max(axis=0) + points.min(axis=0)) / 2.0
+    half = max(float((points.max(axis=0) - points.min(axis=0)).max()) * 0.65, _ZOOM_MIN_HALF)
+    zoom.set_xlim(centre[0] - half, centre[0] + half)
+    zoom.set_ylim(centre[1] - half, centre[1] + half)
+    zoom.set_aspect("equal", adjustable="box")
+    zoom.set_title(f"{run.label}: where it ends", fontsize="medium")
+    zoom.set_xlabel("x [mm]")
+    zoom.set_ylabel("y [mm]")
+    zoom.set_label("end zoom")
+    zoom.grid(True, color="0.9")
+    zoom.legend(loc="best", fontsize="x-small")
+
+
+#: Coverage factor of the error bars of :func:`history_figure` (95 %).
+Z95 = 1.96
+#: Characters of a figure title's line per inch of the figure's width.
+_TITLE_CHARS_PER_INCH = 11
+
+
+def history_figure(robot: RobotRecord, calibrations: Sequence[CalibrationRecord]) -> Figure:
+    """A robot's calibrations over time: ``E_d``, ``E_b`` and ``E_max,syst``, stacked.
+
+    Three panels share the time axis (UTC). ``E_d`` and ``E_b`` carry error bars of
+    ±1.96 standard errors where the calibration has them; ``E_max,syst`` is in
+    millimetres. Calibrations marked applied are filled markers, the others open ones.
+    The title names the robot and its nominal parameters and, when ``E_d`` or ``E_b``
+    drifted (:func:`umbmark.history_store.drift_verdict`), says so.
+
+    Parameters
+    ----------
+    robot : RobotRecord
+        The robot (name, nominal wheelbase and wheel diameter).
+    calibrations : sequence of CalibrationRecord
+        Its calibrations, oldest first (at least one).
+
+    Raises
+    ------
+    ValueError
+        Without calibrations.
+    """
+    from matplotlib import dates
+    from matplotlib.figure import Figure
+
+    if not calibrations:
+        raise ValueError(f"robot {robot.name} has no calibrations to draw")
+    # Matplotlib's date numbers [days], UTC.
+    moments = [dt.datetime.fromisoformat(c.time) for c in calibrations]
+    times = np.asarray(dates.date2num(moments), dtype=np.float64)  # type: ignore[no-untyped-call]
+    applied = np.array([c.applied for c in calibrations])
+    fig = Figure(figsize=(8.0, 8.0), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    for ax, name, label in (
+        (axes[0], "E_d", "E_d = D_R / D_L\n[dimensionless]"),
+        (axes[1], "E_b", "E_b = b_actual / b_nominal\n[dimensionless]"),
+    ):
+        values = np.array([float(getattr(c, name)) for c in calibrations])
+        se = np.array([_finite_or_nan(c.standard_errors.get(name)) for c in calibrations])
+        has_se = np.isfinite(se)
+        if np.any(has_se):
+            ax.errorbar(
+                times[has_se],
+                values[has_se],
+                yerr=Z95 * se[has_se],
+                fmt="none",
+                ecolor="0.5",
+                capsize=4,
+                label="±1.96 standard errors (95 %)",
+            )
+        _trend(ax, times, values, applied, name)
+        ax.ticklabel_format(axis="y", useOffset=False)
+        ax.set_ylabel(label)
+    e_max = np.array([np.nan if c.e_max_syst is None else c.e_max_syst * _MM for c in calibrations])
+    ax = axes[2]
+    known = np.isfinite(e_max)
+    if np.any(known):
+        _trend(
+            ax,
+            times[known],
+            e_max[known],
+            applied[known],
+            "E_max,syst",
+        )
+        ax.set_ylim(bottom=0.0)
+    else:
+        ax.text(
+            0.5,
+            0.5,
+            "no E_max,syst: no calibration had squares in both directions",
+            ha="center",
+            va="center",
+            transform=ax.transAxes,
+        )
+    ax.set_ylabel("E_max,syst [mm]")
+    ax.set_xlabel("calibration time (UTC)")
+    ax.xaxis_date(tz=dt.timezone.utc)
+    locator = dates.AutoDateLocator(tz=dt.timezone.utc)  # type: ignore[no-untyped-call]
+    formatter = dates.ConciseDateFormatter(locator, tz=dt.timezone.utc)  # type: ignore[no-untyped-call]
+    ax.xaxis.set_major_locator(locator)
+    ax.xaxis.set_major_formatter(formatter)
+    if times[0] == times[-1]:  # one instant: give the axis a day's span
+        ax.set_xlim(times[0] - 0.5, times[0] + 0.5)
+    for each in axes:
+        each.grid(True, color="0.92")
+    handles = [h for h in axes[0].get_legend_handles_labels()[0] if h.get_label() != "E_d"]
+    axes[0].legend(handles=handles, loc="best", fontsize="x-small")
+    diameter = (
+        "wheel diameter unknown"
+        if robot.wheel_diameter is None
+        else f"wheel diameter {robot.wheel_diameter * _MM:.2f} mm"
+    )
+    title = (
+        f"Robot {robot.name}: nominal wheelbase {robot.wheelbase * _MM:.2f} mm, {diameter}; "
+        f"{len(calibrations)} calibration(s)"
+    )
+    verdict = drift_verdict(calibrations)
+    if verdict is not None and verdict.startswith("drift"):
+        title += "\n" + verdict
+    _suptitle(fig, title, fontsize="medium")
+    return fig
+
+
+def _trend(ax: Axes, times: FloatArray, values: FloatArray, applied: BoolArray, name: str) -> None:
+    """One quantity over time (``times``: date numbers, shape (n,)): a line through every
+    value, applied calibrations filled, the others open."""
+    colour = "#1f77b4"
+    ax.plot(times, values, "-", color=colour, linewidth=1, label=name, zorder=3)
+    marks = ((applied, "applied", colour), (~applied, "not applied", "white"))
+    for chosen, label, face in marks:
+        if np.any(chosen):
+            ax.plot(
+                times[chosen],
+                values[chosen],
+                "o",
+                markerfacecolor=face,
+                markeredgecolor=colour,
+                color=colour,
+                label=label,
+                zorder=4,
+            )
+
+
+def _suptitle(fig: Figure, title: str, fontsize: str = "large") -> None:
+    """Title ``fig``, its lines wrapped to the figure's width (a long path included)."""
+    if not title:
+        return
+    import textwrap
+
+    width = max(int(fig.get_figwidth() * _TITLE_CHARS_PER_INCH), 40)
+    lines = [textwrap.fill(line, width, break_on_hyphens=False) for line in title.split("\n")]
+    fig.suptitle("\n".join(lines), fontsize=fontsize)
+
+
+def _finite_or_nan(value: float | None) -> float:
+    return float("nan") if value is None or not math.isfinite(value) else float(value)
 
 
 def save_figure(fig: Figure, path: str | Path) -> None:

@@ -33,6 +33,7 @@ def format_metadata(metadata: LogMetadata) -> str:
         body["side_length"] = metadata.side_length
     body["c_left"] = metadata.c_left
     body["c_right"] = metadata.c_right
+    body["wheel_separation_multiplier"] = metadata.separation_multiplier
     body.update(metadata.extra)
     header = "# umbmark run log: lengths in metres, angles in radians, time in seconds\n"
     return header + yaml.safe_dump(body, sort_keys=False)

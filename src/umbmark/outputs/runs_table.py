@@ -7,11 +7,40 @@ import io
 from collections.abc import Sequence
 from pathlib import Path
 
+from ..calibration import ActiveParams
+from ..kinematics import WheelParams
 from ..runs import Run
-from ..sources.runs_table import REQUIRED_COLUMNS
+from ..sources.runs_table import ACTIVE_TAG, REQUIRED_COLUMNS
 from .atomic import atomic_write_text
 
-__all__ = ["format_runs_table", "write_runs_table"]
+__all__ = ["active_of", "format_active", "format_runs_table", "write_runs_table"]
+
+
+def active_of(odometry: WheelParams, configured_wheelbase: float | None = None) -> ActiveParams:
+    """The active parameters of an odometry: its ``c_L``, ``c_R``, and its wheelbase as the
+    configured ``configured_wheelbase`` [m] times a ``wheel_separation_multiplier`` (1 when
+    not given: the odometry's wheelbase is then the configured one)."""
+    configured = odometry.wheelbase if configured_wheelbase is None else configured_wheelbase
+    return ActiveParams(
+        wheelbase=configured,
+        c_left=odometry.c_left,
+        c_right=odometry.c_right,
+        separation_multiplier=odometry.wheelbase / configured,
+        wheel_diameter=odometry.wheel_diameter,
+    )
+
+
+def format_active(active: ActiveParams) -> str:
+    """The ``umbmark-active:`` comment (without ``#``) recording ``active`` (metres)."""
+    parts = [f"wheelbase={active.wheelbase:.12g}"]
+    if active.wheel_diameter is not None:
+        parts.append(f"wheel_diameter={active.wheel_diameter:.12g}")
+    parts += [
+        f"c_L={active.c_left:.12g}",
+        f"c_R={active.c_right:.12g}",
+        f"wheel_separation_multiplier={active.separation_multiplier:.12g}",
+    ]
+    return f"{ACTIVE_TAG} {' '.join(parts)}"
 
 
 def format_runs_table(runs: Sequence[Run]) -> str:
@@ -45,7 +74,16 @@ def format_runs_table(runs: Sequence[Run]) -> str:
     return out.getvalue()
 
 
-def write_runs_table(path: str | Path, runs: Sequence[Run], comment: str = "") -> None:
-    """Write ``runs`` as a runs table, atomically; ``comment`` lines are prefixed with ``#``."""
+def write_runs_table(
+    path: str | Path,
+    runs: Sequence[Run],
+    comment: str = "",
+    active: ActiveParams | None = None,
+) -> None:
+    """Write ``runs`` as a runs table, atomically; ``comment`` lines are prefixed with ``#``,
+    and ``active``, the parameters active during the runs, is recorded in a
+    ``# umbmark-active:`` line that :func:`umbmark.calibrate` reads back."""
+    if active is not None:
+        comment = f"{comment}\n{format_active(active)}" if comment else format_active(active)
     prefix = "".join(f"# {line}\n" for line in comment.splitlines())
     atomic_write_text(path, prefix + format_runs_table(runs))

@@ -43,8 +43,11 @@ def describe_simulation(
     elif kind == "straight":
         true_d = np.hypot(result.true_end[:, 0], result.true_end[:, 1])
         odo_d = np.hypot(result.odometry_end[:, 0], result.odometry_end[:, 1])
-        out["distance_ratio"] = float(np.mean(true_d / odo_d))
+        if np.all(odo_d > 0):  # a robot that never moved has no ratio (not NaN)
+            out["distance_ratio"] = float(np.mean(true_d / odo_d))
     else:
-        out["rotation_ratio"] = float(np.mean(result.true_end[:, 2] / result.odometry_end[:, 2]))
+        if np.all(result.odometry_end[:, 2] != 0):
+            ratio = result.true_end[:, 2] / result.odometry_end[:, 2]
+            out["rotation_ratio"] = float(np.mean(ratio))
         out["centre_shift"] = float(np.mean(np.hypot(result.true_end[:, 0], result.true_end[:, 1])))
     return out

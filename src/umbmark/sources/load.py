@@ -21,12 +21,11 @@ Formats
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
-
-import yaml
 
 from ..conventions import axle_poses
 from ..errors import InputError
@@ -110,15 +109,36 @@ class Loaded:
     notes: list[str] = field(default_factory=list)
 
 
+#: Bytes of a folder's ``metadata.yaml`` looked into to tell a ROS 2 bag.
+_METADATA_PEEK = 1 << 16
+_ROS2_KEY = re.compile(rb"^rosbag2_bagfile_information[ \t]*:", re.MULTILINE)
+
+
 def _is_ros2_bag_folder(path: Path) -> bool:
+    """Whether ``path/metadata.yaml`` starts a ROS 2 bag's metadata (its top-level key).
+
+    Only the first 64 KiB are read and not parsed: a hostile file (nested thousands deep,
+    an alias bomb, endless) is left to the bag reader, which turns it into one line.
+    """
     meta = path / "metadata.yaml"
     if not meta.is_file():
         return False
     try:
-        data = yaml.safe_load(meta.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, OSError, UnicodeDecodeError):
+        with meta.open("rb") as file:
+            head = file.read(_METADATA_PEEK)
+    except OSError:
         return False
-    return isinstance(data, dict) and "rosbag2_bagfile_information" in data
+    return _ROS2_KEY.search(head) is not None
+
+
+def _regular_or_folder(path: Path) -> None:
+    """Refuse a source that is neither a regular file nor a folder: a pipe, a device, a
+    socket (``/dev/zero``, a FIFO) would be read forever or block."""
+    if path.is_dir() or path.is_file():
+        return
+    raise InputError(
+        "is not a regular file or folder (a device, pipe or socket): give a file", source=path
+    )
 
 
 def detect_format(path: str | Path) -> Format:
@@ -135,6 +155,7 @@ def detect_format(path: str | Path) -> Format:
     path = Path(path)
     if not path.exists():
         raise InputError("no such file or folder", source=path)
+    _regular_or_folder(path)
     if path.suffix.lower() in (".bag", ".db3", ".mcap"):
         return "bag"
     if path.is_dir():
@@ -155,10 +176,10 @@ def detect_format(path: str | Path) -> Format:
 
 
 def _looks_like_table(path: Path) -> bool:
-    from .text import content_lines
+    from .text import first_content_line
 
-    lines = content_lines(path)
-    return bool(lines) and "direction" in lines[0][1].lower()
+    first = first_content_line(path)  # the header only: the file may be long
+    return first is not None and "direction" in first[1].lower()
 
 
 def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
@@ -170,6 +191,8 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         Naming the file and the problem.
     """
     source = Path(source)
+    if fmt != "auto" and source.exists():
+        _regular_or_folder(source)
     kind = detect_format(source) if fmt == "auto" else fmt
     if kind == "table":
         from .runs_table import read_runs_table

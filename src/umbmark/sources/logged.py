@@ -38,6 +38,12 @@ MIN_JUMP = 10.0
 #: taken for no motion at all.
 STILL_WHEELS = 1e-9
 STILL_TRUTH = 1e-9
+#: Between two ground-truth samples the tracked point moves at most this far [m], or
+#: :data:`MAX_TRUTH_SPEED` times the time between them if that is more: a larger step is
+#: a corrupt sample (a cell of another unit, an overflow, a tracker that lost the robot).
+MAX_TRUTH_STEP = 1.0
+#: Fastest plausible motion of the ground truth [m/s].
+MAX_TRUTH_SPEED = 10.0
 
 
 @dataclass(frozen=True)
@@ -68,7 +74,8 @@ def to_start_frame(poses: FloatArray) -> FloatArray:
 
 
 def check_motion(name: str, time: FloatArray, angles: FloatArray, truth: FloatArray | None) -> None:
-    """Refuse a recording or run whose wheels never turn or jump, or whose truth never moves.
+    """Refuse a recording or run whose wheels never turn or jump, or whose truth never moves
+    or jumps (:data:`MAX_TRUTH_STEP`).
 
     A jump is one sample step of a wheel angle above :data:`MAX_WHEEL_STEP`, or above both
     :data:`MIN_JUMP` and :data:`JUMP_FACTOR` times the 99th percentile of the steps.
@@ -118,6 +125,28 @@ def check_motion(name: str, time: FloatArray, angles: FloatArray, truth: FloatAr
         raise InputError(
             "the ground truth never moves (every pose is the same): check the ground-truth "
             "columns or topic",
+            source=name,
+        )
+    _check_truth_steps(name, time, truth)
+
+
+def _check_truth_steps(name: str, time: FloatArray, truth: FloatArray) -> None:
+    """Refuse a ground-truth position that jumps between two samples (see
+    :data:`MAX_TRUTH_STEP`); ``truth`` has shape (n, 3) at ``time`` (n,), NaN rows skipped."""
+    if truth.shape[0] != time.shape[0]:
+        return
+    kept = np.flatnonzero(np.all(np.isfinite(truth), axis=1))
+    if kept.size < 2:
+        return
+    step = np.hypot(np.diff(truth[kept, 0]), np.diff(truth[kept, 1]))
+    limit = np.maximum(MAX_TRUTH_STEP, MAX_TRUTH_SPEED * np.abs(np.diff(time[kept])))
+    over = np.flatnonzero(step > limit)
+    if over.size:
+        k = int(over[0])
+        raise InputError(
+            f"the ground truth jumps by {float(step[k]):.4g} m between two samples at "
+            f"{float(time[kept[k + 1]] - time[0]):.2f} s (more than {float(limit[k]):.3g} m): "
+            "a corrupt sample, a cell in another unit, or a tracker that lost the robot",
             source=name,
         )
 
@@ -192,8 +221,8 @@ def runs_from_recordings(
     ------
     InputError
         If a recording has no ground truth, its wheels never turn, its ground truth never
-        moves, a wheel jumps in one sample (see :func:`check_motion`), a run has no motion,
-        its odometry overflows, or no run is found at all.
+        moves or jumps, a wheel jumps in one sample (see :func:`check_motion`), a run has
+        no motion, its odometry overflows, or no run is found at all.
     """
     out = LoadedRuns(runs=[])
     for recording in recordings:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import csv
 import math
 import re
+from array import array
 from pathlib import Path
 
 import numpy as np
@@ -28,9 +29,21 @@ import numpy as np
 from ..errors import InputError
 from ..kinematics import WheelParams
 from ..recording import PoseSeries, Recording, WheelSeries
-from .text import read_text
+from .text import iter_lines
 
-__all__ = ["OptiOdomSession", "is_optiodom_session", "read_optiodom"]
+__all__ = [
+    "MAX_METADATA_ROWS",
+    "MAX_SAMPLES",
+    "OptiOdomSession",
+    "is_optiodom_session",
+    "read_optiodom",
+]
+
+#: Most rows (samples) read from one run file; it is read line by line, only the numbers
+#: kept (48 bytes a row). The published runs have a few thousand.
+MAX_SAMPLES = 5_000_000
+#: Most rows read from a session's metadata file (the published ones have about 20).
+MAX_METADATA_ROWS = 10_000
 
 _RUN = re.compile(r"^(?P<id>.+)_run-(?P<n>\d+)\.csv$")
 
@@ -119,7 +132,14 @@ def read_optiodom(folder: str | Path) -> tuple[list[Recording], OptiOdomSession]
     if meta_path is None:
         raise InputError("has no *_metadata.csv: not an OptiOdom session", source=folder)
     meta: dict[str, list[str]] = {}
-    for row in csv.reader(read_text(meta_path).splitlines()):
+    for number, line in iter_lines(meta_path):
+        if number > MAX_METADATA_ROWS:
+            raise InputError(
+                f"has more than {MAX_METADATA_ROWS} rows: not an OptiOdom metadata file",
+                source=meta_path,
+                row=number,
+            )
+        row = next(csv.reader([line]), [])
         if row and row[0].strip():
             meta[row[0].strip()] = [c.strip() for c in row[1:] if c.strip()]
     session = OptiOdomSession(meta_path, meta)
@@ -154,10 +174,20 @@ def read_optiodom(folder: str | Path) -> tuple[list[Recording], OptiOdomSession]
 
 
 def _read_run(path: Path) -> np.ndarray:
-    rows = []
-    for number, line in enumerate(read_text(path).splitlines(), start=1):
+    """A run file's samples, shape (n, 6): time, x, y, theta, ticks_right, ticks_left."""
+    columns = [array("d") for _ in range(6)]
+    samples = 0
+    for number, line in iter_lines(path):
         if not line.strip():
             continue
+        samples += 1
+        if samples > MAX_SAMPLES:
+            raise InputError(
+                f"has more than {MAX_SAMPLES} samples: umbmark reads at most {MAX_SAMPLES} "
+                "rows of a run file",
+                source=path,
+                row=number,
+            )
         cells = line.split(",")
         if len(cells) < 6:
             raise InputError(
@@ -172,10 +202,11 @@ def _read_run(path: Path) -> np.ndarray:
             raise InputError("has a cell that is not a number", source=path, row=number) from None
         if not all(math.isfinite(v) for v in values):
             raise InputError("has a value that is not a finite number", source=path, row=number)
-        rows.append(values)
-    if len(rows) < 2:
+        for column, value in zip(columns, values, strict=True):
+            column.append(value)
+    if samples < 2:
         raise InputError("has fewer than 2 samples", source=path)
-    data = np.array(rows, dtype=np.float64)
+    data = np.column_stack([np.frombuffer(c, dtype=np.float64) for c in columns])
     if not np.all(np.diff(data[:, 0]) > 0):
         bad = int(np.argmax(np.diff(data[:, 0]) <= 0)) + 2
         raise InputError("time does not increase", source=path, row=bad)

@@ -53,6 +53,34 @@ DIFF_DRIVE_KEYS = frozenset(
 MULTIPLIER_RANGE = (0.2, 5.0)
 #: Bounds of a plausible configured length [m].
 LENGTH_RANGE = (0.001, 10.0)
+#: Largest parameter file or result read [bytes]: real ones are a few kilobytes.
+MAX_FILE_BYTES = 16 * 1024 * 1024
+
+
+def _small_file(path: str | Path) -> None:
+    """Refuse what is not a regular file of at most :data:`MAX_FILE_BYTES` (a folder, a
+    device such as ``/dev/zero`` or a pipe would be read without end) before reading it.
+
+    A missing or unreadable file is left to the reader, which names the problem.
+    """
+    where = Path(path)
+    try:
+        info = where.stat()
+    except OSError:
+        return
+    if where.is_dir():
+        raise InputError("is a folder, not a parameter file or result", source=path)
+    if not where.is_file():
+        raise InputError(
+            "is not a regular file (a device, pipe or socket): give a parameter file or result",
+            source=path,
+        )
+    if info.st_size > MAX_FILE_BYTES:
+        raise InputError(
+            f"is {info.st_size / 1e6:.0f} MB: larger than any parameter file or result "
+            f"({MAX_FILE_BYTES // (1024 * 1024)} MB at most)",
+            source=path,
+        )
 
 
 @dataclass(frozen=True)
@@ -160,6 +188,7 @@ class CalibratedParams:
 
 
 def _result_data(path: str | Path) -> dict[str, Any]:
+    _small_file(path)
     data = load_json(path)
     if not isinstance(data, dict) or not isinstance(data.get("new"), dict):
         raise InputError(
@@ -316,6 +345,7 @@ def read_controller_params(path: str | Path, controller: str | None = None) -> C
     InputError
         If the file is not YAML, names no such controller, or sets an implausible value.
     """
+    _small_file(path)
     data = load_yaml(path)
     blocks = _parameter_blocks(data)
     candidates = {

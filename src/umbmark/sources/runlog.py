@@ -31,6 +31,11 @@ file may hold one run or several (separated by rests near the start point).
     side_length: 4.0          # optional: the square's side, for UMBmark
     c_left: 1.0               # optional: wheel factors active during the runs
     c_right: 1.0
+    wheel_separation_multiplier: 1.0  # optional: active; the odometry used b times this
+
+Where ``c_left``, ``c_right`` or ``wheel_separation_multiplier`` are given, they are the
+parameters active during the runs: :func:`umbmark.calibrate` composes its correction with
+them unless a ``--current-...`` option says otherwise.
 
 Further keys (``truth``, ``notes``) are kept as they are and otherwise ignored.
 :mod:`umbmark.outputs.runlog` writes run logs.
@@ -40,7 +45,8 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Mapping
+from array import array
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,11 +56,12 @@ import numpy as np
 from ..errors import InputError
 from ..kinematics import WheelParams
 from ..recording import PoseSeries, Recording, WheelSeries
-from .text import content_lines, finite, load_yaml
+from .text import finite, first_content_line, iter_content_lines, load_yaml
 
 __all__ = [
     "FORMAT_NAME",
     "LOG_COLUMNS",
+    "MAX_SAMPLES",
     "METADATA_FILE",
     "LogMetadata",
     "is_runlog",
@@ -65,6 +72,9 @@ __all__ = [
 LOG_COLUMNS = ("time", "x", "y", "theta", "left", "right")
 METADATA_FILE = "metadata.yaml"
 FORMAT_NAME = "umbmark-runlog"
+#: Most rows (samples) read from one run file: 14 hours at 100 Hz, 83 minutes at 1 kHz.
+#: The file is read line by line and only the numbers are kept (56 bytes a row).
+MAX_SAMPLES = 5_000_000
 
 
 @dataclass(frozen=True)
@@ -80,12 +90,14 @@ class LogMetadata:
     c_left: float = 1.0
     c_right: float = 1.0
     extra: Mapping[str, Any] = field(default_factory=dict)
+    separation_multiplier: float = 1.0
+    active_recorded: bool = False
 
     @property
     def params(self) -> WheelParams:
-        """The nominal odometry parameters."""
+        """The odometry parameters of the runs (wheelbase times the multiplier)."""
         return WheelParams(
-            wheelbase=self.wheelbase,
+            wheelbase=self.wheelbase * self.separation_multiplier,
             wheel_diameter=self.wheel_diameter,
             encoder_resolution=self.encoder_resolution,
             gear_ratio=self.gear_ratio,
@@ -140,6 +152,7 @@ def read_metadata(path: str | Path) -> LogMetadata:
         "side_length",
         "c_left",
         "c_right",
+        "wheel_separation_multiplier",
     }
     metadata = LogMetadata(
         wheel_diameter=number("wheel_diameter"),
@@ -151,6 +164,10 @@ def read_metadata(path: str | Path) -> LogMetadata:
         c_left=number("c_left", 1.0),
         c_right=number("c_right", 1.0),
         extra={k: v for k, v in data.items() if k not in known},
+        separation_multiplier=number("wheel_separation_multiplier", 1.0),
+        active_recorded=any(
+            k in data for k in ("c_left", "c_right", "wheel_separation_multiplier")
+        ),
     )
     if metadata.wheel_diameter > 10 or metadata.wheelbase > 10:
         raise InputError(
@@ -178,13 +195,15 @@ def read_runlog(path: str | Path) -> tuple[list[Recording], LogMetadata]:
         )
     metadata = read_metadata(meta_path)
     if path.is_dir():
-        # Other CSVs may sit beside the logs (a runs table, say): take only run logs.
         candidates = sorted(folder.glob("*.csv"))
-        files = [f for f in candidates if _is_log_csv(f)]
         if not candidates:
             raise InputError("holds no .csv run files", source=folder)
+        files = [f for f in candidates if _is_log_csv(f)]
         if not files:
-            files = candidates[:1]  # reading it says what is wrong with it
+            raise InputError(
+                "holds runs tables but no run files (header time,x,y,theta,left,right)",
+                source=folder,
+            )
     else:
         files = [path]
     scale = 1.0 if metadata.wheel_data == "angles" else metadata.params.radians_per_pulse
@@ -193,21 +212,91 @@ def read_runlog(path: str | Path) -> tuple[list[Recording], LogMetadata]:
 
 
 def _is_log_csv(path: Path) -> bool:
-    """Whether the first non-comment line of ``path`` is a run-log header."""
-    try:
-        lines = content_lines(path)
-    except InputError:
+    """Whether ``path`` is a run file (its first non-comment line a run-log header).
+
+    A runs table beside the logs (a ``direction`` column) is not, and is left alone; any
+    other file is refused rather than left out without a word, for a run file that cannot
+    be read (another encoding, a misspelt header, another delimiter) would otherwise drop
+    its runs from the calibration.
+
+    Raises
+    ------
+    InputError
+        For a ``.csv`` that is neither: naming it and what its first line is.
+    """
+    if not path.is_file():
+        raise InputError("is not a file: a run-log folder holds run files (.csv)", source=path)
+    first = first_content_line(path)  # raises, naming the file, when it cannot be read
+    if first is None:
+        raise InputError("is empty: a run file needs the header time,x,y,theta,left,right",
+                         source=path)  # fmt: skip
+    cells = {c.strip().lower() for c in first[1].replace(";", ",").split(",")}
+    if set(LOG_COLUMNS) <= cells:
+        return True
+    if "direction" in cells:  # a runs table kept beside the logs
         return False
-    return bool(lines) and set(LOG_COLUMNS) <= {c.strip().lower() for c in lines[0][1].split(",")}
+    missing = [c for c in LOG_COLUMNS if c not in cells]
+    if len(missing) <= len(LOG_COLUMNS) // 2:  # a run file's header, short of columns
+        raise InputError(
+            f"missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} (a run "
+            f"file's header is {','.join(LOG_COLUMNS)})",
+            source=path,
+            row=first[0],
+        )
+    shown = first[1] if len(first[1]) <= 60 else first[1][:57] + "..."
+    raise InputError(
+        f"is not a run file: its header {shown!r} is not {','.join(LOG_COLUMNS)} (fix "
+        "it, or move the file out of the run-log folder)",
+        source=path,
+        row=first[0],
+    )
 
 
 def _read_log_csv(
     path: Path, scale: float, params: WheelParams, side_length: float | None
 ) -> Recording:
-    lines = content_lines(path)
-    if not lines:
+    lines = iter_content_lines(path)
+    try:
+        wheel_columns, truth_columns = _read_samples(path, lines, scale)
+    finally:
+        lines.close()
+    wheels = np.column_stack([np.frombuffer(c, dtype=np.float64) for c in wheel_columns])
+    truth = np.column_stack([np.frombuffer(c, dtype=np.float64) for c in truth_columns])
+    if wheels.shape[0] < 2:
+        raise InputError("has fewer than 2 rows with wheel data", source=path)
+    if not np.all(np.isfinite(wheels)):
+        raise InputError(
+            f"wheel angles overflow: the wheel data times {scale:.3g} rad per count are not "
+            "finite numbers",
+            source=path,
+        )
+    for name, series in (("wheel", wheels), ("ground-truth", truth)):
+        if series.shape[0] > 1 and not np.all(np.diff(series[:, 0]) > 0):
+            raise InputError(f"{name} time does not increase from row to row", source=path)
+    return Recording(
+        name=path.name,
+        wheels=WheelSeries(time=wheels[:, 0], angles=wheels[:, 1:]),
+        truth=PoseSeries(time=truth[:, 0], poses=truth[:, 1:]) if truth.shape[0] >= 2 else None,
+        params=params,
+        side_length=side_length,
+    )
+
+
+def _read_samples(
+    path: Path, lines: Iterator[tuple[int, str]], scale: float
+) -> tuple[list[array[float]], list[array[float]]]:
+    """The samples of a run file, one compact column each: wheels ``time, left, right``
+    (``left`` and ``right`` times ``scale``), ground truth ``time, x, y, theta``.
+
+    Raises
+    ------
+    InputError
+        Naming the row and the problem.
+    """
+    first = next(lines, None)
+    if first is None:
         raise InputError("is empty", source=path)
-    header_row, header_line = lines[0]
+    header_row, header_line = first
     header = [c.strip().lower() for c in next(csv.reader([header_line]))]
     missing = [c for c in LOG_COLUMNS if c not in header]
     if missing:
@@ -218,9 +307,18 @@ def _read_log_csv(
             row=header_row,
         )
     index = [header.index(c) for c in LOG_COLUMNS]
-    wheel_rows: list[list[float]] = []
-    truth_rows: list[list[float]] = []
-    for number, line in lines[1:]:
+    wheel: list[array[float]] = [array("d") for _ in range(3)]
+    truth: list[array[float]] = [array("d") for _ in range(4)]
+    samples = 0
+    for number, line in lines:
+        samples += 1
+        if samples > MAX_SAMPLES:
+            raise InputError(
+                f"has more than {MAX_SAMPLES} samples: umbmark reads at most {MAX_SAMPLES} "
+                "rows of a run file (split the recording into runs)",
+                source=path,
+                row=number,
+            )
         cells = next(csv.reader([line]))
         if len(cells) < len(header):
             raise InputError(
@@ -235,11 +333,12 @@ def _read_log_csv(
             try:
                 value = float(text)
             except ValueError:
+                shown = repr(text) if len(text) <= 40 else repr(text[:40]) + "..."
                 raise InputError(
-                    f"{name} {text!r} is not a number", source=path, row=number
+                    f"{name} {shown} is not a number", source=path, row=number
                 ) from None
             if not math.isfinite(value):
-                raise InputError(f"{name} is {text}", source=path, row=number)
+                raise InputError(f"{name} is {text[:40]}", source=path, row=number)
             values.append(value)
         t, x, y, theta, left, right = values
         if math.isnan(t):
@@ -249,26 +348,9 @@ def _read_log_csv(
         if not has_wheels and not has_truth:
             raise InputError("has neither wheel data nor ground truth", source=path, row=number)
         if has_wheels:
-            wheel_rows.append([t, left * scale, right * scale])
+            for column, value in zip(wheel, (t, left * scale, right * scale), strict=True):
+                column.append(value)
         if has_truth:
-            truth_rows.append([t, x, y, theta])
-    if len(wheel_rows) < 2:
-        raise InputError("has fewer than 2 rows with wheel data", source=path)
-    wheels = np.array(wheel_rows)
-    if not np.all(np.isfinite(wheels)):
-        raise InputError(
-            f"wheel angles overflow: the wheel data times {scale:.3g} rad per count are not "
-            "finite numbers",
-            source=path,
-        )
-    truth = np.array(truth_rows).reshape(-1, 4)
-    for name, array in (("wheel", wheels), ("ground-truth", truth)):
-        if array.shape[0] > 1 and not np.all(np.diff(array[:, 0]) > 0):
-            raise InputError(f"{name} time does not increase from row to row", source=path)
-    return Recording(
-        name=path.name,
-        wheels=WheelSeries(time=wheels[:, 0], angles=wheels[:, 1:]),
-        truth=PoseSeries(time=truth[:, 0], poses=truth[:, 1:]) if truth.shape[0] >= 2 else None,
-        params=params,
-        side_length=side_length,
-    )
+            for column, value in zip(truth, (t, x, y, theta), strict=True):
+                column.append(value)
+    return wheel, truth

@@ -27,6 +27,22 @@ Numbers are ASCII decimals (``-12.5``, ``1e-3``): ``1_000``, other scripts' digi
 ``0x10`` are refused, though Python would read them. A semicolon-separated table may use
 decimal commas (``-12,5``), as European spreadsheets write them; a row with more
 non-empty cells than the header is refused.
+
+The file is read line by line, keeping only the runs: at most :data:`MAX_ROWS` rows, each
+line at most :data:`umbmark.sources.text.MAX_LINE_CHARS` characters.
+
+Active parameters
+-----------------
+A comment line before the header may record the odometry parameters that were active
+while the runs were driven (``umbmark simulate -o`` writes one)::
+
+    # umbmark-active: wheelbase=0.34 c_L=1.0004 c_R=0.9996 wheel_separation_multiplier=1.0114
+
+``wheelbase`` is the configured ``b`` (ros2_control ``wheel_separation``) [m],
+``wheel_diameter`` the nominal ``D_n`` [m] (both optional), ``c_L`` and ``c_R`` the wheel
+factors (``left/right_wheel_radius_multiplier``), ``wheel_separation_multiplier`` the
+factor on ``b`` (optional, default 1). :func:`read_table_active` reads it;
+:func:`umbmark.calibrate` uses it where no ``--current-...`` option says otherwise.
 """
 
 from __future__ import annotations
@@ -34,20 +50,46 @@ from __future__ import annotations
 import csv
 import math
 import re
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..conventions import Direction, angle_to_rad, length_to_m
 from ..errors import InputError
 from ..runs import EndPose, Run
-from .text import content_lines
+from .params import LENGTH_RANGE, MULTIPLIER_RANGE
+from .text import iter_content_lines, iter_lines
 
-__all__ = ["OPTIONAL_COLUMNS", "REQUIRED_COLUMNS", "read_runs_table"]
+__all__ = [
+    "ACTIVE_TAG",
+    "MAX_ROWS",
+    "OPTIONAL_COLUMNS",
+    "REQUIRED_COLUMNS",
+    "RecordedActive",
+    "read_runs_table",
+    "read_table_active",
+]
 
 REQUIRED_COLUMNS = ("direction", "x_abs", "y_abs", "x_odo", "y_odo")
 #: Direction labels of straight runs (measured against a tape for the scale error E_s).
 STRAIGHT_LABELS = ("straight", "line")
 OPTIONAL_COLUMNS = ("theta_abs", "theta_odo")
 _ALIASES = {"x_calc": "x_odo", "y_calc": "y_odo", "theta_calc": "theta_odo"}
+#: Most runs (rows) read from one table: a UMBmark table has tens; beyond this bound a
+#: file is no runs table (and would cost memory for nothing).
+MAX_ROWS = 250_000
+#: The comment that records the active parameters (``# umbmark-active: c_L=1.0 ...``).
+ACTIVE_TAG = "umbmark-active:"
+#: Most lines before the header searched for :data:`ACTIVE_TAG`.
+MAX_PREAMBLE_LINES = 1000
+#: The keys of the active-parameter line, and whether each is a length [m].
+_ACTIVE_KEYS = {
+    "wheelbase": True,
+    "wheel_diameter": True,
+    "c_L": False,
+    "c_R": False,
+    "wheel_separation_multiplier": False,
+}
 #: Headings beyond this many radians are taken for degrees given as radians.
 _MAX_PLAUSIBLE_RAD = 4.0 * math.pi
 
@@ -74,10 +116,21 @@ def read_runs_table(
     InputError
         Naming the file, the row and the problem.
     """
-    lines = content_lines(path)
-    if not lines:
+    lines = iter_content_lines(path)
+    try:
+        return _read_rows(path, lines, unit, angle_unit)
+    finally:
+        lines.close()
+
+
+def _read_rows(
+    path: str | Path, lines: Iterator[tuple[int, str]], unit: str, angle_unit: str
+) -> list[Run]:
+    """The runs of a table whose content lines (header first) ``lines`` yields."""
+    first = next(lines, None)
+    if first is None:
         raise InputError("is empty: expected a header and one row per run", source=path)
-    header_number, header_line = lines[0]
+    header_number, header_line = first
     dialect = _sniff(header_line)
     comma = dialect.delimiter == ";"
     header = [_column_name(cell) for cell in next(csv.reader([header_line], dialect))]
@@ -106,8 +159,15 @@ def read_runs_table(
         if name in header
     }
 
-    runs = []
-    for number, line in lines[1:]:
+    runs: list[Run] = []
+    for number, line in lines:
+        if len(runs) >= MAX_ROWS:
+            raise InputError(
+                f"has more than {MAX_ROWS} runs: a UMBmark table has tens, and umbmark "
+                f"reads at most {MAX_ROWS} rows",
+                source=path,
+                row=number,
+            )
         cells = next(csv.reader([line], dialect))
         if len(cells) < len(header) or any(cell.strip() for cell in cells[len(header) :]):
             hint = (
@@ -182,6 +242,97 @@ def read_runs_table(
     if not runs:
         raise InputError("has a header but no runs", source=path)
     return runs
+
+
+@dataclass(frozen=True)
+class RecordedActive:
+    """The odometry parameters a source records as active while its runs were driven.
+
+    Attributes
+    ----------
+    c_left, c_right : float
+        Wheel factors ``c_L``, ``c_R``.
+    separation_multiplier : float
+        ``wheel_separation_multiplier``.
+    wheelbase : float or None
+        Configured wheelbase ``b`` [m] (before the multiplier), if recorded.
+    wheel_diameter : float or None
+        Nominal wheel diameter ``D_n`` [m], if recorded.
+    where : str
+        What recorded them, for messages (``"the table's header"``).
+    """
+
+    c_left: float
+    c_right: float
+    separation_multiplier: float = 1.0
+    wheelbase: float | None = None
+    wheel_diameter: float | None = None
+    where: str = "the source"
+
+
+def read_table_active(path: str | Path) -> RecordedActive | None:
+    """The active parameters a runs table's ``# umbmark-active:`` line records, if any.
+
+    Only the comment lines before the header are searched (at most
+    :data:`MAX_PREAMBLE_LINES` lines).
+
+    Raises
+    ------
+    InputError
+        If the file cannot be read, or the line is malformed (naming the row).
+    """
+    lines = iter_lines(path)
+    try:
+        for number, line in lines:
+            if number > MAX_PREAMBLE_LINES:
+                return None
+            text = line.strip()
+            if not text:
+                continue
+            if not text.startswith("#"):
+                return None  # the header: no active parameters recorded
+            body = text[1:].strip()
+            if body.startswith(ACTIVE_TAG):
+                return _parse_active(body[len(ACTIVE_TAG) :], path, number)
+        return None
+    finally:
+        lines.close()
+
+
+def _parse_active(text: str, path: str | Path, row: int) -> RecordedActive:
+    values: dict[str, float] = {}
+    for item in text.split():
+        key, equals, cell = item.partition("=")
+        if not equals or key not in _ACTIVE_KEYS:
+            shown = repr(item) if len(item) <= 40 else repr(item[:40]) + "..."
+            raise InputError(
+                f"{ACTIVE_TAG} {shown} is not one of {', '.join(f'{k}=' for k in _ACTIVE_KEYS)}",
+                source=path,
+                row=row,
+            )
+        if key in values:
+            raise InputError(f"{ACTIVE_TAG} gives {key} twice", source=path, row=row)
+        value = _number(cell, f"{ACTIVE_TAG} {key}", path, row)
+        low, high = LENGTH_RANGE if _ACTIVE_KEYS[key] else MULTIPLIER_RANGE
+        if not low <= value <= high:
+            unit = " m" if _ACTIVE_KEYS[key] else ""
+            raise InputError(
+                f"{ACTIVE_TAG} {key} = {value:g}{unit} is outside {low:g} to {high:g}{unit}",
+                source=path,
+                row=row,
+            )
+        values[key] = value
+    missing = [k for k in ("c_L", "c_R") if k not in values]
+    if missing:
+        raise InputError(f"{ACTIVE_TAG} has no {' and no '.join(missing)}", source=path, row=row)
+    return RecordedActive(
+        c_left=values["c_L"],
+        c_right=values["c_R"],
+        separation_multiplier=values.get("wheel_separation_multiplier", 1.0),
+        wheelbase=values.get("wheelbase"),
+        wheel_diameter=values.get("wheel_diameter"),
+        where="the table's header",
+    )
 
 
 def _sniff(header_line: str) -> type[csv.Dialect] | csv.Dialect:

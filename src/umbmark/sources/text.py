@@ -5,14 +5,17 @@ Files are UTF-8, with or without a byte-order mark, of at most :data:`MAX_TEXT_B
 (read with that bound, so ``/dev/zero`` or a FIFO cannot exhaust memory). YAML and JSON
 are parsed with bounds on nesting (:data:`MAX_DEPTH`), on YAML aliases
 (:data:`MAX_ALIASES`: an alias bomb cannot expand) and on the digits of a number
-(:data:`MAX_DIGITS`). Every failure to read becomes an :class:`umbmark.errors.InputError`
-naming the file.
+(:data:`MAX_DIGITS`). Line-oriented files (CSV) are read line by line
+(:func:`iter_lines`), each line at most :data:`MAX_LINE_CHARS` long, so that a reader's
+memory is what it keeps, not the text. Every failure to read becomes an
+:class:`umbmark.errors.InputError` naming the file (and the row).
 """
 
 from __future__ import annotations
 
 import json
 import math
+from collections.abc import Generator
 from pathlib import Path
 from typing import Any
 
@@ -24,22 +27,47 @@ __all__ = [
     "MAX_ALIASES",
     "MAX_DEPTH",
     "MAX_DIGITS",
+    "MAX_DOCUMENT_BYTES",
+    "MAX_LINE_CHARS",
     "MAX_TEXT_BYTES",
     "content_lines",
     "finite",
+    "first_content_line",
+    "iter_content_lines",
+    "iter_lines",
     "load_json",
     "load_yaml",
     "read_text",
 ]
 
-#: Largest text file read [bytes]: runs tables, logs and parameter files are far smaller.
+#: Largest text file read line by line [bytes]: runs tables and logs are far smaller.
 MAX_TEXT_BYTES = 512 * 1024 * 1024
+#: Largest file read whole (:func:`read_text`: YAML, JSON, message definitions) [bytes]:
+#: parameter files, metadata and results are kilobytes; a parser's objects for text this
+#: large take tens of times its size.
+MAX_DOCUMENT_BYTES = 16 * 1024 * 1024
 #: Deepest nesting of YAML or JSON read.
 MAX_DEPTH = 64
 #: Most YAML aliases (``*name``) read in one file.
 MAX_ALIASES = 16
 #: Most digits of a JSON number.
 MAX_DIGITS = 40
+#: Longest line of a CSV file read [characters]: a row of numbers is far shorter (and
+#: Python's csv module refuses cells over 128 KB with a traceback).
+MAX_LINE_CHARS = 64 * 1024
+#: Bytes read at a time by :func:`read_text`.
+_CHUNK_BYTES = 1024 * 1024
+
+
+def _unreadable(path: str | Path, exc: OSError | UnicodeDecodeError) -> InputError:
+    """The one line for a file that cannot be read as text."""
+    if isinstance(exc, FileNotFoundError):
+        return InputError("no such file", source=path)
+    if isinstance(exc, IsADirectoryError):
+        return InputError("is a directory, not a file", source=path)
+    if isinstance(exc, UnicodeDecodeError):
+        return InputError("is not a UTF-8 text file", source=path)
+    return InputError(f"cannot be read ({exc.strerror or exc})", source=path)
 
 
 def read_text(path: str | Path) -> str:
@@ -51,22 +79,96 @@ def read_text(path: str | Path) -> str:
         If the file cannot be read or is not text.
     """
     try:
+        # In chunks: ``read(MAX_DOCUMENT_BYTES + 1)`` would allocate the bound up front.
+        chunks, size = [], 0
         with Path(path).open("rb") as file:
-            raw = file.read(MAX_TEXT_BYTES + 1)
-        if len(raw) > MAX_TEXT_BYTES:
+            while size <= MAX_DOCUMENT_BYTES and (chunk := file.read(_CHUNK_BYTES)):
+                chunks.append(chunk)
+                size += len(chunk)
+        raw = b"".join(chunks)
+        del chunks
+        if len(raw) > MAX_DOCUMENT_BYTES:
             raise InputError(
-                f"is larger than {MAX_TEXT_BYTES // (1024 * 1024)} MB: not a file umbmark reads",
+                f"is larger than {MAX_DOCUMENT_BYTES // (1024 * 1024)} MB: not a file umbmark "
+                "reads whole (a parameter, metadata or result file is kilobytes)",
                 source=path,
             )
         return raw.decode("utf-8-sig")
-    except FileNotFoundError:
-        raise InputError("no such file", source=path) from None
-    except IsADirectoryError:
-        raise InputError("is a directory, not a file", source=path) from None
-    except UnicodeDecodeError:
-        raise InputError("is not a UTF-8 text file", source=path) from None
-    except OSError as exc:
-        raise InputError(f"cannot be read ({exc.strerror or exc})", source=path) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise _unreadable(path, exc) from None
+
+
+def iter_lines(
+    path: str | Path, max_line: int = MAX_LINE_CHARS
+) -> Generator[tuple[int, str], None, None]:
+    """The lines of a UTF-8 text file (a byte-order mark is fine), numbered from 1, read
+    one at a time: memory is one line, whatever the file's size.
+
+    Lines end at ``\n``, ``\r\n`` or ``\r``; the line ends are not part of the lines.
+
+    Raises
+    ------
+    InputError
+        If the file cannot be read, is not text, has a line longer than ``max_line``
+        characters (naming the row) or is longer than :data:`MAX_TEXT_BYTES`.
+    """
+    number, total = 0, 0
+    try:
+        with Path(path).open(encoding="utf-8-sig", newline=None) as file:
+            while True:
+                line = file.readline(max_line + 1)
+                if not line:
+                    return
+                number += 1
+                total += len(line)
+                if total > MAX_TEXT_BYTES:
+                    raise InputError(
+                        f"is larger than {MAX_TEXT_BYTES // (1024 * 1024)} MB: not a file "
+                        "umbmark reads",
+                        source=path,
+                    )
+                text = line.rstrip("\n")
+                if len(text) > max_line:
+                    raise InputError(
+                        f"is longer than {max_line} characters: not a line umbmark reads "
+                        "(a row of numbers is far shorter)",
+                        source=path,
+                        row=number,
+                    )
+                yield number, text
+    except (OSError, UnicodeDecodeError) as exc:
+        raise _unreadable(path, exc) from None
+
+
+def iter_content_lines(
+    path: str | Path, max_line: int = MAX_LINE_CHARS
+) -> Generator[tuple[int, str], None, None]:
+    """The lines of a text file that are neither blank nor ``#`` comments, numbered from 1,
+    read one at a time (see :func:`iter_lines`).
+
+    Raises
+    ------
+    InputError
+        As :func:`iter_lines`.
+    """
+    for number, line in iter_lines(path, max_line):
+        if line.strip() and not line.lstrip().startswith("#"):
+            yield number, line
+
+
+def first_content_line(path: str | Path) -> tuple[int, str] | None:
+    """The first line that is neither blank nor a ``#`` comment (a header), or None.
+
+    Raises
+    ------
+    InputError
+        As :func:`iter_lines`, for the lines up to it.
+    """
+    lines = iter_content_lines(path)
+    try:
+        return next(lines, None)
+    finally:
+        lines.close()
 
 
 def content_lines(path: str | Path) -> list[tuple[int, str]]:
@@ -75,13 +177,9 @@ def content_lines(path: str | Path) -> list[tuple[int, str]]:
     Raises
     ------
     InputError
-        If the file cannot be read or is not text.
+        If the file cannot be read or is not text, or a line is too long.
     """
-    return [
-        (number, line)
-        for number, line in enumerate(read_text(path).splitlines(), start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
+    return list(iter_content_lines(path))
 
 
 def finite(value: object) -> float | None:

@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 from ...errors import InputError
+from ..text import read_text
 from . import reader as bag_reader
 
 if TYPE_CHECKING:
@@ -411,12 +412,7 @@ def _read_definition(paths: Sequence[Path], msgtype: str) -> dict[str, Any]:
     parsed: dict[str, Any] = {}
     first: Path | None = None
     for path in paths:
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as err:
-            raise InputError(
-                f"cannot read the message definition: {bag_reader.one_line(err)}", source=path
-            ) from None
+        text = read_text(path)  # bounded; names the file when it cannot be read
         try:
             types = get_types_from_msg(text, msgtype)
         except Exception as err:  # rosbags' parser: TypesysError, or its grammar's errors

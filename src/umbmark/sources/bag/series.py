@@ -338,6 +338,12 @@ def _check_options(options: BagOptions, src: str) -> None:
     if tpr is not None and not (math.isfinite(tpr) and tpr > 0):
         fail(f"ticks_per_revolution must be a positive number, not {tpr!r}")
     _check_fields(options, src)
+    for side, given, names in (
+        ("left", options.left_joint, options.left_joints),
+        ("right", options.right_joint, options.right_joints),
+    ):
+        if given is not None and not names:
+            fail(f"the {side} wheel joint option (--{side}-joint) names no joint: {given!r:.60}")
     left = options.left_joints or DEFAULT_JOINTS[:1]
     right = options.right_joints or DEFAULT_JOINTS[1:]
     both = set(left) & set(right)
@@ -354,6 +360,13 @@ def _check_options(options: BagOptions, src: str) -> None:
         fail("give the odometry as a topic or as a transform, not both")
     if options.truth_topic is None and (options.tf_parent is None) != (options.tf_child is None):
         fail("a TF ground truth needs both tf_parent and tf_child")
+    if options.truth_topic is not None and (
+        options.tf_parent is not None or options.tf_child is not None
+    ):
+        fail(
+            "give the ground truth as a topic (--truth-topic) or as a TF pair (--tf-parent, "
+            "--tf-child), not both"
+        )
 
 
 def _check_fields(options: BagOptions, src: str) -> None:

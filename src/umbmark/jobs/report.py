@@ -1,0 +1,342 @@
+"""The report job: UMBmark passes on one robot as one self-contained HTML page.
+
+:func:`report` is what ``umbmark report`` does. Each source is one **pass** of UMBmark on
+the same robot, in the order driven: pass 1 the runs before any correction, pass 2 the
+runs driven after applying pass 1's correction, and so on. Every pass is calibrated on
+its own (:func:`umbmark.calibrate`); from pass 2 on, the parameters active during the
+runs are the previous pass's new ones. With a single pass of recorded runs the page also
+shows the *predicted* after: the same runs' wheel data integrated again with the new
+parameters (what :func:`umbmark.replay` does), which is a prediction, not a measured pass.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .. import __version__
+from ..benchmark import Benchmark, umbmark_benchmark
+from ..errors import InputError
+from ..kinematics import WheelParams
+from ..outputs.atomic import atomic_write_text
+from ..runs import Run
+from .calibrate import DEFAULT_METHOD, CalibrationReport, calibrate
+from .inputs import RunSource, source_name
+
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
+    from .inputs import SourceOptions
+    from .validate import ValidationReport
+
+__all__ = ["MAX_PASSES", "PassesReport", "PredictedPass", "predict_after", "report"]
+
+#: Most passes one page holds (the paper needed two; a few more are plausible).
+MAX_PASSES = 10
+_HTML = (".html", ".htm")
+
+
+@dataclass(frozen=True)
+class PredictedPass:
+    """A pass's recorded runs integrated again with its new parameters.
+
+    What the runs' return errors would have been had the odometry used the corrected
+    parameters: a prediction from the recorded wheel data, not a measured pass (the
+    robot steered by its old odometry, so the paths driven were those of the pass).
+
+    Attributes
+    ----------
+    runs : tuple of Run
+        The pass's square runs, their odometry end poses integrated anew.
+    benchmark : Benchmark
+        Their UMBmark figures (Eqs. 3.1-3.4).
+    params : WheelParams
+        The parameters integrated with (:meth:`CalibrationReport.new_params` applied to
+        the pass's own, as :func:`umbmark.replay` does).
+    """
+
+    runs: tuple[Run, ...]
+    benchmark: Benchmark
+    params: WheelParams
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres)."""
+        bench = self.benchmark
+        return {
+            "kind": "prediction: the recorded wheel data replayed with the new parameters",
+            "e_max_syst": bench.e_max_syst,
+            "worst_direction": bench.worst.direction.value,
+            "sem": bench.sem,
+            "second_pass_threshold": bench.second_pass_threshold,
+            **{f"cg_{c.direction.value}": [float(v) for v in c.cg] for c in bench.clusters},
+            "runs": [
+                {
+                    "label": run.label,
+                    "direction": run.direction.value,
+                    "eps_x": run.return_error[0],
+                    "eps_y": run.return_error[1],
+                }
+                for run in self.runs
+            ],
+            "parameters": {
+                "wheelbase": self.params.wheelbase,
+                "wheel_diameter_left": self.params.diameter_left,
+                "wheel_diameter_right": self.params.diameter_right,
+            },
+        }
+
+
+def predict_after(calibration: CalibrationReport) -> PredictedPass | None:
+    """The pass after ``calibration`` as its recorded wheel data predicts it.
+
+    Returns None unless the pass has UMBmark figures and every square run carries its
+    recorded wheel data (run logs, OptiOdom sessions, bags; not runs tables).
+    """
+    if calibration.benchmark is None or calibration.params is None:
+        return None
+    squares = [run for run in calibration.runs if run.kind == "square"]
+    if not squares or any(run.log is None for run in squares):
+        return None
+    params = calibration.new_params().applied_to(calibration.params)
+    runs = tuple(run.reintegrated(params) for run in squares)
+    try:
+        bench = umbmark_benchmark(runs)
+    except ValueError:  # pragma: no cover - the pass had both directions
+        return None
+    return PredictedPass(runs=runs, benchmark=bench, params=params)
+
+
+@dataclass(frozen=True, repr=False)
+class PassesReport:
+    """UMBmark passes on one robot, and what the page about them shows.
+
+    Attributes
+    ----------
+    passes : tuple of CalibrationReport
+        Each pass's calibration, in the order driven (pass 1 first).
+    predicted : PredictedPass or None
+        With a single pass of recorded runs: its runs replayed with the new parameters.
+    validation : ValidationReport or None
+        Held-out validation of the estimators on the last pass (``validate=True``).
+    command : str or None
+        The command line (or call) that made the report, for its provenance.
+    created : datetime
+        When the report was made (UTC).
+    """
+
+    passes: tuple[CalibrationReport, ...]
+    predicted: PredictedPass | None = None
+    validation: ValidationReport | None = None
+    command: str | None = None
+    created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
+
+    def __repr__(self) -> str:
+        figures = ", ".join("None" if e is None else f"{e * 1000:.1f} mm" for e in self.e_max_syst)
+        return f"PassesReport(passes={len(self.passes)}, e_max_syst=[{figures}])"
+
+    @property
+    def e_max_syst(self) -> tuple[float | None, ...]:
+        """``E_max,syst`` [m] of each pass (Eq. 3.4)."""
+        return tuple(p.e_max_syst for p in self.passes)
+
+    @property
+    def last(self) -> CalibrationReport:
+        """The last pass: its correction is the one to apply now."""
+        return self.passes[-1]
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres, radians): what ``report --json`` prints."""
+        return {
+            "umbmark_version": __version__,
+            "units": {"length": "m", "angle": "rad"},
+            "command": self.command,
+            "e_max_syst": list(self.e_max_syst),
+            "passes": [p.to_dict() for p in self.passes],
+            "predicted_after": None if self.predicted is None else self.predicted.to_dict(),
+            "validation": None if self.validation is None else self.validation.to_dict(),
+        }
+
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+    def html(self) -> str:
+        """The self-contained HTML page (what ``umbmark report -o`` writes)."""
+        from ..outputs.html_report import passes_html
+
+        return passes_html(self)
+
+    def write(self, output: str | os.PathLike[str]) -> Path:
+        """Write :meth:`html` to ``output`` (.html or .htm), atomically.
+
+        Raises
+        ------
+        InputError
+            For a name that is not .html, an input's name, or a file that cannot be
+            written.
+        """
+        inputs = [s for p in self.passes for s in p.sources]
+        path = check_output(output, inputs)
+        atomic_write_text(path, self.html())
+        return path
+
+
+def check_output(output: str | os.PathLike[str], inputs: list[str]) -> Path:
+    """Check the page's file name (``-o``) before anything is computed.
+
+    Raises
+    ------
+    InputError
+        If it does not end in .html or .htm, is an input or lies inside an input folder,
+        or cannot be written.
+    """
+    from .outputs import OutputPlan
+
+    path = Path(output)
+    target = path.resolve()
+    for name in inputs:
+        source = Path(name)
+        if not source.exists():
+            continue
+        source = source.resolve()
+        if target == source:
+            raise InputError(
+                f"-o {path} would overwrite an input ({source}); write the page elsewhere"
+            )
+        if source.is_dir() and target.is_relative_to(source):
+            raise InputError(
+                f"-o {path} is inside an input folder ({source}); write the page elsewhere"
+            )
+    if path.suffix.lower() not in _HTML:
+        raise InputError(f"-o {path}: the file name should end in .html or .htm")
+    OutputPlan.of(report=path)  # a writable folder, not a directory
+    return path
+
+
+def report(
+    source: RunSource,
+    *more_passes: RunSource,
+    side_length: float | None = None,
+    wheelbase: float | None = None,
+    method: str = DEFAULT_METHOD,
+    fit_truth_offset: bool = False,
+    validate: bool = False,
+    output: str | os.PathLike[str] | None = None,
+    force: bool = False,
+    command: str | None = None,
+    **options: Unpack[SourceOptions],
+) -> PassesReport:
+    """UMBmark passes on one robot as one self-contained HTML page.
+
+    What ``umbmark report`` does, with the same options as keywords (lengths in metres,
+    angles in radians).
+
+    Parameters
+    ----------
+    source, *more_passes : path or sequence of Run
+        One source per pass, in the order driven: pass 1 the runs before any correction,
+        pass 2 the runs driven after applying pass 1's correction, ... Each is read and
+        calibrated as :func:`umbmark.calibrate` does, and must hold square runs in both
+        directions.
+    side_length, wheelbase, method, fit_truth_offset, force :
+        As for :func:`umbmark.calibrate`, for every pass (``method="auto"`` chooses
+        for each pass on its own).
+    validate : bool
+        Add :func:`umbmark.validate` of the last pass (held-out replay of its recorded
+        runs) to the page.
+    output : path, optional
+        Write the page here (.html or .htm); checked before anything is read.
+    command : str, optional
+        The command line or call to state in the provenance.
+    **options
+        How to read the sources (:class:`umbmark.jobs.inputs.ReadOptions`). The
+        ``current_*`` parameters say what was active during pass 1; from pass 2 on, the
+        previous pass's new ``c_L``, ``c_R`` and ``wheel_separation_multiplier`` are taken
+        as active (they override ``current_*``; a note says so).
+
+    Returns
+    -------
+    PassesReport
+
+    Raises
+    ------
+    InputError
+        Bad input: one line naming the file (or flag) and the problem; a pass without
+        square runs in both directions is bad input here.
+
+    Examples
+    --------
+    >>> page = umbmark.report("before.csv", "after.csv", side_length=4, wheelbase=0.34,
+    ...                       unit="mm", output="umbmark.html")
+    >>> page.e_max_syst  # [m], before and after
+    """
+    sources = (source, *more_passes)
+    if len(sources) > MAX_PASSES:
+        raise InputError(f"{len(sources)} passes: give at most {MAX_PASSES}, one source each")
+    names = [source_name(s) for s in sources]
+    current = options.get("current_params")
+    if output is not None:
+        check_output(output, [*names, *([] if current is None else [str(current)])])
+    passes: list[CalibrationReport] = []
+    pass_options: SourceOptions = options
+    for k, (one, name) in enumerate(zip(sources, names, strict=True), 1):
+        note = None
+        if passes:
+            before = passes[-1].calibration
+            pass_options = options.copy()
+            pass_options["current_c_l"] = before.new_c_left
+            pass_options["current_c_r"] = before.new_c_right
+            pass_options["current_separation_multiplier"] = before.new_separation_multiplier
+            note = (
+                f"taken as active during the runs, pass {k - 1}'s new parameters "
+                f"(c_L {before.new_c_left:.6f}, c_R {before.new_c_right:.6f}, "
+                f"wheel_separation_multiplier {before.new_separation_multiplier:.6f})"
+            )
+        result = calibrate(
+            one,
+            side_length=side_length,
+            wheelbase=wheelbase,
+            method=method,
+            fit_truth_offset=fit_truth_offset,
+            force=force,
+            **pass_options,
+        )
+        if result.benchmark is None:
+            raise InputError(
+                f"pass {k}: UMBmark needs square runs in both directions (cw and ccw), at "
+                "least two each",
+                source=name,
+            )
+        if note is not None:
+            from dataclasses import replace
+
+            result = replace(result, notes=(*result.notes, note))
+        passes.append(result)
+    predicted = predict_after(passes[0]) if len(passes) == 1 else None
+    validation = None
+    if validate:
+        validation = _validate(sources[-1], side_length, wheelbase, pass_options)
+    page = PassesReport(
+        passes=tuple(passes), predicted=predicted, validation=validation, command=command
+    )
+    if output is not None:
+        page.write(output)
+    return page
+
+
+def _validate(
+    source: RunSource,
+    side_length: float | None,
+    wheelbase: float | None,
+    options: SourceOptions,
+) -> ValidationReport:
+    """:func:`umbmark.validate` of one pass's source (a path of recorded runs)."""
+    from .validate import validate as run_validation
+
+    if not isinstance(source, (str, os.PathLike)):
+        raise InputError("--validate replays recorded runs: give the pass as a file or folder")
+    return run_validation(source, side_length=side_length, wheelbase=wheelbase, **options)
