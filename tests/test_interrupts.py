@@ -221,3 +221,31 @@ def test_a_trajectory_fit_on_a_terminal_shows_it_is_working(tmp_path: Path) -> N
     assert screen.endswith(b"umbmark: interrupted\r\n"), screen[-200:]
     assert b"Traceback" not in screen
     assert left == []
+
+
+def test_ctrl_c_while_the_command_line_loads_is_one_line():
+    # Ctrl-C arriving while umbmark.cli.main (click, rich, numpy) is being imported: an
+    # import hook raises KeyboardInterrupt at that import, as the signal would.
+    code = (
+        "import sys\n"
+        "class Interrupt:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'umbmark.cli.main':\n"
+        "            raise KeyboardInterrupt\n"
+        "        return None\n"
+        "sys.meta_path.insert(0, Interrupt())\n"
+        "from umbmark._entry import main\n"
+        "main()\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert proc.returncode == 130
+    assert proc.stderr == "umbmark: interrupted\n"
+
+
+def test_the_console_script_starts_at_the_guarded_entry():
+    from importlib.metadata import entry_points
+
+    (script,) = [e for e in entry_points(group="console_scripts") if e.name == "umbmark"]
+    assert script.value == "umbmark._entry:main"

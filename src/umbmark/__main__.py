@@ -1,5 +1,5 @@
 """``python -m umbmark``: the same as the ``umbmark`` command."""
 
-from .cli.main import main
+from ._entry import main
 
 main()

@@ -59,7 +59,9 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
     drives it again (pass 1), is calibrated again and drives it a third time (pass 2).
     Prints per grid cell and estimator the share of robots at the noise floor after one
     and two passes (E_max,syst <= 3 x SEM), the share refused, the coverage of the 95 %
-    intervals of E_d and E_b, and the noise-free bias [ppm].
+    intervals of E_d and E_b, the noise-free bias [ppm], the spread of the first pass's
+    E_d and E_b about the truth [ppm] (what umbmark plan predicts) and the runs' scatter
+    per axis [mm] (what plan --scatter takes).
     """
     from .. import study as run_study
     from .common import console, progress_bar
@@ -73,7 +75,8 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
         return
     columns = ("slip [m^0.5]", "L [m]", "runs", "b [m]", "method", "floor 1 pass [%]",
                "floor 2 passes [%]", "refused [%]", "95 % cover E_d [%]",
-               "95 % cover E_b [%]", "bias E_d [ppm]", "bias E_b [ppm]")  # fmt: skip
+               "95 % cover E_b [%]", "bias E_d [ppm]", "bias E_b [ppm]",
+               "spread E_d [ppm]", "spread E_b [ppm]", "scatter [mm]")  # fmt: skip
     grid = table(
         f"{report.trials} robots per cell, E_d in 1 ± {report.E_d_spread:g}, E_b in 1 ± "
         f"{report.E_b_spread:g}; shares in %, noise-free bias in ppm",
@@ -87,12 +90,16 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
     def ppm(value: float) -> str:
         return "-" if not math.isfinite(value) else f"{value:+.1f}"
 
+    def size(value: float) -> str:
+        return "-" if not math.isfinite(value) else f"{value:.1f}"
+
     for r in report.results:
         cells = (
             f"{r.cell.slip:g}", f"{r.cell.side_length:g}", str(r.cell.runs),
             f"{r.cell.wheelbase:g}", r.method, pct(r.floor_after_one), pct(r.floor_after_two),
             pct(r.refused), pct(r.coverage_E_d), pct(r.coverage_E_b), ppm(r.bias_E_d_ppm),
-            ppm(r.bias_E_b_ppm),
+            ppm(r.bias_E_b_ppm), size(1e6 * r.spread_E_d), size(1e6 * r.spread_E_b),
+            size(1e3 * r.scatter),
         )  # fmt: skip
         row(grid, *cells)
     console().print(grid)

@@ -38,6 +38,7 @@ from .inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_int_option, check_leng
 from .simulate import SEED_RANGE
 
 if TYPE_CHECKING:
+    from ..benchmark import Benchmark
     from ..sim.experiments import Trial
     from ..sim.robot import VirtualRobot
 
@@ -79,7 +80,13 @@ class Cell:
 
 @dataclass(frozen=True)
 class CellResult:
-    """One estimator in one cell, over all trials (shares in 0..1, biases in ppm)."""
+    """One estimator in one cell, over all trials (shares in 0..1, biases in ppm).
+
+    ``spread_E_d`` and ``spread_E_b`` are the sample standard deviations of the first
+    pass's estimates about the robots' true values (what ``umbmark plan`` predicts as
+    ``se_E_d``, ``se_E_b``); ``scatter`` [m] is the runs' standard deviation per axis about
+    their clusters' centres, pooled over the trials (what ``plan --scatter`` takes).
+    """
 
     cell: Cell
     method: str
@@ -93,6 +100,9 @@ class CellResult:
     bias_E_b_ppm: float
     worst_bias_E_d_ppm: float
     worst_bias_E_b_ppm: float
+    spread_E_d: float = math.nan
+    spread_E_b: float = math.nan
+    scatter: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready figures (None where no trial gave one)."""
@@ -114,6 +124,9 @@ class CellResult:
                 "noise_free_bias_E_b_ppm": self.bias_E_b_ppm,
                 "noise_free_worst_E_d_ppm": self.worst_bias_E_d_ppm,
                 "noise_free_worst_E_b_ppm": self.worst_bias_E_b_ppm,
+                "spread_E_d": self.spread_E_d,
+                "spread_E_b": self.spread_E_b,
+                "scatter": self.scatter,
             }.items()
         }
 
@@ -162,10 +175,11 @@ class _Chunk:
 @dataclass(frozen=True)
 class _Outcome:
     """Per trial and method: refused, floor after 1 and 2 passes, covered E_d, E_b,
-    noise-free errors of E_d and E_b (NaN where refused)."""
+    noise-free errors of E_d and E_b, errors of E_d and E_b of the first pass (NaN where
+    refused), the runs' pooled variance per axis about their centres [m^2]."""
 
     method: str
-    values: np.ndarray  # (trials, 7)
+    values: np.ndarray  # (trials, 10)
 
 
 def study(
@@ -362,8 +376,9 @@ def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
 
     outcomes = []
     for method in chunk.methods:
-        values = np.full((chunk.trials, 7), np.nan)
+        values = np.full((chunk.trials, _COLUMNS), np.nan)
         values[:, 1:3] = 0.0  # a refused robot stays uncalibrated: not at the floor
+        values[:, 9] = [_pooled_variance(t.benchmark) for t in before]
         first = [calibrate(t, method) for t in before]
         ok = [k for k, c in enumerate(first) if c is not None]
         values[:, 0] = [c is None for c in first]
@@ -373,6 +388,8 @@ def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
             estimate = calibration[0].estimate
             truth = before[k].robot
             true_E_b = truth.wheelbase / truth.odometry.wheelbase
+            values[k, 7] = estimate.E_d - truth.E_d
+            values[k, 8] = estimate.E_b - true_E_b
             for col, name, true in ((3, "E_d", truth.E_d), (4, "E_b", true_E_b)):
                 interval = estimate.interval(name)
                 if interval is not None:
@@ -417,6 +434,24 @@ def _truth(trial: Trial) -> tuple[Calibration, VirtualRobot]:
     return calibration, exact
 
 
+#: Columns of :class:`_Outcome`'s values.
+_COLUMNS = 10
+
+
+def _pooled_variance(bench: Benchmark) -> float:
+    """The runs' variance per axis about their clusters' centres [m^2], pooled over both
+    axes and both clusters (``n - 1`` degrees of freedom per cluster and axis)."""
+    squares = sum(float(np.sum(np.square(c.errors - c.cg))) for c in bench.clusters)
+    dof = sum(2 * (len(c.errors) - 1) for c in bench.clusters)
+    return squares / dof if dof > 0 else math.nan
+
+
+def _spread(column: np.ndarray) -> float:
+    """Sample standard deviation of the finite values (NaN for fewer than two)."""
+    known = column[np.isfinite(column)]
+    return float(np.std(known, ddof=1)) if known.size > 1 else math.nan
+
+
 def _share(column: np.ndarray) -> float:
     known = column[np.isfinite(column)]
     return float(known.mean()) if known.size else math.nan
@@ -441,4 +476,7 @@ def _summarize(cell: Cell, method: str, values: np.ndarray) -> CellResult:
         bias_E_b_ppm=float(mean_bias[1]),
         worst_bias_E_d_ppm=float(worst[0]),
         worst_bias_E_b_ppm=float(worst[1]),
+        spread_E_d=_spread(values[:, 7]),
+        spread_E_b=_spread(values[:, 8]),
+        scatter=math.sqrt(float(np.nanmean(values[:, 9]))),
     )
