@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from .calibrate import calibrate as _calibrate_command
 from .common import command_line
 from .options import OUTPUTS, Command, apply, option, source_options
+
+if TYPE_CHECKING:
+    from ..benchmark import Benchmark
 
 __all__ = ["report"]
 
@@ -71,33 +74,27 @@ def report(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     if json_out:
         click.echo(page.to_json(), nl=False)
         return
-    rows = []
-    for k, one in enumerate(page.passes, 1):
-        bench = one.benchmark
-        if bench is None:  # pragma: no cover - report() refuses such passes
-            continue
-        rows.append(
-            [
-                f"pass {k}",
-                one.source,
-                f"{bench.cw.n} / {bench.ccw.n}",
-                f"{bench.e_max_syst * 1000:.1f}",
-                f"{bench.second_pass_threshold * 1000:.1f}",
-                "yes" if bench.second_pass_recommended else "no",
-            ]
-        )
+
+    def line(name: str, source: str, bench: Benchmark) -> list[str]:
+        return [
+            name,
+            source,
+            f"{bench.cw.n} / {bench.ccw.n}",
+            f"{bench.e_max_syst * 1000:.1f}",
+            f"{bench.second_pass_threshold * 1000:.1f}",
+            "yes" if bench.second_pass_recommended else "no",
+        ]
+
+    rows = [
+        line(f"pass {k}", one.source, one.benchmark)
+        for k, one in enumerate(page.passes, 1)
+        if one.benchmark is not None  # report() refuses passes without one
+    ]
     if page.predicted is not None:
-        bench = page.predicted.benchmark
         rows.append(
-            [
-                "predicted after",
-                "pass 1 replayed with the new parameters",
-                f"{bench.cw.n} / {bench.ccw.n}",
-                f"{bench.e_max_syst * 1000:.1f}",
-                f"{bench.second_pass_threshold * 1000:.1f}",
-                "yes" if bench.second_pass_recommended else "no",
-            ]
-        )
+            line("predicted after", "pass 1 replayed with the new parameters",
+                 page.predicted.benchmark)
+        )  # fmt: skip
     head = ["", "source", "runs cw / ccw", "E_max,syst [mm]", "3 x SEM [mm]", "another pass"]
     console().print(table("UMBmark passes", head, rows, left={"", "source"}))
 
