@@ -198,36 +198,20 @@ def render_calibration(
 def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:
     """The trajectory fit's own figures: radii, wheelbase(s), time and truth offsets,
     residuals."""
-    for key, label, note in (
-        ("r_left", "left wheel radius [mm]", "fitted"),
-        ("r_right", "right wheel radius [mm]", "fitted"),
-        ("wheelbase", "wheelbase [mm]", "fitted: the single set exported"),
-        ("arc_wheelbase", "wheelbase on straights and arcs [mm]", "scrub model"),
-        ("spot_wheelbase", "wheelbase turning on the spot [mm]", "scrub model"),
+    # Fitted lengths [mm] and the time offset [ms]: value x 1000 in every row.
+    for key, label, note, digits in (
+        ("r_left", "left wheel radius [mm]", "fitted", ".3f"),
+        ("r_right", "right wheel radius [mm]", "fitted", ".3f"),
+        ("wheelbase", "wheelbase [mm]", "fitted: the single set exported", ".3f"),
+        ("arc_wheelbase", "wheelbase on straights and arcs [mm]", "scrub model", ".3f"),
+        ("spot_wheelbase", "wheelbase turning on the spot [mm]", "scrub model", ".3f"),
+        ("time_offset", "time offset [ms]", "> 0: ground truth lags the wheels", ".1f"),
+        ("truth_offset_x", "tracked point forward [mm]", "fitted: truth offset d_x", ".1f"),
+        ("truth_offset_y", "tracked point left [mm]", "fitted: truth offset d_y", ".1f"),
     ):
         if key in comp:
-            _row(
-                errors,
-                label,
-                _plus_minus(comp[key] * _MM, se.get(key, math.nan) * _MM, ".3f"),
-                note,
-            )
-    if "time_offset" in comp:
-        offset = _plus_minus(
-            comp["time_offset"] * _MM, se.get("time_offset", math.nan) * _MM, ".1f"
-        )
-        _row(errors, "time offset [ms]", offset, "> 0: ground truth lags the wheels")
-    for key, label, note in (
-        ("truth_offset_x", "tracked point forward [mm]", "fitted: truth offset d_x"),
-        ("truth_offset_y", "tracked point left [mm]", "fitted: truth offset d_y"),
-    ):
-        if key in comp:
-            _row(
-                errors,
-                label,
-                _plus_minus(comp[key] * _MM, se.get(key, math.nan) * _MM, ".1f"),
-                note,
-            )
+            value = _plus_minus(comp[key] * _MM, se.get(key, math.nan) * _MM, digits)
+            _row(errors, label, value, note)
     where = "along the runs" if "samples" in comp else "at the runs' ends"
     counted = f"{comp['runs']:.0f} runs" + (
         f", {comp['samples']:.0f} samples" if "samples" in comp else ""
