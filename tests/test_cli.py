@@ -247,3 +247,26 @@ def test_the_method_choices_are_the_librarys_methods():
 
     method = next(p for p in cli.commands["calibrate"].params if p.name == "method")
     assert list(typing.cast("click.Choice", method.type).choices) == [*METHODS, "auto"]
+
+
+def test_help_layout_does_not_depend_on_arguments_having_help_records():
+    """click 8.5 gave arguments a help record; our sections must not move because of it."""
+    import click
+
+    from umbmark.cli.options import OUTPUTS, TEST, Command, option
+
+    class ArgumentWithHelp(click.Argument):  # what click >= 8.5 does
+        def get_help_record(self, ctx: click.Context) -> tuple[str, str]:
+            return (self.make_metavar(ctx), "")
+
+    @click.command(cls=Command)
+    @click.argument("sources", nargs=-1, cls=ArgumentWithHelp)
+    @option("--side-length", section=TEST, help="side")
+    @option("--json", section=OUTPUTS, is_flag=True, help="json")
+    def cmd(**_: object) -> None:
+        """Doc."""
+
+    text = cmd.get_help(click.Context(cmd))
+    sections = re.findall(r"^([A-Z][^\n:]*):$", text, flags=re.MULTILINE)
+    assert sections == ["The square test", "Outputs", "Other options"]
+    assert "SOURCES" not in text.split("Options:")[-1].split("The square test:")[1]

@@ -46,15 +46,24 @@ class SectionOption(click.Option):
 
 
 class Command(click.Command):
-    """A command whose ``--help`` lists its options by section, in declaration order."""
+    """A command whose ``--help`` lists its options by section, in declaration order.
+
+    Sections come in the order their first option was declared, "Other options" (where
+    ``--help`` is) last. Only options are listed: the docstring describes the arguments
+    (click 8.5 began giving arguments a help record of their own; the layout must not
+    depend on the click version).
+    """
 
     def format_options(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         sections: dict[str, list[tuple[str, str]]] = {}
         for param in self.get_params(ctx):
-            record = param.get_help_record(ctx)
+            record = param.get_help_record(ctx) if isinstance(param, click.Option) else None
             if record is not None:
                 section = getattr(param, "section", OTHER)
                 sections.setdefault(section, []).append(record)
+        others = sections.pop(OTHER, None)
+        if others is not None:
+            sections[OTHER] = others
         for name, rows in sections.items():
             with formatter.section(name):
                 formatter.write_dl(rows)
