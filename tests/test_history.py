@@ -135,7 +135,7 @@ def test_drift_is_flagged(tmp_path: Path) -> None:
     raw.close()
     verdict = History(db).drift("r1")
     assert verdict is not None
-    assert verdict.startswith("drift between calibrations 1 and 3: E_b")
+    assert verdict.startswith("drift between calibrations 1 and 3: robot E_b")
 
 
 def _record_ten(table: str, db: str) -> None:
@@ -224,7 +224,7 @@ def test_trend_figure_draws_the_recorded_calibrations(tmp_path: Path) -> None:
     days = [date2num(dt.datetime(2026, 1, 5, 10)), date2num(dt.datetime(2026, 3, 10, 15, 30))]
     days.append(date2num(dt.datetime(2026, 6, 20, 8)))
     for ax, name, column, tolerance in ((e_d_ax, "E_d", 0, 3e-4), (e_b_ax, "E_b", 1, 2e-3)):
-        line = _line(ax, name)
+        line = _line(ax, f"robot {name}")  # all on the nominal parameters: as measured
         assert list(line.get_xdata()) == pytest.approx(days)
         # The estimates of noisy runs: within a few standard errors of the truth, which
         # moves by 0.002 (E_d) and 0.01 (E_b) between calibrations.
@@ -293,7 +293,7 @@ def test_trend_figure_of_one_calibration(tmp_path: Path) -> None:
     table, db = _table(tmp_path), tmp_path / "history.sqlite3"
     report = _calibrate(table, db)
     fig = umbmark.history("r1", history=db).figure()
-    assert list(_line(fig.axes[0], "E_d").get_ydata()) == pytest.approx([report.estimate.E_d])
+    assert list(_line(fig.axes[0], "robot E_d").get_ydata()) == pytest.approx([report.estimate.E_d])
     lo, hi = fig.axes[2].get_xlim()
     assert hi - lo == pytest.approx(1.0)  # one instant: a day's span around it
     assert "drift" not in fig._suptitle.get_text()

@@ -10,6 +10,11 @@ compensated robot is a "new" uncompensated robot with different initial paramete
 - ``c_R,new = c_R,active * 2 / (1/E_d + 1)`` (Eq. 4.32)
 - ``wheel_separation_multiplier,new = multiplier,active * E_b`` and
   ``b_new = E_b * b_effective`` (Eq. 4.26).
+
+The new parameters are also what the robot *is* (:meth:`ActiveParams.robot_errors`): its
+``D_R / D_L = c_R,new / c_L,new`` and its effective wheelbase over the nominal one, the new
+multiplier. A pass on odometry already corrected measures errors near 1; composed with the
+parameters active during it, they give the robot's own again.
 """
 
 from __future__ import annotations
@@ -55,6 +60,37 @@ class ActiveParams:
         """The wheelbase the odometry used [m]: ``b * separation_multiplier``."""
         return self.wheelbase * self.separation_multiplier
 
+    def compose(self, E_d: float, E_b: float, scale: float = 1.0) -> tuple[float, float, float]:
+        """The parameters that correct errors measured on these ones (Eqs. 4.31, 4.32 and
+        4.26, multiplied into the active factors).
+
+        Parameters
+        ----------
+        E_d, E_b : float
+            Errors measured by runs driven with these parameters.
+        scale : float
+            ``E_s``, when known (both wheel factors are multiplied by it).
+
+        Returns
+        -------
+        c_left, c_right, separation_multiplier : float
+            The new absolute ``c_L``, ``c_R`` and ``wheel_separation_multiplier``.
+        """
+        c_left, c_right = correction_factors(E_d)
+        return (
+            self.c_left * (float(c_left) * scale),
+            self.c_right * (float(c_right) * scale),
+            self.separation_multiplier * E_b,
+        )
+
+    def robot_errors(self, E_d: float, E_b: float) -> tuple[float, float]:
+        """What the robot is, from errors measured on these parameters: its ``D_R / D_L``
+        and its effective wheelbase over the nominal ``b``, from :meth:`compose`
+        (``c_R,new / c_L,new = E_d c_R / c_L`` and the new multiplier ``E_b x multiplier``).
+        """
+        c_left, c_right, separation = self.compose(E_d, E_b)
+        return c_right / c_left, separation
+
 
 @dataclass(frozen=True)
 class Calibration:
@@ -79,20 +115,23 @@ class Calibration:
         """Right correction factor of this pass, Eq. 4.32 (times ``E_s`` when known)."""
         return float(correction_factors(self.estimate.E_d)[1]) * self.scale
 
+    def _new(self) -> tuple[float, float, float]:
+        return self.active.compose(self.estimate.E_d, self.estimate.E_b, self.scale)
+
     @property
     def new_c_left(self) -> float:
         """Absolute left factor to configure: ``c_L,active * c_L``."""
-        return self.active.c_left * self.c_L
+        return self._new()[0]
 
     @property
     def new_c_right(self) -> float:
         """Absolute right factor to configure: ``c_R,active * c_R``."""
-        return self.active.c_right * self.c_R
+        return self._new()[1]
 
     @property
     def new_separation_multiplier(self) -> float:
         """Absolute ``wheel_separation_multiplier`` to configure: ``active * E_b``."""
-        return self.active.separation_multiplier * self.estimate.E_b
+        return self._new()[2]
 
     @property
     def wheelbase_corrected(self) -> float:

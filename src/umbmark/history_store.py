@@ -8,6 +8,9 @@ version (``PRAGMA user_version``) and is brought up to date by :data:`MIGRATIONS
 in order; it is written in WAL mode with a busy timeout, so that several processes may
 record into it at once.
 
+What the robot is, as opposed to what a pass measured relative to the parameters active
+during it, and whether that drifts: :mod:`umbmark.history_drift`.
+
 The default file is ``$UMBMARK_HISTORY``, else ``$XDG_DATA_HOME/umbmark/history.sqlite3``
 (``~/.local/share/umbmark/history.sqlite3``).
 """
@@ -17,7 +20,6 @@ from __future__ import annotations
 import datetime as dt
 import hashlib
 import json
-import math
 import os
 import sqlite3
 from collections.abc import Callable, Iterator, Sequence
@@ -27,12 +29,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import InputError
+from .history_drift import DEFINITIONS, DRIFT_MIN_CALIBRATIONS, DRIFT_SIGMAS, drift_verdict
 
 if TYPE_CHECKING:
+    from .calibration import ActiveParams
     from .jobs.calibrate import CalibrationReport
     from .jobs.inputs import SourceOptions
 
 __all__ = [
+    "DEFINITIONS",
+    "DRIFT_MIN_CALIBRATIONS",
+    "DRIFT_SIGMAS",
     "MIGRATIONS",
     "SCHEMA_VERSION",
     "CalibrationRecord",
@@ -47,10 +54,6 @@ __all__ = [
 BUSY_TIMEOUT = 30.0
 #: How far a robot's nominal wheelbase or wheel diameter may differ (relative).
 IDENTITY_TOLERANCE = 1e-6
-#: Fewest calibrations the drift check needs.
-DRIFT_MIN_CALIBRATIONS = 3
-#: The change that counts as drift, in standard errors of the change.
-DRIFT_SIGMAS = 3.0
 
 
 def _migrate_1(db: sqlite3.Connection) -> None:
@@ -153,6 +156,8 @@ class CalibrationRecord:
     inputs : list of dict
         ``{"name": ..., "sha256": ...}`` per input (``sha256`` None for runs in memory).
     E_d, E_b : float
+        What the pass measured, relative to the parameters active during it
+        (:attr:`robot_E_d`, :attr:`robot_E_b`: what the robot is).
     E_s : float or None
     e_max_syst : float or None
         [m]
@@ -192,51 +197,56 @@ class CalibrationRecord:
             "active": self.active,
             "new": self.new,
             "applied": self.applied,
+            "robot_E_d": self.robot_E_d,
+            "robot_E_b": self.robot_E_b,
+            "robot_standard_errors": self.robot_standard_errors,
+            "robot_wheelbase": self.robot_wheelbase,
         }
 
+    @property
+    def active_params(self) -> ActiveParams:
+        """The parameters active during the pass."""
+        from .calibration import ActiveParams
 
-def drift_verdict(calibrations: Sequence[CalibrationRecord]) -> str | None:
-    """Whether ``E_d`` or ``E_b`` drifted between the first and the last calibration.
+        a = self.active
+        return ActiveParams(
+            wheelbase=float(a["wheelbase"]),
+            c_left=float(a["c_L"]),
+            c_right=float(a["c_R"]),
+            separation_multiplier=float(a["wheel_separation_multiplier"]),
+            wheel_diameter=None if a.get("wheel_diameter") is None else float(a["wheel_diameter"]),
+        )
 
-    A change counts as drift when it exceeds :data:`DRIFT_SIGMAS` times its standard
-    error, ``sqrt(se_first^2 + se_last^2)`` from the two reports' standard errors.
+    @property
+    def robot_E_d(self) -> float:
+        """What the robot is: its ``D_R / D_L``, the pass's ``E_d`` composed with the active
+        ``c_L``, ``c_R`` as calibrate composes them (:meth:`ActiveParams.robot_errors
+        <umbmark.calibration.ActiveParams.robot_errors>`: ``E_d c_R,active / c_L,active``)."""
+        return self.active_params.robot_errors(self.E_d, self.E_b)[0]
 
-    Parameters
-    ----------
-    calibrations : sequence of CalibrationRecord
-        A robot's calibrations, oldest first.
+    @property
+    def robot_E_b(self) -> float:
+        """What the robot is: its effective wheelbase over the nominal one, the pass's
+        ``E_b`` composed with the active ``wheel_separation_multiplier`` as calibrate
+        composes them (``E_b x multiplier,active``, the new multiplier)."""
+        return self.active_params.robot_errors(self.E_d, self.E_b)[1]
 
-    Returns
-    -------
-    str or None
-        One line for people; None with fewer than :data:`DRIFT_MIN_CALIBRATIONS`.
-    """
-    if len(calibrations) < DRIFT_MIN_CALIBRATIONS:
-        return None
-    first, last = calibrations[0], calibrations[-1]
-    drifted: list[str] = []
-    steady: list[str] = []
-    unknown: list[str] = []
-    for name in ("E_d", "E_b"):
-        a, b = float(getattr(first, name)), float(getattr(last, name))
-        se_a, se_b = first.standard_errors.get(name), last.standard_errors.get(name)
-        if se_a is None or se_b is None or not math.isfinite(se_a + se_b):
-            unknown.append(name)
-            continue
-        se = math.hypot(se_a, se_b)
-        change = b - a
-        text = f"{name} {a:.6f} -> {b:.6f} ({change:+.2e}, {DRIFT_SIGMAS:g} x se = "
-        text += f"{DRIFT_SIGMAS * se:.2e})"
-        (drifted if abs(change) > DRIFT_SIGMAS * se else steady).append(text)
-    span = f"between calibrations {first.id} and {last.id}"
-    parts = []
-    if drifted:
-        parts.append(f"drift {span}: {'; '.join(drifted)}")
-    if steady:
-        parts.append(f"{'no drift' if not drifted else 'within noise'} {span}: {'; '.join(steady)}")
-    if unknown:
-        parts.append(f"no standard errors to judge {', '.join(unknown)}")
-    return ". ".join(parts)
+    @property
+    def robot_wheelbase(self) -> float:
+        """The robot's effective wheelbase [m]: :attr:`robot_E_b` x the nominal one."""
+        return self.robot_E_b * float(self.active["wheelbase"])
+
+    @property
+    def robot_standard_errors(self) -> dict[str, float]:
+        """Standard errors of :attr:`robot_E_d` and :attr:`robot_E_b` (keys ``E_d``,
+        ``E_b``, where the pass has them): the pass's, scaled as the composition scales
+        the value (the active parameters are exact)."""
+        out = {}
+        for name, robot in (("E_d", self.robot_E_d), ("E_b", self.robot_E_b)):
+            se = self.standard_errors.get(name)
+            if se is not None:
+                out[name] = float(se) * abs(robot / float(getattr(self, name)))
+        return out
 
 
 def _sha256(path: Path) -> str | None:
@@ -261,14 +271,8 @@ def _now() -> str:
     return dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
-def _same(a: float | None, b: float | None) -> bool:
-    if a is None or b is None:
-        return a is None and b is None
+def _same(a: float, b: float) -> bool:
     return abs(a - b) <= IDENTITY_TOLERANCE * max(abs(a), abs(b), 1e-12)
-
-
-def _fmt(value: float | None) -> str:
-    return "unknown" if value is None else f"{value:g} m"
 
 
 class History:
@@ -371,7 +375,9 @@ class History:
         Raises
         ------
         InputError
-            When ``robot`` exists with another nominal wheelbase or wheel diameter.
+            When ``robot`` exists with another nominal wheelbase or wheel diameter (a
+            diameter unknown on either side is no difference; the first one known is the
+            robot's from then on).
         """
         if not robot.strip():
             raise InputError("--robot: give a non-empty name")
@@ -390,6 +396,11 @@ class History:
                 )
             else:
                 self._check(robot, report, (row[0], row[1]))
+                if row[1] is None and active.wheel_diameter is not None:
+                    db.execute(  # the first calibration that knows it says the diameter
+                        "UPDATE robots SET wheel_diameter = ? WHERE name = ?",
+                        (active.wheel_diameter, robot),
+                    )
             cursor = db.execute(
                 "INSERT INTO calibrations (robot, time, method, inputs, E_d, E_b, E_s, "
                 "e_max_syst, standard_errors, active, new, applied) "
@@ -410,6 +421,19 @@ class History:
             )
             return int(cursor.lastrowid or 0)
 
+    def recorded_line(self, robot: str, id: int) -> str:
+        """One line saying that calibration ``id`` of ``robot`` was recorded, and how to
+        mark it applied."""
+        import shlex
+
+        given = self.path != default_history_path()
+        where = f" --history {shlex.quote(str(self.path))}" if given else ""
+        return (
+            f"recorded as calibration {id} of robot {robot} in {self.path}; once its new "
+            f"parameters are configured on the robot: umbmark history {shlex.quote(robot)}"
+            f"{where} --applied {id}"
+        )
+
     def check_identity(self, robot: str, report: CalibrationReport) -> None:
         """Refuse a calibration whose nominal parameters are not those of ``robot``.
 
@@ -417,7 +441,8 @@ class History:
         ------
         InputError
             When ``robot`` is known with another nominal wheelbase or wheel diameter
-            (an unknown robot passes: :meth:`record` adds it).
+            (an unknown robot passes: :meth:`record` adds it; so does a diameter unknown
+            to the robot or to the calibration).
         """
         if not robot.strip():
             raise InputError("--robot: give a non-empty name")
@@ -433,10 +458,10 @@ class History:
             ("wheelbase", nominal[0], active.wheelbase),
             ("wheel diameter", nominal[1], active.wheel_diameter),
         ):
-            if not _same(theirs, ours):
+            if theirs is not None and ours is not None and not _same(theirs, ours):
                 raise InputError(
                     f"this calibration is not robot {robot}: nominal {what} "
-                    f"{_fmt(ours)} vs {_fmt(theirs)} (give another --robot name)",
+                    f"{ours:g} m vs {theirs:g} m (give another --robot name)",
                     source=self.path,
                 )
 

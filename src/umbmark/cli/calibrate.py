@@ -81,7 +81,7 @@ __all__ = ["calibrate"]
             section=TEST,
             help="Record the calibration in the history under this robot's name (umbmark "
             "history NAME lists them); refused when the robot is known with another nominal "
-            "wheelbase or wheel diameter.",
+            "wheelbase or wheel diameter (one unknown on either side is no difference).",
         ),
         option(
             "--history",
@@ -145,7 +145,7 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     active during the runs, and the ros2_control overlay.
     """
     from .. import calibrate as run_calibration
-    from .common import command_line, console, warn, working, wrote
+    from .common import command_line, console, note, warn, working, wrote
 
     options["command"] = command_line(sys.argv)
     method = str(options.get("method"))
@@ -154,12 +154,14 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
             report = run_calibration(*sources, **options)
     else:
         report = run_calibration(*sources, **options)
-    for note in report.notes:
-        warn(note)
+    for line in report.notes:
+        warn(line)
     for message in report.warnings:
         warn(message)
     outputs = ("output", "yaml", "ros1_yaml", "plot", "tum", "report")
     wrote(options[key] for key in outputs if options[key])
+    if report.recorded is not None:
+        note(report.recorded)
     if json_out:
         click.echo(report.to_json(), nl=False)
     else:

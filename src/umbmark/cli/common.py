@@ -19,6 +19,7 @@ __all__ = [
     "command_line",
     "console",
     "error_line",
+    "note",
     "progress_bar",
     "reading_bar",
     "warn",
@@ -50,6 +51,11 @@ def error_line(message: str) -> None:
 def warn(message: str) -> None:
     """Print one warning line to stderr."""
     sys.stderr.write(f"umbmark: warning: {' '.join(message.split())}\n")
+
+
+def note(message: str) -> None:
+    """Print one line of what was done to stderr (a success, never a ``warning:``)."""
+    sys.stderr.write(f"umbmark: {' '.join(message.split())}\n")
 
 
 def wrote(paths: Iterable[str | Path]) -> None:

@@ -23,22 +23,26 @@ __all__ = ["history"]
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print one JSON object (metres)."),
         option("--plot", section=OUTPUTS, type=click.Path(),
-               help="Draw the robot's E_d, E_b (95 % error bars) and E_max,syst over time "
-               "to a .png, .svg or .pdf file."),
+               help="Draw the robot's E_d, E_b (composed with the active parameters; 95 % "
+               "error bars) and the passes' E_max,syst over time to a .png, .svg or .pdf "
+               "file."),
     ]
 )  # fmt: skip
 def history(robot: str | None, json_out: bool, **options: Any) -> None:
     """The robots' calibration history: without ROBOT, the robots; with it, its
-    calibrations (calibrate --robot records them) and whether E_d or E_b drift; --plot
-    draws their trend.
+    calibrations (calibrate --robot records them) and whether the robot's E_d or E_b
+    drift; --plot draws their trend. A pass measures E_d, E_b relative to the parameters
+    active during it; the robot's are those composed with the active parameters (what
+    calibrate configures), and drift compares these.
     """
     from .. import history as run_history
-    from .common import console, warn, wrote
+    from ..history_store import DEFINITIONS
+    from .common import console, note, wrote
     from .render import row, table
 
     report = run_history(robot, **options)
-    for note in report.notes:
-        warn(note)
+    for line in report.notes:
+        note(line)
     wrote([options["plot"]] if options["plot"] else [])
     if json_out:
         click.echo(report.to_json(), nl=False)
@@ -69,7 +73,17 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
         return
     grid = table(
         f"Calibrations of {report.robot}",
-        ["id", "time (UTC)", "method", "E_d", "E_b", "E_max,syst [mm]", "applied"],
+        [
+            "id",
+            "time (UTC)",
+            "method",
+            "pass E_d (measured)",
+            "pass E_b (measured)",
+            "robot E_d (composed)",
+            "robot E_b (composed)",
+            "E_max,syst [mm]",
+            "applied",
+        ],
         left=("time (UTC)", "method", "applied"),
     )
     for c in report.calibrations:
@@ -81,10 +95,15 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
             c.method,
             f"{c.E_d:.6f}",
             f"{c.E_b:.6f}",
+            f"{c.robot_E_d:.6f}",
+            f"{c.robot_E_b:.6f}",
             e_max,
             "yes" if c.applied else "no",
         )
     out.print(grid)
+    for name in ("E_d", "E_b", "robot_E_d", "robot_E_b"):
+        label = name.replace("_", " ", 1) if name.startswith("robot") else f"pass {name}"
+        out.print(f"{label}: {DEFINITIONS[name]}.", markup=False)
     if report.drift is not None:
         out.print(report.drift, markup=False)
     else:

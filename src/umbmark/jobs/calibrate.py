@@ -102,6 +102,8 @@ class CalibrationReport:
     created : datetime
         When the calibration was made (UTC); stamped into the parameter files' comments,
         not into :meth:`to_dict`.
+    recorded : str or None
+        Where the calibration was recorded in the history (``robot``), for people.
     """
 
     sources: tuple[str, ...]
@@ -118,6 +120,7 @@ class CalibrationReport:
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
     robot: str | None = None
     command: str | None = field(default=None, compare=False)
+    recorded: str | None = field(default=None, compare=False)
 
     def __repr__(self) -> str:
         est = self.estimate
@@ -575,7 +578,8 @@ def calibrate(
         report=report,
     )  # fmt: skip
     if store is not None and robot is not None:
-        store.record(robot, result, [source_name(s) for s in sources if source_name(s) != "runs"])
+        id = store.record(robot, result, [n for n in map(source_name, sources) if n != "runs"])
+        result = replace(result, recorded=store.recorded_line(robot, id))
     return result
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
-from ..history_store import CalibrationRecord, History, RobotRecord
+from ..history_store import DEFINITIONS, CalibrationRecord, History, RobotRecord
 from .outputs import OutputPlan
 
 if TYPE_CHECKING:
@@ -37,8 +37,11 @@ class HistoryReport:
     calibrations : tuple of CalibrationRecord
         The robot's calibrations, oldest first.
     drift : str or None
-        The drift verdict (3 calibrations or more).
+        The drift verdict (3 calibrations or more) on what the robot is, each pass's
+        errors composed with the parameters active during it
+        (:func:`umbmark.history_store.drift_verdict`).
     notes : tuple of str
+        What was done, for people (a calibration marked applied).
     nominal : RobotRecord or None
         The robot asked for, with its nominal wheelbase and wheel diameter.
     """
@@ -60,6 +63,7 @@ class HistoryReport:
             "history": self.path,
             "calibrations": [c.to_dict() for c in self.calibrations],
             "drift": self.drift,
+            "definitions": dict(DEFINITIONS),
         }
         if self.notes:
             out["notes"] = list(self.notes)
@@ -70,7 +74,8 @@ class HistoryReport:
         return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def figure(self) -> Figure:
-        """The robot's E_d, E_b and E_max,syst over time (what ``--plot`` draws).
+        """The robot's E_d, E_b (composed with the active parameters, and as each pass
+        measured them) and E_max,syst over time (what ``--plot`` draws).
 
         Raises
         ------
@@ -125,7 +130,8 @@ def history(
     applied : int, optional
         Mark this calibration of ``robot`` as applied first.
     plot : path, optional
-        Draw the robot's E_d, E_b and E_max,syst over time (:meth:`HistoryReport.figure`)
+        Draw the robot's E_d, E_b and the passes' E_max,syst over time
+        (:meth:`HistoryReport.figure`)
         to a .png, .svg or .pdf file (written atomically, never onto the history file).
 
     Returns

@@ -51,6 +51,8 @@ _STYLE = {
 _MM = 1000.0
 #: Characters per line of a cluster panel's title (a long source path is wrapped).
 _PANEL_TITLE_WIDTH = 60
+#: The legend of what the passes measured (relative to their active parameters).
+_PASS_LABEL = "measured by the pass (relative to its active parameters)"
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
@@ -285,10 +287,14 @@ _TITLE_CHARS_PER_INCH = 11
 def history_figure(robot: RobotRecord, calibrations: Sequence[CalibrationRecord]) -> Figure:
     """A robot's calibrations over time: ``E_d``, ``E_b`` and ``E_max,syst``, stacked.
 
-    Three panels share the time axis (UTC). ``E_d`` and ``E_b`` carry error bars of
-    ±1.96 standard errors where the calibration has them; ``E_max,syst`` is in
-    millimetres. Calibrations marked applied are filled markers, the others open ones.
-    The title names the robot and its nominal parameters and, when ``E_d`` or ``E_b``
+    Three panels share the time axis (UTC). ``E_d`` and ``E_b`` are what the robot is,
+    each pass's errors composed with the parameters active during it
+    (:attr:`~umbmark.history_store.CalibrationRecord.robot_E_d`), with error bars of
+    ±1.96 standard errors where the calibration has them; when some pass ran on
+    parameters other than the nominal ones, what the passes measured is drawn too (grey
+    crosses). ``E_max,syst`` (each pass's, on its active parameters) is in millimetres.
+    Calibrations marked applied are filled markers, the others open ones. The title
+    names the robot and its nominal parameters and, when the robot's ``E_d`` or ``E_b``
     drifted (:func:`umbmark.history_store.drift_verdict`), says so.
 
     Parameters
@@ -314,12 +320,18 @@ def history_figure(robot: RobotRecord, calibrations: Sequence[CalibrationRecord]
     applied = np.array([c.applied for c in calibrations])
     fig = Figure(figsize=(8.0, 8.0), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
-    for ax, name, label in (
-        (axes[0], "E_d", "E_d = D_R / D_L\n[dimensionless]"),
-        (axes[1], "E_b", "E_b = b_actual / b_nominal\n[dimensionless]"),
+    # Measured on other parameters than the nominal ones: the passes differ from the robot.
+    corrected = any(
+        float(c.active[key]) != 1.0
+        for c in calibrations
+        for key in ("c_L", "c_R", "wheel_separation_multiplier")
+    )
+    for ax, name, ratio, active in (
+        (axes[0], "E_d", "D_R / D_L", "c_R / c_L"),
+        (axes[1], "E_b", "b_actual / b_nominal", "wheel_separation_multiplier"),
     ):
-        values = np.array([float(getattr(c, name)) for c in calibrations])
-        se = np.array([_finite_or_nan(c.standard_errors.get(name)) for c in calibrations])
+        values = np.array([float(getattr(c, f"robot_{name}")) for c in calibrations])
+        se = np.array([_finite_or_nan(c.robot_standard_errors.get(name)) for c in calibrations])
         has_se = np.isfinite(se)
         if np.any(has_se):
             ax.errorbar(
@@ -331,9 +343,17 @@ def history_figure(robot: RobotRecord, calibrations: Sequence[CalibrationRecord]
                 capsize=4,
                 label="±1.96 standard errors (95 %)",
             )
-        _trend(ax, times, values, applied, name)
+        _trend(ax, times, values, applied, f"robot {name}")
+        if corrected:
+            measured = [float(getattr(c, name)) for c in calibrations]
+            ax.plot(times, measured, "x", color="0.45", label=_PASS_LABEL, zorder=2)
         ax.ticklabel_format(axis="y", useOffset=False)
-        ax.set_ylabel(label)
+        ax.set_ylabel(f"robot {name} = {ratio}\n[dimensionless]")
+        ax.set_title(
+            f"robot {name}: each pass's {name} composed with the active {active}",
+            fontsize="small",
+            loc="left",
+        )
     e_max = np.array([np.nan if c.e_max_syst is None else c.e_max_syst * _MM for c in calibrations])
     ax = axes[2]
     known = np.isfinite(e_max)
@@ -355,7 +375,7 @@ def history_figure(robot: RobotRecord, calibrations: Sequence[CalibrationRecord]
             va="center",
             transform=ax.transAxes,
         )
-    ax.set_ylabel("E_max,syst [mm]")
+    ax.set_ylabel("E_max,syst of the pass [mm]")
     ax.set_xlabel("calibration time (UTC)")
     ax.xaxis_date(tz=dt.timezone.utc)
     locator = dates.AutoDateLocator(tz=dt.timezone.utc)  # type: ignore[no-untyped-call]
@@ -366,7 +386,7 @@ def history_figure(robot: RobotRecord, calibrations: Sequence[CalibrationRecord]
         ax.set_xlim(times[0] - 0.5, times[0] + 0.5)
     for each in axes:
         each.grid(True, color="0.92")
-    handles = [h for h in axes[0].get_legend_handles_labels()[0] if h.get_label() != "E_d"]
+    handles = [h for h in axes[0].get_legend_handles_labels()[0] if h.get_label() != "robot E_d"]
     axes[0].legend(handles=handles, loc="best", fontsize="x-small")
     diameter = (
         "wheel diameter unknown"
