@@ -52,7 +52,7 @@ Method = Literal[
     "paper", "exact", "heading", "endpose", "endpoints", "trajectory", "trajectory-scrub"
 ]
 #: The estimator used unless another is asked for: chosen by the evidence of
-#: ``umbmark study`` and ``umbmark validate`` (README, "Choosing an estimator").
+#: ``umbmark study`` and ``umbmark validate`` (``docs/estimators.md``).
 DEFAULT_METHOD: Method = "exact"
 #: The estimators, in the order the documentation lists them.
 METHODS: tuple[Method, ...] = (
@@ -480,7 +480,7 @@ def calibrate(
         Wheelbase ``b`` the odometry used during the runs [m] (ros2_control
         ``wheel_separation``); required for runs tables unless ``current_params`` has it.
     method : str
-        Estimator (README, "Estimators"). Square tests: ``paper`` (Eqs. 4.20-4.27 as
+        Estimator (``docs/estimators.md``). Square tests: ``paper`` (Eqs. 4.20-4.27 as
         printed), ``exact`` (the default: the exact square geometry inverted), ``heading``
         (final headings, Jung & Chung 2011), ``endpose`` (maximum likelihood on every
         run's end pose). Recorded runs of any shape: ``endpoints`` (least squares on where
