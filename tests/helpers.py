@@ -7,11 +7,13 @@ inputs (files, run end points) from first principles.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
+#: The shared data beside the checkout, or where UMBMARK_SHARED says (a worktree elsewhere).
+SHARED = Path(os.environ.get("UMBMARK_SHARED") or ROOT.parent / "shared")
 OPTIODOM = SHARED / "data" / "optiodom"
 
 

@@ -8,7 +8,9 @@
 2. Leave one session out on day 2506 (circles; straights with spot turns): fit on the
    other nine sessions, replay the one left out.
 3. What the fit finds on every session alone: wheel diameters, wheelbase(s), the time
-   offset between wheels and ground truth, with their standard errors.
+   offset between wheels and ground truth, with their standard errors, and whether the
+   session identifies the scrub model's turn-rate term (scrub k <= 3). The scrub model is
+   fitted even where it is not identified, to show what it would find.
 
 Run: python tools/trajectory_on_real_data.py [--data ../shared/data/optiodom] [--no-loo]
 """
@@ -22,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import umbmark
+from umbmark.estimators.motions import MotionCoverage, motion_coverage
 from umbmark.estimators.trajectory import (
     StartPose,
     TrajectoryFit,
@@ -59,7 +62,20 @@ class Sessions:
         start_pose: StartPose = "fitted",
     ) -> TrajectoryFit:
         logs = [run.log for name in names for run in self.runs(name)[0] if run.log]
-        return fit_trajectories(logs, self.runs(names[0])[1], model=model, start_pose=start_pose)
+        # The scrub model is fitted even where the runs do not identify its turn-rate term
+        # (check_coverage=False): this tool studies what it would find.
+        return fit_trajectories(
+            logs,
+            self.runs(names[0])[1],
+            model=model,
+            start_pose=start_pose,
+            check_coverage=False,
+        )
+
+    def coverage(self, name: str) -> MotionCoverage:
+        """What the session's runs hold."""
+        runs, params = self.runs(name)
+        return motion_coverage([run.log for run in runs if run.log], params)
 
     def replay(self, name: str, apply: Apply) -> float:
         """Mean end-position error [mm] of session ``name`` replayed with ``apply``."""
@@ -88,9 +104,19 @@ def replay_table(sessions: Sessions) -> None:
             row(f"paper, from {short(source)}", calibrated.applied_to)
         for model in ("diff", "scrub"):
             for start_pose in ("fitted", "truth"):
-                fit = sessions.fit([source], model, start_pose)
                 label = f"trajectory {model}, start {start_pose}, from {short(source)}"
+                try:
+                    fit = sessions.fit([source], model, start_pose)
+                except ValueError as exc:
+                    print(f"{label:52s}refused: {exc}")
+                    continue
                 row(label, fit.params)
+        cover = sessions.coverage(source)
+        identified = "identified" if cover.identifies_scrub else "NOT identified (extrapolates)"
+        print(
+            f"  {short(source)} holds {cover.held_text()}: scrub term {identified}, k = "
+            f"{cover.inflation:.1f}"
+        )
     print()
 
 
@@ -121,26 +147,36 @@ def per_session(sessions: Sessions) -> None:
     print("3. Each session alone (start pose fitted): +- one standard error")
     print(
         f"{'session':16s}{'runs':>5s}{'D_L [mm]':>16s}{'D_R [mm]':>16s}{'b [mm]':>16s}"
-        f"{'b_arc [mm]':>16s}{'b_spot [mm]':>16s}{'offset [ms]':>14s}"
+        f"{'b_arc [mm]':>16s}{'b_spot [mm]':>16s}{'offset [ms]':>14s}{'scrub k':>9s}"
     )
     for name in sessions.names:
         diff = sessions.fit([name])
-        scrub = sessions.fit([name], "scrub")
-        se, se_s = diff.standard_errors, scrub.standard_errors
-        assert scrub.spot_wheelbase is not None
+        se = diff.standard_errors
 
         def pm(value: float, error: float, width: int = 16, digits: int = 2) -> str:
             return f"{value:.{digits}f}+-{error:.{digits}f}".rjust(width)
 
+        try:
+            scrub = sessions.fit([name], "scrub")
+            se_s = scrub.standard_errors
+            assert scrub.spot_wheelbase is not None
+            scrub_cells = pm(1000 * scrub.wheelbase, 1000 * se_s["wheelbase"]) + pm(
+                1000 * scrub.spot_wheelbase, 1000 * se_s["spot_wheelbase"]
+            )
+        except ValueError:  # the scrub model's lengths are not pinned at all
+            scrub_cells = f"{'-':>16s}{'-':>16s}"
         print(
             f"{short(name):16s}{diff.runs:5d}"
             + pm(2000 * diff.r_left, 2000 * se["r_left"], digits=3)
             + pm(2000 * diff.r_right, 2000 * se["r_right"], digits=3)
             + pm(1000 * diff.wheelbase, 1000 * se["wheelbase"])
-            + pm(1000 * scrub.wheelbase, 1000 * se_s["wheelbase"])
-            + pm(1000 * scrub.spot_wheelbase, 1000 * se_s["spot_wheelbase"])
+            + scrub_cells
             + pm(1000 * diff.time_offset, 1000 * se["time_offset"], 14, 1)
+            + f"{sessions.coverage(name).inflation:9.1f}"
         )
+    print("scrub k: how much less certain the scrub model's wheelbase is than one wheelbase")
+    print("somewhere between straight and spot turns; above 3 its turn-rate term is not")
+    print("identified by the session (umbmark.estimators.motions), and b_arc extrapolates.")
     print()
 
 

@@ -105,7 +105,10 @@ def render_calibration(
     else:
         _render_benchmark(report, bench, console)
 
-    errors = table(f"Systematic errors: {_METHOD_NAMES.get(est.method, est.method)}", ["", "value"])
+    name = _METHOD_NAMES.get(est.method, est.method)
+    if est.method == "trajectory-scrub" and "spot_wheelbase" not in est.components:
+        name += ": not identified, one wheelbase fitted (see the warning)"
+    errors = table(f"Systematic errors: {name}", ["", "value"])
     column(errors, "", text=True)
     _row(
         errors,

@@ -41,7 +41,8 @@ def validate(sources: tuple[str, ...], json_out: bool, methods: str | None, **op
     out in turn (with one source: each run), the rest calibrated with every estimator,
     and the held-out runs replayed with each calibration. Prints the mean end-position
     error of the held-out runs [mm] per estimator and recommends the lowest; calibrate
-    --method auto uses it.
+    --method auto uses it. The figures speak only for the kinds of motion held out
+    (straight legs, arcs, turns on the spot): the output says which.
     """
     from .. import validate as run_validation
     from .common import console, progress_bar, warn
@@ -70,6 +71,7 @@ def validate(sources: tuple[str, ...], json_out: bool, methods: str | None, **op
     row(grid, "mean", *("-" if m is None else f"{1000 * m:.2f}" for m in means), bold=True)
     out = console()
     out.print(grid)
+    out.print(f"What these figures cover: {report.coverage}.", soft_wrap=True)
     best = report.recommended
     if best is None:
         out.print("No estimator predicts the held-out runs better than the nominal parameters.")

@@ -8,7 +8,9 @@ From the runs of a square path test:
 - ``endpose``: maximum likelihood on every run's end pose (positions and headings),
   exact geometry, weighted by the runs' scatter.
 
-From recorded trajectories of any shape: :mod:`umbmark.estimators.trajectory`.
+From recorded trajectories of any shape: :mod:`umbmark.estimators.trajectory`; what such
+recordings hold (straight legs, arcs, turns on the spot) and whether that identifies the
+scrub model's turn-rate term: :mod:`umbmark.estimators.motions`.
 
 Estimators never print: doubts come back as ``ErrorEstimate.warnings``. Each method judges
 the plausibility of the runs for itself (:mod:`umbmark.estimators.checks`).

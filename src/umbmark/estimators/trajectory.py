@@ -38,10 +38,10 @@ as much as each of its two coordinates. The weights are reported
 ``r_L, r_R, b``). ``"scrub"``: the effective wheelbase of each sampling interval depends on
 its turning share ``w = |dU_R - dU_L| / (|dU_R| + |dU_L|)``, ``b_eff = b_arc + (b_spot -
 b_arc) w`` (:mod:`umbmark.kinematics`; parameters ``r_L, r_R, b_arc, b_spot``), so that
-on-the-spot turns and arcs need not share one wheelbase. ``b_arc`` is pinned only by
-runs with arcs or straights that turn, ``b_spot`` only by turns on the spot: a session
-of squares alone (straight legs, spot turns) leaves ``b_arc`` loose, and its standard
-error says so.
+on-the-spot turns and arcs need not share one wheelbase. Its turn-rate term is pinned
+only by turns at turning shares far apart (:mod:`umbmark.estimators.motions`): squares
+alone (straight legs, spot turns) leave ``b_arc`` to the weaving of the legs, with a
+small standard error that does not see the extrapolation to arcs; the fit refuses them.
 
 **Time offset** (``fit_time_offset``). One time offset ``delta`` [s] between wheel data
 and ground truth, shared by all runs, is fitted as a nuisance: the odometry at wheel time
@@ -101,6 +101,7 @@ from ..kinematics import WheelParams, chord_step, turning_share
 from ..model import alpha_from_E_b, beta_from_E_d
 from ..recording import RunLog
 from .base import ErrorEstimate
+from .motions import SCRUB_ADVICE, SCRUB_FALLBACK, motion_coverage
 
 __all__ = [
     "DEFAULT_MAX_TIME_OFFSET",
@@ -618,32 +619,6 @@ def _check_pinned(jac: FloatArray, names: Sequence[str]) -> None:
         )
 
 
-#: Least share of the recorded wheel travel the scrub model needs in turns on the spot and
-#: in arcs, each.
-_MIN_MOTION_SHARE = 0.02
-
-
-def _check_both_motions(logs: Sequence[RunLog]) -> None:
-    """Refuse, before fitting, runs without both turns on the spot and arcs."""
-    from ..kinematics import turning_share
-
-    spot = arcs = total = 0.0
-    for log in logs:
-        step = np.abs(np.diff(log.wheel_angles, axis=0))
-        travel = step.sum(axis=1)
-        # The wheels' rotation stands for their travel: only its split between them counts.
-        share = turning_share(*np.diff(log.wheel_angles, axis=0).T)
-        total += float(travel.sum())
-        spot += float(travel[share > 0.9].sum())
-        arcs += float(travel[(share > 0.02) & (share <= 0.9)].sum())
-    if total <= 0.0 or min(spot, arcs) < _MIN_MOTION_SHARE * total:
-        raise ValueError(
-            "the scrub model needs both turns on the spot and arcs: "
-            f"{100 * spot / max(total, 1e-300):.0f} % of the wheel travel turns on the spot, "
-            f"{100 * arcs / max(total, 1e-300):.0f} % is on arcs"
-        )
-
-
 #: Largest relative standard error of a length the fit may report: beyond, the recorded
 #: motion does not pin it down.
 _LOOSE = 0.05
@@ -709,6 +684,7 @@ def fit_trajectories(
     max_time_offset: float = DEFAULT_MAX_TIME_OFFSET,
     fit_truth_offset: bool = False,
     max_truth_offset: float = DEFAULT_MAX_TRUTH_OFFSET,
+    check_coverage: bool = True,
 ) -> TrajectoryFit:
     """Fit the wheel radii and wheelbase(s) to recorded runs (module documentation).
 
@@ -736,6 +712,9 @@ def fit_trajectories(
         truth is the axle centre's.
     max_truth_offset : float
         Bound of ``|truth_offset_x|`` and ``|truth_offset_y|`` [m].
+    check_coverage : bool
+        ``"scrub"``: refuse runs whose motion does not identify the turn-rate term
+        (:mod:`umbmark.estimators.motions`); False fits it anyway (to study it).
 
     Returns
     -------
@@ -745,8 +724,9 @@ def fit_trajectories(
     ------
     ValueError
         If the runs have too little recorded motion to pin the parameters down (for the
-        truth offset: no run turns by :data:`MIN_OFFSET_TURN`), or the fitted truth
-        offset reaches its bound.
+        truth offset: no run turns by :data:`MIN_OFFSET_TURN`; for the scrub model: turns
+        at too narrow a range of turning shares), or the fitted truth offset reaches its
+        bound.
     """
     if model not in MODELS:
         raise ValueError(f"unknown trajectory model {model!r}; use diff or scrub")
@@ -756,8 +736,10 @@ def fit_trajectories(
         raise ValueError(f"max time offset must be > 0 s, got {max_time_offset!r}")
     if not (0.0 < max_truth_offset < math.inf):
         raise ValueError(f"max truth offset must be > 0 m, got {max_truth_offset!r}")
-    if model == "scrub":
-        _check_both_motions(logs)
+    if model == "scrub" and check_coverage:
+        unidentified = motion_coverage(logs, start).scrub_problem()
+        if unidentified is not None:
+            raise ValueError(f"{unidentified}: {SCRUB_ADVICE}")
     data = _prepare(logs)
     if fit_truth_offset:
         _check_turning(data)
@@ -889,7 +871,8 @@ def trajectory_estimate(
         ``(D_L, D_R, b)`` (the ``"diff"`` fit: a controller such as ros2_control's has one
         wheelbase), and the components add the scrub fit's ``arc_wheelbase`` and
         ``spot_wheelbase`` with their standard errors: what the richer model finds for
-        arcs and for turns on the spot.
+        arcs and for turns on the spot. Runs that do not identify its turn-rate term
+        (:mod:`umbmark.estimators.motions`) give the single set alone, with a warning.
     fit_time_offset : bool
         Fit a time offset between wheels and ground truth.
     start_pose : {"fitted", "truth"}
@@ -960,10 +943,10 @@ def trajectory_estimate(
         for key in ("truth_offset_x", "truth_offset_y"):
             standard_errors[key] = single.standard_errors[key]
     fit = single
-    method = "trajectory"
-    if model == "scrub":
-        method = "trajectory-scrub"
-        fit = fit_trajectories(logs, active, model="scrub", **options)
+    method = "trajectory-scrub" if model == "scrub" else "trajectory"
+    problem = motion_coverage(logs, active).scrub_problem() if model == "scrub" else None
+    if model == "scrub" and problem is None:
+        fit = fit_trajectories(logs, active, model="scrub", check_coverage=False, **options)
         assert fit.spot_wheelbase is not None
         components.update(
             arc_wheelbase=fit.wheelbase,
@@ -987,6 +970,7 @@ def trajectory_estimate(
         components=components,
         standard_errors=standard_errors,
         dof=float(single.clusters - 1),
+        warnings=() if problem is None else (f"{problem}; {SCRUB_FALLBACK}",),
     )
     return estimate, fit
 

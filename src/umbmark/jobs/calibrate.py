@@ -274,6 +274,11 @@ class CalibrationReport:
         model = self._model()
         if model is not None:
             out["model"] = {"kind": "scrub", **model}
+        logs = [run.log for run in self.runs if run.log is not None]
+        if self.params is not None and logs:
+            from ..estimators.motions import motion_coverage
+
+            out["motions"] = motion_coverage(logs, self.params).to_dict()
         if self.associations:
             out["time_association"] = {name: a.to_dict() for name, a in self.associations}
         if self.notes:
@@ -561,7 +566,9 @@ def calibrate(
         check_square_geometry(read.side_length, read.active.effective_wheelbase)
     chosen, note = method, None
     if method == "auto":
-        chosen, note = _auto_method(sources, read, side_length, wheelbase, options, force=force)
+        from .auto import auto_method
+
+        chosen, note = auto_method(sources, read, side_length, wheelbase, options, force=force)
     result = _calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
     result = replace(result, robot=robot, command=command)
     if note is not None:
@@ -598,43 +605,6 @@ def _sessions_disagree(parts: Sequence[Runs], *, fit_truth_offset: bool = False)
         except ValueError:
             continue  # a source too small to fit alone says nothing against the others
     return disagreement_warnings(fits)
-
-
-def _auto_method(
-    sources: Sequence[RunSource],
-    read: Runs,
-    side_length: float | None,
-    wheelbase: float | None,
-    options: SourceOptions,
-    *,
-    force: bool = False,
-) -> tuple[str, str]:
-    """The estimator that predicts held-out recorded runs best, and a note saying so.
-
-    ``force`` is the caller's: the validation reads the sources as the calibration does.
-    """
-    if read.params is None or any(run.log is None for run in read.runs):
-        return DEFAULT_METHOD, (
-            f"method auto: runs tables cannot be replayed to compare estimators; "
-            f"calibrated with the default, {DEFAULT_METHOD}"
-        )
-    from .validate import validate
-
-    checked = validate(
-        *(Path(str(s)) for s in sources),
-        side_length=side_length,
-        wheelbase=wheelbase,
-        force=force,
-        **options,
-    )
-    best = checked.recommended
-    if best is None:
-        return DEFAULT_METHOD, (
-            "method auto: no estimator predicted held-out runs better than the nominal "
-            f"parameters ({checked.scheme}); calibrated with the default, {DEFAULT_METHOD}"
-        )
-    ranking = ", ".join(f"{name} {1000 * error:.1f} mm" for name, error in checked.ranking)
-    return best, f"method auto: {best}, by held-out end error ({checked.scheme}): {ranking}"
 
 
 def _calibrate_runs(

@@ -6,6 +6,12 @@ the rest with every estimator that can use them, replays the held-out runs with 
 calibration, and compares their mean end-position errors: the held-out error is what a
 user will see on runs the calibration never saw. The estimator with the lowest mean
 held-out error is recommended; ``umbmark calibrate --method auto`` calibrates with it.
+
+The figures say how well each calibration predicts the kinds of motion held out, and
+nothing of others: :attr:`ValidationReport.coverage` states which (straight legs, arcs,
+turns on the spot; :mod:`umbmark.estimators.motions`). ``trajectory-scrub`` calibrates
+only where the rest of the runs identify its turn-rate term (turns at turning shares far
+apart), so that it is never credited with runs it extrapolates to.
 """
 
 from __future__ import annotations
@@ -14,12 +20,14 @@ import json
 import math
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import InputError
+from ..estimators.motions import KINDS, MotionCoverage, MotionKind, join_names, motion_coverage
 from ..kinematics import WheelParams
 from ..runs import Run, end_errors
 from .inputs import (
@@ -65,11 +73,21 @@ class Fold:
         Mean end-position error [m] of the held-out runs with each candidate's
         calibration from the rest; None where the candidate could not calibrate (square
         estimators need squares in both directions).
+    motions : tuple of str
+        The kinds of motion the held-out runs hold (``straight``, ``arc``, ``spot``).
+    trained_on : tuple of str
+        The kinds the rest hold, which calibrated.
+    refused : dict of str to str
+        Why a candidate did not calibrate, where the validation itself decided it
+        (``trajectory-scrub`` on runs that do not identify its turn-rate term).
     """
 
     held_out: str
     runs: int
     errors: dict[str, float | None]
+    motions: tuple[MotionKind, ...] = ()
+    trained_on: tuple[MotionKind, ...] = ()
+    refused: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, repr=False)
@@ -113,6 +131,33 @@ class ValidationReport:
         return sorted(((c, e) for c, e in scored if e is not None), key=lambda item: item[1])
 
     @property
+    def covered(self) -> tuple[MotionKind, ...]:
+        """The kinds of motion held out in some fold: what the figures speak for."""
+        return tuple(k for k in KINDS if any(k in fold.motions for fold in self.folds))
+
+    @property
+    def coverage(self) -> str:
+        """What the figures cover and what they do not, from the held-out runs' motion."""
+        held = join_names([KINDS[k] for k in self.covered]) or "no motion"
+        missing = [KINDS[k] for k in KINDS if k not in self.covered]
+        if missing:
+            text = (
+                f"the held-out runs hold only {held}: the figures say nothing about "
+                f"{join_names(missing, 'or')}"
+            )
+        else:
+            text = f"the held-out runs hold {held}"
+        for kind in self.covered:
+            folds = [f for f in self.folds if kind in f.motions]
+            if all(kind not in f.trained_on for f in folds):
+                names = ", ".join(Path(f.held_out).name for f in folds)
+                text += (
+                    f"; {KINDS[kind]} are held out only against calibrations from runs "
+                    f"without them ({names}): those figures test extrapolation to them"
+                )
+        return text
+
+    @property
     def recommended(self) -> str | None:
         """The estimator with the lowest mean held-out error (None if no estimator beats
         the nominal parameters)."""
@@ -126,11 +171,23 @@ class ValidationReport:
             "sources": list(self.sources),
             "scheme": self.scheme,
             "folds": [
-                {"held_out": f.held_out, "runs": f.runs, "end_error": dict(f.errors)}
+                {
+                    "held_out": f.held_out,
+                    "runs": f.runs,
+                    "end_error": dict(f.errors),
+                    "motions": list(f.motions),
+                    "calibrated_on": list(f.trained_on),
+                    "refused": dict(f.refused),
+                }
                 for f in self.folds
             ],
             "mean_end_error": {c: self.mean_error(c) for c in self.candidates},
             "recommended": self.recommended,
+            "coverage": {
+                "held_out": list(self.covered),
+                "not_held_out": [k for k in KINDS if k not in self.covered],
+                "statement": self.coverage,
+            },
             "notes": list(self.notes),
         }
 
@@ -227,17 +284,50 @@ def validate(
         scheme=scheme,
         candidates=chosen,
         folds=tuple(folds),
-        notes=tuple(n for r in read for n in r.notes),
+        notes=(*(n for r in read for n in r.notes), *_refusals(folds)),
     )
+
+
+def _refusals(folds: Sequence[Fold]) -> list[str]:
+    """One note per reason the validation refused a candidate, naming the folds."""
+    reasons: dict[tuple[str, str], list[str]] = {}
+    for fold in folds:
+        for candidate, why in fold.refused.items():
+            reasons.setdefault((candidate, why), []).append(Path(fold.held_out).name)
+    return [
+        f"{candidate} not calibrated with {', '.join(names)} held out: {why}"
+        for (candidate, why), names in reasons.items()
+    ]
+
+
+def _coverage(runs: Runs) -> MotionCoverage:
+    assert runs.params is not None
+    return motion_coverage([run.log for run in runs.runs if run.log is not None], runs.params)
 
 
 def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> Fold:
     assert held.params is not None
+    trained_on = _coverage(training)
     errors: dict[str, float | None] = {}
+    refused: dict[str, str] = {}
     for candidate in candidates:
+        if candidate == "trajectory-scrub" and not trained_on.identifies_scrub:
+            errors[candidate] = None
+            refused[candidate] = (
+                f"the rest hold {trained_on.held_text(only=True)}, which do not identify "
+                "its turn-rate term"
+            )
+            continue
         params = _calibrated(training, candidate, held.params)
         errors[candidate] = None if params is None else _mean_error(held.runs, params)
-    return Fold(held_out=name, runs=len(held.runs), errors=errors)
+    return Fold(
+        held_out=name,
+        runs=len(held.runs),
+        errors=errors,
+        motions=_coverage(held).held,
+        trained_on=trained_on.held,
+        refused=refused,
+    )
 
 
 def _calibrated(training: Runs, candidate: str, nominal: WheelParams) -> WheelParams | None:

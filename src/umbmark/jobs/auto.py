@@ -1,0 +1,78 @@
+"""``calibrate --method auto``: the estimator that predicts held-out recorded runs best.
+
+:func:`umbmark.validate` ranks the estimators by their held-out end error. The richer
+``trajectory-scrub`` is taken only where the recordings identify its turn-rate term
+(:mod:`umbmark.estimators.motions`), in the pool and with every source held out: held-out
+runs that it cannot be calibrated for say nothing of it, and a pool of squares cannot
+see that it extrapolates to arcs. Otherwise the simpler estimators compete without it,
+and the note says why.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..estimators.motions import motion_coverage
+from .inputs import Runs, RunSource, SourceOptions
+
+__all__ = ["auto_method"]
+
+SCRUB = "trajectory-scrub"
+
+
+def auto_method(
+    sources: Sequence[RunSource],
+    read: Runs,
+    side_length: float | None,
+    wheelbase: float | None,
+    options: SourceOptions,
+    *,
+    force: bool = False,
+) -> tuple[str, str]:
+    """The estimator that predicts held-out recorded runs best, and a note saying so.
+
+    ``force`` is the caller's: the validation reads the sources as the calibration does.
+    """
+    from .calibrate import DEFAULT_METHOD
+    from .validate import validate
+
+    if read.params is None or any(run.log is None for run in read.runs):
+        return DEFAULT_METHOD, (
+            f"method auto: runs tables cannot be replayed to compare estimators; "
+            f"calibrated with the default, {DEFAULT_METHOD}"
+        )
+    checked = validate(
+        *(Path(str(s)) for s in sources),
+        side_length=side_length,
+        wheelbase=wheelbase,
+        force=force,
+        **options,
+    )
+    ranking = checked.ranking
+    logs = [run.log for run in read.runs if run.log is not None]
+    problem = motion_coverage(logs, read.params).scrub_problem()
+    why = ""
+    if problem is not None:
+        ranking = [(name, error) for name, error in ranking if name != SCRUB]
+        why = f"; {SCRUB} left out: {problem}"
+    elif SCRUB in checked.candidates and SCRUB not in dict(ranking):
+        refused = [
+            f"{Path(f.held_out).name} held out ({f.refused[SCRUB]})"
+            for f in checked.folds
+            if SCRUB in f.refused
+        ]
+        if refused:
+            why = f"; {SCRUB} left out: not calibrated with " + ", ".join(refused)
+    covers = f"; {checked.coverage}"
+    best = next(iter(ranking), ("nominal", 0.0))[0]
+    if best == "nominal":
+        return DEFAULT_METHOD, (
+            "method auto: no estimator predicted held-out runs better than the nominal "
+            f"parameters ({checked.scheme}); calibrated with the default, "
+            f"{DEFAULT_METHOD}{why}{covers}"
+        )
+    listed = ", ".join(f"{name} {1000 * error:.1f} mm" for name, error in ranking)
+    return best, (
+        f"method auto: {best}, by held-out end error ({checked.scheme}): {listed}{why}{covers}"
+    )
