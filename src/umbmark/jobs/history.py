@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import InputError
+from ..errors import InputError, python_api
 from ..history_store import CalibrationRecord, History, RobotRecord
 from .outputs import OutputPlan
 
@@ -83,6 +83,7 @@ class HistoryReport:
 
         return history_figure(self.nominal, self.calibrations)
 
+    @python_api
     def write(self, *, plot: str | os.PathLike[str] | None = None) -> list[Path]:
         """Write the trend figure (.png, .svg, .pdf), checked before it is drawn.
 
