@@ -442,10 +442,7 @@ def test_the_job_checks_the_field_options(tmp_path):
         left_field="left ticks", right_field="right_ticks"
     )
     err = error(left_field="a", right_field="b", odom_topic="/odom")
-    assert (
-        "left_field/right_field read the wheels from wheel_topic: leave out odom_topic"
-        in err
-    )
+    assert "left_field/right_field read the wheels from wheel_topic: leave out odom_topic" in err
     err = error(msg_dir=tmp_path)
     assert "msg_dir is for wheel data in a custom message type" in err
 
