@@ -147,6 +147,11 @@ def test_the_error_keeps_both_forms() -> None:
     assert error.args == (str(error),)
     assert error.command_line() == "--side-length must be > 0, got -4 m"
     assert error.problem == "--side-length must be > 0, got -4 m"
+    # Where the command's words are command-line syntax, the error carries Python's too.
+    with pytest.raises(umbmark.InputError) as caught:
+        umbmark.history(plot="trend.png")
+    assert str(caught.value) == "plot needs the robot's name (umbmark.history(name, plot=file))"
+    assert caught.value.command_line().startswith("--plot needs the robot's NAME (umbmark")
 
 
 def test_every_flag_of_the_command_line_names_its_keyword() -> None:

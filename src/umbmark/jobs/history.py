@@ -19,6 +19,10 @@ from .outputs import OutputPlan
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+#: The command's words and the library's (the command line's syntax is no keyword).
+_PLOT_NEEDS_NAME = "--plot needs the robot's NAME (umbmark history NAME --plot FILE)"
+_PLOT_NEEDS_NAME_PY = "plot needs the robot's name (umbmark.history(name, plot=file))"
+
 __all__ = ["HistoryReport", "history"]
 
 
@@ -78,7 +82,7 @@ class HistoryReport:
             For a report that lists the robots instead of one robot's calibrations.
         """
         if self.nominal is None or not self.calibrations:
-            raise InputError("--plot needs the robot's NAME (umbmark history NAME --plot FILE)")
+            raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
         from ..outputs.plotting import history_figure
 
         return history_figure(self.nominal, self.calibrations)
@@ -139,7 +143,7 @@ def history(
         For an unknown robot or calibration, or a file that is not a history.
     """
     if plot is not None and robot is None:
-        raise InputError("--plot needs the robot's NAME (umbmark history NAME --plot FILE)")
+        raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
     store = History(history)
     path = str(store.path)
     if plot is not None:  # the output is checked before a calibration is marked applied
