@@ -61,3 +61,128 @@ def test_python_dash_m_is_the_command():
         env={**os.environ},
     )
     assert proc.stdout == f"umbmark {umbmark.__version__}\n"
+
+
+# --- errors read as the caller writes ----------------------------------------------------
+
+EXAMPLE = str(ROOT / "src" / "umbmark" / "data" / "labmate_runs_mm.csv")
+
+
+@pytest.mark.parametrize(
+    ("call", "args", "keywords", "message"),
+    [
+        (umbmark.calibrate, (EXAMPLE,), {"unti": "mm"},
+         "calibrate() got an unexpected keyword argument 'unti'; did you mean unit=?"),
+        (umbmark.calibrate, (EXAMPLE,), {"sidelength": 4},
+         "calibrate() got an unexpected keyword argument 'sidelength'; did you mean "
+         "side_length=?"),
+        (umbmark.simulate, (), {"rusn": 3},
+         "simulate() got an unexpected keyword argument 'rusn'; did you mean runs=?"),
+        (umbmark.simulate, (), {"e_d": 1.01},
+         "simulate() got an unexpected keyword argument 'e_d'; did you mean E_d=?"),
+        (umbmark.plan, (), {"scater": 0.01},
+         "plan() got an unexpected keyword argument 'scater'; did you mean scatter=?"),
+        (umbmark.report, (EXAMPLE,), {"wheelbase": 0.34, "xyzzy": 1},
+         "report() got an unexpected keyword argument 'xyzzy'"),
+    ],
+)  # fmt: skip
+def test_a_misspelt_keyword_is_a_type_error_naming_the_close_one(
+    call: object, args: tuple[object, ...], keywords: dict[str, object], message: str
+) -> None:
+    assert callable(call)
+    with pytest.raises(TypeError) as caught:
+        call(*args, **keywords)
+    assert str(caught.value) == message
+
+
+def test_input_errors_name_keywords_to_python_and_flags_to_the_command_line(tmp_path) -> None:
+    from helpers import api_error, cli_error
+
+    # A table in mm read as metres: the hint names the unit as each caller writes it.
+    line = api_error(umbmark.calibrate, EXAMPLE, side_length=4, wheelbase=0.34)
+    assert line.endswith('are these mm, not m? (unit="mm")')
+    assert "--" not in line
+    cli = cli_error("calibrate", EXAMPLE, "-L", "4", "-b", "0.34")
+    assert cli.endswith("are these mm, not m? (--unit mm)\n")
+    flags = line.replace('unit="mm"', "--unit mm")
+    assert cli == f"umbmark: error: {flags}\n"
+    # A bare option, a number, an output (-o) and a flag (--force).
+    assert api_error(umbmark.calibrate, EXAMPLE, unit="mm") == (
+        "side_length is required: the side of the square path, in metres"
+    )
+    assert cli_error("calibrate", EXAMPLE, "--unit", "mm") == (
+        "umbmark: error: --side-length is required: the side of the square path, in metres\n"
+    )
+    assert api_error(umbmark.simulate, runs=2000).startswith("runs=2000 is more than 1000")
+    assert cli_error("simulate", "--runs", "2000").startswith(
+        "umbmark: error: --runs 2000 is more than 1000"
+    )
+    out = tmp_path / "runs.csv"
+    out.write_text("keep me\n")
+    assert api_error(umbmark.simulate, path="straight", output=out) == (
+        'output writes a runs table of square runs: use path="square"'
+    )
+    assert cli_error("simulate", "--path", "straight", "-o", str(out)) == (
+        "umbmark: error: -o writes a runs table of square runs: use --path square\n"
+    )
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    (logs / "other.csv").write_text("x\n")
+    assert "force=True" in api_error(umbmark.simulate, runs=2, logs=logs)
+    assert "--force" in cli_error("simulate", "--runs", "2", "--logs", str(logs))
+    # The command's degrees are the library's radians: 0.01 deg is 0.000174533 rad.
+    tiny = api_error(umbmark.simulate, path="turn", turn_angle=1.74533e-4, speed=1.0, dt=0.05)
+    assert tiny.startswith("turn_angle=0.000174533 rad is ")
+    cli = cli_error(
+        "simulate", "--path", "turn", "--turn-angle", "0.01", "--speed", "1", "--dt", "0.05"
+    )
+    assert cli.startswith("umbmark: error: --turn-angle 0.01 deg is ")
+
+
+def test_the_error_keeps_both_forms() -> None:
+    with pytest.raises(umbmark.InputError) as caught:
+        umbmark.calibrate(EXAMPLE, wheelbase=0.34, unit="mm", side_length=-4)
+    error = caught.value
+    assert str(error) == "side_length must be > 0, got -4 m"
+    assert error.args == (str(error),)
+    assert error.command_line() == "--side-length must be > 0, got -4 m"
+    assert error.problem == "--side-length must be > 0, got -4 m"
+    # Where the command's words are command-line syntax, the error carries Python's too.
+    with pytest.raises(umbmark.InputError) as caught:
+        umbmark.history(plot="trend.png")
+    assert str(caught.value) == "plot needs the robot's name (umbmark.history(name, plot=file))"
+    assert caught.value.command_line().startswith("--plot needs the robot's NAME (umbmark")
+
+
+def test_every_flag_of_the_command_line_names_its_keyword() -> None:
+    """The flags the messages name turn into the keyword of the same option."""
+    import click
+
+    from umbmark.cli.main import cli
+    from umbmark.errors import _keyword_of
+
+    def options(command: click.Command) -> list[click.Option]:
+        if isinstance(command, click.Group):
+            return [o for c in command.commands.values() for o in options(c)]
+        return [p for p in command.params if isinstance(p, click.Option)]
+
+    checked = 0
+    for option in options(cli):
+        if option.name in ("json_out", "help"):
+            continue
+        for flag in option.opts:
+            assert _keyword_of(flag) == option.name, flag
+            checked += 1
+    assert checked > 100
+
+
+def test_every_function_knows_its_keywords() -> None:
+    """So that each refuses a misspelt keyword (none takes arbitrary ones)."""
+    import inspect
+
+    from umbmark.errors import keywords_of
+
+    functions = [n for n in umbmark.__all__ if inspect.isfunction(getattr(umbmark, n))]
+    assert "calibrate" in functions
+    for name in functions:
+        assert keywords_of(getattr(umbmark, name)) is not None, name

@@ -429,7 +429,7 @@ def test_the_command_calibrates_from_a_custom_message(tmp_path):
     err = api_error(umbmark.calibrate, bag, **options, ticks_per_rev=COUNTS_PER_REV)
     assert err == (
         f"{bag}: topic /wheels has type {ENCODERS}, whose definition the bag does not carry: "
-        "give --msg-dir with its .msg files"
+        "give msg_dir with its .msg files"
     )
 
 
@@ -437,17 +437,14 @@ def test_the_job_checks_the_field_options(tmp_path):
     def error(**options: object) -> str:
         return api_error(umbmark.calibrate, tmp_path / "never.bag", wheelbase=0.34, **options)
 
-    assert "--left-field and --right-field go together" in error(left_field="left_ticks")
-    assert "--left-field 'left ticks' is not a field path" in error(
+    assert "left_field and right_field go together" in error(left_field="left_ticks")
+    assert "left_field='left ticks' is not a field path" in error(
         left_field="left ticks", right_field="right_ticks"
     )
     err = error(left_field="a", right_field="b", odom_topic="/odom")
-    assert (
-        "--left-field/--right-field read the wheels from --wheel-topic: leave out --odom-topic"
-        in err
-    )
+    assert "left_field/right_field read the wheels from wheel_topic: leave out odom_topic" in err
     err = error(msg_dir=tmp_path)
-    assert "--msg-dir is for wheel data in a custom message type" in err
+    assert "msg_dir is for wheel data in a custom message type" in err
 
 
 # --- progress --------------------------------------------------------------------------

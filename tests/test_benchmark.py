@@ -85,3 +85,46 @@ def test_unequal_numbers_of_runs_are_fine():
     bench = umbmark_benchmark(runs)
     assert (bench.cw.n, bench.ccw.n) == (2, 7)
     assert bench.ccw.cg[1] == pytest.approx(0.03)
+
+
+def _bench_of(e_max: float, sem: float):
+    """A benchmark whose ccw cluster sets E_max,syst = ``e_max`` [m] with SEM = ``sem`` [m].
+
+    Two runs at ``(e_max -/+ sem, 0)``: cg (e_max, 0), radial sigma^2 = 2 sem^2 / 1, so
+    SEM = sigma / sqrt(2) = sem. The cw cluster sits near the origin.
+    """
+    from umbmark.benchmark import Benchmark
+
+    cw = Cluster.of(Direction.CW, np.array([[-1e-4, 0.0], [1e-4, 0.0]]))
+    ccw = Cluster.of(Direction.CCW, np.array([[e_max - sem, 0.0], [e_max + sem, 0.0]]))
+    return Benchmark(cw=cw, ccw=ccw)
+
+
+@pytest.mark.parametrize(
+    ("e_mm", "three_sem_mm", "standing"),
+    [
+        (27.5, 26.3, "just above"),  # what umbmark demo leaves after its correction
+        (36.0, 30.0, "just above"),  # 1.2 x 3 SEM, below CLEARLY_ABOVE = 1.25
+        (45.0, 30.0, "above"),  # 1.5 x
+        (60.0, 30.0, "well above"),  # 2 x
+        (316.9, 28.5, "well above"),  # the demo's robot before its correction
+        (20.0, 30.0, "within"),
+    ],
+)
+def test_the_verdict_follows_the_ratio(e_mm: float, three_sem_mm: float, standing: str) -> None:
+    from umbmark.benchmark import scatter_standing, sem_verdict
+
+    bench = _bench_of(e_mm / 1000, three_sem_mm / 3000)
+    assert bench.e_max_syst * 1000 == pytest.approx(e_mm)
+    assert bench.second_pass_threshold * 1000 == pytest.approx(three_sem_mm)
+    assert scatter_standing(bench) == standing
+    text = sem_verdict(bench)
+    if standing == "within":
+        assert f"E_max,syst = {e_mm:.1f} mm <= 3 x SEM = {three_sem_mm:.1f} mm" in text
+        assert "within the scatter" in text
+        return
+    assert f"E_max,syst = {e_mm:.1f} mm > 3 x SEM = {three_sem_mm:.1f} mm" in text
+    assert f"({e_mm / three_sem_mm:.2f} times 3 x SEM)" in text
+    assert f"stands {standing} the scatter" in text
+    # "well above" only from twice 3 SEM on: 27.5 mm against 26.3 mm is not.
+    assert ("well above" in text) == (e_mm / three_sem_mm >= 2.0)

@@ -205,7 +205,7 @@ def test_figure_is_the_clusters_view(table):
     assert f"E_max,syst = {e_max:.1f} mm" in labels
 
 
-def test_bad_input_raises_one_input_error_with_the_commands_line(table, tmp_path):
+def test_bad_input_raises_one_input_error_naming_the_keywords(table, tmp_path):
     good = table(_rows(), name="good.csv")
     one_direction = [r for r in _rows() if r[0] == "cw"]
 
@@ -213,11 +213,11 @@ def test_bad_input_raises_one_input_error_with_the_commands_line(table, tmp_path
         return api_error(umbmark.calibrate, *sources, **options)
 
     assert issubclass(umbmark.InputError, ValueError)
-    assert bad(good, side_length=0, wheelbase=0.34) == "--side-length must be > 0, got 0 m"
-    assert "--wheelbase must be > 0, got -0.34 m" in bad(good, side_length=4, wheelbase=-0.34)
-    assert "--wheelbase is required" in bad(good, side_length=4)
-    assert "--side-length is required" in bad(good, wheelbase=0.34)
-    assert "--side-length 4000 m is implausibly large" in bad(good, side_length=4000, wheelbase=1)
+    assert bad(good, side_length=0, wheelbase=0.34) == "side_length must be > 0, got 0 m"
+    assert "wheelbase must be > 0, got -0.34 m" in bad(good, side_length=4, wheelbase=-0.34)
+    assert "wheelbase is required" in bad(good, side_length=4)
+    assert "side_length is required" in bad(good, wheelbase=0.34)
+    assert "side_length=4000 m is implausibly large" in bad(good, side_length=4000, wheelbase=1)
     err = bad(table(one_direction, name="cw_only.csv"), side_length=4, wheelbase=0.34)
     assert "cw_only.csv: 0 ccw run(s): UMBmark needs at least 2 runs in each direction" in err
     few = table(one_direction[:1] + _rows()[5:], name="few.csv")
@@ -228,8 +228,8 @@ def test_bad_input_raises_one_input_error_with_the_commands_line(table, tmp_path
     assert "should end in .png" in bad(good, side_length=4, wheelbase=0.34, plot="x.jpg")
     err = bad(good, side_length=4, wheelbase=0.34, method="heading")
     assert "good.csv: the heading method needs theta_abs and theta_odo; missing for row 2" in err
-    assert "--method 'median': use one of paper" in bad(good, side_length=4, method="median")
-    assert "--unit 'km'" in bad(good, side_length=4, wheelbase=0.34, unit="km")
+    assert "method='median': use one of paper" in bad(good, side_length=4, method="median")
+    assert "unit='km'" in bad(good, side_length=4, wheelbase=0.34, unit="km")
     err = bad(good, side_length=4, wheelbase=0.34, output=good)
     assert "would overwrite an input" in err
     assert good.read_text().startswith("direction")  # untouched

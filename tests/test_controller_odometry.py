@@ -428,5 +428,5 @@ def test_wheel_joints_named_in_the_controller_file(tmp_path, session):
         wheel_diameter=0.15,
         truth_topic="/mocap",
     )
-    assert "--left-joint" in message
+    assert "left_joint" in message
     assert "drive_l, drive_r, lidar_joint" in message

@@ -330,7 +330,7 @@ def test_replay_reports_the_rmse_per_run_and_its_mean(bagged):
 def test_a_bad_tum_time(logged):
     folder, _ = logged
     err = api_error(umbmark.replay, folder / "log", tum=folder / "x", tum_time="utc")
-    assert err == "--tum-time 'utc': use recording or run"
+    assert err == "tum_time='utc': use recording or run"
     err = api_error(umbmark.calibrate, folder / "log", tum=folder / "x", tum_time="utc")
-    assert err == "--tum-time 'utc': use recording or run"
+    assert err == "tum_time='utc': use recording or run"
     assert not (folder / "x").exists()

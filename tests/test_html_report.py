@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import hashlib
+import math
 import os
+import re
 import shutil
 import subprocess
 from html.parser import HTMLParser
@@ -81,6 +83,10 @@ def test_html_report_structure(report: umbmark.CalibrationReport, runs_csv: Path
     assert f"E_max,syst = {d['e_max_syst'] * 1000:.1f} mm" in body
     assert f"3 x SEM = {d['second_pass_threshold'] * 1000:.1f} mm" in body
     for name, (low, high) in d["intervals_95"].items():
+        if name in ("alpha", "beta"):  # shown in degrees, as on the terminal
+            assert f"{math.degrees(low):.4f}" in body, name
+            assert f"{math.degrees(high):.4f}" in body, name
+            continue
         assert f"{low:.6f}" in body, name
         assert f"{high:.6f}" in body, name
     assert f"{d['E_d']:.6f}" in body
@@ -114,9 +120,9 @@ def test_report_written_by_calibrate_and_cli(runs_csv: Path, tmp_path: Path) -> 
     out = tmp_path / "r.html"
     umbmark.calibrate(runs_csv, side_length=4, wheelbase=0.34, unit="mm", report=out)
     assert out.read_text().startswith("<!DOCTYPE html>")
-    with pytest.raises(InputError, match=r"--report .*html"):
+    with pytest.raises(InputError, match=r"report='r.txt': .*html"):
         umbmark.calibrate(runs_csv, side_length=4, wheelbase=0.34, unit="mm", report="r.txt")
-    with pytest.raises(InputError, match=r"--report and -o|-o and --report"):
+    with pytest.raises(InputError, match=r"report and output|output and report"):
         umbmark.calibrate(
             runs_csv, side_length=4, wheelbase=0.34, unit="mm", report=out, output=out
         )
@@ -168,3 +174,48 @@ def test_html_report_in_headless_chromium(
     parsed = _parse(dom)
     assert [t for t, _ in parsed.tags].count("svg") == 1
     assert "overlay-yaml" in parsed.ids()
+
+
+def _section(text: str, key: str) -> str:
+    """The text of the page's section ``key``."""
+    part = text.split(f'<section id="{key}">', 1)[1].split("</section>", 1)[0]
+    return "".join(_parse(part).text)
+
+
+def test_alpha_and_beta_in_degrees_on_page_and_terminal(
+    report: umbmark.CalibrationReport, runs_csv: Path
+) -> None:
+    """One unit for alpha and beta wherever a person reads them: degrees (JSON: rad)."""
+    estimates = _section(report.html(), "estimates")
+    assert "[rad]" not in estimates
+    args = [str(runs_csv), "-L", "4", "-b", "0.34", "--unit", "mm"]
+    terminal = CliRunner().invoke(cli, ["calibrate", *args]).output
+    se = report.estimate.standard_errors
+    for name in ("alpha", "beta"):
+        value, error = math.degrees(getattr(report.estimate, name)), math.degrees(se[name])
+        assert f"{name} [deg]" in estimates
+        assert f"{value:.4f}" in estimates
+        assert f"{value:.4f} ± {error:.4f} deg" in terminal
+    assert report.to_dict()["alpha"] == report.estimate.alpha  # JSON stays in radians
+    plan = CliRunner().invoke(cli, ["plan", "--scatter", "0.01", "-L", "4"]).output
+    assert "mrad" not in plan
+    assert re.search(r"se\(alpha\) = se\(beta\)\s+[0-9.]+\s+deg", plan), plan
+
+
+def test_fit_section_promises_what_it_shows(runs_csv: Path) -> None:
+    """Each figure of the fit with its unit and meaning; a p-value only where one is."""
+    exact = umbmark.calibrate(runs_csv, side_length=4, wheelbase=0.34, unit="mm")
+    shown = _section(exact.html(), "messages")
+    assert "p-value" not in shown
+    assert "model_check_p" not in shown
+    assert "Hotelling" not in shown
+    residual = exact.estimate.components["residual_rms"] * 1000
+    assert "misfit of the exact geometry (rms) [mm]" in shown
+    assert f"{residual:.3f}" in shown
+    endpose = umbmark.calibrate(
+        runs_csv, side_length=4, wheelbase=0.34, unit="mm", method="endpose"
+    )
+    shown = _section(endpose.html(), "messages")
+    p = endpose.estimate.components["model_check_p"]
+    assert "model check p-value" in shown
+    assert f"{p:.3g}" in shown

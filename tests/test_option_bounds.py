@@ -1,7 +1,8 @@
 """Every option bounded (issue 10, item 2): the work an option asks for has a documented
-upper bound, refused in the library with a line naming the option as the command spells
-it and the range; the command's --help states the bound; huge and tiny values of the
-parameter options give that line and nothing else (no numpy warning first)."""
+upper bound, refused in the library with a line naming the option (as a keyword to a
+Python caller, as the command spells it on the command line) and the range; the
+command's --help states the bound; huge and tiny values of the parameter options give
+that line and nothing else (no numpy warning first)."""
 
 from __future__ import annotations
 
@@ -22,8 +23,8 @@ from umbmark.jobs.validate import validate
 from helpers import api_error, cli_error, run_cli
 
 SEED_TOP = 2**63 - 1
-RUNS = "--runs must be between 2 and 1000, got "
-SEEDS = f"--seed must be between 0 and {SEED_TOP}, got "
+RUNS = "runs must be between 2 and 1000, got "
+SEEDS = f"seed must be between 0 and {SEED_TOP}, got "
 FACTOR = "is not a plausible factor: it must be within"
 
 
@@ -44,21 +45,21 @@ def logs(tmp_path_factory: pytest.TempPathFactory) -> Path:
         (umbmark.demo, {"runs": 1_000_000}, RUNS + "1000000"),
         (umbmark.demo, {"runs": 2**63}, RUNS + "9223372036854775808"),
         (umbmark.demo, {"runs": 10**400}, RUNS + "a number of 401 digits"),
-        (umbmark.demo, {"runs": 2.5}, "--runs must be a whole number, not '2.5'"),
+        (umbmark.demo, {"runs": 2.5}, "runs must be a whole number, not '2.5'"),
         (umbmark.demo, {"seed": -1}, SEEDS + "-1"),
         (umbmark.study, {"seed": -1, "trials": 1}, SEEDS + "-1"),
         (umbmark.study, {"trials": 50_000, "side_length": [2.0, 3.0, 4.0]},
-         "--trials 50000 in 3 grid cells are 150000 robots: at most 100000 in all"),
-        (umbmark.study, {"slip": [0.0] * 21}, "--slip must list 1 to 20 values, got 21"),
-        (umbmark.study, {"wheelbase": []}, "--wheelbase must list 1 to 20 values, got 0"),
-        (umbmark.study, {"workers": 0}, "--workers must be between 1 and 64, got 0"),
-        (umbmark.study, {"E_d_spread": math.nan}, "--E-d-spread nan: give 0 to 0.2"),
-        (umbmark.study, {"slip": ["abc"]}, "--slip must be a number, not 'abc'"),
-        (umbmark.reproduce_table1, {"seeds": 1_000_000}, "--seeds must be 1 to 1000, got 1000000"),
-        (umbmark.reproduce_table1, {"seed": -1}, f"--seed must be between 0 and {SEED_TOP}"),
+         "trials=50000 in 3 grid cells are 150000 robots: at most 100000 in all"),
+        (umbmark.study, {"slip": [0.0] * 21}, "slip must list 1 to 20 values, got 21"),
+        (umbmark.study, {"wheelbase": []}, "wheelbase must list 1 to 20 values, got 0"),
+        (umbmark.study, {"workers": 0}, "workers must be between 1 and 64, got 0"),
+        (umbmark.study, {"E_d_spread": math.nan}, "E_d_spread=nan: give 0 to 0.2"),
+        (umbmark.study, {"slip": ["abc"]}, "slip must be a number, not 'abc'"),
+        (umbmark.reproduce_table1, {"seeds": 1_000_000}, "seeds must be 1 to 1000, got 1000000"),
+        (umbmark.reproduce_table1, {"seed": -1}, f"seed must be between 0 and {SEED_TOP}"),
         (umbmark.reproduce_table1, {"tape_thickness": 0.5e-3},
-         "--tape-thickness 0.5 mm: give more than 0 and at most 0.3 mm"),
-        (umbmark.reproduce_fig4, {"leg_bend": "x"}, "--leg-bend must be a number, not 'x'"),
+         "tape_thickness=0.0005 m: give more than 0 and at most 0.3 mm"),
+        (umbmark.reproduce_fig4, {"leg_bend": "x"}, "leg_bend must be a number, not 'x'"),
     ],
 )  # fmt: skip
 def test_work_options_are_refused_beyond_their_bound(
@@ -70,16 +71,16 @@ def test_work_options_are_refused_beyond_their_bound(
 def test_info_sampling_is_bounded(logs: Path) -> None:
     assert info_job.MAX_MESSAGES == 1_000_000
     line = api_error(umbmark.info, logs, max_messages=1_000_001)
-    assert "--max-messages 1000001: must be at least 1 and at most 1000000" in line
+    assert "max_messages=1000001: must be at least 1 and at most 1000000" in line
     assert umbmark.info(logs, max_messages=1_000_000).format == "log"  # the bound itself
 
 
 @pytest.mark.parametrize(
     ("option", "value", "message"),
     [
-        ("max_gap", 61.0, "--max-gap must be at most 60 s, got 61 s"),
-        ("max_gap", 1e308, "--max-gap must be at most 60 s, got 1e+308 s"),
-        ("min_rest", 601.0, "--min-rest must be at most 600 s, got 601 s"),
+        ("max_gap", 61.0, "max_gap must be at most 60 s, got 61 s"),
+        ("max_gap", 1e308, "max_gap must be at most 60 s, got 1e+308 s"),
+        ("min_rest", 601.0, "min_rest must be at most 600 s, got 601 s"),
     ],
 )
 def test_reading_options_are_refused_beyond_their_bound(
@@ -111,7 +112,7 @@ def test_a_run_longer_than_two_million_periods_is_refused() -> None:
     expected = _periods(100, 0.01, 1e-4)  # 4.0005e8
     line = api_error(umbmark.simulate, side_length=100, speed=0.01, dt=1e-4)
     assert f"takes about {expected:.3g} sampling periods: at most 2e+06" in line
-    assert "raise --speed or --dt" in line
+    assert "raise speed or dt" in line
 
 
 def test_all_runs_together_are_bounded() -> None:
@@ -138,10 +139,10 @@ def test_recording_is_bounded_by_memory(tmp_path: Path) -> None:
         # One count: pi 0.15 m / 40000 = 0.01178 mm; a 0.01 deg turn moves each wheel
         # (0.01 pi / 180)(0.17 m) = 0.02967 mm: 2.52 counts.
         ({"path": "turn", "turn_angle": math.radians(0.01)},
-         "--turn-angle 0.01 deg is 2.52 encoder counts of wheel travel: at least 20"),
+         "turn_angle=0.000174533 rad is 2.52 encoder counts of wheel travel: at least 20"),
         # 20 counts per revolution: a count is pi 0.15 / 20 = 23.6 mm; 0.4 m is 17 counts.
         ({"encoder_resolution": 1, "gear_ratio": 20, "side_length": 0.4},
-         "--side-length 0.4 m is 17 encoder counts of wheel travel: at least 20 (one count "
+         "side_length=0.4 m is 17 encoder counts of wheel travel: at least 20 (one count "
          "is 23.6 mm)"),
     ],
 )  # fmt: skip

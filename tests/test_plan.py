@@ -274,14 +274,14 @@ def test_the_command_and_its_refusals():
     assert "twice its wheelbase" in api_error(umbmark.plan, scatter=0.01, floor=0.8)
     assert "outside" in api_error(umbmark.plan, scatter=math.nan, side_length=4, runs=5)
     assert "runs per direction" in api_error(umbmark.plan, scatter=0.05, floor=1.6, target_E_d=1e-6)
-    assert "--noise" in api_error(umbmark.plan, scatter=0.01, side_length=4, runs=5, noise="x")
-    assert "--reading-error" in api_error(
+    assert "noise='x'" in api_error(umbmark.plan, scatter=0.01, side_length=4, runs=5, noise="x")
+    assert "reading_error" in api_error(
         umbmark.plan, scatter=0.01, side_length=4, runs=5, reading_error=0.02
     )
-    assert "--reading-error" in api_error(
+    assert "reading_error" in api_error(
         umbmark.plan, scatter=0.01, side_length=4, runs=5, reading_error=0.005, noise="tape"
     )
-    assert "--scatter-side" in api_error(
+    assert "scatter_side" in api_error(
         umbmark.plan, scatter=0.01, side_length=4, runs=5, scatter_side=-1.0
     )
 

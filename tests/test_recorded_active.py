@@ -147,7 +147,7 @@ def test_header_round_trip_and_defaults(tmp_path):
     # A table without the line: nothing recorded, --wheelbase still required.
     write_runs_table(path, runs)
     assert read_table_active(path) is None
-    assert "--wheelbase is required" in api_error(umbmark.calibrate, path, side_length=4)
+    assert "wheelbase is required" in api_error(umbmark.calibrate, path, side_length=4)
 
 
 @pytest.mark.parametrize(

@@ -102,8 +102,8 @@ def test_return_error_larger_than_the_side_of_logged_runs(tmp_path: Path, sessio
     message = api_error(umbmark.calibrate, folder, method="paper")
     assert message == (
         f"{folder}: the return error of session.csv run 2 (0.679 m) is larger than the "
-        "square's side (0.3 m): are the lengths in the right unit (--unit mm)? For errors "
-        "this large use --method exact or endpose"
+        'square\'s side (0.3 m): are the lengths in the right unit (unit="mm")? For errors '
+        "this large use method exact or endpose"
     )
 
 

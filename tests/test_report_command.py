@@ -511,3 +511,49 @@ def test_browser_check_catches_a_broken_page(browser: Chromium, tmp_path: Path) 
     assert browser.errors() != []
     assert browser.evaluate(_OVERFLOW) > 0
     assert browser.evaluate(_FIGURES) == []
+
+
+# --- what a person sees on the page ---------------------------------------------------
+
+_BOXES = """
+[...document.querySelectorAll('.scroll')].map(box => ({
+  section: box.closest('section').id, scroll: box.scrollWidth, client: box.clientWidth}))
+"""
+
+
+def test_every_table_fits_1200_px_without_scrolling(
+    browser: Chromium, session: Path, tmp_path: Path
+) -> None:
+    """The widest page: one real session, its runs with the predicted columns."""
+    out = tmp_path / "real.html"
+    umbmark.calibrate(session, report=out)
+    browser.open(out, 1200)
+    boxes = browser.evaluate(_BOXES)
+    assert any(box["section"] == "runs" for box in boxes)
+    for box in boxes:
+        assert box["scroll"] <= box["client"], box  # no table scrolls sideways in its box
+    assert browser.evaluate(_OVERFLOW) <= 0
+
+
+def test_one_pass_draws_cw_and_ccw_apart(session: Path, tmp_path: Path) -> None:
+    """A single calibration: legend "cw runs", "ccw runs" (no "before"), two colours."""
+    svg = umbmark.calibrate(session).html().split("<svg", 1)[1].split("</svg>", 1)[0]
+    legend = re.findall(r"<!-- ([^>]*runs) -->", svg)
+    assert "cw runs" in legend
+    assert "ccw runs" in legend
+    assert not any(label.startswith("before") for label in legend)
+    # The markers' outlines: two colours (not greys) besides the prediction's grey.
+    strokes = set(re.findall(r"stroke: (#[0-9a-f]{6})", svg))
+    coloured = {s for s in strokes if len({s[1:3], s[3:5], s[5:7]}) > 1}
+    assert len(coloured) >= 2, strokes
+
+
+def test_two_passes_keep_their_names(two_passes: tuple[Path, Path]) -> None:
+    page = umbmark.report(*two_passes, side_length=SIDE, wheelbase=WHEELBASE)
+    legend = re.findall(r"<!-- ([^>]*runs) -->", page.html())
+    assert legend == [
+        "pass 1 (before): cw runs",
+        "pass 1 (before): ccw runs",
+        "pass 2 (after): cw runs",
+        "pass 2 (after): ccw runs",
+    ]

@@ -129,6 +129,6 @@ def test_bad_logs(tmp_path, logs):
     )
     err = bad(logs / "log", windows="500:600")
     assert "run-01.csv: time window 500:600 s holds 0 wheel sample(s)" in err
-    assert "--windows 'ten:20': write start:end pairs" in bad(logs / "log", windows="ten:20")
+    assert "windows='ten:20': write start:end pairs" in bad(logs / "log", windows="ten:20")
     err = api_error(umbmark.replay, logs / "runs.csv")
     assert "replay needs recorded wheel data" in err

@@ -99,21 +99,22 @@ def test_simulate_straight_line_and_turn_report_what_a_tape_measures():
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        ({"E_d": 0}, "--E-d must be > 0, got 0"),
-        ({"E_b": 3}, "--E-b 3 is not a plausible ratio"),
-        ({"runs": 1}, "--runs must be at least 2 for UMBmark"),
-        ({"slip": -1}, "--slip -1 is outside 0 to 0.1"),
-        ({"seed": -1}, "--seed -1 is outside 0 to"),
-        ({"runs": 2**63}, "--runs 9223372036854775808 is more than 1000"),
-        ({"dt": 1e-9}, "--dt 1e-09 is outside 0.0001 to 0.1"),
-        ({"speed": 1e-6}, "--speed 1e-06 is outside 0.01 to 5"),
-        ({"bump_size": 1e308}, "--bump-size 1e+308 is outside 0 to 0.05"),
-        ({"encoder_resolution": 1e308}, "--encoder-resolution 1e+308 is outside 1 to 1e+07"),
-        ({"path": "turn", "turn_angle": math.nan}, "--turn-angle nan is not a finite number"),
-        ({"path": "straight", "output": "x.csv"}, "-o writes a runs table of square runs"),
-        ({"wheelbase": 340}, "--wheelbase 340 m is implausibly large"),
-        ({"path": "turn", "turn_angle": 0.0}, "--turn-angle 0 deg: give a turn of up to"),
-        ({"path": "circle"}, "--path 'circle': use one of square, straight, turn"),
+        ({"E_d": 0}, "E_d must be > 0, got 0"),
+        ({"E_b": 3}, "E_b=3 is not a plausible ratio"),
+        ({"runs": 1}, "runs must be at least 2 for UMBmark"),
+        ({"slip": -1}, "slip=-1 is outside 0 to 0.1"),
+        ({"seed": -1}, "seed=-1 is outside 0 to"),
+        ({"runs": 2**63}, "runs=9223372036854775808 is more than 1000"),
+        ({"dt": 1e-9}, "dt=1e-09 is outside 0.0001 to 0.1"),
+        ({"speed": 1e-6}, "speed=1e-06 is outside 0.01 to 5"),
+        ({"bump_size": 1e308}, "bump_size=1e+308 is outside 0 to 0.05"),
+        ({"encoder_resolution": 1e308}, "encoder_resolution=1e+308 is outside 1 to 1e+07"),
+        ({"path": "turn", "turn_angle": math.nan}, "turn_angle=nan is not a finite number"),
+        ({"path": "straight", "output": "x.csv"}, "output writes a runs table of square runs"),
+        ({"wheelbase": 340}, "wheelbase=340 m is implausibly large"),
+        # The command's degrees are the library's radians.
+        ({"path": "turn", "turn_angle": 0.0}, "turn_angle=0 rad: give a turn of up to"),
+        ({"path": "circle"}, "path='circle': use one of square, straight, turn"),
     ],
 )
 def test_simulate_refuses_bad_options(options, message):
@@ -126,7 +127,7 @@ def test_simulate_logs_refuse_a_folder_with_runs_in_it(tmp_path):
     before = sorted(p.name for p in folder.iterdir())
     message = api_error(umbmark.simulate, runs=2, E_b=1.05, logs=folder)
     assert "is not empty" in message
-    assert "--force" in message
+    assert "force=True" in message
     assert sorted(p.name for p in folder.iterdir()) == before  # nothing written
     umbmark.simulate(runs=2, logs=folder, force=True)
 

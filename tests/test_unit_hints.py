@@ -44,7 +44,7 @@ def test_millimetres_as_metres_are_refused_naming_the_unit():
     message = api_error(umbmark.calibrate, EXAMPLE, side_length=4, wheelbase=0.34, unit="m")
     # The wording of the estimators' check, and the unit the numbers look like.
     assert "the return error of row 16 (324.6 m) is larger than the square's side (4 m)" in message
-    assert message.endswith("are these mm, not m? (--unit mm)")
+    assert message.endswith('are these mm, not m? (unit="mm")')  # to a Python caller
     line = cli_error("calibrate", EXAMPLE, "-L", "4", "-b", "0.34", "--unit", "m")
     assert "(--unit mm)" in line
 

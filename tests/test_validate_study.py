@@ -55,7 +55,7 @@ def test_leave_one_run_out_on_one_source(sessions):
 def test_validation_needs_recorded_runs(table):
     path = table([("cw", 0.1, 0.1, 0, 0)] * 2 + [("ccw", 0.1, -0.1, 0, 0)] * 2)
     assert "validation replays recorded runs" in api_error(umbmark.validate, path)
-    assert "--methods 'median'" in api_error(umbmark.validate, path, methods=["median"])
+    assert "methods='median'" in api_error(umbmark.validate, path, methods=["median"])
 
 
 def test_method_auto_takes_the_recommendation(sessions):
@@ -93,10 +93,10 @@ def test_study_reports_what_each_estimator_reaches(monkeypatch):
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        ({"methods": ["median"]}, "--methods 'median'"),
-        ({"trials": 0}, "--trials must be 1 to"),
-        ({"runs": [1]}, "--runs must be 2 to 100"),
-        ({"E_d_spread": 0.5}, "--E-d-spread 0.5: give 0 to 0.2"),
+        ({"methods": ["median"]}, "methods='median'"),
+        ({"trials": 0}, "trials must be 1 to"),
+        ({"runs": [1]}, "runs must be 2 to 100"),
+        ({"E_d_spread": 0.5}, "E_d_spread=0.5: give 0 to 0.2"),
     ],
 )
 def test_study_refuses_bad_options(options, message):

@@ -15,15 +15,18 @@ metres, angles in radians, times in seconds) and a report as its result::
     print(report.overlay_yaml())  # the ros2_control overlay
     report.to_dict()             # exactly what `umbmark calibrate --json` prints
 
-Bad input raises :class:`InputError` (a ``ValueError``) whose message is the one line the
-command prints. The names below are imported on first use, so that ``import umbmark``
-(and ``umbmark --help``) stay fast. Conventions (frame, signs, units) are in
+Bad input raises :class:`InputError` (a ``ValueError``): the one line the command prints,
+naming the options as keywords (``unit="mm"`` where the command says ``--unit mm``); a
+keyword a function does not take raises ``TypeError`` naming the close one. The names
+below are imported on first use, so that ``import umbmark`` (and ``umbmark --help``) stay
+fast. Conventions (frame, signs, units) are in
 :mod:`umbmark.conventions`.
 """
 
 from __future__ import annotations
 
 import importlib
+import inspect
 from typing import TYPE_CHECKING
 
 __version__ = "0.2.0"
@@ -146,7 +149,15 @@ def __getattr__(name: str) -> object:
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'umbmark' has no attribute {name!r}")
-    return getattr(importlib.import_module(module), name)
+    value = getattr(importlib.import_module(module), name)
+    if inspect.isfunction(value):
+        # Called from Python: a misspelt keyword is a TypeError naming the close one, and
+        # an InputError names options as keywords (unit="mm"), not as flags (--unit mm).
+        from .errors import python_api
+
+        value = python_api(value)
+    globals()[name] = value  # imported once
+    return value
 
 
 def __dir__() -> list[str]:

@@ -6,7 +6,8 @@
 - Eq. 3.4: ``E_max,syst = max(r_cg,cw, r_cg,ccw)``.
 - Sec. 5: the spread of each cluster and its standard error of the mean,
   ``SEM = sigma / sqrt(n)``; a second compensation pass is worth it when
-  ``E_max,syst > 3 SEM``.
+  ``E_max,syst > 3 SEM``. :func:`sem_verdict` says it in words, its wording following
+  the ratio ``E_max,syst / 3 SEM`` (:data:`CLEARLY_ABOVE`, :data:`WELL_ABOVE`).
 
 The spread ``sigma`` of a cluster is the radial standard deviation
 ``sqrt(sum |eps_i - cg|^2 / (n - 1))``, so that ``SEM = sigma / sqrt(n)`` is the
@@ -27,12 +28,25 @@ from numpy.typing import NDArray
 from .conventions import Direction
 from .runs import Run, return_errors, split_by_direction
 
-__all__ = ["MIN_RUNS_PER_DIRECTION", "Benchmark", "Cluster", "umbmark_benchmark"]
+__all__ = [
+    "CLEARLY_ABOVE",
+    "MIN_RUNS_PER_DIRECTION",
+    "WELL_ABOVE",
+    "Benchmark",
+    "Cluster",
+    "scatter_standing",
+    "sem_verdict",
+    "umbmark_benchmark",
+]
 
 #: The spread of a cluster needs at least two runs.
 MIN_RUNS_PER_DIRECTION = 2
 #: Sec. 5: a second pass is worth it when E_max,syst exceeds this many SEMs.
 SEM_RULE_FACTOR = 3.0
+#: E_max,syst from this many times 3 SEM on stands "above" the scatter (below: "just above") ...
+CLEARLY_ABOVE = 1.25
+#: ... and from this many times 3 SEM on "well above" it.
+WELL_ABOVE = 2.0
 
 
 @dataclass(frozen=True)
@@ -125,6 +139,53 @@ class Benchmark:
     def second_pass_recommended(self) -> bool:
         """Sec. 5's rule of thumb: ``E_max,syst > 3 SEM``."""
         return self.e_max_syst > self.second_pass_threshold
+
+    @property
+    def sem_ratio(self) -> float:
+        """``E_max,syst / 3 SEM`` (infinite for runs without scatter, NaN for neither)."""
+        if self.second_pass_threshold > 0:
+            return self.e_max_syst / self.second_pass_threshold
+        return math.inf if self.e_max_syst > 0 else math.nan
+
+
+def scatter_standing(bench: Benchmark) -> str:
+    """Where E_max,syst stands against the runs' scatter, in words: ``"within"`` (at most
+    3 SEM), ``"just above"`` (less than :data:`CLEARLY_ABOVE` times 3 SEM), ``"above"``
+    (less than :data:`WELL_ABOVE` times) or ``"well above"``."""
+    if not bench.second_pass_recommended:
+        return "within"
+    ratio = bench.sem_ratio
+    if ratio < CLEARLY_ABOVE:
+        return "just above"
+    return "above" if ratio < WELL_ABOVE else "well above"
+
+
+def sem_verdict(bench: Benchmark) -> str:
+    """The 3 x SEM rule of Sec. 5 on ``bench``, in one line of plain text (mm).
+
+    The one wording of the rule: the terminal, the HTML page and the JSON results
+    (``verdict``) print this. "Well above the scatter" is said only from
+    :data:`WELL_ABOVE` times 3 SEM on; the ratio is stated.
+    """
+    e, t = bench.e_max_syst * 1000.0, bench.second_pass_threshold * 1000.0
+    standing = scatter_standing(bench)
+    if standing == "within":
+        return (
+            f"E_max,syst = {e:.1f} mm <= 3 x SEM = {t:.1f} mm: what remains is within the "
+            "scatter of the runs; a further pass is unlikely to improve it (Sec. 5)."
+        )
+    ratio = bench.sem_ratio
+    times = f" ({ratio:.2f} times 3 x SEM)" if math.isfinite(ratio) else " (runs without scatter)"
+    head = f"E_max,syst = {e:.1f} mm > 3 x SEM = {t:.1f} mm{times}: the systematic error stands "
+    if standing == "just above":
+        return (
+            f"{head}just above the scatter of the runs; another pass (apply the correction, "
+            "then run UMBmark again) may still improve it a little (Sec. 5)."
+        )
+    return (
+        f"{head}{standing} the scatter of the runs. Apply the correction, then run UMBmark "
+        "again; another pass is worth it while E_max,syst stays above 3 x SEM (Sec. 5)."
+    )
 
 
 def umbmark_benchmark(runs: Sequence[Run]) -> Benchmark:

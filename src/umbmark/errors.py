@@ -1,30 +1,269 @@
-"""The error users see: bad input, named by file (and row) and problem."""
+"""The error users see: bad input, named by file (and row) and problem, read as the caller
+writes.
+
+An :class:`InputError`'s problem is written once, naming options as the command line
+spells them (``--unit mm``, ``--side-length``, ``-o``); the command prints that
+(:meth:`InputError.command_line`). Raised out of a library function called from Python
+(``umbmark.calibrate(...)``: the functions of the package are wrapped by
+:func:`python_api`), the same error reads as Python (:meth:`InputError.python`):
+``unit="mm"``, ``side_length``, ``output``, a flag ``force=True``, and an option the
+command takes in degrees or millimetres in the library's radians and metres
+(``turn_angle=6.28319 rad``). :func:`python_api` also refuses a keyword the function does
+not take as Python does, naming the close one (``did you mean unit=?``).
+"""
 
 from __future__ import annotations
 
+import functools
+import math
+import re
+import typing
+from collections.abc import Callable, Collection, Mapping
+from dataclasses import dataclass
 from pathlib import Path
+from typing import ParamSpec, TypeVar
 
-__all__ = ["InputError"]
+__all__ = [
+    "FLAG_KEYWORDS",
+    "InputError",
+    "Keyword",
+    "keywords_of",
+    "python_api",
+    "unexpected_keyword",
+]
+
+P = ParamSpec("P")
+R = TypeVar("R")
+
+#: The command line's options whose keyword is not their name with "_" for "-" (the short
+#: ones, and ``--from``: ``from`` is Python's), by the keyword they stand for.
+FLAG_KEYWORDS = {
+    "--from": "previous",
+    "-o": "output",
+    "-L": "side_length",
+    "-b": "wheelbase",
+    "-n": "runs",
+    "-m": "method",
+    "-f": "format",
+    "-p": "params",
+}
+
+
+@dataclass(frozen=True)
+class Keyword:
+    """A keyword of a library function, as its errors name it.
+
+    Attributes
+    ----------
+    name : str
+        The keyword (``side_length``).
+    flag : bool
+        A flag (``bool``): the command's ``--force`` is ``force=True``.
+    choices : tuple of str
+        The values it takes, when they are a few words (``Literal["m", "cm", "mm"]``).
+    path : bool
+        It takes a file or folder: the command's ``--report r.txt`` is ``report='r.txt'``.
+    """
+
+    name: str
+    flag: bool = False
+    choices: tuple[str, ...] = ()
+    path: bool = False
 
 
 class InputError(ValueError):
     """Input that umbmark cannot use.
 
-    Its text is one line: ``FILE, row N: PROBLEM`` (file and row when known), the line
-    the command prints before it exits with status 2. It is a ``ValueError``, so code
-    that already catches those catches it too.
+    Its text is one line: ``FILE, row N: PROBLEM`` (file and row when known). The command
+    prints it naming options as flags (:meth:`command_line`); raised out of a function of
+    the package called from Python, it names them as keywords (:meth:`python`). It is a
+    ``ValueError``, so code that already catches those catches it too.
+
+    Parameters
+    ----------
+    problem : str
+        What is wrong, naming options as the command line spells them.
+    source, row : optional
+        The file (or folder) and the row.
+    python : str, optional
+        The problem as Python reads it, where the rule of :meth:`python` would not do.
     """
 
     def __init__(
-        self, problem: str, *, source: str | Path | None = None, row: int | None = None
+        self,
+        problem: str,
+        *,
+        source: str | Path | None = None,
+        row: int | None = None,
+        python: str | None = None,
     ) -> None:
         self.problem = problem
+        self.python_problem = python
         self.source = None if source is None else str(source)
         self.row = row
-        super().__init__(str(self))
+        #: The keywords of the function it was raised from (set by :func:`python_api`).
+        self.keywords: Mapping[str, Keyword] | None = None
+        super().__init__(self.command_line())
 
-    def __str__(self) -> str:
+    def _where(self, problem: str) -> str:
         where = self.source or ""
         if self.row is not None:
             where = f"{where}, row {self.row}" if where else f"row {self.row}"
-        return f"{where}: {self.problem}" if where else self.problem
+        return f"{where}: {problem}" if where else problem
+
+    def command_line(self) -> str:
+        """The line the command prints: options as flags (``--unit mm``)."""
+        return self._where(self.problem)
+
+    def python(self, keywords: Mapping[str, Keyword] | None = None) -> str:
+        """The line as Python reads it: options as keywords (``unit="mm"``).
+
+        ``keywords``: those of the function called [default: the ones recorded when it
+        was raised out of one]; flags that name none of them stay as they are.
+        """
+        keywords = self.keywords if keywords is None else keywords
+        if self.python_problem is not None:
+            return self._where(self.python_problem)
+        if not keywords:
+            return self.command_line()
+        return self._where(_as_python(self.problem, keywords))
+
+    def __str__(self) -> str:
+        return self.command_line() if self.keywords is None else self.python()
+
+
+# --- flags as keywords ------------------------------------------------------------------
+
+_FLAG = r"(?<![\w-])(?P<flag>--[A-Za-z][A-Za-z0-9]*(?:-[A-Za-z0-9]+)*|-[A-Za-z])(?![\w-])"
+#: What may follow a flag: a value (a number, a quoted text, a word or a path; a sentence's
+#: full stop is not part of it), and a unit after a number.
+_VALUE = (
+    r"(?: (?P<value>'[^']*'|\"[^\"]*\"|[\w./~+-]*[\w/~+-]))?"
+    r"(?: (?P<unit>deg|mm|cm|m|ms|s)(?![\w^/]))?"
+)
+_TOKEN = re.compile(_FLAG + _VALUE)
+_NUMBER = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?|[-+]?inf|nan")
+#: Units a command takes that the library takes in SI: factor, SI unit.
+_TO_SI = {"deg": (math.pi / 180.0, "rad"), "mm": (1e-3, "m"), "cm": (1e-2, "m")}
+
+
+def _keyword_of(flag: str) -> str:
+    """The keyword a flag stands for: ``--current-c-l`` is ``current_c_l``."""
+    return FLAG_KEYWORDS.get(flag) or flag.lstrip("-").replace("-", "_")
+
+
+def _as_python(text: str, keywords: Mapping[str, Keyword]) -> str:
+    """``text`` with its flags that name ``keywords`` written as Python keywords."""
+
+    def one(match: re.Match[str]) -> str:
+        keyword = keywords.get(_keyword_of(match["flag"]))
+        if keyword is None:  # not an option of this function (--help, --json)
+            return match[0]
+        name, value, unit = keyword.name, match["value"], match["unit"]
+        rest = "".join(f" {part}" for part in (value, unit) if part is not None)
+        if value is not None and _NUMBER.fullmatch(value):
+            if unit in _TO_SI:
+                factor, unit = _TO_SI[unit]
+                value = format(float(value) * factor, ".6g")
+            return f"{name}={value}" + (f" {unit}" if unit else "")
+        if value is not None and value[0] in "'\"":
+            return f"{name}={value}{rest[len(value) + 1 :]}"
+        if value is not None and value in keyword.choices:
+            return f'{name}="{value}"{rest[len(value) + 1 :]}'
+        if value is not None and keyword.path and ("." in value or "/" in value):
+            return f"{name}={value!r}{rest[len(value) + 1 :]}"
+        return (f"{name}=True" if keyword.flag else name) + rest
+
+    return _TOKEN.sub(one, text)
+
+
+# --- the keywords of a function -----------------------------------------------------------
+
+
+def _literals(annotation: object, namespace: Mapping[str, object]) -> tuple[str, ...]:
+    """The string values of the ``Literal`` types in ``annotation`` (text or type)."""
+    if isinstance(annotation, typing.ForwardRef):
+        annotation = annotation.__forward_arg__
+    if isinstance(annotation, str):
+        import ast
+
+        text = annotation
+        try:  # the code's own annotation, as typing.get_type_hints evaluates it
+            annotation = eval(text, dict(namespace))
+        except Exception:  # a name imported only for type checking: read the text
+            values: list[str] = []
+            for inner in re.findall(r"Literal\[([^\]]*)\]", text):
+                values += [v for v in ast.literal_eval(f"({inner},)") if isinstance(v, str)]
+            return tuple(values)
+    if typing.get_origin(annotation) is typing.Literal:
+        return tuple(v for v in typing.get_args(annotation) if isinstance(v, str))
+    return tuple(v for arg in typing.get_args(annotation) for v in _literals(arg, namespace))
+
+
+def _keyword(
+    name: str, annotation: object, default: object, namespace: Mapping[str, object]
+) -> Keyword:
+    """A parameter's :class:`Keyword`, from its annotation (text or type) and default."""
+    text = annotation.__forward_arg__ if isinstance(annotation, typing.ForwardRef) else annotation
+    return Keyword(
+        name,
+        flag=text in ("bool", bool) or isinstance(default, bool),
+        choices=_literals(annotation, namespace),
+        path=isinstance(text, str) and bool(re.search(r"\bPath(Like)?\b", text)),
+    )
+
+
+def keywords_of(fn: Callable[..., object]) -> dict[str, Keyword] | None:
+    """The keywords ``fn`` takes (those of a ``**options: Unpack[TypedDict]`` too), or
+    None when it takes any."""
+    import inspect
+
+    namespace = getattr(inspect.unwrap(fn), "__globals__", {})
+    out: dict[str, Keyword] = {}
+    for p in inspect.signature(fn).parameters.values():
+        if p.kind is p.VAR_KEYWORD:
+            text = p.annotation if isinstance(p.annotation, str) else ""
+            inner = re.fullmatch(r"Unpack\[(\w+)\]", text)
+            typed = namespace.get(inner[1]) if inner else None
+            hints = getattr(typed, "__annotations__", None)
+            if not isinstance(hints, dict):
+                return None
+            module = inspect.getmodule(typed)
+            space = vars(module) if module is not None else namespace
+            for name, annotation in hints.items():
+                out[name] = _keyword(name, annotation, None, space)
+        elif p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY):
+            out[p.name] = _keyword(p.name, p.annotation, p.default, namespace)
+    return out
+
+
+def unexpected_keyword(function: str, name: str, known: Collection[str]) -> TypeError:
+    """Python's error for a keyword ``function`` does not take, naming the close one."""
+    import difflib
+
+    by_lower = {k.lower(): k for k in known}
+    close = difflib.get_close_matches(name.lower().replace("-", "_"), by_lower, n=1)
+    hint = f"; did you mean {by_lower[close[0]]}=?" if close else ""
+    return TypeError(f"{function}() got an unexpected keyword argument {name!r}{hint}")
+
+
+def python_api(fn: Callable[P, R]) -> Callable[P, R]:
+    """``fn`` as Python callers meet it: a keyword it does not take is a ``TypeError``
+    naming the close one, and its :class:`InputError` names options as keywords."""
+    keywords = keywords_of(fn)
+
+    @functools.wraps(fn)
+    def call(*args: P.args, **kwargs: P.kwargs) -> R:
+        if keywords is not None:
+            for name in kwargs:
+                if name not in keywords:
+                    raise unexpected_keyword(fn.__name__, name, keywords)
+        try:
+            return fn(*args, **kwargs)
+        except InputError as error:
+            if keywords is not None:  # with those of a function it came through
+                error.keywords = {**keywords, **(error.keywords or {})}
+                error.args = (error.python(),)
+            raise
+
+    return call

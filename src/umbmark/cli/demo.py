@@ -44,6 +44,7 @@ def demo(json_out: bool, out: str, seed: int, method: str, runs: int) -> None:
     Fig. 6 / Fig. 11 style plots into --out.
     """
     from .. import demo as run_demo
+    from ..benchmark import sem_verdict
     from .common import console, progress_bar, warn, wrote
     from .render import render_calibration
 
@@ -74,15 +75,7 @@ def demo(json_out: bool, out: str, seed: int, method: str, runs: int) -> None:
         f"{b1.e_max_syst * 1000:.1f} mm: {result.improvement:.1f}-fold improvement[/bold] "
         "(the paper's LabMate: 317 mm -> 21 mm, 15-fold)."
     )
-    screen.print(
-        f"After calibration E_max,syst {'>' if b1.second_pass_recommended else '<='} "
-        f"3 x SEM = {b1.second_pass_threshold * 1000:.1f} mm: "
-        + (
-            "a second pass could still help."
-            if b1.second_pass_recommended
-            else "what remains is the runs' scatter."
-        )
-    )
+    screen.print(f"After calibration: {sem_verdict(b1)}")
     screen.print(
         f"Calibrate the same runs yourself: umbmark calibrate {result.files['runs_before']} "
         "--side-length 4 --wheelbase 0.34"

@@ -108,7 +108,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         error_line(_usage(exc))
         sys.exit(EXIT_BAD_INPUT)
     except InputError as exc:
-        error_line(str(exc))
+        error_line(exc.command_line())  # options named as flags (--unit mm)
         sys.exit(EXIT_BAD_INPUT)
     except (click.Abort, KeyboardInterrupt, _InterruptedError):
         # One line; on a terminal after a line break, as the ^C the terminal echoed has none.

@@ -81,12 +81,13 @@ def plan(json_out: bool, **options: Any) -> None:
         )
     else:
         out.print("  noise model tape: x and y scatter independent")
+    from ..outputs.components import ANGLE_UNIT, to_shown
     from .render import table
 
     rows = [
         ("se(E_d), E_d's standard error", f"{report.se_E_d:.2e}", "1"),
         ("se(E_b), E_b's standard error", f"{report.se_E_b:.2e}", "1"),
-        ("se(alpha) = se(beta)", f"{report.se_alpha * 1e3:.3f}", "mrad"),
+        ("se(alpha) = se(beta)", f"{to_shown(report.se_alpha, ANGLE_UNIT):.4f}", ANGLE_UNIT),
         ("SEM of a cluster", f"{report.sem * 1000:.1f}", "mm"),
         (
             "3 x SEM: another pass while E_max,syst exceeds it",

@@ -4,6 +4,7 @@ the calibration's summary, every figure with its unit."""
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Collection, Iterable, Mapping, Sequence
 
 from rich import box
@@ -11,10 +12,11 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from ..benchmark import Benchmark
+from ..benchmark import Benchmark, sem_verdict
 from ..jobs.calibrate import CalibrationReport
+from ..outputs.components import ANGLE_UNIT, component, to_shown
 
-__all__ = ["column", "render_calibration", "row", "table", "verdict"]
+__all__ = ["column", "print_table", "render_calibration", "row", "table"]
 
 _MM = 1000.0
 _METHOD_NAMES = {
@@ -27,21 +29,6 @@ _METHOD_NAMES = {
     "trajectory": "least squares on whole recorded trajectories",
     "trajectory-scrub": "least squares on whole trajectories, turn-dependent wheelbase",
 }
-
-
-def verdict(b: Benchmark) -> str:
-    """The 3 x SEM rule of Sec. 5, in words."""
-    e, t = b.e_max_syst * _MM, b.second_pass_threshold * _MM
-    if b.second_pass_recommended:
-        return (
-            f"E_max,syst = {e:.1f} mm > 3 x SEM = {t:.1f} mm: the systematic error stands "
-            "well above the scatter of the runs. Apply the correction below, then run "
-            "UMBmark again; another pass is worth it while E_max,syst stays above 3 x SEM."
-        )
-    return (
-        f"E_max,syst = {e:.1f} mm <= 3 x SEM = {t:.1f} mm: what remains is within the "
-        "scatter of the runs; a further pass is unlikely to improve it (Sec. 5)."
-    )
 
 
 def _render_benchmark(report: CalibrationReport, bench: Benchmark, console: Console) -> None:
@@ -72,7 +59,7 @@ def _render_benchmark(report: CalibrationReport, bench: Benchmark, console: Cons
             f"  (the {bench.worst.direction.value} cluster)",
         )
     )
-    console.print(verdict(bench))
+    console.print(sem_verdict(bench))
 
 
 def _plus_minus(value: float, se: float | None, fmt: str) -> str:
@@ -110,18 +97,12 @@ def render_calibration(
         name += ": not identified, one wheelbase fitted (see the warning)"
     errors = table(f"Systematic errors: {name}", ["", "value"])
     column(errors, "", text=True)
-    _row(
-        errors,
-        "alpha, Type A error per turn",
-        _plus_minus(math.degrees(est.alpha), _deg(se.get("alpha")), ".4f") + " deg",
-        "> 0: turns too little",
-    )
-    _row(
-        errors,
-        "beta, Type B error per leg",
-        _plus_minus(math.degrees(est.beta), _deg(se.get("beta")), ".4f") + " deg",
-        "> 0: legs curve left",
-    )
+    for name, label, note in (
+        ("alpha", "alpha, Type A error per turn", "> 0: turns too little"),
+        ("beta", "beta, Type B error per leg", "> 0: legs curve left"),
+    ):
+        shown = _plus_minus(to_shown(getattr(est, name), ANGLE_UNIT), _angle(se.get(name)), ".4f")
+        _row(errors, label, f"{shown} {ANGLE_UNIT}", note)
     _row(
         errors, "E_b = b_actual / b_nominal", _plus_minus(est.E_b, se.get("E_b"), ".6f"), "Eq. 4.27"
     )
@@ -201,20 +182,22 @@ def render_calibration(
 def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:
     """The trajectory fit's own figures: radii, wheelbase(s), time and truth offsets,
     residuals."""
-    # Fitted lengths [mm] and the time offset [ms]: value x 1000 in every row.
-    for key, label, note, digits in (
-        ("r_left", "left wheel radius [mm]", "fitted", ".3f"),
-        ("r_right", "right wheel radius [mm]", "fitted", ".3f"),
-        ("wheelbase", "wheelbase [mm]", "fitted: the single set exported", ".3f"),
-        ("arc_wheelbase", "wheelbase on straights and arcs [mm]", "scrub model", ".3f"),
-        ("spot_wheelbase", "wheelbase turning on the spot [mm]", "scrub model", ".3f"),
-        ("time_offset", "time offset [ms]", "> 0: ground truth lags the wheels", ".1f"),
-        ("truth_offset_x", "tracked point forward [mm]", "fitted: truth offset d_x", ".1f"),
-        ("truth_offset_y", "tracked point left [mm]", "fitted: truth offset d_y", ".1f"),
+    for key, note in (
+        ("r_left", "fitted"),
+        ("r_right", "fitted"),
+        ("wheelbase", "fitted: the single set exported"),
+        ("arc_wheelbase", "scrub model"),
+        ("spot_wheelbase", "scrub model"),
+        ("time_offset", "> 0: ground truth lags the wheels"),
+        ("truth_offset_x", "fitted: truth offset d_x"),
+        ("truth_offset_y", "fitted: truth offset d_y"),
     ):
         if key in comp:
-            value = _plus_minus(comp[key] * _MM, se.get(key, math.nan) * _MM, digits)
-            _row(errors, label, value, note)
+            c = component(key)
+            value = _plus_minus(
+                to_shown(comp[key], c.unit), to_shown(se.get(key, math.nan), c.unit), c.digits
+            )
+            _row(errors, c.heading, value, note)
     where = "along the runs" if "samples" in comp else "at the runs' ends"
     counted = f"{comp['runs']:.0f} runs" + (
         f", {comp['samples']:.0f} samples" if "samples" in comp else ""
@@ -222,7 +205,8 @@ def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, 
     _row(
         errors,
         f"residual {where} (rms)",
-        f"{comp['rms_position'] * _MM:.2f} mm, {math.degrees(comp['rms_heading']):.3f} deg",
+        f"{component('rms_position').show(comp['rms_position'])} mm, "
+        f"{component('rms_heading').show(comp['rms_heading'])} {ANGLE_UNIT}",
         counted,
     )
 
@@ -267,6 +251,79 @@ def table(
     return grid
 
 
+#: A header is wrapped to this many characters a line (or its column's widest cell) ...
+_HEADER_WIDTH = 9
+#: ... and a table is measured as if the console were this wide.
+_UNLIMITED = 1_000_000
+
+
+def print_table(
+    console: Console,
+    title: str,
+    columns: Sequence[str],
+    rows: Sequence[Sequence[str]],
+    *,
+    keys: int = 1,
+    left: Collection[str] | None = None,
+) -> None:
+    """Print a table that fits ``console``: no cell is ever cut or ellipsised.
+
+    A table that fits is printed as it is. A wider one has its headers wrapped between
+    words (each column as wide as its widest cell, at least :data:`_HEADER_WIDTH`) and
+    its columns split over several tables, each repeating the first ``keys`` columns
+    (what a row is about: the grid cell, the method), in the order given. When not even
+    the key columns and one more fit, each row is printed as lines of ``header: value``.
+
+    Parameters
+    ----------
+    console : Console
+        Where to print; its width is the limit.
+    title : str
+        The title (of the first table; the others say which part they are).
+    columns, rows, left
+        As for :func:`table`.
+    keys : int
+        How many leading columns every part repeats.
+    """
+
+    def part(title: str, chosen: Sequence[int], wrap: bool = True) -> Table:
+        grid = table(title, left=left)
+        for k in chosen:
+            header = name = columns[k]
+            if wrap:
+                widest = max([len(r[k]) for r in rows] + [len(w) for w in name.split()])
+                header = textwrap.fill(name, max(widest, _HEADER_WIDTH), break_long_words=False)
+            column(grid, header, text=(k == 0) if left is None else name in left)
+        for cells in rows:
+            row(grid, *(cells[k] for k in chosen))
+        return grid
+
+    def fits(grid: Table) -> bool:  # its natural width, measured without a limit
+        unlimited = console.options.update_width(_UNLIMITED)
+        return console.measure(grid, options=unlimited).maximum <= console.width
+
+    whole = part(title, range(len(columns)), wrap=False)
+    if fits(whole):
+        console.print(whole)
+        return
+    head = list(range(min(keys, len(columns))))
+    parts: list[list[int]] = []
+    for k in range(len(head), len(columns)):
+        if parts and fits(part("", [*parts[-1], k])):
+            parts[-1].append(k)
+        elif fits(part("", [*head, k])):
+            parts.append([*head, k])
+        else:  # not even one column beside the keys: a block of lines per row
+            console.print(Text(title, style="bold"))
+            for cells in rows:
+                console.print()
+                for name, cell in zip(columns, cells, strict=True):
+                    console.print(Text(f"{name}: {cell}"))
+            return
+    for n, chosen in enumerate(parts or [head], 1):
+        console.print(part(title if n == 1 else f"{title} (part {n} of {len(parts)})", chosen))
+
+
 def column(grid: Table, header: str, *, text: bool = False) -> None:
     """Add a column: ``text`` left-aligned, else a number column, right-aligned."""
     grid.add_column(Text(header), justify="left" if text else "right")
@@ -281,5 +338,5 @@ def _row(table: Table, *cells: str) -> None:
     row(table, *cells)
 
 
-def _deg(value: float | None) -> float | None:
-    return None if value is None else math.degrees(value)
+def _angle(value: float | None) -> float | None:
+    return None if value is None else to_shown(value, ANGLE_UNIT)

@@ -60,7 +60,8 @@ def report(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     verdict (E_max,syst of every pass, the 3 x SEM rule), the Fig. 6 view of every pass
     in one figure (one pass of recorded runs: also its runs replayed with the new
     parameters, marked as a prediction), the per-pass and per-run tables, the estimates
-    with 95 % intervals, the model checks, the overlay to copy and the provenance.
+    with 95 % intervals (alpha and beta in degrees), the figures of the fit, the overlay
+    to copy and the provenance.
     """
     from .. import report as run_report
     from .common import console, warn, wrote

@@ -26,9 +26,11 @@ def _number(*decls: str, section: str, default: float, help_text: str) -> Any:
 @apply(
     [
         _number("--E-d", "E_d", section=ROBOT, default=1.0,
-                help_text="True wheel-diameter ratio D_R / D_L (Eq. 2.3)."),
+                help_text="True wheel-diameter ratio D_R / D_L (Eq. 2.3), with the wheels "
+                "of nominal diameter D_n (without --params' c_L, c_R)."),
         _number("--E-b", "E_b", section=ROBOT, default=1.0,
-                help_text="True wheelbase over nominal, b_actual / b (Eq. 2.4)."),
+                help_text="True wheelbase over nominal, b_actual / b (Eq. 2.4), with b of "
+                "--wheelbase (without --params' correction)."),
         _number("--E-s", "E_s", section=ROBOT, default=1.0,
                 help_text="True average wheel diameter over nominal, D_avg / D_n."),
         _number("--wheelbase", "-b", section=ROBOT, default=0.34,
@@ -41,7 +43,9 @@ def _number(*decls: str, section: str, default: float, help_text: str) -> Any:
                 help_text="Motor revolutions per wheel revolution."),
         option("--params", section=ROBOT, type=click.Path(dir_okay=False),
                help="Calibration result (calibrate -o) whose c_L, c_R and wheelbase the "
-               "robot's odometry uses; the truth stays relative to the nominal values."),
+               "robot's odometry uses; --E-d, --E-b, --E-s stay the truth relative to the "
+               "nominal values (printed so), the errors left to the odometry are printed "
+               "too."),
         option("--path", section=DRIVE, type=click.Choice(["square", "straight", "turn"]),
                default="square", show_default=True,
                help="square (UMBmark), straight (a leg of --side-length, to measure E_s) or "
@@ -101,11 +105,26 @@ def simulate(json_out: bool, turn_angle: float, **options: Any) -> None:
         return
     robot, noise = report.robot, report.robot.noise
     out = console()
+
+    def errors(values: dict[str, float]) -> str:
+        return ", ".join(f"{name} = {value:.6f}" for name, value in values.items())
+
     out.print(
-        f"Simulated {len(report.runs)} run(s) of {report.path_name}: true E_d = "
-        f"{robot.E_d:.6f}, E_b = {summary['true_E_b']:.6f}, E_s = {robot.E_s:.6f}; slip "
-        f"{noise.slip:g} m^0.5, bumps {noise.bump_rate:g} per m; seed {report.seed}."
+        f"Simulated {len(report.runs)} run(s) of {report.path_name}; slip {noise.slip:g} "
+        f"m^0.5, bumps {noise.bump_rate:g} per m; seed {report.seed}."
     )
+    out.print(
+        "True errors, relative to the nominal wheels (D_n = "
+        f"{robot.odometry.wheel_diameter * 1000:g} mm, b = {report.nominal_wheelbase * 1000:g} "
+        f"mm): {errors(report.true_errors)}."
+    )
+    if options.get("params") is not None:
+        odo = robot.odometry
+        out.print(
+            "Errors left to the odometry of --params, relative to its parameters (c_L = "
+            f"{odo.c_left:.6f}, c_R = {odo.c_right:.6f}, b = {odo.wheelbase * 1000:.2f} mm): "
+            f"{errors(report.odometry_errors)}; a calibration of these runs measures these."
+        )
     for key, label in (
         ("e_max_syst", "E_max,syst of these runs"),
         ("distance_ratio", "true over odometry distance (E_s)"),

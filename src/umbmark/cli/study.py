@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
 from .options import OUTPUTS, Command, option
+
+if TYPE_CHECKING:
+    from ..jobs.study import CellResult
 
 __all__ = ["study"]
 
@@ -65,7 +68,7 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
     """
     from .. import study as run_study
     from .common import console, progress_bar
-    from .render import row, table
+    from .render import print_table
 
     chosen = [m.strip() for m in methods.split(",") if m.strip()]
     with progress_bar("study") as progress:
@@ -77,11 +80,9 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
                "floor 2 passes [%]", "refused [%]", "95 % cover E_d [%]",
                "95 % cover E_b [%]", "bias E_d [ppm]", "bias E_b [ppm]",
                "spread E_d [ppm]", "spread E_b [ppm]", "scatter [mm]")  # fmt: skip
-    grid = table(
+    title = (
         f"{report.trials} robots per cell, E_d in 1 ± {report.E_d_spread:g}, E_b in 1 ± "
-        f"{report.E_b_spread:g}; shares in %, noise-free bias in ppm",
-        columns,
-        left=("method",),
+        f"{report.E_b_spread:g}; shares in %, noise-free bias in ppm"
     )
 
     def pct(value: float) -> str:
@@ -93,13 +94,16 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
     def size(value: float) -> str:
         return "-" if not math.isfinite(value) else f"{value:.1f}"
 
-    for r in report.results:
-        cells = (
+    def cells(r: CellResult) -> tuple[str, ...]:
+        return (
             f"{r.cell.slip:g}", f"{r.cell.side_length:g}", str(r.cell.runs),
             f"{r.cell.wheelbase:g}", r.method, pct(r.floor_after_one), pct(r.floor_after_two),
             pct(r.refused), pct(r.coverage_E_d), pct(r.coverage_E_b), ppm(r.bias_E_d_ppm),
             ppm(r.bias_E_b_ppm), size(1e6 * r.spread_E_d), size(1e6 * r.spread_E_b),
             size(1e3 * r.scatter),
         )  # fmt: skip
-        row(grid, *cells)
-    console().print(grid)
+
+    rows = [cells(r) for r in report.results]
+    # On a narrow terminal the columns go into several tables, each with the grid cell
+    # and the method: no number is ever cut.
+    print_table(console(), title, columns, rows, keys=5, left=("method",))

@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from .. import __version__
-from ..benchmark import Benchmark, Cluster, umbmark_benchmark
+from ..benchmark import Benchmark, Cluster, sem_verdict, umbmark_benchmark
 from ..calibration import Calibration
-from ..errors import InputError
+from ..errors import InputError, python_api
 from ..estimators.base import ErrorEstimate, SquareTest
 from ..kinematics import WheelParams
 from ..outputs.atomic import atomic_write_text
@@ -230,10 +230,11 @@ class CalibrationReport:
                     "sem": bench.sem,
                     "second_pass_threshold": bench.second_pass_threshold,
                     "second_pass_recommended": bench.second_pass_recommended,
+                    "verdict": sem_verdict(bench),
                 }
             )
         else:
-            out.update({"e_max_syst": None, "second_pass_recommended": None})
+            out.update({"e_max_syst": None, "second_pass_recommended": None, "verdict": None})
         out.update(
             {
                 "alpha": est.alpha,
@@ -358,6 +359,7 @@ class CalibrationReport:
 
         return calibration_html(self)
 
+    @python_api
     def write(
         self,
         *,
@@ -674,12 +676,8 @@ def _calibrate_runs(
 
 def _intervals(estimate: ErrorEstimate) -> dict[str, list[float]]:
     """95 % confidence intervals of the estimate's figures that have a standard error."""
-    out = {}
-    for name in ("E_d", "E_b", "E_s", "alpha", "beta"):
-        interval = estimate.interval(name)
-        if interval is not None:
-            out[name] = [interval[0], interval[1]]
-    return out
+    pairs = ((name, estimate.interval(name)) for name in ("E_d", "E_b", "E_s", "alpha", "beta"))
+    return {name: [pair[0], pair[1]] for name, pair in pairs if pair is not None}
 
 
 def _cluster_dict(cluster: Cluster) -> dict[str, Any]:

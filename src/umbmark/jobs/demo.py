@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..benchmark import sem_verdict
 from ..errors import InputError
 from ..estimators import METHODS, SquareTest
 from ..sim.experiments import Trial
@@ -96,6 +97,7 @@ class DemoReport:
             "improvement": self.improvement,
             "sem_after": b1.sem,
             "second_pass_recommended_after": b1.second_pass_recommended,
+            "verdict_after": sem_verdict(b1),
             "wheelbase_corrected": cal.wheelbase_corrected,
             "c_L": cal.new_c_left,
             "c_R": cal.new_c_right,

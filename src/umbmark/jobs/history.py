@@ -12,12 +12,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import InputError
+from ..errors import InputError, python_api
 from ..history_store import DEFINITIONS, CalibrationRecord, History, RobotRecord
 from .outputs import OutputPlan
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+#: The command's words and the library's (the command line's syntax is no keyword).
+_PLOT_NEEDS_NAME = "--plot needs the robot's NAME (umbmark history NAME --plot FILE)"
+_PLOT_NEEDS_NAME_PY = "plot needs the robot's name (umbmark.history(name, plot=file))"
 
 __all__ = ["HistoryReport", "history"]
 
@@ -83,11 +87,12 @@ class HistoryReport:
             For a report that lists the robots instead of one robot's calibrations.
         """
         if self.nominal is None or not self.calibrations:
-            raise InputError("--plot needs the robot's NAME (umbmark history NAME --plot FILE)")
+            raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
         from ..outputs.plotting import history_figure
 
         return history_figure(self.nominal, self.calibrations)
 
+    @python_api
     def write(self, *, plot: str | os.PathLike[str] | None = None) -> list[Path]:
         """Write the trend figure (.png, .svg, .pdf), checked before it is drawn.
 
@@ -144,7 +149,7 @@ def history(
         For an unknown robot or calibration, or a file that is not a history.
     """
     if plot is not None and robot is None:
-        raise InputError("--plot needs the robot's NAME (umbmark history NAME --plot FILE)")
+        raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
     store = History(history)
     path = str(store.path)
     if plot is not None:  # the output is checked before a calibration is marked applied

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InputError
+from ..errors import InputError, python_api
 from ..kinematics import IntegrationMethod, WheelParams
 from ..recording import RunLog
 from ..runs import Run, end_errors
@@ -193,6 +193,7 @@ class ReplayReport:
 
         return replay_figure(self.runs, self.parameter_sets, title=f"Replay of {self.source}")
 
+    @python_api
     def write(
         self,
         *,

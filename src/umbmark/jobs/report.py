@@ -20,17 +20,16 @@ from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..benchmark import Benchmark, umbmark_benchmark
-from ..errors import InputError
+from ..errors import InputError, python_api
 from ..kinematics import WheelParams
 from ..outputs.atomic import atomic_write_text
 from ..runs import Run
 from .calibrate import DEFAULT_METHOD, CalibrationReport, calibrate
-from .inputs import RunSource, source_name
+from .inputs import RunSource, SourceOptions, source_name
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
 
-    from .inputs import SourceOptions
     from .validate import ValidationReport
 
 __all__ = ["MAX_PASSES", "PassesReport", "PredictedPass", "predict_after", "report"]
@@ -170,6 +169,7 @@ class PassesReport:
 
         return passes_html(self)
 
+    @python_api
     def write(self, output: str | os.PathLike[str]) -> Path:
         """Write :meth:`html` to ``output`` (.html or .htm), atomically.
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import __version__
 from ..conventions import Direction
-from ..errors import InputError
+from ..errors import InputError, python_api
 from ..kinematics import WheelParams
 from ..recording import RunLog
 from ..runs import Run
@@ -45,7 +45,8 @@ __all__ = ["PATHS", "SimulationReport", "simulate"]
 
 PathKind = Literal["square", "straight", "turn"]
 PATHS: tuple[PathKind, ...] = ("square", "straight", "turn")
-DIRECTIONS = ("both", "cw", "ccw")
+DirectionChoice = Literal["both", "cw", "ccw"]
+DIRECTIONS: tuple[DirectionChoice, ...] = ("both", "cw", "ccw")
 #: Largest on-the-spot turn [rad]: ten turns.
 MAX_TURN = 20.0 * math.pi
 #: Bounds of the options that set how much work a simulation is (and of plausibility).
@@ -107,13 +108,34 @@ class SimulationReport:
     configured_wheelbase: float | None = None
 
     def __repr__(self) -> str:
-        robot = self.robot
+        truth = self.true_errors
         return (
             f"SimulationReport(path={self.path_name!r}, runs={len(self.runs)}, "
-            f"E_d={robot.E_d:.6f}, E_b={robot.wheelbase / robot.odometry.wheelbase:.6f}, "
-            f"E_s={robot.E_s:.6f}, seed={self.seed}, "
-            f"recorded={self.result.trace is not None})"
+            f"E_d={truth['E_d']:.6f}, E_b={truth['E_b']:.6f}, E_s={truth['E_s']:.6f}, "
+            f"seed={self.seed}, recorded={self.result.trace is not None})"
         )
+
+    @property
+    def nominal_wheelbase(self) -> float:
+        """The nominal wheelbase ``b`` [m] the errors are relative to."""
+        return self.configured_wheelbase or self.robot.odometry.wheelbase
+
+    @property
+    def true_errors(self) -> dict[str, float]:
+        """``E_d``, ``E_b``, ``E_s`` of the robot relative to the nominal wheels (``D_n``,
+        ``b``): what was asked for (:func:`umbmark.sim.summary.true_errors`)."""
+        from ..sim.summary import true_errors
+
+        return true_errors(self.robot, self.nominal_wheelbase)
+
+    @property
+    def odometry_errors(self) -> dict[str, float]:
+        """``E_d``, ``E_b``, ``E_s`` relative to the parameters the odometry used (with
+        ``params``: the calibration's), what a calibration of these runs measures
+        (:func:`umbmark.sim.summary.odometry_errors`)."""
+        from ..sim.summary import odometry_errors
+
+        return odometry_errors(self.robot)
 
     @property
     def provenance(self) -> str:
@@ -133,7 +155,9 @@ class SimulationReport:
         """A JSON-ready dictionary (metres, radians): what ``simulate --json`` prints."""
         from ..sim.summary import describe_simulation
 
-        out = describe_simulation(self.robot, self.result, self.path_name, self.path)
+        out = describe_simulation(
+            self.robot, self.result, self.path_name, self.path, self.nominal_wheelbase
+        )
         out["seed"] = self.seed
         return out
 
@@ -141,6 +165,7 @@ class SimulationReport:
         """The JSON text of :meth:`to_dict`."""
         return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
+    @python_api
     def write(
         self,
         *,
@@ -237,8 +262,8 @@ def simulate(
     encoder_resolution: float = 2000.0,
     gear_ratio: float = 20.0,
     runs: int = 5,
-    direction: str = "both",
-    path: str = "square",
+    direction: DirectionChoice = "both",
+    path: PathKind = "square",
     turn_angle: float = 2.0 * math.pi,
     noise_free: bool = False,
     slip: float = 0.0004,

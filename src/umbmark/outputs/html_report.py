@@ -12,12 +12,14 @@ from __future__ import annotations
 import datetime as dt
 import hashlib
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .. import __version__
+from ..benchmark import scatter_standing, sem_verdict
+from .components import ANGLE_UNIT, component, to_shown
 
 if TYPE_CHECKING:
     from ..benchmark import Benchmark
@@ -45,6 +47,8 @@ h1, h3, p, li, figcaption { overflow-wrap: anywhere; } h2 { font-size: 1.2rem; m
 table { border-collapse: collapse; margin: .5rem 0; }
 th, td { padding: .2rem .6rem; border-bottom: 1px solid #ddd; text-align: right;
   white-space: nowrap; }
+th { white-space: normal; vertical-align: bottom; }
+.wrap { white-space: normal; overflow-wrap: anywhere; min-width: 6rem; text-align: left; }
 th:first-child, td:first-child { text-align: left; }
 pre { background: #f4f4f4; padding: .75rem; overflow-x: auto; font-size: .85rem; }
 figure { margin: 0; } figure svg { max-width: 100%; height: auto; }
@@ -74,11 +78,21 @@ def _num(value: float | None, fmt: str) -> str:
     return format(value, fmt)
 
 
-def _table(head: list[str], rows: list[list[str]]) -> str:
-    """An HTML table (in a scrolling box) of already formatted cells; escaped here."""
-    th = "".join(f"<th>{escape(h)}</th>" for h in head)
+def _table(head: list[str], rows: list[list[str]], wrap: Collection[int] = ()) -> str:
+    """An HTML table (in a scrolling box) of already formatted cells; escaped here.
+
+    Headers wrap between words, numbers never; the cells of the columns ``wrap`` (their
+    indices: names, paths, digests, explanations) wrap anywhere, so that a wide table fits
+    a page.
+    """
+    cls = [' class="wrap"' if k in wrap else "" for k in range(len(head))]
+    th = "".join(f"<th{c}>{escape(h)}</th>" for c, h in zip(cls, head, strict=True))
+    tds = [f"<td{c}>" for c in cls]
     body = "".join(
-        "<tr>" + "".join(f"<td>{escape(cell)}</td>" for cell in row) + "</tr>\n" for row in rows
+        "<tr>"
+        + "".join(f"{td}{escape(cell)}</td>" for td, cell in zip(tds, row, strict=False))
+        + "</tr>\n"
+        for row in rows
     )
     return (
         f'<div class="scroll"><table>\n<thead><tr>{th}</tr></thead>\n'
@@ -109,21 +123,6 @@ _PREDICTED_WORDS = (
 )
 
 
-def _rule(bench: Benchmark) -> str:
-    """The 3 x SEM rule of Sec. 5 on one benchmark, in words (HTML)."""
-    e, t = bench.e_max_syst * _MM, bench.second_pass_threshold * _MM
-    if bench.second_pass_recommended:
-        return (
-            f"E_max,syst = {e:.1f} mm &gt; 3 x SEM = {t:.1f} mm: the systematic error stands "
-            "well above the scatter of the runs. Apply the correction, then run UMBmark "
-            "again; another pass is worth it while E_max,syst stays above 3 x SEM."
-        )
-    return (
-        f"E_max,syst = {e:.1f} mm &lt;= 3 x SEM = {t:.1f} mm: what remains is within the "
-        "scatter of the runs; a further pass is unlikely to improve it (Sec. 5)."
-    )
-
-
 def _verdict(page: PassesReport) -> str:
     passes = _passes(page)
     last = page.last.benchmark
@@ -152,7 +151,7 @@ def _verdict(page: PassesReport) -> str:
                 f"{last.e_max_syst * _MM:.1f} mm over {len(passes)} passes: "
                 f"{first.e_max_syst / last.e_max_syst:.1f} times smaller.</p>"
             )
-    rule = f"<p>{'Last pass: ' if len(passes) > 1 else ''}{_rule(last)}</p>"
+    rule = f"<p>{'Last pass: ' if len(passes) > 1 else ''}{escape(sem_verdict(last))}</p>"
     predicted = ""
     if page.predicted is not None:
         p = page.predicted.benchmark
@@ -168,7 +167,7 @@ def _verdict(page: PassesReport) -> str:
 
 def _cluster_rows(bench: Benchmark) -> list[str]:
     cw, ccw = bench.cw, bench.ccw
-    worst = "another pass is worth it" if bench.second_pass_recommended else "within scatter"
+    worst = f"{scatter_standing(bench)} the scatter"
     return [
         f"{cw.n} / {ccw.n}",
         f"{cw.cg[0] * _MM:.1f}, {cw.cg[1] * _MM:.1f}",
@@ -227,18 +226,18 @@ def _figure(page: PassesReport) -> str:
     from .report_figures import (
         PASS_COLOURS,
         PREDICTED_COLOUR,
+        SINGLE_COLOUR,
         ClusterSet,
         inline_svg,
         passes_figure,
     )
 
     n = len(page.passes)
+    # One pass: cw and ccw each in its own colour; several: each pass in its own colour.
     sets = [
-        ClusterSet(
-            one.benchmark,
-            "before" if n == 1 else pass_name(k, n),
-            PASS_COLOURS[(k - 1) % len(PASS_COLOURS)],
-        )
+        ClusterSet(one.benchmark, "", SINGLE_COLOUR, by_direction=True)
+        if n == 1
+        else ClusterSet(one.benchmark, pass_name(k, n), PASS_COLOURS[(k - 1) % len(PASS_COLOURS)])
         for k, one in enumerate(page.passes, 1)
         if one.benchmark is not None
     ]
@@ -254,11 +253,16 @@ def _figure(page: PassesReport) -> str:
         if page.predicted is not None
         else ""
     )
+    colours = (
+        "each direction in its own colour"
+        if n == 1
+        else "each pass in its own colour (the legend names them)"
+    )
     return (
         f'<figure id="figure">{svg}<figcaption>The return errors of the cw (circles) and '
-        "ccw (squares) runs, their centres of gravity (crosses) and E_max,syst (the "
-        f"circle about the origin) of every pass, in mm (the paper's Fig. 6 view); a second "
-        f"panel, where there is one, zooms on the later sets.{predicted}"
+        f"ccw (squares) runs, {colours}, their centres of gravity (crosses) and E_max,syst "
+        "(the circle about the origin), in mm (the paper's Fig. 6 view); a second panel, "
+        f"where there is one, zooms on the later sets.{predicted}"
         "</figcaption></figure>\n"
     )
 
@@ -304,7 +308,7 @@ def _runs(page: PassesReport) -> str:
         if predicted
         else ""
     )
-    return _table(head, rows) + note
+    return _table(head, rows, wrap={head.index("run")}) + note
 
 
 def _estimate(one: CalibrationReport) -> str:
@@ -312,25 +316,31 @@ def _estimate(one: CalibrationReport) -> str:
     est = cal.estimate
     se = est.standard_errors
     rows = []
-    names = [("E_d", "D_R / D_L"), ("E_b", "b_actual / b_nominal"), ("E_s", "D_avg / D_active")]
-    names += [("alpha", "Type A error per turn [rad]"), ("beta", "Type B error per leg [rad]")]
-    for name, meaning in names:
+    names = [
+        ("E_d", "", "D_R / D_L"),
+        ("E_b", "", "b_actual / b_nominal"),
+        ("E_s", "", "D_avg / D_active"),
+        ("alpha", ANGLE_UNIT, "Type A error per turn; > 0: turns too little"),
+        ("beta", ANGLE_UNIT, "Type B error per leg; > 0: legs curve left"),
+    ]
+    for name, unit, meaning in names:
         value = getattr(est, name)
         if value is None:
             continue
         interval = est.interval(name)
         low, high = (None, None) if interval is None else interval
+        fmt = ".4f" if unit else ".6f"
         rows.append(
             [
-                name,
-                f"{value:.6f}",
-                _num(se.get(name), ".6f"),
-                _num(low, ".6f"),
-                _num(high, ".6f"),
+                f"{name} [{unit}]" if unit else name,
+                *(
+                    _num(None if v is None else to_shown(v, unit), fmt)
+                    for v in (value, se.get(name), low, high)
+                ),
                 meaning,
             ]
         )
-    table = _table(["", "estimate", "standard error", "95 % low", "95 % high", ""], rows)
+    table = _table(["", "estimate", "standard error", "95 % low", "95 % high", ""], rows, {5})
     active = cal.active
     correction = [
         ["c_L", f"{active.c_left:.6f}", f"{cal.new_c_left:.6f}"],
@@ -358,13 +368,15 @@ def _estimates(page: PassesReport) -> str:
 
 def _checks(one: CalibrationReport) -> str:
     parts = []
-    components = sorted(one.estimate.components.items())
+    est = one.estimate
+    main = {"alpha", "beta", "E_d", "E_b", "E_s"}  # in the estimates' table already
+    components = [(k, v) for k, v in sorted(est.components.items()) if k not in main]
     if components:
-        rows = [[name, _num(float(value), ".6g")] for name, value in components]
+        described = [(component(k), v) for k, v in components]
+        rows = [[c.heading, _num(to_shown(v, c.unit), c.digits), c.meaning] for c, v in described]
         parts.append(
-            "<p>Figures of the estimate and its model check (angles in rad, lengths in m; "
-            "<code>model_check_p</code>: probability of runs this far from any robot of "
-            "the model, Hotelling):</p>\n" + _table(["", "value"], rows)
+            f"<p>The figures of the fit (<code>{escape(est.method)}</code>), each in its "
+            "unit, with what it says:</p>\n" + _table(["", "value", ""], rows, {2})
         )
     for title, items in (("Warnings", one.warnings), ("Notes", one.notes)):
         if items:
@@ -479,7 +491,11 @@ def _provenance(page: PassesReport) -> str:
     methods = ", ".join(sorted({one.estimate.method for _, one in passes}))
     return (
         "<h3>Inputs</h3>\n"
-        + _table(["pass", "file", "SHA-256"] if many else ["file", "SHA-256"], inputs)
+        + _table(
+            ["pass", "file", "SHA-256"] if many else ["file", "SHA-256"],
+            inputs,
+            wrap={1, 2} if many else {0, 1},
+        )
         + "<h3>Parameters active during the runs</h3>\n"
         + _table(["", *(name for name, _ in passes)] if many else ["", ""], params)
         + command
@@ -495,10 +511,11 @@ def passes_html(page: PassesReport) -> str:
     Sections: the verdict (E_max,syst of every pass and the 3 x SEM rule, with the
     per-pass table of Eqs. 3.1-3.4), the Fig. 6 cluster view of every pass in one inline
     SVG figure (and the predicted after of a single pass of recorded runs, marked as a
-    prediction), every run, the estimates with their 95 % intervals and the correction,
-    the model checks, warnings, notes and any validation table, the ros2_control overlay
-    of the last pass and the provenance (inputs with their SHA-256, the parameters active,
-    the command, the umbmark version and the method).
+    prediction), every run, the estimates with their 95 % intervals (alpha and beta in
+    degrees) and the correction, the figures of the fit (each with its unit and
+    meaning), warnings, notes and any validation table, the ros2_control overlay of the
+    last pass and the provenance (inputs with their SHA-256, the parameters active, the
+    command, the umbmark version and the method).
     """
     n = len(page.passes)
     title = (
@@ -514,7 +531,7 @@ def passes_html(page: PassesReport) -> str:
         ("clusters", "Cluster view (Fig. 6)", _figure(page)),
         ("runs", "Runs", _runs(page)),
         ("estimates", "Estimates and 95 % intervals", _estimates(page)),
-        ("messages", "Model checks, warnings and notes", _messages(page)),
+        ("messages", "Figures of the fit, warnings and notes", _messages(page)),
         ("overlay", "ros2_control overlay", _overlay(page)),
         ("provenance", "Provenance", _provenance(page)),
     ]

@@ -32,6 +32,8 @@ if TYPE_CHECKING:
     from ..sim.engine import Trace
 
 __all__ = [
+    "DIRECTION_COLOURS",
+    "DIRECTION_MARKERS",
     "FIGURE_FORMATS",
     "cluster_figure",
     "draw_clusters",
@@ -44,9 +46,12 @@ __all__ = [
 #: File extensions a figure can be saved as.
 FIGURE_FORMATS = (".png", ".svg", ".pdf")
 
+#: The colour and the marker of each direction's runs in every cluster figure.
+DIRECTION_COLOURS = {Direction.CW: "#1f77b4", Direction.CCW: "#d62728"}
+DIRECTION_MARKERS = {Direction.CW: "o", Direction.CCW: "s"}
 _STYLE = {
-    Direction.CW: {"marker": "o", "color": "#1f77b4", "label": "cw runs"},
-    Direction.CCW: {"marker": "s", "color": "#d62728", "label": "ccw runs"},
+    d: {"marker": DIRECTION_MARKERS[d], "color": DIRECTION_COLOURS[d], "label": f"{d.value} runs"}
+    for d in Direction
 }
 _MM = 1000.0
 #: Characters per line of a cluster panel's title (a long source path is wrapped).

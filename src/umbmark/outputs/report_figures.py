@@ -2,8 +2,10 @@
 
 :func:`passes_figure` draws the Fig. 6 view of several UMBmark passes on one robot in one
 axes (before, after, further passes; each pass its own colour, cw and ccw their own
-marker), and optionally the *predicted* after of a single pass (its recorded wheel data
-replayed with the new parameters) in a style of its own. Axes in millimetres.
+marker), or of a single pass (cw and ccw each in its own colour and marker, as in
+:func:`umbmark.outputs.plotting.cluster_figure`), and optionally the *predicted* after of
+a single pass (its recorded wheel data replayed with the new parameters) in a style of
+its own. Axes in millimetres.
 :func:`inline_svg` returns a figure as an ``<svg>`` element that refers to nothing
 outside itself (text drawn as paths, no metadata links).
 """
@@ -19,7 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..benchmark import Benchmark
-from ..conventions import Direction
+from .plotting import DIRECTION_COLOURS, DIRECTION_MARKERS
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -28,6 +30,7 @@ if TYPE_CHECKING:
 __all__ = [
     "PASS_COLOURS",
     "PREDICTED_COLOUR",
+    "SINGLE_COLOUR",
     "ZOOM_RATIO",
     "ClusterSet",
     "inline_svg",
@@ -39,7 +42,8 @@ _MM = 1000.0
 PASS_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2")
 #: Colour of the predicted after (replayed wheel data).
 PREDICTED_COLOUR = "#7f7f7f"
-_MARKERS = {Direction.CW: "o", Direction.CCW: "s"}
+#: Colour of the E_max,syst circle of a single pass (its clusters take the directions').
+SINGLE_COLOUR = "#404040"
 
 
 @dataclass(frozen=True)
@@ -51,17 +55,27 @@ class ClusterSet:
     benchmark : Benchmark
         Its cw and ccw clusters (return errors [m], shape (n, 2) each).
     name : str
-        Its name in the legend (``"pass 1 (before)"``).
+        Its name in the legend (``"pass 1 (before)"``); empty: the legend says only
+        ``cw runs``, ``ccw runs``.
     colour : str
         A matplotlib colour.
     predicted : bool
         A prediction, not a measured pass: drawn with dashed outlines, no fill.
+    by_direction : bool
+        The runs of each direction in that direction's colour
+        (:data:`umbmark.outputs.plotting.DIRECTION_COLOURS`), ``colour`` only for the
+        E_max,syst circle: the one measured pass of a page.
     """
 
     benchmark: Benchmark
     name: str
     colour: str
     predicted: bool = False
+    by_direction: bool = False
+
+    def label(self, what: str) -> str:
+        """A legend entry of this set: ``what``, after the set's name if it has one."""
+        return f"{self.name}: {what}" if self.name else what
 
 
 def _draw(ax: Axes, item: ClusterSet) -> None:
@@ -70,15 +84,16 @@ def _draw(ax: Axes, item: ClusterSet) -> None:
     bench = item.benchmark
     style = "--" if item.predicted else "-"
     for cluster in bench.clusters:
+        colour = DIRECTION_COLOURS[cluster.direction] if item.by_direction else item.colour
         mm = cluster.errors * _MM
         ax.scatter(
             mm[:, 0],
             mm[:, 1],
-            marker=_MARKERS[cluster.direction],
+            marker=DIRECTION_MARKERS[cluster.direction],
             facecolors="none",
-            edgecolors=item.colour,
+            edgecolors=colour,
             linestyles="dashed" if item.predicted else "solid",
-            label=f"{item.name}: {cluster.direction.value} runs",
+            label=item.label(f"{cluster.direction.value} runs"),
             zorder=3,
         )
         cg = cluster.cg * _MM
@@ -88,7 +103,7 @@ def _draw(ax: Axes, item: ClusterSet) -> None:
             marker="x" if item.predicted else "+",
             markersize=14,
             markeredgewidth=2.5,
-            color=item.colour,
+            color=colour,
             linestyle="none",
             zorder=4,
         )
@@ -101,7 +116,7 @@ def _draw(ax: Axes, item: ClusterSet) -> None:
             linestyle=":" if item.predicted else style,
             linewidth=1.2,
             color=item.colour,
-            label=f"{item.name}: E_max,syst = {radius:.1f} mm",
+            label=item.label(f"E_max,syst = {radius:.1f} mm"),
         )
     )
 
@@ -135,7 +150,8 @@ def _axes(ax: Axes, sets: Sequence[ClusterSet], title: str) -> None:
 def passes_figure(sets: Sequence[ClusterSet], title: str = "") -> Figure:
     """The Fig. 6 view of every pass in one figure (millimetres).
 
-    Each set's runs are drawn as open markers (cw circles, ccw squares) in its colour,
+    Each set's runs are drawn as open markers (cw circles, ccw squares) in its colour
+    (or, ``by_direction``, in their direction's colour),
     its centres of gravity as crosses and its ``E_max,syst`` as a circle about the
     origin; a predicted set is drawn dashed. When the later sets are more than
     :data:`ZOOM_RATIO` times smaller than the first, a second panel shows them zoomed.

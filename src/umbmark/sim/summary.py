@@ -8,22 +8,49 @@ from ..benchmark import umbmark_benchmark
 from .engine import SimResult
 from .robot import VirtualRobot
 
-__all__ = ["describe_simulation"]
+__all__ = ["describe_simulation", "odometry_errors", "true_errors"]
+
+
+def true_errors(robot: VirtualRobot, nominal_wheelbase: float) -> dict[str, float]:
+    """The robot's errors relative to the nominal wheels (``D_n``, ``b``): its truth.
+
+    ``E_d = D_R / D_L``, ``E_b = b_actual / b`` and ``E_s = D_avg / D_n`` (Eqs. 2.3,
+    2.4, Sec. 2.2), whatever parameters its odometry uses: what ``simulate`` was given.
+    """
+    return {
+        "E_d": robot.E_d,
+        "E_b": robot.wheelbase / nominal_wheelbase,
+        "E_s": robot.E_s,
+    }
+
+
+def odometry_errors(robot: VirtualRobot) -> dict[str, float]:
+    """The robot's errors relative to the parameters its odometry uses (``c_L D_n``,
+    ``c_R D_n``, its wheelbase): what a calibration of its runs measures, with those
+    parameters active. Without corrections (``c_L = c_R = 1``, the nominal wheelbase)
+    they are :func:`true_errors`."""
+    odo = robot.odometry
+    return {
+        "E_d": robot.E_d * odo.c_left / odo.c_right,
+        "E_b": robot.wheelbase / odo.wheelbase,
+        "E_s": robot.E_s * 2.0 / (odo.c_left + odo.c_right),
+    }
 
 
 def describe_simulation(
-    robot: VirtualRobot, result: SimResult, path_name: str, kind: str
+    robot: VirtualRobot, result: SimResult, path_name: str, kind: str, nominal_wheelbase: float
 ) -> dict[str, object]:
-    """JSON-ready facts of a simulation: the truth, every run's end poses, and per path
-    kind what a user measures: E_max,syst (square), true over odometry distance
-    (straight line: the scale error E_s), true over odometry rotation and the centre's
-    sideways shift (on-the-spot turn, Sec. 2.3)."""
-    odo = robot.odometry
+    """JSON-ready facts of a simulation: the truth (:func:`true_errors`, relative to the
+    nominal wheels; ``odometry_E_*``: :func:`odometry_errors`, relative to the parameters
+    the odometry used), every run's end poses, and per path kind what a user measures:
+    E_max,syst (square), true over odometry distance (straight line: the scale error
+    E_s), true over odometry rotation and the centre's sideways shift (on-the-spot turn,
+    Sec. 2.3)."""
+    truth, odometry = true_errors(robot, nominal_wheelbase), odometry_errors(robot)
     out: dict[str, object] = {
         "path": path_name,
-        "true_E_d": robot.E_d,
-        "true_E_b": robot.wheelbase / odo.wheelbase,
-        "true_E_s": robot.E_s,
+        **{f"true_{k}": v for k, v in truth.items()},
+        **{f"odometry_{k}": v for k, v in odometry.items()},
         "true_wheelbase": robot.wheelbase,
         "true_wheel_diameter_left": robot.diameter_left,
         "true_wheel_diameter_right": robot.diameter_right,
