@@ -291,5 +291,12 @@ def _at_axle(recording: Recording, offset: tuple[float, float]) -> Recording:
     """``recording`` with its ground truth moved from the tracked point to the axle."""
     if recording.truth is None:
         return recording
+    if not recording.truth.headings:
+        raise InputError(
+            "--truth-offset moves the ground truth along its heading, which a position-only "
+            "reference (a GNSS fix, a tracked point) does not measure: mount it over the axle "
+            "centre, or leave --truth-offset out",
+            source=recording.name,
+        )
     truth = PoseSeries(time=recording.truth.time, poses=axle_poses(recording.truth.poses, offset))
     return replace(recording, truth=truth)

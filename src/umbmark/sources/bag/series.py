@@ -34,7 +34,6 @@ Wheels, one of:
   that are).
 - ``odom_topic`` or ``odom_tf`` with ``odom_geometry``: the controller's odometry, turned
   back into wheel rotation (:mod:`umbmark.sources.controller_odometry`).
-
 - ``left_wheel_frame`` and ``right_wheel_frame``: the wheels' frames on ``/tf``
   (``base_link -> wheel_left_link`` from ``robot_state_publisher``), their rotation
   about the parent's ``y`` axis (:mod:`umbmark.sources.bag.wheel_tf`).
@@ -386,8 +385,8 @@ def _read_truth_topic(
     msgtype = topics.get(topic)
     if options.truth_model is not None and msgtype != MODEL_STATES:
         raise InputError(
-            f"--truth-model names a model of a {MODEL_STATES} topic; {topic} has "
-            f"{msgtype or 'no messages in the bag'}",
+            f"--truth-model names a model of a {MODEL_STATES} topic; {topic} "
+            + (f"has {msgtype}" if msgtype else "is not in the bag"),
             source=src,
         )
     header = options.time_source == "header"
