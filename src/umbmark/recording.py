@@ -68,11 +68,19 @@ class PoseSeries:
         Sample times [s], strictly increasing.
     poses : array, shape (m, 3)
         ``x, y`` [m] and heading ``theta`` [rad], in any fixed frame; headings may be
-        wrapped (they are unwrapped on use).
+        wrapped (they are unwrapped on use). NaN headings when ``headings`` is False.
+    headings : bool
+        Whether the reference measures headings; False for position-only references (a
+        GPS fix, a tracked point), whose ``theta`` column is NaN.
+    covariance : array, shape (m, 2, 2), or None
+        The positions' covariance [m^2] where the reference gives one (a GPS receiver's
+        ``position_covariance``, east and north); NaN where a sample has none.
     """
 
     time: FloatArray
     poses: FloatArray
+    headings: bool = True
+    covariance: FloatArray | None = None
 
     def __post_init__(self) -> None:
         _check_time(self.time, "ground-truth")
@@ -80,8 +88,14 @@ class PoseSeries:
             raise ValueError(
                 f"ground-truth poses must have shape ({self.time.size}, 3), got {self.poses.shape}"
             )
-        if not np.all(np.isfinite(self.poses)):
+        checked = self.poses if self.headings else self.poses[:, :2]
+        if not np.all(np.isfinite(checked)):
             raise ValueError("ground-truth poses have values that are not finite numbers")
+        if self.covariance is not None and self.covariance.shape != (self.time.size, 2, 2):
+            raise ValueError(
+                f"ground-truth covariances must have shape ({self.time.size}, 2, 2), got "
+                f"{self.covariance.shape}"
+            )
 
 
 @dataclass(frozen=True)
@@ -128,6 +142,9 @@ class RunLog:
         (a bag's header or receive times, a run log's CSV time): ``start + time`` are the
         recording's timestamps, for matching with other trajectories of the same
         recording (TUM exports). 0.0 when the source has no clock of its own.
+    headings : bool
+        Whether the ground truth has headings; False for a position-only reference,
+        whose ``theta`` column is NaN throughout.
     """
 
     time: FloatArray
@@ -135,11 +152,14 @@ class RunLog:
     truth: FloatArray
     source: str = ""
     start: float = 0.0
+    headings: bool = True
 
     @property
     def matched(self) -> NDArray[np.bool_]:
-        """Which samples have ground truth, shape (n,)."""
-        return np.asarray(np.all(np.isfinite(self.truth), axis=1))
+        """Which samples have ground truth (a position, and a heading where the reference
+        has headings), shape (n,)."""
+        columns = self.truth if self.headings else self.truth[:, :2]
+        return np.asarray(np.all(np.isfinite(columns), axis=1))
 
     def odometry(self, params: WheelParams, method: IntegrationMethod = "arc") -> FloatArray:
         """Odometry poses, shape (n, 3), from the wheel rotation and ``params``.

@@ -47,10 +47,14 @@ def info(source: str, json_out: bool, **options: Any) -> None:
 
     SOURCE: a ROS 1 .bag file, a ROS 2 bag folder (sqlite3 or MCAP), a run-log folder or
     an OptiOdom session folder. For a bag: every topic with its type, message count,
-    rate and duration; the joints of the JointState topics and which of them move; the
-    /tf and /tf_static transforms and their chains; the candidates for the wheels, the
-    controller's odometry and the ground truth; and the options to calibrate with. Only
-    a bounded number of messages per topic is looked into (--max-messages).
+    rate and duration; the joints of the JointState topics, which of them move and how
+    fast; the /tf and /tf_static transforms and their chains; Gazebo's models; the
+    wheelbase and wheel diameter of a recorded robot_description, or which of them are
+    still needed; the candidates for the wheels, the controller's odometry and the ground
+    truth (ranked, with their rates and the --max-gap they need; never the odometry
+    itself, and a warning when no independent reference is recorded); and the options to
+    calibrate with. Only a bounded number of messages per topic is looked into
+    (--max-messages).
     """
     from .. import info as run_info
     from .common import console, warn
@@ -154,10 +158,25 @@ def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
             out.print(Text("  " + " -> ".join(chain)))
         if bag.chains_not_listed:
             out.print(Text("  " + _more(bag.chains_not_listed, "chains")))
+    for ms in bag.model_states:
+        models = table(
+            f"Models of {ms.topic} ({ms.scanned} messages looked into)",
+            ["model", "messages", "position range [m]", "moves"],
+            left=("model", "moves"),
+        )
+        for model in ms.models:
+            row(models, model.name, str(model.samples), f"{model.position_range:.3f}",
+                "yes" if model.moving else "no")  # fmt: skip
+        out.print(models)
+        if ms.not_listed:
+            out.print(Text(_more(ms.not_listed, "models")))
 
     _render_candidates("Wheels", bag.wheels, out)
     _render_candidates("Controller odometry", bag.odometry, out)
     _render_candidates("Ground truth", bag.truth, out)
+    if not bag.independent:
+        out.print(Text("  No ground truth independent of the odometry (see the warning)."))
+    _render_geometry(bag, out)
     if bag.suggested_options is not None:
         out.print(Text(f"Suggested options: {bag.suggested_options}", style="bold"))
     else:
@@ -180,8 +199,32 @@ def _render_candidates(title: str, candidates: tuple[Candidate, ...], out: Conso
     out.print(Text(f"{title}:"))
     for candidate in candidates:
         moves = {True: "", False: " [does not move]", None: ""}[candidate.moving]
+        rate = "" if candidate.rate is None else f", {candidate.rate:.1f} Hz"
+        gap = candidate.gap_option
+        needs = (
+            f", needs --max-gap {gap[1]} s" if gap is not None and title == "Ground truth" else ""
+        )
         options = f"   {candidate.command_line}" if candidate.options else ""
-        out.print(Text(f"  {candidate.label}{moves}{options}"))
+        out.print(Text(f"  {candidate.label}{rate}{needs}{moves}{options}"))
+        if candidate.warning is not None:
+            out.print(Text(f"    not suggested: {candidate.warning}"))
+
+
+def _render_geometry(bag: BagInfo, out: Console) -> None:
+    """Where the wheelbase and wheel diameter come from, or which are still needed."""
+    from rich.text import Text
+
+    if bag.robot is not None:
+        out.print(Text(f"Wheel geometry: {bag.robot.describe()}"))
+    if bag.needs:
+        why = (
+            ""
+            if bag.robot is not None
+            else f" ({bag.robot_problem})"
+            if bag.robot_problem
+            else " (the bag holds no robot_description)"
+        )
+        out.print(Text(f"Still needed: {' and '.join(bag.needs)}{why}"))
 
 
 def _render_logged(report: InfoReport, logged: LoggedInfo, out: Console) -> None:

@@ -282,10 +282,26 @@ def source_options(*, wheelbase: bool = True) -> Callable[[F], F]:
             section=BAGS,
         ),
         option(
+            "--left-wheel-frame",
+            section=BAGS,
+            metavar="FRAME",
+            help="No wheel joint states? The left wheel's frame on /tf (its transform from "
+            "the base, e.g. wheel_left_link from robot_state_publisher): its rotation.",
+        ),
+        option("--right-wheel-frame", section=BAGS, metavar="FRAME", help="... and the right."),
+        option(
             "--truth-topic",
             section=BAGS,
-            help="Ground truth: geometry_msgs/PoseStamped, PoseWithCovarianceStamped or "
-            "nav_msgs/Odometry.",
+            help="Ground truth: geometry_msgs/PoseStamped, PoseWithCovarianceStamped, "
+            "nav_msgs/Odometry or gazebo_msgs/ModelStates; or positions only: "
+            "geometry_msgs/PointStamped, sensor_msgs/NavSatFix (for paper, exact, endpose).",
+        ),
+        option(
+            "--truth-model",
+            section=BAGS,
+            metavar="NAME",
+            help="With a gazebo_msgs/ModelStates ground truth: the robot's model [default: "
+            "the one model that moves].",
         ),
         option(
             "--tf-parent",

@@ -26,6 +26,7 @@ from ..kinematics import WheelParams
 from ..outputs.atomic import atomic_write_text
 from ..runs import Run
 from ..sources.association import Association
+from ..sources.logged import require_headings
 from ..sources.params import CalibratedParams, ControllerParams
 from .inputs import (
     ReadOptions,
@@ -617,6 +618,7 @@ def _calibrate_runs(
     bench = None
     fit = None
     try:
+        require_headings(runs, method, where)
         if method in LOGGED_METHODS:
             logs = [run.log for run in runs if run.log is not None]
             if not logs or read.params is None:

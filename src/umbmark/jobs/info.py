@@ -175,12 +175,17 @@ class InfoReport:
         ``duration``, ``messages``, ``max_messages``, ``complete``, ``topics`` (``name``,
         ``type``, ``count``, ``rate``, ``duration``, ``scanned``), ``topics_not_listed``,
         ``joint_states`` (``topic``, ``scanned``, ``complete``, ``joints``: ``name``,
-        ``samples``, ``position_range``, ``max_speed``, ``moving``), ``transforms``
-        (``parent``, ``child``, ``topic``, ``static``, ``count``, ``rate``, ``moving``),
-        ``chains``, ``candidates`` (``wheels``, ``odometry``, ``truth``: ``kind``,
-        ``label``, ``options``, ``moving``), ``suggested_options``, ``notes``; for run
-        logs and OptiOdom sessions ``files``, ``runs``, ``duration``,
-        ``wheel_parameters``, ``side_length``, ``notes``.
+        ``samples``, ``position_range``, ``max_speed``, ``moving``, ``speed_from``),
+        ``transforms`` (``parent``, ``child``, ``topic``, ``static``, ``count``, ``rate``,
+        ``moving``, ``turns_only``), ``chains``, ``candidates`` (``wheels``,
+        ``odometry``, ``truth``: ``kind``, ``label``, ``options``, ``moving``, ``rate``,
+        ``max_gap``, ``warning``, ``headings``), ``model_states`` (``topic``,
+        ``scanned``, ``models``: ``name``, ``samples``, ``position_range``, ``moving``),
+        ``robot_description`` (``wheelbase``, ``wheel_diameter``, ``left_joints``,
+        ``right_joints``, ``topic``; or None), ``robot_description_problem``, ``needs``
+        (the options still needed for the wheel geometry), ``independent_reference``,
+        ``suggested_options``, ``notes``; for run logs and OptiOdom sessions ``files``,
+        ``runs``, ``duration``, ``wheel_parameters``, ``side_length``, ``notes``.
         """
         out: dict[str, Any] = {"source": self.source, "format": self.format}
         if self.bag is not None:

@@ -127,6 +127,9 @@ class SourceOptions(TypedDict, total=False):
     left_field: str | None
     right_field: str | None
     msg_dir: PathLike | None
+    truth_model: str | None
+    left_wheel_frame: str | None
+    right_wheel_frame: str | None
 
 
 @dataclass(frozen=True)
@@ -191,6 +194,12 @@ class ReadOptions:
         Bags that do not carry the definition of ``wheel_topic``'s type: a folder of its
         ``.msg`` files (``<pkg>/msg/<Name>.msg`` or ``<pkg>/<Name>.msg``, searched
         recursively). Only with the fields.
+    truth_model : str or None
+        Bags: with a ``gazebo_msgs/ModelStates`` ground truth, the robot's model (default:
+        the one model that moves).
+    left_wheel_frame, right_wheel_frame : str or None
+        Bags: the wheels as the child frames of their transforms on ``/tf``
+        (``wheel_left_link``), instead of joint states. Both or neither.
     """
 
     format: str = "auto"
@@ -222,6 +231,9 @@ class ReadOptions:
     left_field: str | None = None
     right_field: str | None = None
     msg_dir: PathLike | None = None
+    truth_model: str | None = None
+    left_wheel_frame: str | None = None
+    right_wheel_frame: str | None = None
 
     def __post_init__(self) -> None:
         _check_choice("--format", self.format, FORMATS)
@@ -257,6 +269,10 @@ class ReadOptions:
                         f"centre, not {value!r}"
                     )
         self._check_fields()
+        if (self.left_wheel_frame is None) != (self.right_wheel_frame is None):
+            raise InputError(
+                "--left-wheel-frame and --right-wheel-frame go together: give both or neither"
+            )
         if self.split == "windows" and not self.windows:
             raise InputError("--split windows needs --windows start:end[,start:end...]")
 
@@ -282,6 +298,7 @@ class ReadOptions:
             ("--right-ticks-topic", self.right_ticks_topic),
             ("--odom-topic", self.odom_topic),
             ("--odom-tf", self.odom_tf),
+            ("--left-wheel-frame", self.left_wheel_frame),
         ):
             if value:
                 raise InputError(
@@ -681,11 +698,17 @@ def _read_one(
         given = None
         if kind == "bag":
             if configured is None or diameter is None:
-                raise InputError(
-                    "a bag needs the wheel parameters: give --wheelbase and --wheel-diameter "
-                    "(or --current-params with wheel_separation and wheel_radius)",
-                    source=name,
+                from ..sources.bag import BagOptions
+                from ..sources.bag.urdf import described_geometry
+
+                named = BagOptions(
+                    left_joint=_joints(options.left_joint) or file.left_joints or None,
+                    right_joint=_joints(options.right_joint) or file.right_joints or None,
                 )
+                configured, diameter, described = described_geometry(
+                    path, named.left_joints, named.right_joints, configured, diameter
+                )
+                chosen = replace(chosen, notes=(*chosen.notes, described))
             given = WheelParams(
                 wheelbase=configured * separation,
                 wheel_diameter=diameter,
@@ -1115,8 +1138,8 @@ def _load_options(
         params=params,
         split=cast("SplitMode", "windows" if windows else options.split),
         windows=windows,
-        split_options=SplitOptions(min_rest=options.min_rest),
-        max_gap=options.max_gap,
+        split_options=SplitOptions(min_rest=float(options.min_rest)),
+        max_gap=float(options.max_gap),
         bag=_bag_options(options, params, file) if kind == "bag" else None,
         truth_offset=(
             (float(options.truth_offset[0]), float(options.truth_offset[1]))
@@ -1157,6 +1180,9 @@ def _bag_options(
         left_field=options.left_field,
         right_field=options.right_field,
         msg_dir=Path(options.msg_dir) if options.msg_dir is not None else None,
+        truth_model=options.truth_model,
+        left_wheel_frame=options.left_wheel_frame,
+        right_wheel_frame=options.right_wheel_frame,
     )
 
 

@@ -124,7 +124,10 @@ def write_tum_runs(
         if run.log is None:
             raise InputError(f"{run.label} has no time series to write", source=folder)
         stem = _slug(run.label)
-        files = {f"{stem}_truth.tum": run.log.truth}
+        truth = run.log.truth
+        if not run.log.headings:  # a position-only reference: no orientation, identity
+            truth = np.column_stack([truth[:, :2], np.where(run.log.matched, 0.0, np.nan)])
+        files = {f"{stem}_truth.tum": truth}
         for name, params in odometry.items():
             files[f"{stem}_{name}.tum"] = run.log.odometry(params)
         stamps = run.log.time + run.log.start if time == "recording" else run.log.time

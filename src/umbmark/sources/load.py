@@ -213,6 +213,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
 
     split = options.split
     params: WheelParams | None
+    read_notes: list[str] = []
     if kind == "log":
         from .runlog import read_runlog
 
@@ -225,7 +226,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         params, side = session.params, session.side_length
         split = "none"  # each OptiOdom file is one run
     else:
-        recordings, params, side = _read_bag(source, options)
+        recordings, params, side = _read_bag(source, options, read_notes)
     if options.params is not None:
         params = options.params
     if params is None:
@@ -252,32 +253,37 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         params=params,
         side_length=side,
         associations=found.associations,
-        notes=found.notes,
+        notes=[*read_notes, *found.notes],
     )
 
 
 def _read_bag(
-    source: Path, options: LoadOptions
+    source: Path, options: LoadOptions, notes: list[str]
 ) -> tuple[list[Recording], WheelParams | None, float | None]:
-    from .bag import BagOptions, read_bag
+    """The bag's one recording; what people should know goes to ``notes``."""
+    from .bag import BagOptions, read_recording
 
     bag = options.bag or BagOptions()
     if bag.truth_topic is None and bag.tf_parent is None and bag.tf_child is None:
         from .bag.info import truth_candidates
         from .bag.reader import listing
 
-        found = [c.label for c in truth_candidates(source)]
+        candidates, independent = truth_candidates(source)
+        found = [c.label for c in candidates]
         named = (
             f"candidates: {listing(found)}"
             if found
+            else f"the bag holds no reference independent of the odometry ({independent})"
+            if independent
             else "the bag has no pose, odometry or TF topics"
         )
         raise InputError(
             f"no ground truth given (--truth-topic or --tf-parent/--tf-child); {named}",
             source=source,
         )
-    wheels, truth = read_bag(source, bag)
-    recording = Recording(name=source.name, wheels=wheels, truth=truth)
+    read = read_recording(source, bag)
+    notes += read.notes
+    recording = Recording(name=source.name, wheels=read.wheels, truth=read.truth)
     return [recording], None, None
 
 
@@ -285,5 +291,12 @@ def _at_axle(recording: Recording, offset: tuple[float, float]) -> Recording:
     """``recording`` with its ground truth moved from the tracked point to the axle."""
     if recording.truth is None:
         return recording
+    if not recording.truth.headings:
+        raise InputError(
+            "--truth-offset moves the ground truth along its heading, which a position-only "
+            "reference (a GNSS fix, a tracked point) does not measure: mount it over the axle "
+            "centre, or leave --truth-offset out",
+            source=recording.name,
+        )
     truth = PoseSeries(time=recording.truth.time, poses=axle_poses(recording.truth.poses, offset))
     return replace(recording, truth=truth)

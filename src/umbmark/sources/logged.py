@@ -23,7 +23,15 @@ from ..runs import EndPose, Run
 from .association import DEFAULT_MAX_GAP, Association, associate
 from .segmentation import SplitOptions, split_by_rests, split_by_windows
 
-__all__ = ["LoadedRuns", "SplitMode", "check_motion", "runs_from_recordings", "to_start_frame"]
+__all__ = [
+    "HEADING_METHODS",
+    "LoadedRuns",
+    "SplitMode",
+    "check_motion",
+    "require_headings",
+    "runs_from_recordings",
+    "to_start_frame",
+]
 
 FloatArray = NDArray[np.float64]
 SplitMode = Literal["rests", "none", "windows"]
@@ -73,7 +81,14 @@ def to_start_frame(poses: FloatArray) -> FloatArray:
     return np.column_stack([c * dx + s * dy, -s * dx + c * dy, poses[:, 2] - th0])
 
 
-def check_motion(name: str, time: FloatArray, angles: FloatArray, truth: FloatArray | None) -> None:
+def check_motion(
+    name: str,
+    time: FloatArray,
+    angles: FloatArray,
+    truth: FloatArray | None,
+    *,
+    headings: bool = True,
+) -> None:
     """Refuse a recording or run whose wheels never turn or jump, or whose truth never moves
     or jumps (:data:`MAX_TRUTH_STEP`).
 
@@ -90,6 +105,9 @@ def check_motion(name: str, time: FloatArray, angles: FloatArray, truth: FloatAr
         Wheel angles [rad].
     truth : array, shape (m, 3), or None
         Ground-truth poses; rows with NaN are left out.
+    headings : bool
+        Whether ``truth`` has headings (else its ``theta`` column is NaN and only the
+        positions are checked).
 
     Raises
     ------
@@ -116,6 +134,8 @@ def check_motion(name: str, time: FloatArray, angles: FloatArray, truth: FloatAr
         )
     if truth is None:
         return
+    if not headings:
+        truth = truth[:, :2]
     rows = truth[np.all(np.isfinite(truth), axis=1)]
     if rows.shape[0] < 2:
         return
@@ -132,7 +152,8 @@ def check_motion(name: str, time: FloatArray, angles: FloatArray, truth: FloatAr
 
 def _check_truth_steps(name: str, time: FloatArray, truth: FloatArray) -> None:
     """Refuse a ground-truth position that jumps between two samples (see
-    :data:`MAX_TRUTH_STEP`); ``truth`` has shape (n, 3) at ``time`` (n,), NaN rows skipped."""
+    :data:`MAX_TRUTH_STEP`); ``truth`` has shape (n, 2 or 3) at ``time`` (n,), NaN rows
+    skipped."""
     if truth.shape[0] != time.shape[0]:
         return
     kept = np.flatnonzero(np.all(np.isfinite(truth), axis=1))
@@ -161,21 +182,21 @@ def _run(
     method: IntegrationMethod,
 ) -> Run | None:
     wheels = recording.wheels
-    matched = np.flatnonzero(np.all(np.isfinite(truth[first : last + 1]), axis=1)) + first
+    headings = recording.truth is None or recording.truth.headings
+    known = _known(truth, headings)
+    matched = np.flatnonzero(known[first : last + 1]) + first
     if matched.size < 2:
         return None
     a, b = int(matched[0]), int(matched[-1])
     sl = slice(a, b + 1)
-    check_motion(label, wheels.time[sl], wheels.angles[sl], truth[sl])
-    rel = np.full((b - a + 1, 3), np.nan)
-    ok = np.all(np.isfinite(truth[sl]), axis=1)
-    rel[ok] = to_start_frame(truth[sl][ok])
+    check_motion(label, wheels.time[sl], wheels.angles[sl], truth[sl], headings=headings)
     log = RunLog(
         time=wheels.time[sl] - wheels.time[a],
         wheel_angles=wheels.angles[sl] - wheels.angles[a],
-        truth=rel,
+        truth=np.full((b - a + 1, 3), np.nan),
         source=label,
         start=float(wheels.time[a]),
+        headings=headings,
     )
     odo = log.odometry(params, method)
     if not np.all(np.isfinite(odo[-1])):
@@ -184,15 +205,59 @@ def _run(
             "the encoder units",
             source=label,
         )
-    turned = float(rel[-1, 2])
+    ok = known[sl]
+    if headings:
+        log.truth[ok] = to_start_frame(truth[sl][ok])
+        turned = float(log.truth[-1, 2])
+    else:
+        log.truth[ok, :2] = _positions_in_start_frame(truth[sl, :2], ok, odo)
+        turned = float(odo[-1, 2])  # a position-only reference: the odometry's turn
     direction = Direction.CCW if turned >= 0 else Direction.CW
+    end = log.truth[-1]
     return Run(
         direction=direction,
-        true_end=EndPose(*(float(v) for v in rel[-1])),
+        true_end=EndPose(float(end[0]), float(end[1]), float(end[2]) if headings else None),
         odometry_end=EndPose(*(float(v) for v in odo[-1])),
         label=label,
         log=log,
     )
+
+
+def _known(truth: FloatArray, headings: bool) -> NDArray[np.bool_]:
+    """Samples with ground truth, shape (n,): a position (and a heading, if it has them)."""
+    return np.asarray(np.all(np.isfinite(truth if headings else truth[:, :2]), axis=1))
+
+
+#: A position-only reference's start heading is read over the first this many metres of
+#: a run (or half of how far it strays from its start, if less).
+ALIGN_DISTANCE = 1.0
+
+
+def _positions_in_start_frame(
+    positions: FloatArray, known: NDArray[np.bool_], odometry: FloatArray
+) -> FloatArray:
+    """Positions of a reference without headings, shape (k, 2) of the ``known`` rows of
+    ``positions`` (n, 2), in the run's start frame.
+
+    The frame's origin is the first position; its heading, which such a reference does
+    not measure, is the direction the reference moved in over the run's first stretch
+    (:data:`ALIGN_DISTANCE`) turned back by the direction the odometry (n, 3) moved in
+    over the same samples: the start frame the odometry starts in. The odometry's own
+    error over that stretch turns the frame by at most its heading drift there, which
+    moves a return error ``eps`` by ``|eps|`` times that angle: second order.
+    """
+    rows = np.flatnonzero(known)
+    origin = positions[rows[0]]
+    moved = positions[rows] - origin
+    odo = odometry[rows, :2] - odometry[rows[0], :2]
+    reach = np.hypot(odo[:, 0], odo[:, 1])
+    limit = min(ALIGN_DISTANCE, 0.5 * float(reach.max()))
+    k = int(np.argmax(reach >= limit)) if limit > 0 else 0
+    if k == 0:
+        return np.asarray(moved)
+    heading = math.atan2(moved[k, 1], moved[k, 0]) - math.atan2(odo[k, 1], odo[k, 0])
+    c, s = math.cos(heading), math.sin(heading)
+    return np.column_stack([c * moved[:, 0] + s * moved[:, 1], -s * moved[:, 0] + c * moved[:, 1]])
 
 
 def runs_from_recordings(
@@ -234,17 +299,25 @@ def runs_from_recordings(
         truth, association = associate(
             recording.wheels, recording.truth, max_gap=max_gap, source=recording.name
         )
-        check_motion(recording.name, recording.wheels.time, recording.wheels.angles, truth)
+        headings = recording.truth.headings
+        time, angles = recording.wheels.time, recording.wheels.angles
+        check_motion(recording.name, time, angles, truth, headings=headings)
         out.associations.append((recording.name, association))
         if association.fraction < 0.9:
             out.notes.append(f"{recording.name}: only {association.describe()}")
-        time, angles = recording.wheels.time, recording.wheels.angles
         if split == "none":
             segments = [(0, time.size - 1)]
         elif split == "windows":
             segments = split_by_windows(time, windows, recording.name)
         else:
-            segments = split_by_rests(time, angles, truth, split_options)
+            split_poses = truth
+            if not headings:  # the turns come from the odometry
+                log = RunLog(time=time - time[0], wheel_angles=angles, truth=truth)
+                split_poses = truth.copy()
+                split_poses[:, 2] = np.where(
+                    _known(truth, False), log.odometry(params, method)[:, 2], np.nan
+                )
+            segments = split_by_rests(time, angles, split_poses, split_options)
         found = 0
         for first, last in segments:
             label = recording.name if len(segments) == 1 else f"{recording.name} run {found + 1}"
@@ -263,3 +336,28 @@ def runs_from_recordings(
         names = ", ".join(r.name for r in recordings) or "the recordings"
         raise InputError(f"found no run with ground truth in {names}", source=None)
     return out
+
+
+#: The estimators that fit headings, and so need a ground truth that measures them.
+HEADING_METHODS = ("heading", "endpoints", "trajectory", "trajectory-scrub")
+
+
+def require_headings(runs: Sequence[Run], method: str, where: str | None) -> None:
+    """Refuse ``method`` where it needs headings and a run's ground truth has positions
+    only (a GNSS fix, a tracked point).
+
+    Raises
+    ------
+    InputError
+        Naming the run, the method and the methods that serve.
+    """
+    if method not in HEADING_METHODS:
+        return
+    for run in runs:
+        if run.log is not None and not run.log.headings:
+            raise InputError(
+                f"the ground truth of {run.label or 'the runs'} has positions only (a "
+                f"PointStamped or NavSatFix reference, no headings): the {method} method "
+                "needs headings; use --method paper, exact or endpose",
+                source=where,
+            )

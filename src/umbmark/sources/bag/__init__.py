@@ -2,6 +2,6 @@
 
 from __future__ import annotations
 
-from .series import BagOptions, bag_topics, read_bag
+from .series import BagOptions, BagRead, bag_topics, read_bag, read_recording
 
-__all__ = ["BagOptions", "bag_topics", "read_bag"]
+__all__ = ["BagOptions", "BagRead", "bag_topics", "read_bag", "read_recording"]

@@ -18,6 +18,15 @@ POSE_COV_STAMPED = "geometry_msgs/msg/PoseWithCovarianceStamped"
 ODOMETRY = "nav_msgs/msg/Odometry"
 TRUTH_TYPES = (POSE_STAMPED, POSE_COV_STAMPED, ODOMETRY)
 TF_TYPES = ("tf2_msgs/msg/TFMessage", "tf/msg/tfMessage")
+#: Gazebo's poses of every model: no header, one entry per model.
+MODEL_STATES = "gazebo_msgs/msg/ModelStates"
+POINT_STAMPED = "geometry_msgs/msg/PointStamped"
+NAV_SAT_FIX = "sensor_msgs/msg/NavSatFix"
+#: References with positions only (no heading).
+POSITION_TYPES = (POINT_STAMPED, NAV_SAT_FIX)
+#: Everything a ground truth may be read from.
+REFERENCE_TYPES = (*TRUTH_TYPES, MODEL_STATES, *POSITION_TYPES)
+STRING = "std_msgs/msg/String"
 
 # std_msgs number types: numpy type code of ``data`` and bits of a counter that wraps
 # (None: no wrap).
@@ -124,3 +133,49 @@ class TFMessage(Protocol):
     """``tf2_msgs/TFMessage`` (ROS 1 ``tf/tfMessage``)."""
 
     transforms: list[TransformStamped]
+
+
+class Twist(Protocol):
+    """``geometry_msgs/Twist``."""
+
+    linear: Vector
+    angular: Vector
+
+
+class ModelStates(Protocol):
+    """``gazebo_msgs/ModelStates``: ``name``, ``pose`` and ``twist`` of every model, no
+    header."""
+
+    name: list[str]
+    pose: list[Pose]
+    twist: list[Twist]
+
+
+class PointStamped(Stamped, Protocol):
+    """``geometry_msgs/PointStamped``."""
+
+    point: Vector
+
+
+class NavSatStatus(Protocol):
+    """``sensor_msgs/NavSatStatus``: ``status`` -1 no fix, 0 fix, 1 SBAS, 2 GBAS (RTK)."""
+
+    status: int
+
+
+class NavSatFix(Stamped, Protocol):
+    """``sensor_msgs/NavSatFix``: WGS84 degrees and metres; ``position_covariance`` [m^2]
+    shape (9,), east, north, up, row-major."""
+
+    status: NavSatStatus
+    latitude: float
+    longitude: float
+    altitude: float
+    position_covariance: NDArray[np.float64]
+    position_covariance_type: int
+
+
+class String(Protocol):
+    """``std_msgs/String``."""
+
+    data: str

@@ -34,12 +34,20 @@ Wheels, one of:
   that are).
 - ``odom_topic`` or ``odom_tf`` with ``odom_geometry``: the controller's odometry, turned
   back into wheel rotation (:mod:`umbmark.sources.controller_odometry`).
+- ``left_wheel_frame`` and ``right_wheel_frame``: the wheels' frames on ``/tf``
+  (``base_link -> wheel_left_link`` from ``robot_state_publisher``), their rotation
+  about the parent's ``y`` axis (:mod:`umbmark.sources.bag.wheel_tf`).
 
 Ground truth, optional: ``truth_topic`` (``geometry_msgs/PoseStamped``,
-``geometry_msgs/PoseWithCovarianceStamped`` or ``nav_msgs/Odometry``), else the direct
-transform ``tf_parent -> tf_child`` on ``/tf`` (``tf2_msgs/TFMessage``; leading slashes of
-frame names are ignored). The pose is ``x, y`` of the position and the yaw of the
-orientation, ``atan2(2 (w z + x y), 1 - 2 (y^2 + z^2))`` of the normalized quaternion.
+``geometry_msgs/PoseWithCovarianceStamped``, ``nav_msgs/Odometry``, Gazebo's
+``gazebo_msgs/ModelStates`` with the model ``truth_model``, or the position-only
+``geometry_msgs/PointStamped`` and ``sensor_msgs/NavSatFix``:
+:mod:`umbmark.sources.bag.references`), else the transform chain ``tf_parent ->
+tf_child`` on ``/tf`` (``tf2_msgs/TFMessage``; leading slashes of frame names are
+ignored). The pose is ``x, y`` of the position and the yaw of the orientation,
+``atan2(2 (w z + x y), 1 - 2 (y^2 + z^2))`` of the normalized quaternion. A ground truth
+that is the odometry the wheels are read from is refused
+(:mod:`umbmark.sources.bag.independence`).
 
 Time
 ----
@@ -83,10 +91,10 @@ read, a topic read twice (finding the wheel joints) counted twice.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -95,28 +103,34 @@ from ...errors import InputError
 from ...recording import PoseSeries, WheelSeries
 from ..controller_odometry import OdometryGeometry, wheels_from_odometry
 from ..progress import Progress, Tracker, current_callback, tracking
-from . import custom, transforms
+from . import custom, independence, references, transforms
 from . import reader as bag_reader
-from .fastpath import POSITION, VELOCITY, Decoded, LayoutOf, Sample, decode_messages, fast_layout
+from .encoders import read_fields, read_ticks
+from .fastpath import POSITION, VELOCITY, Decoded, Sample, fast_layout
 from .msgtypes import (
     JOINT_STATE,
+    MODEL_STATES,
     POSE_STAMPED,
-    TICK_TYPES,
+    POSITION_TYPES,
+    REFERENCE_TYPES,
     TRUTH_TYPES,
     JointState,
-    Number,
     PoseStamped,
     PoseWithCovarianceStamped,
-    Quaternion,
-    Stamped,
-    Vector,
 )
+from .samples import clean as _clean
+from .samples import pose_values as _pose_values
+from .samples import read_topic as _read_topic
+from .samples import stamp as _stamp
+from .samples import time_ns as _time_ns
+from .samples import truth_series as _truth
+from .wheel_tf import read_wheel_transforms
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
     from rosbags.interfaces import Connection
 
-__all__ = ["BagOptions", "bag_topics", "read_bag"]
+__all__ = ["BagOptions", "BagRead", "bag_topics", "read_bag", "read_recording"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -143,7 +157,12 @@ class BagOptions:
         Encoder counts per wheel revolution; required with the ticks topics.
     truth_topic : str or None
         Ground truth: ``geometry_msgs/PoseStamped``,
-        ``geometry_msgs/PoseWithCovarianceStamped`` or ``nav_msgs/Odometry``.
+        ``geometry_msgs/PoseWithCovarianceStamped``, ``nav_msgs/Odometry``,
+        ``gazebo_msgs/ModelStates``, or (positions only) ``geometry_msgs/PointStamped``
+        or ``sensor_msgs/NavSatFix``.
+    truth_model : str or None
+        With a ``gazebo_msgs/ModelStates`` ground truth: the robot's model (default: the
+        one model that moves).
     tf_parent, tf_child : str or None
         Ground truth from the direct transform ``tf_parent -> tf_child`` on ``/tf``
         (used when ``truth_topic`` is not given).
@@ -167,6 +186,9 @@ class BagOptions:
     msg_dir : Path or None
         A folder of ``.msg`` files defining ``wheel_topic``'s type, for bags that do not
         carry its definition (:mod:`umbmark.sources.bag.custom`); only with the fields.
+    left_wheel_frame, right_wheel_frame : str or None
+        Instead of joint states: the child frames of the wheels' transforms on ``/tf``
+        (both or neither).
     """
 
     wheel_topic: str = "/joint_states"
@@ -185,6 +207,9 @@ class BagOptions:
     left_field: str | None = None
     right_field: str | None = None
     msg_dir: Path | None = None
+    truth_model: str | None = None
+    left_wheel_frame: str | None = None
+    right_wheel_frame: str | None = None
 
     @property
     def left_joints(self) -> tuple[str, ...]:
@@ -204,10 +229,30 @@ def _joint_names(value: str | tuple[str, ...] | None) -> tuple[str, ...]:
     return tuple(name.strip() for name in names if name.strip())
 
 
+@dataclass(frozen=True)
+class BagRead:
+    """What :func:`read_recording` read.
+
+    Attributes
+    ----------
+    wheels : WheelSeries
+    truth : PoseSeries or None
+    notes : tuple of str
+        What people should know (a ground truth stamped on another clock, GNSS fixes
+        left out, the model read).
+    """
+
+    wheels: WheelSeries
+    truth: PoseSeries | None
+    notes: tuple[str, ...] = ()
+
+
 def read_bag(
     path: str | Path, options: BagOptions, *, progress: Progress | None = None
 ) -> tuple[WheelSeries, PoseSeries | None]:
     """Read the wheel rotation and, if configured, the ground truth from a bag.
+
+    :func:`read_recording` without the notes.
 
     Parameters
     ----------
@@ -237,6 +282,17 @@ def read_bag(
     InputError
         The bag cannot be read, or lacks what the options ask for.
     """
+    read = read_recording(path, options, progress=progress)
+    return read.wheels, read.truth
+
+
+def read_recording(
+    path: str | Path, options: BagOptions, *, progress: Progress | None = None
+) -> BagRead:
+    """Read the wheel rotation, the ground truth if configured, and notes, from a bag.
+
+    The parameters and errors are those of :func:`read_bag`.
+    """
     src = str(path)
     _check_options(options, src)
     callback = progress if progress is not None else current_callback()
@@ -246,10 +302,10 @@ def read_bag(
         if callback is not None:
             tracker = Tracker(callback, _planned(reader, topics, options))
         with tracking(tracker):
-            wheels, truth = _read(reader, topics, options, src)
+            read = _read(reader, topics, options, src)
         if tracker is not None:
             tracker.finish()
-    return wheels, truth
+    return read
 
 
 def _planned(
@@ -262,6 +318,8 @@ def _planned(
         wanted = [transforms.TF_TOPIC, transforms.TF_STATIC_TOPIC]
     elif options.left_ticks_topic is not None and options.right_ticks_topic is not None:
         wanted = [options.left_ticks_topic, options.right_ticks_topic]
+    elif options.left_wheel_frame is not None:
+        wanted = [transforms.TF_TOPIC]
     else:
         wanted = [options.wheel_topic]
     if options.truth_topic is not None:
@@ -274,17 +332,21 @@ def _planned(
     return [(topic, counts[topic]) for topic in wanted if topic in topics]
 
 
-def _read(
-    reader: AnyReader, topics: dict[str, str], options: BagOptions, src: str
-) -> tuple[WheelSeries, PoseSeries | None]:
-    """What :func:`read_bag` returns, from the open bag."""
+def _read(reader: AnyReader, topics: dict[str, str], options: BagOptions, src: str) -> BagRead:
+    """What :func:`read_recording` returns, from the open bag."""
+    odometry: PoseSeries | None = None
+    header = options.time_source == "header"
     if options.odom_topic is not None or options.odom_tf is not None:
-        wheels = _read_odometry(reader, topics, options, src)
+        wheels, odometry = _read_odometry(reader, topics, options, src)
+    elif options.left_wheel_frame is not None and options.right_wheel_frame is not None:
+        wheels = read_wheel_transforms(
+            reader, topics, options.left_wheel_frame, options.right_wheel_frame, header, src
+        )
     elif options.left_field is not None and options.right_field is not None:
-        wheels = _read_fields(reader, topics, options, src)
+        wheels = read_fields(reader, topics, options, src)
     elif options.left_ticks_topic is not None and options.right_ticks_topic is not None:
         assert options.ticks_per_revolution is not None  # _check_options
-        wheels = _read_ticks(
+        wheels = read_ticks(
             reader,
             topics,
             options.left_ticks_topic,
@@ -295,14 +357,61 @@ def _read(
     else:
         wheels = _read_joint_states(reader, topics, options, src)
     truth: PoseSeries | None = None
+    notes: list[str] = []
     if options.truth_topic is not None:
-        truth = _read_pose_topic(reader, topics, options.truth_topic, options, src)
+        truth = _read_truth_topic(reader, topics, options, src, notes)
     elif options.tf_parent is not None and options.tf_child is not None:
-        header = options.time_source == "header"
         edges = transforms.read_edges(reader, topics, src, header=header)
+        if options.odom_tf is not None:
+            independence.check_chain(
+                edges, (options.tf_parent, options.tf_child), options.odom_tf, src
+            )
         time, poses = transforms.chain_poses(edges, options.tf_parent, options.tf_child, src)
         truth = PoseSeries(time=time, poses=poses)
-    return wheels, truth
+    if odometry is not None and truth is not None:
+        odom = options.odom_topic or " -> ".join(options.odom_tf or ())
+        ref = options.truth_topic or f"{options.tf_parent} -> {options.tf_child}"
+        what = f"ground truth {ref} and odometry {odom}"
+        independence.check_not_reproduced(odometry, truth, what, src)
+    return BagRead(wheels, truth, tuple(notes))
+
+
+def _read_truth_topic(
+    reader: AnyReader, topics: dict[str, str], options: BagOptions, src: str, notes: list[str]
+) -> PoseSeries:
+    """The ground truth of ``truth_topic``, whatever its type; notes go to ``notes``."""
+    topic = options.truth_topic
+    assert topic is not None
+    msgtype = topics.get(topic)
+    if options.truth_model is not None and msgtype != MODEL_STATES:
+        raise InputError(
+            f"--truth-model names a model of a {MODEL_STATES} topic; {topic} "
+            + (f"has {msgtype}" if msgtype else "is not in the bag"),
+            source=src,
+        )
+    header = options.time_source == "header"
+    if msgtype == MODEL_STATES:
+        truth, model = references.read_model_states(reader, topics, topic, options.truth_model, src)
+        clock = (
+            "; the wheels use their header stamps: if the two clocks differ, give --time-source bag"
+            if header
+            else ""
+        )
+        notes.append(
+            f"ground truth: model {model} of {topic}, which has no header: stamped with the "
+            f"bag's receive times{clock}"
+        )
+        return truth
+    if msgtype in POSITION_TYPES:
+        truth, more = references.read_positions(reader, topics, topic, header, src)
+        notes += more
+        notes.append(
+            f"ground truth {topic} has positions only: each run's start heading is taken "
+            "from the direction of its first metre; estimators that need headings "
+            "(heading, endpoints, trajectory) refuse it"
+        )
+        return truth
+    return _read_pose_topic(reader, topics, topic, options, src, allowed=REFERENCE_TYPES)
 
 
 def bag_topics(path: str | Path) -> dict[str, str]:
@@ -367,6 +476,30 @@ def _check_options(options: BagOptions, src: str) -> None:
             "give the ground truth as a topic (--truth-topic) or as a TF pair (--tf-parent, "
             "--tf-child), not both"
         )
+    if options.truth_model is not None and options.truth_topic is None:
+        fail("--truth-model names a model of the ground-truth topic: give --truth-topic too")
+    if (options.left_wheel_frame is None) != (options.right_wheel_frame is None):
+        fail("the left and right wheel frames go together: give both or neither")
+    if options.left_wheel_frame is not None:
+        other = (
+            "ticks topics"
+            if options.left_ticks_topic is not None
+            else "fields"
+            if options.left_field is not None
+            else "controller odometry"
+            if options.odom_topic is not None or options.odom_tf is not None
+            else None
+        )
+        if other is not None:
+            fail(f"give the wheels as wheel frames on /tf or as {other}, not both")
+    tf_truth = (
+        (options.tf_parent, options.tf_child)
+        if options.tf_parent is not None and options.tf_child is not None
+        else None
+    )
+    independence.check_distinct(
+        options.truth_topic, tf_truth, options.odom_topic, options.odom_tf, src
+    )
 
 
 def _check_fields(options: BagOptions, src: str) -> None:
@@ -402,100 +535,6 @@ def _check_fields(options: BagOptions, src: str) -> None:
         raise InputError(
             f"the left and right fields are the same: {options.left_field!r}", source=src
         )
-
-
-# --- reading a topic and its time ------------------------------------------------------
-
-
-def _read_topic(
-    reader: AnyReader,
-    conns: Sequence[Connection],
-    msgtype: str,
-    topic: str,
-    src: str,
-    *,
-    width: int,
-    decode: Callable[[Any], list[Sample]],
-    layout_of: LayoutOf | None,
-) -> Decoded:
-    """Every sample of ``topic``: ``decode`` turns a deserialized message into samples.
-
-    The fast path of :func:`~umbmark.sources.bag.fastpath.decode_messages` reads the
-    messages that fit ``layout_of``; the rest are deserialized by rosbags and decoded.
-
-    Raises
-    ------
-    InputError
-        The topic has no messages, or one cannot be read or deserialized.
-    """
-
-    def deserialize_and_decode(raw: bytes) -> list[Sample]:
-        return decode(bag_reader.deserialize(reader, raw, msgtype, topic, src))
-
-    scan = decode_messages(
-        bag_reader.messages(reader, conns, topic, src),
-        ros2=bool(reader.is2),
-        width=width,
-        decode=deserialize_and_decode,
-        layout_of=layout_of,
-    )
-    if scan.messages == 0:
-        raise InputError(f"topic {topic} has no messages", source=src)
-    return scan
-
-
-def _time_ns(scan: Decoded, header: bool) -> IntArray:
-    """Sample times [ns], shape (k,): header stamps or bag receive times."""
-    if header:
-        return scan.sec * 1_000_000_000 + scan.nsec
-    return scan.bag_ns
-
-
-def _seconds(time_ns: IntArray) -> FloatArray:
-    """Times [s] of ``time_ns`` [ns], shape (k,), as ``sec + nanosec * 1e-9``."""
-    sec, nsec = np.divmod(time_ns, 1_000_000_000)
-    return np.asarray(sec.astype(np.float64) + nsec.astype(np.float64) * 1e-9)
-
-
-def _stamp(msg: Stamped) -> tuple[int, int]:
-    stamp = msg.header.stamp
-    return int(stamp.sec), int(stamp.nanosec)
-
-
-# --- series ----------------------------------------------------------------------------
-
-
-def _clean(
-    time_ns: IntArray, values: FloatArray, what: str, src: str, *, header: bool
-) -> tuple[IntArray, FloatArray, FloatArray]:
-    """Drop non-finite samples, sort by time, keep the first of equal times.
-
-    Returns
-    -------
-    time_ns : array, shape (k,)
-        Times [ns], strictly increasing: differences are exact, for integrating over.
-    time : array, shape (k,)
-        The same times in seconds, strictly increasing. Float seconds since 1970 resolve
-        only about 0.2 microseconds, so of stamps closer than that only the first is kept.
-    values : array, shape (k, w)
-    """
-    finite = np.all(np.isfinite(values), axis=1)
-    time_ns, values = time_ns[finite], values[finite]
-    order = np.argsort(time_ns, kind="stable")
-    time_ns, values = time_ns[order], values[order]
-    time = _seconds(time_ns)
-    keep = np.ones(time.size, np.bool_)
-    keep[1:] = np.diff(time) > 0
-    time_ns, time, values = time_ns[keep], time[keep], values[keep]
-    if time.size < 2:
-        hint = " (are the header stamps all equal? try the bag time)" if header else ""
-        plural = "" if time_ns.size == 1 else "s"
-        raise InputError(
-            f"{what} has {time_ns.size} usable sample{plural} with distinct times, at least 2"
-            f" are needed{hint}",
-            source=src,
-        )
-    return time_ns, time, values
 
 
 #: Joint states inspected to find the wheel joints, at most.
@@ -653,8 +692,9 @@ def _quoted(names: Sequence[str]) -> str:
 
 def _read_odometry(
     reader: AnyReader, topics: dict[str, str], options: BagOptions, src: str
-) -> WheelSeries:
-    """Wheel rotation from the controller's odometry topic or transform chain."""
+) -> tuple[WheelSeries, PoseSeries]:
+    """Wheel rotation from the controller's odometry topic or transform chain, and that
+    odometry."""
     assert options.odom_geometry is not None  # _check_options
     if options.odom_topic is not None:
         what = f"odometry {options.odom_topic}"
@@ -668,191 +708,7 @@ def _read_odometry(
         edges = transforms.read_edges(reader, topics, src, header=options.time_source == "header")
         time, poses = transforms.chain_poses(edges, parent, child, src)
         series = PoseSeries(time=time, poses=poses)
-    return wheels_from_odometry(series, options.odom_geometry, what, src).wheels
-
-
-def _read_counts(
-    reader: AnyReader, topics: dict[str, str], topic: str, side: str, src: str
-) -> tuple[IntArray, FloatArray]:
-    """Time [ns] and unwrapped cumulative counts, each shape (k,), of a ticks topic."""
-    conns, msgtype = bag_reader.topic_connections(
-        reader, topics, topic, tuple(TICK_TYPES), f"{side} wheel ticks", src
-    )
-    bits = TICK_TYPES[msgtype][1]
-
-    def decode(msg: Number) -> list[Sample]:
-        return [(0, 0, (float(msg.data),), POSITION)]
-
-    layout_of = fast_layout(msgtype)
-    scan = _read_topic(
-        reader, conns, msgtype, topic, src, width=1, decode=decode, layout_of=layout_of
-    )
-    time_ns, _, counts = _clean(
-        _time_ns(scan, False), scan.values, f"topic {topic}", src, header=False
-    )
-    return time_ns, _unwrap(counts[:, 0], bits)
-
-
-def _unwrap(counts: FloatArray, bits: int | None) -> FloatArray:
-    """Counts of a ``bits``-bit counter that wraps around, shape (k,), made continuous.
-
-    A jump of more than half the counter's range between two samples is taken as a wrap.
-    ``bits`` None: the counts are returned as they are.
-    """
-    if bits is None:
-        return counts
-    span = float(2**bits)
-    step = np.diff(counts)
-    step = step - span * (step > span / 2) + span * (step < -span / 2)
-    return np.asarray(counts[0] + np.concatenate([[0.0], np.cumsum(step)]))
-
-
-def _read_ticks(
-    reader: AnyReader,
-    topics: dict[str, str],
-    left_topic: str,
-    right_topic: str,
-    ticks_per_revolution: float,
-    src: str,
-) -> WheelSeries:
-    t_left, n_left = _read_counts(reader, topics, left_topic, "left", src)
-    t_right, n_right = _read_counts(reader, topics, right_topic, "right", src)
-    inside = (t_left >= t_right[0]) & (t_left <= t_right[-1])
-    if np.count_nonzero(inside) < 2:
-        raise InputError(
-            f"the ticks topics {left_topic} and {right_topic} overlap in time in fewer than"
-            " 2 samples of the left wheel",
-            source=src,
-        )
-    # interpolate on times relative to a common origin: exact to the nanosecond
-    origin = min(int(t_left[0]), int(t_right[0]))
-    at = (t_left[inside] - origin).astype(np.float64)
-    right = np.interp(at, (t_right - origin).astype(np.float64), n_right)
-    counts = np.column_stack([n_left[inside], right])
-    # both are strictly increasing: _clean made the float seconds so
-    return WheelSeries(
-        time=_seconds(t_left[inside]), angles=counts * (2.0 * math.pi / ticks_per_revolution)
-    )
-
-
-def _read_fields(
-    reader: AnyReader, topics: dict[str, str], options: BagOptions, src: str
-) -> WheelSeries:
-    """Wheel rotation from two fields of the messages of ``wheel_topic``, of any type.
-
-    The type's definition comes from the bag or ``msg_dir``
-    (:func:`umbmark.sources.bag.custom.add_definitions`); every message is deserialized
-    by rosbags and its two values collected into lists, turned into arrays once. Times
-    are ``header.stamp`` if the type has a ``std_msgs/Header header`` and the time source
-    is ``"header"``, else the bag time.
-    """
-    assert options.left_field is not None  # the caller checked
-    assert options.right_field is not None
-    topic = options.wheel_topic
-    if topic in topics and ", " in topics[topic]:
-        raise InputError(
-            f"topic {topic} has messages of several types ({topics[topic]}); wheel fields "
-            "are read from one",
-            source=src,
-        )
-    conns, msgtype = bag_reader.topic_connections(
-        reader, topics, topic, (topics.get(topic, ""),), "wheel data", src
-    )
-    custom.add_definitions(reader, msgtype, options.msg_dir, topic, src)
-    fielddefs = reader.typestore.fielddefs
-    fields = []
-    for what, text in (("left field", options.left_field), ("right field", options.right_field)):
-        try:
-            fields.append(custom.resolve_field(fielddefs, msgtype, text, what, of=topic))
-        except InputError as err:
-            raise InputError(err.problem, source=src) from None
-    left, right = fields
-    tpr = options.ticks_per_revolution
-    if tpr is None:
-        for field in fields:
-            if field.integer:
-                raise InputError(
-                    f"field {field.text} of {msgtype} is an integer ({field.base}): encoder "
-                    "counts need ticks_per_revolution (--ticks-per-rev, counts per wheel "
-                    "revolution); without it the fields are read as angles [rad]",
-                    source=src,
-                )
-    header = options.time_source == "header" and custom.has_header(fielddefs, msgtype)
-    paths = [left.steps, right.steps]
-    if header:
-        paths += [("header", "stamp", "sec"), ("header", "stamp", "nanosec")]
-    row = custom.row_getter(paths)
-    store = reader.typestore
-    deserialize = store.deserialize_cdr if reader.is2 else store.deserialize_ros1
-    rows: list[tuple[Any, ...]] = []
-    bag_ns: list[int] = []
-    add_row, add_ns = rows.append, bag_ns.append
-    for ns, raw in bag_reader.messages(reader, conns, topic, src):
-        try:
-            msg = deserialize(raw, msgtype)
-        except Exception as err:  # malformed message bytes, a definition that does not fit
-            raise InputError(
-                f"a message of {topic} cannot be decoded as {msgtype}: {bag_reader.one_line(err)}",
-                source=src,
-            ) from None
-        try:
-            add_row(row(msg))
-        except AttributeError as err:  # a message class unlike its definition
-            raise InputError(
-                f"a message of {topic} lacks a field of {msgtype}: {bag_reader.one_line(err)}",
-                source=src,
-            ) from None
-        except IndexError:
-            raise InputError(
-                f"a message of {topic} (bag time {ns * 1e-9:.9f} s) has too few entries "
-                f"for the field {_short_field(msg, left, right)}",
-                source=src,
-            ) from None
-        add_ns(ns)
-    if not rows:
-        raise InputError(f"topic {topic} has no messages", source=src)
-    # one conversion; float64 holds the stamps' seconds and nanoseconds exactly
-    table = np.array(rows, np.float64).reshape(len(rows), len(paths))
-    if header:
-        time_ns = table[:, 2].astype(np.int64) * 1_000_000_000 + table[:, 3].astype(np.int64)
-    else:
-        time_ns = np.array(bag_ns, np.int64)
-    _, time, values = _clean(time_ns, table[:, :2], f"topic {topic}", src, header=header)
-    if tpr is None:
-        return WheelSeries(time=time, angles=values)
-    counts = np.column_stack(
-        [_unwrap(values[:, 0], left.wrap_bits), _unwrap(values[:, 1], right.wrap_bits)]
-    )
-    return WheelSeries(time=time, angles=counts * (2.0 * math.pi / tpr))
-
-
-def _short_field(msg: object, *fields: custom.Field) -> str:
-    """The first of ``fields`` that ``msg`` is too short for."""
-    for field in fields:
-        try:
-            custom.getter(field.steps)(msg)
-        except IndexError:
-            return field.text
-    return fields[0].text
-
-
-def _truth(
-    time_ns: IntArray, values: FloatArray, what: str, src: str, *, header: bool
-) -> PoseSeries:
-    """Ground truth from ``values`` shape (k, 6): ``x, y`` and quaternion ``x, y, z, w``."""
-    quat = values[:, 2:6]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        quat = quat / np.linalg.norm(quat, axis=1, keepdims=True)
-    qx, qy, qz, qw = quat.T
-    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
-    poses = np.column_stack([values[:, 0], values[:, 1], yaw])
-    _, time, poses = _clean(time_ns, poses, what, src, header=header)
-    return PoseSeries(time=time, poses=poses)
-
-
-def _pose_values(p: Vector, q: Quaternion) -> tuple[float, ...]:
-    """``x, y`` of ``p`` and the quaternion ``q``'s ``x, y, z, w``."""
-    return (float(p.x), float(p.y), float(q.x), float(q.y), float(q.z), float(q.w))
+    return wheels_from_odometry(series, options.odom_geometry, what, src).wheels, series
 
 
 def _read_pose_topic(
@@ -862,8 +718,9 @@ def _read_pose_topic(
     options: BagOptions,
     src: str,
     role: str = "ground truth",
+    allowed: tuple[str, ...] = TRUTH_TYPES,
 ) -> PoseSeries:
-    conns, msgtype = bag_reader.topic_connections(reader, topics, topic, TRUTH_TYPES, role, src)
+    conns, msgtype = bag_reader.topic_connections(reader, topics, topic, allowed, role, src)
 
     def decode_pose(msg: PoseStamped) -> list[Sample]:
         sec, nsec = _stamp(msg)

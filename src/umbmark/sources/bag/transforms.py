@@ -27,7 +27,7 @@ from .msgtypes import TF_TYPES, TFMessage
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-__all__ = ["TF_STATIC_TOPIC", "TF_TOPIC", "Edge", "chain_poses", "read_edges"]
+__all__ = ["TF_STATIC_TOPIC", "TF_TOPIC", "Edge", "chain_poses", "chain_steps", "read_edges"]
 
 FloatArray = NDArray[np.float64]
 TF_TOPIC = "/tf"
@@ -182,6 +182,14 @@ def _invert(a: FloatArray) -> FloatArray:
     """The inverse of planar poses, shape (n, 3)."""
     c, s = np.cos(a[:, 2]), np.sin(a[:, 2])
     return np.column_stack([-(c * a[:, 0] + s * a[:, 1]), s * a[:, 0] - c * a[:, 1], -a[:, 2]])
+
+
+def chain_steps(
+    edges: dict[tuple[str, str], Edge], parent: str, child: str
+) -> list[tuple[Edge, bool]] | None:
+    """The transforms from ``parent`` to ``child`` (each with whether it is walked
+    backwards), or None if the frames are not connected."""
+    return _path(edges, parent.lstrip("/"), child.lstrip("/"))
 
 
 def chain_poses(
