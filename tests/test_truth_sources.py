@@ -113,7 +113,7 @@ def test_the_controller_odometry_as_its_own_ground_truth_is_refused(husky):
     geometry = {"wheelbase": 0.555, "wheel_diameter": 0.33}
     for job, options in ((umbmark.calibrate, HUSKY_GEOMETRY), (umbmark.replay, geometry)):
         err = api_error(job, husky, **options, **same)
-        assert err.startswith(f"{husky}: the ground truth (--truth-topic {CONTROLLER}) is the ")
+        assert err.startswith(f"{husky}: the ground truth (truth_topic='{CONTROLLER}') is the ")
         assert "E_d = E_b = 1 whatever the robot" in err
         assert "umbmark info lists the candidates" in err
     line = cli_error(
@@ -129,7 +129,7 @@ def test_the_odometrys_own_transforms_are_refused(husky_rtk):
         umbmark.calibrate, husky_rtk, **HUSKY_GEOMETRY,
         odom_tf=("odom", "base_link"), tf_parent="/odom", tf_child="base_link",
     )  # fmt: skip
-    assert "is the odometry's own transform (--odom-tf odom base_link)" in err
+    assert "is the odometry's own transform (odom_tf=('odom', 'base_link'))" in err
     # a chain whose only moving transform is the odometry's (map -> odom never moves)
     err = api_error(
         umbmark.calibrate, husky_rtk, **HUSKY_GEOMETRY,
@@ -207,7 +207,7 @@ def test_gazebo_model_states_are_a_ground_truth(tb3):
     assert "ground_plane, unit_box, turtlebot3_burger" in err
     err = api_error(umbmark.calibrate, tb3, side_length=1.0, truth_topic="/odom",
                     truth_model="turtlebot3_burger")  # fmt: skip
-    assert "--truth-model names a model of a gazebo_msgs/msg/ModelStates topic" in err
+    assert "truth_model names a model of a gazebo_msgs/msg/ModelStates topic" in err
 
 
 def test_model_states_in_a_bag_without_definitions(tmp_path, tb3_motion):
@@ -303,7 +303,7 @@ def test_gnss_fixes_are_a_position_only_ground_truth(husky_rtk):
     for method in ("heading", "endpoints", "trajectory"):
         err = api_error(umbmark.calibrate, husky_rtk, method=method, **read)
         assert "has positions only" in err, method
-        assert f"the {method} method needs headings; use --method paper, exact or endpose" in err
+        assert f"the {method} method needs headings; use method paper, exact or endpose" in err
     replay = umbmark.replay(husky_rtk, **{k: v for k, v in read.items() if k != "side_length"})
     assert all(e is None for e in replay.heading_errors["nominal"])
     err = api_error(umbmark.calibrate, husky_rtk, truth_offset=(0.2, 0.0), **read)

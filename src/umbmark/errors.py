@@ -63,12 +63,15 @@ class Keyword:
         The values it takes, when they are a few words (``Literal["m", "cm", "mm"]``).
     path : bool
         It takes a file or folder: the command's ``--report r.txt`` is ``report='r.txt'``.
+    text : bool
+        It takes a text (``str``): the command's ``--method paper`` is ``method='paper'``.
     """
 
     name: str
     flag: bool = False
     choices: tuple[str, ...] = ()
     path: bool = False
+    text: bool = False
 
 
 class InputError(ValueError):
@@ -143,6 +146,8 @@ _VALUE = (
 )
 _TOKEN = re.compile(_FLAG + _VALUE)
 _NUMBER = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?|[-+]?inf|nan")
+#: A text value that is a name, not a word of the sentence (``base_link``, ``wheel-1``).
+_NAME_LIKE = re.compile(r"[_\-/.0-9]")
 #: Units a command takes that the library takes in SI: factor, SI unit.
 _TO_SI = {"deg": (math.pi / 180.0, "rad"), "mm": (1e-3, "m"), "cm": (1e-2, "m")}
 
@@ -170,7 +175,11 @@ def _as_python(text: str, keywords: Mapping[str, Keyword]) -> str:
             return f"{name}={value}{rest[len(value) + 1 :]}"
         if value is not None and value in keyword.choices:
             return f'{name}="{value}"{rest[len(value) + 1 :]}'
-        if value is not None and keyword.path and ("." in value or "/" in value):
+        if value is not None and (
+            (keyword.path and ("." in value or "/" in value))
+            or value.startswith("/")  # a ROS name (a topic, a frame)
+            or (keyword.text and bool(_NAME_LIKE.search(value)))
+        ):
             return f"{name}={value!r}{rest[len(value) + 1 :]}"
         return (f"{name}=True" if keyword.flag else name) + rest
 
@@ -210,6 +219,7 @@ def _keyword(
         flag=text in ("bool", bool) or isinstance(default, bool),
         choices=_literals(annotation, namespace),
         path=isinstance(text, str) and bool(re.search(r"\bPath(Like)?\b", text)),
+        text=text is str or (isinstance(text, str) and bool(re.fullmatch(r"str( \| None)?", text))),
     )
 
 

@@ -53,11 +53,16 @@ _INSTEAD = (
 )
 
 
-def _refuse(problem: str, src: str) -> InputError:
+def _refuse(problem: str, src: str, python: str | None = None) -> InputError:
+    """The refusal; ``python``: the problem as Python callers name the options."""
+    why = (
+        "calibrating the odometry against itself gives E_d = E_b = 1 whatever the robot; "
+        f"{_INSTEAD}"
+    )
     return InputError(
-        f"{problem}: calibrating the odometry against itself gives E_d = E_b = 1 whatever "
-        f"the robot; {_INSTEAD}",
+        f"{problem}: {why}",
         source=src,
+        python=None if python is None else f"{python}: {why}",
     )
 
 
@@ -92,6 +97,8 @@ def check_distinct(
                 f"the ground truth (--tf-parent {tf_truth[0]} --tf-child {tf_truth[1]}) is the "
                 f"odometry's own transform (--odom-tf {odom_tf[0]} {odom_tf[1]})",
                 src,
+                python=f"the ground truth (tf_parent={tf_truth[0]!r}, tf_child="
+                f"{tf_truth[1]!r}) is the odometry's own transform (odom_tf={tuple(odom_tf)!r})",
             )
 
 
