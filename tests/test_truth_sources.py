@@ -307,7 +307,7 @@ def test_gnss_fixes_are_a_position_only_ground_truth(husky_rtk):
     replay = umbmark.replay(husky_rtk, **{k: v for k, v in read.items() if k != "side_length"})
     assert all(e is None for e in replay.heading_errors["nominal"])
     err = api_error(umbmark.calibrate, husky_rtk, truth_offset=(0.2, 0.0), **read)
-    assert "--truth-offset moves the ground truth along its heading" in err
+    assert "truth_offset moves the ground truth along its heading" in err
 
 
 def test_coarse_gnss_is_listed_but_not_suggested(tmp_path, husky_motion):
