@@ -166,7 +166,9 @@ def _run(
         return None
     a, b = int(matched[0]), int(matched[-1])
     sl = slice(a, b + 1)
-    check_motion(label, wheels.time[sl], wheels.angles[sl], truth[sl])
+    # Messages name the file (the label is its short name, and the run within it).
+    where = recording.where + label[len(recording.name) :]
+    check_motion(where, wheels.time[sl], wheels.angles[sl], truth[sl])
     rel = np.full((b - a + 1, 3), np.nan)
     ok = np.all(np.isfinite(truth[sl]), axis=1)
     rel[ok] = to_start_frame(truth[sl][ok])
@@ -182,7 +184,7 @@ def _run(
         raise InputError(
             "the odometry overflows (not a finite number): check the wheel parameters and "
             "the encoder units",
-            source=label,
+            source=where,
         )
     turned = float(rel[-1, 2])
     direction = Direction.CCW if turned >= 0 else Direction.CW
@@ -226,15 +228,15 @@ def runs_from_recordings(
     """
     out = LoadedRuns(runs=[])
     for recording in recordings:
+        where = recording.where
         if recording.truth is None:
             raise InputError(
-                "has no ground truth: name its topic or columns (see --help)",
-                source=recording.name,
+                "has no ground truth: name its topic or columns (see --help)", source=where
             )
         truth, association = associate(
-            recording.wheels, recording.truth, max_gap=max_gap, source=recording.name
+            recording.wheels, recording.truth, max_gap=max_gap, source=where
         )
-        check_motion(recording.name, recording.wheels.time, recording.wheels.angles, truth)
+        check_motion(where, recording.wheels.time, recording.wheels.angles, truth)
         out.associations.append((recording.name, association))
         if association.fraction < 0.9:
             out.notes.append(f"{recording.name}: only {association.describe()}")
@@ -242,7 +244,7 @@ def runs_from_recordings(
         if split == "none":
             segments = [(0, time.size - 1)]
         elif split == "windows":
-            segments = split_by_windows(time, windows, recording.name)
+            segments = split_by_windows(time, windows, where)
         else:
             segments = split_by_rests(time, angles, truth, split_options)
         found = 0
@@ -260,6 +262,6 @@ def runs_from_recordings(
         if found == 0:
             out.notes.append(f"{recording.name}: no run found")
     if not out.runs:
-        names = ", ".join(r.name for r in recordings) or "the recordings"
+        names = ", ".join(r.where for r in recordings) or "the recordings"
         raise InputError(f"found no run with ground truth in {names}", source=None)
     return out
