@@ -135,25 +135,32 @@ def _scaled(run: Run, factor: float) -> Run:
     return Run(run.direction, scaled(run.true_end), scaled(run.odometry_end), run.label)
 
 
-def _read_as(squares: Sequence[Run], given: str, unit: str) -> _Reading:
-    """The table's runs, written in ``given``, read as ``unit``."""
+def _read_as(squares: Sequence[Run], given: str, unit: str) -> _Reading | None:
+    """The table's runs, written in ``given``, read as ``unit`` (None where a number
+    overflows: far beyond any robot)."""
     from .benchmark import umbmark_benchmark
 
     factor = UNITS[unit] / UNITS[given]
-    runs = tuple(_scaled(run, factor) for run in squares) if factor != 1.0 else tuple(squares)
+    try:
+        runs = tuple(_scaled(run, factor) for run in squares) if factor != 1.0 else tuple(squares)
+    except ValueError:
+        return None
     errors = [math.hypot(*run.return_error) for run in runs]
     odometry = max(math.hypot(r.odometry_end.x, r.odometry_end.y) for r in runs)
     truth = max(math.hypot(r.true_end.x, r.true_end.y) for r in runs)
     e_max = None
-    with contextlib.suppress(ValueError):  # fewer than two runs in a direction
-        e_max = umbmark_benchmark(runs).e_max_syst
+    # Numbers near the float range (a hostile table) overflow to inf: implausible anyway.
+    with np.errstate(all="ignore"):
+        with contextlib.suppress(ValueError):  # fewer than two runs in a direction
+            e_max = umbmark_benchmark(runs).e_max_syst
+        scatter = _scatter(runs)
     return _Reading(
         unit=unit,
         runs=runs,
         error=max(errors),
         reach=max(*errors, odometry, truth),
         odometry=odometry,
-        scatter=_scatter(runs),
+        scatter=scatter,
         e_max=e_max,
     )
 
@@ -239,11 +246,13 @@ def _table_unit_hints(
     if side is None:
         return []
     given = _read_as(squares, unit, unit)
+    if given is None:
+        return []
     tiny = given.reach < _TINY_REACH * side
     if given.reach == 0.0 or (given.typical(side) and not tiny):
         return []
-    others = [_read_as(squares, unit, other) for other in UNITS if other != unit]
-    sound = [r for r in others if r.sound(side)]
+    readings = [_read_as(squares, unit, other) for other in UNITS if other != unit]
+    sound = [r for r in readings if r is not None and r.sound(side)]
     fits = {r.unit: _fit(r, side, wheelbase) for r in sound}
     # Units one robot explains; where none does, the magnitudes alone.
     named = [r for r in sound if fits[r.unit] != "misfit" and fits[r.unit] != "fails"] or [
