@@ -84,6 +84,15 @@ def test_negative_factors_are_refused_not_reported(tmp_path: Path) -> None:
     calibration = Calibration(Estimate(), ActiveParams(wheelbase=0.34))  # type: ignore[arg-type]
     message = api_error(check_calibration, calibration)
     assert "E_d = -2.3" in message
+    assert "check --side-length, --wheelbase and the runs' units" in message
+    # Parameters a run log's metadata gave are named by field and file, not as options.
+    from umbmark.bounds import Origin
+
+    meta = str(tmp_path / "metadata.yaml")
+    origins = {"wheelbase": Origin("wheelbase", meta), "side_length": Origin("side_length", meta)}
+    message = api_error(check_calibration, calibration, origins)
+    assert f"check side_length in {meta}, wheelbase in {meta} and the runs' units" in message
+    assert "--" not in message
 
 
 # --- results of another robot ----------------------------------------------------------

@@ -149,3 +149,122 @@ def test_recording_without_ground_truth_is_refused():
     rec = Recording("odo.csv", WheelSeries(t, np.column_stack([t, t])))
     with pytest.raises(InputError, match=r"odo\.csv: has no ground truth"):
         runs_from_recordings([rec], ODO)
+
+
+# --- parameters from a source's metadata: bounds and provenance in messages ---------------
+
+
+@pytest.fixture(scope="module")
+def log_folder(tmp_path_factory):
+    """A run log of a virtual robot: 2 + 2 runs on a 4 m square, b = 0.34 m."""
+    import umbmark
+
+    folder = tmp_path_factory.mktemp("log") / "log"
+    umbmark.simulate(E_d=1.002, E_b=1.01, runs=2, dt=0.02, logs=folder)
+    return folder
+
+
+def _edited_log(log_folder, tmp_path, old, new):
+    import shutil
+
+    folder = tmp_path / "log"
+    shutil.copytree(log_folder, folder)
+    meta = folder / "metadata.yaml"
+    text = meta.read_text()
+    assert old in text
+    meta.write_text(text.replace(old, new))
+    return folder, meta
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message", "option"),
+    [
+        ("c_right: 1.0\n", "c_right: 1.0e-300\n",
+         "c_right 1e-300 is not a plausible factor: it must be within 0.2 to 5",
+         {"current_c_r": 1e-300}),
+        ("wheel_separation_multiplier: 1.0\n", "wheel_separation_multiplier: 1.0e+300\n",
+         "wheel_separation_multiplier 1e+300 is not a plausible factor: it must be within 0.2 to 5",
+         {"current_separation_multiplier": 1e300}),
+        ("side_length: 4.0\n", "side_length: 1.0e+308\n",
+         "side_length 1e+308 m is implausibly large: lengths are in metres (at most 100 m here",
+         {"side_length": 1e308}),
+        ("side_length: 4.0\n", "side_length: 500.0\n",
+         "side_length 500 m is implausibly large", {"side_length": 500.0}),
+        ("wheelbase: 0.34\n", "wheelbase: 1.0e-300\n",
+         "wheelbase 1e-300 m is implausibly small", {"wheelbase": 1e-300}),
+        ("wheel_diameter: 0.15\n", "wheel_diameter: 340.0\n",
+         "wheel_diameter 340 m is implausibly large", {"wheel_diameter": 340.0}),
+        ("encoder_resolution: 2000.0\n", "encoder_resolution: 1.0e-300\n",
+         "encoder_resolution 1e-300 is outside 1 to 1e+07", None),
+        ("gear_ratio: 20.0\n", "gear_ratio: 1.0e+300\n",
+         "gear_ratio 1e+300 is outside 0.001 to 10000", None),
+    ],
+)  # fmt: skip
+def test_metadata_gets_the_bounds_of_the_options(log_folder, tmp_path, old, new, message, option):
+    # Before: c_R = 1e-300 was taken with a warning, a side of 1e308 ended in NaN. Now the
+    # metadata's values are refused as the option giving the same value is, naming the
+    # file and the field; the bound is the option's (its message says the same range).
+    import umbmark
+
+    from helpers import api_error
+
+    folder, meta = _edited_log(log_folder, tmp_path, old, new)
+    line = api_error(umbmark.calibrate, folder)
+    assert line.startswith(f"{meta}: {message}")
+    if option is not None:
+        flag = "--" + next(iter(option)).replace("_", "-")
+        said = api_error(umbmark.calibrate, log_folder, **option)
+        assert said.startswith(f"{flag} ")
+        # The same bound: the lines differ only in the file and the name before the value.
+        assert said.split(" ", 1)[1] == line.removeprefix(f"{meta}: ").split(" ", 1)[1]
+
+
+def test_a_wheelbase_from_the_metadata_is_named_by_file_and_field(log_folder, tmp_path):
+    # The metadata's wheelbase (2.5 m) is not below half its side (4 m): the refusal names
+    # the file and both fields, not --wheelbase, which was not given.
+    import umbmark
+
+    from helpers import api_error
+
+    folder, meta = _edited_log(log_folder, tmp_path, "wheelbase: 0.34\n", "wheelbase: 2.5\n")
+    message = api_error(umbmark.calibrate, folder)
+    assert message.startswith(f"{meta}: the odometry's wheelbase 2.5 m (wheelbase) is not ")
+    assert "(side_length 4 m, so b < 2 m)" in message
+    assert "--wheelbase" not in message
+    # With the side given: the option is named, the wheelbase still by its file.
+    message = api_error(umbmark.calibrate, folder, side_length=3)
+    assert message.startswith(f"{meta}: the odometry's wheelbase 2.5 m (wheelbase)")
+    assert "(--side-length 3 m, so b < 1.5 m)" in message
+    assert "--wheelbase" not in message
+
+
+def test_optiodom_parameters_and_runs_are_named_by_their_files(tmp_path):
+    # The bundled real session (L = 0.75 m, Li = 0.2 m) with Li set to 2 m: the refusal
+    # names the metadata file and Li; with one run's ground truth frozen, the refusal names
+    # that run's file inside the session folder, not only "run-02".
+    import shutil
+
+    import umbmark
+
+    from helpers import api_error
+
+    sessions = umbmark.example_sessions(tmp_path / "real")
+    session = next(p for p in sessions if p.parent.name == "square")
+    meta = next(session.glob("*_metadata.csv"))
+    text = meta.read_text()
+    meta.write_text(text.replace("\nLi,0.2,", "\nLi,2.0,"))
+    message = api_error(umbmark.calibrate, session)
+    assert message.startswith(f"{meta}: the odometry's wheelbase 2 m (Li) is not smaller")
+    assert "(L 0.75 m, so b < 0.375 m)" in message
+    assert "--wheelbase" not in message
+    meta.write_text(text.replace("\nLi,0.2,", "\nLi,1.0e-9,"))
+    assert api_error(umbmark.calibrate, session) == (
+        f"{meta}: Li 1e-09 m is implausibly small: lengths are in metres (plausible: 0.001 to 10 m)"
+    )
+    meta.write_text(text)
+    run = next(session.glob("*_run-02.csv"))
+    rows = [line.split(",") for line in run.read_text(encoding="utf-8-sig").splitlines()]
+    run.write_text("\n".join(",".join([r[0], "0", "0", "0", *r[4:]]) for r in rows) + "\n")
+    message = api_error(umbmark.calibrate, session)
+    assert message.startswith(f"{run}: the ground truth never moves")
+    shutil.rmtree(session)

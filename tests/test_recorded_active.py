@@ -167,3 +167,43 @@ def test_a_malformed_header_is_one_line_naming_the_row(tmp_path, line, message):
     text = api_error(umbmark.calibrate, path, side_length=4, wheelbase=0.34)
     assert text.startswith(f"{path}, row 2: umbmark-active: ")
     assert message in text
+
+
+def test_a_wheelbase_from_a_header_or_parameter_file_is_named_by_file_and_field(tmp_path):
+    # A wheelbase not below half the 4 m side that came from the table's header, or from
+    # a controller file: the refusal names that file and field, not --wheelbase.
+    source = tmp_path / "ex.csv"
+    umbmark.example(source)
+    rows = source.read_text()
+    path = tmp_path / "runs.csv"
+    path.write_text(f"# umbmark-active: wheelbase=2.5 c_L=1.0 c_R=1.0\n{rows}")
+    message = api_error(umbmark.calibrate, path, side_length=4, unit="mm")
+    assert message.startswith(
+        f"{path}: the odometry's wheelbase 2.5 m (umbmark-active: wheelbase) is not smaller"
+    )
+    assert "(--side-length 4 m, so b < 2 m)" in message
+    assert "--wheelbase" not in message
+    params = tmp_path / "controller.yaml"
+    params.write_text(
+        "diff_drive_controller:\n  ros__parameters:\n    wheel_separation: 2.5\n"
+        "    wheel_separation_multiplier: 1.0\n"
+    )
+    message = api_error(umbmark.calibrate, source, side_length=4, unit="mm", current_params=params)
+    assert message.startswith(f"{params}: the odometry's wheelbase 2.5 m (wheel_separation)")
+    assert "--wheelbase" not in message
+
+
+def test_a_multiplier_from_a_header_is_named_with_the_wheelbase(tmp_path):
+    # --wheelbase 0.34 m times the header's wheel_separation_multiplier 4: 1.36 m, not
+    # below half a 2 m side. Both are named, each by where it came from.
+    source = tmp_path / "ex.csv"
+    umbmark.example(source)
+    path = tmp_path / "runs.csv"
+    path.write_text(
+        "# umbmark-active: c_L=1.0 c_R=1.0 wheel_separation_multiplier=4\n" + source.read_text()
+    )
+    message = api_error(umbmark.calibrate, path, side_length=2, wheelbase=0.34, unit="mm")
+    assert message.startswith(
+        f"{path}: the odometry's wheelbase 1.36 m (--wheelbase times umbmark-active: "
+        "wheel_separation_multiplier 4) is not smaller than the square"
+    )

@@ -110,7 +110,11 @@ def test_bad_logs(tmp_path, logs):
         "wheel_diameter: 150\nwheelbase: 0.34\nencoder_resolution: 100\n"
     )
     err = bad(folder, format="log")
-    assert "metadata.yaml: wheel_diameter and wheelbase are in metres" in err
+    # The bound of --wheel-diameter: lengths in metres, at most 10 m.
+    assert err == (
+        f"{folder / 'metadata.yaml'}: wheel_diameter 150 m is implausibly large: lengths are "
+        "in metres (at most 10 m here; plausible: 0.001 to 10 m)"
+    )
     (folder / "metadata.yaml").write_text("wheel_diameter: 0.15\nwheelbase: 0.34\n")
     assert "metadata.yaml: has no encoder_resolution" in bad(folder)
     (folder / "metadata.yaml").write_text(

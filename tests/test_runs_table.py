@@ -134,3 +134,69 @@ def test_unreadable_files(tmp_path, content, message):
 def test_a_directory_is_not_a_table(tmp_path):
     with pytest.raises(InputError, match="is a directory"):
         read_runs_table(tmp_path)
+
+
+# --- measured and odometry columns swapped (issue "What a new user meets", 3) ------------
+
+
+def _swapped(path, out):
+    """The table at ``path`` with x_abs, y_abs and x_odo, y_odo exchanged (comments kept)."""
+    lines = []
+    for line in path.read_text().splitlines():
+        cells = line.split(",")
+        if line.startswith("#") or cells[0] == "direction":
+            lines.append(line)
+        else:
+            lines.append(",".join([cells[0], cells[3], cells[4], cells[1], cells[2]]))
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
+def test_swapped_measured_and_odometry_columns_are_refused(tmp_path):
+    # The bundled table with its columns swapped: the "odometry" ends lie 203.2 mm from
+    # the start (the median of the rows' ten distances, between row 10's 131.7 mm and row
+    # 12's 274.7 mm) and the "measured" ones at the start: a robot steering by its
+    # odometry ends the other way round.
+    import umbmark
+
+    from helpers import api_error, cli_error
+
+    good = tmp_path / "runs.csv"
+    umbmark.example(good)
+    path = _swapped(good, tmp_path / "swapped.csv")
+    message = api_error(umbmark.calibrate, path, side_length=4, wheelbase=0.34, unit="mm")
+    assert message.startswith(f"{path}: x_odo, y_odo put the robot's end 203.2 mm from the start")
+    assert "the measured and odometry columns are swapped" in message
+    assert "x_abs, y_abs" in message
+    assert "swapped" in cli_error("calibrate", str(path), "-L", "4", "-b", "0.34", "--unit", "mm")
+
+
+def test_odometry_ends_somewhat_farther_than_the_measured_ones_are_warned_of(table):
+    # Odometry ends 30 mm from the start, measured ones 5 mm (median; ratio 6): a robot
+    # whose controller stops loosely could do that, so a warning, not a refusal. The
+    # return errors (about 30 mm) are a robot near calibration: the calibration stands.
+    import umbmark
+
+    rows = [
+        ("cw", 0.004, 0.003, 0.030, 0.000), ("cw", 0.003, 0.004, 0.000, 0.030),
+        ("cw", 0.005, 0.000, -0.030, 0.000), ("ccw", -0.004, 0.003, 0.000, -0.030),
+        ("ccw", 0.000, 0.005, 0.030, 0.000), ("ccw", 0.003, -0.004, -0.030, 0.000),
+    ]  # fmt: skip
+    report = umbmark.calibrate(table(rows), side_length=4, wheelbase=0.34)
+    (note,) = [n for n in report.notes if "swapped" in n]
+    assert note.startswith("x_odo, y_odo put the robot's end 30 mm from the start (median)")
+    assert note.endswith("are the measured and odometry columns swapped?")
+
+
+def test_the_tables_umbmark_writes_and_ships_are_not_taken_for_swapped(tmp_path):
+    # The bundled table (odometry ends at 0) and a simulated one (odometry ends within
+    # micrometres of the start, true ends 0.06 to 0.5 m away) are left alone.
+    import umbmark
+
+    example = tmp_path / "runs.csv"
+    umbmark.example(example)
+    simulated = tmp_path / "sim.csv"
+    umbmark.simulate(E_d=1.002, E_b=1.01, seed=7).write(output=simulated)
+    for path, unit in ((example, "mm"), (simulated, "m")):
+        report = umbmark.calibrate(path, side_length=4, wheelbase=0.34, unit=unit)
+        assert not [n for n in report.notes if "swapped" in n]

@@ -105,7 +105,7 @@ class Recording:
     Attributes
     ----------
     name : str
-        Where it came from (a file, a session), for messages.
+        Its short name (a file's name, ``run-01``): the label of its runs.
     wheels : WheelSeries
     truth : PoseSeries or None
         Ground truth, if the source has it.
@@ -113,6 +113,8 @@ class Recording:
         Nominal wheel parameters, if the source knows them.
     side_length : float or None
         The square's side [m], if the source knows it.
+    path : str or None
+        The file it was read from, for messages (``name`` where None).
     """
 
     name: str
@@ -120,6 +122,12 @@ class Recording:
     truth: PoseSeries | None = None
     params: WheelParams | None = None
     side_length: float | None = None
+    path: str | None = None
+
+    @property
+    def where(self) -> str:
+        """The recording as messages name it: its file, else its name."""
+        return self.path or self.name
 
 
 @dataclass(frozen=True)

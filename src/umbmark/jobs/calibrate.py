@@ -566,7 +566,10 @@ def calibrate(
         sources, read_options, wheelbase=wheelbase, side_length=side_length, force=force
     )
     if any(run.kind == "square" for run in read.runs):
-        check_square_geometry(read.side_length, read.active.effective_wheelbase)
+        active = read.active
+        check_square_geometry(
+            read.side_length, active.effective_wheelbase, read.origins, active.separation_multiplier
+        )
     chosen, note = method, None
     if method == "auto":
         from .auto import auto_method
@@ -660,7 +663,7 @@ def _calibrate_runs(
         raise
     except ValueError as exc:
         raise InputError(str(exc), source=where) from None
-    check_calibration(Calibration(estimate, active))
+    check_calibration(Calibration(estimate, active), read.origins)
     return CalibrationReport(
         sources=read.sources,
         format=read.format,

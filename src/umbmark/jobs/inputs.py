@@ -10,30 +10,40 @@ Parameters come from three places, later ones winning: the source itself (a run 
 line; a bag says nothing), a parameter file (``current_params``: a ros2_control or ROS 1
 YAML, or a previous result), and the keywords. The wheel factors and separation
 multiplier a source records as active are used only where no ``current_...`` keyword or
-file is given (with a note); given ones that differ from them are warned of. A runs
-table's end points are checked against the square's side for a unit slip.
+file is given (with a note); given ones that differ from them are warned of. Messages
+about a parameter name where it came from (an option, or a file's field). A runs table's
+end points are judged as a robot driving the square makes them (:mod:`umbmark.plausibility`:
+units, swapped columns, errors beyond the square test).
 """
 
 from __future__ import annotations
 
 import math
-import operator
 import os
-import statistics
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal, TypeAlias, TypedDict, cast
 
+from ..bounds import (
+    MAX_SIDE_LENGTH,
+    MAX_WHEELBASE,
+    Origin,
+    check_int_option,
+    check_length,
+    check_multiplier,
+    check_positive_option,
+    option_float,
+)
 from ..calibration import ActiveParams, Calibration
 from ..errors import InputError
 from ..kinematics import WheelParams
+from ..plausibility import check_columns, unit_hints
 from ..runs import Run
 from ..sources.association import DEFAULT_MAX_GAP, Association
 from ..sources.load import FORMATS, Format, Loaded, LoadOptions, detect_format, load_runs
 from ..sources.logged import SplitMode
 from ..sources.params import (
-    MULTIPLIER_RANGE,
     CalibratedParams,
     ControllerParams,
     is_result_file,
@@ -70,14 +80,8 @@ __all__ = [
     "read_runs",
 ]
 
-#: Largest plausible square side [m]: beyond, a unit slip is likelier.
-MAX_SIDE_LENGTH = 100.0
-#: Largest plausible wheelbase or wheel diameter [m].
-MAX_WHEELBASE = 10.0
 #: How far a result's nominal parameters may be from a source's (relative).
 SAME_ROBOT_TOLERANCE = 0.01
-#: Smallest plausible length option [m].
-MIN_LENGTH = 0.001
 #: Farthest a tracked point may sit from the axle centre [m].
 MAX_TRUTH_OFFSET = 5.0
 #: Largest --max-gap [s]: interpolating ground truth across longer gaps is guessing.
@@ -355,6 +359,9 @@ class Runs:
         Pooled from several sources: each source's runs as read (empty for one source).
     nominal : WheelParams or None
         A logged source's own nominal parameters, before any option or file overrides.
+    origins : dict of str to Origin
+        Where ``wheelbase``, ``separation_multiplier`` and ``side_length`` came from where
+        an option did not give them (a file's field), for messages.
     """
 
     sources: tuple[str, ...]
@@ -369,6 +376,7 @@ class Runs:
     sides: tuple[float | None, ...] = ()
     parts: tuple[Runs, ...] = field(default=(), repr=False, compare=False)
     nominal: WheelParams | None = field(default=None, repr=False, compare=False)
+    origins: Mapping[str, Origin] = field(default_factory=dict, repr=False, compare=False)
 
     def square_side(self) -> float:
         """The side [m] of the square every source drove.
@@ -442,93 +450,68 @@ def calibrated_name(params: Calibrated) -> str:
     return "the calibration"
 
 
-def option_float(flag: str, value: float) -> float:
-    """An option's number as a float, refusing what is no number or too large for one (a
-    Python ``int`` of hundreds of digits)."""
-    if isinstance(value, bool):
-        raise InputError(f"{flag} must be a number, not {value!r}")
-    try:
-        return float(value)
-    except OverflowError:
-        raise InputError(f"{flag} is far too large ({len(str(abs(int(value))))} digits)") from None
-    except (TypeError, ValueError):
-        raise InputError(f"{flag} must be a number, not {str(value)[:24]!r}") from None
-
-
-def check_positive_option(flag: str, value: float, unit: str = "") -> None:
-    """Refuse an option value that is not a positive finite number."""
-    value = option_float(flag, value)
-    if not (math.isfinite(value) and value > 0):
-        shown = f"{value:g} {unit}".strip()
-        raise InputError(f"{flag} must be > 0, got {shown}")
-
-
-def check_int_option(flag: str, value: int, low: int, high: int) -> int:
-    """An integer option within ``low`` to ``high``, or :class:`InputError` naming the
-    flag and the range (also for a ``bool``, a float and an integer of any size)."""
-    try:
-        if isinstance(value, bool):
-            raise TypeError
-        number = operator.index(value)  # int and numpy integers; not float, not str
-    except TypeError:
-        raise InputError(f"{flag} must be a whole number, not {str(value)[:24]!r}") from None
-    if not low <= number <= high:
-        digits = len(str(abs(number))) if abs(number) >= 10**24 else 0
-        shown = f"a number of {digits} digits" if digits else str(number)
-        raise InputError(f"{flag} must be between {low} and {high}, got {shown}")
-    return number
-
-
-def check_length(flag: str, value: float, largest: float, smallest: float = MIN_LENGTH) -> None:
-    """Refuse a length option [m] that is not positive, or implausibly small or large (a
-    unit slip); the message names the plausible range."""
-    check_positive_option(flag, value, "m")
-    value = float(value)
-    if value > largest:
-        raise InputError(
-            f"{flag} {value:g} m is implausibly large: lengths are in metres "
-            f"(at most {largest:g} m here; plausible: {smallest:g} to {largest:g} m)"
-        )
-    if value < smallest:
-        raise InputError(
-            f"{flag} {value:g} m is implausibly small: lengths are in metres "
-            f"(plausible: {smallest:g} to {largest:g} m)"
-        )
-
-
-def check_multiplier(flag: str, value: float) -> None:
-    """Refuse a wheel factor or multiplier outside the plausible range (``MULTIPLIER_RANGE``)."""
-    low, high = MULTIPLIER_RANGE
-    value = option_float(flag, value)
-    if not (math.isfinite(value) and low <= value <= high):
-        raise InputError(
-            f"{flag} {value:g} is not a plausible factor: it must be within {low:g} to {high:g}"
-        )
-
-
-def check_square_geometry(side_length: float | None, wheelbase: float) -> None:
-    """Refuse a wheelbase [m] that is not smaller than the square's side [m].
+def check_square_geometry(
+    side_length: float | None,
+    wheelbase: float,
+    origins: Mapping[str, Origin] | None = None,
+    multiplier: float = 1.0,
+) -> None:
+    """Refuse a wheelbase [m] (the odometry's: the configured one times ``multiplier``)
+    that is not smaller than the square's side [m].
 
     A robot whose wheelbase reaches half the side cannot drive the square as UMBmark
     assumes (its wheels would cross the square's centre on the turns): the usual cause is
-    swapped or mistyped ``--side-length`` and ``--wheelbase``.
+    swapped or mistyped ``--side-length`` and ``--wheelbase``. ``origins`` says where the
+    values came from (``wheelbase``, ``separation_multiplier``, ``side_length``; options
+    where not said); the message names those.
     """
-    if side_length is not None and wheelbase >= side_length / 2:
+    if side_length is None or wheelbase < side_length / 2:
+        return
+    b_from, side_from, m_from, source = _geometry_origins(origins, multiplier)
+    if b_from.file is None and side_from.file is None and m_from is None:
         raise InputError(
             f"--wheelbase {wheelbase:g} m is not smaller than the square: it must be below "
             f"half the side (--side-length {side_length:g} m, so b < {side_length / 2:g} m); "
             "are the two swapped or in other units?"
         )
+    named = b_from.named(source)
+    if m_from is not None:
+        named += f" times {m_from.named(source)} {multiplier:g}"
+    raise InputError(
+        f"the odometry's wheelbase {wheelbase:g} m ({named}) is not smaller than the square: "
+        f"it must be below half the side ({side_from.named(source)} {side_length:g} m, so "
+        f"b < {side_length / 2:g} m); are the two swapped or in other units?",
+        source=source,
+    )
 
 
-def check_calibration(calibration: Calibration) -> None:
+def _geometry_origins(
+    origins: Mapping[str, Origin] | None, multiplier: float
+) -> tuple[Origin, Origin, Origin | None, str | None]:
+    """Where the wheelbase, the side and (unless 1) the multiplier came from, and the one
+    file they all come from (None if they come from several, or from options only)."""
+    origins = origins or {}
+    b_from = origins.get("wheelbase", Origin("--wheelbase"))
+    side_from = origins.get("side_length", Origin("--side-length"))
+    m_from = origins.get("separation_multiplier") if multiplier != 1.0 else None
+    files = {o.file for o in (b_from, side_from, m_from) if o is not None and o.file}
+    return b_from, side_from, m_from, files.pop() if len(files) == 1 else None
+
+
+def check_calibration(
+    calibration: Calibration, origins: Mapping[str, Origin] | None = None
+) -> None:
     """Refuse a calibration whose new factors are not positive finite numbers.
 
     Raises
     ------
     InputError
-        Naming the first such factor: the runs and the options contradict each other.
+        Naming the first such factor: the runs and the parameters (named as ``origins``
+        says where they came from, see :func:`check_square_geometry`) contradict each other.
     """
+    active = calibration.active
+    b_from, side_from, m_from, _ = _geometry_origins(origins, active.separation_multiplier)
+    named = [side_from.named(), b_from.named(), *([m_from.named()] if m_from else [])]
     for name, value in (
         ("E_d", calibration.estimate.E_d),
         ("E_b", calibration.estimate.E_b),
@@ -540,7 +523,7 @@ def check_calibration(calibration: Calibration) -> None:
         if not (math.isfinite(value) and value > 0):
             raise InputError(
                 f"the runs give {name} = {value:.6g}, which no robot can have: check "
-                "--side-length, --wheelbase and the runs' units and directions"
+                f"{', '.join(named)} and the runs' units and directions"
             )
 
 
@@ -719,17 +702,15 @@ def _read_one(
                 _check_invertible(file, name)
         loaded = load_runs(path, kind, _load_options(options, kind, side_length, given, file))
         if kind == "table":
-            loaded = replace(
-                loaded,
-                notes=[*loaded.notes, *_unit_hints(loaded.runs, options, side_length, name)],
-            )
+            b = _require_wheelbase(configured) * separation
+            hints = [
+                *check_columns(loaded.runs, side_length, name),
+                *unit_hints(loaded.runs, options.unit, options.angle_unit, side_length, b, name),
+            ]
+            loaded = replace(loaded, notes=[*loaded.notes, *hints])
 
     if loaded.params is None:  # end points: the options are all there is
-        if configured is None:
-            raise InputError(
-                "--wheelbase is required: the wheelbase the odometry used during the runs, "
-                "in metres"
-            )
+        configured = _require_wheelbase(configured)
         active = ActiveParams(
             wheelbase=configured,
             c_left=c_left,
@@ -747,6 +728,7 @@ def _read_one(
             controller=controller,
             notes=(*chosen.notes, *loaded.notes),
             sides=(side_length,),
+            origins=_origins(chosen, loaded, side_length),
         )
 
     # Logged runs: the source's parameters, with whatever the options or files override.
@@ -785,7 +767,26 @@ def _read_one(
         notes=(*chosen.notes, *loaded.notes),
         sides=(loaded.side_length,),
         nominal=nominal,
+        origins=_origins(chosen, loaded, side_length),
     )
+
+
+def _origins(chosen: _Chosen, loaded: Loaded, side_length: float | None) -> dict[str, Origin]:
+    """Where the parameters came from: the options and files of ``chosen``, else the
+    source's own fields (a run log's or OptiOdom session's metadata)."""
+    origins = {**loaded.origins, **chosen.origins}
+    if side_length is not None:
+        origins["side_length"] = Origin("--side-length")
+    return origins
+
+
+def _require_wheelbase(configured: float | None) -> float:
+    """The wheelbase end points were driven with, which only the options can say."""
+    if configured is None:
+        raise InputError(
+            "--wheelbase is required: the wheelbase the odometry used during the runs, in metres"
+        )
+    return configured
 
 
 def _recorded_active(path: Path, kind: Format) -> RecordedActive | None:
@@ -810,175 +811,9 @@ def _recorded_active(path: Path, kind: Format) -> RecordedActive | None:
             wheelbase=meta.wheelbase,
             wheel_diameter=meta.wheel_diameter,
             where=f"the run log's {METADATA_FILE}",
+            path=str(meta_path),
         )
     return None
-
-
-#: Length units a table may be in, in metres.
-_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
-#: End points and return errors of a square run beyond this fraction of the side look
-#: like a unit slip (the paper's uncalibrated robot: 7 %); beyond the side, they are
-#: meaningless for UMBmark.
-_PLAUSIBLE_REACH = 0.25
-#: ... and below this fraction (0.4 mm on a 4 m square) no tape measure resolves them.
-_TINY_REACH = 1e-4
-#: Another unit is suggested only if it puts them between this fraction (4 mm on a 4 m
-#: square) and :data:`_PLAUSIBLE_REACH`.
-_SMALLEST_REACH = 1e-3
-
-
-def _unit_hints(
-    runs: Sequence[Run], options: ReadOptions, side: float | None, name: str
-) -> list[str]:
-    """Warnings where a table's runs look like other units than it says: the whole table
-    (:func:`_table_unit_hints`), single rows (:func:`_mixed_unit_rows`) or the headings
-    (:func:`_heading_unit_hints`)."""
-    unit = options.unit
-    squares = [run for run in runs if run.kind == "square"]
-    if not squares or unit not in _UNITS:
-        return []
-    return [
-        *_table_unit_hints(squares, unit, side, name),
-        *_mixed_unit_rows(squares, unit),
-        *_heading_unit_hints(squares, options.angle_unit),
-    ]
-
-
-def _heading_unit_hints(squares: Sequence[Run], angle_unit: str) -> list[str]:
-    """A warning where unwrapped headings given as degrees are a full loop in radians.
-
-    A square driven once round turns the robot by 360 degrees; odometry headings of about
-    6.28 "degrees" in every run are radians. (Degrees given as radians are refused by the
-    table reader: 360 rad is no heading.)
-    """
-    if angle_unit != "deg":
-        return []
-    loops = [abs(run.odometry_end.theta) for run in squares if run.odometry_end.theta is not None]
-    if not loops or len(loops) < len(squares):
-        return []
-    full_turn = math.radians(2.0 * math.pi)  # 6.28 read as degrees, in radians
-    if all(0.97 * full_turn < loop < 1.03 * full_turn for loop in loops):
-        shown = statistics.median(math.degrees(loop) for loop in loops)
-        return [
-            f"theta_odo is about {shown:.2f} deg in every run, where a square driven once "
-            "round turns the robot by 360 deg: are the headings in radians? "
-            "(--angle-unit rad)"
-        ]
-    return []
-
-
-#: A run's return error this many times smaller or larger than the median of the others'
-#: is taken for a row in another unit, if a unit's factor brings it near them.
-_ROW_FACTOR = 100.0
-
-
-def _mixed_unit_rows(squares: Sequence[Run], unit: str) -> list[str]:
-    """Rows whose return error is some hundred times off the others' and that another
-    unit's factor brings back among them (one row typed in metres in a mm table).
-
-    A return error scatters about its cluster, so one 100 times smaller than the median of
-    the other runs' of its direction (or larger) is rare by chance; only factors of the
-    units read here count, and the row must land within 3 times of the median when
-    rescaled.
-    """
-    hints = []
-    for direction in ("cw", "ccw"):
-        runs = [run for run in squares if run.direction.value == direction]
-        if len(runs) < 3:
-            continue
-        errors = [math.hypot(*run.return_error) for run in runs]
-        for k, error in enumerate(errors):
-            typical = statistics.median(errors[:k] + errors[k + 1 :])
-            if typical == 0.0 or error == 0.0:
-                continue
-            ratio = typical / error
-            if 1.0 / _ROW_FACTOR < ratio < _ROW_FACTOR:
-                continue
-            for other, scale in _UNITS.items():
-                factor = scale / _UNITS[unit]  # this row's numbers, read as ``other``
-                if other != unit and 1.0 / 3.0 < error * factor / typical < 3.0:
-                    hints.append(
-                        f"{runs[k].label or f'{direction} run {k + 1}'}: its return error "
-                        f"({1000 * error:.3g} mm) is {max(ratio, 1 / ratio):.0f} times "
-                        f"{'smaller' if ratio > 1 else 'larger'} than the other {direction} "
-                        f"runs' (median {1000 * typical:.3g} mm): is this row in {other}, not "
-                        f"{unit}? (a table has one unit: --unit)"
-                    )
-                    break
-    return hints
-
-
-def _table_unit_hints(
-    squares: Sequence[Run], unit: str, side: float | None, name: str
-) -> list[str]:
-    """Warnings where a table's square runs reach implausibly far or short for its unit and
-    the square's side, naming the unit the numbers look like.
-
-    Raises
-    ------
-    InputError
-        Where a return error is larger than the side and another unit explains it.
-    """
-    if side is None:
-        return []
-    errors = [math.hypot(*run.return_error) for run in squares]
-    worst = int(max(range(len(errors)), key=errors.__getitem__))
-    reach = max(
-        *errors,
-        *(math.hypot(r.true_end.x, r.true_end.y) for r in squares),
-        *(math.hypot(r.odometry_end.x, r.odometry_end.y) for r in squares),
-    )
-    if reach == 0.0:
-        return []
-
-    def looks_like(plausible: bool, smaller: bool) -> str | None:
-        """The unit that makes ``reach`` plausible: the nearest one, smaller or larger."""
-        candidates = [
-            other
-            for other in _UNITS
-            if (_UNITS[other] < _UNITS[unit]) == smaller
-            and other != unit
-            and _SMALLEST_REACH * side
-            <= reach * _UNITS[other] / _UNITS[unit]
-            <= _PLAUSIBLE_REACH * side
-        ]
-        if not candidates or not plausible:
-            return None
-        return min(candidates, key=lambda other: abs(math.log(_UNITS[other] / _UNITS[unit])))
-
-    if errors[worst] > side:
-        other = looks_like(True, smaller=True)
-        if other is not None:
-            factor = _UNITS[unit] / _UNITS[other]
-            raise InputError(
-                f"the return error of {squares[worst].label or 'a run'} "
-                f"({errors[worst]:.4g} m) is larger than the square's side ({side:g} m): are "
-                f"the lengths in the right unit? Read as {other}, they would reach "
-                f"{reach / factor:.4g} m: are these {other}, not {unit}? (--unit {other})",
-                source=name,
-            )
-        return []
-    if reach > _PLAUSIBLE_REACH * side:
-        other = looks_like(True, smaller=True)
-        if other is not None:
-            factor = _UNITS[unit] / _UNITS[other]
-            return [
-                f"the end points and return errors reach {reach:.4g} m, "
-                f"{100 * reach / side:.0f} % of the {side:g} m side (a square's reach a few "
-                f"%); read as {other}, they would reach {reach / factor:.4g} m: are these "
-                f"{other}, not {unit}? (--unit {other})"
-            ]
-    if reach < _TINY_REACH * side:
-        other = looks_like(True, smaller=False)
-        if other is not None:
-            factor = _UNITS[other] / _UNITS[unit]
-            return [
-                f"the end points and return errors reach only {1000 * reach:.3g} mm on a "
-                f"{side:g} m square, less than a tape measure resolves; read as {other}, "
-                f"they would reach {reach * factor:.4g} m: are these {other}, not {unit}? "
-                f"(--unit {other})"
-            ]
-    return []
 
 
 @dataclass(frozen=True)
@@ -991,6 +826,7 @@ class _Chosen:
     wheelbase: float | None
     wheel_diameter: float | None
     notes: tuple[str, ...]
+    origins: dict[str, Origin] = field(default_factory=dict)
 
 
 #: Given and recorded active parameters closer than this (relative) agree.
@@ -1030,8 +866,9 @@ def _choose_active(
         (option, flag) if option is not None else (value, in_file) if from_file else (None, "")
         for option, flag, value in factors
     ]
+    origins = _given_origins(options, wheelbase, file)
     if recorded is None:
-        return _Chosen(given[0][0], given[1][0], given[2][0], user_b, diameter, ())
+        return _Chosen(given[0][0], given[1][0], given[2][0], user_b, diameter, (), origins)
 
     def shown(value: float, unit: str = "") -> str:
         return f"{value:.6g}{unit}"
@@ -1068,6 +905,9 @@ def _choose_active(
                 f"{shown(recorded.separation_multiplier)}) as active during the runs; "
                 f"using {shown(user_b, ' m')} times the recorded multiplier"
             )
+        if recorded_b is not None:
+            origins.setdefault("wheelbase", recorded.origin("wheelbase"))
+        origins["separation_multiplier"] = recorded.origin("wheel_separation_multiplier")
         return _Chosen(
             recorded.c_left,
             recorded.c_right,
@@ -1075,6 +915,7 @@ def _choose_active(
             user_b if user_b is not None else recorded_b,
             diameter,
             tuple(notes),
+            origins,
         )
 
     # Something was given: it wins; say where it contradicts the record.
@@ -1107,7 +948,34 @@ def _choose_active(
                 f"{shown(recorded.separation_multiplier)}) as active during the runs; "
                 f"using {shown(used_b, ' m')}"
             )
-    return _Chosen(given[0][0], given[1][0], separation, configured, diameter, tuple(notes))
+    if user_b is None and recorded_b is not None:
+        origins["wheelbase"] = recorded.origin("wheelbase")
+        if separation is None:
+            origins["separation_multiplier"] = recorded.origin("wheel_separation_multiplier")
+    return _Chosen(
+        given[0][0], given[1][0], separation, configured, diameter, tuple(notes), origins
+    )
+
+
+def _given_origins(
+    options: ReadOptions, wheelbase: float | None, file: ControllerParams
+) -> dict[str, Origin]:
+    """Where the wheelbase and its multiplier come from when an option or the parameter
+    file gives them."""
+    params = os.fspath(options.current_params or "")
+    # A previous result gives its active wheelbase and its new multiplier.
+    result = bool(params) and is_result_file(params)
+    origins = {}
+    if wheelbase is not None:
+        origins["wheelbase"] = Origin("--wheelbase")
+    elif file.wheel_separation is not None:
+        origins["wheelbase"] = Origin("active.wheelbase" if result else "wheel_separation", params)
+    if options.current_separation_multiplier is not None:
+        origins["separation_multiplier"] = Origin("--current-separation-multiplier")
+    elif params:
+        field = "new.wheel_separation_multiplier" if result else "wheel_separation_multiplier"
+        origins["separation_multiplier"] = Origin(field, params)
+    return origins
 
 
 def _check_invertible(file: ControllerParams, name: str) -> None:
@@ -1250,4 +1118,5 @@ def pool_runs(read: Sequence[Runs]) -> Runs:
         notes=(*(n for r in read for n in r.notes), *notes),
         sides=sides,
         parts=tuple(original),
+        origins=first.origins,
     )

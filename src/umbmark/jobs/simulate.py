@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from .. import __version__
+from ..bounds import ENCODER_RESOLUTION_RANGE, GEAR_RATIO_RANGE, check_range
 from ..conventions import Direction
 from ..errors import InputError, python_api
 from ..kinematics import WheelParams
@@ -54,8 +55,6 @@ MAX_RUNS = 1000
 SEED_RANGE = (0, 2**63 - 1)
 DT_RANGE = (1e-4, 0.1)  # s
 SPEED_RANGE = (0.01, 5.0)  # m/s
-MAX_ENCODER_RESOLUTION = 1e7  # counts per motor revolution
-MAX_GEAR_RATIO = 1e4
 MAX_SLIP = 0.1  # standard deviation of the relative wheel slip
 MAX_BUMP_SIZE = 0.05  # m
 MAX_BUMP_RATE = 100.0  # per metre
@@ -347,17 +346,16 @@ def simulate(
         ("--speed", speed),
     ):
         check_positive_option(name, value)
-    for name, value, (low, high) in (
+    for name, value, bounds in (
         ("--dt", dt, DT_RANGE),
         ("--speed", speed, SPEED_RANGE),
-        ("--encoder-resolution", encoder_resolution, (1.0, MAX_ENCODER_RESOLUTION)),
-        ("--gear-ratio", gear_ratio, (1e-3, MAX_GEAR_RATIO)),
+        ("--encoder-resolution", encoder_resolution, ENCODER_RESOLUTION_RANGE),
+        ("--gear-ratio", gear_ratio, GEAR_RATIO_RANGE),
         ("--slip", slip, (0.0, MAX_SLIP)),
         ("--bump-size", bump_size, (0.0, MAX_BUMP_SIZE)),
         ("--bump-rate", bump_rate, (0.0, MAX_BUMP_RATE)),
     ):
-        if not (math.isfinite(value) and low <= value <= high):
-            raise InputError(f"{name} {value:g} is outside {low:g} to {high:g}")
+        check_range(name, value, bounds)
     if isinstance(seed, bool) or not SEED_RANGE[0] <= seed <= SEED_RANGE[1]:
         raise InputError(f"--seed {seed} is outside {SEED_RANGE[0]} to {SEED_RANGE[1]}")
     if runs > MAX_RUNS:

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
+from ..bounds import Origin
 from ..conventions import axle_poses
 from ..errors import InputError
 from ..kinematics import WheelParams
@@ -99,6 +100,9 @@ class Loaded:
         The square's side, from the options or the source.
     associations : list of (str, Association)
     notes : list of str
+    origins : dict of str to Origin
+        Where the source's own parameters are written (``wheelbase``,
+        ``wheel_diameter``, ``side_length``, ``separation_multiplier``), for messages.
     """
 
     format: str
@@ -107,6 +111,7 @@ class Loaded:
     side_length: float | None = None
     associations: list[tuple[str, Association]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    origins: dict[str, Origin] = field(default_factory=dict)
 
 
 #: Bytes of a folder's ``metadata.yaml`` looked into to tell a ROS 2 bag.
@@ -214,17 +219,23 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
     split = options.split
     params: WheelParams | None
     read_notes: list[str] = []
+    origins: dict[str, Origin] = {}
     if kind == "log":
-        from .runlog import read_runlog
+        from .runlog import METADATA_FILE, read_runlog
 
         recordings, metadata = read_runlog(source)
         params, side = metadata.params, metadata.side_length
+        meta = str((source if source.is_dir() else source.parent) / METADATA_FILE)
+        origins = {key: Origin(key, meta) for key in ("wheelbase", "wheel_diameter", "side_length")}
+        origins["separation_multiplier"] = Origin("wheel_separation_multiplier", meta)
     elif kind == "optiodom":
         from .optiodom import read_optiodom
 
         recordings, session = read_optiodom(source)
         params, side = session.params, session.side_length
         split = "none"  # each OptiOdom file is one run
+        fields = {"wheelbase": "Li", "wheel_diameter": "Di", "side_length": "L"}
+        origins = {key: Origin(name, str(session.path)) for key, name in fields.items()}
     else:
         recordings, params, side = _read_bag(source, options, read_notes)
     if options.params is not None:
@@ -254,6 +265,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         side_length=side,
         associations=found.associations,
         notes=[*read_notes, *found.notes],
+        origins=origins,
     )
 
 
@@ -283,7 +295,7 @@ def _read_bag(
         )
     read = read_recording(source, bag)
     notes += read.notes
-    recording = Recording(name=source.name, wheels=read.wheels, truth=read.truth)
+    recording = Recording(name=source.name, wheels=read.wheels, truth=read.truth, path=str(source))
     return [recording], None, None
 
 

@@ -189,7 +189,9 @@ def _run(
         return None
     a, b = int(matched[0]), int(matched[-1])
     sl = slice(a, b + 1)
-    check_motion(label, wheels.time[sl], wheels.angles[sl], truth[sl], headings=headings)
+    # Messages name the file (the label is its short name, and the run within it).
+    where = recording.where + label[len(recording.name) :]
+    check_motion(where, wheels.time[sl], wheels.angles[sl], truth[sl], headings=headings)
     log = RunLog(
         time=wheels.time[sl] - wheels.time[a],
         wheel_angles=wheels.angles[sl] - wheels.angles[a],
@@ -203,7 +205,7 @@ def _run(
         raise InputError(
             "the odometry overflows (not a finite number): check the wheel parameters and "
             "the encoder units",
-            source=label,
+            source=where,
         )
     ok = known[sl]
     if headings:
@@ -291,24 +293,24 @@ def runs_from_recordings(
     """
     out = LoadedRuns(runs=[])
     for recording in recordings:
+        where = recording.where
         if recording.truth is None:
             raise InputError(
-                "has no ground truth: name its topic or columns (see --help)",
-                source=recording.name,
+                "has no ground truth: name its topic or columns (see --help)", source=where
             )
         truth, association = associate(
-            recording.wheels, recording.truth, max_gap=max_gap, source=recording.name
+            recording.wheels, recording.truth, max_gap=max_gap, source=where
         )
         headings = recording.truth.headings
         time, angles = recording.wheels.time, recording.wheels.angles
-        check_motion(recording.name, time, angles, truth, headings=headings)
+        check_motion(where, time, angles, truth, headings=headings)
         out.associations.append((recording.name, association))
         if association.fraction < 0.9:
             out.notes.append(f"{recording.name}: only {association.describe()}")
         if split == "none":
             segments = [(0, time.size - 1)]
         elif split == "windows":
-            segments = split_by_windows(time, windows, recording.name)
+            segments = split_by_windows(time, windows, where)
         else:
             split_poses = truth
             if not headings:  # the turns come from the odometry
@@ -333,7 +335,7 @@ def runs_from_recordings(
         if found == 0:
             out.notes.append(f"{recording.name}: no run found")
     if not out.runs:
-        names = ", ".join(r.name for r in recordings) or "the recordings"
+        names = ", ".join(r.where for r in recordings) or "the recordings"
         raise InputError(f"found no run with ground truth in {names}", source=None)
     return out
 

@@ -26,6 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..bounds import (
+    ENCODER_RESOLUTION_RANGE,
+    GEAR_RATIO_RANGE,
+    MAX_SIDE_LENGTH,
+    MAX_WHEELBASE,
+    check_length,
+    check_range,
+)
 from ..errors import InputError
 from ..kinematics import WheelParams
 from ..recording import PoseSeries, Recording, WheelSeries
@@ -45,14 +53,20 @@ MAX_SAMPLES = 5_000_000
 #: Most rows read from a session's metadata file (the published ones have about 20).
 MAX_METADATA_ROWS = 10_000
 
+#: The metadata's lengths and their largest plausible values [m]: ``Li`` as
+#: ``--wheelbase``, ``Di`` as ``--wheel-diameter``, ``L`` as ``--side-length``; ...
+_LENGTH_BOUNDS = {"Li": MAX_WHEELBASE, "Di": MAX_WHEELBASE, "L": MAX_SIDE_LENGTH}
+#: ... the encoder's figures as ``umbmark simulate``'s options.
+_RANGES = {"encRes": ENCODER_RESOLUTION_RANGE, "ngear": GEAR_RATIO_RANGE}
+
 _RUN = re.compile(r"^(?P<id>.+)_run-(?P<n>\d+)\.csv$")
 
 
 class OptiOdomSession:
-    """The metadata of a session."""
+    """The metadata of a session, read from the file ``path`` (named in messages)."""
 
-    def __init__(self, folder: Path, meta: dict[str, list[str]]) -> None:
-        self.folder = folder
+    def __init__(self, path: Path, meta: dict[str, list[str]]) -> None:
+        self.path = path
         self.meta = meta
 
     def number(self, key: str, index: int = 0) -> float:
@@ -65,15 +79,20 @@ class OptiOdomSession:
         """
         values = self.meta.get(key, [])
         if len(values) <= index or not values[index].strip():
-            raise InputError(f"metadata has no value {index + 1} for {key}", source=self.folder)
+            raise InputError(f"metadata has no value {index + 1} for {key}", source=self.path)
         try:
             value = float(values[index])
         except ValueError:
             raise InputError(
-                f"metadata {key} {values[index]!r} is not a number", source=self.folder
+                f"metadata {key} {values[index]!r} is not a number", source=self.path
             ) from None
         if not (math.isfinite(value) and value > 0):
-            raise InputError(f"metadata {key} = {value:g} is not positive", source=self.folder)
+            raise InputError(f"metadata {key} = {value:g} is not positive", source=self.path)
+        # The same bounds as the options that give these values (--wheelbase, ...).
+        if key in _LENGTH_BOUNDS:
+            check_length(key, value, _LENGTH_BOUNDS[key], source=self.path)
+        elif key in _RANGES:
+            check_range(key, value, _RANGES[key], source=self.path)
         return value
 
     @property
@@ -168,6 +187,7 @@ def read_optiodom(folder: str | Path) -> tuple[list[Recording], OptiOdomSession]
                 truth=PoseSeries(time=time.copy(), poses=data[:, 1:4].copy()),
                 params=params,
                 side_length=session.side_length,
+                path=str(path),
             )
         )
     return recordings, session

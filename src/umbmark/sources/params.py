@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from ..bounds import LENGTH_RANGE, MULTIPLIER_RANGE
 from ..errors import InputError
 from ..kinematics import WheelParams
 from .text import finite, load_json, load_yaml
@@ -49,10 +50,6 @@ GEOMETRY_KEYS = ("wheel_separation", "wheel_radius")
 DIFF_DRIVE_KEYS = frozenset(
     {*MULTIPLIER_KEYS, *GEOMETRY_KEYS, "left_wheel_names", "right_wheel_names", "open_loop"}
 )
-#: Bounds of a plausible multiplier (skid-steer wheelbases reach about 2).
-MULTIPLIER_RANGE = (0.2, 5.0)
-#: Bounds of a plausible configured length [m].
-LENGTH_RANGE = (0.001, 10.0)
 #: Largest parameter file or result read [bytes]: real ones are a few kilobytes.
 MAX_FILE_BYTES = 16 * 1024 * 1024
 

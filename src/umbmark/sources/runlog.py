@@ -53,6 +53,15 @@ from typing import Any
 
 import numpy as np
 
+from ..bounds import (
+    ENCODER_RESOLUTION_RANGE,
+    GEAR_RATIO_RANGE,
+    MAX_SIDE_LENGTH,
+    MAX_WHEELBASE,
+    check_length,
+    check_multiplier,
+    check_range,
+)
 from ..errors import InputError
 from ..kinematics import WheelParams
 from ..recording import PoseSeries, Recording, WheelSeries
@@ -75,6 +84,16 @@ FORMAT_NAME = "umbmark-runlog"
 #: Most rows (samples) read from one run file: 14 hours at 100 Hz, 83 minutes at 1 kHz.
 #: The file is read line by line and only the numbers are kept (56 bytes a row).
 MAX_SAMPLES = 5_000_000
+#: The metadata's lengths and their largest plausible values [m] (as ``--wheel-diameter``,
+#: ``--wheelbase`` and ``--side-length``), ...
+_LENGTH_BOUNDS = {
+    "wheel_diameter": MAX_WHEELBASE,
+    "wheelbase": MAX_WHEELBASE,
+    "side_length": MAX_SIDE_LENGTH,
+}
+#: ... its encoder's figures (as ``umbmark simulate``'s options); the rest are wheel
+#: factors and multipliers (as ``--current-c-l`` and its kin).
+_RANGES = {"encoder_resolution": ENCODER_RESOLUTION_RANGE, "gear_ratio": GEAR_RATIO_RANGE}
 
 
 @dataclass(frozen=True)
@@ -137,6 +156,13 @@ def read_metadata(path: str | Path) -> LogMetadata:
         number = finite(value)
         if number is None or number <= 0:
             raise InputError(f"{key} is {f'{value!r}'[:24]}, not a positive number", source=path)
+        # The same bounds as the options that give these values.
+        if key in _LENGTH_BOUNDS:
+            check_length(key, number, _LENGTH_BOUNDS[key], source=path)
+        elif key in _RANGES:
+            check_range(key, number, _RANGES[key], source=path)
+        else:
+            check_multiplier(key, number, source=path)
         return number
 
     counts = wheel_data == "counts"
@@ -154,7 +180,7 @@ def read_metadata(path: str | Path) -> LogMetadata:
         "c_right",
         "wheel_separation_multiplier",
     }
-    metadata = LogMetadata(
+    return LogMetadata(
         wheel_diameter=number("wheel_diameter"),
         wheelbase=number("wheelbase"),
         wheel_data=wheel_data,
@@ -169,12 +195,6 @@ def read_metadata(path: str | Path) -> LogMetadata:
             k in data for k in ("c_left", "c_right", "wheel_separation_multiplier")
         ),
     )
-    if metadata.wheel_diameter > 10 or metadata.wheelbase > 10:
-        raise InputError(
-            "wheel_diameter and wheelbase are in metres: values over 10 m look like mm",
-            source=path,
-        )
-    return metadata
 
 
 def read_runlog(path: str | Path) -> tuple[list[Recording], LogMetadata]:
@@ -279,6 +299,7 @@ def _read_log_csv(
         truth=PoseSeries(time=truth[:, 0], poses=truth[:, 1:]) if truth.shape[0] >= 2 else None,
         params=params,
         side_length=side_length,
+        path=str(path),
     )
 
 

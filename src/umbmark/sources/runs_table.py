@@ -51,13 +51,13 @@ import csv
 import math
 import re
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..bounds import LENGTH_RANGE, MULTIPLIER_RANGE, Origin
 from ..conventions import Direction, angle_to_rad, length_to_m
 from ..errors import InputError
 from ..runs import EndPose, Run
-from .params import LENGTH_RANGE, MULTIPLIER_RANGE
 from .text import iter_content_lines, iter_lines
 
 __all__ = [
@@ -90,8 +90,11 @@ _ACTIVE_KEYS = {
     "c_R": False,
     "wheel_separation_multiplier": False,
 }
-#: Headings beyond this many radians are taken for degrees given as radians.
-_MAX_PLAUSIBLE_RAD = 4.0 * math.pi
+#: Headings beyond this many radians are taken for degrees given as radians: a square
+#: run's unwrapped heading stays within two turns even for a robot whose turns reach half
+#: a turn (E_b of 0.5) and whose legs bend by up to half a turn each; a square's heading in
+#: degrees is about 360.
+_MAX_PLAUSIBLE_RAD = 8.0 * math.pi
 
 
 def read_runs_table(
@@ -260,6 +263,10 @@ class RecordedActive:
         Nominal wheel diameter ``D_n`` [m], if recorded.
     where : str
         What recorded them, for messages (``"the table's header"``).
+    path : str or None
+        The file that records them, for messages.
+    prefix : str
+        What precedes a field's name in that file (``"umbmark-active: "``).
     """
 
     c_left: float
@@ -268,6 +275,12 @@ class RecordedActive:
     wheelbase: float | None = None
     wheel_diameter: float | None = None
     where: str = "the source"
+    path: str | None = None
+    prefix: str = ""
+
+    def origin(self, field: str) -> Origin:
+        """Where the record's ``field`` (``wheelbase``, ...) is written, for messages."""
+        return Origin(f"{self.prefix}{field}", self.path)
 
 
 def read_table_active(path: str | Path) -> RecordedActive | None:
@@ -293,7 +306,8 @@ def read_table_active(path: str | Path) -> RecordedActive | None:
                 return None  # the header: no active parameters recorded
             body = text[1:].strip()
             if body.startswith(ACTIVE_TAG):
-                return _parse_active(body[len(ACTIVE_TAG) :], path, number)
+                found = _parse_active(body[len(ACTIVE_TAG) :], path, number)
+                return replace(found, path=str(path), prefix=f"{ACTIVE_TAG} ")
         return None
     finally:
         lines.close()
