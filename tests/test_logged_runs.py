@@ -212,11 +212,11 @@ def test_metadata_gets_the_bounds_of_the_options(log_folder, tmp_path, old, new,
     line = api_error(umbmark.calibrate, folder)
     assert line.startswith(f"{meta}: {message}")
     if option is not None:
-        flag = "--" + next(iter(option)).replace("_", "-")
+        keyword = next(iter(option))
         said = api_error(umbmark.calibrate, log_folder, **option)
-        assert said.startswith(f"{flag} ")
+        assert said.startswith(f"{keyword}=")
         # The same bound: the lines differ only in the file and the name before the value.
-        assert said.split(" ", 1)[1] == line.removeprefix(f"{meta}: ").split(" ", 1)[1]
+        assert said.split("=", 1)[1] == line.removeprefix(f"{meta}: ").split(" ", 1)[1]
 
 
 def test_a_wheelbase_from_the_metadata_is_named_by_file_and_field(log_folder, tmp_path):
@@ -234,7 +234,7 @@ def test_a_wheelbase_from_the_metadata_is_named_by_file_and_field(log_folder, tm
     # With the side given: the option is named, the wheelbase still by its file.
     message = api_error(umbmark.calibrate, folder, side_length=3)
     assert message.startswith(f"{meta}: the odometry's wheelbase 2.5 m (wheelbase)")
-    assert "(--side-length 3 m, so b < 1.5 m)" in message
+    assert "(side_length=3 m, so b < 1.5 m)" in message
     assert "--wheelbase" not in message
 
 

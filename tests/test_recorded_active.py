@@ -181,7 +181,7 @@ def test_a_wheelbase_from_a_header_or_parameter_file_is_named_by_file_and_field(
     assert message.startswith(
         f"{path}: the odometry's wheelbase 2.5 m (umbmark-active: wheelbase) is not smaller"
     )
-    assert "(--side-length 4 m, so b < 2 m)" in message
+    assert "(side_length=4 m, so b < 2 m)" in message
     assert "--wheelbase" not in message
     params = tmp_path / "controller.yaml"
     params.write_text(
@@ -204,6 +204,6 @@ def test_a_multiplier_from_a_header_is_named_with_the_wheelbase(tmp_path):
     )
     message = api_error(umbmark.calibrate, path, side_length=2, wheelbase=0.34, unit="mm")
     assert message.startswith(
-        f"{path}: the odometry's wheelbase 1.36 m (--wheelbase times umbmark-active: "
+        f"{path}: the odometry's wheelbase 1.36 m (wheelbase times umbmark-active: "
         "wheel_separation_multiplier 4) is not smaller than the square"
     )

@@ -38,7 +38,7 @@ def test_millimetres_as_centimetres_are_refused_naming_the_unit():
     message = api_error(umbmark.calibrate, EXAMPLE, side_length=4, wheelbase=0.34, unit="cm")
     assert "reach 3.246 m, 81 % of the 4 m side" in message
     assert "read as mm, they would reach 0.3246 m, E_max,syst 307.2 mm" in message
-    assert message.endswith("are these mm, not cm? (--unit mm)")
+    assert message.endswith('are these mm, not cm? (unit="mm")')
     line = cli_error("calibrate", EXAMPLE, "-L", "4", "-b", "0.34", "--unit", "cm")
     assert "are these mm, not cm? (--unit mm)" in line
 
@@ -113,8 +113,8 @@ def test_a_table_in_mm_read_as_metres_names_every_plausible_unit(tmp_path):
     # and neither is recommended. Spread 6 mm: pooled scatter 6 sqrt(10 / 8) = 6.7 mm.
     path = _mm_table(tmp_path, spread_mm=6.0)
     message = api_error(umbmark.calibrate, path, side_length=4, wheelbase=0.34)
-    assert "E_max,syst 848.5 mm (--unit cm)" in message
-    assert "E_max,syst 84.85 mm (--unit mm)" in message
+    assert 'E_max,syst 848.5 mm (unit="cm")' in message
+    assert 'E_max,syst 84.85 mm (unit="mm")' in message
     assert message.endswith("which unit is the table in?")
     line = cli_error("calibrate", str(path), "-L", "4", "-b", "0.34")
     assert "(--unit cm)" in line
@@ -128,8 +128,8 @@ def test_the_nearer_unit_is_not_named_where_only_the_farther_is_plausible(tmp_pa
     # farthest end point (60 + 20 / sqrt 2 = 74 mm out, as cm 0.74 m) within the side.
     path = _mm_table(tmp_path, spread_mm=20.0)
     message = api_error(umbmark.calibrate, path, side_length=4, wheelbase=0.34)
-    assert "(--unit cm)" not in message
-    assert message.endswith("E_max,syst 84.85 mm: are these mm, not m? (--unit mm)")
+    assert 'unit="cm"' not in message
+    assert message.endswith('E_max,syst 84.85 mm: are these mm, not m? (unit="mm")')
 
 
 # --- large return errors are a robot far off, not a unit ---------------------------------
