@@ -64,7 +64,7 @@ MAX_BUMP_RATE = 100.0  # per metre
 MAX_SAMPLES_PER_RUN = 2_000_000
 #: Most sampling periods of all runs together (the work of the vectorized runs) ...
 MAX_SAMPLES = 1_000_000_000
-#: ... and when the time series are kept (--logs, ``record``): about 130 bytes each.
+#: ... and when the time series are kept (--logs, --bag, ``record``): about 130 bytes each.
 MAX_RECORDED_SAMPLES = 5_000_000
 #: Share of the work done by the simulation when a bag is written (the rest is writing it).
 SIMULATION_SHARE = 0.2
