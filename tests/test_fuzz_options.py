@@ -293,6 +293,7 @@ def commands(folder: Path) -> dict[str, Command]:
                 number_opt("--seed", whole(0, 2**63 - 1)),
                 choice_opt("--path", "square", "straight", "turn", "circle"),
                 choice_opt("--direction", "both", "cw", "ccw", "up"),
+                choice_opt("--bag-storage", "sqlite3", "mcap", "zip"),
             ],
         ),
         "simulate-turn": Command(

@@ -78,9 +78,16 @@ def _number(*decls: str, section: str, default: float, help_text: str) -> Any:
         option("--logs", section=OUTPUTS, type=click.Path(file_okay=False),
                help="Write each run's time series (time, true pose, encoder counts) into "
                "this folder, in the run-log format that calibrate reads."),
+        option("--bag", section=OUTPUTS, type=click.Path(),
+               help="Write the runs as one ROS bag, recorded as on a robot with motion "
+               "capture: /joint_states, /odom, /tf and /mocap/robot/pose, the robot resting "
+               "2 s near the start between runs. NAME.bag is ROS 1, another name a ROS 2 "
+               "bag folder (needs the ros extra)."),
+        option("--bag-storage", section=OUTPUTS, type=click.Choice(["sqlite3", "mcap"]),
+               help="Storage of a ROS 2 --bag [default: sqlite3, as rosbags writes]."),
         option("--force", section=OUTPUTS, is_flag=True,
                help="Write --logs into a folder that is not empty (its other runs would be "
-               "calibrated together with these)."),
+               "calibrated together with these); replace an existing --bag."),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print a JSON summary."),
     ]
@@ -89,16 +96,18 @@ def simulate(json_out: bool, turn_angle: float, **options: Any) -> None:
     """Drive a virtual robot with known errors around a path, steering by its own odometry.
 
     Writes the runs table that umbmark calibrate reads (-o) and, with --logs, every run's
-    time series. The robot's controller follows the path in its odometry frame; its
-    wheels move it by their true diameters; its encoders quantize the rotation.
+    time series, or with --bag all runs as one ROS bag. The robot's controller follows the
+    path in its odometry frame; its wheels move it by their true diameters; its encoders
+    quantize the rotation.
     """
     from .. import simulate as run_simulation
     from .common import console, progress_bar, wrote
 
     runs = options["runs"] * (2 if options["direction"] == "both" else 1)
-    with progress_bar(f"simulating {runs} runs") as progress:
+    bag = f", writing {options['bag']}" if options["bag"] else ""
+    with progress_bar(f"simulating {runs} runs{bag}") as progress:
         report = run_simulation(turn_angle=math.radians(turn_angle), progress=progress, **options)
-    wrote(options[key] for key in ("output", "logs") if options[key])
+    wrote(options[key] for key in ("output", "logs", "bag") if options[key])
     summary = report.to_dict()
     if json_out:
         click.echo(report.to_json(), nl=False)

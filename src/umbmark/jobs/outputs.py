@@ -25,6 +25,7 @@ _FLAGS = {
     "tum": "--tum",
     "logs": "--logs",
     "report": "--report",
+    "bag": "--bag",
 }
 
 
@@ -39,6 +40,7 @@ class OutputPlan:
     tum: Path | None = None
     logs: Path | None = None
     report: Path | None = None
+    bag: Path | None = None
 
     @classmethod
     def of(cls, **paths: str | os.PathLike[str] | None) -> OutputPlan:
@@ -87,7 +89,8 @@ class OutputPlan:
 
         A file's folder must exist and be writable, and the file must not be a folder; an
         output folder (``tum``, ``logs``) must be a folder or be creatable in a writable
-        folder. A symbolic link is checked where it points.
+        folder; a bag (a ``.bag`` file or a ROS 2 bag folder) needs a writable folder to be
+        written in. A symbolic link is checked where it points.
 
         Raises
         ------
@@ -98,6 +101,9 @@ class OutputPlan:
             target = path.resolve()
             if name in _FOLDERS:
                 check_folder_output(path)
+                continue
+            if name == "bag":
+                _check_folder(path, target.parent)
                 continue
             if target.is_dir():
                 raise InputError("is a directory; give a file name to write", source=path)

@@ -3,8 +3,8 @@
 :func:`simulate` is what ``umbmark simulate`` does. The robot's controller follows the
 path in its **odometry** frame; its wheels move it by their true diameters; its encoders
 quantize the rotation (see ``docs/simulator.md``). The report holds the runs (end points,
-and with ``record`` or ``logs`` the time series) and writes the runs table and run logs
-that ``calibrate`` reads.
+and with ``record``, ``logs`` or ``bag`` the time series) and writes the runs table, the
+run logs and the ROS bag that ``calibrate`` reads.
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ from .outputs import OutputPlan
 
 if TYPE_CHECKING:
     from ..sim.paths import Path as SimPath
+    from ..sources.bag.writer import BagTarget
 
 __all__ = ["PATHS", "SimulationReport", "simulate"]
 
@@ -63,8 +64,10 @@ MAX_BUMP_RATE = 100.0  # per metre
 MAX_SAMPLES_PER_RUN = 2_000_000
 #: Most sampling periods of all runs together (the work of the vectorized runs) ...
 MAX_SAMPLES = 1_000_000_000
-#: ... and when the time series are kept (--logs, ``record``): about 130 bytes each.
+#: ... and when the time series are kept (--logs, --bag, ``record``): about 130 bytes each.
 MAX_RECORDED_SAMPLES = 5_000_000
+#: Share of the work done by the simulation when a bag is written (the rest is writing it).
+SIMULATION_SHARE = 0.2
 #: Fewest encoder counts per wheel revolution (--encoder-resolution x --gear-ratio) ...
 MIN_COUNTS_PER_REVOLUTION = 16
 #: ... and per path: fewer, and the robot stops before it starts (it stops within two
@@ -171,23 +174,34 @@ class SimulationReport:
         output: str | os.PathLike[str] | None = None,
         logs: str | os.PathLike[str] | None = None,
         force: bool = False,
+        bag: str | os.PathLike[str] | None = None,
+        bag_storage: str | None = None,
+        progress: Callable[[float], None] | None = None,
     ) -> list[Path]:
-        """Write the runs table (``output``) and the run logs (``logs``, a folder).
+        """Write the runs table (``output``), the run logs (``logs``, a folder) and the
+        runs as one recording in a ROS bag (``bag``: ``NAME.bag`` for ROS 1, a folder for
+        ROS 2 with ``bag_storage`` sqlite3 or mcap).
 
-        ``logs`` must be an empty or new folder unless ``force``.
+        ``logs`` must be an empty or new folder, ``bag`` a new path, unless ``force``.
+        ``progress`` is called with the fraction of the bag written.
 
         Raises
         ------
         InputError
-            If a file cannot be written, the runs have no time series for ``logs``, or
-            ``logs`` holds files already (without ``force``).
+            If a file cannot be written, the runs have no time series for ``logs`` or
+            ``bag``, ``logs`` holds files already or ``bag`` exists (without ``force``).
         """
-        plan = OutputPlan.of(output=output, logs=logs)
-        if plan.output is not None and self.path != "square":
-            raise InputError("-o writes a runs table of square runs: use --path square")
+        from ..sources.bag.writer import bag_target
+
+        plan = OutputPlan.of(output=output, logs=logs, bag=bag)
+        _check_square_outputs(self.path, plan)
+        target = None if plan.bag is None else bag_target(plan.bag, bag_storage, force=force)
+        if (plan.logs is not None or target is not None) and self.result.trace is None:
+            raise InputError(
+                f"{'--logs' if plan.logs is not None else '--bag'} needs the time series: "
+                "simulate with record=True"
+            )
         if plan.logs is not None:
-            if self.result.trace is None:
-                raise InputError("--logs needs the time series: simulate with record=True")
             if plan.logs.exists() and not plan.logs.is_dir():
                 raise InputError("exists and is not a folder", source=plan.logs)
             if plan.logs.is_dir() and any(plan.logs.iterdir()) and not force:
@@ -206,7 +220,16 @@ class SimulationReport:
             written.append(plan.output)
         if plan.logs is not None:
             written += self._write_logs(plan.logs)
+        if target is not None:
+            written.append(self._write_bag(target, progress))
         return written
+
+    def _write_bag(self, target: BagTarget, progress: Callable[[float], None] | None) -> Path:
+        from ..sim.session import continuous_session
+        from ..sources.bag.writer import write_bag
+
+        session = continuous_session(self.result, self.robot.odometry.radians_per_pulse)
+        return write_bag(target, session.wheels, session.odometry, session.truth, progress=progress)
 
     def _write_logs(self, folder: Path) -> list[Path]:
         from ..outputs.runlog import write_log_csv, write_metadata
@@ -276,6 +299,8 @@ def simulate(
     output: str | os.PathLike[str] | None = None,
     logs: str | os.PathLike[str] | None = None,
     force: bool = False,
+    bag: str | os.PathLike[str] | None = None,
+    bag_storage: str | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> SimulationReport:
     """Drive a virtual robot with known errors around a path, steering by its own odometry.
@@ -313,11 +338,20 @@ def simulate(
     seed : int
         Seed of the non-systematic errors.
     record : bool
-        Keep every run's time series (``run.log``); implied by ``logs``.
+        Keep every run's time series (``run.log``); implied by ``logs`` and ``bag``.
     output, logs : path, optional
         Write the runs table (CSV, metres, radians) and the run logs (a folder).
+    force : bool
+        Write ``logs`` into a folder that is not empty; replace an existing ``bag``.
+    bag : path, optional
+        Write the runs as one recording in a ROS bag, as a robot with motion capture
+        records them (:mod:`umbmark.sources.bag.writer`): ``NAME.bag`` is ROS 1, another
+        name a ROS 2 bag folder.
+    bag_storage : {"sqlite3", "mcap"}, optional
+        Storage of a ROS 2 bag; sqlite3 (rosbags' default) when not given.
     progress : callable, optional
-        Called with the fraction done (0 to 1).
+        Called with the fraction done (0 to 1); with ``bag``, the simulation is the first
+        :data:`SIMULATION_SHARE` of it, writing the bag the rest.
 
     Raises
     ------
@@ -378,11 +412,16 @@ def simulate(
             f"--turn-angle {math.degrees(turn_angle):g} deg: give a turn of up to "
             f"{math.degrees(MAX_TURN):g} deg either way, not zero"
         )
-    plan = OutputPlan.of(output=output, logs=logs)
+    plan = OutputPlan.of(output=output, logs=logs, bag=bag)
     if isinstance(params, (str, os.PathLike)):
         plan.check_not_inputs([params])
-    if plan.output is not None and path != "square":
-        raise InputError("-o writes a runs table of square runs: use --path square")
+    _check_square_outputs(path, plan)
+    if bag_storage is not None and plan.bag is None:
+        raise InputError("--bag-storage says how to store --bag: give --bag too")
+    if plan.bag is not None:
+        from ..sources.bag.writer import bag_target
+
+        bag_target(plan.bag, bag_storage, force=force)
     if plan.logs is not None and plan.logs.is_dir() and any(plan.logs.iterdir()) and not force:
         raise InputError(
             "is not empty: run logs written into it would mix with what it holds (calibrate "
@@ -419,7 +458,8 @@ def simulate(
         chosen = paths.spot_turn(turn_angle)
         directions = [Direction.CCW] * runs
 
-    recorded = record or logs is not None
+    recorded = record or logs is not None or bag is not None
+    simulated, written = _split_progress(progress, bag is not None)
     _check_resolution(chosen, odometry)
     _check_work(chosen, len(directions), wheelbase, ControlConfig(dt=dt, speed=speed), recorded)
     result = run_simulation(
@@ -429,7 +469,7 @@ def simulate(
         ControlConfig(dt=dt, speed=speed),
         np.random.default_rng(seed),
         record=recorded,
-        progress=progress,
+        progress=simulated,
     )
     report = SimulationReport(
         robot=robot,
@@ -441,8 +481,37 @@ def simulate(
         runs=tuple(_runs_with_logs(result, odometry) if recorded else result.runs()),
         configured_wheelbase=wheelbase,
     )
-    report.write(output=output, logs=logs, force=force)
+    report.write(
+        output=output, logs=logs, force=force, bag=bag, bag_storage=bag_storage, progress=written
+    )
     return report
+
+
+def _check_square_outputs(path: str, plan: OutputPlan) -> None:
+    """Refuse a runs table or a bag of runs that are not squares."""
+    if path == "square":
+        return
+    if plan.output is not None:
+        raise InputError("-o writes a runs table of square runs: use --path square")
+    if plan.bag is not None:
+        raise InputError(
+            "--bag writes square runs (one recording, split where the robot rests near the "
+            "start): use --path square"
+        )
+
+
+def _split_progress(
+    progress: Callable[[float], None] | None, bag: bool
+) -> tuple[Callable[[float], None] | None, Callable[[float], None] | None]:
+    """The progress callbacks of the simulation and of writing the bag: the simulation's
+    fraction is all of it without a bag, the first :data:`SIMULATION_SHARE` with one."""
+    if progress is None or not bag:
+        return progress, None
+    report = progress
+    return (
+        lambda fraction: report(SIMULATION_SHARE * fraction),
+        lambda fraction: report(SIMULATION_SHARE + (1.0 - SIMULATION_SHARE) * fraction),
+    )
 
 
 def _check_resolution(path: SimPath, odometry: WheelParams) -> None:
@@ -504,7 +573,7 @@ def _check_work(
         raise InputError(
             f"keeping the time series of {runs} runs of about {per_run:.3g} samples each "
             f"needs {per_run * runs * 130 / 1e9:.1f} GB: at most {MAX_RECORDED_SAMPLES:.3g} "
-            "samples in all; give fewer --runs, a larger --dt, or no --logs"
+            "samples in all; give fewer --runs, a larger --dt, or no --logs or --bag"
         )
 
 

@@ -30,6 +30,7 @@ __all__ = [
     "listing",
     "message_count",
     "messages",
+    "missing_rosbags",
     "one_line",
     "open_bag",
     "raw_messages",
@@ -82,8 +83,9 @@ def _bag_location(path: Path, src: str) -> Path:
     )
 
 
-def _missing_rosbags(src: str) -> InputError:
-    return InputError("reading bags needs rosbags: pip install 'umbmark[ros]'", source=src)
+def missing_rosbags(src: str, doing: str = "reading") -> InputError:
+    """The one line for a bag without rosbags installed (``doing``: reading or writing)."""
+    return InputError(f"{doing} bags needs rosbags: pip install 'umbmark[ros]'", source=src)
 
 
 @contextmanager
@@ -103,7 +105,7 @@ def open_bag(path: Path, src: str) -> Iterator[AnyReader]:
         from rosbags.highlevel import AnyReader
         from rosbags.typesys import Stores, get_typestore
     except ImportError:
-        raise _missing_rosbags(src) from None
+        raise missing_rosbags(src) from None
     try:
         reader = AnyReader([location], default_typestore=get_typestore(Stores.LATEST))
         reader.open()
