@@ -99,6 +99,8 @@ class Recording:
         Nominal wheel parameters, if the source knows them.
     side_length : float or None
         The square's side [m], if the source knows it.
+    wheel_sample : str
+        What one wheel sample is, for messages (``"/odom message"``).
     """
 
     name: str
@@ -106,6 +108,7 @@ class Recording:
     truth: PoseSeries | None = None
     params: WheelParams | None = None
     side_length: float | None = None
+    wheel_sample: str = "wheel sample"
 
 
 @dataclass(frozen=True)
