@@ -231,3 +231,38 @@ def test_a_gap_in_odom_is_no_sign_of_a_filtered_odometry(tmp_path):
     assert run.true_end.x == pytest.approx(pair.ends[0][0], abs=1e-6)
     (left,) = [n for n in loaded.notes if "left out" in n]
     assert "no /odom message for 4.05 s from " in left
+
+
+def test_a_recorders_hiccup_while_the_robot_speeds_up_is_bridged(tmp_path, session):
+    # A quarter second without /joint_states as the robot sets off on a leg, and as it
+    # starts a spot turn: the speeds change across it, but the robot barely turns while
+    # it drives (and barely drives while it turns), so one arc is the path. No run is
+    # lost, as none was before.
+    drops = [
+        (session.starts[1] - 0.05, session.starts[1] + 0.2),
+        (_turn(session, 2) - 0.05, _turn(session, 2) + 0.2),
+    ]
+    bag = write_session_bag(tmp_path / "tb3", "mcap", session, wheels="joints", drop=drops)
+    report = umbmark.calibrate(
+        bag,
+        wheelbase=TB3.wheelbase,
+        wheel_diameter=TB3.wheel_diameter,
+        side_length=2.0,
+        truth_topic="/ground_truth",
+        left_joint="left_wheel_joint",
+        right_joint="right_wheel_joint",
+    )
+    assert [run.direction.value for run in report.runs] == DIRS
+    for run, (x, y, _) in zip(report.runs, session.ends, strict=True):
+        assert run.true_end.x == pytest.approx(x, abs=1e-6)
+        assert run.true_end.y == pytest.approx(y, abs=1e-6)
+        assert math.hypot(run.odometry_end.x, run.odometry_end.y) < 1e-3
+    bridged = [n for n in report.notes if "bridged" in n]
+    assert len(bridged) == 2
+    for note, run, drop in zip(bridged, (2, 3), drops, strict=True):
+        at, length, _ = _gap_seen(session, *drop)
+        assert note.startswith(
+            f"{bag.name} run {run}: no /joint_states message for {length:.2f} s from {at:.2f} s"
+        )
+        assert "bridged, one arc across it ends at most 0." in note  # a tenth of a mm
+        assert note.endswith(" mm from any path of its length and turn")

@@ -9,9 +9,12 @@ and the checks for jumps leave gaps out. What happened inside a gap is known onl
 two ends, so odometry can cross it as one arc only when the motion was steady:
 
 - a gap is **bridged** (its interval integrated like any other) when the wheels did not
-  turn across it, or when it is at most :data:`MAX_BRIDGE` long and each wheel turned
-  across it at the speed it had in the :data:`SPEED_WINDOW` before it and after it
-  (within :data:`BRIDGE_TOLERANCE` of the larger speed, plus a rest speed);
+  turn across it, or when it is at most :data:`MAX_BRIDGE` long and either each wheel
+  turned across it at the speed it had in the :data:`SPEED_WINDOW` before it and after
+  it (within :data:`BRIDGE_TOLERANCE` of the larger speed, plus a rest speed), or the
+  robot barely turned across it (one arc ends at most :data:`MAX_ARC_ERROR` from any
+  path of the same length and turn, whatever the speeds did: a recorder's hiccup while
+  the robot speeds up);
 - otherwise the path across it is unknown: the run holding it is left out (see
   :func:`umbmark.sources.logged.runs_from_recordings`).
 
@@ -31,6 +34,7 @@ from ..kinematics import WheelParams
 __all__ = [
     "BRIDGE_TOLERANCE",
     "GAP_FACTOR",
+    "MAX_ARC_ERROR",
     "MAX_BRIDGE",
     "MIN_GAP",
     "SPEED_WINDOW",
@@ -49,6 +53,9 @@ GAP_FACTOR = 5.0
 MIN_GAP = 0.1
 #: Longest gap bridged when the wheels turned across it [s].
 MAX_BRIDGE = 2.0
+#: A gap is bridged when one arc across it ends at most this far [m] from any path of
+#: the same length and turn (half the length times the turn): it barely turned.
+MAX_ARC_ERROR = 0.002
 #: How far before and after a gap the wheel speeds are measured [s].
 SPEED_WINDOW = 0.5
 #: Wheel speeds across a gap and around it agree when they differ by at most this share
@@ -138,11 +145,14 @@ def find_gaps(
         index = int(k)
         dt = float(time[index + 1] - time[index])
         step = angles[index + 1] - angles[index]
-        travel = None
+        travel = error = None
         if params is not None:
             radius = 0.5 * params.wheel_diameter
-            travel = 0.5 * radius * (params.c_left * abs(step[0]) + params.c_right * abs(step[1]))
-        bridged, why = _bridge(time, angles, index)
+            d_left, d_right = params.c_left * radius * step[0], params.c_right * radius * step[1]
+            travel = 0.5 * (abs(d_left) + abs(d_right))
+            turn = (d_right - d_left) / params.wheelbase
+            error = 0.5 * abs(0.5 * (d_left + d_right) * turn)
+        bridged, why = _bridge(time, angles, index, error)
         out.append(
             Gap(
                 index=index,
@@ -164,32 +174,30 @@ def _speed(time: FloatArray, angles: FloatArray, first: int, last: int) -> Float
     return np.asarray((angles[last] - angles[first]) / (time[last] - time[first]))
 
 
-def _bridge(time: FloatArray, angles: FloatArray, k: int) -> tuple[bool, str]:
-    """Whether the gap after sample ``k`` is bridged, and why (see the module docstring)."""
+def _bridge(time: FloatArray, angles: FloatArray, k: int, error: float | None) -> tuple[bool, str]:
+    """Whether the gap after sample ``k`` is bridged, and why (see the module docstring);
+    ``error`` bounds how far one arc across it may end from the path driven [m]."""
     dt = float(time[k + 1] - time[k])
     across = (angles[k + 1] - angles[k]) / dt
     if np.all(np.abs(across) < REST_SPEED):
         return True, "the wheels did not turn across it"
     if dt > MAX_BRIDGE:
         return False, f"longer than {MAX_BRIDGE:g} s while the wheels turned"
-    gaps = gap_mask(time)
-    first = int(np.searchsorted(time, time[k] - SPEED_WINDOW, side="left"))
-    last = int(np.searchsorted(time, time[k + 1] + SPEED_WINDOW, side="right")) - 1
-    # Stop at the next gap on either side: the speeds are measured on steady samples.
-    before_gaps = np.flatnonzero(gaps[first:k])
-    if before_gaps.size:
-        first = first + int(before_gaps[-1]) + 1
-    after_gaps = np.flatnonzero(gaps[k + 1 : last])
-    if after_gaps.size:
-        last = k + 1 + int(after_gaps[0])
-    before = _speed(time, angles, first, k)
-    after = _speed(time, angles, k + 1, last)
+    before, after = _speeds_around(time, angles, k)
+    if before is not None and after is not None:
+        largest = np.max(np.abs(np.vstack([before, across, after])), axis=0)
+        tolerance = BRIDGE_TOLERANCE * largest + REST_SPEED
+        if np.all(np.abs(across - before) <= tolerance) and np.all(
+            np.abs(across - after) <= tolerance
+        ):
+            return True, "the wheels turned across it at the speeds they had before and after it"
+    if error is not None and error <= MAX_ARC_ERROR:
+        return True, (
+            f"one arc across it ends at most {1000.0 * error:.1f} mm from any path of its "
+            "length and turn"
+        )
     if before is None or after is None:
         return False, "no wheel samples on both sides to compare its speed with"
-    largest = np.max(np.abs(np.vstack([before, across, after])), axis=0)
-    tolerance = BRIDGE_TOLERANCE * largest + REST_SPEED
-    if np.all(np.abs(across - before) <= tolerance) and np.all(np.abs(across - after) <= tolerance):
-        return True, "the wheels turned across it at the speeds they had before and after it"
     shown = ", ".join(
         f"{side} {b:.2f}, {a:.2f}, {c:.2f}"
         for side, b, a, c in zip(("left", "right"), before, across, after, strict=True)
@@ -198,6 +206,23 @@ def _bridge(time: FloatArray, angles: FloatArray, k: int) -> tuple[bool, str]:
         f"the wheels changed speed (before, across, after it: {shown} rad/s): the path "
         "across it is unknown"
     )
+
+
+def _speeds_around(
+    time: FloatArray, angles: FloatArray, k: int
+) -> tuple[FloatArray | None, FloatArray | None]:
+    """Mean wheel speeds, each shape (2,) or None, in the :data:`SPEED_WINDOW` before the
+    gap after sample ``k`` and after it, up to the next gap on either side."""
+    gaps = gap_mask(time)
+    first = int(np.searchsorted(time, time[k] - SPEED_WINDOW, side="left"))
+    last = int(np.searchsorted(time, time[k + 1] + SPEED_WINDOW, side="right")) - 1
+    before_gaps = np.flatnonzero(gaps[first:k])
+    if before_gaps.size:
+        first = first + int(before_gaps[-1]) + 1
+    after_gaps = np.flatnonzero(gaps[k + 1 : last])
+    if after_gaps.size:
+        last = k + 1 + int(after_gaps[0])
+    return _speed(time, angles, first, k), _speed(time, angles, k + 1, last)
 
 
 def describe_gaps(gaps: list[Gap], sample: str = "wheel sample") -> list[str]:

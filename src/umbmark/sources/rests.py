@@ -53,9 +53,10 @@ TWITCH_ANGLE = 0.5
 #: ... if the stops on either side last at least this long [s].
 BESIDE_TWITCH = 0.2
 #: The ground truth moving this far [m] ...
-RESET_DISTANCE = 0.05
-#: ... or turning this far [rad] while the wheels stand still is a reset.
-RESET_TURN = 0.1
+RESET_DISTANCE = 0.1
+#: ... or turning this far [rad] while the wheels stand still is a reset (a localization
+#: that corrects itself by a few centimetres at a stop is not).
+RESET_TURN = 0.2
 
 
 def still_intervals(time: FloatArray, angles: FloatArray, rest_speed: float) -> BoolArray:
