@@ -213,6 +213,16 @@ class _Finder:
         self.time, self.angles, self.poses, self.known = time, angles, poses, known
         self.radius, self.options = radius, options
         self.resets = {r.first: r for r in resets}
+        self.candidates = np.flatnonzero(known)
+
+    def pose(self, index: int) -> FloatArray | None:
+        """The pose at sample ``index``, or at the nearest sample that has one."""
+        c = self.candidates
+        if c.size == 0:
+            return None
+        k = int(np.searchsorted(c, index))
+        nearest = [int(c[j]) for j in (k - 1, k) if 0 <= j < c.size]
+        return np.asarray(self.poses[min(nearest, key=lambda j: (abs(j - index), j))])
 
     def _moves(self, a: int, b: int) -> bool:
         """Whether a wheel turns more than a twitch from sample ``a`` to ``b``."""
@@ -239,8 +249,8 @@ class _Finder:
         for k, (a, b, after) in enumerate(pieces):
             start = a if start is None else start
             begin, end = (
-                _known_pose(self.poses, self.known, start),
-                _known_pose(self.poses, self.known, b),
+                self.pose(start),
+                self.pose(b),
             )
             if begin is None or end is None:
                 continue
@@ -285,23 +295,13 @@ class _Finder:
     def closes_often(self, a: int, b: int, closings: int) -> str:
         """Why the run from ``a`` to ``b`` is left out: it closes its square ``closings``
         times."""
-        begin = _known_pose(self.poses, self.known, a)
-        end = _known_pose(self.poses, self.known, b)
+        begin, end = self.pose(a), self.pose(b)
         turned = abs(float(end[2] - begin[2])) if begin is not None and end is not None else 0.0
         return (
             f"it closes its square {closings} times (it turns {turned / math.pi:.2f} pi rad) "
             "with no stop near its start between: give each square a rest of at least "
             f"{self.options.min_rest:g} s (--min-rest), or cut them with --windows"
         )
-
-
-def _known_pose(poses: FloatArray, known: NDArray[np.bool_], index: int) -> FloatArray | None:
-    """The pose at ``index``, or at the nearest sample that has one."""
-    candidates = np.flatnonzero(known)
-    if candidates.size == 0:
-        return None
-    nearest = candidates[np.argmin(np.abs(candidates - index))]
-    return np.asarray(poses[nearest])
 
 
 def _trim_to_motion(
