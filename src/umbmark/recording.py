@@ -115,6 +115,8 @@ class Recording:
         The square's side [m], if the source knows it.
     path : str or None
         The file it was read from, for messages (``name`` where None).
+    wheel_sample : str
+        What one wheel sample is, for messages (``"/odom message"``).
     """
 
     name: str
@@ -128,6 +130,8 @@ class Recording:
     def where(self) -> str:
         """The recording as messages name it: its file, else its name."""
         return self.path or self.name
+
+    wheel_sample: str = "wheel sample"
 
 
 @dataclass(frozen=True)

@@ -698,8 +698,10 @@ def _cluster_dict(cluster: Cluster) -> dict[str, Any]:
 
 
 def _run_dict(run: Run) -> dict[str, Any]:
+    """A run's figures; a logged run's also its start and end time on the recording's own
+    clock [s] (a bag's stamps, a run log's time column)."""
     eps_x, eps_y = run.return_error
-    return {
+    out: dict[str, Any] = {
         "label": run.label,
         "kind": run.kind,
         "direction": run.direction.value,
@@ -707,3 +709,7 @@ def _run_dict(run: Run) -> dict[str, Any]:
         "eps_y": eps_y,
         "eps_theta": run.heading_error,
     }
+    if run.log is not None:
+        out["start_time"] = run.log.start
+        out["end_time"] = run.log.start + float(run.log.time[-1])
+    return out

@@ -35,6 +35,10 @@ messages. Two measures of that are computed and refused beyond their bounds:
   do not come from a differential drive's odometry at this rate (a filtered odometry,
   a holonomic base, or too few messages).
 
+Both leave out the steps across gaps in the messages (:mod:`umbmark.sources.gaps`): a
+second without a message says nothing of the rate or of the odometry; whether a run can
+cross it is decided where the runs are found.
+
 An ``open_loop`` controller integrates its velocity commands instead of the wheels: its
 odometry says nothing about the wheels, and the readers refuse it (see
 :class:`umbmark.sources.params.ControllerParams`).
@@ -51,6 +55,7 @@ from numpy.typing import NDArray
 from ..errors import InputError
 from ..kinematics import wheel_travel_from_poses
 from ..recording import PoseSeries, WheelSeries
+from .gaps import gap_mask
 
 __all__ = [
     "MAX_LATERAL_SHARE",
@@ -140,7 +145,12 @@ def wheels_from_odometry(
         raise InputError(f"{what} has fewer than 2 poses", source=source)
     poses[:, 2] = np.unwrap(poses[:, 2])
     d_left, d_right, lateral = wheel_travel_from_poses(poses, geometry.separation)
-    turn = np.abs(np.diff(poses[:, 2]))
+    # A gap in the messages is no sign of a sparse rate or a filtered odometry: its step
+    # is judged where the runs are (umbmark.sources.gaps).
+    steady = ~gap_mask(np.asarray(odometry.time, dtype=np.float64))
+    if not steady.any():
+        steady[:] = True
+    turn = np.abs(np.diff(poses[:, 2]))[steady]
     largest = float(np.quantile(turn, 0.99))
     interval = float(np.median(np.diff(odometry.time)))
     if largest > MAX_STEP_TURN:
@@ -150,8 +160,10 @@ def wheels_from_odometry(
             "record the controller's odometry at its publish rate",
             source=source,
         )
-    driven = float(np.sum(0.5 * np.abs(d_left + d_right) + 0.25 * np.abs(d_right - d_left)))
-    share = float(np.sum(np.abs(lateral)) / driven) if driven > 0.0 else 0.0
+    driven = float(
+        np.sum((0.5 * np.abs(d_left + d_right) + 0.25 * np.abs(d_right - d_left))[steady])
+    )
+    share = float(np.sum(np.abs(lateral[steady])) / driven) if driven > 0.0 else 0.0
     if share > MAX_LATERAL_SHARE:
         raise InputError(
             f"{what} moves sideways {1000.0 * share:.0f} mm per metre driven: not a "

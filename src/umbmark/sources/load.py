@@ -295,8 +295,25 @@ def _read_bag(
         )
     read = read_recording(source, bag)
     notes += read.notes
-    recording = Recording(name=source.name, wheels=read.wheels, truth=read.truth, path=str(source))
+    recording = Recording(
+        name=source.name,
+        wheels=read.wheels,
+        truth=read.truth,
+        path=str(source),
+        wheel_sample=_wheel_sample(bag),
+    )
     return [recording], None, None
+
+
+def _wheel_sample(bag: BagOptions) -> str:
+    """What one wheel sample of ``bag`` is, for messages: ``/odom message``."""
+    if bag.odom_topic is not None:
+        return f"{bag.odom_topic} message"
+    if bag.odom_tf is not None:
+        return f"{bag.odom_tf[0]}->{bag.odom_tf[1]} transform"
+    if bag.left_ticks_topic is not None:
+        return f"{bag.left_ticks_topic} message"
+    return f"{bag.wheel_topic} message"
 
 
 def _at_axle(recording: Recording, offset: tuple[float, float]) -> Recording:

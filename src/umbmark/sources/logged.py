@@ -21,7 +21,9 @@ from ..kinematics import IntegrationMethod, WheelParams
 from ..recording import Recording, RunLog
 from ..runs import EndPose, Run
 from .association import DEFAULT_MAX_GAP, Association, associate
-from .segmentation import SplitOptions, split_by_rests, split_by_windows
+from .gaps import Gap, describe_gaps, find_gaps, gap_mask
+from .rests import Reset, find_resets
+from .segmentation import LeftOut, SplitOptions, find_runs, split_by_windows
 
 __all__ = [
     "HEADING_METHODS",
@@ -88,12 +90,16 @@ def check_motion(
     truth: FloatArray | None,
     *,
     headings: bool = True,
+    resets: Sequence[Reset] = (),
 ) -> None:
     """Refuse a recording or run whose wheels never turn or jump, or whose truth never moves
     or jumps (:data:`MAX_TRUTH_STEP`).
 
-    A jump is one sample step of a wheel angle above :data:`MAX_WHEEL_STEP`, or above both
-    :data:`MIN_JUMP` and :data:`JUMP_FACTOR` times the 99th percentile of the steps.
+    A jump is a wheel step too large for the time it took: above :data:`MAX_WHEEL_STEP`,
+    or above both :data:`MIN_JUMP` and :data:`JUMP_FACTOR` times the 99th percentile of
+    the steps, each limit scaled by the interval over the typical (median) one. Gaps in
+    the samples (:func:`umbmark.sources.gaps.gap_mask`) are no jumps: they are looked at
+    by :func:`umbmark.sources.gaps.find_gaps`.
 
     Parameters
     ----------
@@ -108,6 +114,9 @@ def check_motion(
     headings : bool
         Whether ``truth`` has headings (else its ``theta`` column is NaN and only the
         positions are checked).
+    resets : sequence of Reset
+        Resets of the ground truth (:mod:`umbmark.sources.rests`): its jumps there are
+        no corrupt samples.
 
     Raises
     ------
@@ -122,16 +131,7 @@ def check_motion(
             "from; check the wheel columns or topic",
             source=name,
         )
-    steps = np.abs(np.diff(angles, axis=0))
-    limit = min(MAX_WHEEL_STEP, max(MIN_JUMP, JUMP_FACTOR * float(np.percentile(steps, 99))))
-    if float(np.max(steps)) > limit:
-        k, wheel = np.unravel_index(int(np.argmax(steps)), steps.shape)
-        raise InputError(
-            f"the {('left', 'right')[int(wheel)]} wheel jumps by {float(steps[k, wheel]):.4g} "
-            f"rad in one sample at {float(time[k + 1] - time[0]):.2f} s (more than "
-            f"{limit:.3g} rad): a corrupt sample or wrong encoder units",
-            source=name,
-        )
+    _check_wheel_steps(name, time, angles)
     if truth is None:
         return
     if not headings:
@@ -147,13 +147,36 @@ def check_motion(
             "columns or topic",
             source=name,
         )
-    _check_truth_steps(name, time, truth)
+    _check_truth_steps(name, time, truth, resets)
 
 
-def _check_truth_steps(name: str, time: FloatArray, truth: FloatArray) -> None:
+def _check_wheel_steps(name: str, time: FloatArray, angles: FloatArray) -> None:
+    """Refuse a wheel step too large for the time it took (see :func:`check_motion`)."""
+    dt = np.diff(time)
+    steady = np.flatnonzero(~gap_mask(time))
+    if steady.size == 0:
+        return
+    steps = np.abs(np.diff(angles, axis=0))[steady]
+    limit = min(MAX_WHEEL_STEP, max(MIN_JUMP, JUMP_FACTOR * float(np.percentile(steps, 99))))
+    limits = limit * np.maximum(1.0, dt[steady] / float(np.median(dt)))[:, None]
+    over = steps > limits
+    if np.any(over):
+        k, wheel = np.unravel_index(int(np.argmax(np.where(over, steps, -1.0))), steps.shape)
+        at = int(steady[k])
+        raise InputError(
+            f"the {('left', 'right')[int(wheel)]} wheel jumps by {float(steps[k, wheel]):.4g} "
+            f"rad in one sample at {float(time[at + 1] - time[0]):.2f} s (more than "
+            f"{float(limits[k, 0]):.3g} rad): a corrupt sample or wrong encoder units",
+            source=name,
+        )
+
+
+def _check_truth_steps(
+    name: str, time: FloatArray, truth: FloatArray, resets: Sequence[Reset] = ()
+) -> None:
     """Refuse a ground-truth position that jumps between two samples (see
-    :data:`MAX_TRUTH_STEP`); ``truth`` has shape (n, 2 or 3) at ``time`` (n,), NaN rows
-    skipped."""
+    :data:`MAX_TRUTH_STEP`) other than at a reset; ``truth`` has shape (n, 2 or 3) at
+    ``time`` (n,), NaN rows skipped."""
     if truth.shape[0] != time.shape[0]:
         return
     kept = np.flatnonzero(np.all(np.isfinite(truth), axis=1))
@@ -161,7 +184,12 @@ def _check_truth_steps(name: str, time: FloatArray, truth: FloatArray) -> None:
         return
     step = np.hypot(np.diff(truth[kept, 0]), np.diff(truth[kept, 1]))
     limit = np.maximum(MAX_TRUTH_STEP, MAX_TRUTH_SPEED * np.abs(np.diff(time[kept])))
-    over = np.flatnonzero(step > limit)
+    reset = np.zeros(time.size, dtype=np.int64)
+    for r in resets:
+        reset[r.first + 1 : r.last + 1] = 1
+    in_reset = np.cumsum(reset)
+    across_reset = in_reset[kept[1:]] - in_reset[kept[:-1]] > 0
+    over = np.flatnonzero((step > limit) & ~across_reset)
     if over.size:
         k = int(over[0])
         raise InputError(
@@ -281,17 +309,24 @@ def runs_from_recordings(
     params : WheelParams
         The odometry parameters the wheel data is integrated with.
     split : {"rests", "none", "windows"}
-        Split each recording at rests near the start (see :mod:`umbmark.segmentation`),
-        take each recording as one run, or cut it by ``windows`` (seconds from its start).
+        Split each recording at rests near the start and at resets of the ground truth
+        (see :mod:`umbmark.sources.segmentation`), take each recording as one run, or cut
+        it by ``windows`` (seconds from its start). Windows are cut before any check: what
+        they leave out is not looked at.
+
+    Gaps in the wheel samples (:mod:`umbmark.sources.gaps`) are bridged with a note, or
+    the run holding one is left out with a note; so is a run (a window, a whole
+    recording) across which the ground truth was reset.
 
     Raises
     ------
     InputError
         If a recording has no ground truth, its wheels never turn, its ground truth never
         moves or jumps, a wheel jumps in one sample (see :func:`check_motion`), a run has
-        no motion, its odometry overflows, or no run is found at all.
+        no motion, its odometry overflows, or no run is found or left at all.
     """
     out = LoadedRuns(runs=[])
+    left: list[tuple[str, str]] = []
     for recording in recordings:
         where = recording.where
         if recording.truth is None:
@@ -301,40 +336,48 @@ def runs_from_recordings(
         truth, association = associate(
             recording.wheels, recording.truth, max_gap=max_gap, source=where
         )
-        headings = recording.truth.headings
-        time, angles = recording.wheels.time, recording.wheels.angles
-        check_motion(where, time, angles, truth, headings=headings)
         out.associations.append((recording.name, association))
         if association.fraction < 0.9:
             out.notes.append(f"{recording.name}: only {association.describe()}")
-        if split == "none":
-            segments = [(0, time.size - 1)]
-        elif split == "windows":
-            segments = split_by_windows(time, windows, where)
-        else:
-            split_poses = truth
-            if not headings:  # the turns come from the odometry
-                log = RunLog(time=time - time[0], wheel_angles=angles, truth=truth)
-                split_poses = truth.copy()
-                split_poses[:, 2] = np.where(
-                    _known(truth, False), log.odometry(params, method)[:, 2], np.nan
-                )
-            segments = split_by_rests(time, angles, split_poses, split_options)
+        segments, left_out = _segments(
+            recording, truth, split, windows, split_options, out, params, method
+        )
+        gaps = find_gaps(recording.wheels.time, recording.wheels.angles, params)
         found = 0
         for first, last in segments:
             label = recording.name if len(segments) == 1 else f"{recording.name} run {found + 1}"
+            why = _broken(recording, truth, gaps, first, last, split_options)
+            if why is not None:
+                left_out.append(LeftOut(first, last, why))
+                continue
             run = _run(recording, truth, first, last, params, label, method)
+            time = recording.wheels.time
             if run is None:
                 out.notes.append(
                     f"{recording.name}: left out a run from {time[first] - time[0]:.2f} to "
                     f"{time[last] - time[0]:.2f} s: fewer than 2 samples with ground truth"
                 )
                 continue
+            inside = [g for g in gaps if first <= g.index < last]
+            out.notes.extend(
+                f"{label}: {line}" for line in describe_gaps(inside, recording.wheel_sample)
+            )
             found += 1
             out.runs.append(run)
+        for piece in sorted(left_out, key=lambda p: p.first):
+            time = recording.wheels.time
+            line = (
+                f"left out the motion from {time[piece.first] - time[0]:.2f} to "
+                f"{time[piece.last] - time[0]:.2f} s: {piece.why}"
+            )
+            out.notes.append(f"{recording.name}: {line}")
+            left.append((recording.name, line))
         if found == 0:
             out.notes.append(f"{recording.name}: no run found")
     if not out.runs:
+        if left:
+            name, line = left[0]
+            raise InputError(f"{line}; no run is left", source=name)
         names = ", ".join(r.where for r in recordings) or "the recordings"
         raise InputError(f"found no run with ground truth in {names}", source=None)
     return out
@@ -363,3 +406,59 @@ def require_headings(runs: Sequence[Run], method: str, where: str | None) -> Non
                 "needs headings; use --method paper, exact or endpose",
                 source=where,
             )
+
+
+def _segments(
+    recording: Recording,
+    truth: FloatArray,
+    split: SplitMode,
+    windows: Sequence[tuple[float, float]],
+    split_options: SplitOptions | None,
+    out: LoadedRuns,
+    params: WheelParams,
+    method: IntegrationMethod,
+) -> tuple[list[tuple[int, int]], list[LeftOut]]:
+    """The sample ranges of the runs of ``recording``, and the motion left out; the whole
+    recording is checked first unless ``windows`` select parts of it."""
+    time, angles = recording.wheels.time, recording.wheels.angles
+    if split == "windows":
+        return split_by_windows(time, windows, recording.where), []
+    headings = recording.truth is None or recording.truth.headings
+    if not headings:  # a position-only reference: the turns come from the odometry
+        log = RunLog(time=time - time[0], wheel_angles=angles, truth=truth)
+        truth = truth.copy()
+        truth[:, 2] = np.where(_known(truth, False), log.odometry(params, method)[:, 2], np.nan)
+    rest_speed = (split_options or SplitOptions()).rest_speed
+    resets = find_resets(time, angles, truth, rest_speed)
+    check_motion(recording.where, time, angles, truth, headings=headings, resets=resets)
+    if split == "none":
+        return [(0, time.size - 1)], []
+    found = find_runs(time, angles, truth, split_options)
+    out.notes.extend(
+        f"{recording.name}: {reset.describe(time)}: a run ends there" for reset in found.resets
+    )
+    return found.runs, list(found.left_out)
+
+
+def _broken(
+    recording: Recording,
+    truth: FloatArray,
+    gaps: Sequence[Gap],
+    first: int,
+    last: int,
+    split_options: SplitOptions | None,
+) -> str | None:
+    """Why the run from sample ``first`` to ``last`` cannot be used, or None: a gap that is
+    not bridged, or a reset of the ground truth inside it."""
+    broken = [g for g in gaps if first <= g.index < last and not g.bridged]
+    if broken:
+        return f"{broken[0].describe(recording.wheel_sample)}: {broken[0].why}"
+    time, angles = recording.wheels.time, recording.wheels.angles
+    sl = slice(first, last + 1)
+    rest_speed = (split_options or SplitOptions()).rest_speed
+    resets = find_resets(time[sl], angles[sl], truth[sl], rest_speed)
+    inside = [r for r in resets if r.last > 0 and r.first < last - first]
+    if inside:
+        seen = inside[0].describe(time[first:], float(time[0]))
+        return f"{seen}: a run cannot go on across it; split the runs there (--split rests)"
+    return None
