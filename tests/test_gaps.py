@@ -202,7 +202,7 @@ def test_windows_leave_a_corrupt_stretch_out(tmp_path, session):
     with pytest.raises(umbmark.InputError) as caught:
         umbmark.calibrate(folder)
     whole = str(caught.value)
-    assert whole.startswith("tb3.csv: the left wheel jumps by 40.0")
+    assert "tb3.csv: the left wheel jumps by 40.0" in whole
     assert "rad in one sample at " in whole
     windows = [(session.starts[k] - 1.0, session.stops[k] + 1.0) for k in (0, 1, 3, 4)]
     report = umbmark.calibrate(folder, windows=windows)
