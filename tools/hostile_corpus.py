@@ -144,8 +144,8 @@ def classify(case: Case, out: Outcome, case_dir: Path | None = None) -> tuple[st
         return "traceback", "exit 1"
     if out.returncode not in (0, 1, 2, 3):
         return "traceback", f"exit {out.returncode}"
-    ours = ("umbmark: warning: ", "umbmark: wrote ", "umbmark: error: ")
-    stray = [line for line in err if not line.startswith(ours)]
+    # ours: errors, warnings, files written and notes of what was done (``umbmark: ...``)
+    stray = [line for line in err if not line.startswith("umbmark: ")]
     if stray:
         return "unclean", f"stderr not ours: {stray[0][:120]}"
     errors = [line for line in err if line.startswith("umbmark: error: ")]
