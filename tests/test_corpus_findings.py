@@ -38,7 +38,7 @@ def test_one_row_in_metres_in_a_millimetre_table_is_named(tmp_path):
     clean = _calibrate(str(EXAMPLE))
     assert not [n for n in clean.notes + clean.warnings if "is this row in" in n]
     report = _calibrate(_edited(tmp_path, "cw,69.3,36.4,", "cw,0.0693,0.0364,"))
-    (note,) = [n for n in report.notes if "is this row in" in n]
+    (note,) = [n for n in report.warnings if "is this row in" in n]
     # hypot(0.0693, 0.0364) = 0.0783 mm against the median 96.3 mm of the other cw rows:
     # 1231 times smaller; in metres it would be 78.3 mm, among them.
     assert math.hypot(0.0693, 0.0364) == pytest.approx(0.07828, abs=1e-5)
@@ -72,11 +72,11 @@ def _loops(tmp_path: Path, sign_cw: float = -1.0) -> str:
 def test_headings_in_radians_read_as_degrees_are_warned_of(tmp_path):
     path = _loops(tmp_path)
     as_rad = umbmark.calibrate(path, side_length=1, wheelbase=0.34, method="heading")
-    assert not [n for n in as_rad.notes if "--angle-unit" in n]
+    assert not [n for n in as_rad.notes + as_rad.warnings if "--angle-unit" in n]
     as_deg = umbmark.calibrate(
         path, side_length=1, wheelbase=0.34, method="heading", angle_unit="deg"
     )
-    (note,) = [n for n in as_deg.notes if "--angle-unit" in n]
+    (note,) = [n for n in as_deg.warnings if "--angle-unit" in n]
     assert note.startswith("theta_odo is about 6.28 deg in every run")
     assert note.endswith("are the headings in radians? (--angle-unit rad)")
 

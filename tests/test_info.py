@@ -365,7 +365,7 @@ def test_empty_header_stamps_suggest_the_bag_time(tmp_path):
     assert report.suggested_options == (
         "--truth-topic /vicon/robot --left-joint l_wheel --right-joint r_wheel --time-source bag"
     )
-    assert any("/joint_states" in note and "--time-source bag" in note for note in report.notes)
+    assert any("/joint_states" in w and "--time-source bag" in w for w in report.warnings)
 
 
 def test_a_bag_without_candidates(tmp_path):

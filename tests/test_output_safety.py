@@ -156,8 +156,10 @@ def test_every_written_file_reported(runs: Path, tmp_path: Path) -> None:
         assert path.is_file()
         assert f"umbmark: wrote {path}\n" in proc.stderr
     assert "wrote" not in proc.stdout
-    # piped: the long first line (path and test) is one line, not wrapped at 80 columns
-    first = proc.stdout.splitlines()[0]
+    # piped: the long line of path and test is one line, not wrapped at 80 columns (the
+    # verdict comes first)
+    verdict, first = proc.stdout.splitlines()[:2]
+    assert verdict == "Verdict: apply."
     assert first.startswith(f"UMBmark {runs}")
     assert "wheelbase" in first
     assert len(first) > 80

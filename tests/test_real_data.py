@@ -173,7 +173,8 @@ def test_sessions_pool_for_the_trajectory_fit_but_not_across_squares():
     # Sessions of one day agree; a square of another day wants another wheelbase
     # (200.7 against 201.7 mm, each to 0.1 mm): the calibration says so.
     assert same_day.notes == ()
-    (warning,) = [n for n in pooled.notes if "want different" in n]
+    assert same_day.warnings == ()
+    (warning,) = [n for n in pooled.warnings if "want different" in n]
     assert warning.startswith(f"{SQUARE} and {CIRCLE} want different wheelbases: 200.")
     assert "not a square of known side" in api_error(umbmark.calibrate, SQUARE, CIRCLE)
     err = api_error(umbmark.calibrate, SQUARE, SQUARE2)

@@ -118,14 +118,14 @@ def test_given_parameters_win_and_a_difference_is_named(passes):
         current_separation_multiplier=1.0,
     )  # fmt: skip
     assert report.calibration.active.c_left == 1.0
-    text = " ".join(report.notes)
+    text = " ".join(report.warnings)
     assert "--current-c-l gives c_L = 1, but the table's header records c_L = 0.990099" in text
     assert "--current-c-r gives c_R = 1" in text
     assert "records 0.3502 m (wheelbase 0.34 m times wheel_separation_multiplier 1.03)" in text
     # The same parameters as recorded: nothing to say.
     first = json.loads((passes / "r1.json").read_text())
     same = umbmark.calibrate(passes / "pass2.csv", side_length=4, current_params=passes / "r1.json")
-    assert not [n for n in same.notes if "records" in n or "active parameters" in n]
+    assert not [n for n in same.notes + same.warnings if "records" in n or "active param" in n]
     assert _new(same) == pytest.approx(_new(umbmark.calibrate(passes / "pass2.csv", side_length=4)))
     assert first["new"]["c_L"] == pytest.approx(same.calibration.active.c_left, rel=1e-9)
 

@@ -96,7 +96,7 @@ def test_info_never_proposes_the_controller_odometry_as_ground_truth(husky):
     # before: "--truth-topic /husky_velocity_controller/odom --odom-topic ..."
     assert data["suggested_options"] == f"--odom-topic {CONTROLLER}"
     assert data["independent_reference"] is False
-    (note,) = [n for n in report.notes if n.startswith("no ground truth independent")]
+    (note,) = [n for n in report.warnings if n.startswith("no ground truth independent")]
     assert CONTROLLER in note
     proc = run_cli("info", str(husky))
     assert proc.returncode == 0, proc.stderr

@@ -22,7 +22,7 @@ EXAMPLE = str(resources.files("umbmark.data").joinpath("labmate_runs_mm.csv"))
 
 
 def _unit_notes(report: umbmark.CalibrationReport) -> list[str]:
-    return [note for note in report.notes if "(--unit " in note]
+    return [note for note in report.warnings if "(--unit " in note]
 
 
 def test_millimetres_as_millimetres_say_nothing():

@@ -24,17 +24,17 @@ import os
 import sqlite3
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .errors import InputError
 from .history_drift import DEFINITIONS, DRIFT_MIN_CALIBRATIONS, DRIFT_SIGMAS, drift_verdict
+from .history_records import CalibrationRecord, RobotRecord
 
 if TYPE_CHECKING:
-    from .calibration import ActiveParams
     from .jobs.calibrate import CalibrationReport
     from .jobs.inputs import SourceOptions
+    from .verdict import Verdict
 
 __all__ = [
     "DEFINITIONS",
@@ -86,8 +86,14 @@ def _migrate_1(db: sqlite3.Connection) -> None:
     db.execute("CREATE INDEX calibrations_robot ON calibrations(robot, id)")
 
 
+def _migrate_2(db: sqlite3.Connection) -> None:
+    """Version 2: each calibration's verdict (``{"level", "reasons", "instead"}`` as JSON;
+    NULL for the calibrations recorded before, whose verdict is unknown)."""
+    db.execute("ALTER TABLE calibrations ADD COLUMN verdict TEXT")
+
+
 #: The schema's migrations: ``MIGRATIONS[k]`` takes a file from version ``k`` to ``k + 1``.
-MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_migrate_1,)
+MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_migrate_1, _migrate_2)
 #: The schema version this umbmark writes.
 SCHEMA_VERSION = len(MIGRATIONS)
 
@@ -106,147 +112,6 @@ def default_history_path() -> Path:
         return Path(given)
     data = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
     return Path(data) / "umbmark" / "history.sqlite3"
-
-
-@dataclass(frozen=True)
-class RobotRecord:
-    """A robot of the history.
-
-    Attributes
-    ----------
-    name : str
-    wheelbase : float
-        Nominal wheelbase [m].
-    wheel_diameter : float or None
-        Nominal wheel diameter [m], when known.
-    created : str
-        When it was first recorded (UTC, ISO 8601).
-    calibrations : int
-        How many calibrations it has.
-    """
-
-    name: str
-    wheelbase: float
-    wheel_diameter: float | None
-    created: str
-    calibrations: int = 0
-
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready dictionary (metres)."""
-        return {
-            "name": self.name,
-            "wheelbase": self.wheelbase,
-            "wheel_diameter": self.wheel_diameter,
-            "created": self.created,
-            "calibrations": self.calibrations,
-        }
-
-
-@dataclass(frozen=True)
-class CalibrationRecord:
-    """One recorded calibration.
-
-    Attributes
-    ----------
-    id : int
-    robot : str
-    time : str
-        When it was made (UTC, ISO 8601).
-    method : str
-    inputs : list of dict
-        ``{"name": ..., "sha256": ...}`` per input (``sha256`` None for runs in memory).
-    E_d, E_b : float
-        What the pass measured, relative to the parameters active during it
-        (:attr:`robot_E_d`, :attr:`robot_E_b`: what the robot is).
-    E_s : float or None
-    e_max_syst : float or None
-        [m]
-    standard_errors : dict
-        The report's standard errors (``E_d``, ``E_b``, ...).
-    active, new : dict
-        The parameters active during the runs and the new ones (as ``calibrate --json``).
-    applied : bool
-    """
-
-    id: int
-    robot: str
-    time: str
-    method: str
-    inputs: list[dict[str, Any]]
-    E_d: float
-    E_b: float
-    E_s: float | None
-    e_max_syst: float | None
-    standard_errors: dict[str, float]
-    active: dict[str, Any]
-    new: dict[str, Any]
-    applied: bool
-
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready dictionary (metres)."""
-        return {
-            "id": self.id,
-            "time": self.time,
-            "method": self.method,
-            "E_d": self.E_d,
-            "E_b": self.E_b,
-            "E_s": self.E_s,
-            "e_max_syst": self.e_max_syst,
-            "standard_errors": self.standard_errors,
-            "inputs": self.inputs,
-            "active": self.active,
-            "new": self.new,
-            "applied": self.applied,
-            "robot_E_d": self.robot_E_d,
-            "robot_E_b": self.robot_E_b,
-            "robot_standard_errors": self.robot_standard_errors,
-            "robot_wheelbase": self.robot_wheelbase,
-        }
-
-    @property
-    def active_params(self) -> ActiveParams:
-        """The parameters active during the pass."""
-        from .calibration import ActiveParams
-
-        a = self.active
-        return ActiveParams(
-            wheelbase=float(a["wheelbase"]),
-            c_left=float(a["c_L"]),
-            c_right=float(a["c_R"]),
-            separation_multiplier=float(a["wheel_separation_multiplier"]),
-            wheel_diameter=None if a.get("wheel_diameter") is None else float(a["wheel_diameter"]),
-        )
-
-    @property
-    def robot_E_d(self) -> float:
-        """What the robot is: its ``D_R / D_L``, the pass's ``E_d`` composed with the active
-        ``c_L``, ``c_R`` as calibrate composes them (:meth:`ActiveParams.robot_errors
-        <umbmark.calibration.ActiveParams.robot_errors>`: ``E_d c_R,active / c_L,active``)."""
-        return self.active_params.robot_errors(self.E_d, self.E_b)[0]
-
-    @property
-    def robot_E_b(self) -> float:
-        """What the robot is: its effective wheelbase over the nominal one, the pass's
-        ``E_b`` composed with the active ``wheel_separation_multiplier`` as calibrate
-        composes them (``E_b x multiplier,active``, the new multiplier)."""
-        return self.active_params.robot_errors(self.E_d, self.E_b)[1]
-
-    @property
-    def robot_wheelbase(self) -> float:
-        """The robot's effective wheelbase [m]: :attr:`robot_E_b` x the nominal one."""
-        return self.robot_E_b * float(self.active["wheelbase"])
-
-    @property
-    def robot_standard_errors(self) -> dict[str, float]:
-        """Standard errors of :attr:`robot_E_d` and :attr:`robot_E_b` (keys ``E_d``,
-        ``E_b``, where the pass has them): the pass's, scaled as the composition scales
-        the value (the active parameters are exact)."""
-        out = {}
-        for name, robot in (("E_d", self.robot_E_d), ("E_b", self.robot_E_b)):
-            se = self.standard_errors.get(name)
-            if se is not None:
-                out[name] = float(se) * abs(robot / float(getattr(self, name)))
-        return out
 
 
 def _sha256(path: Path) -> str | None:
@@ -403,8 +268,8 @@ class History:
                     )
             cursor = db.execute(
                 "INSERT INTO calibrations (robot, time, method, inputs, E_d, E_b, E_s, "
-                "e_max_syst, standard_errors, active, new, applied) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0)",
+                "e_max_syst, standard_errors, active, new, applied, verdict) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, ?)",
                 (
                     robot,
                     report.created.astimezone(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
@@ -417,22 +282,32 @@ class History:
                     json.dumps(data["standard_errors"]),
                     json.dumps(data["active"]),
                     json.dumps(data["new"]),
+                    json.dumps(data["apply"]),
                 ),
             )
             return int(cursor.lastrowid or 0)
 
-    def recorded_line(self, robot: str, id: int) -> str:
+    def recorded_line(
+        self, robot: str, id: int, verdict: Verdict | None = None, *, forced: bool = False
+    ) -> str:
         """One line saying that calibration ``id`` of ``robot`` was recorded, and how to
-        mark it applied."""
+        mark it applied; for a ``verdict`` "do not apply", that it is not to be applied
+        (``forced``: its parameters were written all the same, and the command that marks
+        it applied needs ``--force``)."""
         import shlex
 
         given = self.path != default_history_path()
-        where = f" --history {shlex.quote(str(self.path))}" if given else ""
-        return (
-            f"recorded as calibration {id} of robot {robot} in {self.path}; once its new "
-            f"parameters are configured on the robot: umbmark history {shlex.quote(robot)}"
-            f"{where} --applied {id}"
-        )
+        mark = f"umbmark history {shlex.quote(robot)}"
+        mark += f" --history {shlex.quote(str(self.path))}" if given else ""
+        said = f"recorded as calibration {id} of robot {robot} in {self.path}"
+        if verdict is not None and not verdict.applies:
+            if forced:
+                return (
+                    f"{said}; its verdict is do not apply; if its new parameters are "
+                    f"configured on the robot all the same: {mark} --applied {id} --force"
+                )
+            return f"{said}; its verdict is do not apply: not to be configured on the robot"
+        return f"{said}; once its new parameters are configured on the robot: {mark} --applied {id}"
 
     def check_identity(self, robot: str, report: CalibrationReport) -> None:
         """Refuse a calibration whose nominal parameters are not those of ``robot``.
@@ -484,21 +359,41 @@ class History:
         with self._connect() as db:
             rows = db.execute(
                 "SELECT id, robot, time, method, inputs, E_d, E_b, E_s, e_max_syst, "
-                "standard_errors, active, new, applied FROM calibrations "
+                "standard_errors, active, new, applied, verdict FROM calibrations "
                 "WHERE robot = ? ORDER BY id",
                 (robot,),
             ).fetchall()
         return [_calibration(row) for row in rows]
 
-    def mark_applied(self, robot: str, id: int) -> None:
+    def mark_applied(self, robot: str, id: int, *, force: bool = False) -> None:
         """Mark calibration ``id`` of ``robot`` as applied to the robot.
+
+        Parameters
+        ----------
+        robot : str
+        id : int
+        force : bool
+            Mark it even when its verdict was "do not apply".
 
         Raises
         ------
         InputError
-            When the robot has no calibration ``id``.
+            When the robot has no calibration ``id``, or its verdict was "do not apply"
+            (without ``force``).
         """
         with self._connect(write=True) as db:
+            row = db.execute(
+                "SELECT verdict FROM calibrations WHERE robot = ? AND id = ?", (robot, id)
+            ).fetchone()
+            verdict = None if row is None or row[0] is None else json.loads(row[0])
+            if verdict is not None and verdict.get("level") == "do-not-apply" and not force:
+                reasons = "; ".join(verdict.get("reasons") or [])
+                raise InputError(
+                    f"--applied {id}: calibration {id} of {robot} was judged do not apply "
+                    f"({reasons}): its parameters are not to be configured on the robot; "
+                    "--force marks it applied all the same",
+                    source=self.path,
+                )
             cursor = db.execute(
                 "UPDATE calibrations SET applied = 1 WHERE robot = ? AND id = ?", (robot, id)
             )
@@ -532,6 +427,7 @@ def _calibration(row: Sequence[Any]) -> CalibrationRecord:
         active=json.loads(row[10]),
         new=json.loads(row[11]),
         applied=bool(row[12]),
+        verdict=None if row[13] is None else json.loads(row[13]),
     )
 
 
@@ -576,7 +472,9 @@ def compose_last_applied(
     composed["current_c_l"] = c_left
     composed["current_c_r"] = c_right
     composed["current_separation_multiplier"] = separation
-    note = (
+    from .messages import info
+
+    note = info(
         f"robot {robot}: taken as active during the runs, the new parameters of its last "
         f"applied calibration {last.id} ({last.time[:19]}Z): c_L {c_left:.6f}, c_R "
         f"{c_right:.6f}, wheel_separation_multiplier {separation:.6f} (give "

@@ -74,7 +74,9 @@ __all__ = ["calibrate"]
             section=TEST,
             is_flag=True,
             help="Take --current-params even when it is a result for another nominal "
-            "wheelbase or wheel diameter than the sources' own (more than 1 % apart).",
+            "wheelbase or wheel diameter than the sources' own (more than 1 % apart); "
+            "print and write the overlay (--yaml, --ros1-yaml) even when the verdict is do "
+            "not apply.",
         ),
         option(
             "--robot",
@@ -139,10 +141,12 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     SOURCES: runs tables (end points measured by hand), run-log folders, OptiOdom session
     folders or ROS bags; several are pooled. From logged runs the odometry end poses are
     integrated from the recorded wheels and the true ones taken from the ground truth.
-    Prints E_max,syst, the centres of gravity and their spread, the verdict of the
-    paper's 3 x SEM rule, the estimated errors alpha, beta, E_d, E_b (and E_s), the
-    correction factors c_L, c_R and the corrected wheelbase, composed with the parameters
-    active during the runs, and the ros2_control overlay.
+    Prints first the verdict on the correction (apply; apply with care: why; do not
+    apply: why, and what to record instead), then E_max,syst, the centres of gravity and
+    their spread, the paper's 3 x SEM rule, the estimated errors alpha, beta, E_d, E_b
+    (and E_s), the correction factors c_L, c_R and the corrected wheelbase, composed with
+    the parameters active during the runs, and the ros2_control overlay: withheld, and
+    not written, when the verdict is do not apply (--force prints and writes it).
     """
     from .. import calibrate as run_calibration
     from .common import command_line, console, note, warn, working, wrote
@@ -155,11 +159,11 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     else:
         report = run_calibration(*sources, **options)
     for line in report.notes:
-        warn(line)
+        note(line)
     for message in report.warnings:
         warn(message)
     outputs = ("output", "yaml", "ros1_yaml", "plot", "tum", "report")
-    wrote(options[key] for key in outputs if options[key])
+    wrote(options[key] for key in outputs if options[key] and key not in report.withheld)
     if report.recorded is not None:
         note(report.recorded)
     if json_out:

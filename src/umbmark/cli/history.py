@@ -19,7 +19,10 @@ __all__ = ["history"]
                help="The history file [default: $UMBMARK_HISTORY, else "
                "$XDG_DATA_HOME/umbmark/history.sqlite3 or ~/.local/share/umbmark/...]."),
         option("--applied", section=OTHER, type=click.IntRange(min=1),
-               help="Mark this calibration (its id) of the robot as applied."),
+               help="Mark this calibration (its id) of the robot as applied; refused for "
+               "a calibration whose verdict was do not apply."),
+        option("--force", section=OTHER, is_flag=True,
+               help="With --applied: mark it even when its verdict was do not apply."),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print one JSON object (metres)."),
         option("--plot", section=OUTPUTS, type=click.Path(),
@@ -37,6 +40,7 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
     """
     from .. import history as run_history
     from ..history_store import DEFINITIONS
+    from ..verdict import Verdict
     from .common import console, note, wrote
     from .render import row, table
 
@@ -82,9 +86,10 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
             "robot E_d (composed)",
             "robot E_b (composed)",
             "E_max,syst [mm]",
+            "verdict",
             "applied",
         ],
-        left=("time (UTC)", "method", "applied"),
+        left=("time (UTC)", "method", "verdict", "applied"),
     )
     for c in report.calibrations:
         e_max = "-" if c.e_max_syst is None else f"{c.e_max_syst * 1000:.1f}"
@@ -98,6 +103,7 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
             f"{c.robot_E_d:.6f}",
             f"{c.robot_E_b:.6f}",
             e_max,
+            "-" if c.verdict is None else Verdict(c.verdict["level"]).words,
             "yes" if c.applied else "no",
         )
     out.print(grid)

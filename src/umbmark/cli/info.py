@@ -57,11 +57,13 @@ def info(source: str, json_out: bool, **options: Any) -> None:
     (--max-messages).
     """
     from .. import info as run_info
-    from .common import console, warn
+    from .common import console, note, warn
 
     report = run_info(source, **options)
-    for note in report.notes:
-        warn(note)
+    for line in report.notes:
+        note(line)
+    for message in report.warnings:
+        warn(message)
     if json_out:
         click.echo(report.to_json(), nl=False)
         return

@@ -58,11 +58,13 @@ def plan(json_out: bool, **options: Any) -> None:
     comes from --scatter or from a previous result (--from).
     """
     from .. import plan as run_plan
-    from .common import console, warn
+    from .common import console, note, warn
 
     report = run_plan(**options)
-    for note in report.notes:
-        warn(note)
+    for line in report.notes:
+        note(line)
+    for message in report.warnings:
+        warn(message)
     if json_out:
         click.echo(report.to_json(), nl=False)
         return

@@ -71,9 +71,13 @@ def _plus_minus(value: float, se: float | None, fmt: str) -> str:
 def render_calibration(
     report: CalibrationReport, console: Console, *, overlay: bool = True
 ) -> None:
-    """Print the summary of ``report`` on ``console`` (with the overlay to paste)."""
+    """Print the summary of ``report`` on ``console``: the verdict first, the overlay to
+    paste last (withheld when the verdict is "do not apply", unless forced)."""
     from ..sources.association import summarize
 
+    verdict = report.verdict
+    style = {"apply": "bold green", "care": "bold yellow", "do-not-apply": "bold red"}
+    console.print(Text(verdict.line(), style=style[verdict.level]))
     for line in summarize(list(report.associations)):
         console.print(line)
     bench, cal = report.benchmark, report.calibration
@@ -171,7 +175,15 @@ def render_calibration(
         )
     console.print(correction)
 
-    if overlay:
+    if overlay and report.overlay_withheld:
+        console.print(
+            Text(
+                "No ros2_control overlay: the verdict is do not apply (--force prints and "
+                "writes it).",
+                style="bold",
+            )
+        )
+    elif overlay:
         console.print(
             Text("ros2_control overlay (paste it, or write it with --yaml FILE):", style="bold")
         )

@@ -65,12 +65,14 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
     """
     from .. import replay as run_replay
     from ..sources.association import summarize
-    from .common import console, warn, wrote
+    from .common import console, note, warn, wrote
     from .render import row, table
 
     report = run_replay(source, **options)
-    for note in report.notes:
-        warn(note)
+    for line in report.notes:
+        note(line)
+    for message in report.warnings:
+        warn(message)
     wrote(options[key] for key in ("plot", "tum") if options[key])
     if json_out:
         click.echo(report.to_json(), nl=False)

@@ -64,19 +64,25 @@ def report(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     to copy and the provenance.
     """
     from .. import report as run_report
-    from .common import console, warn, wrote
+    from .common import console, note, warn, wrote
     from .render import table
 
     page = run_report(*sources, command=command_line(sys.argv), **options)
+    many = len(page.passes) > 1
     for k, one in enumerate(page.passes, 1):
-        for message in (*one.notes, *one.warnings):
-            warn(f"pass {k}: {message}" if len(page.passes) > 1 else message)
+        for message in one.notes:
+            note(f"pass {k}: {message}" if many else message)
+        for message in one.warnings:
+            warn(f"pass {k}: {message}" if many else message)
     wrote([options["output"]])
     if json_out:
         click.echo(page.to_json(), nl=False)
         return
+    out = console()
+    last = page.last.verdict
+    out.print((f"Pass {len(page.passes)}, the last: " if many else "") + last.line(), markup=False)
 
-    def line(name: str, source: str, bench: Benchmark) -> list[str]:
+    def line(name: str, source: str, bench: Benchmark, verdict: str) -> list[str]:
         return [
             name,
             source,
@@ -84,20 +90,22 @@ def report(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
             f"{bench.e_max_syst * 1000:.1f}",
             f"{bench.second_pass_threshold * 1000:.1f}",
             "yes" if bench.second_pass_recommended else "no",
+            verdict,
         ]
 
     rows = [
-        line(f"pass {k}", one.source, one.benchmark)
+        line(f"pass {k}", one.source, one.benchmark, one.verdict.words)
         for k, one in enumerate(page.passes, 1)
         if one.benchmark is not None  # report() refuses passes without one
     ]
     if page.predicted is not None:
         rows.append(
             line("predicted after", "pass 1 replayed with the new parameters",
-                 page.predicted.benchmark)
+                 page.predicted.benchmark, "")
         )  # fmt: skip
-    head = ["", "source", "runs cw / ccw", "E_max,syst [mm]", "3 x SEM [mm]", "another pass"]
-    console().print(table("UMBmark passes", head, rows, left={"", "source"}))
+    head = ["", "source", "runs cw / ccw", "E_max,syst [mm]", "3 x SEM [mm]", "another pass",
+            "correction"]  # fmt: skip
+    out.print(table("UMBmark passes", head, rows, left={"", "source", "correction"}))
 
 
 # The square test's options are calibrate's own, listed first as there.

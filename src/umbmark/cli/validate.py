@@ -45,14 +45,16 @@ def validate(sources: tuple[str, ...], json_out: bool, methods: str | None, **op
     (straight legs, arcs, turns on the spot): the output says which.
     """
     from .. import validate as run_validation
-    from .common import console, progress_bar, warn
+    from .common import console, note, progress_bar, warn
     from .render import row, table
 
     chosen = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
     with progress_bar("validating") as progress:
         report = run_validation(*sources, methods=chosen, progress=progress, **options)
-    for note in report.notes:
-        warn(note)
+    for line in report.notes:
+        note(line)
+    for message in report.warnings:
+        warn(message)
     if json_out:
         click.echo(report.to_json(), nl=False)
         return

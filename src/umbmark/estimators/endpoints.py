@@ -34,7 +34,7 @@ from ..recording import RunLog
 from .base import ErrorEstimate, FloatArray
 from .solve import gauss_newton
 
-__all__ = ["EndPointFit", "endpoints_estimate", "fit_end_points"]
+__all__ = ["DIVERGED", "EndPointFit", "endpoints_estimate", "fit_end_points"]
 
 #: Fewest runs the fit needs: three parameters, and degrees of freedom for the errors.
 MIN_RUNS = 4
@@ -99,13 +99,24 @@ def _ends(logs: Sequence[RunLog]) -> tuple[list[RunLog], FloatArray, list[int]]:
     return kept, np.array(ends).reshape(-1, 3), last
 
 
+#: Why a fit of the end points fails, and what to try.
+DIVERGED = (
+    "the runs' end points do not determine the wheels: the fit diverged towards a wheel or "
+    "a wheelbase less than half the nominal one, which no robot has. Check that the ground "
+    "truth follows the robot (not a robot on a stand, not a tracker that lost it), the "
+    "units and the nominal wheel diameter and wheelbase; or try --method trajectory (whole "
+    "trajectories), or more runs that turn both ways"
+)
+
+
 def fit_end_points(logs: Sequence[RunLog], start: WheelParams) -> EndPointFit:
     """Fit ``r_L``, ``r_R``, ``b`` to the runs' end poses (see the module's documentation).
 
     Raises
     ------
     ValueError
-        With fewer than :data:`MIN_RUNS` runs that end with ground truth.
+        With fewer than :data:`MIN_RUNS` runs that end with ground truth, or a fit that
+        diverges (:data:`DIVERGED`).
     """
     runs, truth, last = _ends(logs)
     if len(runs) < MIN_RUNS:
@@ -160,7 +171,10 @@ def _fit(
         return np.asarray(ends - truth)
 
     first = np.ones(3) if scale else np.ones(2)
-    p, _, _ = gauss_newton(lambda q: misfit(q).ravel(), first)  # headings: 1 m per radian
+    try:  # a step to a wheel or wheelbase no robot has is refused by WheelParams
+        p, _, _ = gauss_newton(lambda q: misfit(q).ravel(), first)  # headings: 1 m per radian
+    except ValueError:
+        raise ValueError(DIVERGED) from None
     err = misfit(p)
     rms_position = float(np.sqrt(np.mean(np.sum(err[:, :2] ** 2, axis=1) / 2.0)))
     rms_heading = float(np.sqrt(np.mean(err[:, 2] ** 2)))
@@ -170,10 +184,13 @@ def _fit(
     def residuals(q: FloatArray) -> FloatArray:
         return np.asarray((misfit(q) * weight).ravel())
 
-    p, r, jac = gauss_newton(residuals, p)
+    try:
+        p, r, jac = gauss_newton(residuals, p)
+    except ValueError:
+        raise ValueError(DIVERGED) from None
     values = physical(p)
     if not (np.all(np.isfinite(values)) and np.all(values > 0.5 * np.append(r0, b0))):
-        raise ValueError("the runs' end points do not determine the wheels (the fit diverged)")
+        raise ValueError(DIVERGED)
     # Sandwich over runs: each run's three residuals are one independent block.
     n, k = len(runs), p.size
     inverse = np.linalg.pinv(jac.T @ jac)

@@ -558,7 +558,12 @@ def _solve(problem: _Problem, x0: FloatArray, sigma: tuple[float, float]) -> _So
     fit = least_squares(residuals, x0, method="lm", x_scale="jac", ftol=1e-10, xtol=1e-10)
     x = np.asarray(fit.x, dtype=np.float64)
     if not np.all(np.isfinite(x)):
-        raise ValueError("the trajectory fit did not converge")
+        raise ValueError(
+            "the trajectory fit did not converge (its wheel parameters went to numbers that "
+            "are not finite): check that the ground truth follows the robot, the wheel "
+            "data's units (encoder resolution, gear ratio) and the time offset between wheels "
+            "and ground truth; or try --method endpoints, or more runs that drive and turn"
+        )
     return _Solution(
         x=x,
         residuals=np.asarray(fit.fun, dtype=np.float64),
@@ -637,7 +642,9 @@ def _check_physical(values: dict[str, float | None], errors: dict[str, float]) -
                 f"{1000 * se:.1f} mm): the scrub model needs both turns on the spot and arcs"
                 if name in ("spot_wheelbase", "wheelbase") and values.get("spot_wheelbase")
                 else f"the recorded motion does not pin down the {shown} ({1000 * value:.1f} "
-                f"± {1000 * se:.1f} mm)"
+                f"± {1000 * se:.1f} mm): check that the ground truth follows the robot (not a "
+                "robot on a stand) and the wheel data's units, or record runs that drive and "
+                "turn"
             )
 
 

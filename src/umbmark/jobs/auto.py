@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..estimators.motions import motion_coverage
+from ..messages import info
 from .inputs import Runs, RunSource, SourceOptions
 
 __all__ = ["auto_method"]
@@ -29,8 +30,10 @@ def auto_method(
     options: SourceOptions,
     *,
     force: bool = False,
-) -> tuple[str, str]:
-    """The estimator that predicts held-out recorded runs best, and a note saying so.
+) -> tuple[str, str, bool]:
+    """The estimator that predicts held-out recorded runs best, a note saying so, and
+    whether the nominal parameters predicted them better than every estimator (the
+    calibration is then made with the default, and its verdict is "do not apply").
 
     ``force`` is the caller's: the validation reads the sources as the calibration does.
     """
@@ -38,10 +41,11 @@ def auto_method(
     from .validate import validate
 
     if read.params is None or any(run.log is None for run in read.runs):
-        return DEFAULT_METHOD, (
+        said = (
             f"method auto: runs tables cannot be replayed to compare estimators; "
             f"calibrated with the default, {DEFAULT_METHOD}"
         )
+        return DEFAULT_METHOD, info(said), False
     checked = validate(
         *(Path(str(s)) for s in sources),
         side_length=side_length,
@@ -67,12 +71,14 @@ def auto_method(
     covers = f"; {checked.coverage}"
     best = next(iter(ranking), ("nominal", 0.0))[0]
     if best == "nominal":
-        return DEFAULT_METHOD, (
-            "method auto: no estimator predicted held-out runs better than the nominal "
-            f"parameters ({checked.scheme}); calibrated with the default, "
-            f"{DEFAULT_METHOD}{why}{covers}"
+        ranked = any(name != "nominal" for name, _ in ranking)  # else none could be tried
+        said = (
+            "method auto: no estimator predicted held-out runs better than the nominal parameters "
+            if ranked
+            else "method auto: no estimator could be calibrated with a source held out "
         )
+        said += f"({checked.scheme}); calibrated with the default, {DEFAULT_METHOD}{why}{covers}"
+        return DEFAULT_METHOD, info(said), ranked
     listed = ", ".join(f"{name} {1000 * error:.1f} mm" for name, error in ranking)
-    return best, (
-        f"method auto: {best}, by held-out end error ({checked.scheme}): {listed}{why}{covers}"
-    )
+    said = f"method auto: {best}, by held-out end error ({checked.scheme}): {listed}{why}{covers}"
+    return best, info(said), False

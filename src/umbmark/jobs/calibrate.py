@@ -14,11 +14,12 @@ import json
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from .. import __version__
-from ..benchmark import Benchmark, Cluster, sem_verdict, umbmark_benchmark
+from ..benchmark import Benchmark, Cluster, sem_verdict
 from ..calibration import Calibration
 from ..errors import InputError, python_api
 from ..estimators.base import ErrorEstimate, SquareTest
@@ -26,14 +27,12 @@ from ..kinematics import WheelParams
 from ..outputs.atomic import atomic_write_text
 from ..runs import Run
 from ..sources.association import Association
-from ..sources.logged import require_headings
 from ..sources.params import CalibratedParams, ControllerParams
+from .estimate import LOGGED_METHODS, calibrate_runs, sessions_disagree
 from .inputs import (
     ReadOptions,
-    Runs,
     RunSource,
     SourceOptions,
-    check_calibration,
     check_square_geometry,
     read_runs,
     source_name,
@@ -46,6 +45,7 @@ if TYPE_CHECKING:
 
     from ..estimators.trajectory import TrajectoryFit
     from ..outputs.tum import TumTime
+    from ..verdict import Evidence, Verdict
 
 __all__ = ["METHODS", "CalibrationReport", "calibrate"]
 
@@ -65,8 +65,6 @@ METHODS: tuple[Method, ...] = (
     "trajectory",
     "trajectory-scrub",
 )
-#: The methods that need recorded runs (time series).
-LOGGED_METHODS = ("endpoints", "trajectory", "trajectory-scrub")
 
 
 @dataclass(frozen=True, repr=False)
@@ -96,7 +94,18 @@ class CalibrationReport:
     associations : tuple of (str, Association)
         Time matching of each recording.
     notes : tuple of str
-        What was found and left out while reading, for people.
+        What was done and chosen while reading, for people (information).
+    input_warnings : tuple of str
+        What makes the input doubtful (a unit that looks wrong, runs left out, sources
+        that disagree): with the estimate's own, :attr:`warnings`.
+    nominal_best : bool
+        ``method="auto"`` found no estimator that predicts held-out runs better than the
+        nominal parameters (the verdict is then "do not apply").
+    forced : bool
+        ``force=True``: the overlay is written even when the verdict is "do not apply".
+    withheld : tuple of str
+        The outputs asked for and not written because of the verdict (``yaml``,
+        ``ros1_yaml``).
     model_fit : TrajectoryFit or None
         The trajectory methods' fit of the odometry model (the richer model of
         ``trajectory-scrub``), which replays use.
@@ -117,6 +126,10 @@ class CalibrationReport:
     controller: ControllerParams = field(default_factory=ControllerParams)
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = ()
+    input_warnings: tuple[str, ...] = ()
+    nominal_best: bool = False
+    forced: bool = False
+    withheld: tuple[str, ...] = ()
     model_fit: TrajectoryFit | None = field(default=None, compare=False)
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
     robot: str | None = None
@@ -149,8 +162,44 @@ class CalibrationReport:
 
     @property
     def warnings(self) -> tuple[str, ...]:
-        """Everything that makes the result valid but shaky."""
-        return self.calibration.estimate.warnings
+        """Everything that makes the result valid but shaky: the input's doubts, the
+        estimate's, and the outputs withheld."""
+        withheld: tuple[str, ...] = ()
+        if self.withheld:
+            flags = ", ".join("--" + key.replace("_", "-") for key in self.withheld)
+            them = "them" if len(self.withheld) > 1 else "it"
+            withheld = (
+                f"{flags} not written: the verdict is do not apply (--force writes {them})",
+            )
+        return (*self.input_warnings, *self.calibration.estimate.warnings, *withheld)
+
+    @cached_property
+    def verdict(self) -> Verdict:
+        """Whether to apply the correction, why, and what to record instead
+        (:func:`umbmark.verdict.judge`)."""
+        from ..verdict import judge
+
+        return judge(self.estimate, self.test, self._evidence())
+
+    def _evidence(self) -> Evidence:
+        from ..verdict import Evidence, mean_path
+
+        logs = [run.log for run in self.runs if run.log is not None]
+        logged = self.estimate.method in LOGGED_METHODS
+        bench = self.benchmark
+        return Evidence(
+            runs_per_direction=None if logged or bench is None else (bench.cw.n, bench.ccw.n),
+            recorded_runs=len(logs) if logged else None,
+            path_length=mean_path(logs, self.params) if logged and self.params else None,
+            warnings=(*self.input_warnings, *self.estimate.warnings),
+            nominal_best=self.nominal_best,
+        )
+
+    @property
+    def overlay_withheld(self) -> bool:
+        """The parameter files are withheld: the verdict is "do not apply" and ``force``
+        was not given."""
+        return not self.verdict.applies and not self.forced
 
     @property
     def calibrated_params(self) -> WheelParams | None:
@@ -207,6 +256,7 @@ class CalibrationReport:
         bench, cal = self.benchmark, self.calibration
         est, active = cal.estimate, cal.active
         out: dict[str, Any] = {
+            "apply": self.verdict.to_dict(),
             "umbmark_version": __version__,
             "source": self.source,
             "sources": list(self.sources),
@@ -308,6 +358,7 @@ class CalibrationReport:
             "Multiplied into the values active during the runs: separation "
             f"{active.separation_multiplier:g}, left {active.c_left:g}, right {active.c_right:g}.",
             "diff_drive_controller reads these on configure: reload or restart the controller.",
+            *([] if self.verdict.level == "apply" else [self.verdict.line()]),
             *(
                 [
                     "open_loop is true: the controller's odometry integrates its commands, "
@@ -371,6 +422,7 @@ class CalibrationReport:
         tum: str | os.PathLike[str] | None = None,
         tum_time: TumTime = "recording",
         report: str | os.PathLike[str] | None = None,
+        force: bool = False,
     ) -> list[Path]:
         """Write the requested files: every one checked before any is written.
 
@@ -389,6 +441,8 @@ class CalibrationReport:
             seconds from each run's start.
         report : path, optional
             One self-contained HTML page of the calibration (:meth:`html`).
+        force : bool
+            Write ``yaml`` and ``ros1_yaml`` even when the verdict is "do not apply".
 
         Returns
         -------
@@ -398,7 +452,8 @@ class CalibrationReport:
         Raises
         ------
         InputError
-            For a file that cannot be written, or an output this report cannot give.
+            For a file that cannot be written, an output this report cannot give, or
+            parameter files of a calibration not to apply (without ``force``).
         """
         from ..outputs.tum import check_tum_time
 
@@ -415,6 +470,12 @@ class CalibrationReport:
         if plan.plot is not None and self.benchmark is None:
             raise InputError(
                 "--plot needs runs in both directions (cw and ccw)", source=self.source
+            )
+        asked = [f for f, p in (("--yaml", plan.yaml), ("--ros1-yaml", plan.ros1_yaml)) if p]
+        if asked and self.overlay_withheld and not force:
+            raise InputError(
+                f"{', '.join(asked)}: {self.verdict.line()} (--force writes it all the same)",
+                source=self.source,
             )
         calibrated = self.calibrated_params
         if plan.tum is not None and (self.params is None or calibrated is None):
@@ -509,7 +570,9 @@ def calibrate(
         each run's start.
     force : bool
         Take ``current_params`` even when it is a result for other nominal parameters
-        (wheelbase, wheel diameter) than the sources' own.
+        (wheelbase, wheel diameter) than the sources' own; write ``yaml`` and
+        ``ros1_yaml`` even when the verdict (:attr:`CalibrationReport.verdict`) is "do
+        not apply" (without it they are not written, and the report's warnings say so).
     robot : str, optional
         Record the calibration in the history under this robot's name
         (:class:`umbmark.history_store.History`); refused when the robot is known with another
@@ -570,113 +633,38 @@ def calibrate(
         check_square_geometry(
             read.side_length, active.effective_wheelbase, read.origins, active.separation_multiplier
         )
-    chosen, note = method, None
+    chosen, note, nominal_best = method, None, False
     if method == "auto":
         from .auto import auto_method
 
-        chosen, note = auto_method(sources, read, side_length, wheelbase, options, force=force)
-    result = _calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
-    result = replace(result, robot=robot, command=command)
+        chosen, note, nominal_best = auto_method(
+            sources, read, side_length, wheelbase, options, force=force
+        )
+    result = calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
+    result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
     if note is not None:
         result = replace(result, notes=(*result.notes, note))
     if chosen.startswith("trajectory") and len(read.parts) > 1:
-        disagree = _sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
-        result = replace(result, notes=(*result.notes, *disagree))
+        disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
+        result = replace(result, input_warnings=(*result.input_warnings, *disagree))
     if store is not None and robot is not None:
         store.check_identity(robot, result)
         if composed is not None:
             result = replace(result, notes=(*result.notes, composed))
+    files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
+    result = replace(result, forced=force)
+    if result.overlay_withheld:  # the verdict says what to do instead
+        result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
+        files = dict.fromkeys(files)
     result.write(
-        output=output, yaml=yaml, ros1_yaml=ros1_yaml, plot=plot, tum=tum, tum_time=tum_time,
-        report=report,
+        output=output, plot=plot, tum=tum, tum_time=tum_time, report=report, force=force,
+        **files,
     )  # fmt: skip
     if store is not None and robot is not None:
         id = store.record(robot, result, [n for n in map(source_name, sources) if n != "runs"])
-        result = replace(result, recorded=store.recorded_line(robot, id))
+        said = store.recorded_line(robot, id, result.verdict, forced=force)
+        result = replace(result, recorded=said)
     return result
-
-
-def _sessions_disagree(parts: Sequence[Runs], *, fit_truth_offset: bool = False) -> list[str]:
-    """Warnings where the sources, fitted one by one, want different wheels."""
-    from ..estimators.trajectory import disagreement_warnings, fit_trajectories
-
-    fits = []
-    for part in parts:
-        logs = [run.log for run in part.runs if run.log is not None]
-        if part.params is None or not logs:
-            continue
-        try:
-            fit = fit_trajectories(logs, part.params, fit_truth_offset=fit_truth_offset)
-            fits.append((part.sources[0], fit))
-        except ValueError:
-            continue  # a source too small to fit alone says nothing against the others
-    return disagreement_warnings(fits)
-
-
-def _calibrate_runs(
-    read: Runs, method: str, *, fit_truth_offset: bool = False
-) -> CalibrationReport:
-    where = read.sources[0] if len(read.sources) == 1 else None
-    runs, active = read.runs, read.active
-    bench = None
-    fit = None
-    try:
-        require_headings(runs, method, where)
-        if method in LOGGED_METHODS:
-            logs = [run.log for run in runs if run.log is not None]
-            if not logs or read.params is None:
-                raise InputError(
-                    f"the {method} method needs logged runs (a run log, an OptiOdom session "
-                    "or a bag), not a runs table",
-                    source=where,
-                )
-            if method == "endpoints":
-                from ..estimators.endpoints import endpoints_estimate
-
-                estimate, _ = endpoints_estimate(logs, read.params, read.side_length)
-            else:
-                from ..estimators.trajectory import trajectory_estimate
-
-                estimate, fit = trajectory_estimate(
-                    logs,
-                    read.params,
-                    read.side_length,
-                    model="scrub" if method == "trajectory-scrub" else "diff",
-                    fit_truth_offset=fit_truth_offset,
-                )
-            test = SquareTest(read.side_length or 1.0, active.effective_wheelbase)
-            # UMBmark's figures where the runs are squares of a known side.
-            directions = {run.direction for run in runs if run.kind == "square"}
-            if read.side_length is not None and len(directions) == 2:
-                try:
-                    bench = umbmark_benchmark(runs)
-                except ValueError:
-                    bench = None
-        else:
-            from ..estimators import estimate_square_test
-
-            squares = any(run.kind == "square" for run in runs)
-            side = read.square_side() if squares else (read.side_length or 1.0)
-            test = SquareTest(side, active.effective_wheelbase)
-            estimate, bench = estimate_square_test(method, runs, test)
-    except InputError:
-        raise
-    except ValueError as exc:
-        raise InputError(str(exc), source=where) from None
-    check_calibration(Calibration(estimate, active), read.origins)
-    return CalibrationReport(
-        sources=read.sources,
-        format=read.format,
-        runs=read.runs,
-        benchmark=bench,
-        test=test,
-        calibration=Calibration(estimate, active),
-        params=read.params,
-        controller=read.controller,
-        associations=read.associations,
-        notes=read.notes,
-        model_fit=fit,
-    )
 
 
 def _intervals(estimate: ErrorEstimate) -> dict[str, list[float]]:

@@ -122,6 +122,7 @@ def history(
     *,
     history: str | os.PathLike[str] | None = None,
     applied: int | None = None,
+    force: bool = False,
     plot: str | os.PathLike[str] | None = None,
 ) -> HistoryReport:
     """The robots of a history file, or one robot's calibrations and drift verdict.
@@ -133,7 +134,10 @@ def history(
     history : path, optional
         The history file (default: ``$UMBMARK_HISTORY``, else the per-user file).
     applied : int, optional
-        Mark this calibration of ``robot`` as applied first.
+        Mark this calibration of ``robot`` as applied first (refused for a calibration
+        whose verdict was "do not apply").
+    force : bool
+        Mark ``applied`` even when its verdict was "do not apply".
     plot : path, optional
         Draw the robot's E_d, E_b and the passes' E_max,syst over time
         (:meth:`HistoryReport.figure`)
@@ -146,7 +150,8 @@ def history(
     Raises
     ------
     InputError
-        For an unknown robot or calibration, or a file that is not a history.
+        For an unknown robot or calibration, a calibration not to apply (without
+        ``force``), or a file that is not a history.
     """
     if plot is not None and robot is None:
         raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
@@ -166,7 +171,8 @@ def history(
     if applied is not None:
         from .inputs import check_int_option
 
-        store.mark_applied(robot, check_int_option("--applied", applied, 1, 2**63 - 1))
+        number = check_int_option("--applied", applied, 1, 2**63 - 1)
+        store.mark_applied(robot, number, force=force)
         notes = (f"calibration {applied} of {robot} marked applied",)
     calibrations = tuple(store.calibrations(robot))
     report = HistoryReport(

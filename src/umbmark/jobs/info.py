@@ -160,9 +160,14 @@ class InfoReport:
 
     @property
     def notes(self) -> tuple[str, ...]:
-        """What people should know about the source."""
+        """What people should know about the source that is information."""
+        return () if self.bag is None else self.bag.notes
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What people should know about the source that is doubtful."""
         if self.bag is not None:
-            return self.bag.notes
+            return self.bag.warnings
         if self.logged is not None and self.logged.runs_problem is not None:
             return (f"no runs found: {self.logged.runs_problem}",)
         return ()
@@ -184,8 +189,9 @@ class InfoReport:
         ``robot_description`` (``wheelbase``, ``wheel_diameter``, ``left_joints``,
         ``right_joints``, ``topic``; or None), ``robot_description_problem``, ``needs``
         (the options still needed for the wheel geometry), ``independent_reference``,
-        ``suggested_options``, ``notes``; for run logs and OptiOdom sessions ``files``,
-        ``runs``, ``duration``, ``wheel_parameters``, ``side_length``, ``notes``.
+        ``suggested_options``, ``notes``, ``warnings``; for run logs and OptiOdom sessions
+        ``files``, ``runs``, ``duration``, ``wheel_parameters``, ``side_length``, ``notes``,
+        ``warnings``.
         """
         out: dict[str, Any] = {"source": self.source, "format": self.format}
         if self.bag is not None:
@@ -194,6 +200,7 @@ class InfoReport:
             out.update(self.logged.to_dict())
             out["suggested_options"] = None
             out["notes"] = list(self.notes)
+            out["warnings"] = list(self.warnings)
         return out
 
     def to_json(self) -> str:

@@ -38,6 +38,7 @@ from ..bounds import (
 from ..calibration import ActiveParams, Calibration
 from ..errors import InputError
 from ..kinematics import WheelParams
+from ..messages import info
 from ..plausibility import check_columns, unit_hints
 from ..runs import Run
 from ..sources.association import DEFAULT_MAX_GAP, Association
@@ -873,7 +874,7 @@ def _choose_active(
     def shown(value: float, unit: str = "") -> str:
         return f"{value:.6g}{unit}"
 
-    where, notes = recorded.where, []
+    where, notes = recorded.where, list[str]()
     recorded_b = recorded.wheelbase
     if all(value is None for value, _ in given):
         # Nothing said what was active: what the source records was.
@@ -890,9 +891,11 @@ def _choose_active(
             used.append(f"wheelbase = {shown(recorded_b, ' m')}")
         if used:
             notes.append(
-                f"active parameters from {where}: {', '.join(used)} (the correction is "
-                "composed with them; give --current-params or --current-c-l, --current-c-r, "
-                "--current-separation-multiplier to override)"
+                info(
+                    f"active parameters from {where}: {', '.join(used)} (the correction is "
+                    "composed with them; give --current-params or --current-c-l, --current-c-r, "
+                    "--current-separation-multiplier to override)"
+                )
             )
         if (
             user_b is not None
@@ -1089,10 +1092,12 @@ def pool_runs(read: Sequence[Runs]) -> Runs:
                 source=None,
             )
         notes.append(
-            f"{other.sources[0]}: integrated with the parameters of {first.sources[0]} "
-            f"(b = {first.params.wheelbase:g} m, D = {first.params.wheel_diameter:g} m) "
-            f"instead of its own (b = {other.params.wheelbase:g} m, "
-            f"D = {other.params.wheel_diameter:g} m)"
+            info(
+                f"{other.sources[0]}: integrated with the parameters of {first.sources[0]} "
+                f"(b = {first.params.wheelbase:g} m, D = {first.params.wheel_diameter:g} m) "
+                f"instead of its own (b = {other.params.wheelbase:g} m, "
+                f"D = {other.params.wheel_diameter:g} m)"
+            )
         )
         read = [
             *read[:k],

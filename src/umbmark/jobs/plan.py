@@ -73,6 +73,7 @@ from pathlib import Path
 from typing import Any, Literal, TypeAlias
 
 from ..errors import InputError
+from ..messages import info, split_messages
 from ..sources.text import finite, load_json
 from .inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
 
@@ -220,6 +221,9 @@ class PlanReport:
     recommended : bool
         Whether side and runs were chosen by :func:`plan` (else given).
     notes : tuple of str
+        What was chosen and why, for people.
+    warnings : tuple of str
+        Where the figures are rough.
     """
 
     side_length: float
@@ -240,6 +244,7 @@ class PlanReport:
     threshold: float
     recommended: bool
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
     def __repr__(self) -> str:
         return (
@@ -268,6 +273,7 @@ class PlanReport:
             "threshold_3_sem": self.threshold,
             "recommended": self.recommended,
             "notes": list(self.notes),
+            "warnings": list(self.warnings),
         }
 
     def to_json(self) -> str:
@@ -441,8 +447,11 @@ def plan(
     figures = _figures(side_length, runs, wheelbase, on_square, s2)
     if model == "slip" and scatter_side is not None and not math.isclose(scatter_side, side_length):
         notes.append(
-            f"the {scatter * 1000:.1f} mm scatter measured on a {scatter_side:g} m square is "
-            f"{on_square * 1000:.1f} mm on a {side_length:.2f} m one (slip grows with the path)"
+            info(
+                f"the {scatter * 1000:.1f} mm scatter measured on a {scatter_side:g} m square "
+                f"is {on_square * 1000:.1f} mm on a {side_length:.2f} m one (slip grows with "
+                "the path)"
+            )
         )
     if 3.0 * figures["se_alpha"] > 0.05:
         notes.append(
@@ -459,7 +468,8 @@ def plan(
         scatter_given=scatter,
         scatter_side=scatter_side if model == "slip" else None,
         recommended=recommended,
-        notes=tuple(notes),
+        notes=split_messages(notes)[0],
+        warnings=split_messages(notes)[1],
         **figures,
     )
 
@@ -502,13 +512,17 @@ def _recommend_side(
             best, best_cost = side, cost
     if best < largest - 1e-9:
         notes.append(
-            f"a {best:.2f} m square reaches the targets with fewer runs than the largest that "
-            f"fits ({largest:.2f} m): under slip the scatter grows faster than the return "
-            "errors"
+            info(
+                f"a {best:.2f} m square reaches the targets with fewer runs than the largest that "
+                f"fits ({largest:.2f} m): under slip the scatter grows faster than the return "
+                "errors"
+            )
         )
     elif best < 4.0:
         notes.append(
-            f"a {best:.2f} m square instead of the paper's 4 m: the standard errors of E_b "
-            "and E_d grow on a smaller square for the same scatter"
+            info(
+                f"a {best:.2f} m square instead of the paper's 4 m: the standard errors of E_b "
+                "and E_d grow on a smaller square for the same scatter"
+            )
         )
     return best

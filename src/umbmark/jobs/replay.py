@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from ..errors import InputError, python_api
 from ..kinematics import IntegrationMethod, WheelParams
+from ..messages import split_messages
 from ..recording import RunLog
 from ..runs import Run, end_errors
 from ..sources.association import Association
@@ -105,7 +106,9 @@ class ReplayReport:
     associations : tuple of (str, Association)
         Time matching of each recording.
     notes : tuple of str
-        What was found and left out while reading.
+        What was done and chosen while reading, for people (information).
+    warnings : tuple of str
+        What makes the input doubtful (runs left out, samples unmatched, ...).
     """
 
     source: str
@@ -118,6 +121,7 @@ class ReplayReport:
     rmse: Mapping[str, NDArray[np.float64]]
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
     def __repr__(self) -> str:
         means = ", ".join(
@@ -320,7 +324,8 @@ def replay(
             for name, p in sets.items()
         },
         associations=read.associations,
-        notes=read.notes,
+        notes=split_messages(read.notes)[0],
+        warnings=split_messages(read.notes)[1],
     )
     report.write(plot=plot, tum=tum, tum_time=tum_time)
     return report

@@ -22,6 +22,7 @@ from .. import __version__
 from ..benchmark import Benchmark, umbmark_benchmark
 from ..errors import InputError, python_api
 from ..kinematics import WheelParams
+from ..messages import info
 from ..outputs.atomic import atomic_write_text
 from ..runs import Run
 from .calibrate import DEFAULT_METHOD, CalibrationReport, calibrate
@@ -291,7 +292,7 @@ def report(
             pass_options["current_c_l"] = before.new_c_left
             pass_options["current_c_r"] = before.new_c_right
             pass_options["current_separation_multiplier"] = before.new_separation_multiplier
-            note = (
+            note = info(
                 f"taken as active during the runs, pass {k - 1}'s new parameters "
                 f"(c_L {before.new_c_left:.6f}, c_R {before.new_c_right:.6f}, "
                 f"wheel_separation_multiplier {before.new_separation_multiplier:.6f})"

@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import InputError
 from ..estimators.motions import KINDS, MotionCoverage, MotionKind, join_names, motion_coverage
 from ..kinematics import WheelParams
+from ..messages import info, split_messages
 from ..runs import Run, end_errors
 from .inputs import (
     ReadOptions,
@@ -102,6 +103,9 @@ class ValidationReport:
     candidates : tuple of str
     folds : tuple of Fold
     notes : tuple of str
+        What was done, for people (a candidate not calibrated with a fold held out).
+    warnings : tuple of str
+        What makes the inputs doubtful (as read).
     """
 
     sources: tuple[str, ...]
@@ -109,6 +113,7 @@ class ValidationReport:
     candidates: tuple[str, ...]
     folds: tuple[Fold, ...]
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
     def __repr__(self) -> str:
         return (
@@ -189,6 +194,7 @@ class ValidationReport:
                 "statement": self.coverage,
             },
             "notes": list(self.notes),
+            "warnings": list(self.warnings),
         }
 
     def to_json(self) -> str:
@@ -279,12 +285,14 @@ def validate(
         folds.append(_fold(name, held[0], pool_runs(training), chosen))
         if progress is not None:
             progress((k + 1) / len(parts))
+    notes, warnings = split_messages([*(n for r in read for n in r.notes), *_refusals(folds)])
     return ValidationReport(
         sources=tuple(source_name(p) for p in paths),
         scheme=scheme,
         candidates=chosen,
         folds=tuple(folds),
-        notes=(*(n for r in read for n in r.notes), *_refusals(folds)),
+        notes=notes,
+        warnings=warnings,
     )
 
 
@@ -295,7 +303,7 @@ def _refusals(folds: Sequence[Fold]) -> list[str]:
         for candidate, why in fold.refused.items():
             reasons.setdefault((candidate, why), []).append(Path(fold.held_out).name)
     return [
-        f"{candidate} not calibrated with {', '.join(names)} held out: {why}"
+        info(f"{candidate} not calibrated with {', '.join(names)} held out: {why}")
         for (candidate, why), names in reasons.items()
     ]
 
@@ -333,12 +341,12 @@ def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> F
 def _calibrated(training: Runs, candidate: str, nominal: WheelParams) -> WheelParams | None:
     """The held-out source's parameters after calibrating on ``training`` (None: the
     candidate cannot calibrate on it)."""
-    from .calibrate import _calibrate_runs
+    from .estimate import calibrate_runs
 
     if candidate == "nominal":
         return nominal
     try:
-        report = _calibrate_runs(training, candidate)
+        report = calibrate_runs(training, candidate)
         return report.new_params().applied_to(nominal)
     except ValueError:  # InputError included: the candidate cannot calibrate on these runs
         return None

@@ -423,8 +423,12 @@ def _messages(page: PassesReport) -> str:
 
 
 def _overlay(page: PassesReport) -> str:
+    from .html_verdict import WITHHELD
+
     n = len(page.passes)
     which = "" if n == 1 else f" of the last pass (pass {n})"
+    if page.last.overlay_withheld:
+        return WITHHELD
     return (
         f"<p>The correction{which}, composed with the values active during its runs; "
         "copy it into the controller's parameters:</p>\n"
@@ -508,7 +512,9 @@ def _provenance(page: PassesReport) -> str:
 def passes_html(page: PassesReport) -> str:
     """UMBmark passes on one robot as one self-contained HTML page (no external resources).
 
-    Sections: the verdict (E_max,syst of every pass and the 3 x SEM rule, with the
+    Sections: whether to apply the last pass's correction
+    (:func:`umbmark.outputs.html_verdict.verdict_section`), the verdict (E_max,syst of
+    every pass and the 3 x SEM rule, with the
     per-pass table of Eqs. 3.1-3.4), the Fig. 6 cluster view of every pass in one inline
     SVG figure (and the predicted after of a single pass of recorded runs, marked as a
     prediction), every run, the estimates with their 95 % intervals (alpha and beta in
@@ -526,8 +532,11 @@ def passes_html(page: PassesReport) -> str:
     robot = page.passes[0].robot
     if robot:
         title = f"{robot}: {title}"
+    from .html_verdict import CSS, verdict_section
+
     sections = [
-        ("verdict", "Verdict", _verdict(page) + _clusters(page)),
+        ("apply", "Apply the correction?", verdict_section(page)),
+        ("verdict", "E_max,syst and the 3 x SEM rule", _verdict(page) + _clusters(page)),
         ("clusters", "Cluster view (Fig. 6)", _figure(page)),
         ("runs", "Runs", _runs(page)),
         ("estimates", "Estimates and 95 % intervals", _estimates(page)),
@@ -543,7 +552,7 @@ def passes_html(page: PassesReport) -> str:
         "<!DOCTYPE html>\n"
         '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
-        f"<title>{escape(title)}</title>\n<style>{_CSS}</style>\n</head>\n<body>\n"
+        f"<title>{escape(title)}</title>\n<style>{_CSS}{CSS}</style>\n</head>\n<body>\n"
         f"<h1>{escape(title)}</h1>\n{body}</body>\n</html>\n"
     )
 

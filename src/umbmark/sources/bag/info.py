@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InputError
+from ...messages import split_messages
 from . import reader as bag_reader
 from .candidates import Candidate, controller_odometry, odometry_candidates, wheel_candidates
 from .candidates import needed_gap as _needed_gap
@@ -310,8 +311,10 @@ class BagInfo:
     complete : bool
         Every message of the topics looked into was read.
     notes : tuple of str
-        What people should know (topics that could not be decoded, empty stamps, no
-        independent reference).
+        What people should know that is information.
+    warnings : tuple of str
+        What people should know that is doubtful (topics that could not be decoded, empty
+        stamps, no independent reference, a robot description without wheels).
     model_states : tuple of ModelStatesInfo
         Gazebo's model-state topics and their models.
     robot : RobotDescription or None
@@ -340,6 +343,7 @@ class BagInfo:
     max_messages: int
     complete: bool
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
     empty_stamps: tuple[str, ...] = field(default=(), repr=False)
     model_states: tuple[ModelStatesInfo, ...] = ()
     robot: RobotDescription | None = None
@@ -415,6 +419,7 @@ class BagInfo:
             "independent_reference": self.independent,
             "suggested_options": self.suggested_options,
             "notes": list(self.notes),
+            "warnings": list(self.warnings),
         }
 
 
@@ -673,7 +678,8 @@ def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> B
         truth=tuple(truth[:MAX_LISTED]),
         max_messages=max_messages,
         complete=complete,
-        notes=tuple(notes),
+        notes=split_messages(notes)[0],
+        warnings=split_messages(notes)[1],
         empty_stamps=tuple(empty),
         model_states=tuple(model_states),
         robot=robot,

@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import InputError
+from ...messages import info
 from ...recording import PoseSeries
 from . import custom
 from . import reader as bag_reader
@@ -281,9 +282,9 @@ def read_positions(
     scan = read_topic(
         reader, conns, msgtype, topic, src, width=6, decode=decode_fix, layout_of=None
     )
-    notes = []
+    notes: list[str] = []
     if no_fix:
-        notes.append(f"{topic}: left out {no_fix} message(s) without a fix (status < 0)")
+        notes.append(info(f"{topic}: left out {no_fix} message(s) without a fix (status < 0)"))
     values = scan.values
     finite = np.all(np.isfinite(values[:, :3]), axis=1)
     stamps = time_ns(scan, header)
@@ -307,7 +308,9 @@ def read_positions(
     if np.any(np.isfinite(sigma)):
         typical = float(np.nanmedian(sigma))
         notes.append(
-            f"{topic}: GNSS fixes with a median horizontal standard deviation of "
-            f"{1000 * typical:.0f} mm (their position_covariance)"
+            info(
+                f"{topic}: GNSS fixes with a median horizontal standard deviation of "
+                f"{1000 * typical:.0f} mm (their position_covariance)"
+            )
         )
     return PoseSeries(time=time, poses=poses, headings=False, covariance=matrices), notes

@@ -100,6 +100,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import InputError
+from ...messages import info
 from ...recording import PoseSeries, WheelSeries
 from ..controller_odometry import OdometryGeometry, wheels_from_odometry
 from ..progress import Progress, Tracker, current_callback, tracking
@@ -398,17 +399,21 @@ def _read_truth_topic(
             else ""
         )
         notes.append(
-            f"ground truth: model {model} of {topic}, which has no header: stamped with the "
-            f"bag's receive times{clock}"
+            info(
+                f"ground truth: model {model} of {topic}, which has no header: stamped with the "
+                f"bag's receive times{clock}"
+            )
         )
         return truth
     if msgtype in POSITION_TYPES:
         truth, more = references.read_positions(reader, topics, topic, header, src)
         notes += more
         notes.append(
-            f"ground truth {topic} has positions only: each run's start heading is taken "
-            "from the direction of its first metre; estimators that need headings "
-            "(heading, endpoints, trajectory) refuse it"
+            info(
+                f"ground truth {topic} has positions only: each run's start heading is taken "
+                "from the direction of its first metre; estimators that need headings "
+                "(heading, endpoints, trajectory) refuse it"
+            )
         )
         return truth
     return _read_pose_topic(reader, topics, topic, options, src, allowed=REFERENCE_TYPES)

@@ -381,7 +381,9 @@ def described_geometry(
         for label, value in (("wheelbase", wheelbase), ("wheel diameter", diameter))
         if value is None
     ]
-    note = (
+    from ...messages import info
+
+    note = info(
         f"{' and '.join(taken)} from the bag's robot description: "
         f"{description.describe()} (give --wheelbase / --wheel-diameter to override)"
     )

@@ -1,0 +1,40 @@
+"""Messages for people: information, or warnings.
+
+Reading a source, choosing parameters and pooling runs collect messages for people in
+one list (``notes``), in the order found. Most say that something is doubtful: the result
+stands but may be shaky (a unit that looks wrong, runs left out, a conflict between an
+option and a file): **warnings**, printed ``umbmark: warning: ...``. Some only say what
+was done or chosen (the parameters a header recorded, the estimator ``auto`` chose):
+**information**, printed as a plain ``umbmark: ...`` line. The producer of an information
+marks it with :func:`info`; every other message is a warning (so that a message nobody
+classified keeps being shown as one). A report splits its messages with
+:func:`split_messages` into its ``notes`` and ``warnings``; the command prints what the
+report says.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+__all__ = ["Info", "info", "split_messages"]
+
+
+class Info(str):
+    """A message that is information (what was done, found or chosen), not a warning."""
+
+    __slots__ = ()
+
+
+def info(text: str) -> Info:
+    """Mark ``text`` as information."""
+    return Info(text)
+
+
+def split_messages(messages: Iterable[str]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """``(notes, warnings)``: the messages marked :func:`info`, and all the others, each
+    in their order (as plain ``str``)."""
+    notes: list[str] = []
+    warnings: list[str] = []
+    for message in messages:
+        (notes if isinstance(message, Info) else warnings).append(str(message))
+    return tuple(notes), tuple(warnings)

@@ -1,0 +1,56 @@
+"""The verdict on applying a correction, as the HTML page shows it (at its head).
+
+:func:`verdict_section` is the page's first section: the last pass's verdict (apply;
+apply with care: why; do not apply: why, and what to record instead), whose correction
+is the one to apply now, and each earlier pass's in one line. :data:`WITHHELD` is what
+the overlay section says instead of the overlay when the verdict is "do not apply".
+"""
+
+from __future__ import annotations
+
+from html import escape
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..jobs.report import PassesReport
+    from ..verdict import Verdict
+
+__all__ = ["CSS", "WITHHELD", "verdict_section"]
+
+#: The style of the verdict's box: green to apply, orange with care, red not to.
+CSS = """
+.apply { padding: .75rem 1rem; border-left: .4rem solid #2a7; background: #eefaf3; }
+.apply.care { border-color: #c60; background: #fff6ec; }
+.apply.do-not-apply { border-color: #c22; background: #fdeeee; }
+"""
+
+
+def _box(verdict: Verdict, lead: str) -> str:
+    reasons = "".join(f"<li>{escape(reason)}</li>\n" for reason in verdict.reasons)
+    listed = f"<ul>\n{reasons}</ul>\n" if reasons else ""
+    if verdict.instead:
+        what = "Instead" if verdict.level == "do-not-apply" else "To be sure"
+        listed += f'<p class="instead">{what}: {escape(verdict.instead)}.</p>\n'
+    return (
+        f'<div class="apply {verdict.level}" id="apply-verdict" data-level="{verdict.level}">'
+        f'<p class="big">{escape(lead)}{escape(verdict.words.capitalize())}</p>\n'
+        f"{listed}</div>\n"
+    )
+
+
+def verdict_section(page: PassesReport) -> str:
+    """The last pass's verdict in a box, and the earlier passes' in a line each."""
+    n = len(page.passes)
+    lead = "" if n == 1 else f"Pass {n}, the last: "
+    earlier = "".join(
+        f"<li>Pass {k}: {escape(one.verdict.words)}</li>\n"
+        for k, one in enumerate(page.passes[:-1], 1)
+    )
+    return _box(page.last.verdict, lead) + (f"<ul>\n{earlier}</ul>\n" if earlier else "")
+
+
+#: What the overlay section says when the verdict is "do not apply" (not forced).
+WITHHELD = (
+    '<p id="overlay-withheld">No overlay: the verdict is do not apply (its reasons head the '
+    "page). <code>--force</code> writes it all the same.</p>\n"
+)
