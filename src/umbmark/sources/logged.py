@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from ..conventions import Direction
 from ..errors import InputError
 from ..kinematics import IntegrationMethod, WheelParams
+from ..messages import info
 from ..recording import Recording, RunLog
 from ..runs import EndPose, Run
 from .association import DEFAULT_MAX_GAP, Association, associate
@@ -359,8 +360,8 @@ def runs_from_recordings(
                 )
                 continue
             inside = [g for g in gaps if first <= g.index < last]
-            out.notes.extend(
-                f"{label}: {line}" for line in describe_gaps(inside, recording.wheel_sample)
+            out.notes.extend(  # bridged: the run stands as recorded
+                info(f"{label}: {line}") for line in describe_gaps(inside, recording.wheel_sample)
             )
             found += 1
             out.runs.append(run)
@@ -435,7 +436,8 @@ def _segments(
         return [(0, time.size - 1)], []
     found = find_runs(time, angles, truth, split_options)
     out.notes.extend(
-        f"{recording.name}: {reset.describe(time)}: a run ends there" for reset in found.resets
+        info(f"{recording.name}: {reset.describe(time)}: a run ends there")
+        for reset in found.resets
     )
     return found.runs, list(found.left_out)
 
