@@ -270,3 +270,11 @@ def test_help_layout_does_not_depend_on_arguments_having_help_records():
     sections = re.findall(r"^([A-Z][^\n:]*):$", text, flags=re.MULTILINE)
     assert sections == ["The square test", "Outputs", "Other options"]
     assert "SOURCES" not in text.split("Options:")[-1].split("The square test:")[1]
+
+
+def test_group_help_says_what_each_experiment_is():
+    """``reproduce --help`` listed fig4 as just "Fig." (click cut its docstring at the
+    first full stop)."""
+    proc = run_cli("reproduce", "--help")
+    (line,) = [line for line in proc.stdout.splitlines() if line.strip().startswith("fig4")]
+    assert "uni-directional trap" in line

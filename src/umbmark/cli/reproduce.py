@@ -83,7 +83,11 @@ def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) 
     )
 
 
-@reproduce.command("fig4", cls=Command)
+@reproduce.command(
+    "fig4",
+    cls=Command,
+    short_help="Fig. 4: the uni-directional trap of tuning the wheelbase alone.",
+)
 @option("--json", "json_out", section=OUTPUTS, is_flag=True, help="Print one JSON object instead.")
 @option(
     "--plot",
