@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from umbmark.kinematics import integrate_odometry
+from umbmark.model.kinematics import integrate_odometry
 
 from _timing import best_of
 

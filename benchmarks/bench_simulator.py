@@ -14,7 +14,7 @@ import argparse
 
 import numpy as np
 
-from umbmark.conventions import Direction
+from umbmark.core.conventions import Direction
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
 from umbmark.sim.reference import simulate_run_loop

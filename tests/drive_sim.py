@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from umbmark.recording import RunLog
+from umbmark.model.recording import RunLog
 
 #: Sampling period [s], as OptiOdom's 20 Hz.
 DT = 0.05
@@ -112,8 +112,8 @@ def circles(robot: Robot, seed: int, shares: tuple[float, ...] = (0.15, 0.3, 0.5
 def write_session(folder: Path, logs: list[RunLog], rest: float = 2.0) -> Path:
     """Write runs as a run-log folder (wheel angles, one CSV per run, still ``rest`` [s]
     before and after), nominal D 0.084 m, b 0.2 m."""
-    from umbmark.outputs.runlog import write_log_csv, write_metadata
-    from umbmark.sources.runlog import LogMetadata
+    from umbmark.sources.runlog.reader import LogMetadata
+    from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
     write_metadata(
         folder, LogMetadata(wheel_diameter=2 * RADIUS, wheelbase=WHEELBASE, wheel_data="angles")

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from umbmark.conventions import Direction
-from umbmark.kinematics import WheelParams
+from umbmark.core.conventions import Direction
+from umbmark.model.kinematics import WheelParams
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
 from umbmark.sim.robot import ControlConfig, VirtualRobot

@@ -105,7 +105,7 @@ def simulated_session(
     """
     import numpy as np
 
-    from umbmark.conventions import Direction
+    from umbmark.core.conventions import Direction
     from umbmark.sim.engine import simulate
     from umbmark.sim.paths import square
 
@@ -148,8 +148,8 @@ def simulated_session(
 def session_log(folder: Path, session, truth, wheelbase: float = 0.34, side: float = 1.0):  # type: ignore[no-untyped-def]
     """Write a :func:`simulated_session` as a run-log folder, with ``truth`` (n, 3) as its
     ground truth (D_n 0.15 m, 2000 counts per motor turn, gear 20)."""
-    from umbmark.outputs.runlog import write_log_csv, write_metadata
-    from umbmark.sources.runlog import LogMetadata
+    from umbmark.sources.runlog.reader import LogMetadata
+    from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
     times, counts, _, _ = session
     folder.mkdir()
@@ -217,7 +217,7 @@ def api_error(fn, *args, **kwargs) -> str:  # type: ignore[no-untyped-def]
     is the line the command prints."""
     import pytest
 
-    from umbmark.errors import InputError
+    from umbmark.core.errors import InputError
 
     with pytest.raises(InputError) as caught:
         fn(*args, **kwargs)

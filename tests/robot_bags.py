@@ -42,7 +42,7 @@ from rosbags.rosbag2 import Writer as Writer2
 from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from umbmark.kinematics import WheelParams
+from umbmark.model.kinematics import WheelParams
 from umbmark.sim.robot import VirtualRobot
 
 from helpers import simulated_session

@@ -159,7 +159,7 @@ def test_every_flag_of_the_command_line_names_its_keyword() -> None:
     import click
 
     from umbmark.cli.main import cli
-    from umbmark.errors import _keyword_of
+    from umbmark.core.errors import _keyword_of
 
     def options(command: click.Command) -> list[click.Option]:
         if isinstance(command, click.Group):
@@ -180,7 +180,7 @@ def test_every_function_knows_its_keywords() -> None:
     """So that each refuses a misspelt keyword (none takes arbitrary ones)."""
     import inspect
 
-    from umbmark.errors import keywords_of
+    from umbmark.core.errors import keywords_of
 
     functions = [n for n in umbmark.__all__ if inspect.isfunction(getattr(umbmark, n))]
     assert "calibrate" in functions

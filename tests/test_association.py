@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.errors import InputError
-from umbmark.recording import PoseSeries, WheelSeries
-from umbmark.sources.association import associate, summarize
+from umbmark.core.errors import InputError
+from umbmark.model.recording import PoseSeries, WheelSeries
+from umbmark.runs.association import associate, summarize
 
 
 def _wheels(t):

@@ -23,7 +23,7 @@ from rosbags.rosbag2 import Writer as Writer2
 from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from umbmark.errors import InputError
+from umbmark.core.errors import InputError
 from umbmark.sources.bag import BagOptions, bag_topics, fastpath, read_bag
 
 TS2 = get_typestore(Stores.LATEST)

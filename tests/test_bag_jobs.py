@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.kinematics import WheelParams
+from umbmark.model.kinematics import WheelParams
 from umbmark.sim.robot import VirtualRobot
 
 from helpers import api_error, cli_error, cli_json, simulated_session
@@ -89,8 +89,8 @@ def _write(path: Path, fmt: str, session, truth_shift: float = 0.0) -> Path:
 @pytest.fixture(scope="module")
 def log_result(session, tmp_path_factory):
     """The same session as a run log: the reference the bags must match."""
-    from umbmark.outputs.runlog import write_log_csv, write_metadata
-    from umbmark.sources.runlog import LogMetadata
+    from umbmark.sources.runlog.reader import LogMetadata
+    from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
     folder = tmp_path_factory.mktemp("log")
     times, counts, poses, _ = session

@@ -27,9 +27,9 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.errors import InputError
-from umbmark.kinematics import WheelParams
-from umbmark.recording import PoseSeries
+from umbmark.core.errors import InputError
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import PoseSeries
 from umbmark.sim.robot import VirtualRobot
 from umbmark.sources.controller_odometry import OdometryGeometry, wheels_from_odometry
 

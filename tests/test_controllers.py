@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 import umbmark
-from umbmark.sources.params import read_controller_params
+from umbmark.sources.params.reader import read_controller_params
 
 from helpers import linear_cgs, runs_around
 
@@ -119,7 +119,7 @@ def test_skid_steer_multiplier_is_calibrated_on_top_of_its_large_value(tmp_path)
     """A skid-steer turns as if its wheels were 1.3-2 times the track apart; ros2_control
     models that with wheel_separation_multiplier. Track 0.5 m, multiplier 1.6 active (0.8 m
     effective), true effective wheelbase 0.85 m: the new multiplier is 1.6 * 0.85 / 0.8."""
-    from umbmark.kinematics import WheelParams
+    from umbmark.model.kinematics import WheelParams
     from umbmark.sim.robot import VirtualRobot
 
     from helpers import session_log, simulated_session

@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.benchmark import umbmark_benchmark
-from umbmark.conventions import Direction, angle_to_rad, length_to_m, wrap_angle
+from umbmark.benchmark.returns import umbmark_benchmark
+from umbmark.core.conventions import Direction, angle_to_rad, length_to_m, wrap_angle
 from umbmark.estimators import SquareTest, estimate_errors
 from umbmark.estimators.paper import paper_estimate
-from umbmark.kinematics import integrate_odometry
-from umbmark.runs import EndPose, Run
+from umbmark.model.kinematics import integrate_odometry
+from umbmark.model.runs import EndPose, Run
 
 from helpers import runs_around, turtle_square
 
@@ -136,7 +136,7 @@ def test_tracked_point_off_the_axle_adds_rotated_offset_to_return_errors(tmp_pat
     """A marker at d in the robot frame: eps_marker = eps_axle + (R(dtheta) - I) d, with
     dtheta the run's true heading change; --truth-offset d takes it away."""
     import umbmark
-    from umbmark.kinematics import WheelParams
+    from umbmark.model.kinematics import WheelParams
     from umbmark.sim.robot import VirtualRobot
 
     from helpers import session_log, simulated_session

@@ -251,8 +251,8 @@ def _drive(n: int = 400, dt: float = 0.01):
 
 
 def test_a_ground_truth_that_jumps_is_refused():
-    from umbmark.errors import InputError
-    from umbmark.sources.logged import check_motion
+    from umbmark.core.errors import InputError
+    from umbmark.runs.logged import check_motion
 
     time, angles, truth = _drive()
     check_motion("run", time, angles, truth)  # 5 mm a sample: plausible
@@ -265,7 +265,7 @@ def test_a_tracking_gap_is_not_a_jump():
     """2 s without ground truth, 2 m driven meanwhile: 1 m/s, not a jump."""
     import numpy as np
 
-    from umbmark.sources.logged import check_motion
+    from umbmark.runs.logged import check_motion
 
     time, angles, truth = _drive(n=600)
     truth[100:300] = np.nan

@@ -73,7 +73,7 @@ def test_reported_factors_are_positive_and_finite(runs_csv: Path) -> None:
 
 def test_negative_factors_are_refused_not_reported(tmp_path: Path) -> None:
     """Runs whose return errors ask for a negative wheel (E_d <= 0) are refused."""
-    from umbmark.calibration import ActiveParams, Calibration
+    from umbmark.calibration.compose import ActiveParams, Calibration
     from umbmark.jobs.inputs import check_calibration
 
     class Estimate:
@@ -86,7 +86,7 @@ def test_negative_factors_are_refused_not_reported(tmp_path: Path) -> None:
     assert "E_d = -2.3" in message
     assert "check --side-length, --wheelbase and the runs' units" in message
     # Parameters a run log's metadata gave are named by field and file, not as options.
-    from umbmark.bounds import Origin
+    from umbmark.core.bounds import Origin
 
     meta = str(tmp_path / "metadata.yaml")
     origins = {"wheelbase": Origin("wheelbase", meta), "side_length": Origin("side_length", meta)}
@@ -102,7 +102,7 @@ def test_negative_factors_are_refused_not_reported(tmp_path: Path) -> None:
 def logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """Two run logs of one simulated session: with the robot's nominal wheelbase (0.34 m)
     and as if another robot's (0.5 m); and a result computed on the first."""
-    from umbmark.kinematics import WheelParams
+    from umbmark.model.kinematics import WheelParams
     from umbmark.sim.robot import VirtualRobot
 
     base = tmp_path_factory.mktemp("logs")

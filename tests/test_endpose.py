@@ -12,12 +12,12 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.benchmark import umbmark_benchmark
-from umbmark.conventions import Direction
+from umbmark.benchmark.returns import umbmark_benchmark
+from umbmark.core.conventions import Direction
 from umbmark.estimators import SquareTest, estimate_errors
 from umbmark.estimators.endpose import endpose_estimate
-from umbmark.runs import EndPose, Run
-from umbmark.square import icr_offset, square_run_end
+from umbmark.model.runs import EndPose, Run
+from umbmark.model.square import icr_offset, square_run_end
 
 from helpers import turtle_square
 

@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.kinematics import WheelParams
+from umbmark.model.kinematics import WheelParams
 from umbmark.sim.robot import VirtualRobot
 
 from helpers import api_error, cli_json, run_cli, simulated_session

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import umbmark
-from umbmark.errors import InputError
+from umbmark.core.errors import InputError
 
 #: Examples per test: 40 keep the file under 15 s; set UMBMARK_FUZZ_EXAMPLES for a deep run.
 FAST = settings(

@@ -19,13 +19,13 @@ import pytest
 
 import umbmark
 from driven import EVERY, TB3, controller_odometry, squares, write_session_bag
-from umbmark.outputs.runlog import write_log_csv, write_metadata
+from umbmark.runs.load import LoadOptions, load_runs
+from umbmark.runs.logged import check_motion
 from umbmark.sim.robot import VirtualRobot
 from umbmark.sources.bag import BagOptions
 from umbmark.sources.controller_odometry import OdometryGeometry
-from umbmark.sources.load import LoadOptions, load_runs
-from umbmark.sources.logged import check_motion
-from umbmark.sources.runlog import LogMetadata
+from umbmark.sources.runlog.reader import LogMetadata
+from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
 pytest.importorskip("rosbags")
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import umbmark
-from umbmark.history_store import SCHEMA_VERSION, History, default_history_path
+from umbmark.store.history import SCHEMA_VERSION, History, default_history_path
 
 from helpers import api_error, cli_error, cli_json, run_cli
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 import umbmark
-from umbmark.history_store import History
+from umbmark.store.history import History
 
 from helpers import api_error, cli_json, run_cli
 

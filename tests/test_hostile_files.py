@@ -84,7 +84,7 @@ def test_hostile_result_json_is_one_line(tmp_path, runs, text, fragment):
 
 @pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="no /dev/zero")
 def test_an_endless_file_is_refused_with_bounded_memory():
-    from umbmark.errors import InputError
+    from umbmark.core.errors import InputError
     from umbmark.sources.text import MAX_DOCUMENT_BYTES, read_text
 
     # Whole documents (YAML, JSON) are parsed into objects tens of times their size.

@@ -16,7 +16,7 @@ from click.testing import CliRunner
 
 import umbmark
 from umbmark.cli.main import cli
-from umbmark.errors import InputError
+from umbmark.core.errors import InputError
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.errors import InputError
+from umbmark.core.errors import InputError
 
 from helpers import OPTIODOM, api_error, cli_error, cli_json, run_cli
 

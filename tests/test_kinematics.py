@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.kinematics import WheelParams, integrate_odometry, wheel_displacements
+from umbmark.model.kinematics import WheelParams, integrate_odometry, wheel_displacements
 
 METHODS = ("arc", "midpoint", "segment")
 

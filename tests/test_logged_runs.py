@@ -11,15 +11,15 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.errors import InputError
-from umbmark.kinematics import WheelParams
-from umbmark.outputs.runlog import write_log_csv, write_metadata
-from umbmark.recording import PoseSeries, Recording, WheelSeries
-from umbmark.runs import end_errors
+from umbmark.core.errors import InputError
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import PoseSeries, Recording, WheelSeries
+from umbmark.model.runs import end_errors
+from umbmark.runs.logged import runs_from_recordings, to_start_frame
+from umbmark.runs.segmentation import split_by_rests, split_by_windows
 from umbmark.sim.robot import VirtualRobot
-from umbmark.sources.logged import runs_from_recordings, to_start_frame
-from umbmark.sources.runlog import LogMetadata, read_runlog
-from umbmark.sources.segmentation import split_by_rests, split_by_windows
+from umbmark.sources.runlog.reader import LogMetadata, read_runlog
+from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
 from helpers import simulated_session
 

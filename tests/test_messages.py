@@ -11,7 +11,7 @@ import pytest
 
 import umbmark
 from robot_bags import TB3, drive, turtlebot3_bag
-from umbmark.messages import Info, info, split_messages
+from umbmark.core.messages import Info, info, split_messages
 
 from helpers import run_cli, write_table
 

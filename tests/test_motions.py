@@ -20,8 +20,8 @@ import umbmark
 from drive_sim import NO_SCRUB, SCRUB
 from umbmark.estimators.motions import MAX_INFLATION, motion_coverage
 from umbmark.estimators.trajectory import fit_trajectories, trajectory_estimate
-from umbmark.kinematics import WheelParams
-from umbmark.recording import RunLog
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import RunLog
 
 from helpers import OPTIODOM, cli_json, run_cli
 

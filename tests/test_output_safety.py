@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 import umbmark
-from umbmark.jobs.outputs import OutputPlan, check_folder_output
 from umbmark.outputs.atomic import atomic_path, atomic_write_text
+from umbmark.outputs.files import OutputPlan, check_folder_output
 
 from helpers import api_error, cli_error, run_cli
 

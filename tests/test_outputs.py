@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from umbmark.errors import InputError
+from umbmark.core.errors import InputError
 from umbmark.outputs.atomic import atomic_path, atomic_write_text
-from umbmark.sources.params import read_controller_params as read_active_multipliers
+from umbmark.sources.params.reader import read_controller_params as read_active_multipliers
 
 
 def test_a_failed_write_leaves_the_old_file_and_no_litter(tmp_path):

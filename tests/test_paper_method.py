@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.benchmark import umbmark_benchmark
-from umbmark.conventions import Direction
+from umbmark.benchmark.returns import umbmark_benchmark
+from umbmark.core.conventions import Direction
 from umbmark.estimators import SquareTest, estimate_errors
 from umbmark.estimators.paper import paper_estimate
-from umbmark.runs import EndPose, Run
+from umbmark.model.runs import EndPose, Run
 
 from helpers import linear_cgs, runs_around, turtle_square
 

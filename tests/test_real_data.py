@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.errors import InputError
-from umbmark.sources.load import detect_format
+from umbmark.core.errors import InputError
+from umbmark.runs.load import detect_format
 from umbmark.sources.optiodom import read_optiodom
 
 from helpers import OPTIODOM, api_error, cli_error
@@ -72,7 +72,7 @@ def test_paper_calibration_lowers_the_error_on_circles(tmp_path):
 def test_a_report_replays_like_its_result_file(tmp_path):
     from dataclasses import replace
 
-    from umbmark.sources.params import read_calibrated_params
+    from umbmark.sources.params.reader import read_calibrated_params
 
     result = tmp_path / "square.json"
     report = umbmark.calibrate(SQUARE, output=result)

@@ -18,9 +18,9 @@ import pytest
 import yaml
 
 import umbmark
-from umbmark.calibration import ActiveParams
-from umbmark.outputs.runs_table import format_active, write_runs_table
-from umbmark.sources.runs_table import read_table_active
+from umbmark.calibration.compose import ActiveParams
+from umbmark.sources.runs_table.reader import read_table_active
+from umbmark.sources.runs_table.writer import format_active, write_runs_table
 
 from helpers import api_error, run_cli
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.kinematics import WheelParams
+from umbmark.model.kinematics import WheelParams
+from umbmark.runs.load import LoadOptions, load_runs
 from umbmark.sim.robot import VirtualRobot
-from umbmark.sources.load import LoadOptions, load_runs
 
 from helpers import api_error, cli_error, session_log, simulated_session
 

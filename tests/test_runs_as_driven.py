@@ -15,12 +15,12 @@ import pytest
 
 import umbmark
 from driven import TB3, squares, write_session_bag
-from umbmark.outputs.runlog import write_log_csv, write_metadata
-from umbmark.recording import PoseSeries, Recording, WheelSeries
+from umbmark.model.recording import PoseSeries, Recording, WheelSeries
+from umbmark.runs.logged import runs_from_recordings
+from umbmark.runs.segmentation import split_by_rests
 from umbmark.sim.robot import VirtualRobot
-from umbmark.sources.logged import runs_from_recordings
-from umbmark.sources.runlog import LogMetadata
-from umbmark.sources.segmentation import split_by_rests
+from umbmark.sources.runlog.reader import LogMetadata
+from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
 from helpers import cli_json
 

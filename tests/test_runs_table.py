@@ -6,10 +6,10 @@ import math
 
 import pytest
 
-from umbmark.conventions import Direction
-from umbmark.errors import InputError
-from umbmark.outputs.runs_table import format_runs_table, write_runs_table
-from umbmark.sources.runs_table import read_runs_table
+from umbmark.core.conventions import Direction
+from umbmark.core.errors import InputError
+from umbmark.sources.runs_table.reader import read_runs_table
+from umbmark.sources.runs_table.writer import format_runs_table, write_runs_table
 
 GOOD = [("cw", 10.0, 20.0, 1.0, 2.0), ("ccw", -30.0, 40.0, 0.0, 0.0)]
 

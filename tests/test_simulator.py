@@ -13,8 +13,8 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from umbmark.conventions import Direction
-from umbmark.kinematics import WheelParams
+from umbmark.core.conventions import Direction
+from umbmark.model.kinematics import WheelParams
 from umbmark.sim.engine import simulate
 from umbmark.sim.experiments import calibrate_robot, umbmark_trials
 from umbmark.sim.paths import spot_turn, square, straight_line
@@ -151,7 +151,7 @@ def test_seeded_noisy_runs_repeat():
 
 def test_the_engines_arc_step_is_chord_step_to_the_bit():
     # The engine computes chord_step's series for sin(h)/h inline, halved.
-    from umbmark.kinematics import chord_step
+    from umbmark.model.kinematics import chord_step
     from umbmark.sim.engine import _half_sinc_series
 
     rng = np.random.default_rng(0)

@@ -1,4 +1,4 @@
-"""The t and F quantiles of umbmark.stats against scipy.stats (an independent reference)."""
+"""The t and F quantiles of umbmark.core.stats against scipy.stats (an independent reference)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import pytest
 from scipy import stats
 
-from umbmark.stats import beta_cdf, f_cdf, f_quantile, t_quantile
+from umbmark.core.stats import beta_cdf, f_cdf, f_quantile, t_quantile
 
 
 @pytest.mark.parametrize("dof", [1, 2, 3, 4, 8, 18, 98, 1000])

@@ -17,8 +17,10 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.errors import InputError
-from umbmark.sources import optiodom, runlog, runs_table
+from umbmark.core.errors import InputError
+from umbmark.sources import optiodom
+from umbmark.sources.runlog import reader as runlog
+from umbmark.sources.runs_table import reader as runs_table
 from umbmark.sources.text import MAX_LINE_CHARS, first_content_line, iter_content_lines
 
 from helpers import api_error, cli_error

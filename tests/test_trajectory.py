@@ -20,21 +20,17 @@ from rich.console import Console
 
 import umbmark
 from umbmark.cli.render import render_calibration
-from umbmark.estimators.trajectory import (
-    _cluster_covariance,
-    fit_trajectories,
-    trajectory_estimate,
-)
-from umbmark.kinematics import (
+from umbmark.core.stats import t_quantile
+from umbmark.estimators.trajectory import _cluster_covariance, fit_trajectories, trajectory_estimate
+from umbmark.model.kinematics import (
     WheelParams,
     effective_wheelbase,
     integrate_odometry,
     turning_share,
 )
-from umbmark.recording import PoseSeries, Recording, RunLog, WheelSeries
+from umbmark.model.recording import PoseSeries, Recording, RunLog, WheelSeries
+from umbmark.runs.logged import runs_from_recordings
 from umbmark.sim.robot import NoiseModel, VirtualRobot
-from umbmark.sources.logged import runs_from_recordings
-from umbmark.stats import t_quantile
 
 from helpers import cli_error, simulated_session
 

@@ -28,9 +28,9 @@ import pytest
 import drive_sim
 import umbmark
 from robot_bags import TB3, drive, turtlebot3_bag
+from umbmark.calibration.verdict import NOTICEABLE_ANGLE, Evidence, judge, noticeable
 from umbmark.estimators.base import ErrorEstimate, SquareTest
-from umbmark.history_store import MIGRATIONS, History
-from umbmark.verdict import NOTICEABLE_ANGLE, Evidence, judge, noticeable
+from umbmark.store.history import MIGRATIONS, History
 
 from helpers import OPTIODOM, linear_cgs, run_cli, runs_around, write_table
 

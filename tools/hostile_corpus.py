@@ -431,8 +431,8 @@ JointFn = Callable[[int, list[str], list[float]], tuple[list[str], list[float], 
 def simulated_session(directions: Sequence[str] = ("cw", "cw", "ccw", "ccw")) -> SessionArrays:
     """Runs around a 1 m square with 3 s rests: ``time (n,)``, wheel angles ``(n, 2)``
     [rad] (left, right), true pose ``(n, 3)``; every 2nd simulator step (50 Hz)."""
-    from umbmark.conventions import Direction
-    from umbmark.kinematics import WheelParams
+    from umbmark.core.conventions import Direction
+    from umbmark.model.kinematics import WheelParams
     from umbmark.sim.engine import simulate
     from umbmark.sim.paths import square
     from umbmark.sim.robot import VirtualRobot

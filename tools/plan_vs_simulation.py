@@ -24,7 +24,7 @@ import numpy as np
 import umbmark
 from umbmark.estimators import SquareTest
 from umbmark.estimators.exact import exact_components
-from umbmark.kinematics import WheelParams
+from umbmark.model.kinematics import WheelParams
 from umbmark.sim.experiments import umbmark_trials
 from umbmark.sim.robot import NoiseModel, VirtualRobot
 

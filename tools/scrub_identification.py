@@ -24,9 +24,9 @@ import umbmark
 from umbmark.estimators.motions import motion_coverage
 from umbmark.estimators.trajectory import fit_trajectories
 from umbmark.jobs.inputs import ReadOptions, read_runs
-from umbmark.kinematics import WheelParams
-from umbmark.runs import end_errors
-from umbmark.sources.load import LoadOptions, load_runs
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import end_errors
+from umbmark.runs.load import LoadOptions, load_runs
 
 POOLS = {
     "square 2042": ["square/230620202042"],

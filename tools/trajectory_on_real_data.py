@@ -31,9 +31,9 @@ from umbmark.estimators.trajectory import (
     TrajectoryModel,
     fit_trajectories,
 )
-from umbmark.kinematics import WheelParams
-from umbmark.runs import Run, end_errors
-from umbmark.sources.load import LoadOptions, load_runs
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import Run, end_errors
+from umbmark.runs.load import LoadOptions, load_runs
 
 REPLAYED = ("square/230620202042", "square/231220200029", "circular/250620202104")
 #: Turns nominal parameters into the parameters of a calibration.

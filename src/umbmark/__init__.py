@@ -20,7 +20,7 @@ naming the options as keywords (``unit="mm"`` where the command says ``--unit mm
 keyword a function does not take raises ``TypeError`` naming the close one. The names
 below are imported on first use, so that ``import umbmark`` (and ``umbmark --help``) stay
 fast. Conventions (frame, signs, units) are in
-:mod:`umbmark.conventions`.
+:mod:`umbmark.core.conventions`.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ _EXPORTS = {
     "info": "umbmark.jobs.info",
     "history": "umbmark.jobs.history",
     "HistoryReport": "umbmark.jobs.history",
-    "History": "umbmark.history_store",
+    "History": "umbmark.store.history",
     "plan": "umbmark.jobs.plan",
     "PlanReport": "umbmark.jobs.plan",
     "validate": "umbmark.jobs.validate",
@@ -59,21 +59,21 @@ _EXPORTS = {
     "SimulationReport": "umbmark.jobs.simulate",
     "DemoReport": "umbmark.jobs.demo",
     "SourceOptions": "umbmark.jobs.inputs",
-    "InputError": "umbmark.errors",
+    "InputError": "umbmark.core.errors",
     # building blocks
-    "ActiveParams": "umbmark.calibration",
-    "Benchmark": "umbmark.benchmark",
-    "Calibration": "umbmark.calibration",
-    "Direction": "umbmark.conventions",
-    "EndPose": "umbmark.runs",
+    "ActiveParams": "umbmark.calibration.compose",
+    "Benchmark": "umbmark.benchmark.returns",
+    "Calibration": "umbmark.calibration.compose",
+    "Direction": "umbmark.core.conventions",
+    "EndPose": "umbmark.model.runs",
     "ErrorEstimate": "umbmark.estimators",
-    "Run": "umbmark.runs",
+    "Run": "umbmark.model.runs",
     "SquareTest": "umbmark.estimators",
-    "WheelParams": "umbmark.kinematics",
+    "WheelParams": "umbmark.model.kinematics",
     "estimate_errors": "umbmark.estimators",
-    "integrate_odometry": "umbmark.kinematics",
-    "read_runs_table": "umbmark.sources.runs_table",
-    "umbmark_benchmark": "umbmark.benchmark",
+    "integrate_odometry": "umbmark.model.kinematics",
+    "read_runs_table": "umbmark.sources.runs_table.reader",
+    "umbmark_benchmark": "umbmark.benchmark.returns",
 }
 
 __all__ = [
@@ -121,28 +121,28 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from .benchmark import Benchmark, umbmark_benchmark
-    from .calibration import ActiveParams, Calibration
-    from .conventions import Direction
-    from .errors import InputError
-    from .estimators import ErrorEstimate, SquareTest, estimate_errors
-    from .history_store import History
-    from .jobs.calibrate import CalibrationReport, calibrate
-    from .jobs.demo import DemoReport, demo
-    from .jobs.example import example, example_sessions
-    from .jobs.history import HistoryReport, history
-    from .jobs.info import InfoReport, info
-    from .jobs.inputs import SourceOptions
-    from .jobs.plan import PlanReport, plan
-    from .jobs.replay import ReplayReport, replay
-    from .jobs.report import PassesReport, report
-    from .jobs.reproduce import reproduce_fig4, reproduce_table1
-    from .jobs.simulate import SimulationReport, simulate
-    from .jobs.study import StudyReport, study
-    from .jobs.validate import ValidationReport, validate
-    from .kinematics import WheelParams, integrate_odometry
-    from .runs import EndPose, Run
-    from .sources.runs_table import read_runs_table
+    from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
+    from umbmark.calibration.compose import ActiveParams, Calibration
+    from umbmark.core.conventions import Direction
+    from umbmark.core.errors import InputError
+    from umbmark.estimators import ErrorEstimate, SquareTest, estimate_errors
+    from umbmark.jobs.calibrate import CalibrationReport, calibrate
+    from umbmark.jobs.demo import DemoReport, demo
+    from umbmark.jobs.example import example, example_sessions
+    from umbmark.jobs.history import HistoryReport, history
+    from umbmark.jobs.info import InfoReport, info
+    from umbmark.jobs.inputs import SourceOptions
+    from umbmark.jobs.plan import PlanReport, plan
+    from umbmark.jobs.replay import ReplayReport, replay
+    from umbmark.jobs.report import PassesReport, report
+    from umbmark.jobs.reproduce import reproduce_fig4, reproduce_table1
+    from umbmark.jobs.simulate import SimulationReport, simulate
+    from umbmark.jobs.study import StudyReport, study
+    from umbmark.jobs.validate import ValidationReport, validate
+    from umbmark.model.kinematics import WheelParams, integrate_odometry
+    from umbmark.model.runs import EndPose, Run
+    from umbmark.sources.runs_table.reader import read_runs_table
+    from umbmark.store.history import History
 
 
 def __getattr__(name: str) -> object:
@@ -153,7 +153,7 @@ def __getattr__(name: str) -> object:
     if inspect.isfunction(value):
         # Called from Python: a misspelt keyword is a TypeError naming the close one, and
         # an InputError names options as keywords (unit="mm"), not as flags (--unit mm).
-        from .errors import python_api
+        from umbmark.core.errors import python_api
 
         value = python_api(value)
     globals()[name] = value  # imported once

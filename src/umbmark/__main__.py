@@ -1,5 +1,5 @@
 """``python -m umbmark``: the same as the ``umbmark`` command."""
 
-from ._entry import main
+from umbmark._entry import main
 
 main()

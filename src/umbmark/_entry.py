@@ -15,7 +15,7 @@ EXIT_INTERRUPTED = 130
 def main() -> None:
     """Load the command line and run it (:func:`umbmark.cli.main.main`)."""
     try:
-        from .cli.main import main as run
+        from umbmark.cli.main import main as run
     except KeyboardInterrupt:
         sys.stderr.write("umbmark: interrupted\n")
         sys.exit(EXIT_INTERRUPTED)

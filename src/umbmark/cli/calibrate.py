@@ -7,7 +7,15 @@ from typing import Any
 
 import click
 
-from .options import OUTPUTS, TEST, Command, apply, option, source_options, tum_time_option
+from umbmark.cli.options import (
+    OUTPUTS,
+    TEST,
+    Command,
+    apply,
+    option,
+    source_options,
+    tum_time_option,
+)
 
 __all__ = ["calibrate"]
 
@@ -148,8 +156,8 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     the parameters active during the runs, and the ros2_control overlay: withheld, and
     not written, when the verdict is do not apply (--force prints and writes it).
     """
-    from .. import calibrate as run_calibration
-    from .common import command_line, console, note, warn, working, wrote
+    from umbmark import calibrate as run_calibration
+    from umbmark.cli.common import command_line, console, note, warn, working, wrote
 
     options["command"] = command_line(sys.argv)
     method = str(options.get("method"))
@@ -169,6 +177,6 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     if json_out:
         click.echo(report.to_json(), nl=False)
     else:
-        from .render import render_calibration
+        from umbmark.cli.render import render_calibration
 
         render_calibration(report, console())

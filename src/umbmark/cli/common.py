@@ -222,7 +222,7 @@ def reading_bar() -> Iterator[None]:
     (:func:`umbmark.sources.progress.reading_progress`); rich is imported only when a
     bar is shown.
     """
-    from ..sources.progress import reading_progress
+    from umbmark.sources.progress import reading_progress
 
     callback = _ReadingBar()
     try:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .options import OUTPUTS, Command, option
+from umbmark.cli.options import OUTPUTS, Command, option
 
 __all__ = ["demo"]
 
@@ -43,10 +43,10 @@ def demo(json_out: bool, out: str, seed: int, method: str, runs: int) -> None:
     from them, and drives them again. Prints E_max,syst before and after and writes the
     Fig. 6 / Fig. 11 style plots into --out.
     """
-    from .. import demo as run_demo
-    from ..benchmark import sem_verdict
-    from .common import console, progress_bar, warn, wrote
-    from .render import render_calibration
+    from umbmark import demo as run_demo
+    from umbmark.benchmark.returns import sem_verdict
+    from umbmark.cli.common import console, progress_bar, warn, wrote
+    from umbmark.cli.render import render_calibration
 
     with progress_bar("UMBmark before and after calibration") as progress:
         result = run_demo(out=Path(out), seed=seed, method=method, runs=runs, progress=progress)

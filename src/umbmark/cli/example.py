@@ -31,13 +31,13 @@ def example(path: str | None, force: bool, real: bool) -> None:
     With --real, PATH is a folder that receives two real sessions of the OptiOdom data
     set: square/230620202042 (calibrate on it) and circular/250620202104 (check on it).
     """
-    from .. import example as bundled_example
-    from .common import wrote
+    from umbmark import example as bundled_example
+    from umbmark.cli.common import wrote
 
     if real:
         from pathlib import Path
 
-        from ..jobs.example import REAL_SESSIONS
+        from umbmark.jobs.example import REAL_SESSIONS
 
         bundled_example(path, force=force, real=True)
         square, circles = (Path(str(path)) / session for session in REAL_SESSIONS)

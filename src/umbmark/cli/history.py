@@ -6,7 +6,7 @@ from typing import Any
 
 import click
 
-from .options import OTHER, OUTPUTS, Command, apply, option
+from umbmark.cli.options import OTHER, OUTPUTS, Command, apply, option
 
 __all__ = ["history"]
 
@@ -38,11 +38,11 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
     active during it; the robot's are those composed with the active parameters (what
     calibrate configures), and drift compares these.
     """
-    from .. import history as run_history
-    from ..history_store import DEFINITIONS
-    from ..verdict import Verdict
-    from .common import console, note, wrote
-    from .render import row, table
+    from umbmark import history as run_history
+    from umbmark.calibration.verdict import Verdict
+    from umbmark.cli.common import console, note, wrote
+    from umbmark.cli.render import row, table
+    from umbmark.store.history import DEFINITIONS
 
     report = run_history(robot, **options)
     for line in report.notes:

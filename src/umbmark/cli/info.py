@@ -7,13 +7,13 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from .options import LOGS, OUTPUTS, Command, apply, option
+from umbmark.cli.options import LOGS, OUTPUTS, Command, apply, option
 
 if TYPE_CHECKING:
     from rich.console import Console
 
-    from ..jobs.info import InfoReport, LoggedInfo
-    from ..sources.bag.info import BagInfo, Candidate
+    from umbmark.jobs.info import InfoReport, LoggedInfo
+    from umbmark.sources.bag.info import BagInfo, Candidate
 
 __all__ = ["info"]
 
@@ -56,8 +56,8 @@ def info(source: str, json_out: bool, **options: Any) -> None:
     calibrate with. Only a bounded number of messages per topic is looked into
     (--max-messages).
     """
-    from .. import info as run_info
-    from .common import console, note, warn
+    from umbmark import info as run_info
+    from umbmark.cli.common import console, note, warn
 
     report = run_info(source, **options)
     for line in report.notes:
@@ -85,7 +85,7 @@ def _more(count: int, what: str) -> str:
 def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
     from rich.text import Text
 
-    from .render import row, table
+    from umbmark.cli.render import row, table
 
     when = (
         ""
@@ -232,7 +232,7 @@ def _render_geometry(bag: BagInfo, out: Console) -> None:
 def _render_logged(report: InfoReport, logged: LoggedInfo, out: Console) -> None:
     from rich.text import Text
 
-    from .render import row, table
+    from umbmark.cli.render import row, table
 
     kind = "run log" if report.format == "log" else "OptiOdom session"
     runs = "no runs found" if logged.runs is None else f"{logged.runs} runs"

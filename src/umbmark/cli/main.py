@@ -13,21 +13,21 @@ from collections.abc import Sequence
 
 import click
 
-from .. import __version__
-from ..errors import InputError
-from .calibrate import calibrate
-from .common import EXIT_BAD_INPUT, error_line, reading_bar
-from .demo import demo
-from .example import example
-from .history import history
-from .info import info
-from .plan import plan
-from .replay import replay
-from .report import report
-from .reproduce import reproduce
-from .simulate import simulate
-from .study import study
-from .validate import validate
+from umbmark import __version__
+from umbmark.cli.calibrate import calibrate
+from umbmark.cli.common import EXIT_BAD_INPUT, error_line, reading_bar
+from umbmark.cli.demo import demo
+from umbmark.cli.example import example
+from umbmark.cli.history import history
+from umbmark.cli.info import info
+from umbmark.cli.plan import plan
+from umbmark.cli.replay import replay
+from umbmark.cli.report import report
+from umbmark.cli.reproduce import reproduce
+from umbmark.cli.simulate import simulate
+from umbmark.cli.study import study
+from umbmark.cli.validate import validate
+from umbmark.core.errors import InputError
 
 __all__ = ["cli", "main"]
 

@@ -6,7 +6,7 @@ from typing import Any
 
 import click
 
-from .options import OUTPUTS, TEST, Command, apply, option
+from umbmark.cli.options import OUTPUTS, TEST, Command, apply, option
 
 __all__ = ["plan"]
 
@@ -57,8 +57,8 @@ def plan(json_out: bool, **options: Any) -> None:
     --target-e-max) to be recommended the square and the runs per direction. The scatter
     comes from --scatter or from a previous result (--from).
     """
-    from .. import plan as run_plan
-    from .common import console, note, warn
+    from umbmark import plan as run_plan
+    from umbmark.cli.common import console, note, warn
 
     report = run_plan(**options)
     for line in report.notes:
@@ -83,8 +83,8 @@ def plan(json_out: bool, **options: Any) -> None:
         )
     else:
         out.print("  noise model tape: x and y scatter independent")
-    from ..outputs.components import ANGLE_UNIT, to_shown
-    from .render import table
+    from umbmark.cli.render import table
+    from umbmark.outputs.components import ANGLE_UNIT, to_shown
 
     rows = [
         ("se(E_d), E_d's standard error", f"{report.se_E_d:.2e}", "1"),

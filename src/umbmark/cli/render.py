@@ -12,9 +12,9 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from ..benchmark import Benchmark, sem_verdict
-from ..jobs.calibrate import CalibrationReport
-from ..outputs.components import ANGLE_UNIT, component, to_shown
+from umbmark.benchmark.returns import Benchmark, sem_verdict
+from umbmark.jobs.calibrate import CalibrationReport
+from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
 __all__ = ["column", "print_table", "render_calibration", "row", "table"]
 
@@ -73,7 +73,7 @@ def render_calibration(
 ) -> None:
     """Print the summary of ``report`` on ``console``: the verdict first, the overlay to
     paste last (withheld when the verdict is "do not apply", unless forced)."""
-    from ..sources.association import summarize
+    from umbmark.runs.association import summarize
 
     verdict = report.verdict
     style = {"apply": "bold green", "care": "bold yellow", "do-not-apply": "bold red"}

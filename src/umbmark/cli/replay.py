@@ -7,7 +7,15 @@ from typing import Any
 
 import click
 
-from .options import OUTPUTS, PARAMETERS, Command, apply, option, source_options, tum_time_option
+from umbmark.cli.options import (
+    OUTPUTS,
+    PARAMETERS,
+    Command,
+    apply,
+    option,
+    source_options,
+    tum_time_option,
+)
 
 __all__ = ["replay"]
 
@@ -63,10 +71,10 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
     that were not used to compute it: calibrate on one session, replay another (a circle,
     another day).
     """
-    from .. import replay as run_replay
-    from ..sources.association import summarize
-    from .common import console, note, warn, wrote
-    from .render import row, table
+    from umbmark import replay as run_replay
+    from umbmark.cli.common import console, note, warn, wrote
+    from umbmark.cli.render import row, table
+    from umbmark.runs.association import summarize
 
     report = run_replay(source, **options)
     for line in report.notes:

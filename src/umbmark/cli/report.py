@@ -7,12 +7,12 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from .calibrate import calibrate as _calibrate_command
-from .common import command_line
-from .options import OUTPUTS, Command, apply, option, source_options
+from umbmark.cli.calibrate import calibrate as _calibrate_command
+from umbmark.cli.common import command_line
+from umbmark.cli.options import OUTPUTS, Command, apply, option, source_options
 
 if TYPE_CHECKING:
-    from ..benchmark import Benchmark
+    from umbmark.benchmark.returns import Benchmark
 
 __all__ = ["report"]
 
@@ -63,9 +63,9 @@ def report(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     with 95 % intervals (alpha and beta in degrees), the figures of the fit, the overlay
     to copy and the provenance.
     """
-    from .. import report as run_report
-    from .common import console, note, warn, wrote
-    from .render import table
+    from umbmark import report as run_report
+    from umbmark.cli.common import console, note, warn, wrote
+    from umbmark.cli.render import table
 
     page = run_report(*sources, command=command_line(sys.argv), **options)
     many = len(page.passes) > 1

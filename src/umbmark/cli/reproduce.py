@@ -6,7 +6,7 @@ import math
 
 import click
 
-from .options import OUTPUTS, Command, option
+from umbmark.cli.options import OUTPUTS, Command, option
 
 __all__ = ["reproduce"]
 
@@ -38,9 +38,9 @@ def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) 
     left. A second pass is made wherever the 3 x SEM rule asks for one. Figures are means
     over the seeds, with their standard deviation.
     """
-    from .. import reproduce_table1
-    from .common import console, progress_bar
-    from .render import row, table
+    from umbmark import reproduce_table1
+    from umbmark.cli.common import console, progress_bar
+    from umbmark.cli.render import row, table
 
     thickness = None if tape_thickness is None else tape_thickness / 1000.0
     with progress_bar(f"Table I, {seeds} seed(s)") as progress:
@@ -104,9 +104,9 @@ def fig4(json_out: bool, plot: str | None, leg_bend: float) -> None:
     wheelbase until its cw squares come home. Its cw result then looks excellent and its
     ccw result is bad: the bi-directional test exposes what the uni-directional one hid.
     """
-    from .. import reproduce_fig4
-    from .common import console, progress_bar, wrote
-    from .render import row, table
+    from umbmark import reproduce_fig4
+    from umbmark.cli.common import console, progress_bar, wrote
+    from umbmark.cli.render import row, table
 
     with progress_bar("Fig. 4: tuning the wheelbase on cw runs") as progress:
         report = reproduce_fig4(leg_bend=math.radians(leg_bend), plot=plot, progress=progress)

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from .options import OUTPUTS, Command, apply, option
+from umbmark.cli.options import OUTPUTS, Command, apply, option
 
 __all__ = ["simulate"]
 
@@ -100,8 +100,8 @@ def simulate(json_out: bool, turn_angle: float, **options: Any) -> None:
     path in its odometry frame; its wheels move it by their true diameters; its encoders
     quantize the rotation.
     """
-    from .. import simulate as run_simulation
-    from .common import console, progress_bar, wrote
+    from umbmark import simulate as run_simulation
+    from umbmark.cli.common import console, progress_bar, wrote
 
     runs = options["runs"] * (2 if options["direction"] == "both" else 1)
     bag = f", writing {options['bag']}" if options["bag"] else ""

@@ -8,10 +8,10 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
-from .options import OUTPUTS, Command, option
+from umbmark.cli.options import OUTPUTS, Command, option
 
 if TYPE_CHECKING:
-    from ..jobs.study import CellResult
+    from umbmark.jobs.study import CellResult
 
 __all__ = ["study"]
 
@@ -66,9 +66,9 @@ def study(json_out: bool, methods: str, **options: Any) -> None:
     E_d and E_b about the truth [ppm] (what umbmark plan predicts) and the runs' scatter
     per axis [mm] (what plan --scatter takes).
     """
-    from .. import study as run_study
-    from .common import console, progress_bar
-    from .render import print_table
+    from umbmark import study as run_study
+    from umbmark.cli.common import console, progress_bar
+    from umbmark.cli.render import print_table
 
     chosen = [m.strip() for m in methods.split(",") if m.strip()]
     with progress_bar("study") as progress:

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from .options import OUTPUTS, TEST, Command, apply, option, source_options
+from umbmark.cli.options import OUTPUTS, TEST, Command, apply, option, source_options
 
 __all__ = ["validate"]
 
@@ -44,9 +44,9 @@ def validate(sources: tuple[str, ...], json_out: bool, methods: str | None, **op
     --method auto uses it. The figures speak only for the kinds of motion held out
     (straight legs, arcs, turns on the spot): the output says which.
     """
-    from .. import validate as run_validation
-    from .common import console, note, progress_bar, warn
-    from .render import row, table
+    from umbmark import validate as run_validation
+    from umbmark.cli.common import console, note, progress_bar, warn
+    from umbmark.cli.render import row, table
 
     chosen = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
     with progress_bar("validating") as progress:

@@ -21,9 +21,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Literal
 
-from ..benchmark import Benchmark
-from ..runs import Run
-from .base import ErrorEstimate, SquareTest
+from umbmark.benchmark.returns import Benchmark
+from umbmark.estimators.base import ErrorEstimate, SquareTest
+from umbmark.model.runs import Run
 
 __all__ = [
     "METHODS",
@@ -56,24 +56,24 @@ def estimate_errors(
     ValueError
         For an unknown method, or runs the method cannot use.
     """
-    from .checks import check_reachable, check_within_side
+    from umbmark.estimators.checks import check_reachable, check_within_side
 
     if method == "paper":
-        from .paper import paper_estimate
+        from umbmark.estimators.paper import paper_estimate
 
         check_within_side(runs, test)
         estimate = paper_estimate(bench, test, runs)
     elif method == "exact":
-        from .exact import exact_estimate
+        from umbmark.estimators.exact import exact_estimate
 
         check_reachable(runs, test)
         estimate = exact_estimate(bench, test, runs)
     elif method == "heading":
-        from .heading import heading_estimate
+        from umbmark.estimators.heading import heading_estimate
 
         estimate = heading_estimate(bench, list(runs), test)
     elif method == "endpose":
-        from .endpose import endpose_estimate
+        from umbmark.estimators.endpose import endpose_estimate
 
         check_reachable(runs, test)
         return endpose_estimate(bench, runs, test, E_s=E_s)
@@ -104,8 +104,8 @@ def estimate_square_test(
     import math
     from dataclasses import replace
 
-    from ..benchmark import umbmark_benchmark
-    from .scale import scale_from_straights, scale_only
+    from umbmark.benchmark.returns import umbmark_benchmark
+    from umbmark.estimators.scale import scale_from_straights, scale_only
 
     squares = [run for run in runs if run.kind == "square"]
     straights = [run for run in runs if run.kind == "straight"]

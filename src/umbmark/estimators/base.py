@@ -9,8 +9,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..benchmark import Benchmark
-from ..validation import check_positive
+from umbmark.benchmark.returns import Benchmark
+from umbmark.core.validation import check_positive
 
 __all__ = [
     "ErrorEstimate",
@@ -94,7 +94,7 @@ class ErrorEstimate:
     def interval(self, name: str, level: float = 0.95) -> tuple[float, float] | None:
         """The ``level`` confidence interval of ``name`` (``E_d``, ``E_b``, ...), or None
         without a standard error: estimate -/+ Student's t quantile times the standard error."""
-        from ..stats import t_quantile
+        from umbmark.core.stats import t_quantile
 
         se = self.standard_errors.get(name)
         value = getattr(self, name, self.components.get(name))

@@ -20,14 +20,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..benchmark import Benchmark
-from ..conventions import Direction
-from ..runs import Run, split_by_direction
-from .base import SquareTest
-from .endpose import FLOOR
+from umbmark.benchmark.returns import Benchmark
+from umbmark.core.conventions import Direction
+from umbmark.estimators.base import SquareTest
+from umbmark.estimators.endpose import FLOOR
+from umbmark.model.runs import Run, split_by_direction
 
 if TYPE_CHECKING:
-    from .endpose import EndPoseFit
+    from umbmark.estimators.endpose import EndPoseFit
 
 __all__ = [
     "UNEXPLAINED",
@@ -203,7 +203,7 @@ def _heading_units(
     bench: Benchmark, runs: Sequence[Run], test: SquareTest, fit: EndPoseFit
 ) -> list[str]:
     """Headings whose alpha differs from the positions' by a degree/radian factor."""
-    from .endpose import fit_end_poses
+    from umbmark.estimators.endpose import fit_end_poses
 
     if not fit.headings:
         return []
@@ -237,7 +237,7 @@ def model_warnings(
 
     ``fit`` is the end-pose fit of the runs, made here when not given.
     """
-    from .endpose import LEVEL, fit_end_poses
+    from umbmark.estimators.endpose import LEVEL, fit_end_poses
 
     if fit is None:
         try:

@@ -28,11 +28,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics import WheelParams
-from ..model import alpha_from_E_b, beta_from_E_d
-from ..recording import RunLog
-from .base import ErrorEstimate, FloatArray
-from .solve import gauss_newton
+from umbmark.estimators.base import ErrorEstimate, FloatArray
+from umbmark.estimators.solve import gauss_newton
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import RunLog
+from umbmark.model.systematic import alpha_from_E_b, beta_from_E_d
 
 __all__ = ["DIVERGED", "EndPointFit", "endpoints_estimate", "fit_end_points"]
 

@@ -1,7 +1,7 @@
 """Maximum likelihood of ``E_d`` and ``E_b`` from every run's end pose, exact geometry.
 
 Each run of a direction ``d`` ends, by the exact closed-loop geometry of the square
-(:func:`umbmark.square.square_run_end`: legs as arcs, the turns' sideways shift of
+(:func:`umbmark.model.square.square_run_end`: legs as arcs, the turns' sideways shift of
 Sec. 2.3, no small-angle approximation), at ``mu_d(E_d, E_b)`` plus non-systematic
 scatter, over ``x``, ``y`` and, where every run has them, the heading. The scatter is
 estimated from the runs themselves: about their own direction's centre, pooled over both
@@ -36,14 +36,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..benchmark import Benchmark
-from ..conventions import Direction
-from ..runs import Run, split_by_direction
-from ..square import square_run_end
-from ..stats import f_cdf
-from .base import ErrorEstimate, FloatArray, SquareTest, welch_dof
-from .exact import exact_components
-from .solve import gauss_newton, jacobian
+from umbmark.benchmark.returns import Benchmark
+from umbmark.core.conventions import Direction
+from umbmark.core.stats import f_cdf
+from umbmark.estimators.base import ErrorEstimate, FloatArray, SquareTest, welch_dof
+from umbmark.estimators.exact import exact_components
+from umbmark.estimators.solve import gauss_newton, jacobian
+from umbmark.model.runs import Run, split_by_direction
+from umbmark.model.square import square_run_end
 
 __all__ = [
     "FLOOR",
@@ -332,7 +332,7 @@ def endpose_estimate(
     grad_alpha = np.array([0.0, 0.5 * math.pi * scale / fit.E_b**2])
     grad_beta = np.array([4.0 * L * scale / ((fit.E_d + 1.0) ** 2 * fit.E_b * b), -beta / fit.E_b])
     cov = fit.covariance
-    from .checks import model_warnings
+    from umbmark.estimators.checks import model_warnings
 
     return ErrorEstimate(
         method="endpose",

@@ -2,7 +2,7 @@
 
 The paper linearizes the square path (Eqs. 4.1-4.18), which loses accuracy as the errors
 grow (later work; ``paper-notes.md``). This estimator instead finds the ``alpha`` and
-``beta`` whose exact end positions (:func:`umbmark.square.square_end_pose`, legs as arcs
+``beta`` whose exact end positions (:func:`umbmark.model.square.square_end_pose`, legs as arcs
 of length ``L``, the on-the-spot turns' sideways shift of Sec. 2.3 included) best match
 both centres of gravity in the least-squares sense, starting from the paper's estimate.
 ``E_b`` then follows exactly from ``alpha`` (Eq. 4.27) and ``E_d`` from ``beta`` for an arc
@@ -18,14 +18,20 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..benchmark import Benchmark
-from ..conventions import Direction
-from ..model import E_b_from_alpha, E_d_from_beta_arc
-from ..runs import Run
-from ..square import icr_offset, square_end_pose
-from .base import ErrorEstimate, FloatArray, SquareTest, cg_blocks, propagate_blocks
-from .formulas import paper_components
-from .solve import gauss_newton, jacobian
+from umbmark.benchmark.returns import Benchmark
+from umbmark.core.conventions import Direction
+from umbmark.estimators.base import (
+    ErrorEstimate,
+    FloatArray,
+    SquareTest,
+    cg_blocks,
+    propagate_blocks,
+)
+from umbmark.estimators.formulas import paper_components
+from umbmark.estimators.solve import gauss_newton, jacobian
+from umbmark.model.runs import Run
+from umbmark.model.square import icr_offset, square_end_pose
+from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta_arc
 
 __all__ = ["exact_components", "exact_end_positions", "exact_estimate", "fit_exact_geometry"]
 
@@ -152,7 +158,7 @@ def exact_estimate(
         For large errors the geometry does not identify
         (:func:`umbmark.estimators.checks.check_identified`).
     """
-    from .checks import check_identified, model_warnings
+    from umbmark.estimators.checks import check_identified, model_warnings
 
     z, blocks = cg_blocks(bench)
     parts = exact_components(z, test)

@@ -10,8 +10,8 @@ The printed forms multiply by ``180 / pi`` to give degrees; here angles stay in 
 
 from __future__ import annotations
 
-from ..model import E_b_from_alpha, E_d_from_beta
-from .base import FloatArray, SquareTest
+from umbmark.estimators.base import FloatArray, SquareTest
+from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta
 
 __all__ = ["paper_components"]
 

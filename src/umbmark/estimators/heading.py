@@ -15,11 +15,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..benchmark import Benchmark
-from ..conventions import Direction
-from ..model import E_b_from_alpha, E_d_from_beta_arc
-from ..runs import Run
-from .base import ErrorEstimate, FloatArray, SquareTest, propagate_blocks
+from umbmark.benchmark.returns import Benchmark
+from umbmark.core.conventions import Direction
+from umbmark.estimators.base import ErrorEstimate, FloatArray, SquareTest, propagate_blocks
+from umbmark.model.runs import Run
+from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta_arc
 
 __all__ = ["heading_components", "heading_estimate"]
 
@@ -48,8 +48,8 @@ def heading_estimate(bench: Benchmark, runs: list[Run], test: SquareTest) -> Err
     ValueError
         If a run has no headings.
     """
-    from .checks import model_warnings
-    from .endpose import heading_errors
+    from umbmark.estimators.checks import model_warnings
+    from umbmark.estimators.endpose import heading_errors
 
     missing = [run.label or "a run" for run in runs if run.heading_error is None]
     if missing:

@@ -49,8 +49,8 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from ..kinematics import WheelParams
-from ..recording import RunLog
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import RunLog
 
 __all__ = [
     "KINDS",

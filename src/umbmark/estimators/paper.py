@@ -15,12 +15,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from ..benchmark import Benchmark
-from ..runs import Run
-from .base import ErrorEstimate, SquareTest, cg_blocks, propagate_blocks
-from .checks import model_warnings
-from .exact import exact_end_positions
-from .formulas import paper_components
+from umbmark.benchmark.returns import Benchmark
+from umbmark.estimators.base import ErrorEstimate, SquareTest, cg_blocks, propagate_blocks
+from umbmark.estimators.checks import model_warnings
+from umbmark.estimators.exact import exact_end_positions
+from umbmark.estimators.formulas import paper_components
+from umbmark.model.runs import Run
 
 __all__ = ["SMALL_ANGLE_TOLERANCE", "exact_view", "paper_estimate", "small_angle_shortfall"]
 
@@ -32,7 +32,7 @@ def exact_view(alpha: float, beta: float, test: SquareTest) -> dict[str, float]:
     """What the paper's formulas see of a robot with errors ``alpha`` and ``beta`` [rad].
 
     The centres come from the exact square geometry
-    (:func:`umbmark.square.square_end_pose`), without small-angle approximations.
+    (:func:`umbmark.model.square.square_end_pose`), without small-angle approximations.
     """
     return paper_components(exact_end_positions(alpha, beta, test), test)
 

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..runs import Run
-from .base import ErrorEstimate
+from umbmark.estimators.base import ErrorEstimate
+from umbmark.model.runs import Run
 
 __all__ = ["ScaleEstimate", "scale_from_straights", "scale_only"]
 

@@ -7,7 +7,7 @@ them the scale error ``E_s`` that UMBmark cannot see.
 The fit
 -------
 Each run's wheel rotation is integrated from the run's start into odometry poses (exact
-arcs, :mod:`umbmark.kinematics`) with the parameters being fitted, and compared with the
+arcs, :mod:`umbmark.model.kinematics`) with the parameters being fitted, and compared with the
 ground truth at **every** matched sample of the whole run: the sideways drift that a
 wheel-diameter error accumulates along a run (which pins ``E_d``), the heading that a
 wheelbase error accumulates over the turns (which pins ``b``) and the distance travelled
@@ -37,7 +37,7 @@ as much as each of its two coordinates. The weights are reported
 **Models.** ``"diff"``: one wheelbase for all motion (the paper's model; parameters
 ``r_L, r_R, b``). ``"scrub"``: the effective wheelbase of each sampling interval depends on
 its turning share ``w = |dU_R - dU_L| / (|dU_R| + |dU_L|)``, ``b_eff = b_arc + (b_spot -
-b_arc) w`` (:mod:`umbmark.kinematics`; parameters ``r_L, r_R, b_arc, b_spot``), so that
+b_arc) w`` (:mod:`umbmark.model.kinematics`; parameters ``r_L, r_R, b_arc, b_spot``), so that
 on-the-spot turns and arcs need not share one wheelbase. Its turn-rate term is pinned
 only by turns at turning shares far apart (:mod:`umbmark.estimators.motions`): squares
 alone (straight legs, spot turns) leave ``b_arc`` to the weaving of the legs, with a
@@ -97,11 +97,11 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from ..kinematics import WheelParams, chord_step, turning_share
-from ..model import alpha_from_E_b, beta_from_E_d
-from ..recording import RunLog
-from .base import ErrorEstimate
-from .motions import SCRUB_ADVICE, SCRUB_FALLBACK, motion_coverage
+from umbmark.estimators.base import ErrorEstimate
+from umbmark.estimators.motions import SCRUB_ADVICE, SCRUB_FALLBACK, motion_coverage
+from umbmark.model.kinematics import WheelParams, chord_step, turning_share
+from umbmark.model.recording import RunLog
+from umbmark.model.systematic import alpha_from_E_b, beta_from_E_d
 
 __all__ = [
     "DEFAULT_MAX_TIME_OFFSET",
@@ -860,7 +860,7 @@ def trajectory_estimate(
     ``E_d = f_R / f_L`` and ``E_s = (f_L + f_R) / 2`` with ``f = r_fit / (c D_n / 2)``
     compare the fitted radii with the active effective ones, ``E_b = b_fit / b_active``
     the fitted wheelbase with the active one, so that the usual composition
-    (:class:`umbmark.calibration.Calibration`) yields the fitted values. ``alpha`` and
+    (:class:`umbmark.calibration.compose.Calibration`) yields the fitted values. ``alpha`` and
     ``beta`` are what these errors make of a square of side ``side_length`` (1 m when
     unknown).
 
@@ -993,7 +993,7 @@ def disagreement_warnings(
     freedom at ``level`` (two-sided, shared among the comparisons): with honest standard
     errors this fires on about ``level`` of sessions that do agree.
     """
-    from ..stats import t_quantile
+    from umbmark.core.stats import t_quantile
 
     out = []
     pairs = [(a, b) for i, a in enumerate(fits) for b in fits[i + 1 :]]

@@ -13,9 +13,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..estimators.motions import motion_coverage
-from ..messages import info
-from .inputs import Runs, RunSource, SourceOptions
+from umbmark.core.messages import info
+from umbmark.estimators.motions import motion_coverage
+from umbmark.jobs.inputs import Runs, RunSource, SourceOptions
 
 __all__ = ["auto_method"]
 
@@ -37,8 +37,8 @@ def auto_method(
 
     ``force`` is the caller's: the validation reads the sources as the calibration does.
     """
-    from .calibrate import DEFAULT_METHOD
-    from .validate import validate
+    from umbmark.jobs.calibrate import DEFAULT_METHOD
+    from umbmark.jobs.validate import validate
 
     if read.params is None or any(run.log is None for run in read.runs):
         said = (

@@ -18,18 +18,13 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-from .. import __version__
-from ..benchmark import Benchmark, Cluster, sem_verdict
-from ..calibration import Calibration
-from ..errors import InputError, python_api
-from ..estimators.base import ErrorEstimate, SquareTest
-from ..kinematics import WheelParams
-from ..outputs.atomic import atomic_write_text
-from ..runs import Run
-from ..sources.association import Association
-from ..sources.params import CalibratedParams, ControllerParams
-from .estimate import LOGGED_METHODS, calibrate_runs, sessions_disagree
-from .inputs import (
+from umbmark import __version__
+from umbmark.benchmark.returns import Benchmark, Cluster, sem_verdict
+from umbmark.calibration.compose import Calibration
+from umbmark.core.errors import InputError, python_api
+from umbmark.estimators.base import ErrorEstimate, SquareTest
+from umbmark.jobs.estimate import LOGGED_METHODS, calibrate_runs, sessions_disagree
+from umbmark.jobs.inputs import (
     ReadOptions,
     RunSource,
     SourceOptions,
@@ -37,15 +32,20 @@ from .inputs import (
     read_runs,
     source_name,
 )
-from .outputs import OutputPlan
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import Run
+from umbmark.outputs.atomic import atomic_write_text
+from umbmark.outputs.files import OutputPlan
+from umbmark.runs.association import Association
+from umbmark.sources.params.reader import CalibratedParams, ControllerParams
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from typing_extensions import Unpack
 
-    from ..estimators.trajectory import TrajectoryFit
-    from ..outputs.tum import TumTime
-    from ..verdict import Evidence, Verdict
+    from umbmark.calibration.verdict import Evidence, Verdict
+    from umbmark.estimators.trajectory import TrajectoryFit
+    from umbmark.outputs.tum import TumTime
 
 __all__ = ["METHODS", "CalibrationReport", "calibrate"]
 
@@ -176,13 +176,13 @@ class CalibrationReport:
     @cached_property
     def verdict(self) -> Verdict:
         """Whether to apply the correction, why, and what to record instead
-        (:func:`umbmark.verdict.judge`)."""
-        from ..verdict import judge
+        (:func:`umbmark.calibration.verdict.judge`)."""
+        from umbmark.calibration.verdict import judge
 
         return judge(self.estimate, self.test, self._evidence())
 
     def _evidence(self) -> Evidence:
-        from ..verdict import Evidence, mean_path
+        from umbmark.calibration.verdict import Evidence, mean_path
 
         logs = [run.log for run in self.runs if run.log is not None]
         logged = self.estimate.method in LOGGED_METHODS
@@ -328,7 +328,7 @@ class CalibrationReport:
             out["model"] = {"kind": "scrub", **model}
         logs = [run.log for run in self.runs if run.log is not None]
         if self.params is not None and logs:
-            from ..estimators.motions import motion_coverage
+            from umbmark.estimators.motions import motion_coverage
 
             out["motions"] = motion_coverage(logs, self.params).to_dict()
         if self.associations:
@@ -371,13 +371,13 @@ class CalibrationReport:
 
     def overlay_yaml(self) -> str:
         """The ros2_control parameter overlay with the new multipliers (what ``--yaml`` writes)."""
-        from ..outputs.controller_params import ros2_control_overlay
+        from umbmark.sources.params.writer import ros2_control_overlay
 
         return ros2_control_overlay(self.calibration, self.provenance(), self.controller.key_path)
 
     def ros1_yaml(self) -> str:
         """ROS 1 ``diff_drive_controller`` parameters (what ``--ros1-yaml`` writes)."""
-        from ..outputs.controller_params import ros1_params
+        from umbmark.sources.params.writer import ros1_params
 
         controller = self.controller
         comments = self.provenance()
@@ -400,14 +400,14 @@ class CalibrationReport:
         """
         if self.benchmark is None:
             raise InputError("--plot needs runs in both directions (cw and ccw)")
-        from ..outputs.plotting import cluster_figure
+        from umbmark.outputs.plotting import cluster_figure
 
         title = "UMBmark return errors" + (f": {self.robot}" if self.robot else "")
         return cluster_figure([(self.benchmark, self.source)], title=title)
 
     def html(self) -> str:
         """One self-contained HTML page of the calibration (what ``--report`` writes)."""
-        from ..outputs.html_report import calibration_html
+        from umbmark.outputs.html_report import calibration_html
 
         return calibration_html(self)
 
@@ -455,7 +455,7 @@ class CalibrationReport:
             For a file that cannot be written, an output this report cannot give, or
             parameter files of a calibration not to apply (without ``force``).
         """
-        from ..outputs.tum import check_tum_time
+        from umbmark.outputs.tum import check_tum_time
 
         time = check_tum_time(tum_time)
         plan = _plan(
@@ -491,7 +491,7 @@ class CalibrationReport:
             atomic_write_text(plan.ros1_yaml, self.ros1_yaml())
             written.append(plan.ros1_yaml)
         if plan.plot is not None:
-            from ..outputs.plotting import save_figure
+            from umbmark.outputs.plotting import save_figure
 
             save_figure(self.figure(), plan.plot)
             written.append(plan.plot)
@@ -499,7 +499,7 @@ class CalibrationReport:
             atomic_write_text(plan.report, self.html())
             written.append(plan.report)
         if plan.tum is not None and self.params is not None and calibrated is not None:
-            from ..outputs.tum import write_tum_runs
+            from umbmark.outputs.tum import write_tum_runs
 
             sets = {"nominal": self.params, "calibrated": calibrated}
             written += write_tum_runs(plan.tum, self.runs, sets, time=time)
@@ -575,7 +575,7 @@ def calibrate(
         not apply" (without it they are not written, and the report's warnings say so).
     robot : str, optional
         Record the calibration in the history under this robot's name
-        (:class:`umbmark.history_store.History`); refused when the robot is known with another
+        (:class:`umbmark.store.history.History`); refused when the robot is known with another
         nominal wheelbase or wheel diameter. Without ``current_params`` and the
         ``current_*`` multipliers, the robot's last applied calibration's new parameters
         are taken as those active during the runs (a second pass; a note says so).
@@ -603,12 +603,12 @@ def calibrate(
     """
     store, composed = None, None
     if robot is not None:
-        from ..history_store import History, compose_last_applied
+        from umbmark.store.history import History, compose_last_applied
 
         store = History(history)
         options, composed = compose_last_applied(store, robot, options)
     read_options = ReadOptions.of(options)
-    from ..outputs.tum import check_tum_time
+    from umbmark.outputs.tum import check_tum_time
 
     check_tum_time(tum_time)
     if method not in (*METHODS, "auto"):
@@ -621,7 +621,7 @@ def calibrate(
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
           plot=plot, tum=tum, report=report)  # fmt: skip
     if side_length is None and method not in (*LOGGED_METHODS, "auto"):
-        from .inputs import is_table
+        from umbmark.jobs.inputs import is_table
 
         if any(is_table(s, read_options) for s in sources):
             raise InputError("--side-length is required: the side of the square path, in metres")
@@ -635,7 +635,7 @@ def calibrate(
         )
     chosen, note, nominal_best = method, None, False
     if method == "auto":
-        from .auto import auto_method
+        from umbmark.jobs.auto import auto_method
 
         chosen, note, nominal_best = auto_method(
             sources, read, side_length, wheelbase, options, force=force

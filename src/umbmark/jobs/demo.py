@@ -17,14 +17,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..benchmark import sem_verdict
-from ..errors import InputError
-from ..estimators import METHODS, SquareTest
-from ..sim.experiments import Trial
-from ..sim.robot import VirtualRobot
-from .calibrate import CalibrationReport
-from .inputs import check_int_option
-from .simulate import MAX_RUNS, SEED_RANGE
+from umbmark.benchmark.returns import sem_verdict
+from umbmark.core.errors import InputError
+from umbmark.estimators import METHODS, SquareTest
+from umbmark.jobs.calibrate import CalibrationReport
+from umbmark.jobs.inputs import check_int_option
+from umbmark.jobs.simulate import MAX_RUNS, SEED_RANGE
+from umbmark.sim.experiments import Trial
+from umbmark.sim.robot import VirtualRobot
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -112,7 +112,7 @@ class DemoReport:
 
     def figure(self) -> Figure:
         """Before and after, side by side (the view of Fig. 11)."""
-        from ..outputs.plotting import cluster_figure
+        from umbmark.outputs.plotting import cluster_figure
 
         cal = self.report.calibration
         odo = self.robot.odometry
@@ -163,12 +163,12 @@ def demo(
     InputError
         For an option out of range, or a folder that cannot be written.
     """
-    from ..outputs.atomic import atomic_write_text
-    from ..outputs.plotting import save_figure
-    from ..outputs.runs_table import write_runs_table
-    from ..sim.experiments import calibrate_robot, umbmark_trials
-    from ..sim.reproduce import FIG11_E_B, FIG11_E_D, PAPER_NOISE, SIDE
-    from ..sim.robot import LABMATE
+    from umbmark.outputs.atomic import atomic_write_text
+    from umbmark.outputs.plotting import save_figure
+    from umbmark.sim.experiments import calibrate_robot, umbmark_trials
+    from umbmark.sim.reproduce import FIG11_E_B, FIG11_E_D, PAPER_NOISE, SIDE
+    from umbmark.sim.robot import LABMATE
+    from umbmark.sources.runs_table.writer import write_runs_table
 
     runs = check_int_option("--runs", runs, 2, MAX_RUNS)
     seed = check_int_option("--seed", seed, *SEED_RANGE)
@@ -178,7 +178,7 @@ def demo(
         )
     folder = None if out is None else Path(out)
     if folder is not None:
-        from .outputs import check_folder_output
+        from umbmark.outputs.files import check_folder_output
 
         check_folder_output(folder)  # before anything is computed or written
 

@@ -12,16 +12,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ..benchmark import umbmark_benchmark
-from ..calibration import Calibration
-from ..errors import InputError
-from ..estimators.base import SquareTest
-from ..messages import split_messages
-from ..sources.logged import require_headings
-from .inputs import Runs, check_calibration
+from umbmark.benchmark.returns import umbmark_benchmark
+from umbmark.calibration.compose import Calibration
+from umbmark.core.errors import InputError
+from umbmark.core.messages import split_messages
+from umbmark.estimators.base import SquareTest
+from umbmark.jobs.inputs import Runs, check_calibration
+from umbmark.runs.logged import require_headings
 
 if TYPE_CHECKING:
-    from .calibrate import CalibrationReport
+    from umbmark.jobs.calibrate import CalibrationReport
 
 __all__ = ["LOGGED_METHODS", "calibrate_runs", "sessions_disagree"]
 
@@ -49,7 +49,7 @@ def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -
     """
     import numpy as np
 
-    from .calibrate import CalibrationReport
+    from umbmark.jobs.calibrate import CalibrationReport
 
     where = read.sources[0] if len(read.sources) == 1 else None
     runs, active = read.runs, read.active
@@ -66,11 +66,11 @@ def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -
                     source=where,
                 )
             if method == "endpoints":
-                from ..estimators.endpoints import endpoints_estimate
+                from umbmark.estimators.endpoints import endpoints_estimate
 
                 estimate, _ = endpoints_estimate(logs, read.params, read.side_length)
             else:
-                from ..estimators.trajectory import trajectory_estimate
+                from umbmark.estimators.trajectory import trajectory_estimate
 
                 estimate, fit = trajectory_estimate(
                     logs,
@@ -88,7 +88,7 @@ def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -
                 except ValueError:
                     bench = None
         else:
-            from ..estimators import estimate_square_test
+            from umbmark.estimators import estimate_square_test
 
             squares = any(run.kind == "square" for run in runs)
             side = read.square_side() if squares else (read.side_length or 1.0)
@@ -120,7 +120,7 @@ def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -
 
 def sessions_disagree(parts: Sequence[Runs], *, fit_truth_offset: bool = False) -> list[str]:
     """Warnings where the sources, fitted one by one, want different wheels."""
-    from ..estimators.trajectory import disagreement_warnings, fit_trajectories
+    from umbmark.estimators.trajectory import disagreement_warnings, fit_trajectories
 
     fits = []
     for part in parts:

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import InputError, python_api
-from ..history_store import DEFINITIONS, CalibrationRecord, History, RobotRecord
-from .outputs import OutputPlan
+from umbmark.core.errors import InputError, python_api
+from umbmark.outputs.files import OutputPlan
+from umbmark.store.history import DEFINITIONS, CalibrationRecord, History, RobotRecord
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -43,7 +43,7 @@ class HistoryReport:
     drift : str or None
         The drift verdict (3 calibrations or more) on what the robot is, each pass's
         errors composed with the parameters active during it
-        (:func:`umbmark.history_store.drift_verdict`).
+        (:func:`umbmark.store.history.drift_verdict`).
     notes : tuple of str
         What was done, for people (a calibration marked applied).
     nominal : RobotRecord or None
@@ -88,7 +88,7 @@ class HistoryReport:
         """
         if self.nominal is None or not self.calibrations:
             raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
-        from ..outputs.plotting import history_figure
+        from umbmark.outputs.plotting import history_figure
 
         return history_figure(self.nominal, self.calibrations)
 
@@ -110,7 +110,7 @@ class HistoryReport:
         plan.check_not_inputs([self.path])
         written: list[Path] = []
         if plan.plot is not None:
-            from ..outputs.plotting import save_figure
+            from umbmark.outputs.plotting import save_figure
 
             save_figure(self.figure(), plan.plot)
             written.append(plan.plot)
@@ -169,7 +169,7 @@ def history(
         raise InputError(f"no robot {robot!r} in the history (robots: {known})", source=path)
     notes: tuple[str, ...] = ()
     if applied is not None:
-        from .inputs import check_int_option
+        from umbmark.jobs.inputs import check_int_option
 
         number = check_int_option("--applied", applied, 1, 2**63 - 1)
         store.mark_applied(robot, number, force=force)

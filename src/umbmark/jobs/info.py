@@ -16,13 +16,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import InputError
-from ..kinematics import WheelParams
-from ..recording import Recording
-from ..sources.load import FORMATS, detect_format
+from umbmark.core.errors import InputError
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import Recording
+from umbmark.runs.load import FORMATS, detect_format
 
 if TYPE_CHECKING:
-    from ..sources.bag.info import BagInfo
+    from umbmark.sources.bag.info import BagInfo
 
 __all__ = ["FileInfo", "InfoReport", "LoggedInfo", "info"]
 
@@ -266,7 +266,7 @@ def info(
             source=name,
         )
     if kind == "bag":
-        from ..sources.bag.info import DEFAULT_MAX_MESSAGES, bag_info
+        from umbmark.sources.bag.info import DEFAULT_MAX_MESSAGES, bag_info
 
         limit = DEFAULT_MAX_MESSAGES if max_messages is None else max_messages
         return InfoReport(source=name, format="bag", bag=bag_info(name, max_messages=limit))
@@ -275,16 +275,16 @@ def info(
 
 def _logged_info(path: Path, kind: str) -> LoggedInfo:
     """A run log (``kind="log"``) or OptiOdom session in short."""
-    from ..sources.load import LoadOptions, load_runs
+    from umbmark.runs.load import LoadOptions, load_runs
 
     recordings: list[Recording]
     if kind == "log":
-        from ..sources.runlog import read_runlog
+        from umbmark.sources.runlog.reader import read_runlog
 
         recordings, metadata = read_runlog(path)
         params, side = metadata.params, metadata.side_length
     else:
-        from ..sources.optiodom import read_optiodom
+        from umbmark.sources.optiodom import read_optiodom
 
         recordings, session = read_optiodom(path)
         params, side = session.params, session.side_length

@@ -12,8 +12,9 @@ YAML, or a previous result), and the keywords. The wheel factors and separation
 multiplier a source records as active are used only where no ``current_...`` keyword or
 file is given (with a note); given ones that differ from them are warned of. Messages
 about a parameter name where it came from (an option, or a file's field). A runs table's
-end points are judged as a robot driving the square makes them (:mod:`umbmark.plausibility`:
-units, swapped columns, errors beyond the square test).
+end points are judged as a robot driving the square makes them
+(:mod:`umbmark.estimators.plausibility`: units, swapped columns, errors beyond the square
+test).
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal, TypeAlias, TypedDict, cast
 
-from ..bounds import (
+from umbmark.calibration.compose import ActiveParams, Calibration
+from umbmark.core.bounds import (
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
     Origin,
@@ -35,16 +37,15 @@ from ..bounds import (
     check_positive_option,
     option_float,
 )
-from ..calibration import ActiveParams, Calibration
-from ..errors import InputError
-from ..kinematics import WheelParams
-from ..messages import info
-from ..plausibility import check_columns, unit_hints
-from ..runs import Run
-from ..sources.association import DEFAULT_MAX_GAP, Association
-from ..sources.load import FORMATS, Format, Loaded, LoadOptions, detect_format, load_runs
-from ..sources.logged import SplitMode
-from ..sources.params import (
+from umbmark.core.errors import InputError
+from umbmark.core.messages import info
+from umbmark.estimators.plausibility import check_columns, unit_hints
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import Run
+from umbmark.runs.association import DEFAULT_MAX_GAP, Association
+from umbmark.runs.load import FORMATS, Format, Loaded, LoadOptions, detect_format, load_runs
+from umbmark.runs.logged import SplitMode
+from umbmark.sources.params.reader import (
     CalibratedParams,
     ControllerParams,
     is_result_file,
@@ -52,11 +53,11 @@ from ..sources.params import (
     read_parameter_file,
     result_nominal,
 )
-from ..sources.runs_table import RecordedActive, read_table_active
+from umbmark.sources.runs_table.reader import RecordedActive, read_table_active
 
 if TYPE_CHECKING:
-    from ..sources.bag import BagOptions
-    from .calibrate import CalibrationReport
+    from umbmark.jobs.calibrate import CalibrationReport
+    from umbmark.sources.bag import BagOptions
 
 __all__ = [
     "MAX_SIDE_LENGTH",
@@ -283,7 +284,7 @@ class ReadOptions:
 
     def _check_fields(self) -> None:
         """Refuse wheel fields that are malformed or given with other wheel data."""
-        from ..sources.bag.custom import parse_path
+        from umbmark.sources.bag.custom import parse_path
 
         if (self.left_field is None) != (self.right_field is None):
             raise InputError("--left-field and --right-field go together: give both or neither")
@@ -421,7 +422,7 @@ class Runs:
 
 def calibrated_params(params: Calibrated) -> CalibratedParams:
     """The new parameters of a calibration: read from a result file, or taken from a report."""
-    from .calibrate import CalibrationReport
+    from umbmark.jobs.calibrate import CalibrationReport
 
     if isinstance(params, CalibratedParams):
         return params
@@ -432,7 +433,7 @@ def calibrated_params(params: Calibrated) -> CalibratedParams:
 
 def calibrated_nominal(params: Calibrated) -> tuple[float | None, float | None]:
     """The nominal wheelbase and wheel diameter [m] a calibration was computed for."""
-    from .calibrate import CalibrationReport
+    from umbmark.jobs.calibrate import CalibrationReport
 
     if isinstance(params, CalibratedParams):
         return params.configured_wheelbase, params.wheel_diameter
@@ -682,8 +683,8 @@ def _read_one(
         given = None
         if kind == "bag":
             if configured is None or diameter is None:
-                from ..sources.bag import BagOptions
-                from ..sources.bag.urdf import described_geometry
+                from umbmark.sources.bag import BagOptions
+                from umbmark.sources.bag.urdf import described_geometry
 
                 named = BagOptions(
                     left_joint=_joints(options.left_joint) or file.left_joints or None,
@@ -797,7 +798,7 @@ def _recorded_active(path: Path, kind: Format) -> RecordedActive | None:
             return None  # reading the table says what is wrong
         return read_table_active(path)
     if kind == "log":
-        from ..sources.runlog import METADATA_FILE, read_metadata
+        from umbmark.sources.runlog.reader import METADATA_FILE, read_metadata
 
         meta_path = (path if path.is_dir() else path.parent) / METADATA_FILE
         if not meta_path.is_file():
@@ -999,7 +1000,7 @@ def _load_options(
     params: WheelParams | None,
     file: ControllerParams,
 ) -> LoadOptions:
-    from ..sources.segmentation import SplitOptions
+    from umbmark.runs.segmentation import SplitOptions
 
     windows = options.time_windows
     return LoadOptions(
@@ -1023,8 +1024,8 @@ def _load_options(
 def _bag_options(
     options: ReadOptions, params: WheelParams | None, file: ControllerParams
 ) -> BagOptions:
-    from ..sources.bag import BagOptions
-    from ..sources.controller_odometry import OdometryGeometry
+    from umbmark.sources.bag import BagOptions
+    from umbmark.sources.controller_odometry import OdometryGeometry
 
     geometry = None
     if params is not None:

@@ -72,10 +72,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, TypeAlias
 
-from ..errors import InputError
-from ..messages import info, split_messages
-from ..sources.text import finite, load_json
-from .inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
+from umbmark.core.errors import InputError
+from umbmark.core.messages import info, split_messages
+from umbmark.jobs.inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
+from umbmark.sources.text import finite, load_json
 
 __all__ = [
     "MAX_PLAN_RUNS",

@@ -19,13 +19,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InputError, python_api
-from ..kinematics import IntegrationMethod, WheelParams
-from ..messages import split_messages
-from ..recording import RunLog
-from ..runs import Run, end_errors
-from ..sources.association import Association
-from .inputs import (
+from umbmark.core.errors import InputError, python_api
+from umbmark.core.messages import split_messages
+from umbmark.jobs.inputs import (
     Calibrated,
     PathLike,
     ReadOptions,
@@ -38,13 +34,17 @@ from .inputs import (
     read_runs,
     source_name,
 )
-from .outputs import OutputPlan
+from umbmark.model.kinematics import IntegrationMethod, WheelParams
+from umbmark.model.recording import RunLog
+from umbmark.model.runs import Run, end_errors
+from umbmark.outputs.files import OutputPlan
+from umbmark.runs.association import Association
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from typing_extensions import Unpack
 
-    from ..outputs.tum import TumTime
+    from umbmark.outputs.tum import TumTime
 
 __all__ = ["ReplayReport", "replay", "trajectory_rmse"]
 
@@ -64,7 +64,7 @@ def trajectory_rmse(log: RunLog, params: WheelParams, method: IntegrationMethod 
     params : WheelParams
         The odometry parameters to integrate the wheels with.
     method : {"arc", ...}
-        The integration (:func:`umbmark.kinematics.integrate_odometry`).
+        The integration (:func:`umbmark.model.kinematics.integrate_odometry`).
 
     Returns
     -------
@@ -193,7 +193,7 @@ class ReplayReport:
 
     def figure(self) -> Figure:
         """Every run's true path against its odometry paths (what ``--plot`` draws)."""
-        from ..outputs.plotting import replay_figure
+        from umbmark.outputs.plotting import replay_figure
 
         return replay_figure(self.runs, self.parameter_sets, title=f"Replay of {self.source}")
 
@@ -222,18 +222,18 @@ class ReplayReport:
         list of Path
             The files written.
         """
-        from ..outputs.tum import check_tum_time
+        from umbmark.outputs.tum import check_tum_time
 
         time = check_tum_time(tum_time)
         plan = OutputPlan.of(plot=plot, tum=tum)
         plan.check_not_inputs([self.source])
         written: list[Path] = []
         if plan.tum is not None:
-            from ..outputs.tum import write_tum_runs
+            from umbmark.outputs.tum import write_tum_runs
 
             written += write_tum_runs(plan.tum, self.runs, self.parameter_sets, time=time)
         if plan.plot is not None:
-            from ..outputs.plotting import save_figure
+            from umbmark.outputs.plotting import save_figure
 
             save_figure(self.figure(), plan.plot)
             written.append(plan.plot)
@@ -285,7 +285,7 @@ def replay(
         Bad input: one line naming the file and the problem.
     """
     read_options = ReadOptions.of(options)
-    from ..outputs.tum import check_tum_time
+    from umbmark.outputs.tum import check_tum_time
 
     check_tum_time(tum_time)
     OutputPlan.of(plot=plot, tum=tum).check_not_inputs([source_name(source)])

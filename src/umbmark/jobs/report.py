@@ -18,20 +18,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .. import __version__
-from ..benchmark import Benchmark, umbmark_benchmark
-from ..errors import InputError, python_api
-from ..kinematics import WheelParams
-from ..messages import info
-from ..outputs.atomic import atomic_write_text
-from ..runs import Run
-from .calibrate import DEFAULT_METHOD, CalibrationReport, calibrate
-from .inputs import RunSource, SourceOptions, source_name
+from umbmark import __version__
+from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
+from umbmark.core.errors import InputError, python_api
+from umbmark.core.messages import info
+from umbmark.jobs.calibrate import DEFAULT_METHOD, CalibrationReport, calibrate
+from umbmark.jobs.inputs import RunSource, SourceOptions, source_name
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import Run
+from umbmark.outputs.atomic import atomic_write_text
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
 
-    from .validate import ValidationReport
+    from umbmark.jobs.validate import ValidationReport
 
 __all__ = ["MAX_PASSES", "PassesReport", "PredictedPass", "predict_after", "report"]
 
@@ -166,7 +166,7 @@ class PassesReport:
 
     def html(self) -> str:
         """The self-contained HTML page (what ``umbmark report -o`` writes)."""
-        from ..outputs.html_report import passes_html
+        from umbmark.outputs.html_report import passes_html
 
         return passes_html(self)
 
@@ -195,7 +195,7 @@ def check_output(output: str | os.PathLike[str], inputs: list[str]) -> Path:
         If it does not end in .html or .htm, is an input or lies inside an input folder,
         or cannot be written.
     """
-    from .outputs import OutputPlan
+    from umbmark.outputs.files import OutputPlan
 
     path = Path(output)
     target = path.resolve()
@@ -336,7 +336,7 @@ def _validate(
     options: SourceOptions,
 ) -> ValidationReport:
     """:func:`umbmark.validate` of one pass's source (a path of recorded runs)."""
-    from .validate import validate as run_validation
+    from umbmark.jobs.validate import validate as run_validation
 
     if not isinstance(source, (str, os.PathLike)):
         raise InputError("--validate replays recorded runs: give the pass as a file or folder")

@@ -14,11 +14,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..errors import InputError
-from ..sim.reproduce import Fig4Result, Table1Row
-from .inputs import check_int_option, option_float
-from .outputs import OutputPlan
-from .simulate import SEED_RANGE
+from umbmark.core.errors import InputError
+from umbmark.jobs.inputs import check_int_option, option_float
+from umbmark.jobs.simulate import SEED_RANGE
+from umbmark.outputs.files import OutputPlan
+from umbmark.sim.reproduce import Fig4Result, Table1Row
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -79,7 +79,7 @@ class Fig4Report:
 
     def figure(self) -> Figure:
         """The tuned robot's cw and ccw paths (the view of Figs. 4 and 5)."""
-        from ..outputs.plotting import trajectory_figure
+        from umbmark.outputs.plotting import trajectory_figure
 
         tuned = self.result.stages[1]
         return trajectory_figure(
@@ -111,7 +111,7 @@ def reproduce_table1(
     progress : callable, optional
         Called with the fraction done.
     """
-    from ..sim.reproduce import EXPERIMENTS, table1, with_tape
+    from umbmark.sim.reproduce import EXPERIMENTS, table1, with_tape
 
     if isinstance(seeds, bool) or not isinstance(seeds, int) or not 1 <= seeds <= MAX_SEEDS:
         raise InputError(f"--seeds must be 1 to {MAX_SEEDS}, got {str(seeds)[:24]}")
@@ -147,7 +147,7 @@ def reproduce_fig4(
     progress : callable, optional
         Called with the fraction done.
     """
-    from ..sim.reproduce import fig4
+    from umbmark.sim.reproduce import fig4
 
     leg_bend = option_float("--leg-bend", leg_bend)
     if not (math.isfinite(leg_bend) and 0 < abs(leg_bend) <= math.radians(10)):
@@ -158,7 +158,7 @@ def reproduce_fig4(
     result = fig4(leg_bend_deg=math.degrees(leg_bend), progress=progress)
     report = Fig4Report(result=result, leg_bend=leg_bend)
     if plan.plot is not None:
-        from ..outputs.plotting import save_figure
+        from umbmark.outputs.plotting import save_figure
 
         save_figure(report.figure(), plan.plot)
     return report

@@ -19,16 +19,11 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from .. import __version__
-from ..bounds import ENCODER_RESOLUTION_RANGE, GEAR_RATIO_RANGE, check_range
-from ..conventions import Direction
-from ..errors import InputError, python_api
-from ..kinematics import WheelParams
-from ..recording import RunLog
-from ..runs import Run
-from ..sim.engine import SimResult
-from ..sim.robot import ControlConfig, NoiseModel, VirtualRobot
-from .inputs import (
+from umbmark import __version__
+from umbmark.core.bounds import ENCODER_RESOLUTION_RANGE, GEAR_RATIO_RANGE, check_range
+from umbmark.core.conventions import Direction
+from umbmark.core.errors import InputError, python_api
+from umbmark.jobs.inputs import (
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
     Calibrated,
@@ -37,11 +32,16 @@ from .inputs import (
     check_positive_option,
     option_float,
 )
-from .outputs import OutputPlan
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import RunLog
+from umbmark.model.runs import Run
+from umbmark.outputs.files import OutputPlan
+from umbmark.sim.engine import SimResult
+from umbmark.sim.robot import ControlConfig, NoiseModel, VirtualRobot
 
 if TYPE_CHECKING:
-    from ..sim.paths import Path as SimPath
-    from ..sources.bag.writer import BagTarget
+    from umbmark.sim.paths import Path as SimPath
+    from umbmark.sources.bag.writer import BagTarget
 
 __all__ = ["PATHS", "SimulationReport", "simulate"]
 
@@ -126,7 +126,7 @@ class SimulationReport:
     def true_errors(self) -> dict[str, float]:
         """``E_d``, ``E_b``, ``E_s`` of the robot relative to the nominal wheels (``D_n``,
         ``b``): what was asked for (:func:`umbmark.sim.summary.true_errors`)."""
-        from ..sim.summary import true_errors
+        from umbmark.sim.summary import true_errors
 
         return true_errors(self.robot, self.nominal_wheelbase)
 
@@ -135,7 +135,7 @@ class SimulationReport:
         """``E_d``, ``E_b``, ``E_s`` relative to the parameters the odometry used (with
         ``params``: the calibration's), what a calibration of these runs measures
         (:func:`umbmark.sim.summary.odometry_errors`)."""
-        from ..sim.summary import odometry_errors
+        from umbmark.sim.summary import odometry_errors
 
         return odometry_errors(self.robot)
 
@@ -155,7 +155,7 @@ class SimulationReport:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (metres, radians): what ``simulate --json`` prints."""
-        from ..sim.summary import describe_simulation
+        from umbmark.sim.summary import describe_simulation
 
         out = describe_simulation(
             self.robot, self.result, self.path_name, self.path, self.nominal_wheelbase
@@ -191,7 +191,7 @@ class SimulationReport:
             If a file cannot be written, the runs have no time series for ``logs`` or
             ``bag``, ``logs`` holds files already or ``bag`` exists (without ``force``).
         """
-        from ..sources.bag.writer import bag_target
+        from umbmark.sources.bag.writer import bag_target
 
         plan = OutputPlan.of(output=output, logs=logs, bag=bag)
         _check_square_outputs(self.path, plan)
@@ -213,7 +213,7 @@ class SimulationReport:
                 )
         written: list[Path] = []
         if plan.output is not None:
-            from ..outputs.runs_table import active_of, write_runs_table
+            from umbmark.sources.runs_table.writer import active_of, write_runs_table
 
             active = active_of(self.robot.odometry, self.configured_wheelbase)
             write_runs_table(plan.output, self.runs, comment=self.provenance, active=active)
@@ -225,16 +225,16 @@ class SimulationReport:
         return written
 
     def _write_bag(self, target: BagTarget, progress: Callable[[float], None] | None) -> Path:
-        from ..sim.session import continuous_session
-        from ..sources.bag.writer import write_bag
+        from umbmark.sim.session import continuous_session
+        from umbmark.sources.bag.writer import write_bag
 
         session = continuous_session(self.result, self.robot.odometry.radians_per_pulse)
         return write_bag(target, session.wheels, session.odometry, session.truth, progress=progress)
 
     def _write_logs(self, folder: Path) -> list[Path]:
-        from ..outputs.runlog import write_log_csv, write_metadata
-        from ..outputs.runs_table import active_of
-        from ..sources.runlog import LogMetadata
+        from umbmark.sources.runlog.reader import LogMetadata
+        from umbmark.sources.runlog.writer import write_log_csv, write_metadata
+        from umbmark.sources.runs_table.writer import active_of
 
         trace = self.result.trace
         assert trace is not None
@@ -419,7 +419,7 @@ def simulate(
     if bag_storage is not None and plan.bag is None:
         raise InputError("--bag-storage says how to store --bag: give --bag too")
     if plan.bag is not None:
-        from ..sources.bag.writer import bag_target
+        from umbmark.sources.bag.writer import bag_target
 
         bag_target(plan.bag, bag_storage, force=force)
     if plan.logs is not None and plan.logs.is_dir() and any(plan.logs.iterdir()) and not force:
@@ -429,8 +429,8 @@ def simulate(
             source=plan.logs,
         )
 
-    from ..sim import paths
-    from ..sim.engine import simulate as run_simulation
+    from umbmark.sim import paths
+    from umbmark.sim.engine import simulate as run_simulation
 
     odometry = WheelParams(
         wheelbase=wheelbase,

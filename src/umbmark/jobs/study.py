@@ -31,16 +31,22 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..calibration import Calibration
-from ..errors import InputError
-from ..estimators import METHODS
-from .inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_int_option, check_length, option_float
-from .simulate import SEED_RANGE
+from umbmark.calibration.compose import Calibration
+from umbmark.core.errors import InputError
+from umbmark.estimators import METHODS
+from umbmark.jobs.inputs import (
+    MAX_SIDE_LENGTH,
+    MAX_WHEELBASE,
+    check_int_option,
+    check_length,
+    option_float,
+)
+from umbmark.jobs.simulate import SEED_RANGE
 
 if TYPE_CHECKING:
-    from ..benchmark import Benchmark
-    from ..sim.experiments import Trial
-    from ..sim.robot import VirtualRobot
+    from umbmark.benchmark.returns import Benchmark
+    from umbmark.sim.experiments import Trial
+    from umbmark.sim.robot import VirtualRobot
 
 __all__ = ["Cell", "CellResult", "StudyReport", "study"]
 
@@ -340,9 +346,9 @@ def _run_numbered(item: tuple[int, _Chunk]) -> tuple[int, list[_Outcome]]:
 
 def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
     """Every trial of a chunk, every method: three tests each, simulated in batches."""
-    from ..kinematics import WheelParams
-    from ..sim.experiments import calibrate_robot, umbmark_trials
-    from ..sim.robot import NoiseModel, VirtualRobot
+    from umbmark.model.kinematics import WheelParams
+    from umbmark.sim.experiments import calibrate_robot, umbmark_trials
+    from umbmark.sim.robot import NoiseModel, VirtualRobot
 
     rng = np.random.default_rng(chunk.seed)
     cell = chunk.cell
@@ -415,8 +421,8 @@ def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
 
 def _truth(trial: Trial) -> tuple[Calibration, VirtualRobot]:
     """The robot calibrated with its true parameters: the ceiling any estimator can reach."""
-    from ..calibration import ActiveParams
-    from ..estimators.base import ErrorEstimate
+    from umbmark.calibration.compose import ActiveParams
+    from umbmark.estimators.base import ErrorEstimate
 
     robot = trial.robot
     odo = robot.odometry

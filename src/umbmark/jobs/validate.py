@@ -26,12 +26,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..estimators.motions import KINDS, MotionCoverage, MotionKind, join_names, motion_coverage
-from ..kinematics import WheelParams
-from ..messages import info, split_messages
-from ..runs import Run, end_errors
-from .inputs import (
+from umbmark.core.errors import InputError
+from umbmark.core.messages import info, split_messages
+from umbmark.estimators.motions import (
+    KINDS,
+    MotionCoverage,
+    MotionKind,
+    join_names,
+    motion_coverage,
+)
+from umbmark.jobs.inputs import (
     ReadOptions,
     Runs,
     SourceOptions,
@@ -40,6 +44,8 @@ from .inputs import (
     read_runs,
     source_name,
 )
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import Run, end_errors
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
@@ -341,7 +347,7 @@ def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> F
 def _calibrated(training: Runs, candidate: str, nominal: WheelParams) -> WheelParams | None:
     """The held-out source's parameters after calibrating on ``training`` (None: the
     candidate cannot calibrate on it)."""
-    from .estimate import calibrate_runs
+    from umbmark.jobs.estimate import calibrate_runs
 
     if candidate == "nominal":
         return nominal

@@ -20,7 +20,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from ..errors import InputError
+from umbmark.core.errors import InputError
 
 __all__ = ["atomic_path", "atomic_write_text"]
 

@@ -17,15 +17,15 @@ from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .. import __version__
-from ..benchmark import scatter_standing, sem_verdict
-from .components import ANGLE_UNIT, component, to_shown
+from umbmark import __version__
+from umbmark.benchmark.returns import scatter_standing, sem_verdict
+from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
 if TYPE_CHECKING:
-    from ..benchmark import Benchmark
-    from ..jobs.calibrate import CalibrationReport
-    from ..jobs.report import PassesReport
-    from ..jobs.validate import ValidationReport
+    from umbmark.benchmark.returns import Benchmark
+    from umbmark.jobs.calibrate import CalibrationReport
+    from umbmark.jobs.report import PassesReport
+    from umbmark.jobs.validate import ValidationReport
 
 __all__ = ["calibration_html", "file_sha256", "pass_name", "passes_html"]
 
@@ -223,7 +223,7 @@ def _clusters(page: PassesReport) -> str:
 
 
 def _figure(page: PassesReport) -> str:
-    from .report_figures import (
+    from umbmark.outputs.report_figures import (
         PASS_COLOURS,
         PREDICTED_COLOUR,
         SINGLE_COLOUR,
@@ -423,7 +423,7 @@ def _messages(page: PassesReport) -> str:
 
 
 def _overlay(page: PassesReport) -> str:
-    from .html_verdict import WITHHELD
+    from umbmark.outputs.html_verdict import WITHHELD
 
     n = len(page.passes)
     which = "" if n == 1 else f" of the last pass (pass {n})"
@@ -532,7 +532,7 @@ def passes_html(page: PassesReport) -> str:
     robot = page.passes[0].robot
     if robot:
         title = f"{robot}: {title}"
-    from .html_verdict import CSS, verdict_section
+    from umbmark.outputs.html_verdict import CSS, verdict_section
 
     sections = [
         ("apply", "Apply the correction?", verdict_section(page)),
@@ -563,7 +563,7 @@ def calibration_html(report: CalibrationReport) -> str:
     With recorded runs the page shows the predicted after too
     (:func:`umbmark.jobs.report.predict_after`).
     """
-    from ..jobs.report import PassesReport, predict_after
+    from umbmark.jobs.report import PassesReport, predict_after
 
     page = PassesReport(
         passes=(report,),

@@ -12,8 +12,8 @@ from html import escape
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from ..jobs.report import PassesReport
-    from ..verdict import Verdict
+    from umbmark.calibration.verdict import Verdict
+    from umbmark.jobs.report import PassesReport
 
 __all__ = ["CSS", "WITHHELD", "verdict_section"]
 

@@ -18,18 +18,18 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..benchmark import Benchmark
-from ..conventions import Direction
-from ..history_store import CalibrationRecord, RobotRecord, drift_verdict
-from ..kinematics import WheelParams
-from ..runs import Run
-from .atomic import atomic_path
+from umbmark.benchmark.returns import Benchmark
+from umbmark.core.conventions import Direction
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import Run
+from umbmark.outputs.atomic import atomic_path
+from umbmark.store.history import CalibrationRecord, RobotRecord, drift_verdict
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from ..sim.engine import Trace
+    from umbmark.sim.engine import Trace
 
 __all__ = [
     "DIRECTION_COLOURS",
@@ -294,13 +294,13 @@ def history_figure(robot: RobotRecord, calibrations: Sequence[CalibrationRecord]
 
     Three panels share the time axis (UTC). ``E_d`` and ``E_b`` are what the robot is,
     each pass's errors composed with the parameters active during it
-    (:attr:`~umbmark.history_store.CalibrationRecord.robot_E_d`), with error bars of
+    (:attr:`~umbmark.store.history.CalibrationRecord.robot_E_d`), with error bars of
     ±1.96 standard errors where the calibration has them; when some pass ran on
     parameters other than the nominal ones, what the passes measured is drawn too (grey
     crosses). ``E_max,syst`` (each pass's, on its active parameters) is in millimetres.
     Calibrations marked applied are filled markers, the others open ones. The title
     names the robot and its nominal parameters and, when the robot's ``E_d`` or ``E_b``
-    drifted (:func:`umbmark.history_store.drift_verdict`), says so.
+    drifted (:func:`umbmark.store.history.drift_verdict`), says so.
 
     Parameters
     ----------

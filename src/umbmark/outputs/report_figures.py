@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..benchmark import Benchmark
-from .plotting import DIRECTION_COLOURS, DIRECTION_MARKERS
+from umbmark.benchmark.returns import Benchmark
+from umbmark.outputs.plotting import DIRECTION_COLOURS, DIRECTION_MARKERS
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -20,7 +20,7 @@ Runs finish at different times; a finished run stands still.
 How the pass is organised
 -------------------------
 Each run's numbers go through the model's floating-point operations in the model's order,
-whatever else is in the batch (the arcs as in :func:`umbmark.kinematics.chord_step`,
+whatever else is in the batch (the arcs as in :func:`umbmark.model.kinematics.chord_step`,
 whose sin(h)/h takes its series form when every run's ``|h|`` is below 0.01). What is
 arranged for speed is the bookkeeping around them, since a period costs a few dozen numpy
 calls whatever the number of runs:
@@ -47,10 +47,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..conventions import Direction
-from ..runs import EndPose, Run
-from .paths import Path
-from .robot import ControlConfig, VirtualRobot
+from umbmark.core.conventions import Direction
+from umbmark.model.runs import EndPose, Run
+from umbmark.sim.paths import Path
+from umbmark.sim.robot import ControlConfig, VirtualRobot
 
 __all__ = ["SimResult", "Trace", "simulate"]
 
@@ -108,7 +108,7 @@ class SimResult:
     trace: Trace | None = None
 
     def runs(self, label: str = "sim") -> list[Run]:
-        """The simulated runs as :class:`umbmark.runs.Run` values."""
+        """The simulated runs as :class:`umbmark.model.runs.Run` values."""
         return [
             Run(
                 direction=d,
@@ -238,7 +238,7 @@ def _half_sinc_series(
     out: FloatArray,
 ) -> Callable[[], None]:
     """A function writing ``0.5 * sin(h)/h`` of the current ``h`` into ``out``, by the
-    series of :func:`umbmark.kinematics.chord_step` and to the same bits.
+    series of :func:`umbmark.model.kinematics.chord_step` and to the same bits.
 
     ``h2`` (shaped as ``h``) and ``terms`` (3 by that) are work space; ``ones`` and
     ``halves`` (shaped as ``h``) hold 1 and 1/2.

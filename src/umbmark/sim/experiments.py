@@ -10,14 +10,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..benchmark import Benchmark, umbmark_benchmark
-from ..calibration import ActiveParams, Calibration
-from ..conventions import Direction
-from ..estimators import Method, SquareTest, estimate_errors
-from ..runs import Run
-from .engine import simulate
-from .paths import square
-from .robot import ControlConfig, VirtualRobot
+from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
+from umbmark.calibration.compose import ActiveParams, Calibration
+from umbmark.core.conventions import Direction
+from umbmark.estimators import Method, SquareTest, estimate_errors
+from umbmark.model.runs import Run
+from umbmark.sim.engine import simulate
+from umbmark.sim.paths import square
+from umbmark.sim.robot import ControlConfig, VirtualRobot
 
 __all__ = ["Trial", "calibrate_robot", "umbmark_trials"]
 

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import math
 
-from ..conventions import Direction
-from .paths import Path
-from .robot import ControlConfig, VirtualRobot
+from umbmark.core.conventions import Direction
+from umbmark.sim.paths import Path
+from umbmark.sim.robot import ControlConfig, VirtualRobot
 
 __all__ = ["integrate_loop", "simulate_run_loop"]
 

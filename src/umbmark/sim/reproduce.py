@@ -27,12 +27,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..conventions import Direction
-from ..model import E_b_from_alpha
-from .engine import Trace, simulate
-from .experiments import Trial, calibrate_robot, umbmark_trials
-from .paths import square
-from .robot import LABMATE, ControlConfig, NoiseModel, VirtualRobot
+from umbmark.core.conventions import Direction
+from umbmark.model.systematic import E_b_from_alpha
+from umbmark.sim.engine import Trace, simulate
+from umbmark.sim.experiments import Trial, calibrate_robot, umbmark_trials
+from umbmark.sim.paths import square
+from umbmark.sim.robot import LABMATE, ControlConfig, NoiseModel, VirtualRobot
 
 __all__ = [
     "FIG11_E_B",

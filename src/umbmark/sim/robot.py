@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from ..kinematics import IntegrationMethod, WheelParams
-from ..validation import check_positive, require_positive
+from umbmark.core.validation import check_positive, require_positive
+from umbmark.model.kinematics import IntegrationMethod, WheelParams
 
 __all__ = ["LABMATE", "ControlConfig", "NoiseModel", "VirtualRobot"]
 

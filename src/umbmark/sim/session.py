@@ -8,7 +8,7 @@ stopped, and so on (``docs/driving.md``). :func:`continuous_session` lays the ru
 
 * a rest of :data:`REST` seconds before the first run, between runs and after the last,
   sampled every sampling period with the robot still (what
-  :func:`umbmark.sources.segmentation.split_by_rests` splits at);
+  :func:`umbmark.runs.segmentation.split_by_rests` splits at);
 * each run starts where the one before it stopped: its true poses are composed onto the
   previous run's true end pose, its odometry poses onto the previous odometry end pose,
   its encoder counts added to the previous counts. The simulated motion does not depend
@@ -28,8 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..recording import PoseSeries, WheelSeries
-from .engine import SimResult
+from umbmark.model.recording import PoseSeries, WheelSeries
+from umbmark.sim.engine import SimResult
 
 __all__ = ["REST", "START_IN_WORLD", "SimulatedSession", "continuous_session"]
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..benchmark import umbmark_benchmark
-from .engine import SimResult
-from .robot import VirtualRobot
+from umbmark.benchmark.returns import umbmark_benchmark
+from umbmark.sim.engine import SimResult
+from umbmark.sim.robot import VirtualRobot
 
 __all__ = ["describe_simulation", "odometry_errors", "true_errors"]
 

@@ -21,7 +21,7 @@ state, at the controller's publish rate.
 The inverse
 -----------
 Between two published poses the robot moved along one arc if its curvature did not change
-in between, and then :func:`umbmark.kinematics.wheel_travel_from_poses` gives ``dU_L,
+in between, and then :func:`umbmark.model.kinematics.wheel_travel_from_poses` gives ``dU_L,
 dU_R`` exactly; dividing their running sums by the effective radii gives the wheel angles
 the controller read. When the curvature did change between two messages (the start of a
 spot turn), the motion is several arcs, and the single-arc inverse errs by about
@@ -35,13 +35,13 @@ messages. Two measures of that are computed and refused beyond their bounds:
   do not come from a differential drive's odometry at this rate (a filtered odometry,
   a holonomic base, or too few messages).
 
-Both leave out the steps across gaps in the messages (:mod:`umbmark.sources.gaps`): a
+Both leave out the steps across gaps in the messages (:mod:`umbmark.runs.gaps`): a
 second without a message says nothing of the rate or of the odometry; whether a run can
 cross it is decided where the runs are found.
 
 An ``open_loop`` controller integrates its velocity commands instead of the wheels: its
 odometry says nothing about the wheels, and the readers refuse it (see
-:class:`umbmark.sources.params.ControllerParams`).
+:class:`umbmark.sources.params.reader.ControllerParams`).
 """
 
 from __future__ import annotations
@@ -52,10 +52,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InputError
-from ..kinematics import wheel_travel_from_poses
-from ..recording import PoseSeries, WheelSeries
-from .gaps import gap_mask
+from umbmark.core.errors import InputError
+from umbmark.model.kinematics import wheel_travel_from_poses
+from umbmark.model.recording import PoseSeries, WheelSeries
+from umbmark.runs.gaps import gap_mask
 
 __all__ = [
     "MAX_LATERAL_SHARE",
@@ -146,7 +146,7 @@ def wheels_from_odometry(
     poses[:, 2] = np.unwrap(poses[:, 2])
     d_left, d_right, lateral = wheel_travel_from_poses(poses, geometry.separation)
     # A gap in the messages is no sign of a sparse rate or a filtered odometry: its step
-    # is judged where the runs are (umbmark.sources.gaps).
+    # is judged where the runs are (umbmark.runs.gaps).
     steady = ~gap_mask(np.asarray(odometry.time, dtype=np.float64))
     if not steady.any():
         steady[:] = True

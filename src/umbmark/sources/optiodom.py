@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bounds import (
+from umbmark.core.bounds import (
     ENCODER_RESOLUTION_RANGE,
     GEAR_RATIO_RANGE,
     MAX_SIDE_LENGTH,
@@ -34,10 +34,10 @@ from ..bounds import (
     check_length,
     check_range,
 )
-from ..errors import InputError
-from ..kinematics import WheelParams
-from ..recording import PoseSeries, Recording, WheelSeries
-from .text import iter_lines
+from umbmark.core.errors import InputError
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import PoseSeries, Recording, WheelSeries
+from umbmark.sources.text import iter_lines
 
 __all__ = [
     "MAX_METADATA_ROWS",

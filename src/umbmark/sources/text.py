@@ -8,7 +8,7 @@ are parsed with bounds on nesting (:data:`MAX_DEPTH`), on YAML aliases
 (:data:`MAX_DIGITS`). Line-oriented files (CSV) are read line by line
 (:func:`iter_lines`), each line at most :data:`MAX_LINE_CHARS` long, so that a reader's
 memory is what it keeps, not the text. Every failure to read becomes an
-:class:`umbmark.errors.InputError` naming the file (and the row).
+:class:`umbmark.core.errors.InputError` naming the file (and the row).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from typing import Any
 
 import yaml
 
-from ..errors import InputError
+from umbmark.core.errors import InputError
 
 __all__ = [
     "MAX_ALIASES",

@@ -2,6 +2,6 @@
 
 from __future__ import annotations
 
-from .series import BagOptions, BagRead, bag_topics, read_bag, read_recording
+from umbmark.sources.bag.series import BagOptions, BagRead, bag_topics, read_bag, read_recording
 
 __all__ = ["BagOptions", "BagRead", "bag_topics", "read_bag", "read_recording"]

@@ -37,8 +37,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from ..association import DEFAULT_MAX_GAP
-from .msgtypes import (
+from umbmark.runs.association import DEFAULT_MAX_GAP
+from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
     MODEL_STATES,
     NAV_SAT_FIX,
@@ -49,12 +49,19 @@ from .msgtypes import (
     TICK_TYPES,
     TRUTH_TYPES,
 )
-from .names import fixed_frame, fused_like, mirrored_pairs, odometry_frame, truth_like, words
-from .references import moving_models
+from umbmark.sources.bag.names import (
+    fixed_frame,
+    fused_like,
+    mirrored_pairs,
+    odometry_frame,
+    truth_like,
+    words,
+)
+from umbmark.sources.bag.references import moving_models
 
 if TYPE_CHECKING:
-    from .info import TransformInfo
-    from .scan import ScannedTopic as _Topic
+    from umbmark.sources.bag.info import TransformInfo
+    from umbmark.sources.bag.scan import ScannedTopic as _Topic
 
 __all__ = [
     "GAP_SHARE",

@@ -42,9 +42,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
-from ...errors import InputError
-from ..text import read_text
-from . import reader as bag_reader
+from umbmark.core.errors import InputError
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.text import read_text
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

@@ -14,18 +14,18 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from ...recording import WheelSeries
-from . import custom
-from . import reader as bag_reader
-from .fastpath import POSITION, Sample, fast_layout
-from .msgtypes import TICK_TYPES, Number
-from .samples import clean, read_topic, seconds, time_ns
+from umbmark.core.errors import InputError
+from umbmark.model.recording import WheelSeries
+from umbmark.sources.bag import custom
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.fastpath import POSITION, Sample, fast_layout
+from umbmark.sources.bag.msgtypes import TICK_TYPES, Number
+from umbmark.sources.bag.samples import clean, read_topic, seconds, time_ns
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-    from .series import BagOptions
+    from umbmark.sources.bag.series import BagOptions
 
 __all__ = ["read_fields", "read_ticks", "unwrap"]
 

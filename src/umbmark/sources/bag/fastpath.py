@@ -83,7 +83,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .msgtypes import JOINT_STATE, ODOMETRY, TICK_TYPES, TRUTH_TYPES
+from umbmark.sources.bag.msgtypes import JOINT_STATE, ODOMETRY, TICK_TYPES, TRUTH_TYPES
 
 __all__ = [
     "POSITION",

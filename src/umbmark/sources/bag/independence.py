@@ -29,9 +29,9 @@ import math
 
 import numpy as np
 
-from ...errors import InputError
-from ...recording import PoseSeries
-from .transforms import Edge, chain_steps
+from umbmark.core.errors import InputError
+from umbmark.model.recording import PoseSeries
+from umbmark.sources.bag.transforms import Edge, chain_steps
 
 __all__ = [
     "REPRODUCED_SHARE",

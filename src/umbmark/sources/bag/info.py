@@ -38,18 +38,36 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from ...errors import InputError
-from ...messages import split_messages
-from . import reader as bag_reader
-from .candidates import Candidate, controller_odometry, odometry_candidates, wheel_candidates
-from .candidates import needed_gap as _needed_gap
-from .candidates import truth_candidates as _rank_truth
-from .msgtypes import JOINT_STATE, MODEL_STATES, ODOMETRY, REFERENCE_TYPES, TF_TYPES
-from .names import mirrored_pairs
-from .references import ModelMotion
-from .scan import CHUNKS, MOVING_ANGLE, MOVING_DISTANCE, MOVING_SPEED, ScannedTopic, inspect_topics
-from .series import BagOptions
-from .urdf import RobotDescription, read_description
+from umbmark.core.errors import InputError
+from umbmark.core.messages import split_messages
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.candidates import (
+    Candidate,
+    controller_odometry,
+    odometry_candidates,
+    wheel_candidates,
+)
+from umbmark.sources.bag.candidates import needed_gap as _needed_gap
+from umbmark.sources.bag.candidates import truth_candidates as _rank_truth
+from umbmark.sources.bag.msgtypes import (
+    JOINT_STATE,
+    MODEL_STATES,
+    ODOMETRY,
+    REFERENCE_TYPES,
+    TF_TYPES,
+)
+from umbmark.sources.bag.names import mirrored_pairs
+from umbmark.sources.bag.references import ModelMotion
+from umbmark.sources.bag.scan import (
+    CHUNKS,
+    MOVING_ANGLE,
+    MOVING_DISTANCE,
+    MOVING_SPEED,
+    ScannedTopic,
+    inspect_topics,
+)
+from umbmark.sources.bag.series import BagOptions
+from umbmark.sources.bag.urdf import RobotDescription, read_description
 
 __all__ = [
     "CHUNKS",
@@ -490,7 +508,7 @@ def _rank(
 
 
 def _odometry_tf(tf: TransformInfo) -> bool:
-    from .names import odometry_frame
+    from umbmark.sources.bag.names import odometry_frame
 
     return not tf.static and odometry_frame(tf.parent)
 

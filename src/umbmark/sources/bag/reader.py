@@ -1,7 +1,7 @@
 """Opening bags with rosbags, listing their topics and iterating raw messages.
 
 Everything that touches rosbags' reader lives here, and every failure of it becomes an
-:class:`umbmark.errors.InputError` of one line naming the bag: a path that is not a bag,
+:class:`umbmark.core.errors.InputError` of one line naming the bag: a path that is not a bag,
 a missing rosbags (``pip install 'umbmark[ros]'``), a bag that cannot be opened, a topic
 that is absent or of the wrong type (the message lists the topics present), a storage
 error while reading messages, or a message that cannot be deserialized.
@@ -18,8 +18,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ...errors import InputError
-from ..progress import current_tracker
+from umbmark.core.errors import InputError
+from umbmark.sources.progress import current_tracker
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

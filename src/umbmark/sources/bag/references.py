@@ -18,7 +18,7 @@
     [m^2]; NaN where ``position_covariance_type`` is unknown). Fixes without a fix
     (``status.status < 0``) are dropped, with a note.
 
-Position-only references give a :class:`~umbmark.recording.PoseSeries` with
+Position-only references give a :class:`~umbmark.model.recording.PoseSeries` with
 ``headings=False`` (NaN headings): the estimators that use end positions only take them,
 those that need headings refuse them.
 """
@@ -33,14 +33,21 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from ...messages import info
-from ...recording import PoseSeries
-from . import custom
-from . import reader as bag_reader
-from .fastpath import POSITION, Sample
-from .msgtypes import MODEL_STATES, NAV_SAT_FIX, POINT_STAMPED, ModelStates, NavSatFix, PointStamped
-from .samples import clean, pose_values, read_topic, stamp, time_ns, truth_series
+from umbmark.core.errors import InputError
+from umbmark.core.messages import info
+from umbmark.model.recording import PoseSeries
+from umbmark.sources.bag import custom
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.fastpath import POSITION, Sample
+from umbmark.sources.bag.msgtypes import (
+    MODEL_STATES,
+    NAV_SAT_FIX,
+    POINT_STAMPED,
+    ModelStates,
+    NavSatFix,
+    PointStamped,
+)
+from umbmark.sources.bag.samples import clean, pose_values, read_topic, stamp, time_ns, truth_series
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

@@ -15,11 +15,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from ...recording import PoseSeries
-from . import reader as bag_reader
-from .fastpath import Decoded, LayoutOf, Sample, decode_messages
-from .msgtypes import Quaternion, Stamped, Vector
+from umbmark.core.errors import InputError
+from umbmark.model.recording import PoseSeries
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.fastpath import Decoded, LayoutOf, Sample, decode_messages
+from umbmark.sources.bag.msgtypes import Quaternion, Stamped, Vector
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

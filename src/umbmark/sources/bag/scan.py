@@ -20,10 +20,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from . import reader as bag_reader
-from .candidates import needed_gap
-from .msgtypes import (
+from umbmark.core.errors import InputError
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.candidates import needed_gap
+from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
     MODEL_STATES,
     NAV_SAT_FIX,
@@ -43,7 +43,7 @@ from .msgtypes import (
     Stamped,
     TFMessage,
 )
-from .references import ModelMotion, register_model_states
+from umbmark.sources.bag.references import ModelMotion, register_model_states
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

@@ -3,8 +3,8 @@
 Reads ROS 1 bags (``.bag`` files) and ROS 2 bags (a folder with ``metadata.yaml`` and
 sqlite3 ``.db3`` or ``.mcap`` storage; the path of the storage file or of
 ``metadata.yaml`` itself also works and means its folder) through ``rosbags``
-(``pip install 'umbmark[ros]'``), and returns a :class:`umbmark.recording.WheelSeries`
-and, if asked for, a :class:`umbmark.recording.PoseSeries` of ground truth.
+(``pip install 'umbmark[ros]'``), and returns a :class:`umbmark.model.recording.WheelSeries`
+and, if asked for, a :class:`umbmark.model.recording.PoseSeries` of ground truth.
 
 Options (:class:`BagOptions`)
 -----------------------------
@@ -64,7 +64,7 @@ the bag's order) is kept, and samples with values that are not finite numbers ar
 dropped. Wheel samples of the two ticks topics arrive at different times: the right
 wheel's angle is interpolated linearly onto the left wheel's times, inside the time both
 topics cover. Every problem with the bag or the options raises
-:class:`umbmark.errors.InputError`, one line naming the bag.
+:class:`umbmark.core.errors.InputError`, one line naming the bag.
 
 Speed
 -----
@@ -99,16 +99,14 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from ...messages import info
-from ...recording import PoseSeries, WheelSeries
-from ..controller_odometry import OdometryGeometry, wheels_from_odometry
-from ..progress import Progress, Tracker, current_callback, tracking
-from . import custom, independence, references, transforms
-from . import reader as bag_reader
-from .encoders import read_fields, read_ticks
-from .fastpath import POSITION, VELOCITY, Decoded, Sample, fast_layout
-from .msgtypes import (
+from umbmark.core.errors import InputError
+from umbmark.core.messages import info
+from umbmark.model.recording import PoseSeries, WheelSeries
+from umbmark.sources.bag import custom, independence, references, transforms
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.encoders import read_fields, read_ticks
+from umbmark.sources.bag.fastpath import POSITION, VELOCITY, Decoded, Sample, fast_layout
+from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
     MODEL_STATES,
     POSE_STAMPED,
@@ -119,13 +117,15 @@ from .msgtypes import (
     PoseStamped,
     PoseWithCovarianceStamped,
 )
-from .samples import clean as _clean
-from .samples import pose_values as _pose_values
-from .samples import read_topic as _read_topic
-from .samples import stamp as _stamp
-from .samples import time_ns as _time_ns
-from .samples import truth_series as _truth
-from .wheel_tf import read_wheel_transforms
+from umbmark.sources.bag.samples import clean as _clean
+from umbmark.sources.bag.samples import pose_values as _pose_values
+from umbmark.sources.bag.samples import read_topic as _read_topic
+from umbmark.sources.bag.samples import stamp as _stamp
+from umbmark.sources.bag.samples import time_ns as _time_ns
+from umbmark.sources.bag.samples import truth_series as _truth
+from umbmark.sources.bag.wheel_tf import read_wheel_transforms
+from umbmark.sources.controller_odometry import OdometryGeometry, wheels_from_odometry
+from umbmark.sources.progress import Progress, Tracker, current_callback, tracking
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

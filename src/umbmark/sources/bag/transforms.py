@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from . import reader as bag_reader
-from .msgtypes import TF_TYPES, TFMessage
+from umbmark.core.errors import InputError
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.msgtypes import TF_TYPES, TFMessage
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

@@ -32,10 +32,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from . import reader as bag_reader
-from .msgtypes import STRING, String
-from .names import mirrored_pairs
+from umbmark.core.errors import InputError
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.msgtypes import STRING, String
+from umbmark.sources.bag.names import mirrored_pairs
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
@@ -381,7 +381,7 @@ def described_geometry(
         for label, value in (("wheelbase", wheelbase), ("wheel diameter", diameter))
         if value is None
     ]
-    from ...messages import info
+    from umbmark.core.messages import info
 
     note = info(
         f"{' and '.join(taken)} from the bag's robot description: "

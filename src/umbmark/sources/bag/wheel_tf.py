@@ -27,12 +27,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from ...recording import WheelSeries
-from . import reader as bag_reader
-from .msgtypes import TF_TYPES, TFMessage
-from .samples import clean, seconds
-from .transforms import TF_TOPIC
+from umbmark.core.errors import InputError
+from umbmark.model.recording import WheelSeries
+from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.msgtypes import TF_TYPES, TFMessage
+from umbmark.sources.bag.samples import clean, seconds
+from umbmark.sources.bag.transforms import TF_TOPIC
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

@@ -39,9 +39,9 @@ from typing import TYPE_CHECKING, ClassVar, Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InputError
-from ...recording import PoseSeries, WheelSeries
-from .reader import missing_rosbags, one_line
+from umbmark.core.errors import InputError
+from umbmark.model.recording import PoseSeries, WheelSeries
+from umbmark.sources.bag.reader import missing_rosbags, one_line
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore

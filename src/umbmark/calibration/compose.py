@@ -1,0 +1,151 @@
+"""From estimated errors to new odometry parameters, composed with the active ones.
+
+The runs were driven with some parameters active: a wheelbase ``b`` (possibly scaled by a
+ros2_control ``wheel_separation_multiplier``) and wheel factors ``c_L``, ``c_R`` (ros2_control's
+``left_wheel_radius_multiplier`` and ``right_wheel_radius_multiplier``). The errors UMBmark
+measures are relative to those, so the correction multiplies into them (Sec. 5: a
+compensated robot is a "new" uncompensated robot with different initial parameters):
+
+- ``c_L,new = c_L,active * 2 / (E_d + 1)`` (Eq. 4.31)
+- ``c_R,new = c_R,active * 2 / (1/E_d + 1)`` (Eq. 4.32)
+- ``wheel_separation_multiplier,new = multiplier,active * E_b`` and
+  ``b_new = E_b * b_effective`` (Eq. 4.26).
+
+The new parameters are also what the robot *is* (:meth:`ActiveParams.robot_errors`): its
+``D_R / D_L = c_R,new / c_L,new`` and its effective wheelbase over the nominal one, the new
+multiplier. A pass on odometry already corrected measures errors near 1; composed with the
+parameters active during it, they give the robot's own again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from umbmark.core.validation import check_positive, require_positive
+from umbmark.estimators.base import ErrorEstimate
+from umbmark.model.systematic import correction_factors
+
+__all__ = ["ActiveParams", "Calibration"]
+
+
+@dataclass(frozen=True)
+class ActiveParams:
+    """The odometry parameters that were active while the runs were driven.
+
+    Attributes
+    ----------
+    wheelbase : float
+        ``b`` [m] as configured (ros2_control ``wheel_separation``).
+    c_left, c_right : float
+        Wheel correction factors (ros2_control ``left/right_wheel_radius_multiplier``).
+    separation_multiplier : float
+        ros2_control ``wheel_separation_multiplier``.
+    wheel_diameter : float or None
+        Nominal wheel diameter ``D_n`` [m], when known.
+    """
+
+    wheelbase: float
+    c_left: float = 1.0
+    c_right: float = 1.0
+    separation_multiplier: float = 1.0
+    wheel_diameter: float | None = None
+
+    def __post_init__(self) -> None:
+        require_positive(self, "wheelbase", "c_left", "c_right", "separation_multiplier")
+        if self.wheel_diameter is not None:
+            check_positive("wheel_diameter", self.wheel_diameter, unit="m")
+
+    @property
+    def effective_wheelbase(self) -> float:
+        """The wheelbase the odometry used [m]: ``b * separation_multiplier``."""
+        return self.wheelbase * self.separation_multiplier
+
+    def compose(self, E_d: float, E_b: float, scale: float = 1.0) -> tuple[float, float, float]:
+        """The parameters that correct errors measured on these ones (Eqs. 4.31, 4.32 and
+        4.26, multiplied into the active factors).
+
+        Parameters
+        ----------
+        E_d, E_b : float
+            Errors measured by runs driven with these parameters.
+        scale : float
+            ``E_s``, when known (both wheel factors are multiplied by it).
+
+        Returns
+        -------
+        c_left, c_right, separation_multiplier : float
+            The new absolute ``c_L``, ``c_R`` and ``wheel_separation_multiplier``.
+        """
+        c_left, c_right = correction_factors(E_d)
+        return (
+            self.c_left * (float(c_left) * scale),
+            self.c_right * (float(c_right) * scale),
+            self.separation_multiplier * E_b,
+        )
+
+    def robot_errors(self, E_d: float, E_b: float) -> tuple[float, float]:
+        """What the robot is, from errors measured on these parameters: its ``D_R / D_L``
+        and its effective wheelbase over the nominal ``b``, from :meth:`compose`
+        (``c_R,new / c_L,new = E_d c_R / c_L`` and the new multiplier ``E_b x multiplier``).
+        """
+        c_left, c_right, separation = self.compose(E_d, E_b)
+        return c_right / c_left, separation
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """An error estimate turned into corrected parameters."""
+
+    estimate: ErrorEstimate
+    active: ActiveParams
+
+    @property
+    def scale(self) -> float:
+        """``E_s`` of estimators that see it (trajectory fits), else 1: the paper assumes
+        the average diameter calibrated beforehand (Sec. 2.2)."""
+        return 1.0 if self.estimate.E_s is None else self.estimate.E_s
+
+    @property
+    def c_L(self) -> float:
+        """Left correction factor of this pass, Eq. 4.31 (times ``E_s`` when known)."""
+        return float(correction_factors(self.estimate.E_d)[0]) * self.scale
+
+    @property
+    def c_R(self) -> float:
+        """Right correction factor of this pass, Eq. 4.32 (times ``E_s`` when known)."""
+        return float(correction_factors(self.estimate.E_d)[1]) * self.scale
+
+    def _new(self) -> tuple[float, float, float]:
+        return self.active.compose(self.estimate.E_d, self.estimate.E_b, self.scale)
+
+    @property
+    def new_c_left(self) -> float:
+        """Absolute left factor to configure: ``c_L,active * c_L``."""
+        return self._new()[0]
+
+    @property
+    def new_c_right(self) -> float:
+        """Absolute right factor to configure: ``c_R,active * c_R``."""
+        return self._new()[1]
+
+    @property
+    def new_separation_multiplier(self) -> float:
+        """Absolute ``wheel_separation_multiplier`` to configure: ``active * E_b``."""
+        return self._new()[2]
+
+    @property
+    def wheelbase_corrected(self) -> float:
+        """Corrected effective wheelbase [m], Eq. 4.26: ``E_b * b_effective``."""
+        return self.estimate.E_b * self.active.effective_wheelbase
+
+    @property
+    def wheel_diameter_left(self) -> float | None:
+        """Corrected effective left wheel diameter ``c_L,new D_n`` [m], if ``D_n`` is known."""
+        d = self.active.wheel_diameter
+        return None if d is None else self.new_c_left * d
+
+    @property
+    def wheel_diameter_right(self) -> float | None:
+        """Corrected effective right wheel diameter ``c_R,new D_n`` [m], if ``D_n`` is known."""
+        d = self.active.wheel_diameter
+        return None if d is None else self.new_c_right * d

@@ -1,0 +1,395 @@
+"""Whether to apply a calibration: ``apply``, ``apply with care`` or ``do not apply``.
+
+:func:`judge` weighs an estimate and its evidence, criterion by criterion, each with its
+threshold here and the reason for it:
+
+- **Nothing beats the nominal parameters** (``calibrate --method auto``): no estimator
+  predicted held-out runs better than the parameters active during them. Do not apply:
+  those parameters are the better ones.
+- **The interval does not say which way to correct**: the 95 % interval of ``E_d``,
+  ``E_b`` or ``E_s`` holds both 1 (no correction) and ``2 - estimate``, a robot with the
+  opposite error of the same size, which this correction would make twice as wrong; and
+  the correction is large enough to matter (:data:`NOTICEABLE_ANGLE`). Do not apply.
+  Where the interval holds 1 but not ``2 - estimate``, or the correction is too small to
+  matter but the interval is wide enough to hide an error that does
+  (:data:`WIDE_INTERVAL` times what matters): apply with care.
+- **The model does not hold**: a trajectory or end-point fit whose rms residual is far
+  beyond what random wheel slip leaves (:data:`MISFIT_CARE`, :data:`MISFIT_REFUSE` of
+  the runs' path, and :data:`MISFIT_FLOOR`; :data:`HEADING_CARE`, :data:`HEADING_REFUSE`
+  in heading): slip, a wrong wheel geometry, a time offset, a tracked point off the axle,
+  a ground truth that lost the robot. Do not apply (apply with care below the larger
+  thresholds).
+- **Too few runs** (:data:`MIN_RUNS`): apply with care.
+- **Implausible errors** (:data:`PLAUSIBLE_E_D`, :data:`PLAUSIBLE_E_B`,
+  :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry.
+- **Warnings**: a result that comes with warnings (the model check of the end poses, a
+  run in the other cluster, the paper's small-angle formulas beyond their range, input
+  read with doubts) is valid but shaky: apply with care.
+
+What "matters" is measured on the test's square against the paper's own figure of the
+runs' scatter, about 25 mm per cluster on its 4 m square (Sec. 5): an error whose return
+error stays below that scatter cannot be told from it by UMBmark.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from umbmark.estimators.base import ErrorEstimate, SquareTest
+
+if TYPE_CHECKING:
+    from umbmark.model.kinematics import WheelParams
+    from umbmark.model.recording import RunLog
+
+__all__ = [
+    "HEADING_CARE",
+    "HEADING_REFUSE",
+    "LEVELS",
+    "MIN_RUNS",
+    "MISFIT_CARE",
+    "MISFIT_FLOOR",
+    "MISFIT_REFUSE",
+    "NOTICEABLE_ANGLE",
+    "PAPER_SCATTER",
+    "PLAUSIBLE_E_B",
+    "PLAUSIBLE_E_D",
+    "PLAUSIBLE_E_S",
+    "WIDE_INTERVAL",
+    "Evidence",
+    "Level",
+    "Verdict",
+    "judge",
+    "mean_path",
+    "noticeable",
+]
+
+Level = Literal["apply", "care", "do-not-apply"]
+#: The levels, from the best to the worst.
+LEVELS: tuple[Level, ...] = ("apply", "care", "do-not-apply")
+_WORDS = {"apply": "apply", "care": "apply with care", "do-not-apply": "do not apply"}
+
+#: The paper's non-systematic scatter: about 25 mm standard deviation per cluster on its
+#: 4 m square (Sec. 5), as a fraction of the side.
+PAPER_SCATTER = 0.025 / 4.0
+#: A heading error per turn (alpha) or per leg (beta) [rad] whose return error on the
+#: square, ``2 sqrt(2) L`` times the angle to first order (Eqs. 4.17-4.24), equals that
+#: scatter: 0.13 deg. Smaller errors cannot be told from the scatter; larger ones matter.
+NOTICEABLE_ANGLE = PAPER_SCATTER / (2.0 * math.sqrt(2.0))
+#: An interval whose half-width is this many times what matters hides an error that
+#: matters, whatever the estimate.
+WIDE_INTERVAL = 2.0
+#: A fitted model whose rms position residual exceeds this fraction of a run's path is
+#: doubtful: three times the paper's random scatter at a run's end (25 mm on its 16 m
+#: path, 0.16 %) ...
+MISFIT_CARE = 0.005
+#: ... and does not hold beyond this one: the paper's uncalibrated LabMate's whole
+#: systematic error (317 mm on its 16 m path, 2 %). The model then leaves unexplained as
+#: much as calibrating would remove.
+MISFIT_REFUSE = 0.02
+#: Residuals [m] below these are what the ground truth, the robot's stops and random slip
+#: leave on any run, however short: the paper's scatter (25 mm), and four times it.
+MISFIT_FLOOR = (0.025, 0.1)
+#: The same for the rms heading residual [rad]: the heading an uncalibrated LabMate
+#: gains over one square (4 turns of alpha = 1 deg) ...
+HEADING_CARE = math.radians(4.0)
+#: ... and twice as much.
+HEADING_REFUSE = math.radians(8.0)
+#: Fewer runs in a direction (square tests) or recorded runs (fits) than this: the
+#: scatter is known poorly (the paper drove 5 each way).
+MIN_RUNS = 3
+#: ``E_d`` beyond ``1 -/+`` this: wheels whose diameters differ by more than tyres do
+#: (per mille to a per cent).
+PLAUSIBLE_E_D = 0.05
+#: ``E_b`` beyond ``1 -/+`` this: an effective wheelbase 20 % off, as skid-steer and
+#: tracked robots turn, not as a two-wheel differential drive does.
+PLAUSIBLE_E_B = 0.20
+#: ``E_s`` beyond ``1 -/+`` this: a mean wheel diameter 10 % off its nominal one.
+PLAUSIBLE_E_S = 0.10
+
+_MORE_RUNS = (
+    "record more runs (the interval narrows with the square root of their number) or, for "
+    "a square test, a larger square"
+)
+_CHECK_MODEL = (
+    "check the nominal wheelbase and wheel diameter, the time offset between wheels and "
+    "ground truth, a tracked point off the axle (--fit-truth-offset) and slip (slower "
+    "turns); record again with the ground truth tracking the robot all along"
+)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Whether to apply a calibration.
+
+    Attributes
+    ----------
+    level : {"apply", "care", "do-not-apply"}
+        Apply; apply with care; do not apply.
+    reasons : tuple of str
+        Why not plainly "apply", the weightiest first.
+    instead : str or None
+        What to record or check instead (or, for "care", to be sure).
+    """
+
+    level: Level
+    reasons: tuple[str, ...] = ()
+    instead: str | None = None
+
+    @property
+    def applies(self) -> bool:
+        """Whether the correction may be applied (``apply`` or ``care``)."""
+        return self.level != "do-not-apply"
+
+    @property
+    def words(self) -> str:
+        """``apply``, ``apply with care`` or ``do not apply``."""
+        return _WORDS[self.level]
+
+    def line(self) -> str:
+        """One line for people: ``Verdict: apply with care: why; why. Instead: ...``."""
+        text = f"Verdict: {self.words}"
+        if self.reasons:
+            text += ": " + "; ".join(self.reasons)
+        text += "."
+        if self.instead:
+            lead = "Instead" if self.level == "do-not-apply" else "To be sure"
+            text += f" {lead}: {self.instead}."
+        return text
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"level": ..., "reasons": [...], "instead": ...}``."""
+        return {"level": self.level, "reasons": list(self.reasons), "instead": self.instead}
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What an estimate rests on, besides the estimate itself.
+
+    Attributes
+    ----------
+    runs_per_direction : tuple of (int, int), optional
+        Square runs cw and ccw (square tests).
+    recorded_runs : int, optional
+        Recorded runs the fit used (``endpoints``, ``trajectory``).
+    path_length : float, optional
+        Mean path of a recorded run [m] (the axle centre's).
+    warnings : sequence of str
+        The warnings that come with the result.
+    nominal_best : bool
+        ``--method auto`` found no estimator that predicts held-out runs better than the
+        nominal parameters.
+    """
+
+    runs_per_direction: tuple[int, int] | None = None
+    recorded_runs: int | None = None
+    path_length: float | None = None
+    warnings: Sequence[str] = ()
+    nominal_best: bool = False
+
+
+def noticeable(name: str, test: SquareTest) -> float:
+    """How far from 1 ``E_d``, ``E_b`` or ``E_s`` must be to matter on ``test``'s square.
+
+    ``E_b``: ``alpha = (pi/2)(1 - 1/E_b)``, so ``2/pi`` times :data:`NOTICEABLE_ANGLE`.
+    ``E_d``: ``beta = (2L/b)(E_d - 1)/(E_d + 1)``, so ``b/L`` times it. ``E_s``: a scale
+    error whose error over the square's ``4 L`` path is the paper's scatter.
+    """
+    if name == "E_b":
+        return NOTICEABLE_ANGLE * 2.0 / math.pi
+    if name == "E_d":
+        return NOTICEABLE_ANGLE * test.wheelbase / test.side_length
+    return PAPER_SCATTER / 4.0
+
+
+def mean_path(logs: Sequence[RunLog], params: WheelParams) -> float | None:
+    """How far the wheels of a recorded run rolled, on average over the runs [m]: the mean
+    of the left and right wheels' travel, forward or back (what slip grows with; a turn
+    on the spot counts); None without runs."""
+    paths = []
+    for log in logs:
+        steps = np.abs(np.diff(np.asarray(log.wheel_angles, dtype=np.float64), axis=0))
+        radius = 0.5 * params.wheel_diameter
+        left, right = params.c_left * radius * steps[:, 0], params.c_right * radius * steps[:, 1]
+        paths.append(0.5 * float(np.sum(left) + np.sum(right)))
+    return float(np.mean(paths)) if paths else None
+
+
+_Finding = tuple[Level, str, "str | None"]
+
+
+def _intervals(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
+    found: list[_Finding] = []
+    for name in ("E_d", "E_b", "E_s"):
+        interval = estimate.interval(name)
+        value = getattr(estimate, name)
+        if interval is None or value is None:
+            continue
+        low, high = interval
+        correction, half, floor = abs(value - 1.0), 0.5 * (high - low), noticeable(name, test)
+        shown = f"{name}'s 95 % interval, {low:.6f} to {high:.6f},"
+        mirror = 2.0 - value
+        if low <= min(1.0, mirror) and high >= max(1.0, mirror) and correction >= floor:
+            found.append(
+                (
+                    "do-not-apply",
+                    f"{shown} holds both 1 (no correction) and {mirror:.6f}, a robot this "
+                    "correction would make twice as wrong: the runs do not say which way to "
+                    "correct",
+                    _MORE_RUNS,
+                )
+            )
+        elif low <= 1.0 <= high and correction >= floor:
+            found.append(
+                ("care", f"{shown} holds 1: the correction is barely resolved", _MORE_RUNS)
+            )
+        elif half >= WIDE_INTERVAL * floor and low <= 1.0 <= high:
+            found.append(
+                (
+                    "care",
+                    f"{shown} is wide enough to hide an error that matters on the "
+                    f"{test.side_length:g} m square",
+                    _MORE_RUNS,
+                )
+            )
+    return found
+
+
+def _misfit(estimate: ErrorEstimate, evidence: Evidence) -> list[_Finding]:
+    comp = estimate.components
+    if "rms_position" not in comp or "rms_heading" not in comp:
+        return []
+    found: list[_Finding] = []
+    path = evidence.path_length
+    where = "along the runs" if "samples" in comp else "at the runs' ends"
+    position, heading = comp["rms_position"], comp["rms_heading"]
+    if path is not None and path > 0.0:
+        share = position / path
+        if position >= max(MISFIT_CARE * path, MISFIT_FLOOR[0]):
+            refuse = position >= max(MISFIT_REFUSE * path, MISFIT_FLOOR[1])
+            level: Level = "do-not-apply" if refuse else "care"
+            found.append(
+                (
+                    level,
+                    f"the fitted model misses the ground truth by {1000 * position:.0f} mm rms "
+                    f"{where}, {100 * share:.1f} % of the {path:.2f} m a run's wheels roll "
+                    "(random slip leaves a few per mille): the model does not hold",
+                    _CHECK_MODEL,
+                )
+            )
+    if heading >= HEADING_CARE:
+        level = "do-not-apply" if heading >= HEADING_REFUSE else "care"
+        found.append(
+            (
+                level,
+                f"the fitted model misses the ground truth's heading by "
+                f"{math.degrees(heading):.1f} deg rms {where}: the model does not hold",
+                _CHECK_MODEL,
+            )
+        )
+    return found
+
+
+def _few_runs(evidence: Evidence) -> list[_Finding]:
+    advice = f"drive at least {MIN_RUNS} runs each way (the paper drove 5)"
+    if evidence.runs_per_direction is not None:
+        cw, ccw = evidence.runs_per_direction
+        if min(cw, ccw) < MIN_RUNS:
+            return [
+                ("care", f"only {cw} cw and {ccw} ccw runs: their scatter is known poorly", advice)
+            ]
+    elif evidence.recorded_runs is not None and evidence.recorded_runs < MIN_RUNS:
+        n = evidence.recorded_runs
+        return [
+            (
+                "care",
+                f"only {n} recorded run{'s' if n != 1 else ''}: the scatter is known poorly",
+                f"record at least {MIN_RUNS} runs",
+            )
+        ]
+    return []
+
+
+def _implausible(estimate: ErrorEstimate) -> list[_Finding]:
+    found: list[_Finding] = []
+    check = "check the nominal wheelbase and wheel diameter, the encoder resolution and gear ratio"
+    if abs(estimate.E_d - 1.0) > PLAUSIBLE_E_D:
+        found.append(
+            (
+                "care",
+                f"E_d = {estimate.E_d:.4f}: wheel diameters {100 * abs(estimate.E_d - 1):.0f} % "
+                "apart, more than tyres differ",
+                check,
+            )
+        )
+    if abs(estimate.E_b - 1.0) > PLAUSIBLE_E_B:
+        found.append(
+            (
+                "care",
+                f"E_b = {estimate.E_b:.4f}: an effective wheelbase "
+                f"{100 * abs(estimate.E_b - 1):.0f} % off the nominal one, as skid-steer and "
+                "tracked robots turn, not a two-wheel differential drive",
+                check,
+            )
+        )
+    if estimate.E_s is not None and abs(estimate.E_s - 1.0) > PLAUSIBLE_E_S:
+        found.append(
+            (
+                "care",
+                f"E_s = {estimate.E_s:.4f}: a mean wheel diameter "
+                f"{100 * abs(estimate.E_s - 1):.0f} % off the nominal one",
+                check,
+            )
+        )
+    return found
+
+
+def judge(estimate: ErrorEstimate, test: SquareTest, evidence: Evidence) -> Verdict:
+    """The verdict on applying ``estimate`` (see the module for the criteria).
+
+    Parameters
+    ----------
+    estimate : ErrorEstimate
+        The errors, their standard errors and the fit's figures (``components``).
+    test : SquareTest
+        The square the errors are judged on (side and wheelbase [m]).
+    evidence : Evidence
+        The runs, the fit's path, the warnings, ``auto``'s finding.
+
+    Returns
+    -------
+    Verdict
+        The worst level any criterion reaches, with every reason (the worst first) and
+        what to do instead.
+    """
+    found: list[_Finding] = []
+    if evidence.nominal_best:
+        found.append(
+            (
+                "do-not-apply",
+                "no estimator predicted held-out runs better than the nominal parameters: the "
+                "parameters active during the runs are the better ones",
+                "keep the active parameters; to find an error, record runs that show it: "
+                "more runs, squares in both directions, longer paths",
+            )
+        )
+    found += _intervals(estimate, test)
+    found += _misfit(estimate, evidence)
+    found += _few_runs(evidence)
+    found += _implausible(estimate)
+    if evidence.warnings:
+        n = len(evidence.warnings)
+        said = f"{n} warnings come" if n > 1 else "a warning comes"
+        found.append(("care", f"{said} with the result (listed with it)", None))
+    if not found:
+        return Verdict("apply")
+    rank = {level: k for k, level in enumerate(LEVELS)}
+    found.sort(key=lambda f: -rank[f[0]])  # stable: the criteria's order within a level
+    level = found[0][0]
+    advice = [f[2] for f in found if f[0] == level and f[2] is not None]
+    instead = "; ".join(dict.fromkeys(advice)) or None
+    return Verdict(level, tuple(f[1] for f in found), instead)

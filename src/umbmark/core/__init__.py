@@ -1,0 +1,5 @@
+"""Foundations every layer may use: conventions (frame, signs, units), the error users
+see, bounds of physical values, messages for people, statistics.
+
+Imports nothing else of umbmark.
+"""

@@ -1,0 +1,160 @@
+"""The plausible range of every physical parameter, wherever it comes from.
+
+A parameter reaches umbmark as an option (``--wheelbase``), from a run log's
+``metadata.yaml`` (``wheelbase``), an OptiOdom session's metadata (``Li``), a runs
+table's ``# umbmark-active:`` line or a parameter file: each gets the same bound, written
+here once, and the same check. Messages name the parameter as its source spells it (an
+option's flag, a file's field) and, for a file, the file (``source``).
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from dataclasses import dataclass
+from pathlib import Path
+
+from umbmark.core.errors import InputError
+
+__all__ = [
+    "ENCODER_RESOLUTION_RANGE",
+    "GEAR_RATIO_RANGE",
+    "LENGTH_RANGE",
+    "MAX_SIDE_LENGTH",
+    "MAX_WHEELBASE",
+    "MIN_LENGTH",
+    "MULTIPLIER_RANGE",
+    "Origin",
+    "check_int_option",
+    "check_length",
+    "check_multiplier",
+    "check_positive_option",
+    "check_range",
+    "option_float",
+]
+
+#: Largest plausible square side [m]: beyond, a unit slip is likelier.
+MAX_SIDE_LENGTH = 100.0
+#: Largest plausible wheelbase or wheel diameter [m].
+MAX_WHEELBASE = 10.0
+#: Smallest plausible length [m].
+MIN_LENGTH = 0.001
+#: Bounds of a plausible configured wheelbase or wheel diameter [m].
+LENGTH_RANGE = (MIN_LENGTH, MAX_WHEELBASE)
+#: Bounds of a plausible wheel factor or multiplier (skid-steer wheelbases reach about 2).
+MULTIPLIER_RANGE = (0.2, 5.0)
+#: Encoder pulses per motor revolution.
+ENCODER_RESOLUTION_RANGE = (1.0, 1e7)
+#: Motor revolutions per wheel revolution.
+GEAR_RATIO_RANGE = (1e-3, 1e4)
+
+Source = str | Path | None
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Where a parameter's value came from, for messages about it.
+
+    Attributes
+    ----------
+    field : str
+        The option's flag (``--wheelbase``) or the file's field (``wheelbase``, ``Li``).
+    file : str or None
+        The file that holds the field; None for an option.
+    """
+
+    field: str
+    file: str | None = None
+
+    def named(self, source: str | None = None) -> str:
+        """``--wheelbase``, or ``Li in FILE`` (the field alone where ``source``, the file
+        the message is about, is that file)."""
+        if self.file is None or self.file == source:
+            return self.field
+        return f"{self.field} in {self.file}"
+
+
+def option_float(flag: str, value: float, source: Source = None) -> float:
+    """An option's (or a field's) number as a float, refusing what is no number or too
+    large for one (a Python ``int`` of hundreds of digits)."""
+    if isinstance(value, bool):
+        raise InputError(f"{flag} must be a number, not {value!r}", source=source)
+    try:
+        return float(value)
+    except OverflowError:
+        digits = len(str(abs(int(value))))
+        raise InputError(f"{flag} is far too large ({digits} digits)", source=source) from None
+    except (TypeError, ValueError):
+        raise InputError(
+            f"{flag} must be a number, not {str(value)[:24]!r}", source=source
+        ) from None
+
+
+def check_positive_option(flag: str, value: float, unit: str = "", source: Source = None) -> None:
+    """Refuse a value that is not a positive finite number."""
+    value = option_float(flag, value, source)
+    if not (math.isfinite(value) and value > 0):
+        shown = f"{value:g} {unit}".strip()
+        raise InputError(f"{flag} must be > 0, got {shown}", source=source)
+
+
+def check_int_option(flag: str, value: int, low: int, high: int) -> int:
+    """An integer option within ``low`` to ``high``, or :class:`InputError` naming the
+    flag and the range (also for a ``bool``, a float and an integer of any size)."""
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        number = operator.index(value)  # int and numpy integers; not float, not str
+    except TypeError:
+        raise InputError(f"{flag} must be a whole number, not {str(value)[:24]!r}") from None
+    if not low <= number <= high:
+        digits = len(str(abs(number))) if abs(number) >= 10**24 else 0
+        shown = f"a number of {digits} digits" if digits else str(number)
+        raise InputError(f"{flag} must be between {low} and {high}, got {shown}")
+    return number
+
+
+def check_length(
+    flag: str,
+    value: float,
+    largest: float,
+    smallest: float = MIN_LENGTH,
+    source: Source = None,
+) -> None:
+    """Refuse a length [m] that is not positive, or implausibly small or large (a unit
+    slip); the message names the plausible range."""
+    check_positive_option(flag, value, "m", source)
+    value = float(value)
+    if value > largest:
+        raise InputError(
+            f"{flag} {value:g} m is implausibly large: lengths are in metres "
+            f"(at most {largest:g} m here; plausible: {smallest:g} to {largest:g} m)",
+            source=source,
+        )
+    if value < smallest:
+        raise InputError(
+            f"{flag} {value:g} m is implausibly small: lengths are in metres "
+            f"(plausible: {smallest:g} to {largest:g} m)",
+            source=source,
+        )
+
+
+def check_multiplier(flag: str, value: float, source: Source = None) -> None:
+    """Refuse a wheel factor or multiplier outside :data:`MULTIPLIER_RANGE`."""
+    low, high = MULTIPLIER_RANGE
+    value = option_float(flag, value, source)
+    if not (math.isfinite(value) and low <= value <= high):
+        raise InputError(
+            f"{flag} {value:g} is not a plausible factor: it must be within {low:g} to {high:g}",
+            source=source,
+        )
+
+
+def check_range(
+    flag: str, value: float, bounds: tuple[float, float], source: Source = None
+) -> None:
+    """Refuse a number outside ``bounds`` (inclusive) or not finite."""
+    low, high = bounds
+    value = option_float(flag, value, source)
+    if not (math.isfinite(value) and low <= value <= high):
+        raise InputError(f"{flag} {value:g} is outside {low:g} to {high:g}", source=source)

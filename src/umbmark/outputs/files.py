@@ -1,0 +1,174 @@
+"""The files a job is asked to write, checked together before any is written."""
+
+from __future__ import annotations
+
+import errno
+import os
+from collections.abc import Iterable
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+from umbmark.core.errors import InputError
+from umbmark.outputs.plotting import FIGURE_FORMATS
+
+__all__ = ["OutputPlan", "check_folder_output"]
+
+_YAML = (".yaml", ".yml")
+#: Outputs that are folders (made when missing); the others are files.
+_FOLDERS = ("tum", "logs")
+#: Option spelling of each output, for messages.
+_FLAGS = {
+    "output": "-o",
+    "yaml": "--yaml",
+    "ros1_yaml": "--ros1-yaml",
+    "plot": "--plot",
+    "tum": "--tum",
+    "logs": "--logs",
+    "report": "--report",
+    "bag": "--bag",
+}
+
+
+@dataclass(frozen=True)
+class OutputPlan:
+    """Where each requested output goes (None: not requested)."""
+
+    output: Path | None = None
+    yaml: Path | None = None
+    ros1_yaml: Path | None = None
+    plot: Path | None = None
+    tum: Path | None = None
+    logs: Path | None = None
+    report: Path | None = None
+    bag: Path | None = None
+
+    @classmethod
+    def of(cls, **paths: str | os.PathLike[str] | None) -> OutputPlan:
+        """Check the requested outputs' names; the folders ``tum`` and ``logs`` may be new.
+
+        Raises
+        ------
+        InputError
+            For a name of the wrong kind, or two outputs onto one file.
+        """
+        plan = cls(**{k: None if v is None else Path(v) for k, v in paths.items()})
+        for name in ("yaml", "ros1_yaml"):
+            path = getattr(plan, name)
+            if path is not None and path.suffix.lower() not in _YAML:
+                raise InputError(
+                    f"{_FLAGS[name]} {path}: the file name should end in .yaml or .yml"
+                )
+        if plan.plot is not None and plan.plot.suffix.lower() not in FIGURE_FORMATS:
+            raise InputError(
+                f"--plot {plan.plot}: the file name should end in {', '.join(FIGURE_FORMATS)}"
+            )
+        if plan.report is not None and plan.report.suffix.lower() not in (".html", ".htm"):
+            raise InputError(f"--report {plan.report}: the file name should end in .html or .htm")
+        seen: dict[Path, str] = {}
+        for name, path in plan.requested():
+            key = path.resolve()
+            if key in seen:
+                raise InputError(
+                    f"{_FLAGS[seen[key]]} and {_FLAGS[name]} both name {path}: "
+                    "give each its own file"
+                )
+            seen[key] = name
+        plan.check_writable()
+        return plan
+
+    def requested(self) -> list[tuple[str, Path]]:
+        """``(keyword, path)`` of every requested output."""
+        return [
+            (f.name, getattr(self, f.name))
+            for f in fields(self)
+            if getattr(self, f.name) is not None
+        ]
+
+    def check_writable(self) -> None:
+        """Check that every requested output can be written, before any is.
+
+        A file's folder must exist and be writable, and the file must not be a folder; an
+        output folder (``tum``, ``logs``) must be a folder or be creatable in a writable
+        folder; a bag (a ``.bag`` file or a ROS 2 bag folder) needs a writable folder to be
+        written in. A symbolic link is checked where it points.
+
+        Raises
+        ------
+        InputError
+            Naming the first output that cannot be written, and why.
+        """
+        for name, path in self.requested():
+            target = path.resolve()
+            if name in _FOLDERS:
+                check_folder_output(path)
+                continue
+            if name == "bag":
+                _check_folder(path, target.parent)
+                continue
+            if target.is_dir():
+                raise InputError("is a directory; give a file name to write", source=path)
+            _check_folder(path, target.parent)
+
+    def check_not_inputs(self, inputs: Iterable[str | os.PathLike[str]]) -> None:
+        """Refuse an output that would overwrite an input or write inside an input folder.
+
+        Links are followed, so an output that is a link to an input is refused too.
+
+        Raises
+        ------
+        InputError
+            Naming the output and the input.
+        """
+        read = [Path(p).resolve() for p in inputs if Path(p).exists()]
+        for name, path in self.requested():
+            target = path.resolve()
+            for source in read:
+                if target == source:
+                    raise InputError(
+                        f"{_FLAGS[name]} {path} would overwrite an input ({source}); "
+                        "write the output elsewhere"
+                    )
+                if source.is_dir() and target.is_relative_to(source):
+                    raise InputError(
+                        f"{_FLAGS[name]} {path} is inside an input folder ({source}); "
+                        "write the output elsewhere"
+                    )
+
+
+def check_folder_output(folder: str | os.PathLike[str]) -> None:
+    """Check that output folder ``folder`` is a folder or can be made, before writing.
+
+    Raises
+    ------
+    InputError
+        If ``folder`` is a file, or neither it nor its nearest existing parent is a
+        writable folder.
+    """
+    path = Path(folder)
+    target = path.resolve()
+    if target.exists() and not target.is_dir():
+        raise InputError("exists and is not a folder", source=path)
+    _check_folder(path, _nearest_existing(target))
+
+
+def _nearest_existing(path: Path) -> Path:
+    """``path`` or its nearest ancestor that exists (what a ``mkdir -p`` would start from)."""
+    while not path.exists() and path.parent != path:
+        path = path.parent
+    return path
+
+
+def _check_folder(output: Path, folder: Path) -> None:
+    """Refuse ``output`` unless ``folder`` (where it would be written) is a writable folder.
+
+    The reasons are the system's words, as a failed write would give them.
+    """
+    if not folder.exists():
+        reason = errno.ENOENT
+    elif not folder.is_dir():
+        reason = errno.ENOTDIR
+    elif not os.access(folder, os.W_OK | os.X_OK):
+        reason = errno.EACCES
+    else:
+        return
+    raise InputError(f"cannot be written ({os.strerror(reason)})", source=output)

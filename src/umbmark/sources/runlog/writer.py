@@ -1,0 +1,83 @@
+"""Writing umbmark run logs (the format is described in :mod:`umbmark.sources.runlog.reader`)."""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from umbmark.outputs.atomic import atomic_write_text
+from umbmark.sources.runlog.reader import FORMAT_NAME, LOG_COLUMNS, METADATA_FILE, LogMetadata
+
+__all__ = ["format_metadata", "write_log_csv", "write_metadata"]
+
+
+def format_metadata(metadata: LogMetadata) -> str:
+    """The text of a run log's ``metadata.yaml``."""
+    body: dict[str, Any] = {
+        "format": FORMAT_NAME,
+        "version": 1,
+        "wheel_data": metadata.wheel_data,
+        "wheel_diameter": metadata.wheel_diameter,
+        "wheelbase": metadata.wheelbase,
+        "encoder_resolution": metadata.encoder_resolution,
+        "gear_ratio": metadata.gear_ratio,
+    }
+    if metadata.side_length is not None:
+        body["side_length"] = metadata.side_length
+    body["c_left"] = metadata.c_left
+    body["c_right"] = metadata.c_right
+    body["wheel_separation_multiplier"] = metadata.separation_multiplier
+    body.update(metadata.extra)
+    header = "# umbmark run log: lengths in metres, angles in radians, time in seconds\n"
+    return header + yaml.safe_dump(body, sort_keys=False)
+
+
+def write_metadata(folder: str | Path, metadata: LogMetadata) -> Path:
+    """Write ``metadata.yaml`` into ``folder`` (created if missing)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / METADATA_FILE
+    atomic_write_text(path, format_metadata(metadata))
+    return path
+
+
+def write_log_csv(
+    path: str | Path,
+    time: NDArray[np.float64],
+    pose: NDArray[np.float64] | None,
+    wheels: NDArray[np.float64] | NDArray[np.int64],
+    comment: str = "",
+) -> None:
+    """Write one run-log CSV.
+
+    Parameters
+    ----------
+    time : array, shape (n,)
+        Seconds.
+    pose : array, shape (n, 3), or None
+        Ground truth ``x, y, theta`` [m, rad]; a row of NaN leaves its cells empty.
+    wheels : array, shape (n, 2)
+        Cumulative ``left, right`` counts (integers) or wheel angles [rad].
+    """
+    out = io.StringIO()
+    out.write("".join(f"# {line}\n" for line in comment.splitlines()))
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(LOG_COLUMNS)
+    integer = np.issubdtype(np.asarray(wheels).dtype, np.integer)
+    for i in range(len(time)):
+        row: list[str] = [f"{time[i]:.6f}"]
+        if pose is None or np.isnan(pose[i]).any():
+            row += ["", "", ""]
+        else:
+            row += [f"{pose[i, 0]:.6f}", f"{pose[i, 1]:.6f}", f"{pose[i, 2]:.8f}"]
+        w: Sequence[Any] = wheels[i]
+        row += [str(int(v)) for v in w] if integer else [f"{float(v):.9f}" for v in w]
+        writer.writerow(row)
+    atomic_write_text(path, out.getvalue())

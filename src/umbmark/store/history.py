@@ -1,0 +1,484 @@
+"""A robot's calibration history in an SQLite file (standard library :mod:`sqlite3`).
+
+:class:`History` keeps, per robot (a name with its nominal wheelbase and wheel
+diameter), every calibration recorded: when, by which method, from which inputs (with
+their SHA-256), the errors found with their standard errors, the parameters active during
+the runs and the new ones, and whether they were applied. The file carries a schema
+version (``PRAGMA user_version``) and is brought up to date by :data:`MIGRATIONS`, applied
+in order; it is written in WAL mode with a busy timeout, so that several processes may
+record into it at once.
+
+What the robot is, as opposed to what a pass measured relative to the parameters active
+during it, and whether that drifts: :mod:`umbmark.store.drift`.
+
+The default file is ``$UMBMARK_HISTORY``, else ``$XDG_DATA_HOME/umbmark/history.sqlite3``
+(``~/.local/share/umbmark/history.sqlite3``).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+import os
+import sqlite3
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from umbmark.core.errors import InputError
+from umbmark.store.drift import DEFINITIONS, DRIFT_MIN_CALIBRATIONS, DRIFT_SIGMAS, drift_verdict
+from umbmark.store.records import CalibrationRecord, RobotRecord
+
+if TYPE_CHECKING:
+    from umbmark.calibration.verdict import Verdict
+    from umbmark.jobs.calibrate import CalibrationReport
+    from umbmark.jobs.inputs import SourceOptions
+
+__all__ = [
+    "DEFINITIONS",
+    "DRIFT_MIN_CALIBRATIONS",
+    "DRIFT_SIGMAS",
+    "MIGRATIONS",
+    "SCHEMA_VERSION",
+    "CalibrationRecord",
+    "History",
+    "RobotRecord",
+    "compose_last_applied",
+    "default_history_path",
+    "drift_verdict",
+]
+
+#: How long a writer waits for another one's lock [s].
+BUSY_TIMEOUT = 30.0
+#: How far a robot's nominal wheelbase or wheel diameter may differ (relative).
+IDENTITY_TOLERANCE = 1e-6
+
+
+def _migrate_1(db: sqlite3.Connection) -> None:
+    """Version 1: the robots and their calibrations."""
+    db.execute(
+        """CREATE TABLE robots (
+            name TEXT PRIMARY KEY,
+            wheelbase REAL NOT NULL,
+            wheel_diameter REAL,
+            created TEXT NOT NULL
+        )"""
+    )
+    db.execute(
+        """CREATE TABLE calibrations (
+            id INTEGER PRIMARY KEY AUTOINCREMENT,
+            robot TEXT NOT NULL REFERENCES robots(name),
+            time TEXT NOT NULL,
+            method TEXT NOT NULL,
+            inputs TEXT NOT NULL,
+            E_d REAL NOT NULL,
+            E_b REAL NOT NULL,
+            E_s REAL,
+            e_max_syst REAL,
+            standard_errors TEXT NOT NULL,
+            active TEXT NOT NULL,
+            new TEXT NOT NULL,
+            applied INTEGER NOT NULL DEFAULT 0
+        )"""
+    )
+    db.execute("CREATE INDEX calibrations_robot ON calibrations(robot, id)")
+
+
+def _migrate_2(db: sqlite3.Connection) -> None:
+    """Version 2: each calibration's verdict (``{"level", "reasons", "instead"}`` as JSON;
+    NULL for the calibrations recorded before, whose verdict is unknown)."""
+    db.execute("ALTER TABLE calibrations ADD COLUMN verdict TEXT")
+
+
+#: The schema's migrations: ``MIGRATIONS[k]`` takes a file from version ``k`` to ``k + 1``.
+MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_migrate_1, _migrate_2)
+#: The schema version this umbmark writes.
+SCHEMA_VERSION = len(MIGRATIONS)
+
+
+def default_history_path() -> Path:
+    """The history file used when none is given.
+
+    Returns
+    -------
+    Path
+        ``$UMBMARK_HISTORY``, else ``$XDG_DATA_HOME/umbmark/history.sqlite3``, else
+        ``~/.local/share/umbmark/history.sqlite3``.
+    """
+    given = os.environ.get("UMBMARK_HISTORY")
+    if given:
+        return Path(given)
+    data = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(data) / "umbmark" / "history.sqlite3"
+
+
+def _sha256(path: Path) -> str | None:
+    """SHA-256 of a file, or of a folder's files (relative names and contents, sorted)."""
+    digest = hashlib.sha256()
+    if path.is_file():
+        files = [path]
+    elif path.is_dir():
+        files = sorted(p for p in path.rglob("*") if p.is_file())
+    else:
+        return None
+    for file in files:
+        if path.is_dir():
+            digest.update(file.relative_to(path).as_posix().encode() + b"\0")
+        with file.open("rb") as stream:
+            for block in iter(lambda: stream.read(1 << 20), b""):
+                digest.update(block)
+    return digest.hexdigest()
+
+
+def _now() -> str:
+    return dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+
+
+def _same(a: float, b: float) -> bool:
+    return abs(a - b) <= IDENTITY_TOLERANCE * max(abs(a), abs(b), 1e-12)
+
+
+class History:
+    """The calibration history in one SQLite file.
+
+    Parameters
+    ----------
+    path : path, optional
+        The file (created with its folder when missing); :func:`default_history_path`
+        when None.
+
+    Raises
+    ------
+    InputError
+        When the file is not an SQLite database, or is of a newer schema.
+    """
+
+    def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
+        self.path = Path(path) if path is not None else default_history_path()
+        if self.path.is_dir():
+            raise InputError("is a folder, not a history file", source=self.path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._migrate()
+
+    @contextmanager
+    def _connect(self, *, write: bool = False) -> Iterator[sqlite3.Connection]:
+        """A connection in one transaction (``BEGIN IMMEDIATE`` when writing)."""
+        try:
+            db = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT, isolation_level=None)
+        except sqlite3.Error as exc:
+            raise InputError(f"cannot open the history: {exc}", source=self.path) from None
+        try:
+            db.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT * 1000)}")
+            db.execute("PRAGMA foreign_keys = ON")
+            db.execute("BEGIN IMMEDIATE" if write else "BEGIN")
+            try:
+                yield db
+            except BaseException:
+                db.execute("ROLLBACK")
+                raise
+            db.execute("COMMIT")
+        except sqlite3.DatabaseError as exc:
+            raise InputError(f"not a usable history file ({exc})", source=self.path) from None
+        finally:
+            db.close()
+
+    def _migrate(self) -> None:
+        """Set WAL mode and bring the schema to :data:`SCHEMA_VERSION`."""
+        try:
+            db = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT, isolation_level=None)
+            try:
+                db.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT * 1000)}")
+                if db.execute("PRAGMA journal_mode").fetchone()[0] != "wal":
+                    db.execute("PRAGMA journal_mode = WAL")
+            finally:
+                db.close()
+        except sqlite3.DatabaseError as exc:
+            raise InputError(f"not a usable history file ({exc})", source=self.path) from None
+        with self._connect(write=True) as db:
+            version = int(db.execute("PRAGMA user_version").fetchone()[0])
+            if version > SCHEMA_VERSION:
+                raise InputError(
+                    f"history schema version {version} is newer than this umbmark's "
+                    f"({SCHEMA_VERSION}): upgrade umbmark",
+                    source=self.path,
+                )
+            for number, migration in enumerate(MIGRATIONS[version:], start=version + 1):
+                migration(db)
+                db.execute(f"PRAGMA user_version = {number}")
+
+    @property
+    def schema_version(self) -> int:
+        """The file's schema version (``PRAGMA user_version``)."""
+        with self._connect() as db:
+            return int(db.execute("PRAGMA user_version").fetchone()[0])
+
+    def record(
+        self,
+        robot: str,
+        report: CalibrationReport,
+        inputs: Sequence[str | os.PathLike[str]] = (),
+    ) -> int:
+        """Record a calibration of ``robot``; a new robot is added with the report's
+        nominal wheelbase and wheel diameter.
+
+        Parameters
+        ----------
+        robot : str
+            The robot's name.
+        report : CalibrationReport
+            The calibration.
+        inputs : sequence of path
+            Its inputs (hashed with SHA-256 when they are files or folders).
+
+        Returns
+        -------
+        int
+            The calibration's id.
+
+        Raises
+        ------
+        InputError
+            When ``robot`` exists with another nominal wheelbase or wheel diameter (a
+            diameter unknown on either side is no difference; the first one known is the
+            robot's from then on).
+        """
+        if not robot.strip():
+            raise InputError("--robot: give a non-empty name")
+        data = report.to_dict()
+        active = report.calibration.active
+        hashed = [{"name": os.fspath(p), "sha256": _sha256(Path(os.fspath(p)))} for p in inputs]
+        with self._connect(write=True) as db:
+            row = db.execute(
+                "SELECT wheelbase, wheel_diameter FROM robots WHERE name = ?", (robot,)
+            ).fetchone()
+            if row is None:
+                db.execute(
+                    "INSERT INTO robots (name, wheelbase, wheel_diameter, created) "
+                    "VALUES (?, ?, ?, ?)",
+                    (robot, active.wheelbase, active.wheel_diameter, _now()),
+                )
+            else:
+                self._check(robot, report, (row[0], row[1]))
+                if row[1] is None and active.wheel_diameter is not None:
+                    db.execute(  # the first calibration that knows it says the diameter
+                        "UPDATE robots SET wheel_diameter = ? WHERE name = ?",
+                        (active.wheel_diameter, robot),
+                    )
+            cursor = db.execute(
+                "INSERT INTO calibrations (robot, time, method, inputs, E_d, E_b, E_s, "
+                "e_max_syst, standard_errors, active, new, applied, verdict) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, ?)",
+                (
+                    robot,
+                    report.created.astimezone(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
+                    data["method"],
+                    json.dumps(hashed),
+                    data["E_d"],
+                    data["E_b"],
+                    data["E_s"],
+                    data["e_max_syst"],
+                    json.dumps(data["standard_errors"]),
+                    json.dumps(data["active"]),
+                    json.dumps(data["new"]),
+                    json.dumps(data["apply"]),
+                ),
+            )
+            return int(cursor.lastrowid or 0)
+
+    def recorded_line(
+        self, robot: str, id: int, verdict: Verdict | None = None, *, forced: bool = False
+    ) -> str:
+        """One line saying that calibration ``id`` of ``robot`` was recorded, and how to
+        mark it applied; for a ``verdict`` "do not apply", that it is not to be applied
+        (``forced``: its parameters were written all the same, and the command that marks
+        it applied needs ``--force``)."""
+        import shlex
+
+        given = self.path != default_history_path()
+        mark = f"umbmark history {shlex.quote(robot)}"
+        mark += f" --history {shlex.quote(str(self.path))}" if given else ""
+        said = f"recorded as calibration {id} of robot {robot} in {self.path}"
+        if verdict is not None and not verdict.applies:
+            if forced:
+                return (
+                    f"{said}; its verdict is do not apply; if its new parameters are "
+                    f"configured on the robot all the same: {mark} --applied {id} --force"
+                )
+            return f"{said}; its verdict is do not apply: not to be configured on the robot"
+        return f"{said}; once its new parameters are configured on the robot: {mark} --applied {id}"
+
+    def check_identity(self, robot: str, report: CalibrationReport) -> None:
+        """Refuse a calibration whose nominal parameters are not those of ``robot``.
+
+        Raises
+        ------
+        InputError
+            When ``robot`` is known with another nominal wheelbase or wheel diameter
+            (an unknown robot passes: :meth:`record` adds it; so does a diameter unknown
+            to the robot or to the calibration).
+        """
+        if not robot.strip():
+            raise InputError("--robot: give a non-empty name")
+        known = self.robot(robot)
+        if known is not None:
+            self._check(robot, report, (known.wheelbase, known.wheel_diameter))
+
+    def _check(
+        self, robot: str, report: CalibrationReport, nominal: tuple[float, float | None]
+    ) -> None:
+        active = report.calibration.active
+        for what, theirs, ours in (
+            ("wheelbase", nominal[0], active.wheelbase),
+            ("wheel diameter", nominal[1], active.wheel_diameter),
+        ):
+            if theirs is not None and ours is not None and not _same(theirs, ours):
+                raise InputError(
+                    f"this calibration is not robot {robot}: nominal {what} "
+                    f"{ours:g} m vs {theirs:g} m (give another --robot name)",
+                    source=self.path,
+                )
+
+    def robots(self) -> list[RobotRecord]:
+        """Every robot, by name, with its number of calibrations."""
+        with self._connect() as db:
+            rows = db.execute(
+                "SELECT r.name, r.wheelbase, r.wheel_diameter, r.created, COUNT(c.id) "
+                "FROM robots r LEFT JOIN calibrations c ON c.robot = r.name "
+                "GROUP BY r.name ORDER BY r.name"
+            ).fetchall()
+        return [RobotRecord(*row) for row in rows]
+
+    def robot(self, name: str) -> RobotRecord | None:
+        """The robot of this name, or None."""
+        return next((r for r in self.robots() if r.name == name), None)
+
+    def calibrations(self, robot: str) -> list[CalibrationRecord]:
+        """The robot's calibrations, oldest first (empty for an unknown robot)."""
+        with self._connect() as db:
+            rows = db.execute(
+                "SELECT id, robot, time, method, inputs, E_d, E_b, E_s, e_max_syst, "
+                "standard_errors, active, new, applied, verdict FROM calibrations "
+                "WHERE robot = ? ORDER BY id",
+                (robot,),
+            ).fetchall()
+        return [_calibration(row) for row in rows]
+
+    def mark_applied(self, robot: str, id: int, *, force: bool = False) -> None:
+        """Mark calibration ``id`` of ``robot`` as applied to the robot.
+
+        Parameters
+        ----------
+        robot : str
+        id : int
+        force : bool
+            Mark it even when its verdict was "do not apply".
+
+        Raises
+        ------
+        InputError
+            When the robot has no calibration ``id``, or its verdict was "do not apply"
+            (without ``force``).
+        """
+        with self._connect(write=True) as db:
+            row = db.execute(
+                "SELECT verdict FROM calibrations WHERE robot = ? AND id = ?", (robot, id)
+            ).fetchone()
+            verdict = None if row is None or row[0] is None else json.loads(row[0])
+            if verdict is not None and verdict.get("level") == "do-not-apply" and not force:
+                reasons = "; ".join(verdict.get("reasons") or [])
+                raise InputError(
+                    f"--applied {id}: calibration {id} of {robot} was judged do not apply "
+                    f"({reasons}): its parameters are not to be configured on the robot; "
+                    "--force marks it applied all the same",
+                    source=self.path,
+                )
+            cursor = db.execute(
+                "UPDATE calibrations SET applied = 1 WHERE robot = ? AND id = ?", (robot, id)
+            )
+            if cursor.rowcount != 1:
+                raise InputError(
+                    f"--applied {id}: robot {robot} has no calibration {id}", source=self.path
+                )
+
+    def last_applied(self, robot: str) -> CalibrationRecord | None:
+        """The robot's latest calibration marked applied, or None."""
+        applied = [c for c in self.calibrations(robot) if c.applied]
+        return applied[-1] if applied else None
+
+    def drift(self, robot: str) -> str | None:
+        """:func:`drift_verdict` of the robot's calibrations."""
+        return drift_verdict(self.calibrations(robot))
+
+
+def _calibration(row: Sequence[Any]) -> CalibrationRecord:
+    return CalibrationRecord(
+        id=int(row[0]),
+        robot=str(row[1]),
+        time=str(row[2]),
+        method=str(row[3]),
+        inputs=json.loads(row[4]),
+        E_d=float(row[5]),
+        E_b=float(row[6]),
+        E_s=None if row[7] is None else float(row[7]),
+        e_max_syst=None if row[8] is None else float(row[8]),
+        standard_errors=json.loads(row[9]),
+        active=json.loads(row[10]),
+        new=json.loads(row[11]),
+        applied=bool(row[12]),
+        verdict=None if row[13] is None else json.loads(row[13]),
+    )
+
+
+def compose_last_applied(
+    store: History, robot: str, options: SourceOptions
+) -> tuple[SourceOptions, str | None]:
+    """Take the robot's last applied calibration as the parameters active during the runs.
+
+    Only when the options say nothing of them (no ``current_params``, ``current_c_l``,
+    ``current_c_r`` or ``current_separation_multiplier``): a second pass then composes
+    with what the robot runs now.
+
+    Parameters
+    ----------
+    store : History
+    robot : str
+    options : SourceOptions
+        The source options of :func:`umbmark.calibrate`.
+
+    Returns
+    -------
+    options : SourceOptions
+        The options, with the multipliers of the last applied calibration when taken.
+    note : str or None
+        A note saying so, when taken.
+    """
+    given = (
+        options.get("current_params"),
+        options.get("current_c_l"),
+        options.get("current_c_r"),
+        options.get("current_separation_multiplier"),
+    )
+    if any(value is not None for value in given):
+        return options, None
+    last = store.last_applied(robot)
+    if last is None:
+        return options, None
+    c_left = float(last.new["c_L"])
+    c_right = float(last.new["c_R"])
+    separation = float(last.new["wheel_separation_multiplier"])
+    composed = options.copy()
+    composed["current_c_l"] = c_left
+    composed["current_c_r"] = c_right
+    composed["current_separation_multiplier"] = separation
+    from umbmark.core.messages import info
+
+    note = info(
+        f"robot {robot}: taken as active during the runs, the new parameters of its last "
+        f"applied calibration {last.id} ({last.time[:19]}Z): c_L {c_left:.6f}, c_R "
+        f"{c_right:.6f}, wheel_separation_multiplier {separation:.6f} (give "
+        "--current-params or --current-c-l/--current-c-r/--current-separation-multiplier "
+        "to say otherwise)"
+    )
+    return composed, note
