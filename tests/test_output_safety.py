@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import umbmark
-from umbmark.outputs.atomic import atomic_path, atomic_write_text
+from umbmark.core.atomic import atomic_path, atomic_write_text
 from umbmark.outputs.files import OutputPlan, check_folder_output
 
 from helpers import api_error, cli_error, run_cli

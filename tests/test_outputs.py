@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from umbmark.core.atomic import atomic_path, atomic_write_text
 from umbmark.core.errors import InputError
-from umbmark.outputs.atomic import atomic_path, atomic_write_text
 from umbmark.sources.params.reader import read_controller_params as read_active_multipliers
 
 

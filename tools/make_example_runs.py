@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from umbmark.outputs.atomic import atomic_write_text
+from umbmark.core.atomic import atomic_write_text
 from umbmark.sim.experiments import umbmark_trials
 from umbmark.sim.reproduce import FIG11_E_B, FIG11_E_D, PAPER_NOISE
 from umbmark.sim.robot import LABMATE, VirtualRobot

@@ -29,7 +29,7 @@ import importlib
 import inspect
 from typing import TYPE_CHECKING
 
-__version__ = "0.2.0"
+from umbmark.core.version import __version__
 
 _EXPORTS = {
     # jobs: one function per command, and their reports

@@ -13,7 +13,6 @@ from collections.abc import Sequence
 
 import click
 
-from umbmark import __version__
 from umbmark.cli.calibrate import calibrate
 from umbmark.cli.common import EXIT_BAD_INPUT, error_line, reading_bar
 from umbmark.cli.demo import demo
@@ -28,6 +27,7 @@ from umbmark.cli.simulate import simulate
 from umbmark.cli.study import study
 from umbmark.cli.validate import validate
 from umbmark.core.errors import InputError
+from umbmark.core.version import __version__
 
 __all__ = ["cli", "main"]
 

@@ -18,10 +18,11 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-from umbmark import __version__
 from umbmark.benchmark.returns import Benchmark, Cluster, sem_verdict
 from umbmark.calibration.compose import Calibration
+from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
+from umbmark.core.version import __version__
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.jobs.estimate import LOGGED_METHODS, calibrate_runs, sessions_disagree
 from umbmark.jobs.inputs import (
@@ -34,7 +35,6 @@ from umbmark.jobs.inputs import (
 )
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
-from umbmark.outputs.atomic import atomic_write_text
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.association import Association
 from umbmark.sources.params.reader import CalibratedParams, ControllerParams

@@ -163,7 +163,7 @@ def demo(
     InputError
         For an option out of range, or a folder that cannot be written.
     """
-    from umbmark.outputs.atomic import atomic_write_text
+    from umbmark.core.atomic import atomic_write_text
     from umbmark.outputs.plotting import save_figure
     from umbmark.sim.experiments import calibrate_robot, umbmark_trials
     from umbmark.sim.reproduce import FIG11_E_B, FIG11_E_D, PAPER_NOISE, SIDE

@@ -33,7 +33,7 @@ def example(
     InputError
         If ``path`` exists and ``force`` is not set, or cannot be written.
     """
-    from umbmark.outputs.atomic import atomic_write_text
+    from umbmark.core.atomic import atomic_write_text
 
     if real:
         if path is None:
@@ -70,7 +70,7 @@ def example_sessions(folder: str | os.PathLike[str], *, force: bool = False) -> 
     InputError
         If ``folder`` holds files already and ``force`` is not set, or cannot be written.
     """
-    from umbmark.outputs.atomic import atomic_path
+    from umbmark.core.atomic import atomic_path
 
     def write(path: Path, data: bytes) -> None:
         with atomic_path(path) as tmp:

@@ -18,15 +18,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from umbmark import __version__
 from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
+from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
 from umbmark.core.messages import info
+from umbmark.core.version import __version__
 from umbmark.jobs.calibrate import DEFAULT_METHOD, CalibrationReport, calibrate
 from umbmark.jobs.inputs import RunSource, SourceOptions, source_name
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
-from umbmark.outputs.atomic import atomic_write_text
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack

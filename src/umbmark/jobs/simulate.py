@@ -19,10 +19,10 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from umbmark import __version__
 from umbmark.core.bounds import ENCODER_RESOLUTION_RANGE, GEAR_RATIO_RANGE, check_range
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, python_api
+from umbmark.core.version import __version__
 from umbmark.jobs.inputs import (
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,

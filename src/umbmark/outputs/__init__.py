@@ -1,2 +1,2 @@
 """Everything umbmark writes: runs tables, run logs, controller parameters, TUM
-trajectories, figures; always whole or not at all (:mod:`umbmark.outputs.atomic`)."""
+trajectories, figures; always whole or not at all (:mod:`umbmark.core.atomic`)."""

@@ -17,8 +17,8 @@ from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark import __version__
 from umbmark.benchmark.returns import scatter_standing, sem_verdict
+from umbmark.core.version import __version__
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
 if TYPE_CHECKING:

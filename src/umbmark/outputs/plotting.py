@@ -19,10 +19,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.benchmark.returns import Benchmark
+from umbmark.core.atomic import atomic_path
 from umbmark.core.conventions import Direction
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
-from umbmark.outputs.atomic import atomic_path
 from umbmark.store.history import CalibrationRecord, RobotRecord, drift_verdict
 
 if TYPE_CHECKING:

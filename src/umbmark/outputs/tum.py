@@ -20,10 +20,10 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
-from umbmark.outputs.atomic import atomic_write_text
 
 __all__ = ["TUM_TIMES", "TumTime", "check_tum_time", "format_tum", "write_tum_runs"]
 

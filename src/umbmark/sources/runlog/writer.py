@@ -12,7 +12,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from umbmark.outputs.atomic import atomic_write_text
+from umbmark.core.atomic import atomic_write_text
 from umbmark.sources.runlog.reader import FORMAT_NAME, LOG_COLUMNS, METADATA_FILE, LogMetadata
 
 __all__ = ["format_metadata", "write_log_csv", "write_metadata"]

@@ -8,9 +8,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from umbmark.calibration.compose import ActiveParams
+from umbmark.core.atomic import atomic_write_text
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
-from umbmark.outputs.atomic import atomic_write_text
 from umbmark.sources.runs_table.reader import ACTIVE_TAG, REQUIRED_COLUMNS
 
 __all__ = ["active_of", "format_active", "format_runs_table", "write_runs_table"]
