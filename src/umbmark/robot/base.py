@@ -1,0 +1,202 @@
+"""What the self-calibration needs of a robot, and the values it exchanges with one.
+
+Frames and units follow :mod:`umbmark.core.conventions`: x forward, y to the left,
+headings counter-clockwise positive, metres, radians, seconds. Poses are planar. The
+odometry frame is the robot's own (``odom``); a sensor's mounting is its pose in the
+robot's base frame (``base_link``), as TF gives it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "ApplyResult",
+    "DriveParams",
+    "LaserScan",
+    "Pose2D",
+    "RangeReading",
+    "Robot",
+    "Stamped",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """A planar pose: position [m] and heading [rad]."""
+
+    x: float = 0.0
+    y: float = 0.0
+    theta: float = 0.0
+
+    def compose(self, other: Pose2D) -> Pose2D:
+        """``self * other``: ``other`` (given in this pose's frame) in the outer frame."""
+        c, s = math.cos(self.theta), math.sin(self.theta)
+        return Pose2D(
+            self.x + c * other.x - s * other.y,
+            self.y + s * other.x + c * other.y,
+            self.theta + other.theta,
+        )
+
+    def inverse(self) -> Pose2D:
+        """The outer frame's origin seen from this pose."""
+        c, s = math.cos(self.theta), math.sin(self.theta)
+        return Pose2D(-c * self.x - s * self.y, s * self.x - c * self.y, -self.theta)
+
+    def relative_to(self, origin: Pose2D) -> Pose2D:
+        """This pose in the frame of ``origin`` (both in the same outer frame)."""
+        return origin.inverse().compose(self)
+
+
+@dataclass(frozen=True)
+class Stamped:
+    """A pose at a time of the robot's clock [s]."""
+
+    time: float
+    pose: Pose2D
+
+
+@dataclass(frozen=True)
+class LaserScan:
+    """One sweep of a planar laser scanner (``sensor_msgs/LaserScan``).
+
+    Attributes
+    ----------
+    time : float
+        The robot's clock at the scan [s].
+    angle_min, angle_increment : float
+        Angle of the first beam and between beams [rad], in the laser's frame.
+    ranges : array, shape (n,)
+        Measured ranges [m]; NaN or inf, or outside ``range_min .. range_max``, is no return.
+    range_min, range_max : float
+        The scanner's valid range [m].
+    mount : Pose2D
+        The laser's pose in the robot's base frame (TF ``base_link -> laser``).
+    """
+
+    time: float
+    angle_min: float
+    angle_increment: float
+    ranges: FloatArray
+    range_min: float
+    range_max: float
+    mount: Pose2D = field(default_factory=Pose2D)
+
+    def angles(self) -> FloatArray:
+        """Beam angles [rad], shape (n,), in the laser's frame."""
+        return self.angle_min + self.angle_increment * np.arange(self.ranges.size)
+
+
+@dataclass(frozen=True)
+class RangeReading:
+    """Simultaneous readings of a few single-beam range sensors (``sensor_msgs/Range``),
+    as the paper's "sonar calibrator": two facing one wall, one the other.
+
+    Attributes
+    ----------
+    time : float
+    ranges : array, shape (k,)
+        Ranges [m] (NaN: no echo).
+    mounts : tuple of Pose2D
+        Each sensor's pose in the robot's base frame (it measures along its x axis).
+    """
+
+    time: float
+    ranges: FloatArray
+    mounts: tuple[Pose2D, ...]
+
+
+@dataclass(frozen=True)
+class DriveParams:
+    """The odometry's parameters as a ``diff_drive_controller`` holds them.
+
+    The UMBmark correction maps onto the multipliers one to one (``paper-notes.md``):
+    ``left_wheel_radius_multiplier`` is ``c_L``, ``right_wheel_radius_multiplier`` is
+    ``c_R``, ``wheel_separation_multiplier`` carries ``E_b``.
+    """
+
+    wheel_separation: float
+    wheel_radius: float
+    wheel_separation_multiplier: float = 1.0
+    left_wheel_radius_multiplier: float = 1.0
+    right_wheel_radius_multiplier: float = 1.0
+
+    @property
+    def wheelbase(self) -> float:
+        """The wheelbase the odometry uses [m]."""
+        return self.wheel_separation * self.wheel_separation_multiplier
+
+
+ApplyMethod = Literal["reconfigure", "yaml", "none"]
+
+
+@dataclass(frozen=True)
+class ApplyResult:
+    """What applying parameters did: how, whether the controller now runs with them, the
+    file written (if any), and a line for people."""
+
+    method: ApplyMethod
+    active: bool
+    message: str
+    file: str | None = None
+
+
+@runtime_checkable
+class Robot(Protocol):
+    """A differential-drive robot, as the self-calibration drives and reads it.
+
+    Every reading is the latest one with its time on the robot's clock (:meth:`now`), or
+    None when there is none yet. :meth:`wait` lets the robot's time pass: a virtual robot
+    simulates it (as fast as the computer allows), a real one sleeps on its clock (ROS
+    time, so ``/use_sim_time`` works).
+    """
+
+    name: str
+
+    def now(self) -> float:
+        """The robot's clock [s]."""
+        ...
+
+    def wait(self, duration: float) -> None:
+        """Let ``duration`` seconds of the robot's time pass."""
+        ...
+
+    def send_velocity(self, linear: float, angular: float) -> None:
+        """Command a body velocity: ``linear`` [m/s] forward, ``angular`` [rad/s] ccw."""
+        ...
+
+    def odometry(self) -> Stamped | None:
+        """The latest odometry pose (frame ``odom``)."""
+        ...
+
+    def scan(self) -> LaserScan | None:
+        """The latest laser scan, if the robot has a scanner."""
+        ...
+
+    def ranges(self) -> RangeReading | None:
+        """The latest range-sensor readings, if the robot has them."""
+        ...
+
+    def ground_truth(self) -> Stamped | None:
+        """The latest ground-truth pose (motion capture), if there is one."""
+        ...
+
+    def drive_params(self) -> DriveParams:
+        """The parameters the odometry runs with now."""
+        ...
+
+    def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
+        """Make the odometry run with ``params`` (or write them where the controller reads
+        them, saying whether it runs with them yet)."""
+        ...
+
+    def close(self) -> None:
+        """Stop the robot (a zero velocity) and release what the adapter holds."""
+        ...
