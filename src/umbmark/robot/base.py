@@ -91,7 +91,9 @@ class LaserScan:
 
     def angles(self) -> FloatArray:
         """Beam angles [rad], shape (n,), in the laser's frame."""
-        return self.angle_min + self.angle_increment * np.arange(self.ranges.size)
+        return np.asarray(
+            self.angle_min + self.angle_increment * np.arange(self.ranges.size), dtype=np.float64
+        )
 
 
 @dataclass(frozen=True)
