@@ -1,0 +1,271 @@
+"""The virtual robot: a differential-drive robot with known errors behind the
+:class:`~umbmark.robot.base.Robot` interface, simulated as fast as the computer allows.
+
+Each control period (``period``, 20 ms by default: a 50 Hz ``diff_drive_controller``):
+
+1. the commanded body velocity becomes wheel speeds through the controller's *current*
+   parameters (``wheel_separation * wheel_separation_multiplier``, ``wheel_radius *
+   {left,right}_wheel_radius_multiplier``), as diff_drive_controller's inverse kinematics;
+   a command older than ``command_timeout`` is a stop (its ``cmd_vel_timeout``);
+2. the true wheels (diameters ``D_L``, ``D_R`` from ``E_d`` and ``E_s``, wheelbase
+   ``E_b b``: :meth:`umbmark.sim.robot.VirtualRobot.with_errors`, the batch simulator's
+   definitions) roll that far over the floor, less the slip of the simulator's noise model
+   (Gaussian, standard deviation ``slip * sqrt(travel)``), and move the robot along the
+   arc they describe;
+3. the encoders count whole pulses;
+4. the odometry is updated exactly as ros_controllers' ``diff_drive_controller::Odometry``
+   does: the wheel positions times the current radii, differenced with the previous ones
+   *as stored in metres*, integrated as an exact arc. Changing a radius multiplier
+   therefore makes the next update jump by ``angle * (r_new - r_old)`` (the real
+   controller's behaviour): apply parameters while the robot stands and take the next
+   run's start from the odometry after that.
+
+The sensors (a planar laser, range sensors, motion capture) see a world of walls and
+clutter (:mod:`umbmark.robot.world`) from the true pose.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from umbmark.core.errors import InputError
+from umbmark.model.kinematics import WheelParams
+from umbmark.robot.base import (
+    ApplyMethod,
+    ApplyResult,
+    DriveParams,
+    LaserScan,
+    Pose2D,
+    RangeReading,
+    Stamped,
+)
+from umbmark.sim.robot import NoiseModel
+from umbmark.sim.robot import VirtualRobot as RobotTruth
+
+if TYPE_CHECKING:
+    from umbmark.robot.world import World
+
+__all__ = ["VirtualRobot"]
+
+#: The longest stretch of robot time one :meth:`VirtualRobot.wait` may simulate [s].
+LONGEST_WAIT = 3600.0
+
+
+class VirtualRobot:
+    """A simulated differential-drive robot with systematic errors ``E_d``, ``E_b``, ``E_s``.
+
+    Parameters
+    ----------
+    E_d, E_b, E_s : float
+        The robot's true ``D_R / D_L``, wheelbase over the nominal one, and mean wheel
+        diameter over the nominal one (Sec. 2.2).
+    wheelbase, wheel_diameter : float
+        The nominal wheelbase and wheel diameter [m]: what its controller is configured with
+        (``wheel_separation``, ``2 * wheel_radius``).
+    slip : float
+        Wheel slip [m^(1/2)] (:class:`umbmark.sim.robot.NoiseModel`).
+    seed : int, optional
+        Seeds the slip and the sensors' noise.
+    encoder_resolution, gear_ratio : float
+        Encoder pulses per motor revolution, motor revolutions per wheel revolution.
+    period : float
+        The controller's period [s].
+    world : World, optional
+        What the sensors see (default: :func:`umbmark.robot.world.corner_world`, an
+        L-shaped corner behind the start with some clutter).
+    params : DriveParams, optional
+        The controller's parameters at the start (default: nominal, multipliers 1).
+    command_timeout : float
+        A velocity command older than this [s] stops the wheels.
+    """
+
+    name = "virtual robot"
+
+    def __init__(
+        self,
+        E_d: float = 1.0,
+        E_b: float = 1.0,
+        E_s: float = 1.0,
+        wheelbase: float = 0.34,
+        wheel_diameter: float = 0.15,
+        slip: float = 0.0,
+        seed: int | None = None,
+        *,
+        encoder_resolution: float = 2000.0,
+        gear_ratio: float = 20.0,
+        period: float = 0.02,
+        world: World | None = None,
+        params: DriveParams | None = None,
+        command_timeout: float = 0.5,
+    ) -> None:
+        nominal = WheelParams(
+            wheelbase=wheelbase,
+            wheel_diameter=wheel_diameter,
+            encoder_resolution=encoder_resolution,
+            gear_ratio=gear_ratio,
+        )
+        #: The robot's truth (its diameters, wheelbase and slip).
+        self.truth = RobotTruth.with_errors(nominal, E_d, E_b, E_s, NoiseModel(slip=slip))
+        if not (period > 0.0 and math.isfinite(period)):
+            raise InputError(f"period must be a positive time, got {period!r} s")
+        self.period = float(period)
+        self.command_timeout = float(command_timeout)
+        if world is None:
+            from umbmark.robot.world import corner_world
+
+            world = corner_world()
+        self.world = world
+        self._rng = np.random.default_rng(seed)
+        self._params = params or DriveParams(wheelbase, 0.5 * wheel_diameter)
+        self._pulses = gear_ratio * encoder_resolution  # per wheel revolution
+        self._time = 0.0
+        self._pose = world.start  # true pose in the world
+        self._angle = [0.0, 0.0]  # true wheel rotation [rad]
+        self._counts = [0, 0]
+        self._command = (0.0, 0.0, -math.inf)  # linear, angular, time sent
+        self._odom = [0.0, 0.0, 0.0]
+        self._old = [0.0, 0.0]  # the controller's previous wheel positions [m]
+        self._odom_time = 0.0
+        #: Every velocity command sent, with its time: ``(t, linear, angular)``.
+        self.commands: list[tuple[float, float, float]] = []
+
+    # --- the Robot interface ------------------------------------------------------------
+
+    def now(self) -> float:
+        """The robot's clock [s]."""
+        return self._time
+
+    def wait(self, duration: float) -> None:
+        """Simulate ``duration`` seconds, one controller period after the other."""
+        if not (0.0 <= duration <= LONGEST_WAIT):
+            raise InputError(f"wait {duration!r} s: give 0 to {LONGEST_WAIT:g} s")
+        steps = round(duration / self.period)
+        for _ in range(steps):
+            self._step()
+
+    def send_velocity(self, linear: float, angular: float) -> None:
+        """Command a body velocity [m/s, rad/s] (held until the next, or the timeout)."""
+        if not (math.isfinite(linear) and math.isfinite(angular)):
+            raise InputError(f"velocity ({linear!r}, {angular!r}) is not finite")
+        self._command = (float(linear), float(angular), self._time)
+        self.commands.append((self._time, float(linear), float(angular)))
+
+    def odometry(self) -> Stamped:
+        """The controller's odometry pose (frame ``odom``) at its last update."""
+        return Stamped(self._odom_time, Pose2D(*self._odom))
+
+    def scan(self) -> LaserScan | None:
+        """A laser scan from the true pose, if the world has a laser on the robot."""
+        return self.world.scan(self._pose, self._time, self._rng)
+
+    def ranges(self) -> RangeReading | None:
+        """The range sensors' readings from the true pose, if the robot has them."""
+        return self.world.ranges(self._pose, self._time, self._rng)
+
+    def ground_truth(self) -> Stamped | None:
+        """The true pose in the world's frame (as motion capture would give it)."""
+        return self.world.truth(self._pose, self._time, self._rng)
+
+    def drive_params(self) -> DriveParams:
+        """The parameters the controller runs with now."""
+        return self._params
+
+    def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
+        """Run with ``params``: ``reconfigure`` changes them at once (as dynamic_reconfigure
+        does, odometry jump included), ``yaml`` as a controller restarted on a new file
+        (the odometry starts again at zero), ``none`` leaves them."""
+        if method == "none":
+            return ApplyResult("none", False, "parameters not applied (apply: none)")
+        for name in (
+            "wheel_separation_multiplier",
+            "left_wheel_radius_multiplier",
+            "right_wheel_radius_multiplier",
+        ):
+            value = getattr(params, name)
+            if not (0.0 < value < math.inf):
+                raise InputError(f"{name} {value!r} is not a positive number")
+        self._params = replace(params)
+        if method == "yaml":
+            self._odom = [0.0, 0.0, 0.0]
+            self._old = self._wheel_positions()
+            return ApplyResult("yaml", True, "controller restarted with the new parameters")
+        return ApplyResult("reconfigure", True, "parameters reconfigured")
+
+    def close(self) -> None:
+        """Stop: a zero velocity."""
+        self.send_velocity(0.0, 0.0)
+
+    # --- what is simulated --------------------------------------------------------------
+
+    @property
+    def true_pose(self) -> Pose2D:
+        """The robot's true pose in the world [m, rad] (for checks against the truth)."""
+        return self._pose
+
+    def _wheel_positions(self) -> list[float]:
+        """The controller's wheel positions [m]: encoder angles times the current radii."""
+        p = self._params
+        step = 2.0 * math.pi / self._pulses
+        radius = p.wheel_radius
+        return [
+            self._counts[0] * step * radius * p.left_wheel_radius_multiplier,
+            self._counts[1] * step * radius * p.right_wheel_radius_multiplier,
+        ]
+
+    def _step(self) -> None:
+        dt = self.period
+        linear, angular, sent = self._command
+        if self._time - sent > self.command_timeout:
+            linear = angular = 0.0
+        p = self._params
+        separation = p.wheel_separation * p.wheel_separation_multiplier
+        r_left = p.wheel_radius * p.left_wheel_radius_multiplier
+        r_right = p.wheel_radius * p.right_wheel_radius_multiplier
+        turn_left = (linear - 0.5 * angular * separation) / r_left * dt  # wheel rotation [rad]
+        turn_right = (linear + 0.5 * angular * separation) / r_right * dt
+        truth = self.truth
+        travel_left = 0.5 * truth.diameter_left * turn_left
+        travel_right = 0.5 * truth.diameter_right * turn_right
+        slip = truth.noise.slip
+        if slip > 0.0:
+            noise = self._rng.standard_normal(2)
+            travel_left += slip * math.sqrt(abs(travel_left)) * float(noise[0])
+            travel_right += slip * math.sqrt(abs(travel_right)) * float(noise[1])
+        x, y, theta = self._pose.x, self._pose.y, self._pose.theta
+        x, y, theta = _arc(x, y, theta, travel_left, travel_right, truth.wheelbase)
+        self._pose = Pose2D(x, y, theta)
+        self._angle[0] += turn_left
+        self._angle[1] += turn_right
+        per_radian = self._pulses / (2.0 * math.pi)
+        self._counts = [math.floor(a * per_radian) for a in self._angle]
+        self._time += dt
+        # diff_drive_controller::Odometry::update
+        current = self._wheel_positions()
+        moved_left, moved_right = current[0] - self._old[0], current[1] - self._old[1]
+        self._old = current
+        x, y, theta = self._odom
+        self._odom = list(_arc(x, y, theta, moved_left, moved_right, separation))
+        self._odom_time = self._time
+
+
+def _arc(
+    x: float, y: float, theta: float, left: float, right: float, wheelbase: float
+) -> tuple[float, float, float]:
+    """The pose after the wheels travel ``left`` and ``right`` [m]: an exact arc
+    (``integrateExact`` of diff_drive_controller; the midpoint rule below 1e-6 rad)."""
+    linear = 0.5 * (left + right)
+    angular = (right - left) / wheelbase
+    if abs(angular) < 1e-6:
+        heading = theta + 0.5 * angular
+        return x + linear * math.cos(heading), y + linear * math.sin(heading), theta + angular
+    radius = linear / angular
+    after = theta + angular
+    return (
+        x + radius * (math.sin(after) - math.sin(theta)),
+        y - radius * (math.cos(after) - math.cos(theta)),
+        after,
+    )

@@ -1,0 +1,379 @@
+"""Driving one UMBmark run by the robot's own odometry, safely.
+
+A run (Sec. 5 of the paper) is four straight legs of length ``L``, each followed by an
+on-the-spot turn of 90 degrees (left for ccw, right for cw; the fourth turn at the end),
+all steered by the odometry: the robot believes it drove a perfect square, and its true
+return error is what UMBmark measures. So the odometry's own end pose must match the
+commanded one closely (:data:`DriveLimits.end_position`, :data:`DriveLimits.end_heading`).
+
+- **Legs** are closed-loop on the odometry: the speed ramps up and down within the
+  acceleration limit (``v <= sqrt(2 a d)`` on the way to the corner, a creep speed at the
+  last millimetres), the heading is held on the leg's direction and the robot steered back
+  onto the line (a heading term and a cross-track term), and the leg ends when the
+  odometry reaches the corner.
+- **Turns** are on the spot, ramped the same way in angle, to the odometry's heading
+  within :data:`DriveLimits.heading_tolerance`.
+- Between segments the robot stops completely; after the run it settles (the odometry
+  still for :data:`DriveLimits.settle_time`) before anything is measured.
+
+Safety comes first: a zero velocity is sent on any error or interruption and before any
+:class:`SafetyError` propagates: odometry older than ``stale_odometry``, an obstacle in the
+scan ahead, the odometry leaving the square plus ``margin``, or a run taking more than
+``time_factor`` times its expected time. Knows nothing of ROS: it drives a
+:class:`~umbmark.robot.base.Robot`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from umbmark.core.conventions import Direction, wrap_angle
+from umbmark.core.errors import InputError
+from umbmark.robot.base import LaserScan, Pose2D, Robot, Stamped
+
+__all__ = ["DriveLimits", "DrivenRun", "SafetyError", "drive_square", "stop_safely"]
+
+
+class SafetyError(RuntimeError):
+    """The robot was stopped for safety (a zero velocity was sent); the message says why."""
+
+
+@dataclass(frozen=True)
+class DriveLimits:
+    """How the square is driven, and the safety limits (SI units).
+
+    Attributes
+    ----------
+    speed, acceleration : float
+        Cruise speed on the legs [m/s] (the paper: 0.2) and its acceleration limit [m/s^2].
+    turn_rate, turn_acceleration : float
+        Top turn rate on the spot [rad/s] and its acceleration limit [rad/s^2].
+    creep_speed, creep_rate : float
+        The slowest speed [m/s] and turn rate [rad/s] when closing in.
+    period : float
+        Control period [s].
+    heading_gain, cross_track_gain : float
+        Line following on the legs: turn rate per heading error [1/s] and per metre of
+        cross-track error [1/(m s)].
+    position_tolerance, heading_tolerance : float
+        A leg ends within this of its corner along the leg [m]; a turn within this of its
+        heading [rad].
+    end_position, end_heading : float
+        The odometry's end pose must be this close to the commanded one [m, rad].
+    settle_time, still_speed : float
+        The robot has settled when the odometry moved less than ``still_speed`` [m/s, and
+        rad/s] for ``settle_time`` [s].
+    stale_odometry : float
+        Odometry older than this [s] stops the robot.
+    obstacle_distance, obstacle_half_angle : float
+        A scan return closer than this [m] ahead (within this half angle [rad] of the
+        direction of travel) stops the robot.
+    margin : float
+        The odometry leaving the square by more than this [m] stops the robot.
+    time_factor : float
+        A run taking more than this times its expected time stops the robot.
+    """
+
+    speed: float = 0.2
+    acceleration: float = 0.3
+    turn_rate: float = 0.8
+    turn_acceleration: float = 1.5
+    creep_speed: float = 0.01
+    creep_rate: float = 0.03
+    period: float = 0.02
+    heading_gain: float = 3.0
+    cross_track_gain: float = 6.0
+    position_tolerance: float = 0.0005
+    heading_tolerance: float = math.radians(0.02)
+    end_position: float = 0.005
+    end_heading: float = math.radians(0.1)
+    settle_time: float = 0.5
+    still_speed: float = 0.002
+    stale_odometry: float = 0.5
+    obstacle_distance: float = 0.3
+    obstacle_half_angle: float = math.radians(30.0)
+    margin: float = 0.5
+    time_factor: float = 2.0
+
+    def __post_init__(self) -> None:
+        bounds = {
+            "speed": (0.01, 1.0),
+            "acceleration": (0.01, 5.0),
+            "turn_rate": (0.05, 3.0),
+            "turn_acceleration": (0.05, 20.0),
+            "period": (0.001, 0.2),
+            "margin": (0.05, 5.0),
+            "time_factor": (1.2, 10.0),
+        }
+        for name, (low, high) in bounds.items():
+            value = getattr(self, name)
+            if not (low <= value <= high):
+                raise InputError(f"{name} {value!r} is outside {low:g} to {high:g}")
+
+    def expected_time(self, side: float) -> float:
+        """A run's time without stops or settling [s]: four legs and four turns, each an
+        acceleration-limited ramp up, cruise and ramp down."""
+
+        def ramp(distance: float, top: float, acceleration: float) -> float:
+            reach = top * top / acceleration  # the distance of ramping up and down
+            if distance <= reach:
+                return 2.0 * math.sqrt(distance / acceleration)
+            return 2.0 * top / acceleration + (distance - reach) / top
+
+        leg = ramp(side, self.speed, self.acceleration)
+        turn = ramp(0.5 * math.pi, self.turn_rate, self.turn_acceleration)
+        return 4.0 * (leg + turn)
+
+
+@dataclass(frozen=True)
+class DrivenRun:
+    """What one run drove, by the odometry.
+
+    Attributes
+    ----------
+    direction : Direction
+    start, end : Stamped
+        The odometry's settled pose before and after the run (frame ``odom``).
+    commanded_end : Pose2D
+        Where the odometry was told to end (the start pose).
+    odometry : array, shape (n, 4)
+        ``t, x, y, theta`` of every odometry reading during the run.
+    """
+
+    direction: Direction
+    start: Stamped
+    end: Stamped
+    commanded_end: Pose2D
+    odometry: np.ndarray
+
+    @property
+    def end_error(self) -> tuple[float, float]:
+        """How far the odometry's end is from the commanded end: distance [m], heading
+        [rad]."""
+        rel = self.end.pose.relative_to(self.commanded_end)
+        return math.hypot(rel.x, rel.y), abs(float(wrap_angle(rel.theta)))
+
+
+#: What the driver reports while it drives: (leg or turn number 1-8, text).
+Progress = Callable[[int, str], None]
+
+
+def stop_safely(robot: Robot, reason: str) -> SafetyError:
+    """Send a zero velocity and return the :class:`SafetyError` to raise."""
+    robot.send_velocity(0.0, 0.0)
+    return SafetyError(reason)
+
+
+class _Driver:
+    """The control loop of one run (state kept between segments)."""
+
+    def __init__(
+        self, robot: Robot, side: float, direction: Direction, limits: DriveLimits
+    ) -> None:
+        self.robot, self.side, self.direction, self.limits = robot, side, direction, limits
+        self.samples: list[tuple[float, float, float, float]] = []
+        self.linear = 0.0
+        self.angular = 0.0
+        self.deadline = math.inf
+        self.origin = Pose2D()
+
+    # --- reading, with the safety checks ------------------------------------------------
+
+    def read(self) -> Pose2D:
+        """The odometry now, checked: fresh, inside the square plus the margin."""
+        odom = self.robot.odometry()
+        now = self.robot.now()
+        limits = self.limits
+        if odom is None or now - odom.time > limits.stale_odometry:
+            age = "none" if odom is None else f"{now - odom.time:.2f} s old"
+            raise stop_safely(
+                self.robot, f"odometry stale ({age}, limit {limits.stale_odometry:g} s)"
+            )
+        if now > self.deadline:
+            raise stop_safely(
+                self.robot,
+                f"the run takes more than {limits.time_factor:g} times its expected time",
+            )
+        pose = odom.pose
+        self.samples.append((odom.time, pose.x, pose.y, pose.theta))
+        local = pose.relative_to(self.origin)
+        sign = self.direction.turn_sign
+        m = limits.margin
+        if not (-m <= local.x <= self.side + m and -m <= sign * local.y <= self.side + m):
+            raise stop_safely(
+                self.robot,
+                f"the odometry left the square by more than {m:g} m "
+                f"(at x = {local.x:.3f} m, y = {local.y:.3f} m of the run's frame)",
+            )
+        return pose
+
+    def check_ahead(self, forward: bool) -> None:
+        """Stop for a scan return within the obstacle distance in the direction of travel."""
+        scan = self.robot.scan()
+        if scan is None or not forward:
+            return
+        distance = obstacle_ahead(scan, self.limits.obstacle_half_angle)
+        if distance < self.limits.obstacle_distance:
+            raise stop_safely(
+                self.robot,
+                f"an obstacle {distance:.2f} m ahead (limit {self.limits.obstacle_distance:g} m)",
+            )
+
+    def command(self, linear: float, angular: float) -> None:
+        self.linear, self.angular = linear, angular
+        self.robot.send_velocity(linear, angular)
+        self.robot.wait(self.limits.period)
+
+    # --- segments -----------------------------------------------------------------------
+
+    def leg(self, start: Pose2D) -> None:
+        """Drive ``side`` metres along ``start``'s heading, on the line, and stop."""
+        lim, dt = self.limits, self.limits.period
+        cos_h, sin_h = math.cos(start.theta), math.sin(start.theta)
+        scan_every = max(1, round(0.1 / dt))
+        k = 0
+        while True:
+            pose = self.read()
+            dx, dy = pose.x - start.x, pose.y - start.y
+            along = dx * cos_h + dy * sin_h
+            cross = -dx * sin_h + dy * cos_h
+            remaining = self.side - along
+            if remaining <= lim.position_tolerance:
+                break
+            if k % scan_every == 0:
+                self.check_ahead(True)
+            k += 1
+            brake = math.sqrt(2.0 * lim.acceleration * remaining)
+            goal = min(lim.speed, brake, remaining / dt)
+            goal = max(goal, min(lim.creep_speed, remaining / dt))
+            step = lim.acceleration * dt
+            linear = min(max(goal, self.linear - step), self.linear + step)
+            heading_error = float(wrap_angle(start.theta - pose.theta))
+            angular = lim.heading_gain * heading_error - lim.cross_track_gain * cross
+            angular = min(max(angular, -lim.turn_rate), lim.turn_rate)
+            self.command(linear, angular)
+        self.command(0.0, 0.0)
+
+    def turn(self, heading: float) -> None:
+        """Turn on the spot to the odometry heading ``heading`` and stop."""
+        lim, dt = self.limits, self.limits.period
+        while True:
+            pose = self.read()
+            error = float(wrap_angle(heading - pose.theta))
+            if abs(error) <= lim.heading_tolerance:
+                break
+            brake = math.sqrt(2.0 * lim.turn_acceleration * abs(error))
+            goal = min(lim.turn_rate, brake, abs(error) / dt)
+            goal = max(goal, min(lim.creep_rate, abs(error) / dt))
+            step = lim.turn_acceleration * dt
+            rate = abs(self.angular) if self.angular * error > 0 else 0.0
+            rate = min(max(goal, rate - step), rate + step)
+            self.command(0.0, math.copysign(rate, error))
+        self.command(0.0, 0.0)
+
+    def settle(self) -> Stamped:
+        """Wait until the odometry has been still for ``settle_time``; the settled pose."""
+        lim = self.limits
+        self.robot.send_velocity(0.0, 0.0)
+        still_since = self.robot.now()
+        last = self.read()
+        last_time = self.robot.now()
+        while self.robot.now() - still_since < lim.settle_time:
+            self.robot.send_velocity(0.0, 0.0)
+            self.robot.wait(lim.period)
+            pose = self.read()
+            now = self.robot.now()
+            moved = math.hypot(pose.x - last.x, pose.y - last.y)
+            turned = abs(float(wrap_angle(pose.theta - last.theta)))
+            span = max(now - last_time, 1e-9)
+            if moved / span > lim.still_speed or turned / span > lim.still_speed:
+                still_since = now
+            last, last_time = pose, now
+        odom = self.robot.odometry()
+        assert odom is not None  # read() checked it
+        return odom
+
+
+def obstacle_ahead(scan: LaserScan, half_angle: float) -> float:
+    """The nearest return [m] within ``half_angle`` of the robot's forward direction (from
+    the robot's centre, the laser's mounting taken into account); inf if none."""
+    ranges = np.asarray(scan.ranges, dtype=np.float64)
+    ok = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
+    if not ok.any():
+        return math.inf
+    angles = scan.angles()[ok] + scan.mount.theta
+    r = ranges[ok]
+    x = scan.mount.x + r * np.cos(angles)
+    y = scan.mount.y + r * np.sin(angles)
+    ahead = (x > 0.0) & (np.abs(np.arctan2(y, x)) <= half_angle)
+    return float(np.min(np.hypot(x[ahead], y[ahead]))) if ahead.any() else math.inf
+
+
+def drive_square(
+    robot: Robot,
+    side: float,
+    direction: Direction,
+    limits: DriveLimits | None = None,
+    progress: Progress | None = None,
+) -> DrivenRun:
+    """Drive one UMBmark run by the odometry: four legs and four on-the-spot turns.
+
+    Parameters
+    ----------
+    robot : Robot
+    side : float
+        The square's side ``L`` [m].
+    direction : Direction
+        ``ccw``: left turns; ``cw``: right turns (both start along the robot's heading).
+    limits : DriveLimits, optional
+    progress : callable, optional
+        Called with the segment number (1-8) and a short text as each segment starts.
+
+    Returns
+    -------
+    DrivenRun
+
+    Raises
+    ------
+    SafetyError
+        After sending a zero velocity (stale odometry, an obstacle, leaving the square,
+        too long).
+    """
+    limits = limits or DriveLimits()
+    driver = _Driver(robot, side, direction, limits)
+    try:
+        start = driver.settle()
+        driver.origin = start.pose
+        driver.deadline = robot.now() + limits.time_factor * limits.expected_time(side)
+        heading = start.pose.theta
+        corner = start.pose
+        turn = direction.turn_sign * 0.5 * math.pi
+        for k in range(4):
+            if progress is not None:
+                progress(2 * k + 1, f"leg {k + 1}")
+            driver.leg(corner)
+            odom = robot.odometry()
+            assert odom is not None
+            # The next corner as commanded: the square's corner, not where the leg stopped.
+            corner = corner.compose(Pose2D(side, 0.0, 0.0))
+            heading += turn
+            if progress is not None:
+                progress(2 * k + 2, f"turn {k + 1}")
+            driver.turn(heading)
+            corner = Pose2D(corner.x, corner.y, heading)
+        driver.deadline = math.inf
+        end = driver.settle()
+    except BaseException:
+        robot.send_velocity(0.0, 0.0)
+        raise
+    return DrivenRun(
+        direction=direction,
+        start=start,
+        end=end,
+        commanded_end=Pose2D(start.pose.x, start.pose.y, start.pose.theta + 4 * turn),
+        odometry=np.asarray(driver.samples, dtype=np.float64),
+    )
