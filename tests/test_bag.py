@@ -24,7 +24,9 @@ from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from umbmark.core.errors import InputError
-from umbmark.sources.bag import BagOptions, bag_topics, fastpath, read_bag
+from umbmark.sources.bag import fastpath
+from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.recording import bag_topics, read_bag
 
 TS2 = get_typestore(Stores.LATEST)
 TS1 = get_typestore(Stores.ROS1_NOETIC)

@@ -1,7 +1,7 @@
 """Samples of one topic: reading its messages, their times, and cleaning the series.
 
-Shared by the readers of :mod:`umbmark.sources.bag.series` and
-:mod:`umbmark.sources.bag.references`: :func:`read_topic` decodes every message of a
+Shared by the readers of :mod:`umbmark.sources.bag.wheels` and
+:mod:`umbmark.sources.bag.truth`: :func:`read_topic` decodes every message of a
 topic (the fast path of :mod:`umbmark.sources.bag.fastpath` where the layout allows),
 :func:`time_ns` picks header stamps or bag times, :func:`clean` drops non-finite samples
 and sorts by time, :func:`truth_series` turns positions and quaternions into planar poses.
@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError
+from umbmark.core.geometry import quaternion_yaw
 from umbmark.model.recording import PoseSeries
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.fastpath import Decoded, LayoutOf, Sample, decode_messages
@@ -127,7 +128,7 @@ def truth_series(
     with np.errstate(invalid="ignore", divide="ignore"):
         quat = quat / np.linalg.norm(quat, axis=1, keepdims=True)
     qx, qy, qz, qw = quat.T
-    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    yaw = quaternion_yaw(qx, qy, qz, qw)
     poses = np.column_stack([values[:, 0], values[:, 1], yaw])
     _, time, poses = clean(time_ns, poses, what, src, header=header)
     return PoseSeries(time=time, poses=poses)

@@ -21,7 +21,6 @@ wheel's times.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -30,39 +29,19 @@ from numpy.typing import NDArray
 from umbmark.core.errors import InputError
 from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import reader as bag_reader
-from umbmark.sources.bag.msgtypes import TF_TYPES, TFMessage
+from umbmark.sources.bag.msgtypes import TF_TOPIC, TF_TYPES, TFMessage
 from umbmark.sources.bag.samples import clean, seconds
-from umbmark.sources.bag.transforms import TF_TOPIC
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-__all__ = ["MAX_STEP", "WheelTransforms", "read_wheel_transforms", "turns_about_y"]
+__all__ = ["MAX_STEP", "read_wheel_transforms", "turns_about_y"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: Largest turn [rad] of a wheel between two of its transforms that can be followed.
 MAX_STEP = 0.5 * math.pi
-
-
-@dataclass(frozen=True)
-class WheelTransforms:
-    """The transforms of one wheel frame.
-
-    Attributes
-    ----------
-    parent : str
-        The frame they are given in.
-    time_ns : array, shape (k,)
-        Stamps [ns], strictly increasing.
-    quaternions : array, shape (k, 4)
-        ``x, y, z, w`` of the wheel frame in the parent frame.
-    """
-
-    parent: str
-    time_ns: IntArray
-    quaternions: FloatArray
 
 
 def turns_about_y(quaternions: FloatArray) -> FloatArray:
