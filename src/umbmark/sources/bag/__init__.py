@@ -15,16 +15,18 @@ Modules by concern, lowest first; a module imports only from those above it in t
 4. Messages to samples: :mod:`~umbmark.sources.bag.fastpath` (the byte-level decoder),
    :mod:`~umbmark.sources.bag.samples` (a topic's samples, times, cleaning),
    :mod:`~umbmark.sources.bag.custom` (definitions of custom message types).
-5. :mod:`umbmark.sources.bag.wheels`: joint states, encoder ticks and fields, wheel
-   frames on ``/tf``, the controller's odometry turned back into wheel rotation.
-6. :mod:`umbmark.sources.bag.truth`: pose topics, transform chains, Gazebo's model
-   states and position-only references, and the checks that a ground truth is not the
-   odometry.
-7. :mod:`~umbmark.sources.bag.recording`: ``read_recording`` and ``read_bag``, the
+5. Side by side, neither importing the other: :mod:`umbmark.sources.bag.wheels` (joint
+   states, encoder ticks and fields, wheel frames on ``/tf``, the controller's odometry
+   turned back into wheel rotation) and :mod:`umbmark.sources.bag.truth` (pose topics,
+   transform chains, Gazebo's model states and position-only references, and the checks
+   that a ground truth is not the odometry).
+6. :mod:`~umbmark.sources.bag.recording`: ``read_recording`` and ``read_bag``, the
    options turned into wheels, ground truth and notes.
-8. :mod:`~umbmark.sources.bag.urdf`: the wheel geometry of a recorded robot description.
-9. :mod:`umbmark.sources.bag.info`: what ``umbmark info`` reports (the bounded scan of
+7. :mod:`~umbmark.sources.bag.urdf`: the wheel geometry of a recorded robot description.
+8. :mod:`umbmark.sources.bag.info`: what ``umbmark info`` reports (the bounded scan of
    the topics, the transforms and their chains, the candidates for each input).
+
+``tests/test_bag_layout.py`` holds the order.
 
 rosbags is imported only when a bag is opened or written.
 """
