@@ -375,6 +375,26 @@ def test_ticks_topics_unwrap_and_interpolate(
     assert any(abs(b - a) > 2 ** (bits - 1) for a, b in itertools.pairwise(wrapped))
 
 
+def test_ticks_topics_that_do_not_overlap_are_refused(tmp_path):
+    typ = "std_msgs/msg/Int32"
+    cls = TS1.types[typ]
+    # the left wheel from 0 to 0.18 s, the right one from 1 s on: no sample in common
+    messages = [("/left_ticks", ns(0.02 * k), cls(data=k)) for k in range(10)]
+    messages += [("/right_ticks", ns(1.0 + 0.02 * k), cls(data=k)) for k in range(10)]
+    path = write_bag(tmp_path, "ros1", {"/left_ticks": typ, "/right_ticks": typ}, messages)
+    options = BagOptions(
+        left_ticks_topic="/left_ticks", right_ticks_topic="/right_ticks", ticks_per_revolution=100
+    )
+    with pytest.raises(InputError) as err:
+        read_bag(path, options)
+    assert_one_line(
+        err.value,
+        path,
+        "the ticks topics /left_ticks and /right_ticks overlap in time in fewer than 2 samples "
+        "of the left wheel",
+    )
+
+
 # --- ground truth -----------------------------------------------------------------------
 
 

@@ -1,11 +1,3 @@
-"""Poses from a bag: the ground truth, and the controller's odometry read as poses.
-
-- :mod:`~umbmark.sources.bag.truth.poses`: pose topics (``PoseStamped``,
-  ``PoseWithCovarianceStamped``, ``Odometry``);
-- :mod:`~umbmark.sources.bag.truth.transforms`: chains of transforms on ``/tf`` and
-  ``/tf_static``;
-- :mod:`~umbmark.sources.bag.truth.references`: Gazebo's model states, and the
-  position-only ``PointStamped`` and ``NavSatFix``;
-- :mod:`~umbmark.sources.bag.truth.independence`: a ground truth must not be the
-  odometry it judges.
+"""Poses from a bag: pose topics, transform chains, Gazebo's model states, position-only
+references, and the checks that a ground truth is not the odometry it judges.
 """

@@ -21,7 +21,7 @@ from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.fastpath import POSITION, Sample, fast_layout
 from umbmark.sources.bag.fieldpath import getter, row_getter
 from umbmark.sources.bag.msgtypes import TICK_TYPES, Number
-from umbmark.sources.bag.samples import clean, read_topic, seconds, time_ns
+from umbmark.sources.bag.samples import clean, on_left_times, read_topic, time_ns
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
@@ -76,24 +76,14 @@ def read_ticks(
     ticks_per_revolution: float,
     src: str,
 ) -> WheelSeries:
-    t_left, n_left = _read_counts(reader, topics, left_topic, "left", src)
-    t_right, n_right = _read_counts(reader, topics, right_topic, "right", src)
-    inside = (t_left >= t_right[0]) & (t_left <= t_right[-1])
-    if np.count_nonzero(inside) < 2:
-        raise InputError(
-            f"the ticks topics {left_topic} and {right_topic} overlap in time in fewer than"
-            " 2 samples of the left wheel",
-            source=src,
-        )
-    # interpolate on times relative to a common origin: exact to the nanosecond
-    origin = min(int(t_left[0]), int(t_right[0]))
-    at = (t_left[inside] - origin).astype(np.float64)
-    right = np.interp(at, (t_right - origin).astype(np.float64), n_right)
-    counts = np.column_stack([n_left[inside], right])
-    # both are strictly increasing: _clean made the float seconds so
-    return WheelSeries(
-        time=seconds(t_left[inside]), angles=counts * (2.0 * math.pi / ticks_per_revolution)
+    time, counts = on_left_times(
+        _read_counts(reader, topics, left_topic, "left", src),
+        _read_counts(reader, topics, right_topic, "right", src),
+        f"the ticks topics {left_topic} and {right_topic} overlap in time in fewer than"
+        " 2 samples of the left wheel",
+        src,
     )
+    return WheelSeries(time=time, angles=counts * (2.0 * math.pi / ticks_per_revolution))
 
 
 def read_fields(

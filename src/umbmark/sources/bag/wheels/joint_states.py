@@ -1,12 +1,6 @@
 """Wheel rotation from ``sensor_msgs/JointState``: the wheel joints' positions (or their
-velocities, integrated), named by the options or found in the messages.
-
-Each message's ``name`` list is searched for the joints, so joint order may change
-between messages and other joints may be present; messages without all of them (another
-joint group published on the same topic) are skipped. Several joints per side (a
-skid-steer's four wheels) are averaged per side, as ros2_control's
-``diff_drive_controller`` does. The fast path of :mod:`umbmark.sources.bag.fastpath`
-reads the messages of one layout.
+velocities, integrated), named by the options or found in the messages
+(:mod:`umbmark.sources.bag.options` says what is read).
 """
 
 from __future__ import annotations
@@ -52,8 +46,7 @@ def wheel_joints(
     InputError
         The moving joints do not split into left and right; the message names them.
     """
-    total = sum(int(getattr(conn, "msgcount", 0)) for conn in conns)
-    stride = max(1, total // MAX_INSPECTED)
+    stride = max(1, bag_reader.message_count(conns) // MAX_INSPECTED)
     low: dict[str, float] = {}
     high: dict[str, float] = {}
     for k, (_, raw) in enumerate(bag_reader.messages(reader, conns, topic, src)):
@@ -88,7 +81,7 @@ def read_joint_states(
     src: str,
 ) -> WheelSeries:
     """Wheel rotation from the joints of ``options.wheel_topic`` (named, or found by
-    :func:`wheel_joints`); see :mod:`umbmark.sources.bag.options` for what is read.
+    :func:`wheel_joints`); several joints per side are averaged per side.
 
     Raises
     ------
