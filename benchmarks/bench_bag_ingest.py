@@ -7,7 +7,7 @@ then reads the wheel stamps and positions from that same bag three ways:
 (a) rosbags' loop: ``for conn, t, raw in reader.messages(...)``, ``reader.deserialize``,
     then the stamp and the two joints' positions picked out of each message; opening the
     bag included;
-(b) ``umbmark.sources.bag.read_bag``, whose fast path reads fixed-layout messages with
+(b) ``umbmark.sources.bag.recording.read_bag``, whose fast path reads fixed-layout messages with
     vectorized numpy views instead of deserializing them; opening the bag included;
 (c) the decoders alone, on the same list of raw messages already read from the bag:
     rosbags' ``reader.deserialize`` plus picking the fields, against
@@ -36,7 +36,9 @@ from rosbags.rosbag2 import Writer as Writer2
 from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_typestore
 
-from umbmark.sources.bag import BagOptions, fastpath, read_bag
+from umbmark.sources.bag import fastpath
+from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.recording import read_bag
 
 from _timing import best_of
 

@@ -8,7 +8,7 @@ stamps and both wheels' positions from it two ways, in the same process:
 
 (a) rosbags' loop: open the bag, ``reader.deserialize`` every message, pick the stamp and
     ``positions[0]``, ``positions[1]``;
-(b) ``umbmark.sources.bag.read_bag`` with ``--wheel-topic /wheels --left-field
+(b) ``umbmark.sources.bag.recording.read_bag`` with ``--wheel-topic /wheels --left-field
     positions[0] --right-field positions[1]``: what ``calibrate`` runs for those options.
 
 Prints messages per second and the time ratio (b) / (a) (above 1: umbmark is slower),
@@ -31,7 +31,8 @@ from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from umbmark.sources.bag import BagOptions, read_bag
+from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.recording import read_bag
 
 from _timing import best_of
 

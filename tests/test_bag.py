@@ -24,7 +24,9 @@ from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from umbmark.core.errors import InputError
-from umbmark.sources.bag import BagOptions, bag_topics, fastpath, read_bag
+from umbmark.sources.bag import fastpath
+from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.recording import bag_topics, read_bag
 
 TS2 = get_typestore(Stores.LATEST)
 TS1 = get_typestore(Stores.ROS1_NOETIC)
@@ -371,6 +373,26 @@ def test_ticks_topics_unwrap_and_interpolate(
     # the unwrapped count really crossed the type's limit
     wrapped = [wrap_int(c, bits, signed) for c in left_counts]
     assert any(abs(b - a) > 2 ** (bits - 1) for a, b in itertools.pairwise(wrapped))
+
+
+def test_ticks_topics_that_do_not_overlap_are_refused(tmp_path):
+    typ = "std_msgs/msg/Int32"
+    cls = TS1.types[typ]
+    # the left wheel from 0 to 0.18 s, the right one from 1 s on: no sample in common
+    messages = [("/left_ticks", ns(0.02 * k), cls(data=k)) for k in range(10)]
+    messages += [("/right_ticks", ns(1.0 + 0.02 * k), cls(data=k)) for k in range(10)]
+    path = write_bag(tmp_path, "ros1", {"/left_ticks": typ, "/right_ticks": typ}, messages)
+    options = BagOptions(
+        left_ticks_topic="/left_ticks", right_ticks_topic="/right_ticks", ticks_per_revolution=100
+    )
+    with pytest.raises(InputError) as err:
+        read_bag(path, options)
+    assert_one_line(
+        err.value,
+        path,
+        "the ticks topics /left_ticks and /right_ticks overlap in time in fewer than 2 samples "
+        "of the left wheel",
+    )
 
 
 # --- ground truth -----------------------------------------------------------------------

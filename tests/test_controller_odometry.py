@@ -28,10 +28,10 @@ import pytest
 
 import umbmark
 from umbmark.core.errors import InputError
-from umbmark.model.kinematics import WheelParams
+from umbmark.model.kinematics import OdometryGeometry, WheelParams
 from umbmark.model.recording import PoseSeries
 from umbmark.sim.robot import VirtualRobot
-from umbmark.sources.controller_odometry import OdometryGeometry, wheels_from_odometry
+from umbmark.sources.bag.wheels.odometry import wheels_from_odometry
 
 from helpers import api_error, cli_error, cli_json, simulated_session
 

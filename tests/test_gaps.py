@@ -19,11 +19,11 @@ import pytest
 
 import umbmark
 from driven import EVERY, TB3, controller_odometry, squares, write_session_bag
+from umbmark.model.kinematics import OdometryGeometry
 from umbmark.runs.load import LoadOptions, load_runs
 from umbmark.runs.logged import check_motion
 from umbmark.sim.robot import VirtualRobot
-from umbmark.sources.bag import BagOptions
-from umbmark.sources.controller_odometry import OdometryGeometry
+from umbmark.sources.bag.options import BagOptions
 from umbmark.sources.runlog.reader import LogMetadata
 from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 

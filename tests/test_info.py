@@ -396,7 +396,7 @@ def test_the_command_prints_the_reports_dictionary_and_a_summary(robot):
 
 
 def test_left_and_right_names_are_paired():
-    from umbmark.sources.bag.info import mirrored_pairs
+    from umbmark.sources.bag.names import mirrored_pairs
 
     names = ["wheel_left_joint", "wheel_right_joint", "l_wheel", "r_wheel", "wheel_l", "wheel_r",
              "LeftWheel", "RightWheel", "fl_wheel", "fr_wheel", "/lwheel", "/rwheel",
@@ -412,7 +412,7 @@ def test_left_and_right_names_are_paired():
 
 
 def test_chains_leave_sensor_mounts_out():
-    from umbmark.sources.bag.info import TransformInfo, tf_chains
+    from umbmark.sources.bag.info.frames import TransformInfo, tf_chains
 
     def tf(parent, child, static):
         return TransformInfo(parent, child, "/tf_static" if static else "/tf", 1, None)

@@ -356,7 +356,7 @@ def test_nav2_localization_with_the_max_gap_it_needs(tmp_path, tb3_motion):
 
 
 def test_gnss_fixes_to_east_north():
-    from umbmark.sources.bag.references import enu
+    from umbmark.sources.bag.truth.references import enu
 
     points = np.array([(0.0, 0.0), (3.0, 4.0), (-12.0, 7.5), (20.0, -15.0)])
     fixes = np.array([to_fix(e, n) for e, n in points])
@@ -405,7 +405,7 @@ def test_robot_descriptions_are_read_within_bounds():
 
 
 def test_wheel_turns_from_rotations():
-    from umbmark.sources.bag.wheel_tf import turns_about_y
+    from umbmark.sources.bag.wheels.wheel_tf import turns_about_y
 
     angles = np.concatenate([np.linspace(0.0, 30.0, 400), np.linspace(30.0, -4.0, 300)])
     quaternions = np.array([wheel_quaternion(a) for a in angles])

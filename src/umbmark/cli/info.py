@@ -13,7 +13,8 @@ if TYPE_CHECKING:
     from rich.console import Console
 
     from umbmark.jobs.info import InfoReport, LoggedInfo
-    from umbmark.sources.bag.info import BagInfo, Candidate
+    from umbmark.sources.bag.info.candidates import Candidate
+    from umbmark.sources.bag.info.report import BagInfo
 
 __all__ = ["info"]
 

@@ -22,7 +22,7 @@ from pathlib import Path
 
 from umbmark.core.errors import InputError
 
-__all__ = ["atomic_path", "atomic_write_text"]
+__all__ = ["atomic_path", "atomic_write_text", "fsync"]
 
 
 def _new_mode(target: Path) -> int:
@@ -35,7 +35,7 @@ def _new_mode(target: Path) -> int:
         return 0o666 & ~umask
 
 
-def _fsync(path: Path) -> None:
+def fsync(path: Path) -> None:
     """Flush ``path``'s contents to disk."""
     fd = os.open(path, os.O_RDONLY)
     try:
@@ -74,7 +74,7 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
     try:
         os.close(fd)
         yield tmp
-        _fsync(tmp)
+        fsync(tmp)
         with contextlib.suppress(OSError):
             tmp.chmod(_new_mode(real))
         try:

@@ -41,8 +41,9 @@ from umbmark.core.errors import InputError
 from umbmark.core.messages import info
 from umbmark.estimators.plausibility import check_columns, unit_hints
 from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import DEFAULT_MAX_GAP
 from umbmark.model.runs import Run
-from umbmark.runs.association import DEFAULT_MAX_GAP, Association
+from umbmark.runs.association import Association
 from umbmark.runs.load import FORMATS, Format, Loaded, LoadOptions, detect_format, load_runs
 from umbmark.runs.logged import SplitMode
 from umbmark.sources.params.reader import (
@@ -57,7 +58,7 @@ from umbmark.sources.runs_table.reader import RecordedActive, read_table_active
 
 if TYPE_CHECKING:
     from umbmark.jobs.calibrate import CalibrationReport
-    from umbmark.sources.bag import BagOptions
+    from umbmark.sources.bag.options import BagOptions
 
 __all__ = [
     "MAX_SIDE_LENGTH",
@@ -284,7 +285,7 @@ class ReadOptions:
 
     def _check_fields(self) -> None:
         """Refuse wheel fields that are malformed or given with other wheel data."""
-        from umbmark.sources.bag.custom import parse_path
+        from umbmark.sources.bag.fieldpath import parse_path
 
         if (self.left_field is None) != (self.right_field is None):
             raise InputError("--left-field and --right-field go together: give both or neither")
@@ -683,7 +684,7 @@ def _read_one(
         given = None
         if kind == "bag":
             if configured is None or diameter is None:
-                from umbmark.sources.bag import BagOptions
+                from umbmark.sources.bag.options import BagOptions
                 from umbmark.sources.bag.urdf import described_geometry
 
                 named = BagOptions(
@@ -1024,8 +1025,8 @@ def _load_options(
 def _bag_options(
     options: ReadOptions, params: WheelParams | None, file: ControllerParams
 ) -> BagOptions:
-    from umbmark.sources.bag import BagOptions
-    from umbmark.sources.controller_odometry import OdometryGeometry
+    from umbmark.model.kinematics import OdometryGeometry
+    from umbmark.sources.bag.options import BagOptions
 
     geometry = None
     if params is not None:

@@ -41,10 +41,12 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from umbmark.core.errors import InputError
 from umbmark.core.validation import check_positive, require_positive
 
 __all__ = [
     "IntegrationMethod",
+    "OdometryGeometry",
     "WheelParams",
     "chord_step",
     "effective_wheelbase",
@@ -157,6 +159,33 @@ class WheelParams:
         if self.spot_wheelbase is None:
             return self.wheelbase
         return effective_wheelbase(d_left, d_right, self.wheelbase, self.spot_wheelbase)
+
+
+@dataclass(frozen=True)
+class OdometryGeometry:
+    """The geometry a controller's odometry was computed with (the effective values of
+    ros2_controllers' ``diff_drive_controller``, multipliers applied).
+
+    Attributes
+    ----------
+    left_radius, right_radius : float
+        Effective wheel radii [m]: ``wheel_radius`` times the radius multiplier.
+    separation : float
+        Effective wheel separation [m]: ``wheel_separation`` times its multiplier.
+    """
+
+    left_radius: float
+    right_radius: float
+    separation: float
+
+    def __post_init__(self) -> None:
+        for name, value in (
+            ("left_radius", self.left_radius),
+            ("right_radius", self.right_radius),
+            ("separation", self.separation),
+        ):
+            if not (math.isfinite(value) and 0.0 < value < 100.0):
+                raise InputError(f"the odometry's {name} must be in (0, 100) m, not {value!r}")
 
 
 def wheel_displacements(

@@ -18,9 +18,38 @@ from numpy.typing import NDArray
 
 from umbmark.model.kinematics import IntegrationMethod, WheelParams, integrate_odometry
 
-__all__ = ["PoseSeries", "Recording", "RunLog", "WheelSeries"]
+__all__ = [
+    "DEFAULT_MAX_GAP",
+    "GAP_FACTOR",
+    "MIN_GAP",
+    "PoseSeries",
+    "Recording",
+    "RunLog",
+    "WheelSeries",
+    "gap_mask",
+]
 
 FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+#: Longest stretch [s] without ground truth across which poses are interpolated (the
+#: default of ``--max-gap``; :mod:`umbmark.runs.association`).
+DEFAULT_MAX_GAP = 0.25
+#: An interval between samples longer than this many typical sample periods (the
+#: median) is a gap (:func:`gap_mask`) ...
+GAP_FACTOR = 5.0
+#: ... if it is also longer than this [s].
+MIN_GAP = 0.1
+
+
+def gap_mask(time: FloatArray) -> BoolArray:
+    """Which intervals of ``time`` (shape (n,), increasing) are gaps, shape (n - 1,): a
+    while without a sample (:mod:`umbmark.runs.gaps` says what happens across one)."""
+    dt = np.diff(time)
+    if dt.size == 0:
+        return np.zeros(0, dtype=bool)
+    limit = max(GAP_FACTOR * float(np.median(dt)), MIN_GAP)
+    return np.asarray(dt > limit)
 
 
 def _check_time(time: FloatArray, what: str) -> None:

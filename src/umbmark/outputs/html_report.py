@@ -10,7 +10,6 @@ that scroll) and prints. Every text from the reports is escaped.
 from __future__ import annotations
 
 import datetime as dt
-import hashlib
 import math
 from collections.abc import Collection, Sequence
 from html import escape
@@ -18,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from umbmark.benchmark.returns import scatter_standing, sem_verdict
+from umbmark.core.digest import file_sha256
 from umbmark.core.version import __version__
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from umbmark.jobs.report import PassesReport
     from umbmark.jobs.validate import ValidationReport
 
-__all__ = ["calibration_html", "file_sha256", "pass_name", "passes_html"]
+__all__ = ["calibration_html", "pass_name", "passes_html"]
 
 _MM = 1000.0
 #: Files of an input folder listed with their SHA-256 at most.
@@ -60,15 +60,6 @@ code { word-break: break-all; }
   h2 { break-after: avoid; } figure, table { break-inside: avoid; }
 }
 """
-
-
-def file_sha256(path: str | Path) -> str:
-    """The SHA-256 of a file's bytes, as hex."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as file:
-        for block in iter(lambda: file.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def _num(value: float | None, fmt: str) -> str:

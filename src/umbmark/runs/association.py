@@ -19,13 +19,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError
-from umbmark.model.recording import PoseSeries, WheelSeries
+from umbmark.model.recording import DEFAULT_MAX_GAP, PoseSeries, WheelSeries
 
-__all__ = ["DEFAULT_MAX_GAP", "Association", "associate", "summarize"]
+__all__ = ["Association", "associate", "summarize"]
 
 FloatArray = NDArray[np.float64]
-#: Longest stretch [s] without ground truth across which poses are interpolated.
-DEFAULT_MAX_GAP = 0.25
 
 
 @dataclass(frozen=True)

@@ -1,12 +1,14 @@
 """Gaps in the wheel samples: a while without a message is a gap, not a jump.
 
 Wheel samples come at a typical period, the median interval of the recording. An interval
-much longer than that (:func:`gap_mask`: more than :data:`GAP_FACTOR` periods and more
-than :data:`MIN_GAP`) is a gap: the messages stopped for a while (a recorder that could not
-keep up, a dropped connection, a simulation that paused). The wheels went on turning
-meanwhile, so the step of a wheel angle across a gap is large; it is not a corrupt sample,
-and the checks for jumps leave gaps out. What happened inside a gap is known only at its
-two ends, so odometry can cross it as one arc only when the motion was steady:
+much longer than that (:func:`umbmark.model.recording.gap_mask`: more than
+:data:`~umbmark.model.recording.GAP_FACTOR` periods and more than
+:data:`~umbmark.model.recording.MIN_GAP`) is a gap: the messages stopped for a while (a
+recorder that could not keep up, a dropped connection, a simulation that paused). The
+wheels went on turning meanwhile, so the step of a wheel angle across a gap is large; it
+is not a corrupt sample, and the checks for jumps leave gaps out. What happened inside a
+gap is known only at its two ends, so odometry can cross it as one arc only when the
+motion was steady:
 
 - a gap is **bridged** (its interval integrated like any other) when the wheels did not
   turn across it, or when it is at most :data:`MAX_BRIDGE` long and either each wheel
@@ -30,27 +32,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.model.kinematics import WheelParams
+from umbmark.model.recording import gap_mask
 
 __all__ = [
     "BRIDGE_TOLERANCE",
-    "GAP_FACTOR",
     "MAX_ARC_ERROR",
     "MAX_BRIDGE",
-    "MIN_GAP",
     "SPEED_WINDOW",
     "Gap",
     "describe_gaps",
     "find_gaps",
-    "gap_mask",
 ]
 
 FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
-#: An interval longer than this many typical sample periods (the median) is a gap...
-GAP_FACTOR = 5.0
-#: ... if it is also longer than this [s].
-MIN_GAP = 0.1
 #: Longest gap bridged when the wheels turned across it [s].
 MAX_BRIDGE = 2.0
 #: A gap is bridged when one arc across it ends at most this far [m] from any path of
@@ -65,15 +60,6 @@ BRIDGE_TOLERANCE = 0.1
 REST_SPEED = 0.05
 #: More bridged gaps than this in a recording are summed up in one line.
 LISTED_GAPS = 3
-
-
-def gap_mask(time: FloatArray) -> BoolArray:
-    """Which intervals of ``time`` (shape (n,), increasing) are gaps, shape (n - 1,)."""
-    dt = np.diff(time)
-    if dt.size == 0:
-        return np.zeros(0, dtype=bool)
-    limit = max(GAP_FACTOR * float(np.median(dt)), MIN_GAP)
-    return np.asarray(dt > limit)
 
 
 @dataclass(frozen=True)

@@ -31,14 +31,14 @@ from umbmark.core.bounds import Origin
 from umbmark.core.conventions import axle_poses
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.recording import PoseSeries, Recording
+from umbmark.model.recording import DEFAULT_MAX_GAP, PoseSeries, Recording
 from umbmark.model.runs import Run
-from umbmark.runs.association import DEFAULT_MAX_GAP, Association
+from umbmark.runs.association import Association
 from umbmark.runs.logged import SplitMode, runs_from_recordings
 from umbmark.runs.segmentation import SplitOptions
 
 if TYPE_CHECKING:
-    from umbmark.sources.bag import BagOptions
+    from umbmark.sources.bag.options import BagOptions
 
 __all__ = ["FORMATS", "Format", "LoadOptions", "Loaded", "detect_format", "load_runs"]
 
@@ -273,11 +273,12 @@ def _read_bag(
     source: Path, options: LoadOptions, notes: list[str]
 ) -> tuple[list[Recording], WheelParams | None, float | None]:
     """The bag's one recording; what people should know goes to ``notes``."""
-    from umbmark.sources.bag import BagOptions, read_recording
+    from umbmark.sources.bag.options import BagOptions
+    from umbmark.sources.bag.recording import read_recording
 
     bag = options.bag or BagOptions()
     if bag.truth_topic is None and bag.tf_parent is None and bag.tf_child is None:
-        from umbmark.sources.bag.info import truth_candidates
+        from umbmark.sources.bag.info.report import truth_candidates
         from umbmark.sources.bag.reader import listing
 
         candidates, independent = truth_candidates(source)

@@ -17,12 +17,13 @@ from numpy.typing import NDArray
 
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError
+from umbmark.core.geometry import relative_positions, to_start_frame
 from umbmark.core.messages import info
 from umbmark.model.kinematics import IntegrationMethod, WheelParams
-from umbmark.model.recording import Recording, RunLog
+from umbmark.model.recording import DEFAULT_MAX_GAP, Recording, RunLog, gap_mask
 from umbmark.model.runs import EndPose, Run
-from umbmark.runs.association import DEFAULT_MAX_GAP, Association, associate
-from umbmark.runs.gaps import Gap, describe_gaps, find_gaps, gap_mask
+from umbmark.runs.association import Association, associate
+from umbmark.runs.gaps import Gap, describe_gaps, find_gaps
 from umbmark.runs.rests import Reset, find_resets
 from umbmark.runs.segmentation import LeftOut, SplitOptions, find_runs, split_by_windows
 
@@ -33,7 +34,6 @@ __all__ = [
     "check_motion",
     "require_headings",
     "runs_from_recordings",
-    "to_start_frame",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -76,14 +76,6 @@ class LoadedRuns:
     notes: list[str] = field(default_factory=list)
 
 
-def to_start_frame(poses: FloatArray) -> FloatArray:
-    """Express poses, shape (n, 3), in the frame of the first one (x along its heading)."""
-    x0, y0, th0 = poses[0]
-    c, s = math.cos(th0), math.sin(th0)
-    dx, dy = poses[:, 0] - x0, poses[:, 1] - y0
-    return np.column_stack([c * dx + s * dy, -s * dx + c * dy, poses[:, 2] - th0])
-
-
 def check_motion(
     name: str,
     time: FloatArray,
@@ -99,7 +91,7 @@ def check_motion(
     A jump is a wheel step too large for the time it took: above :data:`MAX_WHEEL_STEP`,
     or above both :data:`MIN_JUMP` and :data:`JUMP_FACTOR` times the 99th percentile of
     the steps, each limit scaled by the interval over the typical (median) one. Gaps in
-    the samples (:func:`umbmark.runs.gaps.gap_mask`) are no jumps: they are looked at
+    the samples (:func:`umbmark.model.recording.gap_mask`) are no jumps: they are looked at
     by :func:`umbmark.runs.gaps.find_gaps`.
 
     Parameters
@@ -287,8 +279,7 @@ def _positions_in_start_frame(
     if k == 0:
         return np.asarray(moved)
     heading = math.atan2(moved[k, 1], moved[k, 0]) - math.atan2(odo[k, 1], odo[k, 0])
-    c, s = math.cos(heading), math.sin(heading)
-    return np.column_stack([c * moved[:, 0] + s * moved[:, 1], -s * moved[:, 0] + c * moved[:, 1]])
+    return relative_positions(moved, heading)  # moved starts at 0: only turned
 
 
 def runs_from_recordings(

@@ -2,7 +2,7 @@
 
 Reading a bag of millions of messages takes seconds to minutes. The bag reader counts the
 messages it reads and reports ``(read, total)`` to a callback, so that a caller can show
-a progress bar. The callback is given either to :func:`umbmark.sources.bag.read_bag`
+a progress bar. The callback is given either to :func:`umbmark.sources.bag.recording.read_bag`
 (``progress=``) or, for every bag read inside a block of code, by
 :func:`reading_progress`: the way to get progress out of :func:`umbmark.calibrate`,
 :func:`umbmark.replay` or :func:`umbmark.validate`, which read bags deep inside::

@@ -30,7 +30,6 @@ __all__ = [
     "MAX_DOCUMENT_BYTES",
     "MAX_LINE_CHARS",
     "MAX_TEXT_BYTES",
-    "content_lines",
     "finite",
     "first_content_line",
     "iter_content_lines",
@@ -169,17 +168,6 @@ def first_content_line(path: str | Path) -> tuple[int, str] | None:
         return next(lines, None)
     finally:
         lines.close()
-
-
-def content_lines(path: str | Path) -> list[tuple[int, str]]:
-    """The lines of a text file that are neither blank nor ``#`` comments, numbered from 1.
-
-    Raises
-    ------
-    InputError
-        If the file cannot be read or is not text, or a line is too long.
-    """
-    return list(iter_content_lines(path))
 
 
 def finite(value: object) -> float | None:

@@ -18,7 +18,6 @@ The default file is ``$UMBMARK_HISTORY``, else ``$XDG_DATA_HOME/umbmark/history.
 from __future__ import annotations
 
 import datetime as dt
-import hashlib
 import json
 import os
 import sqlite3
@@ -27,6 +26,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from umbmark.core.digest import path_sha256
 from umbmark.core.errors import InputError
 from umbmark.store.drift import DEFINITIONS, DRIFT_MIN_CALIBRATIONS, DRIFT_SIGMAS, drift_verdict
 from umbmark.store.records import CalibrationRecord, RobotRecord
@@ -112,24 +112,6 @@ def default_history_path() -> Path:
         return Path(given)
     data = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
     return Path(data) / "umbmark" / "history.sqlite3"
-
-
-def _sha256(path: Path) -> str | None:
-    """SHA-256 of a file, or of a folder's files (relative names and contents, sorted)."""
-    digest = hashlib.sha256()
-    if path.is_file():
-        files = [path]
-    elif path.is_dir():
-        files = sorted(p for p in path.rglob("*") if p.is_file())
-    else:
-        return None
-    for file in files:
-        if path.is_dir():
-            digest.update(file.relative_to(path).as_posix().encode() + b"\0")
-        with file.open("rb") as stream:
-            for block in iter(lambda: stream.read(1 << 20), b""):
-                digest.update(block)
-    return digest.hexdigest()
 
 
 def _now() -> str:
@@ -248,7 +230,7 @@ class History:
             raise InputError("--robot: give a non-empty name")
         data = report.to_dict()
         active = report.calibration.active
-        hashed = [{"name": os.fspath(p), "sha256": _sha256(Path(os.fspath(p)))} for p in inputs]
+        hashed = [{"name": os.fspath(p), "sha256": path_sha256(Path(os.fspath(p)))} for p in inputs]
         with self._connect(write=True) as db:
             row = db.execute(
                 "SELECT wheelbase, wheel_diameter FROM robots WHERE name = ?", (robot,)

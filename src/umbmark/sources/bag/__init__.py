@@ -1,7 +1,32 @@
-"""ROS bags: wheel rotation and ground truth from ROS 1 and ROS 2 recordings."""
+"""ROS bags: wheel rotation and ground truth from ROS 1 and ROS 2 recordings, and what a
+bag holds.
 
-from __future__ import annotations
+Modules by concern, lowest first; a module imports only from those above it in this list
+(and from :mod:`umbmark.core`, :mod:`umbmark.model`, :mod:`umbmark.sources.text` and
+:mod:`umbmark.sources.progress`):
 
-from umbmark.sources.bag.series import BagOptions, BagRead, bag_topics, read_bag, read_recording
+1. What things are called: :mod:`~umbmark.sources.bag.msgtypes` (message types, the
+   transform topics, the fields the readers use), :mod:`~umbmark.sources.bag.names`
+   (what names say: left and right, ground truth, fixed frames),
+   :mod:`~umbmark.sources.bag.fieldpath` (paths to a value in a message of any type).
+2. :mod:`~umbmark.sources.bag.options`: what to read (``BagOptions``) and its checks.
+3. The files: :mod:`~umbmark.sources.bag.reader` (opening bags, topics, raw messages;
+   every rosbags failure one line) and :mod:`~umbmark.sources.bag.writer` (writing one).
+4. Messages to samples: :mod:`~umbmark.sources.bag.fastpath` (the byte-level decoder),
+   :mod:`~umbmark.sources.bag.samples` (a topic's samples, times, cleaning),
+   :mod:`~umbmark.sources.bag.custom` (definitions of custom message types).
+5. Side by side, neither importing the other: :mod:`umbmark.sources.bag.wheels` (joint
+   states, encoder ticks and fields, wheel frames on ``/tf``, the controller's odometry
+   turned back into wheel rotation) and :mod:`umbmark.sources.bag.truth` (pose topics,
+   transform chains, Gazebo's model states and position-only references, and the checks
+   that a ground truth is not the odometry).
+6. :mod:`~umbmark.sources.bag.recording`: ``read_recording`` and ``read_bag``, the
+   options turned into wheels, ground truth and notes.
+7. :mod:`~umbmark.sources.bag.urdf`: the wheel geometry of a recorded robot description.
+8. :mod:`umbmark.sources.bag.info`: what ``umbmark info`` reports (the bounded scan of
+   the topics, the transforms and their chains, the candidates for each input).
 
-__all__ = ["BagOptions", "BagRead", "bag_topics", "read_bag", "read_recording"]
+``tests/test_bag_layout.py`` holds the order.
+
+rosbags is imported only when a bag is opened or written.
+"""

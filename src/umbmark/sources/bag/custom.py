@@ -7,9 +7,11 @@ A vendor's driver may publish its wheels in its own message, for example
     int32 left_ticks
     int32 right_ticks
 
-The options ``left_field`` and ``right_field`` of :class:`~umbmark.sources.bag.BagOptions`
-name the two values in such a message by a field path (:func:`parse_path`):
-``left_ticks``, ``wheels.left.position``, ``positions[0]``, ``wheels[1].angle``.
+The options ``left_field`` and ``right_field`` of
+:class:`~umbmark.sources.bag.options.BagOptions` name the two values in such a message by
+a field path (:mod:`umbmark.sources.bag.fieldpath`): ``left_ticks``,
+``wheels.left.position``, ``positions[0]``, ``wheels[1].angle``; :func:`resolve_field`
+checks one against the type's definition.
 
 Definitions
 -----------
@@ -33,39 +35,29 @@ ROS 2 types (ROS 1 Noetic's for ROS 1 bags).
 
 from __future__ import annotations
 
-import keyword
-import operator
 import os
-import re
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError
 from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.fieldpath import Step, parse_path
 from umbmark.sources.text import read_text
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
 __all__ = [
-    "MAX_DEPTH",
-    "MAX_INDEX",
     "MAX_MSG_FILES",
     "Field",
     "add_definitions",
-    "getter",
     "has_header",
-    "parse_path",
+    "missing_types",
     "resolve_field",
-    "row_getter",
 ]
 
-#: Field names in a path, at most (``a.b.c`` has 3).
-MAX_DEPTH = 8
-#: Largest array index in a path.
-MAX_INDEX = 65_535
 #: ``.msg`` files looked at in ``msg_dir``, at most.
 MAX_MSG_FILES = 10_000
 
@@ -93,53 +85,11 @@ HEADER = "std_msgs/msg/Header"
 # this module needs rosbags only when reading a bag.
 _BASE, _NAME, _ARRAY, _SEQUENCE = 1, 2, 3, 4
 
-_SEGMENT = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d{1,7})\])?")
-
-Step = str | int
-"""One step of a field path: an attribute name, or an index into an array."""
-
 FieldDefs = Mapping[str, tuple[Any, Sequence[tuple[str, Any]]]]
 """rosbags' ``Typestore.fielddefs``: type name to ``(constants, [(field, node), ...])``."""
 
 
-# --- field paths -----------------------------------------------------------------------
-
-
-def parse_path(text: str, what: str = "field path") -> tuple[Step, ...]:
-    """The steps of a field path: ``"wheels[1].position"`` is ``("wheels", 1, "position")``.
-
-    Parameters
-    ----------
-    text : str
-        Field names separated by dots, each optionally followed by one index ``[k]``,
-        at most :data:`MAX_DEPTH` names, indexes at most :data:`MAX_INDEX`.
-    what : str
-        How messages name the path (``"--left-field"``).
-
-    Raises
-    ------
-    InputError
-        The path is malformed, too deep, or has too large an index.
-    """
-    parts = text.strip().split(".")
-    if len(parts) > MAX_DEPTH:
-        raise InputError(f"{what} {text!r} is deeper than {MAX_DEPTH} fields")
-    steps: list[Step] = []
-    for part in parts:
-        match = _SEGMENT.fullmatch(part.strip())
-        if match is None:
-            raise InputError(
-                f"{what} {text!r} is not a field path: write field names separated by dots, "
-                "each with at most one index, e.g. left_ticks, wheels.left.position, "
-                "positions[0]"
-            )
-        steps.append(match.group(1))
-        if match.group(2) is not None:
-            index = int(match.group(2))
-            if index > MAX_INDEX:
-                raise InputError(f"{what} {text!r}: index {index} is larger than {MAX_INDEX}")
-            steps.append(index)
-    return tuple(steps)
+# --- fields checked against a definition ---------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -274,57 +224,6 @@ def resolve_field(fielddefs: FieldDefs, msgtype: str, text: str, what: str, of: 
     if base not in NUMBER_BITS:
         raise InputError(f"{name_it}: {done} is {base}, not a number")
     return Field(text=text, steps=steps, base=base)
-
-
-def attribute(name: str) -> str:
-    """The attribute of rosbags' message class for the field ``name`` (``from_`` for a
-    field named ``from``: rosbags appends ``_`` to Python keywords)."""
-    return f"{name}_" if keyword.iskeyword(name) else name
-
-
-def getter(steps: Sequence[Step]) -> Callable[[object], float]:
-    """A function that follows ``steps`` into a deserialized message.
-
-    Runs of names become one :func:`operator.attrgetter`, indexes an
-    :func:`operator.itemgetter`; it raises IndexError where a sequence is too short.
-    """
-    parts: list[Callable[[Any], Any]] = []
-    names: list[str] = []
-    for step in steps:
-        if isinstance(step, str):
-            names.append(attribute(step))
-            continue
-        if names:
-            parts.append(operator.attrgetter(".".join(names)))
-            names = []
-        parts.append(operator.itemgetter(step))
-    if names:
-        parts.append(operator.attrgetter(".".join(names)))
-    if len(parts) == 1:
-        return parts[0]
-
-    def follow(msg: object) -> float:
-        value: Any = msg
-        for part in parts:
-            value = part(value)
-        return cast("float", value)
-
-    return follow
-
-
-def row_getter(paths: Sequence[Sequence[Step]]) -> Callable[[object], tuple[Any, ...]]:
-    """A function that returns the values at all ``paths`` of a message, as a tuple.
-
-    Paths of names only are read by one :func:`operator.attrgetter` (the common case,
-    and the fastest); otherwise each path by its :func:`getter`.
-    """
-    if len(paths) > 1 and all(isinstance(step, str) for path in paths for step in path):
-        get: Callable[[object], tuple[Any, ...]] = operator.attrgetter(
-            *(".".join(attribute(name) for name in cast("Sequence[str]", path)) for path in paths)
-        )
-        return get
-    getters = [getter(path) for path in paths]
-    return lambda msg: tuple(get(msg) for get in getters)
 
 
 def has_header(fielddefs: FieldDefs, msgtype: str) -> bool:

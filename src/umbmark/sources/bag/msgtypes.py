@@ -1,8 +1,9 @@
-"""The ROS message types the bag reader reads, and what it uses of rosbags' message classes.
+"""The ROS message types the bags hold, the transform topics, and what the readers use of
+rosbags' message classes.
 
 The names are rosbags' (``sensor_msgs/msg/JointState``, also for ROS 1 bags). The
 protocols describe the attributes of rosbags' deserialized messages that the readers of
-:mod:`umbmark.sources.bag.series` use; rosbags itself is never imported here.
+:mod:`umbmark.sources.bag` use; rosbags itself is never imported here.
 """
 
 from __future__ import annotations
@@ -17,7 +18,11 @@ POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 POSE_COV_STAMPED = "geometry_msgs/msg/PoseWithCovarianceStamped"
 ODOMETRY = "nav_msgs/msg/Odometry"
 TRUTH_TYPES = (POSE_STAMPED, POSE_COV_STAMPED, ODOMETRY)
-TF_TYPES = ("tf2_msgs/msg/TFMessage", "tf/msg/tfMessage")
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+#: Transform messages: ROS 2's and ROS 1's, and ROS 1's older ``tf``.
+TF_TYPES = (TF_MESSAGE, "tf/msg/tfMessage")
+TF_TOPIC = "/tf"
+TF_STATIC_TOPIC = "/tf_static"
 #: Gazebo's poses of every model: no header, one entry per model.
 MODEL_STATES = "gazebo_msgs/msg/ModelStates"
 POINT_STAMPED = "geometry_msgs/msg/PointStamped"

@@ -1,6 +1,6 @@
 """What names say: left and right pairs, ground-truth names, fixed frames, fused odometry.
 
-The heuristics :mod:`umbmark.sources.bag.info` ranks candidates by, and
+The heuristics :mod:`umbmark.sources.bag.info.candidates` ranks candidates by, and
 :mod:`umbmark.sources.bag.urdf` finds wheel joints by. Names are topics, joints and
 frames as the bag spells them.
 """

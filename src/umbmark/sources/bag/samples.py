@@ -1,7 +1,7 @@
 """Samples of one topic: reading its messages, their times, and cleaning the series.
 
-Shared by the readers of :mod:`umbmark.sources.bag.series` and
-:mod:`umbmark.sources.bag.references`: :func:`read_topic` decodes every message of a
+Shared by the readers of :mod:`umbmark.sources.bag.wheels` and
+:mod:`umbmark.sources.bag.truth`: :func:`read_topic` decodes every message of a
 topic (the fast path of :mod:`umbmark.sources.bag.fastpath` where the layout allows),
 :func:`time_ns` picks header stamps or bag times, :func:`clean` drops non-finite samples
 and sorts by time, :func:`truth_series` turns positions and quaternions into planar poses.
@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError
+from umbmark.core.geometry import quaternion_yaw
 from umbmark.model.recording import PoseSeries
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.fastpath import Decoded, LayoutOf, Sample, decode_messages
@@ -25,7 +26,8 @@ if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
     from rosbags.interfaces import Connection
 
-__all__ = ["clean", "pose_values", "read_topic", "seconds", "stamp", "time_ns", "truth_series"]
+__all__ = ["clean", "on_left_times", "pose_values", "read_topic", "seconds", "stamp", "time_ns"]
+__all__ += ["truth_series"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -127,10 +129,28 @@ def truth_series(
     with np.errstate(invalid="ignore", divide="ignore"):
         quat = quat / np.linalg.norm(quat, axis=1, keepdims=True)
     qx, qy, qz, qw = quat.T
-    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    yaw = quaternion_yaw(qx, qy, qz, qw)
     poses = np.column_stack([values[:, 0], values[:, 1], yaw])
     _, time, poses = clean(time_ns, poses, what, src, header=header)
     return PoseSeries(time=time, poses=poses)
+
+
+def on_left_times(
+    left: tuple[IntArray, FloatArray], right: tuple[IntArray, FloatArray], few: str, src: str
+) -> tuple[FloatArray, FloatArray]:
+    """Two wheels sampled at their own times: ``(time [ns], value)``, each shape (k,), the
+    times strictly increasing (:func:`clean`). Returns the left wheel's times [s] inside
+    the right wheel's, shape (n,), and both wheels' values there, shape (n, 2): the
+    right's interpolated linearly, on times from a common origin (exact to the
+    nanosecond). ``few`` is the message when they share fewer than 2 samples."""
+    (t_left, v_left), (t_right, v_right) = left, right
+    inside = (t_left >= t_right[0]) & (t_left <= t_right[-1])
+    if np.count_nonzero(inside) < 2:
+        raise InputError(few, source=src)
+    origin = min(int(t_left[0]), int(t_right[0]))
+    at = (t_left[inside] - origin).astype(np.float64)
+    right = np.interp(at, (t_right - origin).astype(np.float64), v_right)
+    return seconds(t_left[inside]), np.column_stack([v_left[inside], right])
 
 
 def pose_values(p: Vector, q: Quaternion) -> tuple[float, ...]:

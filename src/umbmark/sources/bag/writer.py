@@ -39,8 +39,16 @@ from typing import TYPE_CHECKING, ClassVar, Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.atomic import fsync
 from umbmark.core.errors import InputError
 from umbmark.model.recording import PoseSeries, WheelSeries
+from umbmark.sources.bag.msgtypes import (
+    JOINT_STATE,
+    ODOMETRY,
+    POSE_STAMPED,
+    TF_MESSAGE,
+    TF_TOPIC,
+)
 from umbmark.sources.bag.reader import missing_rosbags, one_line
 
 if TYPE_CHECKING:
@@ -60,10 +68,6 @@ _REPORT_EVERY = 2000
 FloatArray = NDArray[np.float64]
 _Make = Callable[[int, int], "_Msg"]  # (sample index, stamp [ns]) -> message object
 
-JOINT_STATE = "sensor_msgs/msg/JointState"
-ODOMETRY = "nav_msgs/msg/Odometry"
-TF_MESSAGE = "tf2_msgs/msg/TFMessage"
-POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 TF_DEFINITION = "geometry_msgs/TransformStamped[] transforms"
 
 
@@ -75,7 +79,7 @@ class BagTopics:
     left_joint: str = "left_wheel_joint"
     right_joint: str = "right_wheel_joint"
     odometry: str = "/odom"
-    tf: str = "/tf"
+    tf: str = TF_TOPIC
     truth: str = "/mocap/robot/pose"
     odom_frame: str = "odom"
     base_frame: str = "base_link"
@@ -228,7 +232,7 @@ def write_bag(
             _write(fresh, target.format, store, names, wheels, odometry, truth, start_epoch,
                    progress)  # fmt: skip
             for file in [fresh] if fresh.is_file() else sorted(fresh.iterdir()):
-                _fsync(file)
+                fsync(file)
             _put(fresh, real, scratch)
     except OSError as err:
         raise InputError(f"cannot be written ({err.strerror or err})", source=shown) from None
@@ -262,14 +266,6 @@ def _temporary_beside(target: Path) -> Iterator[Path]:
         yield scratch
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
-
-
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
 
 
 def _stamps(time: FloatArray, start_epoch: float) -> NDArray[np.int64]:

@@ -13,7 +13,6 @@ all cover. Poses are planar: ``x, y`` of the translation and the yaw of the rota
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -21,17 +20,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError
+from umbmark.core.geometry import compose, invert, quaternion_yaw
 from umbmark.sources.bag import reader as bag_reader
-from umbmark.sources.bag.msgtypes import TF_TYPES, TFMessage
+from umbmark.sources.bag.msgtypes import TF_STATIC_TOPIC, TF_TOPIC, TF_TYPES, TFMessage
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-__all__ = ["TF_STATIC_TOPIC", "TF_TOPIC", "Edge", "chain_poses", "chain_steps", "read_edges"]
+__all__ = ["MAX_TRANSFORMS", "Edge", "chain_poses", "chain_steps", "read_edges"]
 
 FloatArray = NDArray[np.float64]
-TF_TOPIC = "/tf"
-TF_STATIC_TOPIC = "/tf_static"
 #: Transform messages read at most: about a day of 100 Hz TF with ten frames.
 MAX_TRANSFORMS = 50_000_000
 
@@ -67,8 +65,7 @@ class Edge:
 
 def _yaw(qx: float, qy: float, qz: float, qw: float) -> float:
     norm = float(np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)) or 1.0
-    qx, qy, qz, qw = qx / norm, qy / norm, qz / norm, qw / norm
-    return float(np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
+    return float(quaternion_yaw(qx / norm, qy / norm, qz / norm, qw / norm))
 
 
 def read_edges(
@@ -166,24 +163,6 @@ def _path(
     return steps[::-1]
 
 
-def _compose(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``a (+) b`` for planar poses, shape (n, 3): ``b`` expressed in ``a``'s parent."""
-    c, s = np.cos(a[:, 2]), np.sin(a[:, 2])
-    return np.column_stack(
-        [
-            a[:, 0] + c * b[:, 0] - s * b[:, 1],
-            a[:, 1] + s * b[:, 0] + c * b[:, 1],
-            a[:, 2] + b[:, 2],
-        ]
-    )
-
-
-def _invert(a: FloatArray) -> FloatArray:
-    """The inverse of planar poses, shape (n, 3)."""
-    c, s = np.cos(a[:, 2]), np.sin(a[:, 2])
-    return np.column_stack([-(c * a[:, 0] + s * a[:, 1]), s * a[:, 0] - c * a[:, 1], -a[:, 2]])
-
-
 def chain_steps(
     edges: dict[tuple[str, str], Edge], parent: str, child: str
 ) -> list[tuple[Edge, bool]] | None:
@@ -234,15 +213,5 @@ def chain_poses(
     poses = np.zeros((time.size, 3))
     for edge, backwards in steps:
         value = edge.at(time)
-        poses = _compose(poses, _invert(value) if backwards else value)
+        poses = compose(poses, invert(value) if backwards else value)
     return time, poses
-
-
-def describe_chain(steps: Sequence[tuple[Edge, bool]]) -> str:
-    """``map -> odom -> base_link`` for people."""
-    if not steps:
-        return ""
-    frames = [steps[0][0].child if steps[0][1] else steps[0][0].parent]
-    for edge, backwards in steps:
-        frames.append(edge.parent if backwards else edge.child)
-    return " -> ".join(frames)

@@ -7,7 +7,7 @@ from their roots (``map -> odom -> base_link``); the models of Gazebo's
 ``gazebo_msgs/ModelStates`` and which of them move; the wheelbase and wheel diameter of a
 recorded robot description (:mod:`umbmark.sources.bag.urdf`), or which of them are still
 needed; and the candidates for each input, ranked, with their rates and the
-``--max-gap`` they need (:mod:`umbmark.sources.bag.candidates`). When no reference
+``--max-gap`` they need (:mod:`umbmark.sources.bag.info.candidates`). When no reference
 independent of the odometry is found, a note says so. :func:`truth_candidates` is the
 short version for an error message that asks for ground truth.
 
@@ -17,18 +17,21 @@ Counts come from the bag's index. Times are receive (bag) times: a topic's first
 is read, and its last one found by reading a few messages at a time from the end of the
 bag (bisection). Only the topics whose content matters are deserialized, at most
 ``max_messages`` messages each (default :data:`DEFAULT_MAX_MESSAGES`): all of them when
-the topic has no more, else ``max_messages`` spread over :data:`CHUNKS` stretches evenly
+the topic has no more, else ``max_messages`` spread over
+:data:`~umbmark.sources.bag.info.scan.CHUNKS` stretches evenly
 spaced over its time span, so that a robot that stands still at first still shows its
-wheels moving. Transform rates are the topic's rate times each pair's share of the
-messages read. At most :data:`MAX_LISTED` names (topics, joints, transforms, candidates)
-and :data:`MAX_CHAINS` chains are listed; the rest are counted.
+wheels moving (:mod:`umbmark.sources.bag.info.scan`). Transform rates are the topic's
+rate times each pair's share of the messages read. At most :data:`MAX_LISTED` names
+(topics, joints, transforms, candidates) and :data:`MAX_CHAINS` chains are listed; the
+rest are counted.
 
 "Moving" means, in the messages read: a joint's position range over
-:data:`MOVING_ANGLE` [rad] or a speed over :data:`MOVING_SPEED` [rad/s] (its
-``velocity``, else its position's change over time between consecutive messages read); a
-pose's position range over :data:`MOVING_DISTANCE` [m]; a counter's range of at least one
-count; a Gazebo model's position range over
-:data:`umbmark.sources.bag.references.MOVING_DISTANCE`.
+:data:`~umbmark.sources.bag.info.scan.MOVING_ANGLE` [rad] or a speed over
+:data:`~umbmark.sources.bag.info.scan.MOVING_SPEED` [rad/s] (its ``velocity``, else its
+position's change over time between consecutive messages read); a pose's position range
+over :data:`~umbmark.sources.bag.info.scan.MOVING_DISTANCE` [m]; a counter's range of at
+least one count; a Gazebo model's position range over
+:data:`umbmark.sources.bag.truth.references.MOVING_DISTANCE`.
 """
 
 from __future__ import annotations
@@ -41,52 +44,43 @@ from typing import Any
 from umbmark.core.errors import InputError
 from umbmark.core.messages import split_messages
 from umbmark.sources.bag import reader as bag_reader
-from umbmark.sources.bag.candidates import (
+from umbmark.sources.bag.info.candidates import (
     Candidate,
     controller_odometry,
     odometry_candidates,
     wheel_candidates,
 )
-from umbmark.sources.bag.candidates import needed_gap as _needed_gap
-from umbmark.sources.bag.candidates import truth_candidates as _rank_truth
+from umbmark.sources.bag.info.candidates import truth_candidates as _rank_truth
+from umbmark.sources.bag.info.frames import (
+    TransformInfo,
+    odometry_transform,
+    pair_gaps,
+    tf_chains,
+    transform_infos,
+)
+from umbmark.sources.bag.info.scan import ScannedTopic, inspect_topics
 from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
     MODEL_STATES,
     ODOMETRY,
     REFERENCE_TYPES,
-    TF_TYPES,
+    TF_STATIC_TOPIC,
+    TF_TOPIC,
 )
-from umbmark.sources.bag.names import mirrored_pairs
-from umbmark.sources.bag.references import ModelMotion
-from umbmark.sources.bag.scan import (
-    CHUNKS,
-    MOVING_ANGLE,
-    MOVING_DISTANCE,
-    MOVING_SPEED,
-    ScannedTopic,
-    inspect_topics,
-)
-from umbmark.sources.bag.series import BagOptions
+from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.truth.references import ModelMotion
 from umbmark.sources.bag.urdf import RobotDescription, read_description
 
 __all__ = [
-    "CHUNKS",
     "DEFAULT_MAX_MESSAGES",
     "MAX_CHAINS",
     "MAX_LISTED",
-    "MOVING_ANGLE",
-    "MOVING_DISTANCE",
-    "MOVING_SPEED",
     "BagInfo",
-    "Candidate",
     "JointInfo",
     "JointStateInfo",
     "ModelStatesInfo",
     "TopicInfo",
-    "TransformInfo",
     "bag_info",
-    "mirrored_pairs",
-    "tf_chains",
     "truth_candidates",
 ]
 
@@ -96,9 +90,6 @@ DEFAULT_MAX_MESSAGES = 2000
 MAX_LISTED = 50
 #: Chains listed at most.
 MAX_CHAINS = 20
-
-_MAX_DEPTH = 32  # frames in a chain at most
-TF_TOPIC, TF_STATIC = "/tf", "/tf_static"
 
 
 # --- what the report holds -------------------------------------------------------------
@@ -207,56 +198,6 @@ class JointStateInfo:
             "complete": self.complete,
             "joints": [joint.to_dict() for joint in self.joints],
             "joints_not_listed": self.not_listed,
-        }
-
-
-@dataclass(frozen=True)
-class TransformInfo:
-    """A parent->child pair of ``/tf`` or ``/tf_static`` (leading slashes dropped).
-
-    Attributes
-    ----------
-    parent, child : str
-    topic : str
-        ``/tf`` or ``/tf_static``.
-    count : int
-        Transforms of the pair in the messages read.
-    rate : float or None
-        Estimated rate [Hz] (the topic's rate times the pair's share of the messages
-        read); None for ``/tf_static``.
-    moving : bool
-        Its translation ranges over :data:`MOVING_DISTANCE` or its rotation over about
-        :data:`MOVING_ANGLE`, in the messages read.
-    turns_only : bool
-        It moves, but only turns: its translation stays within :data:`MOVING_DISTANCE`
-        (a wheel, a spinning sensor).
-    """
-
-    parent: str
-    child: str
-    topic: str
-    count: int
-    rate: float | None
-    moving: bool = False
-    turns_only: bool = False
-
-    @property
-    def static(self) -> bool:
-        """Whether it comes from ``/tf_static``."""
-        return self.topic == TF_STATIC
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: ``parent``, ``child``, ``topic``, ``static``, ``count``, ``rate``
-        [Hz], ``moving``."""
-        return {
-            "parent": self.parent,
-            "child": self.child,
-            "topic": self.topic,
-            "static": self.static,
-            "count": self.count,
-            "rate": self.rate,
-            "moving": self.moving,
-            "turns_only": self.turns_only,
         }
 
 
@@ -452,39 +393,7 @@ def _topic_of(candidate: Candidate) -> str | None:
     return None
 
 
-# --- transforms and chains ----------------------------------------------------------------
-
-
-def _transform_infos(scanned: Sequence[ScannedTopic]) -> list[TransformInfo]:
-    out = []
-    for topic in sorted(scanned, key=lambda t: t.name == TF_STATIC):
-        content = topic.content
-        if (
-            topic.msgtype not in TF_TYPES
-            or content is None
-            or topic.name not in (TF_TOPIC, TF_STATIC)
-        ):
-            continue
-        read = max(content.decoded, 1)
-        static = topic.name == TF_STATIC
-        for (parent, child), stats in content.pairs.items():
-            rate = None if static or topic.rate is None else topic.rate * stats.count / read
-            out.append(
-                TransformInfo(
-                    parent, child, topic.name, stats.count, rate, stats.moving, stats.turns_only
-                )
-            )
-    return out
-
-
-def _pair_gaps(scanned: Sequence[ScannedTopic]) -> dict[tuple[str, str], float | None]:
-    """The ``--max-gap`` [s] each ``/tf`` pair needs."""
-    return {
-        pair: _needed_gap(stats.times.intervals)
-        for topic in scanned
-        if topic.name == TF_TOPIC and topic.content is not None
-        for pair, stats in topic.content.pairs.items()
-    }
+# --- the entry points -------------------------------------------------------------------
 
 
 def _rank(
@@ -494,87 +403,17 @@ def _rank(
 ) -> tuple[list[Candidate], str | None]:
     """The ground-truth candidates, and, when none of them is independent of the
     odometry, what the bag holds instead (for a note)."""
-    found = _rank_truth(scanned, transforms, chains, _pair_gaps(scanned))
+    found = _rank_truth(scanned, transforms, chains, pair_gaps(scanned))
     if any(c.warning is None for c in found):
         return found, None
     own = [t.name for t in scanned if controller_odometry(t)]
-    own += [f"TF {tf.parent} -> {tf.child}" for tf in transforms if _odometry_tf(tf)]
+    own += [f"TF {tf.parent} -> {tf.child}" for tf in transforms if odometry_transform(tf)]
     flawed = [c.label for c in found]
     if not own and not flawed:
         return found, None
     held = [f"the robot's own odometry ({', '.join(own)})"] if own else []
     held += [f"{label}, listed with a warning" for label in flawed]
     return found, " and ".join(held)
-
-
-def _odometry_tf(tf: TransformInfo) -> bool:
-    from umbmark.sources.bag.names import odometry_frame
-
-    return not tf.static and odometry_frame(tf.parent)
-
-
-def tf_chains(transforms: Sequence[TransformInfo]) -> list[tuple[str, ...]]:
-    """Chains of frames from each root (a frame that is no child) down to the last frame
-    that moves: a static transform is followed only if a moving one lies below it.
-
-    Without any moving transform, the chains follow the static ones to their leaves.
-    """
-    children: dict[str, list[tuple[str, bool]]] = {}
-    parents: set[str] = set()
-    kids: set[str] = set()
-    for tf in transforms:
-        if tf.parent == tf.child:
-            continue
-        edge = (tf.child, tf.static)
-        siblings = children.setdefault(tf.parent, [])
-        if (tf.child, False) in siblings:
-            continue
-        if edge[1] is False and (tf.child, True) in siblings:
-            siblings.remove((tf.child, True))
-        if edge not in siblings:
-            siblings.append(edge)
-        parents.add(tf.parent)
-        kids.add(tf.child)
-    any_moving = any(not tf.static for tf in transforms)
-    memo: dict[str, bool] = {}
-
-    def moving_below(frame: str, path: frozenset[str]) -> bool:
-        if frame in memo:
-            return memo[frame]
-        result = False
-        for child, static in children.get(frame, []):
-            if child in path:
-                continue
-            if not static or moving_below(child, path | {child}):
-                result = True
-                break
-        memo[frame] = result
-        return result
-
-    chains: list[tuple[str, ...]] = []
-
-    def walk(path: tuple[str, ...]) -> None:
-        frame = path[-1]
-        nexts = [
-            child
-            for child, static in children.get(frame, [])
-            if child not in path
-            and (not any_moving or not static or moving_below(child, frozenset(path) | {child}))
-        ]
-        if not nexts or len(path) >= _MAX_DEPTH:
-            if len(path) > 1:
-                chains.append(path)
-            return
-        for child in nexts:
-            walk((*path, child))
-
-    roots = sorted(parents - kids) or sorted(parents)[:1]
-    for root in roots:
-        walk((root,))
-    return chains
-
-
-# --- the entry points -------------------------------------------------------------------
 
 
 def _storage(path: Path) -> str:
@@ -614,7 +453,7 @@ def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> B
             reader, topics, src, max_messages, wanted=lambda t, m: True, notes=notes
         )
         robot, robot_problem = read_description(reader, topics, src)
-    transforms = _transform_infos(scanned)
+    transforms = transform_infos(scanned)
     chains = tf_chains(transforms)
     truth, instead = _rank(scanned, transforms, chains)
     if instead is not None:
@@ -731,8 +570,8 @@ def truth_candidates(
         topics = bag_reader.topic_types(reader)
 
         def wanted(topic: str, msgtype: str) -> bool:
-            return msgtype in (*REFERENCE_TYPES, ODOMETRY) or topic in (TF_TOPIC, TF_STATIC)
+            return msgtype in (*REFERENCE_TYPES, ODOMETRY) or topic in (TF_TOPIC, TF_STATIC_TOPIC)
 
         scanned = inspect_topics(reader, topics, src, max_messages, wanted=wanted, notes=[])
-    transforms = _transform_infos(scanned)
+    transforms = transform_infos(scanned)
     return _rank(scanned, transforms, tf_chains(transforms))

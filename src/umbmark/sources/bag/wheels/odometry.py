@@ -35,7 +35,8 @@ messages. Two measures of that are computed and refused beyond their bounds:
   do not come from a differential drive's odometry at this rate (a filtered odometry,
   a holonomic base, or too few messages).
 
-Both leave out the steps across gaps in the messages (:mod:`umbmark.runs.gaps`): a
+Both leave out the steps across gaps in the messages
+(:func:`umbmark.model.recording.gap_mask`; :mod:`umbmark.runs.gaps`): a
 second without a message says nothing of the rate or of the odometry; whether a run can
 cross it is decided where the runs are found.
 
@@ -46,24 +47,16 @@ odometry says nothing about the wheels, and the readers refuse it (see
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError
-from umbmark.model.kinematics import wheel_travel_from_poses
-from umbmark.model.recording import PoseSeries, WheelSeries
-from umbmark.runs.gaps import gap_mask
+from umbmark.model.kinematics import OdometryGeometry, wheel_travel_from_poses
+from umbmark.model.recording import PoseSeries, WheelSeries, gap_mask
 
-__all__ = [
-    "MAX_LATERAL_SHARE",
-    "MAX_STEP_TURN",
-    "OdometryGeometry",
-    "OdometryInversion",
-    "wheels_from_odometry",
-]
+__all__ = ["MAX_LATERAL_SHARE", "MAX_STEP_TURN", "OdometryInversion", "wheels_from_odometry"]
 
 FloatArray = NDArray[np.float64]
 
@@ -71,32 +64,6 @@ FloatArray = NDArray[np.float64]
 MAX_STEP_TURN = 0.35
 #: Largest sideways displacement, summed over the recording, per metre driven.
 MAX_LATERAL_SHARE = 0.02
-
-
-@dataclass(frozen=True)
-class OdometryGeometry:
-    """The geometry a controller's odometry was computed with.
-
-    Attributes
-    ----------
-    left_radius, right_radius : float
-        Effective wheel radii [m]: ``wheel_radius`` times the radius multiplier.
-    separation : float
-        Effective wheel separation [m]: ``wheel_separation`` times its multiplier.
-    """
-
-    left_radius: float
-    right_radius: float
-    separation: float
-
-    def __post_init__(self) -> None:
-        for name, value in (
-            ("left_radius", self.left_radius),
-            ("right_radius", self.right_radius),
-            ("separation", self.separation),
-        ):
-            if not (math.isfinite(value) and 0.0 < value < 100.0):
-                raise InputError(f"the odometry's {name} must be in (0, 100) m, not {value!r}")
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,9 @@
 """Wheel encoders: cumulative counts on ``std_msgs`` topics, or two fields of any message.
 
-The readers behind :class:`~umbmark.sources.bag.BagOptions`' ``left_ticks_topic`` /
-``right_ticks_topic`` (:func:`read_ticks`) and ``left_field`` / ``right_field``
-(:func:`read_fields`); the module docstring of :mod:`umbmark.sources.bag.series` says what
-they read.
+The readers behind :class:`~umbmark.sources.bag.options.BagOptions`' ``left_ticks_topic``
+/ ``right_ticks_topic`` (:func:`read_ticks`) and ``left_field`` / ``right_field``
+(:func:`read_fields`); the module docstring of :mod:`umbmark.sources.bag.options` says
+what they read.
 """
 
 from __future__ import annotations
@@ -19,13 +19,14 @@ from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import custom
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.fastpath import POSITION, Sample, fast_layout
+from umbmark.sources.bag.fieldpath import getter, row_getter
 from umbmark.sources.bag.msgtypes import TICK_TYPES, Number
-from umbmark.sources.bag.samples import clean, read_topic, seconds, time_ns
+from umbmark.sources.bag.samples import clean, on_left_times, read_topic, time_ns
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-    from umbmark.sources.bag.series import BagOptions
+    from umbmark.sources.bag.options import BagOptions
 
 __all__ = ["read_fields", "read_ticks", "unwrap"]
 
@@ -75,24 +76,14 @@ def read_ticks(
     ticks_per_revolution: float,
     src: str,
 ) -> WheelSeries:
-    t_left, n_left = _read_counts(reader, topics, left_topic, "left", src)
-    t_right, n_right = _read_counts(reader, topics, right_topic, "right", src)
-    inside = (t_left >= t_right[0]) & (t_left <= t_right[-1])
-    if np.count_nonzero(inside) < 2:
-        raise InputError(
-            f"the ticks topics {left_topic} and {right_topic} overlap in time in fewer than"
-            " 2 samples of the left wheel",
-            source=src,
-        )
-    # interpolate on times relative to a common origin: exact to the nanosecond
-    origin = min(int(t_left[0]), int(t_right[0]))
-    at = (t_left[inside] - origin).astype(np.float64)
-    right = np.interp(at, (t_right - origin).astype(np.float64), n_right)
-    counts = np.column_stack([n_left[inside], right])
-    # both are strictly increasing: _clean made the float seconds so
-    return WheelSeries(
-        time=seconds(t_left[inside]), angles=counts * (2.0 * math.pi / ticks_per_revolution)
+    time, counts = on_left_times(
+        _read_counts(reader, topics, left_topic, "left", src),
+        _read_counts(reader, topics, right_topic, "right", src),
+        f"the ticks topics {left_topic} and {right_topic} overlap in time in fewer than"
+        " 2 samples of the left wheel",
+        src,
     )
+    return WheelSeries(time=time, angles=counts * (2.0 * math.pi / ticks_per_revolution))
 
 
 def read_fields(
@@ -141,7 +132,7 @@ def read_fields(
     paths = [left.steps, right.steps]
     if header:
         paths += [("header", "stamp", "sec"), ("header", "stamp", "nanosec")]
-    row = custom.row_getter(paths)
+    row = row_getter(paths)
     store = reader.typestore
     deserialize = store.deserialize_cdr if reader.is2 else store.deserialize_ros1
     rows: list[tuple[Any, ...]] = []
@@ -190,7 +181,7 @@ def _short_field(msg: object, *fields: custom.Field) -> str:
     """The first of ``fields`` that ``msg`` is too short for."""
     for field in fields:
         try:
-            custom.getter(field.steps)(msg)
+            getter(field.steps)(msg)
         except IndexError:
             return field.text
     return fields[0].text

@@ -1,9 +1,10 @@
-"""Looking into a bag's topics, within bounds: what :mod:`umbmark.sources.bag.info` reports.
+"""Looking into a bag's topics, within bounds: what ``umbmark info`` reports
+(:mod:`umbmark.sources.bag.info.report`).
 
 :func:`inspect_topics` finds each topic's first and last receive times and deserializes
 at most ``max_messages`` of the messages whose content matters, spread over
 :data:`CHUNKS` stretches of the topic's time span (see the docstring of
-:mod:`umbmark.sources.bag.info`). What they show is kept per topic (:class:`Content`):
+:mod:`umbmark.sources.bag.info.report`). What they show is kept per topic (:class:`Content`):
 the joints' ranges and speeds, the transforms' ranges and intervals, the ranges of
 positions and counters, the models of Gazebo's model states, the scatter of GNSS fixes,
 and the intervals between consecutive messages read (within a stretch), from which the
@@ -22,7 +23,6 @@ from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError
 from umbmark.sources.bag import reader as bag_reader
-from umbmark.sources.bag.candidates import needed_gap
 from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
     MODEL_STATES,
@@ -43,7 +43,7 @@ from umbmark.sources.bag.msgtypes import (
     Stamped,
     TFMessage,
 )
-from umbmark.sources.bag.references import ModelMotion, register_model_states
+from umbmark.sources.bag.truth.references import ModelMotion, ModelRanges, register_model_states
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
@@ -51,12 +51,14 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CHUNKS",
+    "GAP_SHARE",
     "MOVING_ANGLE",
     "MOVING_DISTANCE",
     "MOVING_SPEED",
     "Content",
     "ScannedTopic",
     "inspect_topics",
+    "needed_gap",
 ]
 
 #: Stretches of a long topic that the messages read are spread over.
@@ -67,11 +69,26 @@ MOVING_ANGLE = 1e-3
 MOVING_SPEED = 1e-3
 #: A pose moves if its position ranges over more than this [m].
 MOVING_DISTANCE = 1e-3
+#: Share of the intervals between a topic's messages its suggested --max-gap covers.
+GAP_SHARE = 0.95
 
 _PROBE = 8  # messages read per probe when looking for a topic's last message
 _MAX_PAIRS = 1000  # transforms pairs tracked per topic
 _MAX_MODELS = 1000  # models tracked per model-states topic
 _METRES_PER_DEGREE = 111_320.0  # of latitude, near enough to tell a moving receiver
+
+
+def needed_gap(intervals: Sequence[float]) -> float | None:
+    """The ``--max-gap`` [s] that interpolates across :data:`GAP_SHARE` of ``intervals``
+    [s] (between consecutive messages), with 10 % to spare (rounded to two significant
+    digits: at least 5 %); None without intervals."""
+    values = np.asarray([v for v in intervals if v > 0], dtype=np.float64)
+    if values.size == 0:
+        return None
+    gap = 1.1 * float(np.quantile(values, GAP_SHARE))
+    digits = 1 - math.floor(math.log10(gap))
+    return round(gap, digits)
+
 
 # --- reading a topic -------------------------------------------------------------------
 
@@ -298,7 +315,7 @@ class Content:
 
     joints: dict[str, JointStats] = field(default_factory=dict)
     pairs: dict[tuple[str, str], PairStats] = field(default_factory=dict)
-    models: dict[str, list[float]] = field(default_factory=dict)  # x/y low, high, count
+    models: ModelRanges = field(default_factory=lambda: ModelRanges(limit=_MAX_MODELS))
     sigmas: list[float] = field(default_factory=list)  # GNSS horizontal sigma [m]
     low: NDArray[np.float64] | None = None
     high: NDArray[np.float64] | None = None
@@ -336,10 +353,7 @@ class Content:
 
     def model_motion(self) -> list[ModelMotion]:
         """The models seen, and how far each moved."""
-        return [
-            ModelMotion(name, int(v[4]), max(v[2] - v[0], v[3] - v[1]))
-            for name, v in self.models.items()
-        ]
+        return self.models.motion()
 
     @property
     def sigma(self) -> float | None:
@@ -400,18 +414,7 @@ def _fix(msg: NavSatFix, out: Content) -> None:
 
 
 def _model_states(msg: ModelStates, out: Content) -> None:
-    for raw, pose in zip(msg.name, msg.pose, strict=False):
-        name = str(raw)
-        x, y = float(pose.position.x), float(pose.position.y)
-        if not (math.isfinite(x) and math.isfinite(y)):
-            continue
-        v = out.models.get(name)
-        if v is None:
-            if len(out.models) >= _MAX_MODELS:
-                continue
-            v = out.models[name] = [x, y, x, y, 0.0]
-        v[0], v[1], v[2], v[3] = min(v[0], x), min(v[1], y), max(v[2], x), max(v[3], y)
-        v[4] += 1
+    out.models.add(msg)
 
 
 def _number(msg: Number, out: Content) -> None:
@@ -496,7 +499,7 @@ class ScannedTopic:
     @property
     def needed_gap(self) -> float | None:
         """The ``--max-gap`` [s] it needs as a ground truth (between consecutive messages
-        read; :func:`~umbmark.sources.bag.candidates.needed_gap`)."""
+        read; :func:`needed_gap`)."""
         return None if self.content is None else needed_gap(self.content.times.intervals)
 
 

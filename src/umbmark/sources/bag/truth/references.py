@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -56,6 +56,7 @@ if TYPE_CHECKING:
 __all__ = [
     "MODEL_STATES_MSG",
     "ModelMotion",
+    "ModelRanges",
     "enu",
     "moving_models",
     "read_model_states",
@@ -123,27 +124,35 @@ class ModelMotion:
         return self.position_range > MOVING_DISTANCE
 
 
-def model_motion(messages: Sequence[ModelStates]) -> list[ModelMotion]:
-    """The models of ``messages``, in order of first appearance, and how far they move."""
-    low: dict[str, list[float]] = {}
-    high: dict[str, list[float]] = {}
-    count: dict[str, int] = {}
-    for msg in messages:
-        for raw_name, pose in zip(msg.name, msg.pose, strict=False):
+@dataclass
+class ModelRanges:
+    """How far each model of ``gazebo_msgs/ModelStates`` messages moved: the messages
+    added one at a time (:meth:`add`), at most ``limit`` models tracked (None: all)."""
+
+    limit: int | None = None
+    ranges: dict[str, list[float]] = field(default_factory=dict)  # x, y low; x, y high; count
+
+    def add(self, msg: ModelStates) -> None:
+        """The finite positions of one message's models."""
+        for raw, pose in zip(msg.name, msg.pose, strict=False):
             x, y = float(pose.position.x), float(pose.position.y)
             if not (math.isfinite(x) and math.isfinite(y)):
                 continue
-            name = str(raw_name)
-            lo, hi = low.setdefault(name, [x, y]), high.setdefault(name, [x, y])
-            lo[0], lo[1] = min(lo[0], x), min(lo[1], y)
-            hi[0], hi[1] = max(hi[0], x), max(hi[1], y)
-            count[name] = count.get(name, 0) + 1
-    return [
-        ModelMotion(
-            name, count[name], max(high[name][0] - low[name][0], high[name][1] - low[name][1])
-        )
-        for name in low
-    ]
+            name = str(raw)
+            v = self.ranges.get(name)
+            if v is None:
+                if self.limit is not None and len(self.ranges) >= self.limit:
+                    continue
+                v = self.ranges[name] = [x, y, x, y, 0.0]
+            v[0], v[1], v[2], v[3] = min(v[0], x), min(v[1], y), max(v[2], x), max(v[3], y)
+            v[4] += 1
+
+    def motion(self) -> list[ModelMotion]:
+        """The models, in order of first appearance, and how far they moved."""
+        return [
+            ModelMotion(name, int(v[4]), max(v[2] - v[0], v[3] - v[1]))
+            for name, v in self.ranges.items()
+        ]
 
 
 def moving_models(models: Sequence[ModelMotion]) -> list[str]:
@@ -157,11 +166,11 @@ def _choose_model(
     """``model``, or the one model of ``topic`` that moves."""
     total = bag_reader.message_count(conns)
     stride = max(1, total // MAX_INSPECTED)
-    looked: list[ModelStates] = []
+    ranges = ModelRanges()
     for k, (_, raw) in enumerate(bag_reader.raw_messages(reader, conns, topic, src)):
         if k % stride == 0:
-            looked.append(bag_reader.deserialize(reader, raw, MODEL_STATES, topic, src))  # type: ignore[arg-type]
-    models = model_motion(looked)
+            ranges.add(bag_reader.deserialize(reader, raw, MODEL_STATES, topic, src))  # type: ignore[arg-type]
+    models = ranges.motion()
     names = [m.name for m in models]
     if model is not None:
         if model not in names:

@@ -30,8 +30,9 @@ import math
 import numpy as np
 
 from umbmark.core.errors import InputError
+from umbmark.core.geometry import relative_positions
 from umbmark.model.recording import PoseSeries
-from umbmark.sources.bag.transforms import Edge, chain_steps
+from umbmark.sources.bag.truth.transforms import Edge, chain_steps
 
 __all__ = [
     "REPRODUCED_SHARE",
@@ -157,21 +158,16 @@ def disagreement(odometry: PoseSeries, truth: PoseSeries) -> tuple[float, float]
         + [np.interp(t, truth.time, np.unwrap(truth.poses[:, 2]))]
     )
 
-    def local(poses: np.ndarray, heading: float) -> np.ndarray:
-        c, s = math.cos(heading), math.sin(heading)
-        d = poses[:, :2] - poses[0, :2]
-        return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])
-
-    a = local(odo, float(odo[0, 2]))
+    a = relative_positions(odo, float(odo[0, 2]))
     if truth.headings:
-        b = local(ref, float(ref[0, 2]))
+        b = relative_positions(ref, float(ref[0, 2]))
     else:  # no heading: the best rotation of the truth onto the odometry
-        raw = local(ref, 0.0)
+        raw = relative_positions(ref, 0.0)
         angle = math.atan2(
             float(np.sum(raw[:, 0] * a[:, 1] - raw[:, 1] * a[:, 0])),
             float(np.sum(raw[:, 0] * a[:, 0] + raw[:, 1] * a[:, 1])),
         )
-        b = local(raw, -angle)
+        b = relative_positions(raw, -angle)
     rms = float(np.sqrt(np.mean(np.sum((a - b) ** 2, axis=1))))
     driven = float(np.sum(np.hypot(*np.diff(odo[:, :2], axis=0).T)))
     return rms, driven

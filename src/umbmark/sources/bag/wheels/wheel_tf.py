@@ -21,7 +21,6 @@ wheel's times.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -30,39 +29,19 @@ from numpy.typing import NDArray
 from umbmark.core.errors import InputError
 from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import reader as bag_reader
-from umbmark.sources.bag.msgtypes import TF_TYPES, TFMessage
-from umbmark.sources.bag.samples import clean, seconds
-from umbmark.sources.bag.transforms import TF_TOPIC
+from umbmark.sources.bag.msgtypes import TF_TOPIC, TF_TYPES, TFMessage
+from umbmark.sources.bag.samples import clean, on_left_times
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-__all__ = ["MAX_STEP", "WheelTransforms", "read_wheel_transforms", "turns_about_y"]
+__all__ = ["MAX_STEP", "read_wheel_transforms", "turns_about_y"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: Largest turn [rad] of a wheel between two of its transforms that can be followed.
 MAX_STEP = 0.5 * math.pi
-
-
-@dataclass(frozen=True)
-class WheelTransforms:
-    """The transforms of one wheel frame.
-
-    Attributes
-    ----------
-    parent : str
-        The frame they are given in.
-    time_ns : array, shape (k,)
-        Stamps [ns], strictly increasing.
-    quaternions : array, shape (k, 4)
-        ``x, y, z, w`` of the wheel frame in the parent frame.
-    """
-
-    parent: str
-    time_ns: IntArray
-    quaternions: FloatArray
 
 
 def turns_about_y(quaternions: FloatArray) -> FloatArray:
@@ -123,8 +102,8 @@ def _wheel(
     frame: str,
     header: bool,
     src: str,
-) -> tuple[IntArray, FloatArray, str]:
-    """Time [ns], cumulative turn [rad] and parent frame of one wheel frame."""
+) -> tuple[IntArray, FloatArray]:
+    """Time [ns] and cumulative turn [rad] of one wheel frame."""
     parents = sorted({parent for _, parent, _ in samples})
     if len(parents) > 1:
         raise InputError(
@@ -146,7 +125,7 @@ def _wheel(
             "state rate, or the joint states themselves",
             source=src,
         )
-    return kept, turns, parents[0]
+    return kept, turns
 
 
 def read_wheel_transforms(
@@ -181,16 +160,10 @@ def read_wheel_transforms(
             "frames of the wheels' transforms (umbmark info lists them)",
             source=src,
         )
-    t_left, a_left, _ = _wheel(found[left], left, header, src)
-    t_right, a_right, _ = _wheel(found[right], right, header, src)
-    inside = (t_left >= t_right[0]) & (t_left <= t_right[-1])
-    if np.count_nonzero(inside) < 2:
-        raise InputError(
-            f"the transforms to {left} and {right} overlap in time in fewer than 2 samples",
-            source=src,
-        )
-    origin = min(int(t_left[0]), int(t_right[0]))
-    at = (t_left[inside] - origin).astype(np.float64)
-    right_angle = np.interp(at, (t_right - origin).astype(np.float64), a_right)
-    angles = np.column_stack([a_left[inside], right_angle])
-    return WheelSeries(time=seconds(t_left[inside]), angles=angles)
+    time, angles = on_left_times(
+        _wheel(found[left], left, header, src),
+        _wheel(found[right], right, header, src),
+        f"the transforms to {left} and {right} overlap in time in fewer than 2 samples",
+        src,
+    )
+    return WheelSeries(time=time, angles=angles)

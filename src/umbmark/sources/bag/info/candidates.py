@@ -23,21 +23,20 @@ Ground truth, ranked
     odometry's) is never a ground-truth candidate: calibrating against it measures
     nothing. Candidates that do not move go last. Each carries its rate and the
     ``--max-gap`` it needs: 10 % more than 95 % of the intervals between its messages
-    (:func:`needed_gap`). Candidates with a warning (a fused odometry, GNSS fixes coarser
-    than :data:`MAX_SUGGESTED_SIGMA`) are listed but never suggested.
+    (:func:`umbmark.sources.bag.info.scan.needed_gap`). Candidates with a warning (a fused
+    odometry, GNSS fixes coarser than :data:`MAX_SUGGESTED_SIGMA`) are listed but never
+    suggested.
 """
 
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
-import numpy as np
-
-from umbmark.runs.association import DEFAULT_MAX_GAP
+from umbmark.model.recording import DEFAULT_MAX_GAP
+from umbmark.sources.bag.info.frames import odometry_transform
 from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
     MODEL_STATES,
@@ -57,17 +56,15 @@ from umbmark.sources.bag.names import (
     truth_like,
     words,
 )
-from umbmark.sources.bag.references import moving_models
+from umbmark.sources.bag.truth.references import moving_models
 
 if TYPE_CHECKING:
-    from umbmark.sources.bag.info import TransformInfo
-    from umbmark.sources.bag.scan import ScannedTopic as _Topic
+    from umbmark.sources.bag.info.frames import TransformInfo
+    from umbmark.sources.bag.info.scan import ScannedTopic as _Topic
 
 __all__ = [
-    "GAP_SHARE",
     "MAX_SUGGESTED_SIGMA",
     "Candidate",
-    "needed_gap",
     "odometry_candidates",
     "truth_candidates",
     "wheel_candidates",
@@ -75,13 +72,9 @@ __all__ = [
 
 Role = Literal["wheels", "odometry", "truth"]
 
-#: Share of the intervals between a candidate's messages its suggested --max-gap covers.
-GAP_SHARE = 0.95
 #: GNSS fixes with a larger median horizontal standard deviation [m] are not suggested:
 #: UMBmark's return errors are centimetres.
 MAX_SUGGESTED_SIGMA = 0.05
-#: A wheel frame's transforms move by less than this [m] (they only turn).
-_WHEEL_SHIFT = 1e-3
 
 
 @dataclass(frozen=True)
@@ -104,7 +97,8 @@ class Candidate:
     rate : float or None
         Its rate [Hz] (a transform's share of its topic's), None if unknown.
     max_gap : float or None
-        The ``--max-gap`` [s] it needs (:func:`needed_gap`), None if unknown.
+        The ``--max-gap`` [s] it needs (:func:`~umbmark.sources.bag.info.scan.needed_gap`),
+        None if unknown.
     warning : str or None
         Why it is no sound reference although listed (a fused odometry); such a
         candidate is never suggested.
@@ -147,18 +141,6 @@ class Candidate:
             "warning": self.warning,
             "headings": self.headings,
         }
-
-
-def needed_gap(intervals: Sequence[float]) -> float | None:
-    """The ``--max-gap`` [s] that interpolates across :data:`GAP_SHARE` of ``intervals``
-    [s] (between consecutive messages), with 10 % to spare (rounded to two significant
-    digits: at least 5 %); None without intervals."""
-    values = np.asarray([v for v in intervals if v > 0], dtype=np.float64)
-    if values.size == 0:
-        return None
-    gap = 1.1 * float(np.quantile(values, GAP_SHARE))
-    digits = 1 - math.floor(math.log10(gap))
-    return round(gap, digits)
 
 
 # --- wheels --------------------------------------------------------------------------------
@@ -256,7 +238,7 @@ def odometry_candidates(
         if controller_odometry(t)
     ]
     for tf in transforms:
-        if not tf.static and odometry_frame(tf.parent):
+        if odometry_transform(tf):
             options = (("--odom-tf", f"{tf.parent} {tf.child}"),)
             label = f"TF {tf.parent} -> {tf.child}"
             out.append(Candidate("odometry", "tf", label, options, tf.moving, tf.rate))
