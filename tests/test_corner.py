@@ -14,16 +14,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from umbmark.core.errors import InputError
-from umbmark.robot.base import LaserScan, Pose2D
-from umbmark.robot.world import LCorner, Lidar, World, box, chair, corner_world, legs
-from umbmark.selfcal.corner import (
+from umbmark.autocal.corner import (
     CornerFix,
     CornerNotFoundError,
     expected_pose,
     relative_motion,
 )
-from umbmark.selfcal.corner_lidar import LidarCorner, find_corner, fix_from_scans
+from umbmark.autocal.corner_lidar import LidarCorner, find_corner, fix_from_scans
+from umbmark.core.errors import InputError
+from umbmark.robot.base import LaserScan, Pose2D
+from umbmark.robot.world import LCorner, Lidar, World, box, chair, corner_world, legs
 
 SCANS = 5
 START = Pose2D(1.0, 0.8, 0.0)  # the start in the standard world's corner frame
