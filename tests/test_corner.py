@@ -26,7 +26,7 @@ from umbmark.robot.base import LaserScan, Pose2D
 from umbmark.robot.world import LCorner, Lidar, World, box, chair, corner_world, legs
 
 SCANS = 5
-START = Pose2D(1.0, 0.8, 0.0)  # the start in the standard world's corner frame
+START = Pose2D(1.6, 1.3, 0.0)  # the start in the standard world's corner frame
 
 
 def _scans(world: World, pose: Pose2D, rng: np.random.Generator, n: int = SCANS) -> list[LaserScan]:
@@ -159,16 +159,16 @@ def _cluttered(*segments: np.ndarray, circles: tuple[np.ndarray, ...] = ()) -> W
     ("name", "world"),
     [
         # a box with perpendicular sides inside the corner, near the back wall
-        ("box in the corner", _cluttered(box(-0.75, 0.3, 0.3, 0.3, 0.2))),
+        ("box in the corner", _cluttered(box(-1.35, -0.2, 0.3, 0.3, 0.2))),
         # a person standing between the robot and the back wall, and a chair
-        ("legs and a chair", _cluttered(circles=(legs(-0.5, 0.3, 0.3), chair(-0.6, 1.2)))),
+        ("legs and a chair", _cluttered(circles=(legs(-1.1, -0.2, 0.3), chair(-1.2, 0.7)))),
         # the corner partly occluded: a box hides the vertex, a person part of the back wall
         (
             "occluded vertex",
-            _cluttered(box(-0.9, -0.7, 0.15, 0.15), circles=(legs(-0.6, 0.5, 0.0),)),
+            _cluttered(box(-1.5, -1.2, 0.15, 0.15), circles=(legs(-1.2, 0.0, 0.0),)),
         ),
         # a box against the back wall: its side and the wall make another concave L
-        ("box against the wall", _cluttered(box(-0.8, 1.3, 0.4, 0.6))),
+        ("box against the wall", _cluttered(box(-1.4, 0.8, 0.4, 0.6))),
     ],
 )
 def test_clutter_does_not_fool_it(name, world):
@@ -186,19 +186,19 @@ def test_clutter_does_not_fool_it(name, world):
 def test_the_prior_tells_a_box_corner_from_the_corner():
     # a big box against the back wall: its lower side (0.8 m) and the wall below it make
     # a concave L as long as the real one; the prior picks the real corner
-    world = _cluttered(box(-0.6, 0.8, 0.8, 0.8))
+    world = _cluttered(box(-1.2, 0.8, 0.8, 0.8))
     assert world.corner is not None
     rng = np.random.default_rng(8)
     truth = world.corner.in_corner(Pose2D())
     fix = fix_from_scans(_scans(world, Pose2D(), rng), prior=truth.compose(Pose2D(0.2, 0.1, 0.1)))
     assert math.hypot(*_error(fix, truth)[:2]) < 0.003
-    # the box's L: vertex (-1.0, 0.4), its x wall down the back wall (world heading
+    # the box's L: vertex (-1.6, 0.4), its x wall down the back wall (world heading
     # -90 deg), its y wall the box's side along +x: the robot at the origin is at
-    # (0.4, 1.0), heading +90 deg, in it. A prior there finds that one.
+    # (0.4, 1.6), heading +90 deg, in it. A prior there finds that one.
     scan = _scans(world, Pose2D(), rng, n=1)[0]
-    other, _, _ = find_corner(scan, prior=Pose2D(0.5, 0.9, math.pi / 2))
+    other, _, _ = find_corner(scan, prior=Pose2D(0.5, 1.5, math.pi / 2))
     assert other.theta == pytest.approx(math.pi / 2, abs=math.radians(1.0))
-    assert (other.x, other.y) == pytest.approx((0.4, 1.0), abs=0.01)
+    assert (other.x, other.y) == pytest.approx((0.4, 1.6), abs=0.01)
 
 
 # --- refusals ----------------------------------------------------------------------------
@@ -248,7 +248,7 @@ def test_refuses_with_too_few_returns():
 
 
 def test_refuses_a_corner_far_from_the_prior():
-    error = _refusal(corner_world(), prior=Pose2D(2.0, 0.8, 0.0))
+    error = _refusal(corner_world(), prior=Pose2D(1.6, 2.3, 0.0))
     assert error.cause == "not_where_expected"
     # the robot is 1 m from where it was expected
     off = float(str(error).split("), ")[1].split(" m and")[0])

@@ -104,8 +104,8 @@ def test_a_single_reading_is_as_uncertain_as_stated():
 
 
 def test_ranges_refuse_a_missing_echo():
-    # 0.6 m forward the side sensor looks past the end of the side wall
-    error = _refuse_ranges(corner_world(), Pose2D(0.6, 0.0, 0.0))
+    # 1.2 m forward the side sensor looks past the end of the side wall
+    error = _refuse_ranges(corner_world(), Pose2D(1.2, 0.0, 0.0))
     assert error.cause == "missing_echo"
     assert "sensor 3" in str(error)
 
@@ -241,7 +241,7 @@ def test_ground_truth_in_the_corner_frame():
     assert stamped is not None
     fix = fix_from_ground_truth(stamped, corner=world.corner.frame, sigma_xy=0.001)
     truth = world.corner.in_corner(pose)
-    assert (fix.pose.x, fix.pose.y, fix.pose.theta) == pytest.approx((1.3, 0.6, 0.4))
+    assert (fix.pose.x, fix.pose.y, fix.pose.theta) == pytest.approx((1.9, 1.1, 0.4))
     assert (fix.pose.x, fix.pose.y) == pytest.approx((truth.x, truth.y))
     assert fix.std[0] == pytest.approx(0.001)
     assert fix.time == 12.0

@@ -188,7 +188,7 @@ def test_the_standard_world_keeps_out_of_the_squares_way():
     assert world.clearance(square_path(4.0, "cw")) == pytest.approx(0.35, abs=1e-12)
     assert world.clearance(square_path(4.0, "ccw")) == pytest.approx(0.6, abs=1e-12)
     assert world.corner is not None
-    assert world.corner.in_corner(world.start) == Pose2D(1.0, 0.8, 0.0)
+    assert world.corner.in_corner(world.start) == Pose2D(1.6, 1.3, 0.0)
 
 
 def test_clearance_is_zero_when_a_wall_crosses_the_path():

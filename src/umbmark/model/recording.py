@@ -146,6 +146,9 @@ class Recording:
         The file it was read from, for messages (``name`` where None).
     wheel_sample : str
         What one wheel sample is, for messages (``"/odom message"``).
+    truth_at_stops : bool
+        The ground truth was measured only where the robot stood (a self-calibration's
+        corner fixes): few wheel samples have one, as intended.
     """
 
     name: str
@@ -161,6 +164,7 @@ class Recording:
         return self.path or self.name
 
     wheel_sample: str = "wheel sample"
+    truth_at_stops: bool = False
 
 
 @dataclass(frozen=True)

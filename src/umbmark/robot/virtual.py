@@ -206,6 +206,11 @@ class VirtualRobot:
         """The robot's true pose in the world [m, rad] (for checks against the truth)."""
         return self._pose
 
+    def corner_truth(self) -> Pose2D | None:
+        """The true pose in the corner frame (None: the world has no corner)."""
+        corner = self.world.corner
+        return None if corner is None else corner.in_corner(self._pose)
+
     def _wheel_positions(self) -> list[float]:
         """The controller's wheel positions [m]: encoder angles times the current radii."""
         p = self._params

@@ -143,14 +143,14 @@ class MotionCapture:
 
 
 #: The range sensors of the standard world: two at the back facing the wall behind the
-#: start (0.5 m apart), one at the back right looking back and right (30 degrees off
-#: square) at the side wall, which ends behind the start: its beam meets that wall while
-#: the robot stands within about 0.15 m and 5 degrees of the start.
+#: start (0.5 m apart), one at the back right looking right and a little back (15
+#: degrees off square) at the side wall, which ends behind the start: its beam meets that wall while
+#: the robot stands near the start.
 CORNER_SENSORS = RangeSensors(
     mounts=(
         Pose2D(-0.35, 0.25, math.pi),
         Pose2D(-0.35, -0.25, math.pi),
-        Pose2D(-0.35, -0.25, -2 * math.pi / 3),
+        Pose2D(-0.35, -0.25, -7 * math.pi / 12),
     )
 )
 
@@ -376,23 +376,24 @@ def square_path(
 
 def corner_world(clutter: bool = True) -> World:
     """The standard world: an L-shaped corner behind and to the right of the start
-    (vertex at (-1.0, -0.8) m; a 0.65 m wall along +x ending 0.35 m behind the start, and
-    a 2.8 m wall along +y 1 m behind the start), a far wall 6 m ahead and, with
-    ``clutter``, a box beside the back wall, a chair and a person standing aside. The
+    (vertex at (-1.6, -1.3) m; a 1.25 m wall along +x ending 0.35 m behind the start, and
+    a 2.8 m wall along +y 1.6 m behind the start, 1.3 m to the right of it), a far wall 6 m ahead and, with
+    ``clutter``, a box in front of the back wall, a chair and a person standing aside. The
     robot starts at the origin heading +x and carries a 360 degree laser (720 beams, 1 cm
     noise, 2 % dropouts) at its centre, the three range sensors of
     :data:`CORNER_SENSORS` (2 mm noise) and motion capture.
 
     The 4 x 4 m squares driven from the start (cw and ccw) keep at least 0.35 m from
-    everything (:meth:`World.clearance`). In the corner frame the start is at
-    ``(1.0, 0.8)`` m, heading 0.
+    everything (:meth:`World.clearance`), and a robot ending a run up to about 1 m from
+    the start in any direction still sees both walls well from inside the corner. In the
+    corner frame the start is at ``(1.6, 1.3)`` m, heading 0.
     """
-    corner = LCorner(vertex=(-1.0, -0.8), heading=0.0, x_length=0.65, y_length=2.8)
+    corner = LCorner(vertex=(-1.6, -1.3), heading=0.0, x_length=1.25, y_length=2.8)
     walls = [np.array([[6.0, -5.5, 6.0, 5.5]])]
     circles: list[FloatArray] = []
     if clutter:
         walls.append(box(-0.75, 1.6, 0.3, 0.4))
-        circles += [chair(-2.0, -2.5, 0.3), legs(-1.8, 3.0, 0.5)]
+        circles += [chair(-1.2, 2.6, 0.3), legs(-0.9, -2.4, 0.5)]
     return World.build(
         np.vstack(walls),
         np.vstack(circles) if circles else (),

@@ -225,6 +225,8 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
 
         recordings, metadata = read_runlog(source)
         params, side = metadata.params, metadata.side_length
+        if metadata.one_run_per_file:
+            split = "none"
         meta = str((source if source.is_dir() else source.parent) / METADATA_FILE)
         origins = {key: Origin(key, meta) for key in ("wheelbase", "wheel_diameter", "side_length")}
         origins["separation_multiplier"] = Origin("wheel_separation_multiplier", meta)

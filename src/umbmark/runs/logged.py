@@ -231,6 +231,12 @@ def _run(
     ok = known[sl]
     if headings:
         log.truth[ok] = to_start_frame(truth[sl][ok])
+        if recording.truth_at_stops:
+            # Measured only at the stops, the truth cannot tell how many whole turns the
+            # robot made in between: as many as its odometry (off by far less than a half
+            # turn), the truth's heading within them.
+            turns = np.round((odo[ok, 2] - log.truth[ok, 2]) / (2 * math.pi))
+            log.truth[ok, 2] += 2 * math.pi * turns
         turned = float(log.truth[-1, 2])
     else:
         log.truth[ok, :2] = _positions_in_start_frame(truth[sl, :2], ok, odo)
@@ -329,7 +335,8 @@ def runs_from_recordings(
             recording.wheels, recording.truth, max_gap=max_gap, source=where
         )
         out.associations.append((recording.name, association))
-        if association.fraction < 0.9:
+        # A truth measured only where the robot stood matches few samples, as intended.
+        if association.fraction < 0.9 and not recording.truth_at_stops:
             out.notes.append(f"{recording.name}: only {association.describe()}")
         segments, left_out = _segments(
             recording, truth, split, windows, split_options, out, params, method

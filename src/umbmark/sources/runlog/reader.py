@@ -37,7 +37,12 @@ Where ``c_left``, ``c_right`` or ``wheel_separation_multiplier`` are given, they
 parameters active during the runs: :func:`umbmark.calibrate` composes its correction with
 them unless a ``--current-...`` option says otherwise.
 
-Further keys (``truth``, ``notes``) are kept as they are and otherwise ignored.
+Two further keys say how the runs were recorded (what ``umbmark selfcal`` writes)::
+
+    runs: one per file        # each CSV holds exactly one run (no splitting at rests)
+    truth: at stops           # ground truth measured only where the robot stood
+
+Other keys (``notes``, ...) are kept as they are and otherwise ignored.
 :mod:`umbmark.sources.runlog.writer` writes run logs.
 """
 
@@ -47,7 +52,7 @@ import csv
 import math
 from array import array
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -111,6 +116,16 @@ class LogMetadata:
     extra: Mapping[str, Any] = field(default_factory=dict)
     separation_multiplier: float = 1.0
     active_recorded: bool = False
+
+    @property
+    def one_run_per_file(self) -> bool:
+        """``runs: one per file``: each CSV is one run, not split at rests."""
+        return self.extra.get("runs") == "one per file"
+
+    @property
+    def truth_at_stops(self) -> bool:
+        """``truth: at stops``: ground truth measured only where the robot stood."""
+        return self.extra.get("truth") == "at stops"
 
     @property
     def params(self) -> WheelParams:
@@ -228,6 +243,8 @@ def read_runlog(path: str | Path) -> tuple[list[Recording], LogMetadata]:
         files = [path]
     scale = 1.0 if metadata.wheel_data == "angles" else metadata.params.radians_per_pulse
     recordings = [_read_log_csv(f, scale, metadata.params, metadata.side_length) for f in files]
+    if metadata.truth_at_stops:
+        recordings = [replace(r, truth_at_stops=True) for r in recordings]
     return recordings, metadata
 
 

@@ -1,0 +1,117 @@
+"""Taking a fix at a stop: the robot's pose in the corner frame from what the robot
+offers (laser scans, range sensors, motion capture) or from a person with a tape.
+
+The robot stands still while readings are taken; several are averaged
+(:data:`READINGS`), spaced by the sensor's period so that they are independent.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+from umbmark.autocal.corner import CornerFix, CornerNotFoundError
+from umbmark.autocal.corner_lidar import LidarCorner, fix_from_scans
+from umbmark.autocal.corner_sensors import (
+    TapeMarks,
+    ask_tape,
+    fix_from_ground_truth,
+    fix_from_ranges,
+    fix_from_tape,
+)
+from umbmark.robot.base import LaserScan, Pose2D, RangeReading, Robot, Stamped
+
+__all__ = ["MEASURE_METHODS", "READINGS", "Measure", "MeasureMethod", "measure"]
+
+MeasureMethod = Literal["lidar", "ranges", "truth", "tape"]
+MEASURE_METHODS: tuple[MeasureMethod, ...] = ("lidar", "ranges", "truth", "tape")
+
+#: Readings averaged at a stop (scans, range readings, motion-capture poses).
+READINGS = 5
+#: Time between readings [s]: a 10 Hz laser's period.
+READING_PERIOD = 0.1
+
+
+@dataclass(frozen=True)
+class Measure:
+    """How fixes are taken.
+
+    Attributes
+    ----------
+    method : {"lidar", "ranges", "truth", "tape"}
+    readings : int
+        Readings averaged per fix.
+    ask : callable, optional
+        For ``tape``: shows a prompt, returns the person's answer (``input``).
+    marks : TapeMarks, optional
+        For ``tape``: the marks on the robot the person measures from.
+    """
+
+    method: MeasureMethod = "lidar"
+    readings: int = READINGS
+    ask: Callable[[str], str] | None = None
+    marks: TapeMarks | None = None
+
+
+def _collect(robot: Robot, read: Callable[[], object], what: str, count: int) -> list[object]:
+    out: list[object] = []
+    last: float | None = None
+    for _ in range(50 * count):
+        value = read()
+        time = getattr(value, "time", None)
+        if value is not None and time != last:
+            out.append(value)
+            last = time
+            if len(out) == count:
+                return out
+        robot.wait(READING_PERIOD)
+    raise CornerNotFoundError("missing_echo", f"the robot gives no {what} (asked for {count})")
+
+
+def measure(
+    robot: Robot,
+    how: Measure,
+    prior: Pose2D | None = None,
+    gate: tuple[float, float] = (0.5, math.radians(20.0)),
+) -> CornerFix:
+    """A fix of the robot where it stands.
+
+    Parameters
+    ----------
+    robot : Robot
+        Standing still.
+    how : Measure
+    prior : Pose2D, optional
+        Where the robot should be in the corner frame (from the last fix and the odometry):
+        gates the corner found.
+    gate : (float, float)
+        How far [m] and how much turned [rad] from ``prior`` the fix may be (after a run,
+        the return error's size).
+
+    Raises
+    ------
+    CornerNotFoundError
+        No fix, with the cause.
+    """
+    n = how.readings
+    if how.method == "lidar":
+        scans = _collect(robot, robot.scan, "laser scan", n)
+        config = LidarCorner(prior_distance=gate[0], prior_angle=gate[1])
+        return fix_from_scans([s for s in scans if isinstance(s, LaserScan)], prior, config)
+    if how.method == "ranges":
+        readings = _collect(robot, robot.ranges, "range-sensor reading", n)
+        return fix_from_ranges(
+            [r for r in readings if isinstance(r, RangeReading)],
+            prior=prior,
+            prior_distance=gate[0],
+            prior_angle=gate[1],
+        )
+    if how.method == "truth":
+        poses = _collect(robot, robot.ground_truth, "ground-truth pose", n)
+        return fix_from_ground_truth([p for p in poses if isinstance(p, Stamped)])
+    if how.ask is None or how.marks is None:
+        raise CornerNotFoundError("missing_echo", "a tape fix needs a person to ask and marks")
+    distances = ask_tape(how.ask, how.marks)
+    return fix_from_tape(distances, how.marks, prior=prior, time=robot.now())

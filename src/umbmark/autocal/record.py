@@ -1,0 +1,134 @@
+"""Recording a self-calibration pass as a run log, the folder ``calibrate``, ``replay`` and
+``report`` read.
+
+One CSV per run (``runs: one per file``). The wheel columns are the wheel angles that
+made the odometry move as it did, given the parameters the controller ran with
+(:func:`umbmark.model.kinematics.wheel_travel_from_poses` over the odometry's poses,
+divided by each wheel's effective radius): integrating them with those parameters, as
+``calibrate`` does, gives the robot's odometry back. The ground truth is the corner fix,
+written at the samples where the robot stood still before and after the run
+(``truth: at stops``): its pose relative to the run's start is what UMBmark measures.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from umbmark.autocal.corner import CornerFix
+from umbmark.autocal.drive import DrivenRun
+from umbmark.model.kinematics import wheel_travel_from_poses
+from umbmark.robot.base import DriveParams
+from umbmark.sources.runlog.reader import LogMetadata
+from umbmark.sources.runlog.writer import write_log_csv, write_metadata
+
+__all__ = ["MeasuredRun", "record_pass"]
+
+
+@dataclass(frozen=True)
+class MeasuredRun:
+    """A run as driven by the odometry, with the corner fixes before and after it."""
+
+    run: DrivenRun
+    start: CornerFix
+    end: CornerFix
+
+
+def _samples(run: DrivenRun) -> np.ndarray:
+    """The run's odometry readings, shape (n, 4), one per odometry time (the driver may
+    read one update more than once)."""
+    odometry = np.asarray(run.odometry, dtype=np.float64)
+    keep = np.ones(odometry.shape[0], dtype=bool)
+    keep[:-1] = np.diff(odometry[:, 0]) > 0.0
+    return odometry[keep]
+
+
+#: The odometry stands still while it changes by less than this [m, rad].
+STILL = 1e-6
+
+
+def _still(odometry: np.ndarray) -> tuple[int, int]:
+    """``first, last``: the readings ``[:first]`` where the robot still stood at the start
+    and ``[last:]`` where it stood at the end (the fixes hold there)."""
+    pose = odometry[:, 1:4]
+    moved_from_start = np.any(np.abs(pose - pose[0]) > STILL, axis=1)
+    moved_from_end = np.any(np.abs(pose - pose[-1]) > STILL, axis=1)
+    first = int(np.argmax(moved_from_start)) if moved_from_start.any() else pose.shape[0]
+    last = pose.shape[0] - int(np.argmax(moved_from_end[::-1])) if moved_from_end.any() else 0
+    return max(first, 1), min(last, pose.shape[0] - 1)
+
+
+def _wheel_angles(odometry: np.ndarray, params: DriveParams) -> np.ndarray:
+    """Cumulative wheel angles [rad], shape (n, 2), from odometry readings ``t, x, y,
+    theta``, shape (n, 4)."""
+    poses = np.array(odometry[:, 1:4], dtype=np.float64)
+    poses[:, 2] = np.unwrap(poses[:, 2])
+    d_left, d_right, _ = wheel_travel_from_poses(poses, params.wheelbase)
+    r_left = params.wheel_radius * params.left_wheel_radius_multiplier
+    r_right = params.wheel_radius * params.right_wheel_radius_multiplier
+    angles = np.zeros((poses.shape[0], 2))
+    angles[1:, 0] = np.cumsum(d_left) / r_left
+    angles[1:, 1] = np.cumsum(d_right) / r_right
+    return angles
+
+
+def record_pass(
+    folder: Path,
+    runs: Sequence[MeasuredRun],
+    params: DriveParams,
+    side_length: float,
+    method: str,
+    robot: str,
+) -> list[Path]:
+    """Write ``folder/metadata.yaml`` and ``run-NN-cw.csv`` / ``run-NN-ccw.csv``.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    metadata = LogMetadata(
+        wheel_diameter=2.0 * params.wheel_radius,
+        wheelbase=params.wheel_separation,
+        wheel_data="angles",
+        side_length=side_length,
+        c_left=params.left_wheel_radius_multiplier,
+        c_right=params.right_wheel_radius_multiplier,
+        separation_multiplier=params.wheel_separation_multiplier,
+        extra={
+            "runs": "one per file",
+            "truth": "at stops",
+            "measurement": method,
+            "robot": robot,
+        },
+    )
+    written = [write_metadata(folder, metadata)]
+    for k, measured in enumerate(runs, start=1):
+        run = measured.run
+        odometry = _samples(run)
+        time = odometry[:, 0]
+        truth = np.full((time.size, 3), math.nan)
+        first, last = _still(odometry)
+        start, end = measured.start.pose, measured.end.pose
+        # The run turned one full turn (left for ccw): the fixes' headings, unwrapped so.
+        turn = run.direction.turn_sign * 2 * math.pi
+        end_heading = start.theta + turn + math.remainder(end.theta - start.theta, 2 * math.pi)
+        truth[:first] = (start.x, start.y, start.theta)
+        truth[last:] = (end.x, end.y, end_heading)
+        path = folder / f"run-{k:02d}-{run.direction.value}.csv"
+        write_log_csv(
+            path,
+            time,
+            truth,
+            _wheel_angles(odometry, params),
+            comment=(
+                f"{run.direction.value} run {k} of a self-calibration: odometry turned back "
+                f"into wheel angles; truth: corner fixes ({method}) where the robot stood"
+            ),
+        )
+        written.append(path)
+    return written

@@ -1,0 +1,418 @@
+"""The self-calibration job (the paper's Sec. 6): the robot drives UMBmark by itself,
+measures where it stopped against an L-shaped corner, calibrates, applies the correction
+and checks it.
+
+:func:`selfcal` is what ``umbmark selfcal`` does; its report's :meth:`SelfCalReport.to_dict`
+is what ``umbmark selfcal --json`` prints. The steps:
+
+1. checks before anything moves: the odometry is alive, the controller answers, the corner
+   is found (the first fix is the start of every run), the floor of both squares is free;
+2. a coarse turning check (:mod:`umbmark.autocal.coarse`), corrected when the robot turns
+   far from what its odometry believes, so that a square is possible at all;
+3. a UMBmark pass: ``runs`` cw then ``runs`` ccw runs, each from the start, recorded as a
+   run log in ``out/pass-N`` (what ``umbmark calibrate``, ``report`` and ``replay`` read);
+4. the calibration (:func:`umbmark.calibrate`, the default estimator), composed with the
+   parameters active during the pass;
+5. applying it (unless its verdict is "do not apply");
+6. further passes while the paper's 3 x SEM rule says another is worth it, at most
+   ``max_passes``;
+7. a verification pass on the final parameters;
+8. the history entry (``robot_name``), the HTML report of all passes and the overlay.
+
+What a person still does: place the robot in the corner, and calibrate the scale error
+``E_s`` with a tape (``docs/driving.md``): UMBmark cannot see it.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from umbmark.autocal.coarse import CoarseTurning, coarse_turning
+from umbmark.autocal.corner_sensors import TapeMarks
+from umbmark.autocal.drive import DriveLimits, settle
+from umbmark.autocal.measure import Measure, MeasureMethod, measure
+from umbmark.autocal.passes import Home, corner_truth, drive_pass
+from umbmark.autocal.preflight import preflight
+from umbmark.autocal.record import record_pass
+from umbmark.core.conventions import Direction, wrap_angle
+from umbmark.core.errors import InputError
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+
+if TYPE_CHECKING:
+    from umbmark.jobs.calibrate import CalibrationReport
+
+__all__ = ["MAX_SELFCAL_PASSES", "PassResult", "SelfCalReport", "selfcal"]
+
+#: Most UMBmark passes one self-calibration drives (verification not counted).
+MAX_SELFCAL_PASSES = 5
+#: Most runs per direction in a pass.
+MAX_SELFCAL_RUNS = 20
+
+#: Live progress: (pass label, run number, direction, what) for a terminal.
+Progress = Callable[[str, int, Direction | None, str], None]
+
+
+@dataclass(frozen=True)
+class PassResult:
+    """One UMBmark pass of the self-calibration.
+
+    Attributes
+    ----------
+    label : str
+        ``pass 1``, ``pass 2``, ..., ``verification``.
+    folder : Path
+        Its run log.
+    report : CalibrationReport
+        Its calibration (composed with the parameters active during it).
+    params : DriveParams
+        The parameters the controller ran with during the pass.
+    applied : ApplyResult or None
+        What applying its correction did (None: not applied).
+    """
+
+    label: str
+    folder: Path
+    report: CalibrationReport
+    params: DriveParams
+    applied: ApplyResult | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (metres, radians)."""
+        estimate = self.report.estimate
+        return {
+            "label": self.label,
+            "folder": str(self.folder),
+            "e_max_syst": self.report.e_max_syst,
+            "E_d": estimate.E_d,
+            "E_b": estimate.E_b,
+            "verdict": self.report.verdict.words,
+            "active": _multipliers(self.params),
+            "applied": None if self.applied is None else self.applied.active,
+            "apply_method": None if self.applied is None else self.applied.method,
+            "apply_message": None if self.applied is None else self.applied.message,
+        }
+
+
+@dataclass(frozen=True)
+class SelfCalReport:
+    """What a self-calibration did and found.
+
+    Attributes
+    ----------
+    robot : str
+        The robot's name.
+    side_length : float
+        The square's side [m].
+    measurement : str
+        ``lidar``, ``ranges``, ``truth`` or ``tape``.
+    coarse : CoarseTurning or None
+        The coarse turning check (None: not made).
+    coarse_applied : ApplyResult or None
+    passes : tuple of PassResult
+        The UMBmark passes, the verification last.
+    final : DriveParams
+        The parameters the controller holds at the end.
+    fix_errors : array, shape (k, 3), or None
+        Each fix's error against the truth (a virtual robot): ``x, y`` [m], heading [rad].
+    checks : tuple of str
+        What the checks before moving found.
+    files : tuple of Path
+        Files written.
+    """
+
+    robot: str
+    side_length: float
+    measurement: str
+    coarse: CoarseTurning | None
+    coarse_applied: ApplyResult | None
+    passes: tuple[PassResult, ...]
+    final: DriveParams
+    fix_errors: np.ndarray | None = None
+    checks: tuple[str, ...] = ()
+    files: tuple[Path, ...] = field(default=(), compare=False)
+
+    @property
+    def e_max_syst_before(self) -> float | None:
+        """E_max,syst of the first pass [m]."""
+        return self.passes[0].report.e_max_syst if self.passes else None
+
+    @property
+    def e_max_syst_after(self) -> float | None:
+        """E_max,syst of the last pass (the verification, if driven) [m]."""
+        return self.passes[-1].report.e_max_syst if self.passes else None
+
+    def measurement_errors(self) -> tuple[float, float] | None:
+        """RMS position [m] and heading [rad] error of the fixes against the truth."""
+        if self.fix_errors is None or self.fix_errors.size == 0:
+            return None
+        e = self.fix_errors
+        position = float(np.sqrt(np.mean(e[:, 0] ** 2 + e[:, 1] ** 2)))
+        return position, float(np.sqrt(np.mean(e[:, 2] ** 2)))
+
+    def to_dict(self) -> dict[str, Any]:
+        """What ``umbmark selfcal --json`` prints (metres, radians)."""
+        measurement: dict[str, Any] = {"method": self.measurement}
+        errors = self.measurement_errors()
+        if errors is not None:
+            measurement["rms_position_error"] = errors[0]
+            measurement["rms_heading_error"] = errors[1]
+            measurement["fixes"] = int(self.fix_errors.shape[0])  # type: ignore[union-attr]
+        return {
+            "robot": self.robot,
+            "side_length": self.side_length,
+            "checks": list(self.checks),
+            "coarse": None if self.coarse is None else self.coarse.to_dict(),
+            "passes": [p.to_dict() for p in self.passes],
+            "e_max_syst_before": self.e_max_syst_before,
+            "e_max_syst_after": self.e_max_syst_after,
+            "applied": _multipliers(self.final),
+            "measurement": measurement,
+            "files": [str(f) for f in self.files],
+        }
+
+
+def _multipliers(params: DriveParams) -> dict[str, float]:
+    return {
+        "wheel_separation_multiplier": params.wheel_separation_multiplier,
+        "left_wheel_radius_multiplier": params.left_wheel_radius_multiplier,
+        "right_wheel_radius_multiplier": params.right_wheel_radius_multiplier,
+    }
+
+
+def _check_counts(side_length: float, runs: int, max_passes: int) -> None:
+    if not (0.5 <= side_length <= 20.0):
+        raise InputError(f"--side-length {side_length!r} m: give 0.5 to 20 m")
+    if not (2 <= runs <= MAX_SELFCAL_RUNS):
+        raise InputError(f"--runs {runs!r}: give 2 to {MAX_SELFCAL_RUNS} per direction")
+    if not (1 <= max_passes <= MAX_SELFCAL_PASSES):
+        raise InputError(f"--max-passes {max_passes!r}: give 1 to {MAX_SELFCAL_PASSES}")
+
+
+def selfcal(
+    robot: Robot,
+    *,
+    side_length: float = 4.0,
+    runs: int = 5,
+    measure_with: MeasureMethod = "lidar",
+    apply: ApplyMethod = "reconfigure",
+    verify: bool = True,
+    max_passes: int = 3,
+    robot_name: str | None = None,
+    history: str | os.PathLike[str] | None = None,
+    out: str | os.PathLike[str] | None = None,
+    progress: Progress | None = None,
+    limits: DriveLimits | None = None,
+    ask: Callable[[str], str] | None = None,
+    coarse: bool = True,
+) -> SelfCalReport:
+    """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
+    corner, applied and verified (module documentation).
+
+    Parameters
+    ----------
+    robot : Robot
+        Placed at the start, in view of the L-shaped corner.
+    side_length, runs : float, int
+        The square's side [m] and runs per direction (5 in the paper).
+    measure_with : {"lidar", "ranges", "truth", "tape"}
+        How the fixes are taken (``tape``: a person answers ``ask`` at each stop).
+    apply : {"reconfigure", "yaml", "none"}
+        How corrections reach the controller (``none``: one pass, nothing applied).
+    verify : bool
+        Drive a verification pass on the final parameters.
+    max_passes : int
+        Most UMBmark passes before the verification.
+    robot_name, history : optional
+        Record every pass in the robot's history (SQLite) and mark the applied ones.
+    out : path, optional
+        Folder for the run logs, the report and the overlay [default: ``selfcal-<robot>``].
+    limits : DriveLimits, optional
+        Speeds, accelerations and safety limits.
+
+    Raises
+    ------
+    InputError
+        Bad options, or a check before moving failed (with the cause).
+    umbmark.autocal.drive.SafetyError
+        The robot was stopped for safety (a zero velocity was the last command).
+    """
+    _check_counts(side_length, runs, max_passes)
+    limits = limits or DriveLimits()
+    how = Measure(
+        measure_with, ask=ask, marks=_tape_marks(robot) if measure_with == "tape" else None
+    )
+    name = robot_name or robot.name
+    folder = Path(out) if out is not None else Path(f"selfcal-{_slug(name)}")
+    if folder.exists() and any(folder.iterdir()):
+        raise InputError("is not empty: a self-calibration writes its passes there", source=folder)
+    try:
+        checks = preflight(robot, how, side_length, limits)
+        odom = settle(robot, limits).pose
+        first = measure(robot, how)
+        home = Home(first.pose, first, odom)
+        home.fixes.append((first, corner_truth(robot)))
+        coarse_check, coarse_applied = None, None
+        if coarse and apply != "none" and measure_with in ("lidar", "truth"):
+            if progress is not None:
+                progress("coarse", 0, None, "turning check")
+            coarse_check = coarse_turning(robot, how, limits)
+            if coarse_check.needed:
+                params = robot.drive_params()
+                coarse_applied = robot.apply(
+                    replace(
+                        params,
+                        wheel_separation_multiplier=params.wheel_separation_multiplier
+                        * coarse_check.ratio,
+                    ),
+                    apply,
+                )
+            # where it stands now, by a fix without a prior (the turns moved its odometry)
+            home.odometry = settle(robot, limits).pose
+            home.fix = measure(robot, how)
+        passes: list[PassResult] = []
+        drive = _Passes(
+            robot, how, folder, side_length, runs, home, limits, name, progress,
+            record_as=robot_name, history=history,
+        )  # fmt: skip
+        for k in range(1, max_passes + 1):
+            result = _apply(robot, drive(f"pass {k}"), apply)
+            drive.mark_applied(result)
+            home.reanchor(robot)
+            passes.append(result)
+            bench = result.report.benchmark
+            if result.applied is None or not result.applied.active:
+                break
+            if bench is None or not bench.second_pass_recommended:
+                break
+        if verify and passes and passes[-1].applied is not None and passes[-1].applied.active:
+            passes.append(drive("verification"))
+    except BaseException:
+        robot.send_velocity(0.0, 0.0)
+        raise
+    robot.send_velocity(0.0, 0.0)
+    files = _outputs(passes, folder)
+    errors = [
+        (
+            fix.pose.x - truth.x,
+            fix.pose.y - truth.y,
+            float(wrap_angle(fix.pose.theta - truth.theta)),
+        )
+        for fix, truth in home.fixes
+        if truth is not None
+    ]
+    return SelfCalReport(
+        robot=name,
+        side_length=side_length,
+        measurement=measure_with,
+        coarse=coarse_check,
+        coarse_applied=coarse_applied,
+        passes=tuple(passes),
+        final=robot.drive_params(),
+        fix_errors=np.asarray(errors, dtype=np.float64).reshape(-1, 3) if errors else None,
+        checks=tuple(checks),
+        files=tuple(files),
+    )
+
+
+@dataclass(frozen=True)
+class _Passes:
+    """Drives, records and calibrates one pass at a time."""
+
+    robot: Robot
+    how: Measure
+    folder: Path
+    side: float
+    runs: int
+    home: Home
+    limits: DriveLimits
+    name: str
+    progress: Progress | None
+    record_as: str | None = None
+    history: str | os.PathLike[str] | None = None
+
+    def __call__(self, label: str) -> PassResult:
+        from umbmark.jobs.calibrate import calibrate
+
+        params = self.robot.drive_params()
+
+        def said(k: int, direction: Direction, what: str) -> None:
+            if self.progress is not None:
+                self.progress(label, k, direction, what)
+
+        measured = drive_pass(
+            self.robot, self.how, self.side, self.runs, self.home, self.limits, said
+        )
+        where = self.folder / label.replace(" ", "-")
+        record_pass(where, measured, params, self.side, self.how.method, self.name)
+        report = calibrate(where, robot=self.record_as, history=self.history)
+        return PassResult(label, where, report, params)
+
+    def mark_applied(self, result: PassResult) -> None:
+        """Mark the pass's calibration applied in the history (it was recorded last)."""
+        if self.record_as is None or result.applied is None or not result.applied.active:
+            return
+        from umbmark.store.history import History
+
+        store = History(self.history)
+        (last,) = store.calibrations(self.record_as)[-1:]
+        store.mark_applied(self.record_as, last.id)
+
+
+def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
+    """Apply the pass's correction, composed with its active parameters, unless the
+    verdict says not to or ``method`` is ``none``."""
+    if method == "none" or not result.report.verdict.applies:
+        return result
+    calibration = result.report.calibration
+    new = replace(
+        result.params,
+        wheel_separation_multiplier=calibration.new_separation_multiplier,
+        left_wheel_radius_multiplier=calibration.new_c_left,
+        right_wheel_radius_multiplier=calibration.new_c_right,
+    )
+    return replace(result, applied=robot.apply(new, method))
+
+
+def _outputs(passes: list[PassResult], folder: Path) -> list[Path]:
+    """The report of all passes and the overlay of the final parameters."""
+    from umbmark.jobs.report import report
+
+    written: list[Path] = []
+    if not passes:
+        return written
+    page = folder / "report.html"
+    report(*(p.folder for p in passes), output=page)
+    written.append(page)
+    last_applied = [p for p in passes if p.applied is not None and p.applied.active]
+    if last_applied:
+        overlay = folder / "overlay.yaml"
+        last_applied[-1].report.write(yaml=overlay)
+        written.append(overlay)
+    return written
+
+
+def _slug(name: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_" else "-" for c in name)[:60] or "robot"
+
+
+def _tape_marks(robot: Robot) -> TapeMarks:
+    """The marks a person measures from: the robot's own (``tape_marks()``), else three at
+    the back of a LabMate-sized robot, as the paper's sensors."""
+    marks = getattr(robot, "tape_marks", None)
+    if callable(marks):
+        found = marks()
+        if isinstance(found, TapeMarks):
+            return found
+    return TapeMarks(marks=((-0.35, 0.25), (-0.35, -0.25), (-0.35, -0.25)))
+
+
+def _json(report: SelfCalReport) -> str:
+    import json
+
+    return json.dumps(report.to_dict(), indent=2, allow_nan=False) + "\n"
