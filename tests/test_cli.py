@@ -243,7 +243,7 @@ def test_an_ascii_only_terminal_gets_escapes_not_a_traceback(tmp_path):
 
 
 def test_the_method_choices_are_the_librarys_methods():
-    from umbmark.jobs.calibrate import METHODS
+    from umbmark.estimators.registry import NAMES as METHODS
 
     method = next(p for p in cli.commands["calibrate"].params if p.name == "method")
     assert list(typing.cast("click.Choice", method.type).choices) == [*METHODS, "auto"]

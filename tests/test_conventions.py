@@ -9,7 +9,8 @@ import pytest
 
 from umbmark.benchmark.returns import umbmark_benchmark
 from umbmark.core.conventions import Direction, angle_to_rad, length_to_m, wrap_angle
-from umbmark.estimators import SquareTest, estimate_errors
+from umbmark.estimators.base import SquareTest
+from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.paper import paper_estimate
 from umbmark.model.kinematics import integrate_odometry
 from umbmark.model.runs import EndPose, Run

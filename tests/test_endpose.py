@@ -14,7 +14,8 @@ import pytest
 
 from umbmark.benchmark.returns import umbmark_benchmark
 from umbmark.core.conventions import Direction
-from umbmark.estimators import SquareTest, estimate_errors
+from umbmark.estimators.base import SquareTest
+from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.endpose import endpose_estimate
 from umbmark.model.runs import EndPose, Run
 from umbmark.model.square import icr_offset, square_run_end

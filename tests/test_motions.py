@@ -19,7 +19,8 @@ import drive_sim
 import umbmark
 from drive_sim import NO_SCRUB, SCRUB
 from umbmark.estimators.motions import MAX_INFLATION, motion_coverage
-from umbmark.estimators.trajectory import fit_trajectories, trajectory_estimate
+from umbmark.estimators.trajectory import trajectory_estimate
+from umbmark.estimators.trajectory_fit import fit_trajectories
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 

@@ -9,7 +9,8 @@ import pytest
 
 from umbmark.benchmark.returns import umbmark_benchmark
 from umbmark.core.conventions import Direction
-from umbmark.estimators import SquareTest, estimate_errors
+from umbmark.estimators.base import SquareTest
+from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.paper import paper_estimate
 from umbmark.model.runs import EndPose, Run
 
@@ -138,7 +139,7 @@ def test_disagreeing_x_and_y_give_a_warning():
         ("ccw", -0.080, -0.081, 0, 0),
     ]
     runs = _runs(rows)
-    est = paper_estimate(umbmark_benchmark(runs), SquareTest(L, B), runs)
+    est = estimate_errors("paper", umbmark_benchmark(runs), runs, SquareTest(L, B))
     (warning,) = est.warnings
     assert "positions do not fit one robot of the model" in warning
     assert "on 2 degrees of freedom" in warning  # four centre coordinates, two unknowns
@@ -156,7 +157,7 @@ def test_consistent_noisy_runs_give_no_warning(seed):
             (d, x + rng.normal(0, 0.018), y + rng.normal(0, 0.018), 0.0, 0.0) for _ in range(5)
         ]
     runs = _runs(rows)
-    est = paper_estimate(umbmark_benchmark(runs), SquareTest(L, B), runs)
+    est = estimate_errors("paper", umbmark_benchmark(runs), runs, SquareTest(L, B))
     assert est.warnings == ()
 
 
@@ -167,7 +168,7 @@ def test_errors_too_large_for_small_angles_give_a_warning_but_a_result():
         x, y, _ = turtle_square(86.0, 2.0, L, d, steps=500)
         rows += [(d, x + dx, y + dy, 0.0, 0.0) for dx, dy in ((-0.005, 0), (0.005, 0), (0, 0.005))]
     runs = _runs(rows)
-    est = paper_estimate(umbmark_benchmark(runs), SquareTest(L, B), runs)
+    est = estimate_errors("paper", umbmark_benchmark(runs), runs, SquareTest(L, B))
     assert any("small-angle" in w for w in est.warnings)
     assert not any("do not fit" in w for w in est.warnings)  # explained by the geometry
     assert est.E_b > 1

@@ -11,7 +11,7 @@ import pytest
 
 import umbmark
 from umbmark.benchmark.returns import Benchmark, Cluster
-from umbmark.estimators import SquareTest
+from umbmark.estimators.base import SquareTest
 from umbmark.estimators.exact import exact_components
 from umbmark.model.kinematics import WheelParams
 from umbmark.sim.experiments import umbmark_trials

@@ -21,7 +21,8 @@ from rich.console import Console
 import umbmark
 from umbmark.cli.render import render_calibration
 from umbmark.core.stats import t_quantile
-from umbmark.estimators.trajectory import _cluster_covariance, fit_trajectories, trajectory_estimate
+from umbmark.estimators.trajectory import trajectory_estimate
+from umbmark.estimators.trajectory_fit import _cluster_covariance, fit_trajectories
 from umbmark.model.kinematics import (
     WheelParams,
     effective_wheelbase,
@@ -167,11 +168,11 @@ def test_errors_relative_to_the_active_parameters():
 def test_long_recordings_are_compared_at_a_bounded_number_of_samples(session, monkeypatch):
     # Thinning the comparison to 150 samples a run (of several hundred) keeps the fit on
     # the simulated robot's truth: the wheel data are still integrated whole.
-    from umbmark.estimators import trajectory
+    from umbmark.estimators import trajectory_model
 
     counts = [int(r.log.matched.sum()) for r in session]
     assert min(counts) > 300
-    monkeypatch.setattr(trajectory, "MAX_COMPARED_PER_RUN", 150)
+    monkeypatch.setattr(trajectory_model, "MAX_COMPARED_PER_RUN", 150)
     fit = fit_trajectories([r.log for r in session], ODO)
     assert fit.samples == 150 * len(session)
     assert fit.r_left == pytest.approx(ROBOT.diameter_left / 2, rel=1e-5)

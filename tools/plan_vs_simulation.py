@@ -22,7 +22,7 @@ import sys
 import numpy as np
 
 import umbmark
-from umbmark.estimators import SquareTest
+from umbmark.estimators.base import SquareTest
 from umbmark.estimators.exact import exact_components
 from umbmark.model.kinematics import WheelParams
 from umbmark.sim.experiments import umbmark_trials

@@ -22,7 +22,7 @@ import numpy as np
 
 import umbmark
 from umbmark.estimators.motions import motion_coverage
-from umbmark.estimators.trajectory import fit_trajectories
+from umbmark.estimators.trajectory_fit import fit_trajectories
 from umbmark.jobs.inputs import ReadOptions, read_runs
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import end_errors

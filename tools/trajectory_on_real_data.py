@@ -25,12 +25,8 @@ import numpy as np
 
 import umbmark
 from umbmark.estimators.motions import MotionCoverage, motion_coverage
-from umbmark.estimators.trajectory import (
-    StartPose,
-    TrajectoryFit,
-    TrajectoryModel,
-    fit_trajectories,
-)
+from umbmark.estimators.trajectory_fit import TrajectoryFit, fit_trajectories
+from umbmark.estimators.trajectory_model import StartPose, TrajectoryModel
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run, end_errors
 from umbmark.runs.load import LoadOptions, load_runs

@@ -66,11 +66,11 @@ _EXPORTS = {
     "Calibration": "umbmark.calibration.compose",
     "Direction": "umbmark.core.conventions",
     "EndPose": "umbmark.model.runs",
-    "ErrorEstimate": "umbmark.estimators",
+    "ErrorEstimate": "umbmark.estimators.base",
     "Run": "umbmark.model.runs",
-    "SquareTest": "umbmark.estimators",
+    "SquareTest": "umbmark.estimators.base",
     "WheelParams": "umbmark.model.kinematics",
-    "estimate_errors": "umbmark.estimators",
+    "estimate_errors": "umbmark.estimators.dispatch",
     "integrate_odometry": "umbmark.model.kinematics",
     "read_runs_table": "umbmark.sources.runs_table.reader",
     "umbmark_benchmark": "umbmark.benchmark.returns",
@@ -125,7 +125,8 @@ if TYPE_CHECKING:
     from umbmark.calibration.compose import ActiveParams, Calibration
     from umbmark.core.conventions import Direction
     from umbmark.core.errors import InputError
-    from umbmark.estimators import ErrorEstimate, SquareTest, estimate_errors
+    from umbmark.estimators.base import ErrorEstimate, SquareTest
+    from umbmark.estimators.dispatch import estimate_errors
     from umbmark.jobs.calibrate import CalibrationReport, calibrate
     from umbmark.jobs.demo import DemoReport, demo
     from umbmark.jobs.example import example, example_sessions

@@ -16,6 +16,7 @@ from umbmark.cli.options import (
     source_options,
     tum_time_option,
 )
+from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, method_help, names
 
 __all__ = ["calibrate"]
 
@@ -45,36 +46,17 @@ __all__ = ["calibrate"]
             "--method",
             "-m",
             section=TEST,
-            # umbmark.jobs.calibrate.METHODS and "auto", spelt out so that the command
-            # starts without importing numpy (tests/test_cli.py keeps them equal)
-            type=click.Choice(
-                [
-                    "paper",
-                    "exact",
-                    "heading",
-                    "endpose",
-                    "endpoints",
-                    "trajectory",
-                    "trajectory-scrub",
-                    "auto",
-                ]
-            ),
-            default="exact",
+            type=click.Choice(CHOICES),
+            default=DEFAULT.name,
             show_default=True,
-            help="Estimator. Square tests: paper (Eqs. 4.20-4.27 as printed), exact (the "
-            "exact square geometry inverted, no small-angle approximation), heading (final "
-            "headings, Jung & Chung 2011), endpose (maximum likelihood on every run's end "
-            "pose). Recorded runs of any shape: endpoints (least squares on where they end), "
-            "trajectory (on whole trajectories; finds E_s too), trajectory-scrub (with a "
-            "turn-dependent wheelbase; exports the single-wheelbase set). auto: the one that "
-            "predicts held-out recorded runs best (umbmark validate).",
+            help=method_help(),
         ),
         option(
             "--fit-truth-offset",
             section=TEST,
             is_flag=True,
-            help="With --method trajectory or trajectory-scrub: fit where the ground truth's "
-            "tracked point (a motion-capture marker) sits in the robot frame, instead of "
+            help=f"With --method {' or '.join(names(trajectories=True))}: fit where the ground "
+            "truth's tracked point (a motion-capture marker) sits in the robot frame, instead of "
             "taking it as the axle centre (see --truth-offset to give it).",
         ),
         option(
@@ -161,7 +143,7 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
 
     options["command"] = command_line(sys.argv)
     method = str(options.get("method"))
-    if method.startswith("trajectory") or method == "auto":  # fits that can take minutes
+    if method in names(trajectories=True) or method == AUTO:  # fits that can take minutes
         with working(f"calibrating, --method {method}"):
             report = run_calibration(*sources, **options)
     else:

@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from umbmark.cli.options import OUTPUTS, Command, option
+from umbmark.estimators.registry import DEFAULT, SQUARE
 
 __all__ = ["demo"]
 
@@ -27,8 +28,8 @@ __all__ = ["demo"]
     "--method",
     "-m",
     section="Options",
-    type=click.Choice(["paper", "exact", "heading", "endpose"]),
-    default="exact",
+    type=click.Choice(SQUARE),
+    default=DEFAULT.name,
     show_default=True,
     help="Estimator to calibrate with.",
 )

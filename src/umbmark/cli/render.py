@@ -13,22 +13,13 @@ from rich.table import Table
 from rich.text import Text
 
 from umbmark.benchmark.returns import Benchmark, sem_verdict
+from umbmark.estimators.registry import LOGGED, find, method_label
 from umbmark.jobs.calibrate import CalibrationReport
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
 __all__ = ["column", "print_table", "render_calibration", "row", "table"]
 
 _MM = 1000.0
-_METHOD_NAMES = {
-    "paper": "the paper's equations (Eqs. 4.20-4.27, x and y averaged)",
-    "exact": "exact square geometry, inverted numerically",
-    "heading": "final heading errors (Jung & Chung 2011)",
-    "endpose": "maximum likelihood on the runs' end poses, exact geometry",
-    "straight": "straight runs against a tape (scale only)",
-    "endpoints": "least squares on where the recorded runs end",
-    "trajectory": "least squares on whole recorded trajectories",
-    "trajectory-scrub": "least squares on whole trajectories, turn-dependent wheelbase",
-}
 
 
 def _render_benchmark(report: CalibrationReport, bench: Benchmark, console: Console) -> None:
@@ -96,8 +87,9 @@ def render_calibration(
     else:
         _render_benchmark(report, bench, console)
 
-    name = _METHOD_NAMES.get(est.method, est.method)
-    if est.method == "trajectory-scrub" and "spot_wheelbase" not in est.components:
+    name = method_label(est.method)
+    entry = find(est.method)
+    if entry is not None and entry.turn_rate and "spot_wheelbase" not in est.components:
         name += ": not identified, one wheelbase fitted (see the warning)"
     errors = table(f"Systematic errors: {name}", ["", "value"])
     column(errors, "", text=True)
@@ -113,7 +105,7 @@ def render_calibration(
     _row(errors, "E_d = D_R / D_L", _plus_minus(est.E_d, se.get("E_d"), ".6f"), "Eq. 4.22")
     if est.E_s is not None:
         _row(errors, "E_s = D_avg / D_active", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "scale")
-    if est.method.startswith("trajectory") or est.method == "endpoints":
+    if est.method in LOGGED:
         _trajectory_rows(errors, est.components, se)
     console.print(errors)
     intervals = [

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import click
 
 from umbmark.cli.options import OUTPUTS, Command, option
+from umbmark.estimators.registry import SQUARE
 
 if TYPE_CHECKING:
     from umbmark.jobs.study import CellResult
@@ -33,7 +34,7 @@ def _list(kind: Callable[[str], T]) -> Callable[[click.Context, click.Parameter,
 
 
 @click.command(cls=Command)
-@option("--methods", section=ROBOTS, default="truth,paper,exact,heading,endpose",
+@option("--methods", section=ROBOTS, default=",".join(("truth", *SQUARE)),
         show_default=True, help="Estimators to compare; truth: calibrated with the true "
         "parameters, the ceiling.")  # fmt: skip
 @option("--trials", section=ROBOTS, type=int, default=200, show_default=True,

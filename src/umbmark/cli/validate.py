@@ -8,6 +8,7 @@ from typing import Any
 import click
 
 from umbmark.cli.options import OUTPUTS, TEST, Command, apply, option, source_options
+from umbmark.estimators.registry import NAMES
 
 __all__ = ["validate"]
 
@@ -19,8 +20,7 @@ __all__ = ["validate"]
         option(
             "--methods",
             section=TEST,
-            help="Estimators to compare, comma-separated [default: all: paper, exact, "
-            "heading, endpose, trajectory].",
+            help=f"Estimators to compare, comma-separated [default: all: {', '.join(NAMES)}].",
         ),
         option("--side-length", "-L", section=TEST, type=float, help="Side of squares [m]."),
         option(

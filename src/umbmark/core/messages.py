@@ -14,9 +14,9 @@ report says.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
-__all__ = ["Info", "info", "split_messages"]
+__all__ = ["Info", "info", "join_names", "split_messages"]
 
 
 class Info(str):
@@ -38,3 +38,10 @@ def split_messages(messages: Iterable[str]) -> tuple[tuple[str, ...], tuple[str,
     for message in messages:
         (notes if isinstance(message, Info) else warnings).append(str(message))
     return tuple(notes), tuple(warnings)
+
+
+def join_names(names: Sequence[str], conjunction: str = "and") -> str:
+    """``a, b and c`` (``conjunction`` before the last)."""
+    if len(names) < 2:
+        return "".join(names)
+    return ", ".join(names[:-1]) + f" {conjunction} " + names[-1]

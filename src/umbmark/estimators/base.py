@@ -16,8 +16,6 @@ __all__ = [
     "ErrorEstimate",
     "SquareTest",
     "cg_blocks",
-    "cg_vector",
-    "propagate",
     "propagate_blocks",
     "welch_dof",
 ]
@@ -107,25 +105,6 @@ class ErrorEstimate:
         return (value - half, value + half)
 
 
-def cg_vector(bench: Benchmark) -> tuple[FloatArray, FloatArray]:
-    """Centres of gravity as one vector and their covariance.
-
-    Returns
-    -------
-    z : array, shape (4,)
-        ``(x_cw, y_cw, x_ccw, y_ccw)`` [m].
-    cov : array, shape (4, 4)
-        Covariance of ``z``: each cluster's sample covariance divided by its size.
-    """
-    z = np.concatenate([bench.cw.cg, bench.ccw.cg])
-    cov = np.zeros((4, 4))
-    for k, cluster in enumerate(bench.clusters):
-        cov[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = (
-            np.cov(cluster.errors, rowvar=False, ddof=1) / cluster.n
-        )
-    return z, cov
-
-
 def welch_dof(parts: Sequence[tuple[float, float]]) -> float:
     """Degrees of freedom of a sum of independent variance estimates (Welch-Satterthwaite).
 
@@ -186,25 +165,3 @@ def propagate_blocks(
         errors[key] = math.sqrt(sum(v for v, _ in parts))
         dofs[key] = welch_dof(parts)
     return errors, dofs
-
-
-def propagate(
-    fn: Callable[[FloatArray], Mapping[str, float]],
-    z: FloatArray,
-    cov: FloatArray,
-    step: float = 1e-6,
-) -> dict[str, float]:
-    """First-order standard errors of every output of ``fn`` at ``z``.
-
-    Central differences give the Jacobian ``J``; the standard errors are the square
-    roots of the diagonal of ``J cov J^T``.
-    """
-    keys = list(fn(z))
-    jac = np.zeros((len(keys), len(z)))
-    for j in range(len(z)):
-        dz = np.zeros_like(z)
-        dz[j] = step
-        plus, minus = fn(z + dz), fn(z - dz)
-        jac[:, j] = [(plus[k] - minus[k]) / (2.0 * step) for k in keys]
-    var = np.einsum("ij,jk,ik->i", jac, cov, jac)
-    return {k: float(math.sqrt(max(v, 0.0))) for k, v in zip(keys, var, strict=True)}

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.estimators.base import ErrorEstimate, FloatArray
+from umbmark.estimators.registry import ENDPOINTS
 from umbmark.estimators.solve import gauss_newton
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
@@ -76,14 +77,6 @@ class EndPointFit:
         se = np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
         return dict(zip(("r_left", "r_right", "wheelbase"), (float(v) for v in se), strict=True))
 
-    def params(self, base: WheelParams) -> WheelParams:
-        """``base`` with the fitted radii and wheelbase."""
-        return base.with_corrections(
-            c_left=2.0 * self.r_left / base.wheel_diameter,
-            c_right=2.0 * self.r_right / base.wheel_diameter,
-            wheelbase=self.wheelbase,
-        )
-
 
 def _ends(logs: Sequence[RunLog]) -> tuple[list[RunLog], FloatArray, list[int]]:
     """The runs with ground truth at an end, their true end poses (n, 3), and the index of
@@ -124,14 +117,12 @@ def fit_end_points(logs: Sequence[RunLog], start: WheelParams) -> EndPointFit:
             f"{len(runs)} run(s) end with ground truth: fitting their end points needs at "
             f"least {MIN_RUNS}"
         )
-    n = len(runs)
     fit = _fit(runs, truth, last, start, scale=True)
     if fit.scale_fitted:
         se = fit.standard_errors
         scale_se = math.hypot(se["r_left"] / fit.r_left, se["r_right"] / fit.r_right) / 2.0
         if scale_se > LOOSE_SCALE:
             fit = _fit(runs, truth, last, start, scale=False)
-    del n
     return fit
 
 
@@ -242,7 +233,7 @@ def endpoints_estimate(
     side = side_length or 1.0
     dof = float(fit.runs - (3 if fit.scale_fitted else 2))
     estimate = ErrorEstimate(
-        method="endpoints",
+        method=ENDPOINTS.name,
         alpha=float(alpha_from_E_b(E_b, E_s)),
         beta=float(beta_from_E_d(E_d, side, fit.wheelbase)),
         E_d=E_d,

@@ -41,6 +41,7 @@ from umbmark.core.conventions import Direction
 from umbmark.core.stats import f_cdf
 from umbmark.estimators.base import ErrorEstimate, FloatArray, SquareTest, welch_dof
 from umbmark.estimators.exact import exact_components
+from umbmark.estimators.registry import ENDPOSE
 from umbmark.estimators.solve import gauss_newton, jacobian
 from umbmark.model.runs import Run, split_by_direction
 from umbmark.model.square import square_run_end
@@ -315,15 +316,23 @@ def _p_value(statistic: float, dof: int, scatter_dof: int) -> float:
 
 
 def endpose_estimate(
-    bench: Benchmark, runs: Sequence[Run], test: SquareTest, *, E_s: float | None = None
+    bench: Benchmark,
+    runs: Sequence[Run],
+    test: SquareTest,
+    *,
+    E_s: float | None = None,
+    fit: EndPoseFit | None = None,
 ) -> ErrorEstimate:
     """``alpha``, ``beta``, ``E_d``, ``E_b`` by maximum likelihood on the end poses.
 
     ``E_s``, when a straight run measured it, is held fixed and reported; else it is taken
-    as 1 and ``E_b`` is the wheelbase error the turns see (as in the paper).
+    as 1 and ``E_b`` is the wheelbase error the turns see (as in the paper). ``fit`` is
+    :func:`fit_end_poses` of these runs with that ``E_s`` where the caller made it (the
+    dispatch, whose model check judges the same fit); made here when not given.
     """
     scale = 1.0 if E_s is None else E_s
-    fit = fit_end_poses(bench, runs, test, E_s=scale)
+    if fit is None:
+        fit = fit_end_poses(bench, runs, test, E_s=scale)
     se_d, se_b = (float(math.sqrt(max(v, 0.0))) for v in np.diag(fit.covariance))
     # alpha = (pi/2)(1 - E_s/E_b); beta = L (k_R - k_L) / (E_b b), k_L = 2 E_s/(E_d + 1).
     L, b = test.side_length, test.wheelbase
@@ -332,10 +341,8 @@ def endpose_estimate(
     grad_alpha = np.array([0.0, 0.5 * math.pi * scale / fit.E_b**2])
     grad_beta = np.array([4.0 * L * scale / ((fit.E_d + 1.0) ** 2 * fit.E_b * b), -beta / fit.E_b])
     cov = fit.covariance
-    from umbmark.estimators.checks import model_warnings
-
     return ErrorEstimate(
-        method="endpose",
+        method=ENDPOSE.name,
         alpha=alpha,
         beta=beta,
         E_d=fit.E_d,
@@ -352,6 +359,5 @@ def endpose_estimate(
             "alpha": float(math.sqrt(grad_alpha @ cov @ grad_alpha)),
             "beta": float(math.sqrt(grad_beta @ cov @ grad_beta)),
         },
-        warnings=tuple(model_warnings(bench, runs, test, fit)),
         dof={"E_d": fit.dof[0], "E_b": fit.dof[1], "alpha": fit.dof[1], "beta": min(fit.dof)},
     )

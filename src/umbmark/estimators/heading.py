@@ -13,11 +13,15 @@ whole turns: they are unwrapped to the turns the positions say
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from umbmark.benchmark.returns import Benchmark
 from umbmark.core.conventions import Direction
 from umbmark.estimators.base import ErrorEstimate, FloatArray, SquareTest, propagate_blocks
+from umbmark.estimators.endpose import heading_errors
+from umbmark.estimators.registry import HEADING
 from umbmark.model.runs import Run
 from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta_arc
 
@@ -40,7 +44,7 @@ def heading_components(m: FloatArray, test: SquareTest) -> dict[str, float]:
     }
 
 
-def heading_estimate(bench: Benchmark, runs: list[Run], test: SquareTest) -> ErrorEstimate:
+def heading_estimate(bench: Benchmark, runs: Sequence[Run], test: SquareTest) -> ErrorEstimate:
     """Jung & Chung's estimate from the runs' heading errors (the positions only check it).
 
     Raises
@@ -48,9 +52,6 @@ def heading_estimate(bench: Benchmark, runs: list[Run], test: SquareTest) -> Err
     ValueError
         If a run has no headings.
     """
-    from umbmark.estimators.checks import model_warnings
-    from umbmark.estimators.endpose import heading_errors
-
     missing = [run.label or "a run" for run in runs if run.heading_error is None]
     if missing:
         raise ValueError(
@@ -73,13 +74,12 @@ def heading_estimate(bench: Benchmark, runs: list[Run], test: SquareTest) -> Err
     blocks = [(np.array([[v]]), float(n - 1)) for v, n in zip(variances, counts, strict=True)]
     errors, dofs = propagate_blocks(lambda v: heading_components(v, test), m, blocks, step=1e-7)
     return ErrorEstimate(
-        method="heading",
+        method=HEADING.name,
         alpha=parts["alpha"],
         beta=parts["beta"],
         E_d=parts["E_d"],
         E_b=parts["E_b"],
         components={k: parts[k] for k in ("eps_theta_cw", "eps_theta_ccw")},
         standard_errors={k: errors[k] for k in ("alpha", "beta", "E_d", "E_b")},
-        warnings=tuple(model_warnings(bench, runs, test)),
         dof={k: dofs[k] for k in ("alpha", "beta", "E_d", "E_b")},
     )

@@ -49,6 +49,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.messages import join_names
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 
@@ -59,7 +60,6 @@ __all__ = [
     "SCRUB_FALLBACK",
     "MotionCoverage",
     "MotionKind",
-    "join_names",
     "motion_coverage",
 ]
 
@@ -191,13 +191,6 @@ class MotionCoverage:
 
 def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
-
-
-def join_names(names: Sequence[str], conjunction: str = "and") -> str:
-    """``a, b and c``."""
-    if len(names) < 2:
-        return "".join(names)
-    return ", ".join(names[:-1]) + f" {conjunction} " + names[-1]
 
 
 def _turns(d_left: FloatArray, d_right: FloatArray) -> tuple[FloatArray, ...]:

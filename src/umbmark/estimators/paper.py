@@ -4,10 +4,10 @@ The equations are in :mod:`umbmark.estimators.formulas`. As in the paper's exper
 (Sec. 5, footnote 2), ``E_d`` and ``E_b`` are computed from x and from y and the two
 averaged. The reported ``alpha`` and ``beta`` are the averages of their x and y estimates.
 
-Two doubts are reported as warnings, never as errors: runs that one robot of the model
-does not explain (x- and y-based estimates that differ by more than the spread of the runs
-and the exact geometry explain: the model check of :mod:`umbmark.estimators.checks`), and
-errors so large that the small-angle formulas misjudge them.
+Errors so large that the small-angle formulas misjudge them are reported as a warning,
+never as an error. (Runs that one robot of the model does not explain, x- and y-based
+estimates that differ by more than the spread of the runs and the exact geometry explain,
+get the model check's warning: :mod:`umbmark.estimators.diagnostics`.)
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from collections.abc import Sequence
 
 from umbmark.benchmark.returns import Benchmark
 from umbmark.estimators.base import ErrorEstimate, SquareTest, cg_blocks, propagate_blocks
-from umbmark.estimators.checks import model_warnings
 from umbmark.estimators.exact import exact_end_positions
 from umbmark.estimators.formulas import paper_components
+from umbmark.estimators.registry import PAPER
 from umbmark.model.runs import Run
 
 __all__ = ["SMALL_ANGLE_TOLERANCE", "exact_view", "paper_estimate", "small_angle_shortfall"]
@@ -59,13 +59,13 @@ def paper_estimate(
 ) -> ErrorEstimate:
     """The paper's estimate of ``alpha``, ``beta``, ``E_d`` and ``E_b`` (Sec. 4).
 
-    With ``runs`` (the same runs, for their headings) the model check of
-    :func:`umbmark.estimators.checks.model_warnings` is made.
+    ``runs`` are not used: the centres of gravity are all the equations need (the
+    dispatch gives every square estimator the runs).
     """
     z, blocks = cg_blocks(bench)
     parts = paper_components(z, test)
     errors, dofs = propagate_blocks(lambda v: paper_components(v, test), z, blocks)
-    warnings = [] if runs is None else model_warnings(bench, runs, test)
+    warnings: list[str] = []
     shortfall = small_angle_shortfall(parts["alpha"], parts["beta"], test)
     if shortfall > SMALL_ANGLE_TOLERANCE:
         warnings.append(
@@ -76,7 +76,7 @@ def paper_estimate(
             "or use --method endpose or exact"
         )
     return ErrorEstimate(
-        method="paper",
+        method=PAPER.name,
         alpha=parts["alpha"],
         beta=parts["beta"],
         E_d=parts["E_d"],

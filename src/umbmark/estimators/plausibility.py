@@ -182,9 +182,8 @@ def _fit(reading: _Reading, side: float, wheelbase: float | None) -> Fit:
     centres), ``unknown`` (too few runs, or no wheelbase, to tell)."""
     from umbmark.benchmark.returns import umbmark_benchmark
     from umbmark.estimators.base import SquareTest
-    from umbmark.estimators.checks import check_identified
     from umbmark.estimators.endpose import fit_end_poses
-    from umbmark.estimators.exact import exact_components
+    from umbmark.estimators.exact import check_identified, exact_components
 
     if wheelbase is None or reading.e_max is None:
         return "unknown"
@@ -329,7 +328,7 @@ def _choice(
 def _too_large(label: str, given: _Reading, side: float) -> str:
     """The refusal of return errors beyond the side that no robot of the exact geometry
     and no other unit explains: its real cause and the remedy."""
-    from umbmark.estimators.checks import beyond_square_test
+    from umbmark.estimators.exact import beyond_square_test
 
     why = (
         f"no robot driving the square ends where these runs end (the return error of {label} "

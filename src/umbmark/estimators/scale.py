@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.estimators.base import ErrorEstimate
+from umbmark.estimators.registry import STRAIGHT
 from umbmark.model.runs import Run
 
 __all__ = ["ScaleEstimate", "scale_from_straights", "scale_only"]
@@ -72,7 +73,7 @@ def scale_only(scale: ScaleEstimate) -> ErrorEstimate:
     """A calibration from straight runs alone: ``E_s``; ``E_d`` and ``E_b`` unmeasured (1)."""
     errors = {} if scale.standard_error is None else {"E_s": scale.standard_error}
     return ErrorEstimate(
-        method="straight",
+        method=STRAIGHT,
         alpha=0.0,
         beta=0.0,
         E_d=1.0,

@@ -1,11 +1,11 @@
 """``calibrate --method auto``: the estimator that predicts held-out recorded runs best.
 
 :func:`umbmark.validate` ranks the estimators by their held-out end error. The richer
-``trajectory-scrub`` is taken only where the recordings identify its turn-rate term
-(:mod:`umbmark.estimators.motions`), in the pool and with every source held out: held-out
-runs that it cannot be calibrated for say nothing of it, and a pool of squares cannot
-see that it extrapolates to arcs. Otherwise the simpler estimators compete without it,
-and the note says why.
+estimators of a turn-rate term (``trajectory-scrub``) are taken only where the recordings
+identify it (:mod:`umbmark.estimators.motions`), in the pool and with every source held
+out: held-out runs that one cannot be calibrated for say nothing of it, and a pool of
+squares cannot see that it extrapolates to arcs. Otherwise the simpler estimators compete
+without it, and the note says why.
 """
 
 from __future__ import annotations
@@ -15,11 +15,10 @@ from pathlib import Path
 
 from umbmark.core.messages import info
 from umbmark.estimators.motions import motion_coverage
+from umbmark.estimators.registry import AUTO, DEFAULT, names
 from umbmark.jobs.inputs import Runs, RunSource, SourceOptions
 
 __all__ = ["auto_method"]
-
-SCRUB = "trajectory-scrub"
 
 
 def auto_method(
@@ -37,15 +36,15 @@ def auto_method(
 
     ``force`` is the caller's: the validation reads the sources as the calibration does.
     """
-    from umbmark.jobs.calibrate import DEFAULT_METHOD
     from umbmark.jobs.validate import validate
 
+    default = DEFAULT.name
     if read.params is None or any(run.log is None for run in read.runs):
         said = (
-            f"method auto: runs tables cannot be replayed to compare estimators; "
-            f"calibrated with the default, {DEFAULT_METHOD}"
+            f"method {AUTO}: runs tables cannot be replayed to compare estimators; "
+            f"calibrated with the default, {default}"
         )
-        return DEFAULT_METHOD, info(said), False
+        return default, info(said), False
     checked = validate(
         *(Path(str(s)) for s in sources),
         side_length=side_length,
@@ -57,28 +56,30 @@ def auto_method(
     logs = [run.log for run in read.runs if run.log is not None]
     problem = motion_coverage(logs, read.params).scrub_problem()
     why = ""
-    if problem is not None:
-        ranking = [(name, error) for name, error in ranking if name != SCRUB]
-        why = f"; {SCRUB} left out: {problem}"
-    elif SCRUB in checked.candidates and SCRUB not in dict(ranking):
-        refused = [
-            f"{Path(f.held_out).name} held out ({f.refused[SCRUB]})"
-            for f in checked.folds
-            if SCRUB in f.refused
-        ]
-        if refused:
-            why = f"; {SCRUB} left out: not calibrated with " + ", ".join(refused)
+    for scrub in names(turn_rate=True):
+        if problem is not None:
+            ranking = [(name, error) for name, error in ranking if name != scrub]
+            why += f"; {scrub} left out: {problem}"
+        elif scrub in checked.candidates and scrub not in dict(ranking):
+            refused = [
+                f"{Path(f.held_out).name} held out ({f.refused[scrub]})"
+                for f in checked.folds
+                if scrub in f.refused
+            ]
+            if refused:
+                why += f"; {scrub} left out: not calibrated with " + ", ".join(refused)
     covers = f"; {checked.coverage}"
     best = next(iter(ranking), ("nominal", 0.0))[0]
     if best == "nominal":
         ranked = any(name != "nominal" for name, _ in ranking)  # else none could be tried
         said = (
-            "method auto: no estimator predicted held-out runs better than the nominal parameters "
+            f"method {AUTO}: no estimator predicted held-out runs better than the nominal "
+            "parameters "
             if ranked
-            else "method auto: no estimator could be calibrated with a source held out "
+            else f"method {AUTO}: no estimator could be calibrated with a source held out "
         )
-        said += f"({checked.scheme}); calibrated with the default, {DEFAULT_METHOD}{why}{covers}"
-        return DEFAULT_METHOD, info(said), ranked
+        said += f"({checked.scheme}); calibrated with the default, {default}{why}{covers}"
+        return default, info(said), ranked
     listed = ", ".join(f"{name} {1000 * error:.1f} mm" for name, error in ranking)
-    said = f"method auto: {best}, by held-out end error ({checked.scheme}): {listed}{why}{covers}"
+    said = f"method {AUTO}: {best}, by held-out end error ({checked.scheme}): {listed}{why}{covers}"
     return best, info(said), False

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 from umbmark.benchmark.returns import Benchmark, Cluster, sem_verdict
 from umbmark.calibration.compose import Calibration
@@ -24,7 +24,8 @@ from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
 from umbmark.core.version import __version__
 from umbmark.estimators.base import ErrorEstimate, SquareTest
-from umbmark.jobs.estimate import LOGGED_METHODS, calibrate_runs, sessions_disagree
+from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, LOGGED, NAMES, find, names
+from umbmark.jobs.estimate import calibrate_runs, sessions_disagree
 from umbmark.jobs.inputs import (
     ReadOptions,
     RunSource,
@@ -44,27 +45,10 @@ if TYPE_CHECKING:
     from typing_extensions import Unpack
 
     from umbmark.calibration.verdict import Evidence, Verdict
-    from umbmark.estimators.trajectory import TrajectoryFit
+    from umbmark.estimators.trajectory_fit import TrajectoryFit
     from umbmark.outputs.tum import TumTime
 
-__all__ = ["METHODS", "CalibrationReport", "calibrate"]
-
-Method = Literal[
-    "paper", "exact", "heading", "endpose", "endpoints", "trajectory", "trajectory-scrub"
-]
-#: The estimator used unless another is asked for: chosen by the evidence of
-#: ``umbmark study`` and ``umbmark validate`` (``docs/estimators.md``).
-DEFAULT_METHOD: Method = "exact"
-#: The estimators, in the order the documentation lists them.
-METHODS: tuple[Method, ...] = (
-    "paper",
-    "exact",
-    "heading",
-    "endpose",
-    "endpoints",
-    "trajectory",
-    "trajectory-scrub",
-)
+__all__ = ["CalibrationReport", "calibrate"]
 
 
 @dataclass(frozen=True, repr=False)
@@ -185,7 +169,7 @@ class CalibrationReport:
         from umbmark.calibration.verdict import Evidence, mean_path
 
         logs = [run.log for run in self.runs if run.log is not None]
-        logged = self.estimate.method in LOGGED_METHODS
+        logged = self.estimate.method in LOGGED
         bench = self.benchmark
         return Evidence(
             runs_per_direction=None if logged or bench is None else (bench.cw.n, bench.ccw.n),
@@ -517,7 +501,7 @@ def calibrate(
     *more_sources: RunSource,
     side_length: float | None = None,
     wheelbase: float | None = None,
-    method: str = DEFAULT_METHOD,
+    method: str = DEFAULT.name,
     fit_truth_offset: bool = False,
     output: str | os.PathLike[str] | None = None,
     yaml: str | os.PathLike[str] | None = None,
@@ -611,16 +595,16 @@ def calibrate(
     from umbmark.outputs.tum import check_tum_time
 
     check_tum_time(tum_time)
-    if method not in (*METHODS, "auto"):
-        raise InputError(f"--method {method!r}: use one of {', '.join(METHODS)} or auto")
-    if fit_truth_offset and not method.startswith("trajectory"):
-        raise InputError(
-            f"--fit-truth-offset needs --method trajectory or trajectory-scrub, not {method}"
-        )
+    if method not in CHOICES:
+        raise InputError(f"--method {method!r}: use one of {', '.join(NAMES)} or {AUTO}")
+    fitting = names(trajectories=True)
+    if fit_truth_offset and method not in fitting:
+        raise InputError(f"--fit-truth-offset needs --method {' or '.join(fitting)}, not {method}")
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
           plot=plot, tum=tum, report=report)  # fmt: skip
-    if side_length is None and method not in (*LOGGED_METHODS, "auto"):
+    entry = find(method)
+    if side_length is None and entry is not None and entry.side_required:
         from umbmark.jobs.inputs import is_table
 
         if any(is_table(s, read_options) for s in sources):
@@ -634,7 +618,7 @@ def calibrate(
             read.side_length, active.effective_wheelbase, read.origins, active.separation_multiplier
         )
     chosen, note, nominal_best = method, None, False
-    if method == "auto":
+    if method == AUTO:
         from umbmark.jobs.auto import auto_method
 
         chosen, note, nominal_best = auto_method(
@@ -644,7 +628,7 @@ def calibrate(
     result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
     if note is not None:
         result = replace(result, notes=(*result.notes, note))
-    if chosen.startswith("trajectory") and len(read.parts) > 1:
+    if chosen in fitting and len(read.parts) > 1:
         disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
         result = replace(result, input_warnings=(*result.input_warnings, *disagree))
     if store is not None and robot is not None:

@@ -19,7 +19,9 @@ import numpy as np
 
 from umbmark.benchmark.returns import sem_verdict
 from umbmark.core.errors import InputError
-from umbmark.estimators import METHODS, SquareTest
+from umbmark.core.messages import join_names
+from umbmark.estimators.base import SquareTest
+from umbmark.estimators.registry import DEFAULT, SQUARE
 from umbmark.jobs.calibrate import CalibrationReport
 from umbmark.jobs.inputs import check_int_option
 from umbmark.jobs.simulate import MAX_RUNS, SEED_RANGE
@@ -136,7 +138,7 @@ def demo(
     *,
     out: str | os.PathLike[str] | None = None,
     seed: int = 1,
-    method: str = "exact",
+    method: str = DEFAULT.name,
     runs: int = 5,
     progress: Callable[[float], None] | None = None,
 ) -> DemoReport:
@@ -172,10 +174,8 @@ def demo(
 
     runs = check_int_option("--runs", runs, 2, MAX_RUNS)
     seed = check_int_option("--seed", seed, *SEED_RANGE)
-    if method not in METHODS:
-        raise InputError(
-            "the demo calibrates from end points: use paper, exact, heading or endpose"
-        )
+    if method not in SQUARE:
+        raise InputError(f"the demo calibrates from end points: use {join_names(SQUARE, 'or')}")
     folder = None if out is None else Path(out)
     if folder is not None:
         from umbmark.outputs.files import check_folder_output

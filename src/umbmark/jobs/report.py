@@ -23,7 +23,8 @@ from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
 from umbmark.core.messages import info
 from umbmark.core.version import __version__
-from umbmark.jobs.calibrate import DEFAULT_METHOD, CalibrationReport, calibrate
+from umbmark.estimators.registry import DEFAULT
+from umbmark.jobs.calibrate import CalibrationReport, calibrate
 from umbmark.jobs.inputs import RunSource, SourceOptions, source_name
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
@@ -223,7 +224,7 @@ def report(
     *more_passes: RunSource,
     side_length: float | None = None,
     wheelbase: float | None = None,
-    method: str = DEFAULT_METHOD,
+    method: str = DEFAULT.name,
     fit_truth_offset: bool = False,
     validate: bool = False,
     output: str | os.PathLike[str] | None = None,

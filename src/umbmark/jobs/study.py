@@ -33,7 +33,7 @@ import numpy as np
 
 from umbmark.calibration.compose import Calibration
 from umbmark.core.errors import InputError
-from umbmark.estimators import METHODS
+from umbmark.estimators.registry import SQUARE
 from umbmark.jobs.inputs import (
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
@@ -190,7 +190,7 @@ class _Outcome:
 
 def study(
     *,
-    methods: Sequence[str] = METHODS,
+    methods: Sequence[str] = SQUARE,
     trials: int = 200,
     E_d_spread: float = 0.02,
     E_b_spread: float = 0.05,
@@ -231,8 +231,8 @@ def study(
         For options out of range.
     """
     for name in methods:
-        if name not in (*METHODS, TRUTH):
-            raise InputError(f"--methods {name!r}: use some of {', '.join(METHODS)}, {TRUTH}")
+        if name not in (*SQUARE, TRUTH):
+            raise InputError(f"--methods {name!r}: use some of {', '.join(SQUARE)}, {TRUTH}")
     if not methods:
         raise InputError("--methods: name at least one estimator")
     if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:

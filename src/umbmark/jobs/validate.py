@@ -9,9 +9,9 @@ held-out error is recommended; ``umbmark calibrate --method auto`` calibrates wi
 
 The figures say how well each calibration predicts the kinds of motion held out, and
 nothing of others: :attr:`ValidationReport.coverage` states which (straight legs, arcs,
-turns on the spot; :mod:`umbmark.estimators.motions`). ``trajectory-scrub`` calibrates
-only where the rest of the runs identify its turn-rate term (turns at turning shares far
-apart), so that it is never credited with runs it extrapolates to.
+turns on the spot; :mod:`umbmark.estimators.motions`). An estimator of a turn-rate
+term (``trajectory-scrub``) calibrates only where the rest of the runs identify it (turns
+at turning shares far apart), so that it is never credited with runs it extrapolates to.
 """
 
 from __future__ import annotations
@@ -27,14 +27,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.core.errors import InputError
-from umbmark.core.messages import info, split_messages
-from umbmark.estimators.motions import (
-    KINDS,
-    MotionCoverage,
-    MotionKind,
-    join_names,
-    motion_coverage,
-)
+from umbmark.core.messages import info, join_names, split_messages
+from umbmark.estimators.motions import KINDS, MotionCoverage, MotionKind, motion_coverage
+from umbmark.estimators.registry import NAMES, names
 from umbmark.jobs.inputs import (
     ReadOptions,
     Runs,
@@ -53,16 +48,7 @@ if TYPE_CHECKING:
 __all__ = ["CANDIDATES", "Fold", "ValidationReport", "validate"]
 
 #: What is compared: the nominal parameters and every estimator.
-CANDIDATES = (
-    "nominal",
-    "paper",
-    "exact",
-    "heading",
-    "endpose",
-    "endpoints",
-    "trajectory",
-    "trajectory-scrub",
-)
+CANDIDATES = ("nominal", *NAMES)
 _MM = 1000.0
 
 
@@ -325,7 +311,7 @@ def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> F
     errors: dict[str, float | None] = {}
     refused: dict[str, str] = {}
     for candidate in candidates:
-        if candidate == "trajectory-scrub" and not trained_on.identifies_scrub:
+        if candidate in names(turn_rate=True) and not trained_on.identifies_scrub:
             errors[candidate] = None
             refused[candidate] = (
                 f"the rest hold {trained_on.held_text(only=True)}, which do not identify "

@@ -28,11 +28,9 @@ from umbmark.runs.rests import Reset, find_resets
 from umbmark.runs.segmentation import LeftOut, SplitOptions, find_runs, split_by_windows
 
 __all__ = [
-    "HEADING_METHODS",
     "LoadedRuns",
     "SplitMode",
     "check_motion",
-    "require_headings",
     "runs_from_recordings",
 ]
 
@@ -380,31 +378,6 @@ def runs_from_recordings(
         names = ", ".join(r.where for r in recordings) or "the recordings"
         raise InputError(f"found no run with ground truth in {names}", source=None)
     return out
-
-
-#: The estimators that fit headings, and so need a ground truth that measures them.
-HEADING_METHODS = ("heading", "endpoints", "trajectory", "trajectory-scrub")
-
-
-def require_headings(runs: Sequence[Run], method: str, where: str | None) -> None:
-    """Refuse ``method`` where it needs headings and a run's ground truth has positions
-    only (a GNSS fix, a tracked point).
-
-    Raises
-    ------
-    InputError
-        Naming the run, the method and the methods that serve.
-    """
-    if method not in HEADING_METHODS:
-        return
-    for run in runs:
-        if run.log is not None and not run.log.headings:
-            raise InputError(
-                f"the ground truth of {run.label or 'the runs'} has positions only (a "
-                f"PointStamped or NavSatFix reference, no headings): the {method} method "
-                "needs headings; use --method paper, exact or endpose",
-                source=where,
-            )
 
 
 def _segments(

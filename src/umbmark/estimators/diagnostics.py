@@ -1,41 +1,46 @@
-"""Checks that the runs are what the square estimators assume, and warnings that say why not.
+"""What the dispatch checks of square runs besides estimating: refusals before, warnings after.
 
-- :func:`check_within_side` and :func:`check_reachable`: the plausibility of the return
-  errors belongs to the method. The paper's small-angle formulas mean nothing for errors
-  larger than the square's side; the exact geometry inverts anything a robot driving the
+Called once per estimate by :mod:`umbmark.estimators.dispatch`, for whichever estimator
+(the table of :mod:`umbmark.estimators.registry` says what each one needs and takes):
+
+- :func:`require_headings`: an estimator that needs headings refuses runs whose ground
+  truth measures positions only.
+- :func:`check_reach`: the plausibility of the return errors belongs to the method. The
+  paper's small-angle formulas mean nothing for errors larger than the square's side
+  (``reach="side"``); the exact geometry inverts anything a robot driving the
   square can do, and only refuses errors farther from the start than the whole path is
-  long (a unit slip).
+  long (a unit slip, ``reach="path"``).
 - :func:`model_warnings`: the model check of the end-pose fit
   (:mod:`umbmark.estimators.endpose`) tests whether one robot of the model explains both
   clusters (and the headings); it fires on one in a thousand sets of runs with Gaussian
   scatter. When it fires, the warning gives the numbers and looks for the usual causes: a
   run whose direction label contradicts its cluster, headings in other units.
+
+What an estimator cannot identify it refuses itself (the exact geometry's
+:func:`umbmark.estimators.exact.check_identified`, a fit that does not converge).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
 
 import numpy as np
 
 from umbmark.benchmark.returns import Benchmark
 from umbmark.core.conventions import Direction
+from umbmark.core.errors import InputError
+from umbmark.core.messages import join_names
 from umbmark.estimators.base import SquareTest
-from umbmark.estimators.endpose import FLOOR
+from umbmark.estimators.endpose import FLOOR, LEVEL, EndPoseFit, fit_end_poses
+from umbmark.estimators.registry import Estimator, names
 from umbmark.model.runs import Run, split_by_direction
 
-if TYPE_CHECKING:
-    from umbmark.estimators.endpose import EndPoseFit
-
 __all__ = [
-    "UNEXPLAINED",
-    "beyond_square_test",
-    "check_identified",
-    "check_reachable",
-    "check_within_side",
+    "check_reach",
     "model_warnings",
+    "require_headings",
+    "runs_label",
 ]
 
 _MM = 1000.0
@@ -54,7 +59,7 @@ def _farthest(runs: Sequence[Run]) -> tuple[Run, float]:
     return runs[k], errors[k]
 
 
-def check_within_side(runs: Sequence[Run], test: SquareTest) -> None:
+def _check_within_side(runs: Sequence[Run], test: SquareTest) -> None:
     """Refuse return errors larger than the square's side: beyond the paper's formulas.
 
     Raises
@@ -67,11 +72,11 @@ def check_within_side(runs: Sequence[Run], test: SquareTest) -> None:
         raise ValueError(
             f"the return error of {run.label or 'a run'} ({error:.4g} m) is larger than the "
             f"square's side ({test.side_length:g} m), beyond the paper's small-angle "
-            "formulas: use --method exact or endpose (the exact geometry)"
+            f"formulas: use --method {join_names(names(reach='path'), 'or')} (the exact geometry)"
         )
 
 
-def check_reachable(runs: Sequence[Run], test: SquareTest) -> None:
+def _check_reachable(runs: Sequence[Run], test: SquareTest) -> None:
     """Refuse return errors no robot driving the square can make (a unit slip).
 
     Raises
@@ -86,49 +91,6 @@ def check_reachable(runs: Sequence[Run], test: SquareTest) -> None:
             f"start than the whole {4 * test.side_length:g} m path is long: are the lengths "
             "in the right unit (--unit) and the side length right?"
         )
-
-
-#: The exact geometry's closest robot missing the centres by more than this fraction of
-#: the side (20 cm on a 4 m square) ends elsewhere: no robot driving the square ends there.
-UNEXPLAINED = 0.05
-#: ... which is judged only where E_max,syst exceeds this fraction of the side: smaller
-#: errors are identified whatever else is wrong with the runs (the model check says what).
-LARGE = 0.25
-
-
-def beyond_square_test(why: str, e_max: float, side: float) -> str:
-    """The refusal of return errors the square test cannot identify: why, and the remedy."""
-    return (
-        f"E_max,syst is {e_max:.4g} m on a {side:g} m square, and {why}: turning errors "
-        "this large (a wheelbase tens of % off, as on skid-steer robots) are beyond what "
-        "the square test identifies. Calibrate the turning coarsely first: turn the robot "
-        "on the spot ten times as its odometry counts, measure the angle it truly turned, "
-        "multiply wheel_separation_multiplier by the odometry's angle over the true one, "
-        "and drive the square again"
-    )
-
-
-def check_identified(parts: Mapping[str, float], bench: Benchmark, test: SquareTest) -> None:
-    """Refuse large return errors that no robot of the exact geometry explains, or that
-    several explain (``parts`` from :func:`umbmark.estimators.exact.exact_components`).
-
-    Raises
-    ------
-    ValueError
-        Naming the cause and the remedy (:func:`beyond_square_test`).
-    """
-    side = test.side_length
-    if bench.e_max_syst <= LARGE * side:
-        return
-    if parts["residual_rms"] > UNEXPLAINED * side:
-        why = (
-            "no robot driving the square ends where these runs end (the closest misses "
-            f"their centres by {parts['residual_rms']:.3g} m)"
-        )
-        raise ValueError(beyond_square_test(why, bench.e_max_syst, side))
-    if parts.get("roots", 1.0) > 1.0:
-        why = f"{parts['roots']:.0f} different robots driving the square end where these runs end"
-        raise ValueError(beyond_square_test(why, bench.e_max_syst, side))
 
 
 def _misfit_text(fit: EndPoseFit) -> str:
@@ -203,8 +165,6 @@ def _heading_units(
     bench: Benchmark, runs: Sequence[Run], test: SquareTest, fit: EndPoseFit
 ) -> list[str]:
     """Headings whose alpha differs from the positions' by a degree/radian factor."""
-    from umbmark.estimators.endpose import fit_end_poses
-
     if not fit.headings:
         return []
     positions = fit_end_poses(bench, runs, test, headings=False)
@@ -235,10 +195,8 @@ def model_warnings(
 ) -> list[str]:
     """Warnings when one robot of the model does not explain the runs (see the module).
 
-    ``fit`` is the end-pose fit of the runs, made here when not given.
+    ``fit`` is the end-pose fit of the runs, made here (``E_s = 1``) when not given.
     """
-    from umbmark.estimators.endpose import LEVEL, fit_end_poses
-
     if fit is None:
         try:
             fit = fit_end_poses(bench, runs, test)
@@ -262,3 +220,40 @@ def model_warnings(
         f"{_misfit_text(fit)} (model check {check.statistic:.1f} on {check.dof} degrees of "
         f"freedom, p = {check.p_value:.2g} < {LEVEL:g}); {likely}"
     ]
+
+
+def check_reach(method: Estimator, runs: Sequence[Run], test: SquareTest) -> None:
+    """Refuse return errors beyond what ``method`` takes
+    (:attr:`~umbmark.estimators.registry.Estimator.reach`).
+
+    Raises
+    ------
+    ValueError
+        Naming the run and the likely cause.
+    """
+    if method.reach == "side":
+        _check_within_side(runs, test)
+    elif method.reach == "path":
+        _check_reachable(runs, test)
+
+
+def require_headings(method: Estimator, runs: Sequence[Run], where: str | None) -> None:
+    """Refuse ``method`` where it needs headings and a run's ground truth has positions
+    only (a GNSS fix, a tracked point).
+
+    Raises
+    ------
+    InputError
+        Naming the run, the method and the methods that serve.
+    """
+    if not method.headings:
+        return
+    serve = join_names(names(headings=False), "or")
+    for run in runs:
+        if run.log is not None and not run.log.headings:
+            raise InputError(
+                f"the ground truth of {run.label or 'the runs'} has positions only (a "
+                f"PointStamped or NavSatFix reference, no headings): the {method.name} method "
+                f"needs headings; use --method {serve}",
+                source=where,
+            )

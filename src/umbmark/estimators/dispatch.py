@@ -1,0 +1,222 @@
+"""Run the estimator a method names: the one way from runs to an error estimate.
+
+The table of :mod:`umbmark.estimators.registry` says what each estimator needs and how it
+is called; this module calls it, and around it what every estimate gets:
+
+- :func:`estimate_errors`: a square estimator on a square test's runs, with the refusals
+  before and the model check's warnings after (:mod:`umbmark.estimators.diagnostics`),
+  made once here for every estimator;
+- :func:`estimate_square_test`: that, completed by the scale ``E_s`` of straight runs
+  (:mod:`umbmark.estimators.scale`) where the runs include them;
+- :func:`estimate_runs`: any estimator on a calibration's runs (square tests or
+  recordings), whose failures say why and what to try, as one line: never a bare "the
+  fit diverged".
+
+Estimators never print: doubts come back as ``ErrorEstimate.warnings``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
+from umbmark.core.errors import InputError
+from umbmark.estimators.base import ErrorEstimate, SquareTest
+from umbmark.estimators.diagnostics import check_reach, model_warnings, require_headings
+from umbmark.estimators.endpose import fit_end_poses
+from umbmark.estimators.registry import SQUARE, estimator, find
+from umbmark.estimators.scale import scale_from_straights, scale_only
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import Run
+
+if TYPE_CHECKING:
+    from umbmark.estimators.trajectory_fit import TrajectoryFit
+
+__all__ = ["Estimated", "estimate_errors", "estimate_runs", "estimate_square_test"]
+
+
+def estimate_errors(
+    method: str,
+    bench: Benchmark,
+    runs: Sequence[Run],
+    test: SquareTest,
+    *,
+    E_s: float | None = None,
+) -> ErrorEstimate:
+    """Run the estimator named ``method`` on a square path test.
+
+    ``E_s``, measured by straight runs, is held fixed by the end-pose fit (``endpose``)
+    and scales ``E_b`` of the others (their turns see ``E_b / E_s``). The model check's
+    warnings come first, then the estimator's own.
+
+    Raises
+    ------
+    ValueError
+        For an unknown method, or runs the method cannot use.
+    """
+    entry = find(method)
+    if entry is None or entry.needs != "square":
+        raise ValueError(f"unknown method {method!r}; use one of {', '.join(SQUARE)}")
+    check_reach(entry, runs, test)
+    function = entry.load()
+    fit = None
+    if entry.fits_end_poses:  # the estimate is the fit the model check judges: made once
+        fit = fit_end_poses(bench, runs, test, E_s=1.0 if E_s is None else E_s)
+        estimate: ErrorEstimate = function(bench, runs=runs, test=test, E_s=E_s, fit=fit)
+    else:
+        estimate = function(bench, runs=runs, test=test)
+        if E_s is not None:
+            estimate = estimate.with_scale(E_s)
+    warnings = model_warnings(bench, runs, test, fit)
+    return replace(estimate, warnings=(*warnings, *estimate.warnings))
+
+
+def estimate_square_test(
+    method: str, runs: Sequence[Run], test: SquareTest
+) -> tuple[ErrorEstimate, Benchmark | None]:
+    """The estimate from square runs and, where the runs include them, straight runs.
+
+    Straight runs measure ``E_s`` (:mod:`umbmark.estimators.scale`), which completes the
+    square test's estimate; alone, they give ``E_s`` only.
+
+    Returns
+    -------
+    estimate : ErrorEstimate
+    benchmark : Benchmark or None
+        The UMBmark figures of the square runs (None without square runs).
+
+    Raises
+    ------
+    ValueError
+        For too few runs in a direction, or runs the method cannot use.
+    """
+    squares = [run for run in runs if run.kind == "square"]
+    straights = [run for run in runs if run.kind == "straight"]
+    scale = scale_from_straights(straights) if straights else None
+    if not squares and scale is not None:
+        return scale_only(scale), None
+    bench = umbmark_benchmark(squares)
+    estimate = estimate_errors(
+        method, bench, squares, test, E_s=None if scale is None else scale.E_s
+    )
+    if scale is None or scale.standard_error is None:
+        return estimate, bench
+    errors = dict(estimate.standard_errors)
+    errors["E_s"] = scale.standard_error
+    if "E_b" in errors:
+        relative = scale.standard_error / scale.E_s
+        errors["E_b"] = math.hypot(errors["E_b"], estimate.E_b * relative)
+    return replace(estimate, standard_errors=errors), bench
+
+
+@dataclass(frozen=True)
+class Estimated:
+    """What an estimator made of a calibration's runs.
+
+    Attributes
+    ----------
+    estimate : ErrorEstimate
+    test : SquareTest
+        Side [m] and wheelbase [m] the estimate assumed.
+    benchmark : Benchmark or None
+        The UMBmark figures (Eqs. 3.1-3.4); None when the runs are not squares of a known
+        side in both directions.
+    model_fit : TrajectoryFit or None
+        The trajectory methods' fit of the odometry model, which replays use.
+    """
+
+    estimate: ErrorEstimate
+    test: SquareTest
+    benchmark: Benchmark | None
+    model_fit: TrajectoryFit | None = None
+
+
+def _failed(method: str, why: str) -> str:
+    """What an estimator that could not compute says: why, and what to try."""
+    return (
+        f"the {method} estimate could not be computed ({why}): the runs do not determine the "
+        "errors; try another --method, more runs (in both directions, with turns both "
+        "ways), and check the units, the nominal wheelbase and wheel diameter and, for "
+        "recorded runs, the time offset between wheels and ground truth"
+    )
+
+
+def estimate_runs(
+    method: str,
+    runs: Sequence[Run],
+    *,
+    wheelbase: float,
+    params: WheelParams | None,
+    side_length: float | None,
+    square_side: Callable[[], float],
+    fit_truth_offset: bool = False,
+    where: str | None = None,
+) -> Estimated:
+    """The estimate of ``method`` from a calibration's runs, square tests or recordings.
+
+    Parameters
+    ----------
+    method : str
+        The estimator (:data:`umbmark.estimators.registry.NAMES`).
+    runs : sequence of Run
+        Every run; recorded ones with their time series.
+    wheelbase : float
+        The wheelbase [m] the odometry used during the runs.
+    params : WheelParams or None
+        What recorded runs were integrated with (None for end points only).
+    side_length : float or None
+        The square's side [m], where given or known to the sources.
+    square_side : callable
+        The side [m] of the square every source drove, asked only of square runs for a
+        square estimator (raises :class:`InputError` where the sources disagree).
+    fit_truth_offset : bool
+        The trajectory methods: fit the ground truth's tracked point.
+    where : str, optional
+        The source named in errors.
+
+    Raises
+    ------
+    InputError
+        For runs the method cannot use, or a fit that fails (why, and what to try).
+    """
+    try:
+        entry = estimator(method)
+        require_headings(entry, runs, where)
+        if entry.needs == "square":
+            squares = any(run.kind == "square" for run in runs)
+            side = square_side() if squares else (side_length or 1.0)
+            test = SquareTest(side, wheelbase)
+            estimate, bench = estimate_square_test(method, runs, test)
+            return Estimated(estimate, test, bench)
+        logs = [run.log for run in runs if run.log is not None]
+        if not logs or params is None:
+            raise InputError(
+                f"the {method} method needs logged runs (a run log, an OptiOdom session "
+                "or a bag), not a runs table",
+                source=where,
+            )
+        options: dict[str, object] = dict(entry.options)
+        if entry.trajectories:
+            options["fit_truth_offset"] = fit_truth_offset
+        estimate, fit = entry.load()(logs, params, side_length, **options)
+        test = SquareTest(side_length or 1.0, wheelbase)
+        # UMBmark's figures where the runs are squares of a known side.
+        bench = None
+        directions = {run.direction for run in runs if run.kind == "square"}
+        if side_length is not None and len(directions) == 2:
+            try:
+                bench = umbmark_benchmark(runs)
+            except ValueError:
+                bench = None
+        return Estimated(estimate, test, bench, fit if entry.trajectories else None)
+    except InputError:
+        raise
+    except np.linalg.LinAlgError as exc:  # a ValueError: caught before the others
+        raise InputError(_failed(method, f"a singular system: {exc}"), source=where) from None
+    except ValueError as exc:
+        raise InputError(str(exc), source=where) from None
