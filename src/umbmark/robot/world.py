@@ -375,18 +375,18 @@ def square_path(
 
 
 def corner_world(clutter: bool = True) -> World:
-    """The standard world: an L-shaped corner behind and to the right of the start
-    (vertex at (-1.6, -1.3) m; a 1.25 m wall along +x ending 0.35 m behind the start, and
-    a 2.8 m wall along +y 1.6 m behind the start, 1.3 m to the right of it), a far wall 6 m ahead and, with
-    ``clutter``, a box in front of the back wall, a chair and a person standing aside. The
-    robot starts at the origin heading +x and carries a 360 degree laser (720 beams, 1 cm
-    noise, 2 % dropouts) at its centre, the three range sensors of
-    :data:`CORNER_SENSORS` (2 mm noise) and motion capture.
+    """The standard world: an L-shaped corner behind and to the right of the start (vertex at
+    (-1.6, -1.3) m: a 1.25 m wall along +x, 1.3 m to the right of the start, ending 0.35 m
+    behind it, and a 2.8 m wall along +y 1.6 m behind the start), a far wall 6 m ahead and,
+    with ``clutter``, a box in front of the back wall, a chair and a person standing aside.
+    The robot starts at the origin heading +x and carries a 360 degree laser (720 beams, 1
+    cm noise, 2 % dropouts) at its centre, the three range sensors of :data:`CORNER_SENSORS`
+    (2 mm noise) and motion capture.
 
     The 4 x 4 m squares driven from the start (cw and ccw) keep at least 0.35 m from
-    everything (:meth:`World.clearance`), and a robot ending a run up to about 1 m from
-    the start in any direction still sees both walls well from inside the corner. In the
-    corner frame the start is at ``(1.6, 1.3)`` m, heading 0.
+    everything (:meth:`World.clearance`), and a robot ending a run up to about 1 m from the
+    start in any direction still sees both walls well from inside the corner. In the corner
+    frame the start is at ``(1.6, 1.3)`` m, heading 0.
     """
     corner = LCorner(vertex=(-1.6, -1.3), heading=0.0, x_length=1.25, y_length=2.8)
     walls = [np.array([[6.0, -5.5, 6.0, 5.5]])]
