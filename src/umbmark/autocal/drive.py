@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.core.conventions import Direction, wrap_angle
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, SafetyError
 from umbmark.robot.base import LaserScan, Pose2D, Robot, Stamped
 
 __all__ = [
@@ -44,10 +44,6 @@ __all__ = [
     "settle",
     "stop_safely",
 ]
-
-
-class SafetyError(RuntimeError):
-    """The robot was stopped for safety (a zero velocity was sent); the message says why."""
 
 
 @dataclass(frozen=True)

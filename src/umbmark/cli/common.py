@@ -104,6 +104,25 @@ def progress_bar(description: str) -> Iterator[Callable[[float], None]]:
 
 
 @contextlib.contextmanager
+def status_line(description: str) -> Iterator[Callable[[str], None]]:
+    """A spinner with a changing text and the time elapsed on stderr (on a terminal
+    only); yields a callback taking the text to show now."""
+    from rich.console import Console
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    err = Console(stderr=True)
+    if not err.is_terminal:
+        yield lambda text: None
+        return
+    with Progress(
+        SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
+        console=err, transient=True,
+    ) as bar:  # fmt: skip
+        task = bar.add_task(f"{description} (Ctrl-C stops)", total=None)
+        yield lambda text: bar.update(task, description=f"{description}: {text} (Ctrl-C stops)")
+
+
+@contextlib.contextmanager
 def working(description: str) -> Iterator[None]:
     """A spinner with the time elapsed on stderr, for work whose fraction done is unknown
     (an iterative fit): shown only on a terminal, gone when the block ends."""

@@ -23,10 +23,11 @@ from umbmark.cli.plan import plan
 from umbmark.cli.replay import replay
 from umbmark.cli.report import report
 from umbmark.cli.reproduce import reproduce
+from umbmark.cli.selfcal import selfcal
 from umbmark.cli.simulate import simulate
 from umbmark.cli.study import study
 from umbmark.cli.validate import validate
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, SafetyError
 from umbmark.core.version import __version__
 
 __all__ = ["cli", "main"]
@@ -78,6 +79,7 @@ for command in (
     reproduce,
     example,
     history,
+    selfcal,
 ):
     cli.add_command(command)
 
@@ -107,6 +109,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     except click.UsageError as exc:
         error_line(_usage(exc))
         sys.exit(EXIT_BAD_INPUT)
+    except SafetyError as exc:  # the robot was stopped: a zero velocity was sent
+        error_line(f"stopped for safety: {exc}")
+        sys.exit(EXIT_ENVIRONMENT)
     except InputError as exc:
         error_line(exc.command_line())  # options named as flags (--unit mm)
         sys.exit(EXIT_BAD_INPUT)

@@ -15,6 +15,7 @@ from rich.text import Text
 from umbmark.benchmark.returns import Benchmark, sem_verdict
 from umbmark.estimators.registry import LOGGED, find, method_label
 from umbmark.jobs.calibrate import CalibrationReport
+from umbmark.jobs.selfcal import SelfCalReport
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
 __all__ = ["column", "print_table", "render_calibration", "row", "table"]
@@ -344,3 +345,61 @@ def _row(table: Table, *cells: str) -> None:
 
 def _angle(value: float | None) -> float | None:
     return None if value is None else to_shown(value, ANGLE_UNIT)
+
+
+def render_selfcal(report: SelfCalReport, screen: Console) -> None:
+    """What ``umbmark selfcal`` prints: the coarse check, each pass, before and after, the
+    multipliers the controller holds, and how well the corner was measured."""
+    screen.print(
+        f"Self-calibration of {report.robot}: {report.side_length:g} m squares, fixes by "
+        f"{report.measurement}."
+    )
+    coarse = report.coarse
+    if coarse is not None:
+        done = "corrected" if coarse.needed else "within 5 %, not corrected"
+        screen.print(
+            f"Coarse turning check: the robot turned {math.degrees(coarse.true_angle):.1f} deg "
+            f"while its odometry turned {math.degrees(coarse.odometry_angle):.1f} deg "
+            f"(ratio {coarse.ratio:.4f}): {done}."
+        )
+    grid = table(
+        "UMBmark passes",
+        ["pass", "E_max,syst [mm]", "E_d", "E_b", "verdict", "applied"],
+        left={"pass", "verdict", "applied"},
+    )
+    for p in report.passes:
+        r = p.report
+        e = r.e_max_syst
+        applied = "-" if p.applied is None else (p.applied.method if p.applied.active else "no")
+        row(
+            grid,
+            p.label,
+            "-" if e is None else f"{e * 1000:.1f}",
+            f"{r.estimate.E_d:.6f}",
+            f"{r.estimate.E_b:.6f}",
+            r.verdict.words,
+            applied,
+        )
+    screen.print(grid)
+    before, after = report.e_max_syst_before, report.e_max_syst_after
+    if before is not None and after is not None and after > 0:
+        screen.print(
+            f"[bold]E_max,syst {before * 1000:.1f} mm -> {after * 1000:.1f} mm "
+            f"({before / after:.1f}-fold)[/bold]"
+        )
+    final = report.final
+    screen.print(
+        "The controller now holds: wheel_separation_multiplier "
+        f"{final.wheel_separation_multiplier:.6f}, left_wheel_radius_multiplier "
+        f"{final.left_wheel_radius_multiplier:.6f}, right_wheel_radius_multiplier "
+        f"{final.right_wheel_radius_multiplier:.6f}."
+    )
+    errors = report.measurement_errors()
+    if errors is not None:
+        screen.print(
+            f"Corner fixes against the virtual robot's truth: {errors[0] * 1000:.2f} mm, "
+            f"{math.degrees(errors[1]):.3f} deg rms."
+        )
+    for p in report.passes:
+        if p.applied is not None and not p.applied.active:
+            screen.print(f"{p.label}: {p.applied.message}")

@@ -27,6 +27,7 @@ __all__ = [
     "FLAG_KEYWORDS",
     "InputError",
     "Keyword",
+    "SafetyError",
     "keywords_of",
     "python_api",
     "unexpected_keyword",
@@ -133,6 +134,12 @@ class InputError(ValueError):
 
     def __str__(self) -> str:
         return self.command_line() if self.keywords is None else self.python()
+
+
+class SafetyError(RuntimeError):
+    """A robot was stopped for safety (a zero velocity was sent before this was raised):
+    stale odometry, an obstacle ahead, the robot leaving its path, a move taking too long.
+    Its text says why, in one line."""
 
 
 # --- flags as keywords ------------------------------------------------------------------

@@ -176,6 +176,12 @@ class SelfCalReport:
             "files": [str(f) for f in self.files],
         }
 
+    def to_json(self) -> str:
+        """The JSON text of :meth:`to_dict`."""
+        import json
+
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
 
 def _multipliers(params: DriveParams) -> dict[str, float]:
     return {
@@ -206,6 +212,7 @@ def selfcal(
     robot_name: str | None = None,
     history: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
+    report: str | os.PathLike[str] | None = None,
     progress: Progress | None = None,
     limits: DriveLimits | None = None,
     ask: Callable[[str], str] | None = None,
@@ -232,6 +239,8 @@ def selfcal(
         Record every pass in the robot's history (SQLite) and mark the applied ones.
     out : path, optional
         Folder for the run logs, the report and the overlay [default: ``selfcal-<robot>``].
+    report : path, optional
+        The HTML page of all passes [default: ``report.html`` in ``out``].
     limits : DriveLimits, optional
         Speeds, accelerations and safety limits.
 
@@ -239,7 +248,7 @@ def selfcal(
     ------
     InputError
         Bad options, or a check before moving failed (with the cause).
-    umbmark.autocal.drive.SafetyError
+    umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
     """
     _check_counts(side_length, runs, max_passes)
@@ -296,7 +305,7 @@ def selfcal(
         robot.send_velocity(0.0, 0.0)
         raise
     robot.send_velocity(0.0, 0.0)
-    files = _outputs(passes, folder)
+    files = _outputs(passes, folder, Path(report) if report is not None else None)
     errors = [
         (
             fix.pose.x - truth.x,
@@ -379,14 +388,14 @@ def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
     return replace(result, applied=robot.apply(new, method))
 
 
-def _outputs(passes: list[PassResult], folder: Path) -> list[Path]:
+def _outputs(passes: list[PassResult], folder: Path, page: Path | None) -> list[Path]:
     """The report of all passes and the overlay of the final parameters."""
     from umbmark.jobs.report import report
 
     written: list[Path] = []
     if not passes:
         return written
-    page = folder / "report.html"
+    page = page or folder / "report.html"
     report(*(p.folder for p in passes), output=page)
     written.append(page)
     last_applied = [p for p in passes if p.applied is not None and p.applied.active]
@@ -410,9 +419,3 @@ def _tape_marks(robot: Robot) -> TapeMarks:
         if isinstance(found, TapeMarks):
             return found
     return TapeMarks(marks=((-0.35, 0.25), (-0.35, -0.25), (-0.35, -0.25)))
-
-
-def _json(report: SelfCalReport) -> str:
-    import json
-
-    return json.dumps(report.to_dict(), indent=2, allow_nan=False) + "\n"

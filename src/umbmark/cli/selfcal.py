@@ -1,0 +1,153 @@
+"""``umbmark selfcal``: parse the options, connect to the robot, call
+:func:`umbmark.selfcal`, render."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from umbmark.cli.options import OUTPUTS, TEST, Command, apply, option
+
+__all__ = ["selfcal"]
+
+ROBOT = "The robot"
+ROS = "ROS robots (--ros1, --ros2)"
+DRIVING = "Driving"
+
+
+@click.command(cls=Command)
+@apply(
+    [
+        option("--sim", "backend", flag_value="sim", section=ROBOT,
+               help="The virtual robot (its errors: --sim-E-d, --sim-E-b, --sim-E-s)."),
+        option("--ros1", "backend", flag_value="ros1", section=ROBOT,
+               help="A ROS 1 robot (rospy; ROS_MASTER_URI)."),
+        option("--ros2", "backend", flag_value="ros2", section=ROBOT,
+               help="A ROS 2 robot (rclpy; never run on our machines: see docs/selfcal.md)."),
+        option("--sim-E-d", "E_d", section=ROBOT, type=float, default=1.004, show_default=True,
+               help="The virtual robot's D_R / D_L."),
+        option("--sim-E-b", "E_b", section=ROBOT, type=float, default=0.97, show_default=True,
+               help="The virtual robot's true wheelbase over the nominal one."),
+        option("--sim-E-s", "E_s", section=ROBOT, type=float, default=1.0, show_default=True,
+               help="The virtual robot's mean wheel diameter over the nominal one."),
+        option("--sim-slip", "slip", section=ROBOT, type=float, default=0.0004,
+               show_default=True, help="The virtual robot's wheel slip [m^0.5]."),
+        option("--seed", section=ROBOT, type=click.IntRange(0, 2**63 - 1), default=1,
+               show_default=True, help="Seed of the virtual robot's slip and sensor noise."),
+        option("--side-length", "-L", section=TEST, type=float, default=4.0, show_default=True,
+               help="Side of the square [m] (0.5 to 20)."),
+        option("--runs", "-n", section=TEST, type=int, default=5, show_default=True,
+               help="Runs in each direction (2 to 20)."),
+        option("--measure", section=TEST, type=click.Choice(["lidar", "ranges", "truth", "tape"]),
+               default="lidar", show_default=True,
+               help="How the robot's pose in the corner is measured at each stop: the laser, "
+               "three range sensors, motion capture, or a person with a tape (prompted)."),
+        option("--apply", section=TEST, type=click.Choice(["reconfigure", "yaml", "none"]),
+               default="reconfigure", show_default=True,
+               help="How corrections reach the controller (none: one pass, nothing applied)."),
+        option("--max-passes", section=TEST, type=int, default=3, show_default=True,
+               help="Most UMBmark passes before the verification (1 to 5)."),
+        option("--no-verify", "verify", section=TEST, flag_value=False, default=True,
+               help="Leave out the verification pass."),
+        option("--no-coarse", "coarse", section=TEST, flag_value=False, default=True,
+               help="Leave out the coarse turning check."),
+        option("--speed", section=DRIVING, type=float, default=0.2, show_default=True,
+               help="Cruise speed on the legs [m/s] (0.01 to 1)."),
+        option("--acceleration", section=DRIVING, type=float, default=0.3, show_default=True,
+               help="Acceleration limit [m/s^2] (0.01 to 5)."),
+        option("--turn-rate", section=DRIVING, type=float, default=0.8, show_default=True,
+               help="Top turn rate on the spot [rad/s] (0.05 to 3)."),
+        option("--cmd-vel", section=ROS, default="/cmd_vel", show_default=True,
+               help="Velocity command topic (geometry_msgs/Twist)."),
+        option("--odom-topic", section=ROS, default="/odom", show_default=True,
+               help="Odometry topic (nav_msgs/Odometry)."),
+        option("--scan-topic", section=ROS, default="/scan", show_default=True,
+               help="Laser scan topic (sensor_msgs/LaserScan); its mounting from TF."),
+        option("--range-topics", section=ROS, default=None,
+               help="Three sensor_msgs/Range topics, comma-separated (--measure ranges)."),
+        option("--truth-topic", section=ROS, default=None,
+               help="Ground-truth pose topic, geometry_msgs/PoseStamped (--measure truth)."),
+        option("--base-frame", section=ROS, default="base_link", show_default=True,
+               help="The robot's base frame."),
+        option("--controller", section=ROS, default="/diff_drive_controller",
+               show_default=True, help="The diff_drive_controller's namespace."),
+        option("--params-file", section=ROS, type=click.Path(dir_okay=False), default=None,
+               help="The YAML the controller loads (--apply yaml writes the multipliers)."),
+        option("--reload", section=ROS, is_flag=True,
+               help="ROS 2: reload the controller after writing its parameter file."),
+        option("--robot", "robot_name", section=OUTPUTS, default=None,
+               help="Record every pass in this robot's history (umbmark history)."),
+        option("--history", section=OUTPUTS, type=click.Path(dir_okay=False), default=None,
+               help="The history file [default: $UMBMARK_HISTORY, else the per-user one]."),
+        option("--out", section=OUTPUTS, type=click.Path(file_okay=False), default=None,
+               help="Folder for the passes' run logs, the report and the overlay "
+               "[default: selfcal-ROBOT]; must be new or empty."),
+        option("--report", section=OUTPUTS, type=click.Path(dir_okay=False), default=None,
+               help="The HTML page of all passes [default: report.html in --out]."),
+        option("--json", "json_out", section=OUTPUTS, is_flag=True,
+               help="Print one JSON object (metres, radians)."),
+    ]
+)  # fmt: skip
+def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
+    """The robot calibrates itself (the paper's Sec. 6).
+
+    Placed at its start in view of an L-shaped corner, the robot checks what it needs,
+    checks that it turns as its odometry believes, drives UMBmark (5 cw, then 5 ccw runs,
+    steering by its odometry, back to the start by the corner between runs), measures
+    where it stopped against the corner, calibrates, applies the correction to its
+    controller, repeats while the paper's 3 x SEM rule says another pass is worth it, and
+    verifies. A zero velocity is sent on any error, on Ctrl-C and on every safety stop.
+    """
+    from umbmark.cli.common import console, note, status_line, wrote
+    from umbmark.cli.render import render_selfcal
+    from umbmark.core.errors import InputError
+    from umbmark.jobs.selfcal import selfcal as run_selfcal
+    from umbmark.robot.connect import connect
+    from umbmark.robot.ros_common import RosOptions
+
+    if backend is None:
+        raise InputError("choose the robot: --sim, --ros1 or --ros2")
+    ranges = options.pop("range_topics")
+    ros = RosOptions(
+        cmd_vel=options.pop("cmd_vel"),
+        odom=options.pop("odom_topic"),
+        scan=options.pop("scan_topic"),
+        ranges=tuple(t.strip() for t in ranges.split(",")) if ranges else (),
+        truth=options.pop("truth_topic"),
+        base_frame=options.pop("base_frame"),
+        controller=options.pop("controller"),
+        params_file=options.pop("params_file"),
+        reload=options.pop("reload"),
+    )
+    sim = {k: options.pop(k) for k in ("E_d", "E_b", "E_s", "slip", "seed")}
+    from umbmark.autocal.drive import DriveLimits
+
+    limits = DriveLimits(
+        speed=options.pop("speed"),
+        acceleration=options.pop("acceleration"),
+        turn_rate=options.pop("turn_rate"),
+    )
+    robot = connect(backend, ros=ros, **sim)  # type: ignore[arg-type]
+    measure_with = options.pop("measure")
+    ask = click.prompt if measure_with == "tape" else None
+    try:
+        with status_line("self-calibration") as show:
+
+            def progress(label: str, k: int, direction: object, what: str) -> None:
+                run = f", run {k} {getattr(direction, 'value', '')}" if k else ""
+                show(f"{label}{run}: {what}")
+
+            report = run_selfcal(
+                robot, measure_with=measure_with, limits=limits, progress=progress,
+                ask=ask, **options,
+            )  # fmt: skip
+    finally:
+        robot.close()
+    for line in report.checks:
+        note(line)
+    wrote(report.files)
+    if json_out:
+        click.echo(report.to_json(), nl=False)
+        return
+    render_selfcal(report, console())

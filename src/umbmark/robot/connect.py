@@ -1,0 +1,55 @@
+"""One entry to a robot: the virtual one, a ROS 1 robot or a ROS 2 robot."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from umbmark.core.errors import InputError
+from umbmark.robot.base import Robot
+from umbmark.robot.ros_common import RosOptions
+
+__all__ = ["BACKENDS", "Backend", "connect"]
+
+Backend = Literal["sim", "ros1", "ros2"]
+BACKENDS: tuple[Backend, ...] = ("sim", "ros1", "ros2")
+
+
+def connect(
+    backend: Backend,
+    *,
+    E_d: float = 1.0,
+    E_b: float = 1.0,
+    E_s: float = 1.0,
+    slip: float = 0.0004,
+    seed: int | None = None,
+    ros: RosOptions | None = None,
+) -> Robot:
+    """The robot to calibrate.
+
+    ``sim``: a :class:`~umbmark.robot.virtual.VirtualRobot` (LabMate-sized, 4 m squares'
+    room) with errors ``E_d``, ``E_b``, ``E_s`` and wheel slip ``slip`` [m^(1/2)];
+    ``ros1`` / ``ros2``: the robot behind the topics and controller of ``ros``.
+
+    Raises
+    ------
+    InputError
+        Bad errors, or a ROS robot that cannot be reached (with the reason).
+    """
+    if backend == "sim":
+        from umbmark.robot.virtual import VirtualRobot
+
+        for name, value in (("E_d", E_d), ("E_b", E_b), ("E_s", E_s)):
+            if not (0.5 <= value <= 2.0):
+                raise InputError(f"--sim-{name.replace('_', '-')} {value!r}: give 0.5 to 2")
+        if not (0.0 <= slip <= 0.01):
+            raise InputError(f"--sim-slip {slip!r} m^0.5: give 0 to 0.01")
+        return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed)
+    if backend == "ros1":
+        from umbmark.robot.ros1 import Ros1Robot
+
+        return Ros1Robot(ros or RosOptions())
+    if backend == "ros2":
+        from umbmark.robot.ros2 import Ros2Robot
+
+        return Ros2Robot(ros or RosOptions())
+    raise InputError(f"robot {backend!r}: use one of {', '.join(BACKENDS)}")
