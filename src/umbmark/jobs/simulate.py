@@ -36,7 +36,7 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 from umbmark.model.runs import Run
 from umbmark.outputs.files import OutputPlan
-from umbmark.sim.engine import SimResult
+from umbmark.sim.result import SimResult
 from umbmark.sim.robot import ControlConfig, NoiseModel, VirtualRobot
 
 if TYPE_CHECKING:

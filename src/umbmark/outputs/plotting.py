@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from umbmark.sim.engine import Trace
+    from umbmark.sim.result import Trace
 
 __all__ = [
     "DIRECTION_COLOURS",
@@ -155,7 +155,7 @@ def trajectory_figure(
     Parameters
     ----------
     paths : sequence of (Trace, str)
-        A one-run trace (see :class:`umbmark.sim.engine.Trace`) and its panel title.
+        A one-run trace (see :class:`umbmark.sim.result.Trace`) and its panel title.
     side_length : float, optional
         Draw the nominal square of this side [m] for comparison.
     """
