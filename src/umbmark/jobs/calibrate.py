@@ -10,7 +10,6 @@ and ``--plot``.
 from __future__ import annotations
 
 import datetime as dt
-import json
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -22,6 +21,7 @@ from umbmark.benchmark.returns import Benchmark, Cluster, sem_verdict
 from umbmark.calibration.compose import Calibration
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
+from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.jobs.estimate import LOGGED_METHODS, calibrate_runs, sessions_disagree
@@ -68,7 +68,7 @@ METHODS: tuple[Method, ...] = (
 
 
 @dataclass(frozen=True, repr=False)
-class CalibrationReport:
+class CalibrationReport(JsonText):
     """Everything a calibration found.
 
     Attributes
@@ -336,10 +336,6 @@ class CalibrationReport:
         if self.notes:
             out["notes"] = list(self.notes)
         return out
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def provenance(self) -> list[str]:
         """Comment lines saying where a parameter file came from."""
