@@ -1,6 +1,6 @@
 """The closed-loop virtual robot: one vectorized pass over many runs against a plain loop.
 
-Both simulate the same noise-free model (umbmark.sim.reference is the per-sample loop the
+Both simulate the same noise-free model (tests/reference_sim.py is the per-sample loop the
 vectorized engine is tested against) on 4 x 4 m UMBmark squares; the script prints runs
 per second and odometry samples per second of each, and their ratio, for several batch
 sizes.
@@ -11,16 +11,20 @@ Run: python benchmarks/bench_simulator.py [--runs 10 100 1000 4000] [--loop-runs
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 import numpy as np
 
 from umbmark.core.conventions import Direction
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
-from umbmark.sim.reference import simulate_run_loop
 from umbmark.sim.robot import LABMATE, VirtualRobot
 
 from _timing import best_of
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from reference_sim import simulate_run_loop
 
 
 def main() -> None:

@@ -1,5 +1,5 @@
-"""The hostile-input corpus (tools/hostile_corpus.py) in CI: its classifier, and a fast
-subset of its cases run as a user runs them.
+"""The hostile-input corpus (tests/corpus/, run by tests/corpus_runner.py) in CI: its
+classifier, and a fast subset of its cases run as a user runs them.
 
 The classifier is checked on outcomes written by hand, one per class, so that each class
 can be told apart. The subset takes one or two cases per reader and class of hostility
@@ -11,21 +11,12 @@ each known-wrong case needs.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-
 import pytest
-
-from helpers import ROOT
 
 pytest.importorskip("rosbags")
 
-_SPEC = importlib.util.spec_from_file_location("hostile_corpus", ROOT / "tools/hostile_corpus.py")
-assert _SPEC is not None
-assert _SPEC.loader is not None
-corpus_tool = importlib.util.module_from_spec(_SPEC)
-sys.modules["hostile_corpus"] = corpus_tool
-_SPEC.loader.exec_module(corpus_tool)
+import corpus_cases
+import corpus_runner as corpus_tool
 
 Case, Outcome, classify = corpus_tool.Case, corpus_tool.Outcome, corpus_tool.classify
 
@@ -110,7 +101,7 @@ def test_classify(case, outcome, klass):
 
 def test_output_checks_make_a_wrong_result(tmp_path):
     (tmp_path / "link.json").symlink_to("elsewhere.json")
-    kept = _case(check=corpus_tool._still_link("link.json"))
+    kept = _case(check=corpus_cases.still_link("link.json"))
     assert classify(kept, Outcome(0, "", "", 0.1), tmp_path)[0] == "ok-result"
     (tmp_path / "link.json").unlink()
     (tmp_path / "link.json").write_text("{}")

@@ -1,4 +1,5 @@
-"""What tools/hostile_corpus.py found wrong with exit 0, each refused or warned of now.
+"""What the hostile-input corpus (tests/corpus/) found wrong with exit 0, each refused or
+warned of now.
 
 The bundled table (millimetres, 4 m square, odometry ends at the origin) has its cw
 runs at about (69, 36), (97, 89), (26, 45), (106, 69), (46, 47) mm: their return errors

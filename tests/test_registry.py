@@ -27,9 +27,6 @@ from umbmark.estimators.registry import ESTIMATORS, NAMES, SQUARE, Method
 from umbmark.model.runs import EndPose, Run
 
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "umbmark"
-#: Where an estimator's name may still be written besides the registry: the default of
-#: ``calibrate_robot``, in the simulator another branch of issue 16 restructures.
-ELSEWHERE = {PACKAGE / "sim" / "experiments.py"}
 
 
 def test_the_method_type_is_the_tables_names():
@@ -74,7 +71,7 @@ def test_estimator_names_are_written_in_the_registry_alone():
     found = {
         f"{path.relative_to(PACKAGE)}:{line}": name
         for path in sorted(PACKAGE.rglob("*.py"))
-        if path.name != "registry.py" and path not in ELSEWHERE
+        if path.name != "registry.py"
         for line, name in _names_in_code(path)
     }
     assert found == {}

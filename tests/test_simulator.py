@@ -18,10 +18,10 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.sim.engine import simulate
 from umbmark.sim.experiments import calibrate_robot, umbmark_trials
 from umbmark.sim.paths import spot_turn, square, straight_line
-from umbmark.sim.reference import simulate_run_loop
 from umbmark.sim.robot import ControlConfig, NoiseModel, VirtualRobot
 
 from helpers import turtle_square
+from reference_sim import simulate_run_loop
 
 # A fine encoder keeps quantization out of the way of the geometry.
 FINE = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=4096, gear_ratio=50)
@@ -152,7 +152,7 @@ def test_seeded_noisy_runs_repeat():
 def test_the_engines_arc_step_is_chord_step_to_the_bit():
     # The engine computes chord_step's series for sin(h)/h inline, halved.
     from umbmark.model.kinematics import chord_step
-    from umbmark.sim.engine import _half_sinc_series
+    from umbmark.sim.kernels import half_sinc_series
 
     rng = np.random.default_rng(0)
     ds, theta = rng.uniform(-0.01, 0.01, (2, 2, 64))
@@ -160,7 +160,7 @@ def test_the_engines_arc_step_is_chord_step_to_the_bit():
     h = 0.5 * d_theta
     half_sinc = np.empty_like(h)
     work = np.empty_like(h), np.empty((3, *h.shape)), np.ones_like(h), np.full_like(h, 0.5)
-    _half_sinc_series(h, *work, half_sinc)()
+    half_sinc_series(h, *work, half_sinc)()
     chord, heading = chord_step(ds, d_theta, theta, "arc")
     assert np.array_equal((ds + ds) * half_sinc, chord)
     assert np.array_equal(theta + h, heading)

@@ -13,33 +13,6 @@ scrub model's turn-rate term: :mod:`umbmark.estimators.motions`. The scale ``E_s
 straight runs: :mod:`umbmark.estimators.scale`.
 
 Estimators never print: doubts come back as ``ErrorEstimate.warnings``. This package
-imports nothing until a module of it is used, so that the command line reads the
-registry before numpy is loaded.
+imports nothing, so that the command line reads the registry before numpy is loaded.
 """
 
-from __future__ import annotations
-
-import importlib
-from typing import TYPE_CHECKING
-
-# Kept for callers not yet moved to the names' homes (umbmark.sim.experiments, on another
-# branch of issue 16): imported on first use, so that the package stays cheap to import.
-_MOVED = {
-    "Method": "umbmark.estimators.registry",
-    "SquareTest": "umbmark.estimators.base",
-    "estimate_errors": "umbmark.estimators.dispatch",
-}
-
-if TYPE_CHECKING:
-    from umbmark.estimators.base import SquareTest
-    from umbmark.estimators.dispatch import estimate_errors
-    from umbmark.estimators.registry import Method
-
-__all__ = ["Method", "SquareTest", "estimate_errors"]
-
-
-def __getattr__(name: str) -> object:
-    home = _MOVED.get(name)
-    if home is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(home), name)

@@ -10,7 +10,6 @@ and ``--plot``.
 from __future__ import annotations
 
 import datetime as dt
-import json
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -22,6 +21,7 @@ from umbmark.benchmark.returns import Benchmark, Cluster, sem_verdict
 from umbmark.calibration.compose import Calibration
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
+from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, LOGGED, NAMES, find, names
@@ -52,7 +52,7 @@ __all__ = ["CalibrationReport", "calibrate"]
 
 
 @dataclass(frozen=True, repr=False)
-class CalibrationReport:
+class CalibrationReport(JsonText):
     """Everything a calibration found.
 
     Attributes
@@ -320,10 +320,6 @@ class CalibrationReport:
         if self.notes:
             out["notes"] = list(self.notes)
         return out
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def provenance(self) -> list[str]:
         """Comment lines saying where a parameter file came from."""

@@ -8,7 +8,6 @@ and drives them again.
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -19,6 +18,7 @@ import numpy as np
 
 from umbmark.benchmark.returns import sem_verdict
 from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import join_names
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.registry import DEFAULT, SQUARE
@@ -44,7 +44,7 @@ DEMO_FILES = {
 
 
 @dataclass(frozen=True, repr=False)
-class DemoReport:
+class DemoReport(JsonText):
     """The demo's robot, its test before and after calibration, and the calibration.
 
     Attributes
@@ -107,10 +107,6 @@ class DemoReport:
             "files": {k: str(v) for k, v in self.files.items()},
             "warnings": list(est.warnings),
         }
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def figure(self) -> Figure:
         """Before and after, side by side (the view of Fig. 11)."""

@@ -6,13 +6,13 @@
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError, python_api
+from umbmark.core.jsontext import JsonText
 from umbmark.outputs.files import OutputPlan
 from umbmark.store.history import DEFINITIONS, CalibrationRecord, History, RobotRecord
 
@@ -27,7 +27,7 @@ __all__ = ["HistoryReport", "history"]
 
 
 @dataclass(frozen=True)
-class HistoryReport:
+class HistoryReport(JsonText):
     """The robots of a history file, or one robot's calibrations.
 
     Attributes
@@ -72,10 +72,6 @@ class HistoryReport:
         if self.notes:
             out["notes"] = list(self.notes)
         return out
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def figure(self) -> Figure:
         """The robot's E_d, E_b (composed with the active parameters, and as each pass

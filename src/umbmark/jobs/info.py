@@ -10,13 +10,13 @@ duration and wheel parameters. A runs table has nothing to look into and is refu
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import Recording
 from umbmark.runs.load import FORMATS, detect_format
@@ -114,7 +114,7 @@ class LoggedInfo:
 
 
 @dataclass(frozen=True, repr=False)
-class InfoReport:
+class InfoReport(JsonText):
     """What is in a source.
 
     Attributes
@@ -202,10 +202,6 @@ class InfoReport:
             out["notes"] = list(self.notes)
             out["warnings"] = list(self.warnings)
         return out
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
 
 def info(

@@ -65,7 +65,6 @@ is the same on every side and the largest square wins.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -73,6 +72,7 @@ from pathlib import Path
 from typing import Any, Literal, TypeAlias
 
 from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import info, split_messages
 from umbmark.jobs.inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
 from umbmark.sources.text import finite, load_json
@@ -184,7 +184,7 @@ def read_previous_scatter(path: str | Path) -> PreviousScatter:
 
 
 @dataclass(frozen=True)
-class PlanReport:
+class PlanReport(JsonText):
     """A UMBmark test plan and the accuracy it gives.
 
     Attributes
@@ -275,10 +275,6 @@ class PlanReport:
             "notes": list(self.notes),
             "warnings": list(self.warnings),
         }
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,6 @@ replay another (a circle, another day).
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -20,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError, python_api
+from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import split_messages
 from umbmark.jobs.inputs import (
     Calibrated,
@@ -80,7 +80,7 @@ def trajectory_rmse(log: RunLog, params: WheelParams, method: IntegrationMethod 
 
 
 @dataclass(frozen=True, repr=False)
-class ReplayReport:
+class ReplayReport(JsonText):
     """Recorded runs integrated again with one or more parameter sets.
 
     Attributes
@@ -186,10 +186,6 @@ class ReplayReport:
         if "calibrated" in sets:
             out["mean_end_error_calibrated"] = float(self.end_errors["calibrated"].mean())
         return out
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def figure(self) -> Figure:
         """Every run's true path against its odometry paths (what ``--plot`` draws)."""

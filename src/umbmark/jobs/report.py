@@ -12,7 +12,6 @@ parameters (what :func:`umbmark.replay` does), which is a prediction, not a meas
 from __future__ import annotations
 
 import datetime as dt
-import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
+from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import info
 from umbmark.core.version import __version__
 from umbmark.estimators.registry import DEFAULT
@@ -112,7 +112,7 @@ def predict_after(calibration: CalibrationReport) -> PredictedPass | None:
 
 
 @dataclass(frozen=True, repr=False)
-class PassesReport:
+class PassesReport(JsonText):
     """UMBmark passes on one robot, and what the page about them shows.
 
     Attributes
@@ -160,10 +160,6 @@ class PassesReport:
             "predicted_after": None if self.predicted is None else self.predicted.to_dict(),
             "validation": None if self.validation is None else self.validation.to_dict(),
         }
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def html(self) -> str:
         """The self-contained HTML page (what ``umbmark report -o`` writes)."""

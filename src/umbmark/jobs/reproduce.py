@@ -7,7 +7,6 @@ options and return reports that serialize (``reproduce table1 --json``, ``reprod
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Callable
@@ -15,6 +14,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
 from umbmark.jobs.inputs import check_int_option, option_float
 from umbmark.jobs.simulate import SEED_RANGE
 from umbmark.outputs.files import OutputPlan
@@ -33,7 +33,7 @@ MAX_TAPE_THICKNESS = 0.0003
 
 
 @dataclass(frozen=True)
-class Table1Report:
+class Table1Report(JsonText):
     """Table I on virtual robots: one row per experiment, statistics over the seeds."""
 
     rows: tuple[Table1Row, ...]
@@ -43,13 +43,9 @@ class Table1Report:
         """A JSON-ready dictionary (metres): what ``reproduce table1 --json`` prints."""
         return {"rows": [row.to_dict() for row in self.rows]}
 
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
-
 
 @dataclass(frozen=True)
-class Fig4Report:
+class Fig4Report(JsonText):
     """The uni-directional trap: a robot with curved legs tuned on cw runs only."""
 
     result: Fig4Result
@@ -72,10 +68,6 @@ class Fig4Report:
                 for s in self.result.stages
             ],
         }
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def figure(self) -> Figure:
         """The tuned robot's cw and ccw paths (the view of Figs. 4 and 5)."""

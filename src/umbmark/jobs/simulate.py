@@ -9,7 +9,6 @@ run logs and the ROS bag that ``calibrate`` reads.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Callable
@@ -22,6 +21,7 @@ import numpy as np
 from umbmark.core.bounds import ENCODER_RESOLUTION_RANGE, GEAR_RATIO_RANGE, check_range
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, python_api
+from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
 from umbmark.jobs.inputs import (
     MAX_SIDE_LENGTH,
@@ -36,7 +36,7 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 from umbmark.model.runs import Run
 from umbmark.outputs.files import OutputPlan
-from umbmark.sim.engine import SimResult
+from umbmark.sim.result import SimResult
 from umbmark.sim.robot import ControlConfig, NoiseModel, VirtualRobot
 
 if TYPE_CHECKING:
@@ -76,7 +76,7 @@ MIN_COUNTS_PER_PATH = 20
 
 
 @dataclass(frozen=True, repr=False)
-class SimulationReport:
+class SimulationReport(JsonText):
     """What a simulation drove and measured.
 
     Attributes
@@ -162,10 +162,6 @@ class SimulationReport:
         )
         out["seed"] = self.seed
         return out
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     @python_api
     def write(

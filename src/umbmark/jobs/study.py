@@ -20,7 +20,6 @@ does not depend on how many processes share the work.
 from __future__ import annotations
 
 import itertools
-import json
 import math
 import multiprocessing
 import os
@@ -33,6 +32,7 @@ import numpy as np
 
 from umbmark.calibration.compose import Calibration
 from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
 from umbmark.estimators.registry import SQUARE
 from umbmark.jobs.inputs import (
     MAX_SIDE_LENGTH,
@@ -138,7 +138,7 @@ class CellResult:
 
 
 @dataclass(frozen=True, repr=False)
-class StudyReport:
+class StudyReport(JsonText):
     """The study's settings and one :class:`CellResult` per cell and estimator."""
 
     E_d_spread: float
@@ -162,10 +162,6 @@ class StudyReport:
             "seed": self.seed,
             "results": [r.to_dict() for r in self.results],
         }
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
 
 @dataclass(frozen=True)

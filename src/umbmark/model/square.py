@@ -8,9 +8,7 @@ turn also moves the axle centre sideways (Sec. 2.3): the centre circles the
 instantaneous centre of rotation, which sits ``y_icr = (b/2)(E_d - 1)/(E_d + 1)`` to the
 left of it.
 
-:func:`square_end_pose` computes the end pose exactly (no small-angle approximation);
-:func:`linear_end_position` is the paper's first-order result, Eqs. 4.17-4.18 and their
-y counterparts (see ``paper-notes.md``).
+:func:`square_end_pose` computes the end pose exactly (no small-angle approximation).
 """
 
 from __future__ import annotations
@@ -22,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from umbmark.core.conventions import Direction
 
-__all__ = ["icr_offset", "linear_end_position", "square_end_pose", "square_run_end"]
+__all__ = ["icr_offset", "square_end_pose", "square_run_end"]
 
 FloatArray = NDArray[np.float64]
 
@@ -181,28 +179,3 @@ def square_run_end(
         turn_offset=icr_offset(e_d, true_b),
         leg_length=side_length * e_s,
     )
-
-
-def linear_end_position(
-    alpha: ArrayLike, beta: ArrayLike, side_length: float, direction: Direction
-) -> FloatArray:
-    """First-order end position (Eqs. 4.17, 4.18 and their y counterparts).
-
-    ``cw: (-2L(alpha + beta), -2L(alpha + beta))``,
-    ``ccw: (-2L(alpha - beta), +2L(alpha - beta))``.
-
-    Returns
-    -------
-    position : array, shape (..., 2)
-        ``x, y`` [m].
-    """
-    a = np.asarray(alpha, dtype=np.float64)
-    b = np.asarray(beta, dtype=np.float64)
-    two_l = 2.0 * side_length
-    if direction is Direction.CW:
-        x = -two_l * (a + b)
-        y = -two_l * (a + b)
-    else:
-        x = -two_l * (a - b)
-        y = two_l * (a - b)
-    return np.stack(np.broadcast_arrays(x, y), axis=-1)

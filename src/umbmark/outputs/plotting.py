@@ -29,14 +29,16 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from umbmark.sim.engine import Trace
+    from umbmark.sim.result import Trace
 
 __all__ = [
     "DIRECTION_COLOURS",
     "DIRECTION_MARKERS",
     "FIGURE_FORMATS",
+    "cluster_extent",
     "cluster_figure",
     "draw_clusters",
+    "frame_clusters",
     "history_figure",
     "replay_figure",
     "save_figure",
@@ -49,10 +51,6 @@ FIGURE_FORMATS = (".png", ".svg", ".pdf")
 #: The colour and the marker of each direction's runs in every cluster figure.
 DIRECTION_COLOURS = {Direction.CW: "#1f77b4", Direction.CCW: "#d62728"}
 DIRECTION_MARKERS = {Direction.CW: "o", Direction.CCW: "s"}
-_STYLE = {
-    d: {"marker": DIRECTION_MARKERS[d], "color": DIRECTION_COLOURS[d], "label": f"{d.value} runs"}
-    for d in Direction
-}
 _MM = 1000.0
 #: Characters per line of a cluster panel's title (a long source path is wrapped).
 _PANEL_TITLE_WIDTH = 60
@@ -62,36 +60,65 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
-def draw_clusters(ax: Axes, bench: Benchmark, title: str = "", tag: str = "") -> None:
-    """Draw a benchmark's clusters onto ``ax`` (millimetres).
+def draw_clusters(
+    ax: Axes,
+    bench: Benchmark,
+    *,
+    name: str = "",
+    colour: str | None = None,
+    circle_colour: str = "0.4",
+    predicted: bool = False,
+    page: bool = False,
+) -> None:
+    """Draw the Fig. 6 view of a benchmark onto ``ax`` (millimetres): each run's return
+    error as an open marker (cw circles, ccw squares), the centres of gravity as crosses,
+    ``E_max,syst`` as a circle about the origin.
 
-    ``tag`` is added to the legend entries, to tell two benchmarks apart on one axes.
+    Parameters
+    ----------
+    ax : Axes
+    bench : Benchmark
+    name : str
+        Put before the legend entries (``"pass 1 (before): cw runs"``), to tell several
+        benchmarks on one axes apart.
+    colour : str, optional
+        The colour of the runs and crosses; None: each direction's own
+        (:data:`DIRECTION_COLOURS`).
+    circle_colour : str
+        The colour of the ``E_max,syst`` circle.
+    predicted : bool
+        A prediction, not a measured pass: dashed outlines, ``x`` for the centres.
+    page : bool
+        The style of the HTML report's figure (smaller crosses that the legend leaves
+        out, a solid circle) rather than that of ``--plot``.
     """
     from matplotlib.patches import Circle
 
-    suffix = f" ({tag})" if tag else ""
     for cluster in bench.clusters:
-        style = _STYLE[cluster.direction]
+        direction = cluster.direction
+        run_colour = colour or DIRECTION_COLOURS[direction]
         mm = cluster.errors * _MM
         ax.scatter(
             mm[:, 0],
             mm[:, 1],
-            marker=style["marker"],
+            marker=DIRECTION_MARKERS[direction],
             facecolors="none",
-            edgecolors=style["color"],
-            label=f"{style['label']}{suffix}",
+            edgecolors=run_colour,
+            linestyles="dashed" if predicted else "solid",
+            label=_named(name, f"{direction.value} runs"),
             zorder=3,
         )
         cg = cluster.cg * _MM
+        cg_label = f"c.g. {direction.value}: r = {cluster.r_cg * _MM:.1f} mm"
         ax.plot(
             cg[0],
             cg[1],
-            marker="+",
-            markersize=16,
+            marker="x" if predicted else "+",
+            markersize=14 if page else 16,
             markeredgewidth=2.5,
-            color=style["color"],
+            color=run_colour,
             linestyle="none",
-            label=f"c.g. {cluster.direction.value}{suffix}: r = {cluster.r_cg * _MM:.1f} mm",
+            label="_nolegend_" if page else cg_label,
             zorder=4,
         )
     radius = bench.e_max_syst * _MM
@@ -100,20 +127,44 @@ def draw_clusters(ax: Axes, bench: Benchmark, title: str = "", tag: str = "") ->
             (0.0, 0.0),
             radius,
             fill=False,
-            linestyle="--",
-            color="0.4",
-            label=f"E_max,syst{suffix} = {radius:.1f} mm",
+            linestyle=(":" if predicted else "-") if page else "--",
+            linewidth=1.2 if page else None,
+            color=circle_colour,
+            label=_named(name, f"E_max,syst = {radius:.1f} mm"),
         )
     )
-    ax.axhline(0.0, color="0.8", linewidth=0.8, zorder=1)
-    ax.axvline(0.0, color="0.8", linewidth=0.8, zorder=1)
+
+
+def _named(name: str, what: str) -> str:
+    return f"{name}: {what}" if name else what
+
+
+def frame_clusters(ax: Axes, extent: float, title: str = "", *, page: bool = False) -> None:
+    """Square limits of half side ``extent`` [mm] about the origin (see
+    :func:`cluster_extent`), the axes through it, their labels and ``title`` (wrapped,
+    unless ``page``: the style of the HTML report's figure)."""
+    ax.set_xlim(-extent, extent)
+    ax.set_ylim(-extent, extent)
+    grey = "0.85" if page else "0.8"
+    ax.axhline(0.0, color=grey, linewidth=0.8, zorder=1)
+    ax.axvline(0.0, color=grey, linewidth=0.8, zorder=1)
     ax.set_xlabel("return error x [mm]")
     ax.set_ylabel("return error y [mm]")
     ax.set_aspect("equal", adjustable="box")
-    if title:
+    if title and not page:
         import textwrap
 
-        ax.set_title(textwrap.fill(title, _PANEL_TITLE_WIDTH, break_on_hyphens=False))
+        title = textwrap.fill(title, _PANEL_TITLE_WIDTH, break_on_hyphens=False)
+    if title:
+        ax.set_title(title)
+
+
+def cluster_extent(benches: Sequence[Benchmark]) -> float:
+    """Half the side [mm] of a square about the origin holding every return error and
+    ``E_max,syst`` circle of ``benches``."""
+    points = np.vstack([c.errors for bench in benches for c in bench.clusters]) * _MM
+    radii = [bench.e_max_syst * _MM for bench in benches]
+    return max(float(np.abs(points).max()), *radii, 1.0) * 1.15
 
 
 def cluster_figure(
@@ -133,18 +184,11 @@ def cluster_figure(
     fig = Figure(figsize=(6.4 * len(benches), 6.0), layout="constrained")
     axes = fig.subplots(1, len(benches), squeeze=False)[0]
     for ax, (bench, panel_title) in zip(axes, benches, strict=True):
-        draw_clusters(ax, bench, panel_title)
-        _fit_limits(ax, bench)
+        draw_clusters(ax, bench)
+        frame_clusters(ax, cluster_extent([bench]), panel_title)
         ax.legend(loc="best", fontsize="small")
     _suptitle(fig, title)
     return fig
-
-
-def _fit_limits(ax: Axes, bench: Benchmark) -> None:
-    points = np.vstack([c.errors for c in bench.clusters]) * _MM
-    extent = max(float(np.abs(points).max()), bench.e_max_syst * _MM, 1.0) * 1.15
-    ax.set_xlim(-extent, extent)
-    ax.set_ylim(-extent, extent)
 
 
 def trajectory_figure(
@@ -155,7 +199,7 @@ def trajectory_figure(
     Parameters
     ----------
     paths : sequence of (Trace, str)
-        A one-run trace (see :class:`umbmark.sim.engine.Trace`) and its panel title.
+        A one-run trace (see :class:`umbmark.sim.result.Trace`) and its panel title.
     side_length : float, optional
         Draw the nominal square of this side [m] for comparison.
     """

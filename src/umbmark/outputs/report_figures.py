@@ -18,10 +18,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from umbmark.benchmark.returns import Benchmark
-from umbmark.outputs.plotting import DIRECTION_COLOURS, DIRECTION_MARKERS
+from umbmark.outputs.plotting import cluster_extent, draw_clusters, frame_clusters
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -37,7 +35,6 @@ __all__ = [
     "passes_figure",
 ]
 
-_MM = 1000.0
 #: Colour of each pass in order (pass 1, 2, ...), repeated beyond.
 PASS_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2")
 #: Colour of the predicted after (replayed wheel data).
@@ -73,78 +70,27 @@ class ClusterSet:
     predicted: bool = False
     by_direction: bool = False
 
-    def label(self, what: str) -> str:
-        """A legend entry of this set: ``what``, after the set's name if it has one."""
-        return f"{self.name}: {what}" if self.name else what
-
-
-def _draw(ax: Axes, item: ClusterSet) -> None:
-    from matplotlib.patches import Circle
-
-    bench = item.benchmark
-    style = "--" if item.predicted else "-"
-    for cluster in bench.clusters:
-        colour = DIRECTION_COLOURS[cluster.direction] if item.by_direction else item.colour
-        mm = cluster.errors * _MM
-        ax.scatter(
-            mm[:, 0],
-            mm[:, 1],
-            marker=DIRECTION_MARKERS[cluster.direction],
-            facecolors="none",
-            edgecolors=colour,
-            linestyles="dashed" if item.predicted else "solid",
-            label=item.label(f"{cluster.direction.value} runs"),
-            zorder=3,
-        )
-        cg = cluster.cg * _MM
-        ax.plot(
-            cg[0],
-            cg[1],
-            marker="x" if item.predicted else "+",
-            markersize=14,
-            markeredgewidth=2.5,
-            color=colour,
-            linestyle="none",
-            zorder=4,
-        )
-    radius = bench.e_max_syst * _MM
-    ax.add_patch(
-        Circle(
-            (0.0, 0.0),
-            radius,
-            fill=False,
-            linestyle=":" if item.predicted else style,
-            linewidth=1.2,
-            color=item.colour,
-            label=item.label(f"E_max,syst = {radius:.1f} mm"),
-        )
-    )
-
 
 #: A second panel zooms on the later sets when they fit this many times over into the first.
 ZOOM_RATIO = 4.0
 
 
 def _extent(sets: Sequence[ClusterSet]) -> float:
-    """Half the side [mm] of a square about the origin holding every point and circle."""
-    points = np.vstack([c.errors for item in sets for c in item.benchmark.clusters]) * _MM
-    radii = [item.benchmark.e_max_syst * _MM for item in sets]
-    return max(float(np.abs(points).max()), *radii, 1.0) * 1.15
+    return cluster_extent([item.benchmark for item in sets])
 
 
 def _axes(ax: Axes, sets: Sequence[ClusterSet], title: str) -> None:
     for item in sets:
-        _draw(ax, item)
-    extent = _extent(sets)
-    ax.set_xlim(-extent, extent)
-    ax.set_ylim(-extent, extent)
-    ax.axhline(0.0, color="0.85", linewidth=0.8, zorder=1)
-    ax.axvline(0.0, color="0.85", linewidth=0.8, zorder=1)
-    ax.set_xlabel("return error x [mm]")
-    ax.set_ylabel("return error y [mm]")
-    ax.set_aspect("equal", adjustable="box")
-    if title:
-        ax.set_title(title)
+        draw_clusters(
+            ax,
+            item.benchmark,
+            name=item.name,
+            colour=None if item.by_direction else item.colour,
+            circle_colour=item.colour,
+            predicted=item.predicted,
+            page=True,
+        )
+    frame_clusters(ax, _extent(sets), title, page=True)
 
 
 def passes_figure(sets: Sequence[ClusterSet], title: str = "") -> Figure:

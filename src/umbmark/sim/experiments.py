@@ -13,7 +13,9 @@ import numpy as np
 from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.calibration.compose import ActiveParams, Calibration
 from umbmark.core.conventions import Direction
-from umbmark.estimators import Method, SquareTest, estimate_errors
+from umbmark.estimators.base import SquareTest
+from umbmark.estimators.dispatch import estimate_errors
+from umbmark.estimators.registry import PAPER, Method
 from umbmark.model.runs import Run
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
@@ -63,7 +65,7 @@ def umbmark_trials(
 
 
 def calibrate_robot(
-    trial: Trial, side_length: float, method: Method = "paper"
+    trial: Trial, side_length: float, method: Method = PAPER.name
 ) -> tuple[Calibration, VirtualRobot]:
     """Calibrate a virtual robot from its test, as a user would a real one.
 

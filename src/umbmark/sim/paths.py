@@ -17,7 +17,6 @@ from numpy.typing import NDArray
 __all__ = [
     "Path",
     "Segment",
-    "bidirectional_square",
     "spot_turn",
     "square",
     "straight_line",
@@ -86,11 +85,6 @@ def square(side_length: float) -> Path:
     leg = Segment("straight", side_length)
     turn = Segment("turn", 0.5 * math.pi)
     return Path(f"square {side_length:g} m", (leg, turn) * 4)
-
-
-def bidirectional_square(side_length: float) -> Path:
-    """Alias of :func:`square`: UMBmark drives it in both directions."""
-    return square(side_length)
 
 
 def straight_line(length: float) -> Path:

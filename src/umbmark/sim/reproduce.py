@@ -29,9 +29,10 @@ import numpy as np
 
 from umbmark.core.conventions import Direction
 from umbmark.model.systematic import E_b_from_alpha
-from umbmark.sim.engine import Trace, simulate
+from umbmark.sim.engine import simulate
 from umbmark.sim.experiments import Trial, calibrate_robot, umbmark_trials
 from umbmark.sim.paths import square
+from umbmark.sim.result import Trace
 from umbmark.sim.robot import LABMATE, ControlConfig, NoiseModel, VirtualRobot
 
 __all__ = [

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.model.recording import PoseSeries, WheelSeries
-from umbmark.sim.engine import SimResult
+from umbmark.sim.result import SimResult
 
 __all__ = ["REST", "START_IN_WORLD", "SimulatedSession", "continuous_session"]
 

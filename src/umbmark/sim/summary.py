@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from umbmark.benchmark.returns import umbmark_benchmark
-from umbmark.sim.engine import SimResult
+from umbmark.sim.result import SimResult
 from umbmark.sim.robot import VirtualRobot
 
 __all__ = ["describe_simulation", "odometry_errors", "true_errors"]

@@ -1,8 +1,8 @@
 """The simulator's model as a plain per-sample Python loop, one run at a time.
 
 Slow on purpose: it is the reference that :func:`umbmark.sim.engine.simulate` is checked
-against (``tests/test_simulator.py``) and timed against (``benchmarks/bench_simulator.py``).
-Noise-free robots only.
+against (``tests/test_simulator.py``) and timed against (``benchmarks/bench_simulator.py``,
+which puts ``tests/`` on its path). Noise-free robots only.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from umbmark.core.conventions import Direction
 from umbmark.sim.paths import Path
 from umbmark.sim.robot import ControlConfig, VirtualRobot
 
-__all__ = ["integrate_loop", "simulate_run_loop"]
+__all__ = ["simulate_run_loop"]
 
 
 def _chord(ds: float, dth: float, theta: float, method: str) -> tuple[float, float]:
@@ -23,21 +23,6 @@ def _chord(ds: float, dth: float, theta: float, method: str) -> tuple[float, flo
     if method == "midpoint":
         return ds, theta + 0.5 * dth
     return ds, theta + dth
-
-
-def integrate_loop(
-    d_left: list[float], d_right: list[float], wheelbase: float, method: str = "arc"
-) -> tuple[float, float, float]:
-    """Integrate wheel travel [m] sample by sample; returns the end pose (x, y, theta)."""
-    x = y = th = 0.0
-    for dl, dr in zip(d_left, d_right, strict=True):
-        ds = 0.5 * (dr + dl)
-        dth = (dr - dl) / wheelbase
-        chord, heading = _chord(ds, dth, th, method)
-        x += chord * math.cos(heading)
-        y += chord * math.sin(heading)
-        th += dth
-    return x, y, th
 
 
 def simulate_run_loop(
