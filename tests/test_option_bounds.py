@@ -16,9 +16,10 @@ import pytest
 
 import umbmark
 from umbmark.jobs import info as info_job
-from umbmark.jobs import inputs, reproduce, simulate, study
+from umbmark.jobs import reproduce, simulate, study
 from umbmark.jobs.calibrate import calibrate
 from umbmark.jobs.validate import validate
+from umbmark.runs import options as read_options
 
 from helpers import api_error, cli_error, run_cli
 
@@ -90,7 +91,9 @@ def test_reading_options_are_refused_beyond_their_bound(
 
 
 def test_reading_options_at_their_bound_are_taken(logs: Path) -> None:
-    report = umbmark.calibrate(logs, max_gap=inputs.LONGEST_GAP, min_rest=inputs.LONGEST_REST)
+    report = umbmark.calibrate(
+        logs, max_gap=read_options.LONGEST_GAP, min_rest=read_options.LONGEST_REST
+    )
     assert len(report.runs) == 4
 
 
@@ -169,8 +172,8 @@ def test_help_states_the_bounds() -> None:
     assert f"1 to {reproduce.MAX_SEEDS}" in text
     assert f"at most {reproduce.MAX_TAPE_THICKNESS * 1000:g})" in text
     text = _help("calibrate")
-    assert f"at most {inputs.LONGEST_GAP:g}." in text
-    assert f"at most {inputs.LONGEST_REST:g}." in text
+    assert f"at most {read_options.LONGEST_GAP:g}." in text
+    assert f"at most {read_options.LONGEST_REST:g}." in text
 
 
 def test_info_max_messages_range_is_the_librarys() -> None:

@@ -120,7 +120,9 @@ class DriveLimits:
         for name, (low, high) in bounds.items():
             value = getattr(self, name)
             if not (low <= value <= high):
-                raise InputError(f"{name} {value!r} is outside {low:g} to {high:g}")
+                raise InputError(
+                    f"--{name.replace('_', '-')} {value!r} is outside {low:g} to {high:g}"
+                )
 
     def expected_time(self, side: float) -> float:
         """A run's time without stops or settling [s]: four legs and four turns, each an

@@ -8,6 +8,7 @@ from typing import Any
 import click
 
 from umbmark.cli.options import OUTPUTS, TEST, Command, apply, option
+from umbmark.core.errors import InputError
 
 __all__ = ["selfcal"]
 
@@ -25,14 +26,14 @@ DRIVING = "Driving"
                help="A ROS 1 robot (rospy; ROS_MASTER_URI)."),
         option("--ros2", "backend", flag_value="ros2", section=ROBOT,
                help="A ROS 2 robot (rclpy; never run on our machines: see docs/selfcal.md)."),
-        option("--sim-E-d", "E_d", section=ROBOT, type=float, default=1.004, show_default=True,
-               help="The virtual robot's D_R / D_L."),
-        option("--sim-E-b", "E_b", section=ROBOT, type=float, default=0.97, show_default=True,
-               help="The virtual robot's true wheelbase over the nominal one."),
-        option("--sim-E-s", "E_s", section=ROBOT, type=float, default=1.0, show_default=True,
-               help="The virtual robot's mean wheel diameter over the nominal one."),
-        option("--sim-slip", "slip", section=ROBOT, type=float, default=0.0004,
-               show_default=True, help="The virtual robot's wheel slip [m^0.5]."),
+        option("--E-d", "E_d", section=ROBOT, type=float, default=1.004, show_default=True,
+               help="With --sim: the virtual robot's D_R / D_L."),
+        option("--E-b", "E_b", section=ROBOT, type=float, default=0.97, show_default=True,
+               help="With --sim: the virtual robot's true wheelbase over the nominal one."),
+        option("--E-s", "E_s", section=ROBOT, type=float, default=1.0, show_default=True,
+               help="With --sim: the virtual robot's mean wheel diameter over the nominal one."),
+        option("--slip", section=ROBOT, type=float, default=0.0004,
+               show_default=True, help="With --sim: the virtual robot's wheel slip [m^0.5]."),
         option("--seed", section=ROBOT, type=click.IntRange(0, 2**63 - 1), default=1,
                show_default=True, help="Seed of the virtual robot's slip and sensor noise."),
         option("--side-length", "-L", section=TEST, type=float, default=4.0, show_default=True,
@@ -130,7 +131,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     )
     robot = connect(backend, ros=ros, **sim)  # type: ignore[arg-type]
     measure_with = options.pop("measure")
-    ask = click.prompt if measure_with == "tape" else None
+    ask = _ask_person if measure_with == "tape" else None
     try:
         with status_line("self-calibration") as show:
 
@@ -151,3 +152,14 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         click.echo(report.to_json(), nl=False)
         return
     render_selfcal(report, console())
+
+
+def _ask_person(prompt: str) -> str:
+    """A tape measurement's answer, typed at the terminal (or piped in, one per line)."""
+    try:
+        return input(prompt)
+    except EOFError:
+        raise InputError(
+            "--measure tape: the input ended before the distances were given "
+            "(a person types them at each stop)"
+        ) from None

@@ -40,9 +40,9 @@ def connect(
 
         for name, value in (("E_d", E_d), ("E_b", E_b), ("E_s", E_s)):
             if not (0.5 <= value <= 2.0):
-                raise InputError(f"--sim-{name.replace('_', '-')} {value!r}: give 0.5 to 2")
+                raise InputError(f"--{name.replace('_', '-')} {value!r}: give 0.5 to 2")
         if not (0.0 <= slip <= 0.01):
-            raise InputError(f"--sim-slip {slip!r} m^0.5: give 0 to 0.01")
+            raise InputError(f"--slip {slip!r} m^0.5: give 0 to 0.01")
         return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed)
     if backend == "ros1":
         from umbmark.robot.ros1 import Ros1Robot
