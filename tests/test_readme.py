@@ -415,7 +415,7 @@ def _cli_options() -> set[str]:
 
 #: Options of other programs that the pages name (pip, venv, evo, ros2, the project's tools).
 OTHER_PROGRAMS = {
-    "--upgrade", "--clear", "--ref", "--align_origin", "--once", "--list", "--filter",
+    "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--ref", "--align_origin", "--once", "--list", "--filter",
     "--jobs", "--keep", "--data", "--strict", "--auto",
 }  # fmt: skip
 
