@@ -58,10 +58,10 @@ _EXPORTS = {
     "InfoReport": "umbmark.jobs.info",
     "SimulationReport": "umbmark.jobs.simulate",
     "DemoReport": "umbmark.jobs.demo",
-    "SourceOptions": "umbmark.jobs.inputs",
+    "SourceOptions": "umbmark.runs.options",
     "InputError": "umbmark.core.errors",
     # building blocks
-    "ActiveParams": "umbmark.calibration.compose",
+    "ActiveParams": "umbmark.model.active",
     "Benchmark": "umbmark.benchmark.returns",
     "Calibration": "umbmark.calibration.compose",
     "Direction": "umbmark.core.conventions",
@@ -122,7 +122,7 @@ __all__ = [
 
 if TYPE_CHECKING:
     from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
-    from umbmark.calibration.compose import ActiveParams, Calibration
+    from umbmark.calibration.compose import Calibration
     from umbmark.core.conventions import Direction
     from umbmark.core.errors import InputError
     from umbmark.estimators.base import ErrorEstimate, SquareTest
@@ -132,7 +132,6 @@ if TYPE_CHECKING:
     from umbmark.jobs.example import example, example_sessions
     from umbmark.jobs.history import HistoryReport, history
     from umbmark.jobs.info import InfoReport, info
-    from umbmark.jobs.inputs import SourceOptions
     from umbmark.jobs.plan import PlanReport, plan
     from umbmark.jobs.replay import ReplayReport, replay
     from umbmark.jobs.report import PassesReport, report
@@ -140,8 +139,10 @@ if TYPE_CHECKING:
     from umbmark.jobs.simulate import SimulationReport, simulate
     from umbmark.jobs.study import StudyReport, study
     from umbmark.jobs.validate import ValidationReport, validate
+    from umbmark.model.active import ActiveParams
     from umbmark.model.kinematics import WheelParams, integrate_odometry
     from umbmark.model.runs import EndPose, Run
+    from umbmark.runs.options import SourceOptions
     from umbmark.sources.runs_table.reader import read_runs_table
     from umbmark.store.history import History
 

@@ -18,26 +18,22 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from umbmark.benchmark.returns import Benchmark, Cluster, sem_verdict
+from umbmark.calibration.active import read_runs
 from umbmark.calibration.compose import Calibration
 from umbmark.core.atomic import atomic_write_text
+from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError, python_api
 from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, LOGGED, NAMES, find, names
 from umbmark.jobs.estimate import calibrate_runs, sessions_disagree
-from umbmark.jobs.inputs import (
-    ReadOptions,
-    RunSource,
-    SourceOptions,
-    check_square_geometry,
-    read_runs,
-    source_name,
-)
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.association import Association
+from umbmark.runs.options import ReadOptions, SourceOptions
+from umbmark.runs.read import RunSource, source_name
 from umbmark.sources.params.reader import CalibratedParams, ControllerParams
 
 if TYPE_CHECKING:
@@ -564,7 +560,7 @@ def calibrate(
     command : str, optional
         The command line (or call) to state in the ``report`` page's provenance.
     **options
-        How to read the sources: see :class:`umbmark.jobs.inputs.ReadOptions`
+        How to read the sources: see :class:`umbmark.runs.options.ReadOptions`
         (``unit="mm"``, ``current_params="controllers.yaml"``, ``truth_topic=...``).
 
     Returns
@@ -601,7 +597,7 @@ def calibrate(
           plot=plot, tum=tum, report=report)  # fmt: skip
     entry = find(method)
     if side_length is None and entry is not None and entry.side_required:
-        from umbmark.jobs.inputs import is_table
+        from umbmark.runs.read import is_table
 
         if any(is_table(s, read_options) for s in sources):
             raise InputError("--side-length is required: the side of the square path, in metres")

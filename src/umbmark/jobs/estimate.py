@@ -1,9 +1,10 @@
 """The estimation step of a calibration: runs as read, one estimator, a report.
 
 :func:`calibrate_runs` runs the estimator a method names on runs already read
-(:func:`umbmark.jobs.inputs.read_runs`), through :func:`umbmark.estimators.dispatch.estimate_runs`,
-and returns the :class:`~umbmark.jobs.calibrate.CalibrationReport`; :func:`umbmark.calibrate`
-and the held-out validation (:func:`umbmark.validate`) share it.
+(:func:`umbmark.calibration.active.read_runs`), through
+:func:`umbmark.estimators.dispatch.estimate_runs`, and returns the
+:class:`~umbmark.jobs.calibrate.CalibrationReport`; :func:`umbmark.calibrate` and the
+held-out validation (:func:`umbmark.validate`) share it.
 """
 
 from __future__ import annotations
@@ -11,10 +12,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from umbmark.calibration.active import check_calibration
 from umbmark.calibration.compose import Calibration
 from umbmark.core.messages import split_messages
 from umbmark.estimators.dispatch import estimate_runs
-from umbmark.jobs.inputs import Runs, check_calibration
+from umbmark.runs.read import Runs
 
 if TYPE_CHECKING:
     from umbmark.jobs.calibrate import CalibrationReport

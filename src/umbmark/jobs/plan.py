@@ -71,10 +71,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, TypeAlias
 
+from umbmark.core.bounds import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import info, split_messages
-from umbmark.jobs.inputs import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
 from umbmark.sources.text import finite, load_json
 
 __all__ = [

@@ -25,9 +25,10 @@ from umbmark.core.messages import info
 from umbmark.core.version import __version__
 from umbmark.estimators.registry import DEFAULT
 from umbmark.jobs.calibrate import CalibrationReport, calibrate
-from umbmark.jobs.inputs import RunSource, SourceOptions, source_name
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
+from umbmark.runs.options import SourceOptions
+from umbmark.runs.read import RunSource, source_name
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
@@ -251,7 +252,7 @@ def report(
     command : str, optional
         The command line or call to state in the provenance.
     **options
-        How to read the sources (:class:`umbmark.jobs.inputs.ReadOptions`). The
+        How to read the sources (:class:`umbmark.runs.options.ReadOptions`). The
         ``current_*`` parameters say what was active during pass 1; from pass 2 on, the
         previous pass's new ``c_L``, ``c_R`` and ``wheel_separation_multiplier`` are taken
         as active (they override ``current_*``; a note says so).

@@ -26,21 +26,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from umbmark.calibration.active import read_runs
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info, join_names, split_messages
 from umbmark.estimators.motions import KINDS, MotionCoverage, MotionKind, motion_coverage
 from umbmark.estimators.registry import NAMES, names
-from umbmark.jobs.inputs import (
-    ReadOptions,
-    Runs,
-    SourceOptions,
-    is_table,
-    pool_runs,
-    read_runs,
-    source_name,
-)
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run, end_errors
+from umbmark.runs.options import ReadOptions, SourceOptions
+from umbmark.runs.read import Runs, is_table, pool_runs, source_name
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
@@ -222,7 +216,7 @@ def validate(
     progress : callable, optional
         Called with the fraction done.
     **options
-        How to read the sources (:class:`umbmark.jobs.inputs.ReadOptions`).
+        How to read the sources (:class:`umbmark.runs.options.ReadOptions`).
 
     Raises
     ------

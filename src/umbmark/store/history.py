@@ -34,7 +34,7 @@ from umbmark.store.records import CalibrationRecord, RobotRecord
 if TYPE_CHECKING:
     from umbmark.calibration.verdict import Verdict
     from umbmark.jobs.calibrate import CalibrationReport
-    from umbmark.jobs.inputs import SourceOptions
+    from umbmark.runs.options import SourceOptions
 
 __all__ = [
     "DEFINITIONS",

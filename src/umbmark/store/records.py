@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from umbmark.calibration.compose import ActiveParams
+    from umbmark.model.active import ActiveParams
 
 __all__ = ["CalibrationRecord", "RobotRecord"]
 
@@ -115,7 +115,7 @@ class CalibrationRecord:
     @property
     def active_params(self) -> ActiveParams:
         """The parameters active during the pass."""
-        from umbmark.calibration.compose import ActiveParams
+        from umbmark.model.active import ActiveParams
 
         a = self.active
         return ActiveParams(
@@ -130,7 +130,7 @@ class CalibrationRecord:
     def robot_E_d(self) -> float:
         """What the robot is: its ``D_R / D_L``, the pass's ``E_d`` composed with the active
         ``c_L``, ``c_R`` as calibrate composes them (:meth:`ActiveParams.robot_errors
-        <umbmark.calibration.compose.ActiveParams.robot_errors>`:
+        <umbmark.model.active.ActiveParams.robot_errors>`:
         ``E_d c_R,active / c_L,active``)."""
         return self.active_params.robot_errors(self.E_d, self.E_b)[0]
 
