@@ -24,7 +24,6 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeAlias
 
 from umbmark.calibration.compose import Calibration
 from umbmark.core.bounds import (
@@ -40,7 +39,6 @@ from umbmark.estimators.plausibility import check_columns, unit_hints
 from umbmark.runs.options import SAME_ROBOT_TOLERANCE, ReadOptions
 from umbmark.runs.read import (
     Chosen,
-    PathLike,
     Runs,
     RunSource,
     parameter_file,
@@ -50,63 +48,18 @@ from umbmark.runs.read import (
     source_format,
 )
 from umbmark.sources.params.reader import (
-    CalibratedParams,
     ControllerParams,
     is_result_file,
-    read_calibrated_params,
     result_nominal,
 )
 from umbmark.sources.runs_table.reader import RecordedActive
 
-if TYPE_CHECKING:
-    from umbmark.jobs.calibrate import CalibrationReport
-
 __all__ = [
-    "Calibrated",
-    "calibrated_name",
-    "calibrated_nominal",
-    "calibrated_params",
     "check_calibration",
     "check_same_robot",
     "choose_active",
     "read_runs",
 ]
-
-
-#: A calibration to replay or simulate with: a result file, or what it holds.
-Calibrated: TypeAlias = "PathLike | CalibratedParams | CalibrationReport"
-
-
-def calibrated_params(params: Calibrated) -> CalibratedParams:
-    """The new parameters of a calibration: read from a result file, or taken from a report."""
-    from umbmark.jobs.calibrate import CalibrationReport
-
-    if isinstance(params, CalibratedParams):
-        return params
-    if isinstance(params, CalibrationReport):
-        return params.new_params()
-    return read_calibrated_params(Path(params))
-
-
-def calibrated_nominal(params: Calibrated) -> tuple[float | None, float | None]:
-    """The nominal wheelbase and wheel diameter [m] a calibration was computed for."""
-    from umbmark.jobs.calibrate import CalibrationReport
-
-    if isinstance(params, CalibratedParams):
-        return params.configured_wheelbase, params.wheel_diameter
-    if isinstance(params, CalibrationReport):
-        active = params.calibration.active
-        return active.wheelbase, active.wheel_diameter
-    return result_nominal(Path(params))
-
-
-def calibrated_name(params: Calibrated) -> str:
-    """How a calibration is named in messages."""
-    if isinstance(params, CalibratedParams):
-        return params.source or "the calibration"
-    if isinstance(params, str | os.PathLike):
-        return os.fspath(params)
-    return "the calibration"
 
 
 def check_calibration(

@@ -18,13 +18,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from umbmark.calibration.active import (
+from umbmark.calibration.active import check_same_robot, read_runs
+from umbmark.calibration.report import (
     Calibrated,
     calibrated_name,
     calibrated_nominal,
     calibrated_params,
-    check_same_robot,
-    read_runs,
 )
 from umbmark.core.errors import InputError, python_api
 from umbmark.core.jsontext import JsonText

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from umbmark.calibration.active import Calibrated, calibrated_params
+from umbmark.calibration.report import Calibrated, calibrated_params
 from umbmark.core.bounds import (
     ENCODER_RESOLUTION_RANGE,
     GEAR_RATIO_RANGE,
