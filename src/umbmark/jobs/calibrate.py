@@ -11,17 +11,17 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from umbmark.calibration.active import read_runs
+from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
 from umbmark.calibration.report import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError, python_api
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, NAMES, find, names
-from umbmark.jobs.estimate import calibrate_runs, sessions_disagree
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import RunSource, source_name
@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from typing_extensions import Unpack
 
     from umbmark.outputs.tum import TumTime
+    from umbmark.store.records import NewCalibration
 
 __all__ = ["CalibrationReport", "calibrate"]
 
@@ -39,6 +40,11 @@ __all__ = ["CalibrationReport", "calibrate"]
 class CalibrationReport(CalibrationResult):
     """Everything a calibration found (:class:`~umbmark.calibration.report.CalibrationResult`),
     and the files it writes: the figure, the HTML page and :meth:`write`."""
+
+    @classmethod
+    def of(cls, result: CalibrationResult) -> CalibrationReport:
+        """The report of ``result``."""
+        return cls(**{f.name: getattr(result, f.name) for f in fields(result)})
 
     def figure(self) -> Figure:
         """The Fig. 6 view of the return errors (what ``--plot`` draws).
@@ -290,7 +296,7 @@ def calibrate(
         chosen, note, nominal_best = auto_method(
             sources, read, side_length, wheelbase, options, force=force
         )
-    result = calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
+    result = CalibrationReport.of(calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset))
     result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
     if note is not None:
         result = replace(result, notes=(*result.notes, note))
@@ -298,7 +304,8 @@ def calibrate(
         disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
         result = replace(result, input_warnings=(*result.input_warnings, *disagree))
     if store is not None and robot is not None:
-        store.check_identity(robot, result)
+        active = result.calibration.active
+        store.check_identity(robot, active.wheelbase, active.wheel_diameter)
         if composed is not None:
             result = replace(result, notes=(*result.notes, composed))
     files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
@@ -311,7 +318,30 @@ def calibrate(
         **files,
     )  # fmt: skip
     if store is not None and robot is not None:
-        id = store.record(robot, result, [n for n in map(source_name, sources) if n != "runs"])
+        inputs = [n for n in map(source_name, sources) if n != "runs"]
+        id = store.record(robot, _history_entry(result), inputs)
         said = store.recorded_line(robot, id, result.verdict, forced=force)
         result = replace(result, recorded=said)
     return result
+
+
+def _history_entry(result: CalibrationResult) -> NewCalibration:
+    """What the history records of a calibration."""
+    from umbmark.store.records import NewCalibration
+
+    data = result.to_dict()
+    active = result.calibration.active
+    return NewCalibration(
+        time=result.created,
+        method=data["method"],
+        E_d=data["E_d"],
+        E_b=data["E_b"],
+        E_s=data["E_s"],
+        e_max_syst=data["e_max_syst"],
+        standard_errors=data["standard_errors"],
+        active=data["active"],
+        new=data["new"],
+        verdict=data["apply"],
+        wheelbase=active.wheelbase,
+        wheel_diameter=active.wheel_diameter,
+    )

@@ -184,7 +184,7 @@ def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> F
 def _calibrated(training: Runs, candidate: str, nominal: WheelParams) -> WheelParams | None:
     """The held-out source's parameters after calibrating on ``training`` (None: the
     candidate cannot calibrate on it)."""
-    from umbmark.jobs.estimate import calibrate_runs
+    from umbmark.calibration.estimate import calibrate_runs
 
     if candidate == "nominal":
         return nominal

@@ -3,13 +3,55 @@ one calibration of it with what the robot is according to it."""
 
 from __future__ import annotations
 
+import datetime as dt
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from umbmark.model.active import ActiveParams
 
-__all__ = ["CalibrationRecord", "RobotRecord"]
+__all__ = ["CalibrationRecord", "NewCalibration", "RobotRecord"]
+
+
+@dataclass(frozen=True)
+class NewCalibration:
+    """A calibration to record (:meth:`umbmark.store.history.History.record`), as the job
+    that made it says it (``calibrate --json``'s figures and blocks).
+
+    Attributes
+    ----------
+    time : datetime
+        When it was made.
+    method : str
+    E_d, E_b : float
+    E_s : float or None
+    e_max_syst : float or None
+        ``E_max,syst`` [m] of its runs.
+    standard_errors : dict of str to float
+    active : dict of str to object
+        The parameters active during the runs (the ``active`` block).
+    new : dict of str to object
+        The new parameters (the ``new`` block).
+    verdict : dict of str to object
+        Whether to apply it (the ``apply`` block).
+    wheelbase : float
+        Nominal wheelbase [m]: the active one, as configured.
+    wheel_diameter : float or None
+        Nominal wheel diameter [m], when known.
+    """
+
+    time: dt.datetime
+    method: str
+    E_d: float
+    E_b: float
+    E_s: float | None
+    e_max_syst: float | None
+    standard_errors: dict[str, float]
+    active: dict[str, Any]
+    new: dict[str, Any]
+    verdict: dict[str, Any]
+    wheelbase: float
+    wheel_diameter: float | None
 
 
 @dataclass(frozen=True)
