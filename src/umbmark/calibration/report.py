@@ -349,7 +349,13 @@ class CalibrationResult(JsonText):
         """The ros2_control parameter overlay with the new multipliers (what ``--yaml`` writes)."""
         from umbmark.sources.params.writer import ros2_control_overlay
 
-        return ros2_control_overlay(self.calibration, self.provenance(), self.controller.key_path)
+        new = self._new_multipliers()
+        return ros2_control_overlay(new, self.provenance(), self.controller.key_path)
+
+    def _new_multipliers(self) -> tuple[float, float, float]:
+        """The new ``c_L``, ``c_R`` and ``wheel_separation_multiplier``."""
+        cal = self.calibration
+        return cal.new_c_left, cal.new_c_right, cal.new_separation_multiplier
 
     def ros1_yaml(self) -> str:
         """ROS 1 ``diff_drive_controller`` parameters (what ``--ros1-yaml`` writes)."""
@@ -364,7 +370,7 @@ class CalibrationResult(JsonText):
                 "the left and right ones, which here include it."
             )
         keys = controller.key_path if not controller.ros2 else (controller.controller,)
-        return ros1_params(self.calibration, comments, keys)
+        return ros1_params(self._new_multipliers(), comments, keys)
 
 
 #: A calibration to replay or simulate with: a result file, or what it holds.
