@@ -42,11 +42,11 @@ _EXPORTS = {
     "HistoryReport": "umbmark.jobs.history",
     "History": "umbmark.store.history",
     "plan": "umbmark.jobs.plan",
-    "PlanReport": "umbmark.jobs.plan",
+    "PlanReport": "umbmark.calibration.plan",
     "validate": "umbmark.jobs.validate",
     "study": "umbmark.jobs.study",
     "StudyReport": "umbmark.jobs.study",
-    "ValidationReport": "umbmark.jobs.validate",
+    "ValidationReport": "umbmark.calibration.validation",
     "simulate": "umbmark.jobs.simulate",
     "demo": "umbmark.jobs.demo",
     "reproduce_table1": "umbmark.jobs.reproduce",
@@ -67,7 +67,7 @@ _EXPORTS = {
     "connect": "umbmark.robot.connect",
     "InputError": "umbmark.core.errors",
     # building blocks
-    "ActiveParams": "umbmark.calibration.compose",
+    "ActiveParams": "umbmark.model.active",
     "Benchmark": "umbmark.benchmark.returns",
     "Calibration": "umbmark.calibration.compose",
     "Direction": "umbmark.core.conventions",
@@ -133,7 +133,9 @@ __all__ = [
 
 if TYPE_CHECKING:
     from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
-    from umbmark.calibration.compose import ActiveParams, Calibration
+    from umbmark.calibration.compose import Calibration
+    from umbmark.calibration.plan import PlanReport
+    from umbmark.calibration.validation import ValidationReport
     from umbmark.core.conventions import Direction
     from umbmark.core.errors import InputError
     from umbmark.estimators.base import ErrorEstimate, SquareTest
@@ -143,14 +145,15 @@ if TYPE_CHECKING:
     from umbmark.jobs.example import example, example_sessions
     from umbmark.jobs.history import HistoryReport, history
     from umbmark.jobs.info import InfoReport, info
-    from umbmark.jobs.plan import PlanReport, plan
+    from umbmark.jobs.plan import plan
     from umbmark.jobs.replay import ReplayReport, replay
     from umbmark.jobs.report import PassesReport, report
     from umbmark.jobs.reproduce import reproduce_fig4, reproduce_table1
     from umbmark.jobs.selfcal import SelfCalReport, selfcal
     from umbmark.jobs.simulate import SimulationReport, simulate
     from umbmark.jobs.study import StudyReport, study
-    from umbmark.jobs.validate import ValidationReport, validate
+    from umbmark.jobs.validate import validate
+    from umbmark.model.active import ActiveParams
     from umbmark.model.kinematics import WheelParams, integrate_odometry
     from umbmark.model.runs import EndPose, Run
     from umbmark.robot.base import Robot
