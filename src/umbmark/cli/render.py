@@ -388,10 +388,10 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
             f"({before / after:.1f}-fold)[/bold]"
         )
     elif before is not None and after is None:
-        applied = any(p.applied is not None and p.applied.active for p in report.passes)
+        was_applied = any(p.applied is not None and p.applied.active for p in report.passes)
         why = (
             "the correction was applied but not verified (--no-verify)"
-            if applied
+            if was_applied
             else "nothing was applied, so there is nothing to verify"
         )
         screen.print(f"E_max,syst {before * 1000:.1f} mm; {why}.")
