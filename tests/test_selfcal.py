@@ -342,3 +342,45 @@ def test_one_pass_without_verification_says_so(tmp_path):
     assert len(report.passes) == 1
     assert report.e_max_syst_after is None
     assert json.loads(report.to_json())["e_max_syst_after"] is None
+
+
+def test_range_sensors_that_lose_the_corner_say_which_run_and_what_to_do(tmp_path):
+    """Three single beams see both walls only near the start: the paper's LabMate errors
+    on 4 m squares end the ccw runs about a metre away (its E_max,syst is 1.04 m)."""
+    robot = VirtualRobot(E_d=E_D, E_b=E_B, slip=0.0004, seed=1)
+    with pytest.raises(InputError, match=r"at the end of (cw|ccw) run [1-5]\): the robot stopped"):
+        selfcal(robot, measure_with="ranges", out=tmp_path / "out")
+    _last_command_is_a_stop(robot)
+
+
+def test_range_sensors_calibrate_a_robot_with_moderate_errors(tmp_path):
+    """The paper's sonar calibrator: fixes within its 2 mm and 0.4 deg where the robot
+    returns near its start."""
+    robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=1)
+    report = selfcal(robot, measure_with="ranges", side_length=2.0, out=tmp_path / "out")
+    errors = report.measurement_errors()
+    assert errors is not None
+    assert errors[0] <= 0.003  # m rms
+    assert math.degrees(errors[1]) <= 0.4  # deg rms
+    before, after = report.e_max_syst_before, report.e_max_syst_after
+    assert before is not None
+    assert after is not None
+    assert before / after >= 5.0
+    final = report.final
+    assert final.wheel_separation_multiplier == pytest.approx(0.995, abs=0.001)
+    ratio = final.right_wheel_radius_multiplier / final.left_wheel_radius_multiplier
+    assert ratio == pytest.approx(1.001, abs=0.0002)
+
+
+def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
+    """Motion capture's fixes are in the world frame; the virtual robot's truth there is its
+    true pose: the errors are the capture's noise (0.5 mm, 0.05 deg per reading, five
+    readings averaged), not the distance between two frames."""
+    robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=1)
+    report = selfcal(
+        robot, measure_with="truth", side_length=1.0, runs=2, max_passes=1, out=tmp_path / "o"
+    )
+    errors = report.measurement_errors()
+    assert errors is not None
+    assert errors[0] <= 0.001  # m rms
+    assert math.degrees(errors[1]) <= 0.05  # deg rms

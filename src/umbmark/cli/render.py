@@ -405,7 +405,8 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
     errors = report.measurement_errors()
     if errors is not None:
         screen.print(
-            f"Corner fixes against the virtual robot's truth: {errors[0] * 1000:.2f} mm, "
+            f"Fixes ({report.measurement}) against the virtual robot's truth: "
+            f"{errors[0] * 1000:.2f} mm, "
             f"{math.degrees(errors[1]):.3f} deg rms."
         )
     for p in report.passes:

@@ -266,7 +266,7 @@ def selfcal(
         odom = settle(robot, limits).pose
         first = measure(robot, how)
         home = Home(first.pose, first, odom)
-        home.fixes.append((first, corner_truth(robot)))
+        home.fixes.append((first, corner_truth(robot, how)))
         coarse_check, coarse_applied = None, None
         if coarse and apply != "none" and measure_with in ("lidar", "truth"):
             if progress is not None:
