@@ -384,3 +384,39 @@ def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
     assert errors is not None
     assert errors[0] <= 0.001  # m rms
     assert math.degrees(errors[1]) <= 0.05  # deg rms
+
+
+def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path):
+    """The person is simulated by geometry: at each prompt, the distance from the named mark
+    on the robot to the named wall, square to it, read off the virtual robot's true pose in
+    the corner frame (walls along x = 0, the "y wall", and y = 0, the "x wall") and rounded
+    to the millimetre as a tape is read."""
+    import re
+
+    robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=3)
+    asked: list[str] = []
+
+    def person(prompt: str) -> str:
+        asked.append(prompt)
+        found = re.search(
+            r"mark \d \(x (-?\d+) mm, y (-?\d+) mm on the robot\) to the (x|y) wall", prompt
+        )
+        assert found, prompt
+        mark = Pose2D(float(found[1]) / 1000, float(found[2]) / 1000, 0.0)
+        where = robot.corner_truth()
+        assert where is not None
+        at = where.compose(mark)
+        distance = at.x if found[3] == "y" else at.y
+        return f"{round(distance * 1000)}"
+
+    report = selfcal(
+        robot, measure_with="tape", ask=person, side_length=1.0, runs=2, max_passes=1,
+        verify=False, out=tmp_path / "out",
+    )  # fmt: skip
+    fixes = report.fix_errors
+    assert fixes is not None
+    assert len(asked) == 3 * fixes.shape[0]  # three distances a fix
+    errors = report.measurement_errors()
+    assert errors is not None
+    assert errors[0] <= 0.002  # m rms: millimetre readings
+    assert math.degrees(errors[1]) <= 0.4  # deg rms (marks 0.5 m apart)

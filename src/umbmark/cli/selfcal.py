@@ -21,7 +21,7 @@ DRIVING = "Driving"
 @apply(
     [
         option("--sim", "backend", flag_value="sim", section=ROBOT,
-               help="The virtual robot (its errors: --sim-E-d, --sim-E-b, --sim-E-s)."),
+               help="The virtual robot (its errors: --E-d, --E-b, --E-s, --slip)."),
         option("--ros1", "backend", flag_value="ros1", section=ROBOT,
                help="A ROS 1 robot (rospy; ROS_MASTER_URI)."),
         option("--ros2", "backend", flag_value="ros2", section=ROBOT,
@@ -50,9 +50,9 @@ DRIVING = "Driving"
         option("--max-passes", section=TEST, type=int, default=3, show_default=True,
                help="Most UMBmark passes before the verification (1 to 5)."),
         option("--verify/--no-verify", section=TEST, default=True,
-               help="Leave out the verification pass."),
+               help="Drive a last pass on the final parameters (--no-verify: leave it out)."),
         option("--coarse/--no-coarse", section=TEST, default=True,
-               help="Leave out the coarse turning check."),
+               help="Check first that the robot turns as its odometry believes."),
         option("--speed", section=DRIVING, type=float, default=0.2, show_default=True,
                help="Cruise speed on the legs [m/s] (0.01 to 1)."),
         option("--acceleration", section=DRIVING, type=float, default=0.3, show_default=True,
