@@ -349,7 +349,7 @@ def test_range_sensors_that_lose_the_corner_say_which_run_and_what_to_do(tmp_pat
     on 4 m squares end the ccw runs about a metre away (its E_max,syst is 1.04 m)."""
     robot = VirtualRobot(E_d=E_D, E_b=E_B, slip=0.0004, seed=1)
     with pytest.raises(InputError, match=r"at the end of (cw|ccw) run [1-5]\): the robot stopped"):
-        selfcal(robot, measure_with="ranges", out=tmp_path / "out")
+        selfcal(robot, measure="ranges", out=tmp_path / "out")
     _last_command_is_a_stop(robot)
 
 
@@ -357,7 +357,7 @@ def test_range_sensors_calibrate_a_robot_with_moderate_errors(tmp_path):
     """The paper's sonar calibrator: fixes within its 2 mm and 0.4 deg where the robot
     returns near its start."""
     robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=1)
-    report = selfcal(robot, measure_with="ranges", side_length=2.0, out=tmp_path / "out")
+    report = selfcal(robot, measure="ranges", side_length=2.0, out=tmp_path / "out")
     errors = report.measurement_errors()
     assert errors is not None
     assert errors[0] <= 0.003  # m rms
@@ -378,7 +378,7 @@ def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
     readings averaged), not the distance between two frames."""
     robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=1)
     report = selfcal(
-        robot, measure_with="truth", side_length=1.0, runs=2, max_passes=1, out=tmp_path / "o"
+        robot, measure="truth", side_length=1.0, runs=2, max_passes=1, out=tmp_path / "o"
     )
     errors = report.measurement_errors()
     assert errors is not None
@@ -410,7 +410,7 @@ def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path):
         return f"{round(distance * 1000)}"
 
     report = selfcal(
-        robot, measure_with="tape", ask=person, side_length=1.0, runs=2, max_passes=1,
+        robot, measure="tape", ask=person, side_length=1.0, runs=2, max_passes=1,
         verify=False, out=tmp_path / "out",
     )  # fmt: skip
     fixes = report.fix_errors

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 from umbmark.autocal.corner import CornerFix, CornerNotFoundError, expected_pose
 from umbmark.autocal.drive import DriveLimits, drive_square, move_to, settle
-from umbmark.autocal.measure import Measure, measure
+from umbmark.autocal.measure import Measure, take_fix
 from umbmark.autocal.record import MeasuredRun
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.robot.base import Pose2D, Robot
@@ -53,7 +53,7 @@ class Home:
 
 def _fix_here(robot: Robot, how: Measure, home: Home, gate: tuple[float, float]) -> CornerFix:
     odom = settle(robot).pose
-    fix = measure(robot, how, home.prior(odom), gate)
+    fix = take_fix(robot, how, home.prior(odom), gate)
     home.fix, home.odometry = fix, odom
     home.fixes.append((fix, corner_truth(robot, how)))
     return fix
