@@ -420,3 +420,15 @@ def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path):
     assert errors is not None
     assert errors[0] <= 0.002  # m rms: millimetre readings
     assert math.degrees(errors[1]) <= 0.4  # deg rms (marks 0.5 m apart)
+
+
+def test_progress_names_the_pass_the_run_and_the_leg(tmp_path):
+    seen: list[tuple[str, int, object, str]] = []
+    selfcal(
+        VirtualRobot(E_d=1.001, E_b=0.995, seed=4), side_length=1.0, runs=2, max_passes=1,
+        verify=False, coarse=False, out=tmp_path / "out",
+        progress=lambda label, k, direction, what: seen.append((label, k, direction, what)),
+    )  # fmt: skip
+    assert ("pass 1", 1, Direction.CW, "driving, leg 1") in seen
+    assert ("pass 1", 4, Direction.CCW, "driving, turn 4") in seen
+    assert ("pass 1", 4, Direction.CCW, "measuring") in seen

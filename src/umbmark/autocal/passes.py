@@ -107,7 +107,14 @@ def drive_pass(
         start = go_home(robot, how, home, limits)
         if progress is not None:
             progress(k, direction, "driving")
-        run = drive_square(robot, side, direction, limits)
+        legs = None
+        if progress is not None:
+
+            def legs(_: int, segment: str, k: int = k, direction: Direction = direction) -> None:
+                assert progress is not None
+                progress(k, direction, f"driving, {segment}")
+
+        run = drive_square(robot, side, direction, limits, progress=legs)
         if progress is not None:
             progress(k, direction, "measuring")
         try:
