@@ -197,3 +197,37 @@ def test_optiodom_run_files_are_bounded(tmp_path, monkeypatch):
     message = api_error(optiodom.read_optiodom, tmp_path / "wide")
     assert "row 4" in message
     assert "longer than" in message
+
+
+@pytest.mark.parametrize(
+    ("bad", "said"),
+    [
+        ("25.00,0.1,0.2,0.3,abc,1.0", "left 'abc' is not a number"),
+        ("25.00,0.1,0.2,inf,1.0,1.0", "theta is inf"),
+        ("25.00,0.1,0.2", "has 3 cells, the header has 6"),
+        (",0.1,0.2,0.3,1.0,1.0", "time is empty"),
+        ("25.00,,,,,", "has neither wheel data nor ground truth"),
+    ],
+)
+def test_a_bad_row_deep_in_a_long_run_file_is_named(tmp_path, bad, said):
+    """Rows are read a block at a time; a row with something to say is said with its own
+    number wherever it falls (here after two and a half blocks of good rows)."""
+    folder = tmp_path / "log"
+    _write_log(folder, 0)
+    good = [f"{k * 0.01:.2f},0.1,0.2,0.3,{k},{k}" for k in range(2500)]
+    rows = [*good, bad, *good]
+    (folder / "run-01.csv").write_text("time,x,y,theta,left,right\n" + "\n".join(rows) + "\n")
+    message = api_error(runlog.read_runlog, folder)
+    assert message == f"{folder / 'run-01.csv'}, row 2502: {said}"
+
+
+def test_quoted_cells_read_as_csv_reads_them(tmp_path):
+    folder = tmp_path / "log"
+    _write_log(folder, 0)
+    rows = [f'{k * 0.01:.2f},"{k * 0.001:.3f}",0.0,0.0,{k},"{2 * k}"' for k in range(3000)]
+    (folder / "run-01.csv").write_text("time,x,y,theta,left,right\n" + "\n".join(rows) + "\n")
+    (rec,), _ = runlog.read_runlog(folder)
+    np.testing.assert_array_equal(rec.wheels.time, np.round(np.arange(3000) * 0.01, 2))
+    np.testing.assert_array_equal(rec.wheels.angles[:, 1], 2.0 * np.arange(3000))
+    assert rec.truth is not None
+    np.testing.assert_allclose(rec.truth.poses[:, 0], np.arange(3000) * 0.001)
