@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from umbmark.cli.options import LOGS, OUTPUTS, Command, apply, option
+from umbmark.cli.options import OUTPUTS, Command, apply, option
+from umbmark.options.spec import LOGS
 
 if TYPE_CHECKING:
     from rich.console import Console

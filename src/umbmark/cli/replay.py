@@ -9,13 +9,13 @@ import click
 
 from umbmark.cli.options import (
     OUTPUTS,
-    PARAMETERS,
     Command,
     apply,
     option,
     source_options,
     tum_time_option,
 )
+from umbmark.options.spec import PARAMETERS
 
 __all__ = ["replay"]
 

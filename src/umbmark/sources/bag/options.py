@@ -54,6 +54,7 @@ from typing import Literal
 
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry
+from umbmark.options.spec import READ
 from umbmark.sources.bag.fieldpath import parse_path
 
 __all__ = ["DEFAULT_JOINTS", "BagOptions", "check_options"]
@@ -64,7 +65,8 @@ DEFAULT_JOINTS = ("left_wheel_joint", "right_wheel_joint")
 
 @dataclass(frozen=True)
 class BagOptions:
-    """What to read from a bag; see the module docstring for the details.
+    """What to read from a bag; see the module docstring for the details. The defaults
+    are those of the reading options (:data:`umbmark.options.spec.READ`).
 
     Attributes
     ----------
@@ -116,7 +118,7 @@ class BagOptions:
         (both or neither).
     """
 
-    wheel_topic: str = "/joint_states"
+    wheel_topic: str = READ["wheel_topic"].default
     left_joint: str | tuple[str, ...] | None = None
     right_joint: str | tuple[str, ...] | None = None
     left_ticks_topic: str | None = None
@@ -125,7 +127,7 @@ class BagOptions:
     truth_topic: str | None = None
     tf_parent: str | None = None
     tf_child: str | None = None
-    time_source: Literal["header", "bag"] = "header"
+    time_source: Literal["header", "bag"] = READ["time_source"].default
     odom_topic: str | None = None
     odom_tf: tuple[str, str] | None = None
     odom_geometry: OdometryGeometry | None = None
