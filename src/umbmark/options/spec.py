@@ -11,7 +11,7 @@ and checks of :class:`umbmark.runs.options.ReadOptions`, and the defaults of
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, cast
 
@@ -40,6 +40,7 @@ __all__ = [
     "Bound",
     "Spec",
     "check_choice",
+    "check_pairs",
 ]
 
 # --- the sections of --help -----------------------------------------------------------
@@ -109,6 +110,8 @@ class Spec:
         How many values it takes (``--odom-tf PARENT CHILD``: 2).
     metavar : str or None
         How ``--help`` names its values.
+    pair : str or None
+        The option it goes with: both or neither (``left_field``: ``right_field``).
     """
 
     name: str
@@ -122,14 +125,16 @@ class Spec:
     bound: Bound | None = None
     nargs: int = 1
     metavar: str | None = None
+    pair: str | None = None
 
     @property
     def flag(self) -> str:
         """The long flag, as messages name the option."""
         return self.flags[0]
 
-    def check(self, value: object) -> None:
-        """Refuse a value outside the choices or the bound (None, not given, passes).
+    def check(self, value: object, source: str | None = None) -> None:
+        """Refuse a value outside the choices or the bound (None, not given, passes);
+        ``source``: the file the message is about, if any.
 
         Raises
         ------
@@ -139,37 +144,54 @@ class Spec:
         if value is None:
             return
         if self.kind == "choice":
-            check_choice(self.flag, value, self.choices)
+            check_choice(self.flag, value, self.choices, source)
         bound = self.bound
         if bound is None:
             return
         high = math.inf if bound.high is None else bound.high
         number = cast("float", value)
         if bound.kind == "factor":
-            check_multiplier(self.flag, number)
+            check_multiplier(self.flag, number, source)
         elif bound.kind == "length":
-            check_length(self.flag, number, high)
+            check_length(self.flag, number, high, source=source)
         elif bound.kind == "positive":
-            check_positive_option(self.flag, number, self.unit)
+            check_positive_option(self.flag, number, self.unit, source)
             if float(number) > high:
                 raise InputError(
                     f"{self.flag} must be at most {high:g} {self.unit}, "
-                    f"got {float(number):g} {self.unit}"
+                    f"got {float(number):g} {self.unit}",
+                    source=source,
                 )
         else:
             for given in cast("Sequence[float]", value):
-                number = option_float(self.flag, given)
+                number = option_float(self.flag, given, source)
                 if not (math.isfinite(number) and abs(number) <= high):
                     raise InputError(
                         f"{self.flag} must be within {high:g} {self.unit} of the axle centre, "
-                        f"not {number!r}"
+                        f"not {number!r}",
+                        source=source,
                     )
 
 
-def check_choice(flag: str, value: object, choices: tuple[str, ...]) -> None:
+def check_choice(
+    flag: str, value: object, choices: tuple[str, ...], source: str | None = None
+) -> None:
     """Refuse a value that is not one of ``choices``."""
     if value not in choices:
-        raise InputError(f"{flag} {value!r}: use one of {', '.join(choices)}")
+        raise InputError(f"{flag} {value!r}: use one of {', '.join(choices)}", source=source)
+
+
+def check_pairs(values: Mapping[str, object], source: str | None = None) -> None:
+    """Refuse one of two reading options that go together (:attr:`Spec.pair`) given
+    without the other; ``values`` by keyword (those missing count as not given)."""
+    for spec in READ_OPTIONS:
+        if spec.pair is None:
+            continue
+        if (values.get(spec.name) is None) != (values.get(spec.pair) is None):
+            raise InputError(
+                f"{spec.flag} and {READ[spec.pair].flag} go together: give both or neither",
+                source=source,
+            )
 
 
 _FACTOR = Bound("factor")
@@ -372,6 +394,7 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "wheel's angle [rad], or its encoder counts with --ticks-per-rev, e.g. left_ticks, "
         "wheels.left.position, positions[0].",
         metavar="PATH",
+        pair="right_field",
     ),
     Spec(
         "right_field",
@@ -405,6 +428,7 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "No wheel joint states? The left wheel's frame on /tf (its transform from the "
         "base, e.g. wheel_left_link from robot_state_publisher): its rotation.",
         metavar="FRAME",
+        pair="right_wheel_frame",
     ),
     Spec(
         "right_wheel_frame",

@@ -14,7 +14,7 @@ from dataclasses import dataclass, fields
 from typing import Literal, TypedDict
 
 from umbmark.core.errors import InputError
-from umbmark.options.spec import READ, READ_OPTIONS
+from umbmark.options.spec import READ, READ_OPTIONS, check_pairs
 
 __all__ = [
     "SAME_ROBOT_TOLERANCE",
@@ -173,45 +173,27 @@ class ReadOptions:
     right_wheel_frame: str | None = None
 
     def __post_init__(self) -> None:
+        from umbmark.sources.bag.options import check_wheel_fields
+
         for spec in READ_OPTIONS:
             spec.check(getattr(self, spec.name))
-        self._check_fields()
-        if (self.left_wheel_frame is None) != (self.right_wheel_frame is None):
-            raise InputError(
-                "--left-wheel-frame and --right-wheel-frame go together: give both or neither"
-            )
+        check_pairs(vars(self))
+        check_wheel_fields(
+            self.left_field,
+            self.right_field,
+            self.msg_dir,
+            (
+                ("--left-joint", self.left_joint),
+                ("--right-joint", self.right_joint),
+                ("--left-ticks-topic", self.left_ticks_topic),
+                ("--right-ticks-topic", self.right_ticks_topic),
+                ("--odom-topic", self.odom_topic),
+                ("--odom-tf", self.odom_tf),
+                ("--left-wheel-frame", self.left_wheel_frame),
+            ),
+        )
         if self.split == "windows" and not self.windows:
             raise InputError("--split windows needs --windows start:end[,start:end...]")
-
-    def _check_fields(self) -> None:
-        """Refuse wheel fields that are malformed or given with other wheel data."""
-        from umbmark.sources.bag.fieldpath import parse_path
-
-        if (self.left_field is None) != (self.right_field is None):
-            raise InputError("--left-field and --right-field go together: give both or neither")
-        if self.left_field is None or self.right_field is None:
-            if self.msg_dir is not None:
-                raise InputError(
-                    "--msg-dir is for wheel data in a custom message type: give it with "
-                    "--left-field and --right-field"
-                )
-            return
-        parse_path(self.left_field, "--left-field")
-        parse_path(self.right_field, "--right-field")
-        for flag, value in (
-            ("--left-joint", self.left_joint),
-            ("--right-joint", self.right_joint),
-            ("--left-ticks-topic", self.left_ticks_topic),
-            ("--right-ticks-topic", self.right_ticks_topic),
-            ("--odom-topic", self.odom_topic),
-            ("--odom-tf", self.odom_tf),
-            ("--left-wheel-frame", self.left_wheel_frame),
-        ):
-            if value:
-                raise InputError(
-                    f"--left-field/--right-field read the wheels from --wheel-topic: leave "
-                    f"out {flag}"
-                )
 
     @classmethod
     def of(cls, options: Mapping[str, object]) -> ReadOptions:
