@@ -209,3 +209,12 @@ def test_the_field_checks_say_the_same_in_the_job_and_the_bag_reader(
     with pytest.raises(InputError) as caught:
         check_options(BagOptions(**bag_given), "robot.bag")  # type: ignore[arg-type]
     assert caught.value.command_line() == f"robot.bag: {line}"
+
+
+def test_short_flags_name_their_keyword_in_messages() -> None:
+    """A message naming ``-f`` reads ``format`` from Python (core's table, below the spec)."""
+    from umbmark.core.errors import FLAG_KEYWORDS
+
+    for spec in (*READ_OPTIONS, WHEELBASE, SIDE_LENGTH):
+        for flag in spec.flags[1:]:
+            assert FLAG_KEYWORDS[flag] == spec.name, flag
