@@ -218,3 +218,28 @@ def test_short_flags_name_their_keyword_in_messages() -> None:
     for spec in (*READ_OPTIONS, WHEELBASE, SIDE_LENGTH):
         for flag in spec.flags[1:]:
             assert FLAG_KEYWORDS[flag] == spec.name, flag
+
+
+@pytest.mark.parametrize(
+    ("spec", "argv", "value", "command_line", "python"),
+    [
+        (WHEELBASE, ["--wheelbase", "11"], 11.0,
+         "--wheelbase 11 m is implausibly large: lengths are in metres (at most 10 m here; "
+         "plausible: 0.001 to 10 m)",
+         "wheelbase=11 m is implausibly large: lengths are in metres (at most 10 m here; "
+         "plausible: 0.001 to 10 m)"),
+        (SIDE_LENGTH, ["-L", "101"], 101.0,
+         "--side-length 101 m is implausibly large: lengths are in metres (at most 100 m "
+         "here; plausible: 0.001 to 100 m)",
+         "side_length=101 m is implausibly large: lengths are in metres (at most 100 m "
+         "here; plausible: 0.001 to 100 m)"),
+    ],
+)  # fmt: skip
+def test_the_square_options_bound_is_the_one_the_command_and_the_library_refuse(
+    logs: Path, spec: Spec, argv: list[str], value: float, command_line: str, python: str
+) -> None:
+    assert cli_error("calibrate", str(logs), *argv) == f"umbmark: error: {command_line}\n"
+    assert api_error(umbmark.calibrate, logs, **{spec.name: value}) == python
+    with pytest.raises(InputError) as caught:
+        spec.check(value)
+    assert caught.value.command_line() == command_line

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any, Literal, cast
 
 from umbmark.core.bounds import (
+    MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
     check_length,
     check_multiplier,
@@ -208,6 +209,7 @@ WHEELBASE = Spec(
     "for logged runs, overrides the source's. Taken from --current-params if it has it.",
     kind="number",
     unit="m",
+    bound=Bound("length", MAX_WHEELBASE),
 )
 #: ``--side-length`` of ``calibrate`` and ``report``.
 SIDE_LENGTH = Spec(
@@ -217,6 +219,7 @@ SIDE_LENGTH = Spec(
     "Side of the square path [m]. Logged sources may know it (OptiOdom L, run-log side_length).",
     kind="number",
     unit="m",
+    bound=Bound("length", MAX_SIDE_LENGTH),
 )
 
 # --- how to read a source (calibrate, replay, report, validate) -----------------------
