@@ -22,11 +22,13 @@ from umbmark.cli.validate import validate as validate_command
 from umbmark.core.errors import InputError
 from umbmark.options.spec import (
     BAGS,
+    OUTPUTS,
     PARAMETERS,
     READ,
     READ_OPTIONS,
     SIDE_LENGTH,
     TEST,
+    TUM_TIME,
     WHEELBASE,
     Spec,
 )
@@ -243,3 +245,12 @@ def test_the_square_options_bound_is_the_one_the_command_and_the_library_refuse(
     with pytest.raises(InputError) as caught:
         spec.check(value)
     assert caught.value.command_line() == command_line
+
+
+def test_tum_time_is_the_specs() -> None:
+    from umbmark.outputs.tum import TUM_TIMES, TumTime
+
+    assert TUM_TIME.choices == ("recording", "run")
+    assert typing.get_args(TumTime) == TUM_TIMES == TUM_TIME.choices
+    for command in (calibrate_command, replay_command):
+        _same_option(command, TUM_TIME, OUTPUTS, TUM_TIME.help)

@@ -8,7 +8,6 @@ from typing import Any
 import click
 
 from umbmark.cli.options import (
-    OUTPUTS,
     Command,
     apply,
     option,
@@ -17,7 +16,7 @@ from umbmark.cli.options import (
     tum_time_option,
 )
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, method_help, names
-from umbmark.options.spec import SIDE_LENGTH, TEST, WHEELBASE
+from umbmark.options.spec import OUTPUTS, SIDE_LENGTH, TEST, WHEELBASE
 
 __all__ = ["calibrate"]
 

@@ -13,11 +13,10 @@ from typing import Any, TypeVar
 
 import click
 
-from umbmark.options.spec import READ_OPTIONS, WHEELBASE, Spec
+from umbmark.options.spec import READ_OPTIONS, TUM_TIME, WHEELBASE, Spec
 
 __all__ = [
     "OTHER",
-    "OUTPUTS",
     "Command",
     "apply",
     "option",
@@ -28,7 +27,6 @@ __all__ = [
 
 F = TypeVar("F", bound=Callable[..., Any])
 
-OUTPUTS = "Outputs"
 OTHER = "Other options"
 
 
@@ -113,16 +111,7 @@ def spec_option(
 
 def tum_time_option() -> Callable[[F], F]:
     """``--tum-time``: the clock of the TUM files (calibrate and replay)."""
-    return option(
-        "--tum-time",
-        section=OUTPUTS,
-        type=click.Choice(["recording", "run"]),
-        default="recording",
-        show_default=True,
-        help="Timestamps of the TUM files: the recording's own clock (bag stamps, run-log "
-        "time; evo matches them with other trajectories of the same bag) or seconds from "
-        "each run's start.",
-    )
+    return spec_option(TUM_TIME)
 
 
 def source_options(*, wheelbase: bool = True) -> Callable[[F], F]:

@@ -6,8 +6,8 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import OUTPUTS, Command, apply, option
-from umbmark.options.spec import TEST
+from umbmark.cli.options import Command, apply, option
+from umbmark.options.spec import OUTPUTS, TEST
 
 __all__ = ["plan"]
 

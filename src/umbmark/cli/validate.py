@@ -7,9 +7,9 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import OUTPUTS, Command, apply, option, source_options, spec_option
+from umbmark.cli.options import Command, apply, option, source_options, spec_option
 from umbmark.estimators.registry import NAMES
-from umbmark.options.spec import SIDE_LENGTH, TEST
+from umbmark.options.spec import OUTPUTS, SIDE_LENGTH, TEST
 
 __all__ = ["validate"]
 

@@ -31,12 +31,14 @@ __all__ = [
     "LONGEST_GAP",
     "LONGEST_REST",
     "MAX_TRUTH_OFFSET",
+    "OUTPUTS",
     "PARAMETERS",
     "READ",
     "READ_OPTIONS",
     "SIDE_LENGTH",
     "TABLE",
     "TEST",
+    "TUM_TIME",
     "WHEELBASE",
     "Bound",
     "Spec",
@@ -51,6 +53,7 @@ TABLE = "Runs table"
 PARAMETERS = "Parameters active during the runs"
 LOGS = "Logged runs (run logs, OptiOdom sessions, ROS bags)"
 BAGS = "ROS bags"
+OUTPUTS = "Outputs"
 
 # --- bounds -----------------------------------------------------------------------------
 
@@ -220,6 +223,18 @@ SIDE_LENGTH = Spec(
     kind="number",
     unit="m",
     bound=Bound("length", MAX_SIDE_LENGTH),
+)
+
+#: ``--tum-time`` of ``calibrate`` and ``replay``.
+TUM_TIME = Spec(
+    "tum_time",
+    ("--tum-time",),
+    OUTPUTS,
+    "Timestamps of the TUM files: the recording's own clock (bag stamps, run-log time; evo "
+    "matches them with other trajectories of the same bag) or seconds from each run's start.",
+    kind="choice",
+    default="recording",
+    choices=("recording", "run"),
 )
 
 # --- how to read a source (calibrate, replay, report, validate) -----------------------
