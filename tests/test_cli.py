@@ -22,7 +22,7 @@ import pytest
 
 import umbmark
 from umbmark.cli.main import cli
-from umbmark.jobs.inputs import SourceOptions
+from umbmark.runs.options import SourceOptions
 
 from helpers import OPTIODOM, cli_error, cli_json, linear_cgs, run_cli, runs_around
 

@@ -73,8 +73,9 @@ def test_reported_factors_are_positive_and_finite(runs_csv: Path) -> None:
 
 def test_negative_factors_are_refused_not_reported(tmp_path: Path) -> None:
     """Runs whose return errors ask for a negative wheel (E_d <= 0) are refused."""
-    from umbmark.calibration.compose import ActiveParams, Calibration
-    from umbmark.jobs.inputs import check_calibration
+    from umbmark.calibration.active import check_calibration
+    from umbmark.calibration.compose import Calibration
+    from umbmark.model.active import ActiveParams
 
     class Estimate:
         E_d = -2.3

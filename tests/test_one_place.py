@@ -20,11 +20,11 @@ SRC = ROOT / "src" / "umbmark"
 
 
 def _report_classes() -> list[type]:
+    from umbmark.calibration.plan import PlanReport
     from umbmark.jobs.calibrate import CalibrationReport
     from umbmark.jobs.demo import DemoReport
     from umbmark.jobs.history import HistoryReport
     from umbmark.jobs.info import InfoReport
-    from umbmark.jobs.plan import PlanReport
     from umbmark.jobs.replay import ReplayReport
     from umbmark.jobs.report import PassesReport
     from umbmark.jobs.reproduce import Fig4Report, Table1Report

@@ -415,8 +415,9 @@ def _cli_options() -> set[str]:
 
 #: Options of other programs that the pages name (pip, venv, evo, ros2, the project's tools).
 OTHER_PROGRAMS = {
-    "--upgrade", "--clear", "--ref", "--align_origin", "--once", "--list", "--filter",
-    "--jobs", "--keep", "--data", "--strict", "--auto",
+    "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--ref",
+    "--align_origin", "--once", "--list", "--filter", "--jobs", "--keep", "--data", "--strict",
+    "--auto",
 }  # fmt: skip
 
 

@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 import umbmark
-from umbmark.calibration.compose import ActiveParams
+from umbmark.model.active import ActiveParams
 from umbmark.sources.runs_table.reader import read_table_active
 from umbmark.sources.runs_table.writer import format_active, write_runs_table
 

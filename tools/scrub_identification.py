@@ -21,12 +21,13 @@ from pathlib import Path
 import numpy as np
 
 import umbmark
+from umbmark.calibration.active import read_runs
 from umbmark.estimators.motions import motion_coverage
 from umbmark.estimators.trajectory_fit import fit_trajectories
-from umbmark.jobs.inputs import ReadOptions, read_runs
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import end_errors
 from umbmark.runs.load import LoadOptions, load_runs
+from umbmark.runs.options import ReadOptions
 
 POOLS = {
     "square 2042": ["square/230620202042"],

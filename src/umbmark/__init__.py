@@ -42,11 +42,11 @@ _EXPORTS = {
     "HistoryReport": "umbmark.jobs.history",
     "History": "umbmark.store.history",
     "plan": "umbmark.jobs.plan",
-    "PlanReport": "umbmark.jobs.plan",
+    "PlanReport": "umbmark.calibration.plan",
     "validate": "umbmark.jobs.validate",
     "study": "umbmark.jobs.study",
     "StudyReport": "umbmark.jobs.study",
-    "ValidationReport": "umbmark.jobs.validate",
+    "ValidationReport": "umbmark.calibration.validation",
     "simulate": "umbmark.jobs.simulate",
     "demo": "umbmark.jobs.demo",
     "reproduce_table1": "umbmark.jobs.reproduce",
@@ -58,10 +58,16 @@ _EXPORTS = {
     "InfoReport": "umbmark.jobs.info",
     "SimulationReport": "umbmark.jobs.simulate",
     "DemoReport": "umbmark.jobs.demo",
-    "SourceOptions": "umbmark.jobs.inputs",
+    "SourceOptions": "umbmark.runs.options",
+    # the robot calibrates itself (the paper's Sec. 6)
+    "selfcal": "umbmark.jobs.selfcal",
+    "SelfCalReport": "umbmark.jobs.selfcal",
+    "VirtualRobot": "umbmark.robot.virtual",
+    "Robot": "umbmark.robot.base",
+    "connect": "umbmark.robot.connect",
     "InputError": "umbmark.core.errors",
     # building blocks
-    "ActiveParams": "umbmark.calibration.compose",
+    "ActiveParams": "umbmark.model.active",
     "Benchmark": "umbmark.benchmark.returns",
     "Calibration": "umbmark.calibration.compose",
     "Direction": "umbmark.core.conventions",
@@ -92,15 +98,19 @@ __all__ = [
     "PassesReport",
     "PlanReport",
     "ReplayReport",
+    "Robot",
     "Run",
+    "SelfCalReport",
     "SimulationReport",
     "SourceOptions",
     "SquareTest",
     "StudyReport",
     "ValidationReport",
+    "VirtualRobot",
     "WheelParams",
     "__version__",
     "calibrate",
+    "connect",
     "demo",
     "estimate_errors",
     "example",
@@ -114,6 +124,7 @@ __all__ = [
     "report",
     "reproduce_fig4",
     "reproduce_table1",
+    "selfcal",
     "simulate",
     "study",
     "umbmark_benchmark",
@@ -122,7 +133,9 @@ __all__ = [
 
 if TYPE_CHECKING:
     from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
-    from umbmark.calibration.compose import ActiveParams, Calibration
+    from umbmark.calibration.compose import Calibration
+    from umbmark.calibration.plan import PlanReport
+    from umbmark.calibration.validation import ValidationReport
     from umbmark.core.conventions import Direction
     from umbmark.core.errors import InputError
     from umbmark.estimators.base import ErrorEstimate, SquareTest
@@ -132,16 +145,21 @@ if TYPE_CHECKING:
     from umbmark.jobs.example import example, example_sessions
     from umbmark.jobs.history import HistoryReport, history
     from umbmark.jobs.info import InfoReport, info
-    from umbmark.jobs.inputs import SourceOptions
-    from umbmark.jobs.plan import PlanReport, plan
+    from umbmark.jobs.plan import plan
     from umbmark.jobs.replay import ReplayReport, replay
     from umbmark.jobs.report import PassesReport, report
     from umbmark.jobs.reproduce import reproduce_fig4, reproduce_table1
+    from umbmark.jobs.selfcal import SelfCalReport, selfcal
     from umbmark.jobs.simulate import SimulationReport, simulate
     from umbmark.jobs.study import StudyReport, study
-    from umbmark.jobs.validate import ValidationReport, validate
+    from umbmark.jobs.validate import validate
+    from umbmark.model.active import ActiveParams
     from umbmark.model.kinematics import WheelParams, integrate_odometry
     from umbmark.model.runs import EndPose, Run
+    from umbmark.robot.base import Robot
+    from umbmark.robot.connect import connect
+    from umbmark.robot.virtual import VirtualRobot
+    from umbmark.runs.options import SourceOptions
     from umbmark.sources.runs_table.reader import read_runs_table
     from umbmark.store.history import History
 

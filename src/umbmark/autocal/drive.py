@@ -70,7 +70,8 @@ class DriveLimits:
         The odometry's end pose must be this close to the commanded one [m, rad].
     settle_time, still_speed : float
         The robot has settled when the odometry moved less than ``still_speed`` [m/s, and
-        rad/s] for ``settle_time`` [s].
+        rad/s] for ``settle_time`` [s]; odometry still moving ``settle_limit`` [s] after
+        the stop stops the routine.
     stale_odometry : float
         Odometry older than this [s] stops the robot.
     obstacle_distance, obstacle_half_angle : float
@@ -99,6 +100,7 @@ class DriveLimits:
     end_position: float = 0.005
     end_heading: float = math.radians(0.1)
     settle_time: float = 0.5
+    settle_limit: float = 30.0
     still_speed: float = 0.002
     stale_odometry: float = 0.5
     obstacle_distance: float = 0.3
@@ -116,6 +118,7 @@ class DriveLimits:
             "period": (0.001, 0.2),
             "margin": (0.05, 5.0),
             "time_factor": (1.2, 10.0),
+            "settle_limit": (1.0, 600.0),
         }
         for name, (low, high) in bounds.items():
             value = getattr(self, name)
@@ -297,10 +300,17 @@ class _Driver:
         """Wait until the odometry has been still for ``settle_time``; the settled pose."""
         lim = self.limits
         self.robot.send_velocity(0.0, 0.0)
-        still_since = self.robot.now()
+        still_since = begun = self.robot.now()
         last = self.read()
         last_time = self.robot.now()
         while self.robot.now() - still_since < lim.settle_time:
+            if self.robot.now() - begun > lim.settle_limit:
+                raise stop_safely(
+                    self.robot,
+                    f"the odometry does not come to rest: it still moves {lim.settle_limit:g} s "
+                    "after the robot was told to stop (a wheel slipping, or the controller "
+                    "not taking commands)",
+                )
             self.robot.send_velocity(0.0, 0.0)
             self.robot.wait(lim.period)
             pose = self.read()

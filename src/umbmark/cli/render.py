@@ -387,6 +387,14 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
             f"[bold]E_max,syst {before * 1000:.1f} mm -> {after * 1000:.1f} mm "
             f"({before / after:.1f}-fold)[/bold]"
         )
+    elif before is not None and after is None:
+        was_applied = any(p.applied is not None and p.applied.active for p in report.passes)
+        why = (
+            "the correction was applied but not verified (--no-verify)"
+            if was_applied
+            else "nothing was applied, so there is nothing to verify"
+        )
+        screen.print(f"E_max,syst {before * 1000:.1f} mm; {why}.")
     final = report.final
     screen.print(
         "The controller now holds: wheel_separation_multiplier "

@@ -4,13 +4,15 @@ A parameter reaches umbmark as an option (``--wheelbase``), from a run log's
 ``metadata.yaml`` (``wheelbase``), an OptiOdom session's metadata (``Li``), a runs
 table's ``# umbmark-active:`` line or a parameter file: each gets the same bound, written
 here once, and the same check. Messages name the parameter as its source spells it (an
-option's flag, a file's field) and, for a file, the file (``source``).
+option's flag, a file's field) and, for a file, the file (``source``). The square's
+geometry (a wheelbase below half the side) is checked here too (:func:`check_square_geometry`).
 """
 
 from __future__ import annotations
 
 import math
 import operator
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -158,3 +160,51 @@ def check_range(
     value = option_float(flag, value, source)
     if not (math.isfinite(value) and low <= value <= high):
         raise InputError(f"{flag} {value:g} is outside {low:g} to {high:g}", source=source)
+
+
+def check_square_geometry(
+    side_length: float | None,
+    wheelbase: float,
+    origins: Mapping[str, Origin] | None = None,
+    multiplier: float = 1.0,
+) -> None:
+    """Refuse a wheelbase [m] (the odometry's: the configured one times ``multiplier``)
+    that is not smaller than the square's side [m].
+
+    A robot whose wheelbase reaches half the side cannot drive the square as UMBmark
+    assumes (its wheels would cross the square's centre on the turns): the usual cause is
+    swapped or mistyped ``--side-length`` and ``--wheelbase``. ``origins`` says where the
+    values came from (``wheelbase``, ``separation_multiplier``, ``side_length``; options
+    where not said); the message names those.
+    """
+    if side_length is None or wheelbase < side_length / 2:
+        return
+    b_from, side_from, m_from, source = geometry_origins(origins, multiplier)
+    if b_from.file is None and side_from.file is None and m_from is None:
+        raise InputError(
+            f"--wheelbase {wheelbase:g} m is not smaller than the square: it must be below "
+            f"half the side (--side-length {side_length:g} m, so b < {side_length / 2:g} m); "
+            "are the two swapped or in other units?"
+        )
+    named = b_from.named(source)
+    if m_from is not None:
+        named += f" times {m_from.named(source)} {multiplier:g}"
+    raise InputError(
+        f"the odometry's wheelbase {wheelbase:g} m ({named}) is not smaller than the square: "
+        f"it must be below half the side ({side_from.named(source)} {side_length:g} m, so "
+        f"b < {side_length / 2:g} m); are the two swapped or in other units?",
+        source=source,
+    )
+
+
+def geometry_origins(
+    origins: Mapping[str, Origin] | None, multiplier: float
+) -> tuple[Origin, Origin, Origin | None, str | None]:
+    """Where the wheelbase, the side and (unless 1) the multiplier came from, and the one
+    file they all come from (None if they come from several, or from options only)."""
+    origins = origins or {}
+    b_from = origins.get("wheelbase", Origin("--wheelbase"))
+    side_from = origins.get("side_length", Origin("--side-length"))
+    m_from = origins.get("separation_multiplier") if multiplier != 1.0 else None
+    files = {o.file for o in (b_from, side_from, m_from) if o is not None and o.file}
+    return b_from, side_from, m_from, files.pop() if len(files) == 1 else None

@@ -16,7 +16,8 @@ from pathlib import Path
 from umbmark.core.messages import info
 from umbmark.estimators.motions import motion_coverage
 from umbmark.estimators.registry import AUTO, DEFAULT, names
-from umbmark.jobs.inputs import Runs, RunSource, SourceOptions
+from umbmark.runs.options import SourceOptions
+from umbmark.runs.read import Runs, RunSource
 
 __all__ = ["auto_method"]
 

@@ -165,7 +165,7 @@ def history(
         raise InputError(f"no robot {robot!r} in the history (robots: {known})", source=path)
     notes: tuple[str, ...] = ()
     if applied is not None:
-        from umbmark.jobs.inputs import check_int_option
+        from umbmark.core.bounds import check_int_option
 
         number = check_int_option("--applied", applied, 1, 2**63 - 1)
         store.mark_applied(robot, number, force=force)

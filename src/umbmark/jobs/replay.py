@@ -18,27 +18,23 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from umbmark.core.errors import InputError, python_api
-from umbmark.core.jsontext import JsonText
-from umbmark.core.messages import split_messages
-from umbmark.jobs.inputs import (
+from umbmark.calibration.active import check_same_robot, read_runs
+from umbmark.calibration.report import (
     Calibrated,
-    PathLike,
-    ReadOptions,
-    SourceOptions,
     calibrated_name,
     calibrated_nominal,
     calibrated_params,
-    check_same_robot,
-    is_table,
-    read_runs,
-    source_name,
 )
+from umbmark.core.errors import InputError, python_api
+from umbmark.core.jsontext import JsonText
+from umbmark.core.messages import split_messages
 from umbmark.model.kinematics import IntegrationMethod, WheelParams
 from umbmark.model.recording import RunLog
 from umbmark.model.runs import Run, end_errors
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.association import Association
+from umbmark.runs.options import ReadOptions, SourceOptions
+from umbmark.runs.read import PathLike, is_table, source_name
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -273,7 +269,7 @@ def replay(
         Replay ``params`` (or take ``current_params``) even when it is a result for other
         nominal parameters (wheelbase, wheel diameter) than the source's own.
     **options
-        How to read the source: see :class:`umbmark.jobs.inputs.ReadOptions`.
+        How to read the source: see :class:`umbmark.runs.options.ReadOptions`.
 
     Raises
     ------

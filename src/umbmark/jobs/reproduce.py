@@ -13,9 +13,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from umbmark.core.bounds import check_int_option, option_float
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
-from umbmark.jobs.inputs import check_int_option, option_float
 from umbmark.jobs.simulate import SEED_RANGE
 from umbmark.outputs.files import OutputPlan
 from umbmark.sim.reproduce import Fig4Result, Table1Row

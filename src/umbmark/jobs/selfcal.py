@@ -144,8 +144,9 @@ class SelfCalReport:
 
     @property
     def e_max_syst_after(self) -> float | None:
-        """E_max,syst of the last pass (the verification, if driven) [m]."""
-        return self.passes[-1].report.e_max_syst if self.passes else None
+        """E_max,syst of the last pass (the verification, if driven) [m]; None when only
+        one pass was driven (nothing after a correction)."""
+        return self.passes[-1].report.e_max_syst if len(self.passes) > 1 else None
 
     def measurement_errors(self) -> tuple[float, float] | None:
         """RMS position [m] and heading [rad] error of the fixes against the truth."""

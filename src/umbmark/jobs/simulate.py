@@ -18,20 +18,21 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from umbmark.core.bounds import ENCODER_RESOLUTION_RANGE, GEAR_RATIO_RANGE, check_range
+from umbmark.calibration.report import Calibrated, calibrated_params
+from umbmark.core.bounds import (
+    ENCODER_RESOLUTION_RANGE,
+    GEAR_RATIO_RANGE,
+    MAX_SIDE_LENGTH,
+    MAX_WHEELBASE,
+    check_length,
+    check_positive_option,
+    check_range,
+    option_float,
+)
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, python_api
 from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
-from umbmark.jobs.inputs import (
-    MAX_SIDE_LENGTH,
-    MAX_WHEELBASE,
-    Calibrated,
-    calibrated_params,
-    check_length,
-    check_positive_option,
-    option_float,
-)
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 from umbmark.model.runs import Run

@@ -31,16 +31,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.calibration.compose import Calibration
-from umbmark.core.errors import InputError
-from umbmark.core.jsontext import JsonText
-from umbmark.estimators.registry import SQUARE
-from umbmark.jobs.inputs import (
+from umbmark.core.bounds import (
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
     check_int_option,
     check_length,
     option_float,
 )
+from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
+from umbmark.estimators.registry import SQUARE
 from umbmark.jobs.simulate import SEED_RANGE
 
 if TYPE_CHECKING:
@@ -417,8 +417,8 @@ def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
 
 def _truth(trial: Trial) -> tuple[Calibration, VirtualRobot]:
     """The robot calibrated with its true parameters: the ceiling any estimator can reach."""
-    from umbmark.calibration.compose import ActiveParams
     from umbmark.estimators.base import ErrorEstimate
+    from umbmark.model.active import ActiveParams
 
     robot = trial.robot
     odo = robot.odometry

@@ -23,9 +23,9 @@ from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
 if TYPE_CHECKING:
     from umbmark.benchmark.returns import Benchmark
-    from umbmark.jobs.calibrate import CalibrationReport
-    from umbmark.jobs.report import PassesReport
-    from umbmark.jobs.validate import ValidationReport
+    from umbmark.calibration.passes import Passes
+    from umbmark.calibration.report import CalibrationResult
+    from umbmark.calibration.validation import ValidationReport
 
 __all__ = ["calibration_html", "pass_name", "passes_html"]
 
@@ -100,7 +100,7 @@ def pass_name(k: int, n: int) -> str:
     return f"pass {k} (after pass {k - 1})"
 
 
-def _passes(page: PassesReport) -> list[tuple[str, CalibrationReport]]:
+def _passes(page: Passes) -> list[tuple[str, CalibrationResult]]:
     n = len(page.passes)
     if n == 1:
         return [("measured", page.passes[0])]
@@ -114,7 +114,7 @@ _PREDICTED_WORDS = (
 )
 
 
-def _verdict(page: PassesReport) -> str:
+def _verdict(page: Passes) -> str:
     passes = _passes(page)
     last = page.last.benchmark
     if last is None:
@@ -175,7 +175,7 @@ def _cluster_rows(bench: Benchmark) -> list[str]:
     ]
 
 
-def _clusters(page: PassesReport) -> str:
+def _clusters(page: Passes) -> str:
     """The per-pass table of Eqs. 3.1-3.4: one column per pass (and the prediction)."""
     names = [
         "runs cw / ccw",
@@ -213,7 +213,7 @@ def _clusters(page: PassesReport) -> str:
     )
 
 
-def _figure(page: PassesReport) -> str:
+def _figure(page: Passes) -> str:
     from umbmark.outputs.report_figures import (
         PASS_COLOURS,
         PREDICTED_COLOUR,
@@ -258,7 +258,7 @@ def _figure(page: PassesReport) -> str:
     )
 
 
-def _runs(page: PassesReport) -> str:
+def _runs(page: Passes) -> str:
     many = len(page.passes) > 1
     head = ["#", "run", "kind", "direction", "eps_x [mm]", "eps_y [mm]", "eps_theta [deg]"]
     if many:
@@ -302,7 +302,7 @@ def _runs(page: PassesReport) -> str:
     return _table(head, rows, wrap={head.index("run")}) + note
 
 
-def _estimate(one: CalibrationReport) -> str:
+def _estimate(one: CalibrationResult) -> str:
     cal = one.calibration
     est = cal.estimate
     se = est.standard_errors
@@ -350,14 +350,14 @@ def _estimate(one: CalibrationReport) -> str:
     )
 
 
-def _estimates(page: PassesReport) -> str:
+def _estimates(page: Passes) -> str:
     passes = _passes(page)
     if len(passes) == 1:
         return _estimate(passes[0][1])
     return "".join(f"<h3>{escape(name)}</h3>\n{_estimate(one)}" for name, one in passes)
 
 
-def _checks(one: CalibrationReport) -> str:
+def _checks(one: CalibrationResult) -> str:
     parts = []
     est = one.estimate
     main = {"alpha", "beta", "E_d", "E_b", "E_s"}  # in the estimates' table already
@@ -402,7 +402,7 @@ def _mm(value: float | None) -> str:
     return "–" if value is None else f"{value * _MM:.1f}"
 
 
-def _messages(page: PassesReport) -> str:
+def _messages(page: Passes) -> str:
     passes = _passes(page)
     if len(passes) == 1:
         body = _checks(passes[0][1])
@@ -413,7 +413,7 @@ def _messages(page: PassesReport) -> str:
     return body
 
 
-def _overlay(page: PassesReport) -> str:
+def _overlay(page: Passes) -> str:
     from umbmark.outputs.html_verdict import WITHHELD
 
     n = len(page.passes)
@@ -427,7 +427,7 @@ def _overlay(page: PassesReport) -> str:
     )
 
 
-def _inputs(report: CalibrationReport) -> list[list[str]]:
+def _inputs(report: CalibrationResult) -> list[list[str]]:
     """``[path, SHA-256]`` of every input file (the files of an input folder)."""
     rows = []
     for source in report.sources:
@@ -445,7 +445,7 @@ def _inputs(report: CalibrationReport) -> list[list[str]]:
     return rows
 
 
-def _parameters(one: CalibrationReport) -> list[str]:
+def _parameters(one: CalibrationResult) -> list[str]:
     active = one.calibration.active
     return [
         _num(one.test.side_length, ".4f"),
@@ -460,7 +460,7 @@ def _parameters(one: CalibrationReport) -> list[str]:
     ]
 
 
-def _provenance(page: PassesReport) -> str:
+def _provenance(page: Passes) -> str:
     passes = _passes(page)
     many = len(passes) > 1
     inputs = [[name, *row] if many else row for name, one in passes for row in _inputs(one)]
@@ -500,7 +500,7 @@ def _provenance(page: PassesReport) -> str:
     )
 
 
-def passes_html(page: PassesReport) -> str:
+def passes_html(page: Passes) -> str:
     """UMBmark passes on one robot as one self-contained HTML page (no external resources).
 
     Sections: whether to apply the last pass's correction
@@ -548,15 +548,15 @@ def passes_html(page: PassesReport) -> str:
     )
 
 
-def calibration_html(report: CalibrationReport) -> str:
+def calibration_html(report: CalibrationResult) -> str:
     """One calibration as the page of :func:`passes_html` (what ``--report`` writes).
 
     With recorded runs the page shows the predicted after too
-    (:func:`umbmark.jobs.report.predict_after`).
+    (:func:`umbmark.calibration.passes.predict_after`).
     """
-    from umbmark.jobs.report import PassesReport, predict_after
+    from umbmark.calibration.passes import Passes, predict_after
 
-    page = PassesReport(
+    page = Passes(
         passes=(report,),
         predicted=predict_after(report),
         created=report.created,

@@ -12,8 +12,8 @@ from html import escape
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from umbmark.calibration.passes import Passes
     from umbmark.calibration.verdict import Verdict
-    from umbmark.jobs.report import PassesReport
 
 __all__ = ["CSS", "WITHHELD", "verdict_section"]
 
@@ -38,7 +38,7 @@ def _box(verdict: Verdict, lead: str) -> str:
     )
 
 
-def verdict_section(page: PassesReport) -> str:
+def verdict_section(page: Passes) -> str:
     """The last pass's verdict in a box, and the earlier passes' in a line each."""
     n = len(page.passes)
     lead = "" if n == 1 else f"Pass {n}, the last: "

@@ -36,13 +36,14 @@ def connect(
         Bad errors, or a ROS robot that cannot be reached (with the reason).
     """
     if backend == "sim":
-        from umbmark.robot.virtual import VirtualRobot
+        from umbmark.robot.virtual import ERROR_RANGE, MAX_SLIP, VirtualRobot
 
+        low, high = ERROR_RANGE
         for name, value in (("E_d", E_d), ("E_b", E_b), ("E_s", E_s)):
-            if not (0.5 <= value <= 2.0):
-                raise InputError(f"--{name.replace('_', '-')} {value!r}: give 0.5 to 2")
-        if not (0.0 <= slip <= 0.01):
-            raise InputError(f"--slip {slip!r} m^0.5: give 0 to 0.01")
+            if not (low <= value <= high):
+                raise InputError(f"--{name.replace('_', '-')} {value!r}: give {low:g} to {high:g}")
+        if not (0.0 <= slip <= MAX_SLIP):
+            raise InputError(f"--slip {slip!r} m^0.5: give 0 to {MAX_SLIP:g}")
         return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed)
     if backend == "ros1":
         from umbmark.robot.ros1 import Ros1Robot

@@ -49,7 +49,12 @@ from umbmark.sim.robot import VirtualRobot as RobotTruth
 if TYPE_CHECKING:
     from umbmark.robot.world import World
 
-__all__ = ["VirtualRobot"]
+__all__ = ["ERROR_RANGE", "MAX_SLIP", "VirtualRobot"]
+
+#: The systematic errors a virtual robot may have (E_d, E_b, E_s).
+ERROR_RANGE = (0.5, 2.0)
+#: The largest wheel slip of a virtual robot [m^0.5].
+MAX_SLIP = 0.01
 
 #: The longest stretch of robot time one :meth:`VirtualRobot.wait` may simulate [s].
 LONGEST_WAIT = 3600.0
@@ -102,6 +107,7 @@ class VirtualRobot:
         params: DriveParams | None = None,
         command_timeout: float = 0.5,
     ) -> None:
+        _check_arguments(E_d, E_b, E_s, wheelbase, wheel_diameter, slip, command_timeout)
         nominal = WheelParams(
             wheelbase=wheelbase,
             wheel_diameter=wheel_diameter,
@@ -274,3 +280,29 @@ def _arc(
         y - radius * (math.cos(after) - math.cos(theta)),
         after,
     )
+
+
+def _check_arguments(
+    E_d: float,
+    E_b: float,
+    E_s: float,
+    wheelbase: float,
+    wheel_diameter: float,
+    slip: float,
+    command_timeout: float,
+) -> None:
+    """Refuse a virtual robot that the simulation cannot stand for (Python's names)."""
+    low, high = ERROR_RANGE
+    for name, value in (("E_d", E_d), ("E_b", E_b), ("E_s", E_s)):
+        if not (low <= value <= high):
+            raise InputError(f"{name}={value!r}: give {low:g} to {high:g}")
+    for name, value, top in (
+        ("wheelbase", wheelbase, 5.0),
+        ("wheel_diameter", wheel_diameter, 2.0),
+    ):
+        if not (0.0 < value <= top):
+            raise InputError(f"{name}={value!r} m: give more than 0 and at most {top:g} m")
+    if not (0.0 <= slip <= MAX_SLIP):
+        raise InputError(f"slip={slip!r} m^0.5: give 0 to {MAX_SLIP:g}")
+    if not (0.0 < command_timeout <= 60.0):
+        raise InputError(f"command_timeout={command_timeout!r} s: give more than 0, at most 60 s")

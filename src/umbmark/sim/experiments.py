@@ -11,11 +11,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
-from umbmark.calibration.compose import ActiveParams, Calibration
+from umbmark.calibration.compose import Calibration
 from umbmark.core.conventions import Direction
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.registry import PAPER, Method
+from umbmark.model.active import ActiveParams
 from umbmark.model.runs import Run
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square

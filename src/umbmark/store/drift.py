@@ -12,7 +12,7 @@ calibrate`` makes for the new parameters (:class:`umbmark.calibration.compose.Ca
   its effective wheelbase over the configured (nominal) one.
 
 :func:`drift_verdict` compares those of the first and the last calibration
-(:attr:`CalibrationRecord.robot_E_d <umbmark.store.history.CalibrationRecord.robot_E_d>`).
+(:attr:`CalibrationRecord.robot_E_d <umbmark.store.records.CalibrationRecord.robot_E_d>`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from umbmark.store.history import CalibrationRecord
+    from umbmark.store.records import CalibrationRecord
 
 __all__ = ["DEFINITIONS", "DRIFT_MIN_CALIBRATIONS", "DRIFT_SIGMAS", "drift_verdict"]
 

@@ -29,12 +29,11 @@ from typing import TYPE_CHECKING, Any
 from umbmark.core.digest import path_sha256
 from umbmark.core.errors import InputError
 from umbmark.store.drift import DEFINITIONS, DRIFT_MIN_CALIBRATIONS, DRIFT_SIGMAS, drift_verdict
-from umbmark.store.records import CalibrationRecord, RobotRecord
+from umbmark.store.records import CalibrationRecord, NewCalibration, RobotRecord
 
 if TYPE_CHECKING:
     from umbmark.calibration.verdict import Verdict
-    from umbmark.jobs.calibrate import CalibrationReport
-    from umbmark.jobs.inputs import SourceOptions
+    from umbmark.runs.options import SourceOptions
 
 __all__ = [
     "DEFINITIONS",
@@ -199,18 +198,18 @@ class History:
     def record(
         self,
         robot: str,
-        report: CalibrationReport,
+        calibration: NewCalibration,
         inputs: Sequence[str | os.PathLike[str]] = (),
     ) -> int:
-        """Record a calibration of ``robot``; a new robot is added with the report's
+        """Record a calibration of ``robot``; a new robot is added with the calibration's
         nominal wheelbase and wheel diameter.
 
         Parameters
         ----------
         robot : str
             The robot's name.
-        report : CalibrationReport
-            The calibration.
+        calibration : NewCalibration
+            The calibration, as the job that made it says it.
         inputs : sequence of path
             Its inputs (hashed with SHA-256 when they are files or folders).
 
@@ -228,8 +227,7 @@ class History:
         """
         if not robot.strip():
             raise InputError("--robot: give a non-empty name")
-        data = report.to_dict()
-        active = report.calibration.active
+        ours = (calibration.wheelbase, calibration.wheel_diameter)
         hashed = [{"name": os.fspath(p), "sha256": path_sha256(Path(os.fspath(p)))} for p in inputs]
         with self._connect(write=True) as db:
             row = db.execute(
@@ -239,14 +237,14 @@ class History:
                 db.execute(
                     "INSERT INTO robots (name, wheelbase, wheel_diameter, created) "
                     "VALUES (?, ?, ?, ?)",
-                    (robot, active.wheelbase, active.wheel_diameter, _now()),
+                    (robot, calibration.wheelbase, calibration.wheel_diameter, _now()),
                 )
             else:
-                self._check(robot, report, (row[0], row[1]))
-                if row[1] is None and active.wheel_diameter is not None:
+                self._check(robot, ours, (row[0], row[1]))
+                if row[1] is None and calibration.wheel_diameter is not None:
                     db.execute(  # the first calibration that knows it says the diameter
                         "UPDATE robots SET wheel_diameter = ? WHERE name = ?",
-                        (active.wheel_diameter, robot),
+                        (calibration.wheel_diameter, robot),
                     )
             cursor = db.execute(
                 "INSERT INTO calibrations (robot, time, method, inputs, E_d, E_b, E_s, "
@@ -254,17 +252,17 @@ class History:
                 "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, ?)",
                 (
                     robot,
-                    report.created.astimezone(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
-                    data["method"],
+                    calibration.time.astimezone(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
+                    calibration.method,
                     json.dumps(hashed),
-                    data["E_d"],
-                    data["E_b"],
-                    data["E_s"],
-                    data["e_max_syst"],
-                    json.dumps(data["standard_errors"]),
-                    json.dumps(data["active"]),
-                    json.dumps(data["new"]),
-                    json.dumps(data["apply"]),
+                    calibration.E_d,
+                    calibration.E_b,
+                    calibration.E_s,
+                    calibration.e_max_syst,
+                    json.dumps(calibration.standard_errors),
+                    json.dumps(calibration.active),
+                    json.dumps(calibration.new),
+                    json.dumps(calibration.verdict),
                 ),
             )
             return int(cursor.lastrowid or 0)
@@ -291,8 +289,9 @@ class History:
             return f"{said}; its verdict is do not apply: not to be configured on the robot"
         return f"{said}; once its new parameters are configured on the robot: {mark} --applied {id}"
 
-    def check_identity(self, robot: str, report: CalibrationReport) -> None:
-        """Refuse a calibration whose nominal parameters are not those of ``robot``.
+    def check_identity(self, robot: str, wheelbase: float, wheel_diameter: float | None) -> None:
+        """Refuse a calibration whose nominal parameters (``wheelbase`` and
+        ``wheel_diameter`` [m], the ones active during its runs) are not those of ``robot``.
 
         Raises
         ------
@@ -305,15 +304,14 @@ class History:
             raise InputError("--robot: give a non-empty name")
         known = self.robot(robot)
         if known is not None:
-            self._check(robot, report, (known.wheelbase, known.wheel_diameter))
+            self._check(robot, (wheelbase, wheel_diameter), (known.wheelbase, known.wheel_diameter))
 
     def _check(
-        self, robot: str, report: CalibrationReport, nominal: tuple[float, float | None]
+        self, robot: str, given: tuple[float, float | None], nominal: tuple[float, float | None]
     ) -> None:
-        active = report.calibration.active
         for what, theirs, ours in (
-            ("wheelbase", nominal[0], active.wheelbase),
-            ("wheel diameter", nominal[1], active.wheel_diameter),
+            ("wheelbase", nominal[0], given[0]),
+            ("wheel diameter", nominal[1], given[1]),
         ):
             if theirs is not None and ours is not None and not _same(theirs, ours):
                 raise InputError(

@@ -3,13 +3,55 @@ one calibration of it with what the robot is according to it."""
 
 from __future__ import annotations
 
+import datetime as dt
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from umbmark.calibration.compose import ActiveParams
+    from umbmark.model.active import ActiveParams
 
-__all__ = ["CalibrationRecord", "RobotRecord"]
+__all__ = ["CalibrationRecord", "NewCalibration", "RobotRecord"]
+
+
+@dataclass(frozen=True)
+class NewCalibration:
+    """A calibration to record (:meth:`umbmark.store.history.History.record`), as the job
+    that made it says it (``calibrate --json``'s figures and blocks).
+
+    Attributes
+    ----------
+    time : datetime
+        When it was made.
+    method : str
+    E_d, E_b : float
+    E_s : float or None
+    e_max_syst : float or None
+        ``E_max,syst`` [m] of its runs.
+    standard_errors : dict of str to float
+    active : dict of str to object
+        The parameters active during the runs (the ``active`` block).
+    new : dict of str to object
+        The new parameters (the ``new`` block).
+    verdict : dict of str to object
+        Whether to apply it (the ``apply`` block).
+    wheelbase : float
+        Nominal wheelbase [m]: the active one, as configured.
+    wheel_diameter : float or None
+        Nominal wheel diameter [m], when known.
+    """
+
+    time: dt.datetime
+    method: str
+    E_d: float
+    E_b: float
+    E_s: float | None
+    e_max_syst: float | None
+    standard_errors: dict[str, float]
+    active: dict[str, Any]
+    new: dict[str, Any]
+    verdict: dict[str, Any]
+    wheelbase: float
+    wheel_diameter: float | None
 
 
 @dataclass(frozen=True)
@@ -115,7 +157,7 @@ class CalibrationRecord:
     @property
     def active_params(self) -> ActiveParams:
         """The parameters active during the pass."""
-        from umbmark.calibration.compose import ActiveParams
+        from umbmark.model.active import ActiveParams
 
         a = self.active
         return ActiveParams(
@@ -130,7 +172,7 @@ class CalibrationRecord:
     def robot_E_d(self) -> float:
         """What the robot is: its ``D_R / D_L``, the pass's ``E_d`` composed with the active
         ``c_L``, ``c_R`` as calibrate composes them (:meth:`ActiveParams.robot_errors
-        <umbmark.calibration.compose.ActiveParams.robot_errors>`:
+        <umbmark.model.active.ActiveParams.robot_errors>`:
         ``E_d c_R,active / c_L,active``)."""
         return self.active_params.robot_errors(self.E_d, self.E_b)[0]
 

@@ -18,17 +18,16 @@ from typing import Any
 
 import yaml
 
-from umbmark.calibration.compose import Calibration
 from umbmark.sources.params.reader import DEFAULT_CONTROLLER
 
 __all__ = ["ros1_params", "ros2_control_overlay"]
 
 
-def _multipliers(calibration: Calibration) -> dict[str, float]:
+def _multipliers(c_left: float, c_right: float, separation: float) -> dict[str, float]:
     return {
-        "wheel_separation_multiplier": _tidy(calibration.new_separation_multiplier),
-        "left_wheel_radius_multiplier": _tidy(calibration.new_c_left),
-        "right_wheel_radius_multiplier": _tidy(calibration.new_c_right),
+        "wheel_separation_multiplier": _tidy(separation),
+        "left_wheel_radius_multiplier": _tidy(c_left),
+        "right_wheel_radius_multiplier": _tidy(c_right),
     }
 
 
@@ -52,28 +51,30 @@ def _nested(keys: Sequence[str], leaf: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def ros2_control_overlay(
-    calibration: Calibration,
+    new: tuple[float, float, float],
     comments: Sequence[str] = (),
     key_path: Sequence[str] = (DEFAULT_CONTROLLER,),
 ) -> str:
-    """A ros2_control parameter overlay with the new multipliers (YAML text).
+    """A ros2_control parameter overlay with the new multipliers ``new``: ``c_L``, ``c_R``
+    and ``wheel_separation_multiplier`` (YAML text).
 
     ``key_path`` are the keys of the controller in the user's file (``("robot1",
     "diff_cont")``, ``("/robot1/diff_cont",)``, ``("/**",)``): the overlay is keyed the
     same way, so that the parameter server applies it to the same node.
     """
-    return _document(_nested(key_path, {"ros__parameters": _multipliers(calibration)}), comments)
+    return _document(_nested(key_path, {"ros__parameters": _multipliers(*new)}), comments)
 
 
 def ros1_params(
-    calibration: Calibration,
+    new: tuple[float, float, float],
     comments: Sequence[str] = (),
     key_path: Sequence[str] = (DEFAULT_CONTROLLER,),
 ) -> str:
-    """ROS 1 ``diff_drive_controller`` parameters with the new multipliers (YAML text).
+    """ROS 1 ``diff_drive_controller`` parameters with the new multipliers ``new``:
+    ``c_L``, ``c_R`` and ``wheel_separation_multiplier`` (YAML text).
 
     ROS 1's controller takes ``wheel_radius_multiplier``, when it is set, for both wheels
     and ignores the left and right ones: these left and right values work only once it is
     deleted (the caller says so in ``comments``).
     """
-    return _document(_nested(key_path, _multipliers(calibration)), comments)
+    return _document(_nested(key_path, _multipliers(*new)), comments)

@@ -7,8 +7,8 @@ import io
 from collections.abc import Sequence
 from pathlib import Path
 
-from umbmark.calibration.compose import ActiveParams
 from umbmark.core.atomic import atomic_write_text
+from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
 from umbmark.sources.runs_table.reader import ACTIVE_TAG, REQUIRED_COLUMNS

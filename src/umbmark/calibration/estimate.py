@@ -1,28 +1,27 @@
-"""The estimation step of a calibration: runs as read, one estimator, a report.
+"""The estimation step of a calibration: runs as read, one estimator, a result.
 
 :func:`calibrate_runs` runs the estimator a method names on runs already read
-(:func:`umbmark.jobs.inputs.read_runs`), through :func:`umbmark.estimators.dispatch.estimate_runs`,
-and returns the :class:`~umbmark.jobs.calibrate.CalibrationReport`; :func:`umbmark.calibrate`
-and the held-out validation (:func:`umbmark.validate`) share it.
+(:func:`umbmark.calibration.active.read_runs`), through
+:func:`umbmark.estimators.dispatch.estimate_runs`, and returns the
+:class:`~umbmark.calibration.report.CalibrationResult`; :func:`umbmark.calibrate` and the
+held-out validation (:func:`umbmark.validate`) share it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
+from umbmark.calibration.active import check_calibration
 from umbmark.calibration.compose import Calibration
+from umbmark.calibration.report import CalibrationResult
 from umbmark.core.messages import split_messages
 from umbmark.estimators.dispatch import estimate_runs
-from umbmark.jobs.inputs import Runs, check_calibration
-
-if TYPE_CHECKING:
-    from umbmark.jobs.calibrate import CalibrationReport
+from umbmark.runs.read import Runs
 
 __all__ = ["calibrate_runs", "sessions_disagree"]
 
 
-def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -> CalibrationReport:
+def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -> CalibrationResult:
     """The calibration of runs already read, by ``method``.
 
     Raises
@@ -30,8 +29,6 @@ def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -
     InputError
         For runs the method cannot use, or a fit that fails (why, and what to try).
     """
-    from umbmark.jobs.calibrate import CalibrationReport
-
     active = read.active
     found = estimate_runs(
         method,
@@ -45,7 +42,7 @@ def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -
     )
     check_calibration(Calibration(found.estimate, active), read.origins)
     notes, warnings = split_messages(read.notes)
-    return CalibrationReport(
+    return CalibrationResult(
         sources=read.sources,
         format=read.format,
         runs=read.runs,

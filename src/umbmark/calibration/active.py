@@ -1,0 +1,344 @@
+"""The odometry parameters active while the runs were driven, resolved for each source,
+and the runs read with them (:func:`read_runs`); checks of a calibration against them.
+
+Parameters come from three places, later ones winning: the source itself (a run log's
+``metadata.yaml``, an OptiOdom session's metadata, a runs table's ``# umbmark-active:``
+line; a bag says nothing), a parameter file (``current_params``: a ros2_control or ROS 1
+YAML, or a previous result), and the keywords. The wheel factors and separation
+multiplier a source records as active are used only where no ``current_...`` keyword or
+file is given (with a note); given ones that differ from them are warned of. Messages
+about a parameter name where it came from (an option, or a file's field). A runs table's
+end points are judged as a robot driving the square makes them
+(:mod:`umbmark.estimators.plausibility`: units, swapped columns, errors beyond the square
+test).
+
+Every keyword is an option of ``umbmark calibrate`` and ``umbmark replay`` with the same
+name and meaning (``--current-c-l`` is ``current_c_l``); lengths in metres. Messages name
+the options as the command line spells them.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+
+from umbmark.calibration.compose import Calibration
+from umbmark.core.bounds import (
+    MAX_SIDE_LENGTH,
+    MAX_WHEELBASE,
+    Origin,
+    check_length,
+    geometry_origins,
+)
+from umbmark.core.errors import InputError
+from umbmark.core.messages import info
+from umbmark.estimators.plausibility import check_columns, unit_hints
+from umbmark.runs.options import SAME_ROBOT_TOLERANCE, ReadOptions
+from umbmark.runs.read import (
+    Chosen,
+    Runs,
+    RunSource,
+    parameter_file,
+    pool_runs,
+    read_source,
+    recorded_active,
+    source_format,
+)
+from umbmark.sources.params.reader import (
+    ControllerParams,
+    is_result_file,
+    result_nominal,
+)
+from umbmark.sources.runs_table.reader import RecordedActive
+
+__all__ = [
+    "check_calibration",
+    "check_same_robot",
+    "choose_active",
+    "read_runs",
+]
+
+
+def check_calibration(
+    calibration: Calibration, origins: Mapping[str, Origin] | None = None
+) -> None:
+    """Refuse a calibration whose new factors are not positive finite numbers.
+
+    Raises
+    ------
+    InputError
+        Naming the first such factor: the runs and the parameters (named as ``origins``
+        says where they came from, see :func:`check_square_geometry`) contradict each other.
+    """
+    active = calibration.active
+    b_from, side_from, m_from, _ = geometry_origins(origins, active.separation_multiplier)
+    named = [side_from.named(), b_from.named(), *([m_from.named()] if m_from else [])]
+    for name, value in (
+        ("E_d", calibration.estimate.E_d),
+        ("E_b", calibration.estimate.E_b),
+        ("c_L", calibration.new_c_left),
+        ("c_R", calibration.new_c_right),
+        ("wheel_separation_multiplier", calibration.new_separation_multiplier),
+        ("wheelbase", calibration.wheelbase_corrected),
+    ):
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(
+                f"the runs give {name} = {value:.6g}, which no robot can have: check "
+                f"{', '.join(named)} and the runs' units and directions"
+            )
+
+
+def check_same_robot(
+    result: str,
+    theirs: tuple[float | None, float | None],
+    source: str,
+    ours: tuple[float | None, float | None],
+) -> None:
+    """Refuse a result computed for other nominal parameters than a source's.
+
+    Parameters
+    ----------
+    result : str
+        The result (a file name) as messages name it.
+    theirs : (float or None, float or None)
+        The result's nominal wheelbase and wheel diameter [m] (its ``active`` block).
+    source : str
+        The source as messages name it.
+    ours : (float or None, float or None)
+        The source's own nominal wheelbase and wheel diameter [m].
+
+    Raises
+    ------
+    InputError
+        Naming both values, where one pair differs by more than 1 %.
+    """
+    for name, their, our in zip(("wheelbase", "wheel diameter"), theirs, ours, strict=True):
+        if their is None or our is None:
+            continue
+        if abs(their - our) > SAME_ROBOT_TOLERANCE * our:
+            raise InputError(
+                f"{result} is a calibration for a nominal {name} of {their:g} m, but "
+                f"{source} has {our:g} m (more than 1 % apart): a result of another robot "
+                "or setup; give --force to use it anyway"
+            )
+
+
+def read_runs(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    *,
+    wheelbase: float | None = None,
+    side_length: float | None = None,
+    force: bool = False,
+) -> Runs:
+    """Read the runs of every source, with the odometry parameters the options say.
+
+    Several sources must agree on the square's side and on the parameters that were
+    active; their runs are pooled (labels then start with the source's name). A result
+    file as ``current_params`` must be for the sources' nominal wheelbase and wheel
+    diameter (within 1 %), unless ``force``.
+
+    Raises
+    ------
+    InputError
+        For bad options, a bad source, or sources that disagree.
+    """
+    if not sources:
+        raise InputError("no source given: name a runs table, run log, OptiOdom session or bag")
+    if wheelbase is not None:
+        check_length("--wheelbase", wheelbase, MAX_WHEELBASE)
+    if side_length is not None:
+        check_length("--side-length", side_length, MAX_SIDE_LENGTH)
+    file = parameter_file(options)
+    read = [_read_one(source, options, file, wheelbase, side_length) for source in sources]
+    if options.current_params is not None and not force:
+        path = Path(options.current_params)
+        if is_result_file(path):
+            theirs = result_nominal(path)
+            for one in read:
+                if one.nominal is not None:
+                    check_same_robot(
+                        str(path),
+                        theirs,
+                        one.sources[0],
+                        (one.nominal.wheelbase, one.nominal.wheel_diameter),
+                    )
+    if len(read) == 1:
+        return read[0]
+    return pool_runs(read)
+
+
+def _read_one(
+    source: RunSource,
+    options: ReadOptions,
+    file: ControllerParams,
+    wheelbase: float | None,
+    side_length: float | None,
+) -> Runs:
+    """One source read with the active parameters resolved for it; a runs table's end
+    points judged (:mod:`umbmark.estimators.plausibility`)."""
+    path, kind = source_format(source, options)
+    recorded = None if path is None else recorded_active(path, kind)
+    chosen = choose_active(options, file, wheelbase, recorded, note_wheelbase=kind == "table")
+    read = read_source(source, kind, options, file, chosen, side_length, recorded)
+    if path is not None and kind == "table":
+        name, runs = read.sources[0], list(read.runs)
+        b = read.active.effective_wheelbase
+        hints = [
+            *check_columns(runs, side_length, name),
+            *unit_hints(runs, options.unit, options.angle_unit, side_length, b, name),
+        ]
+        read = replace(read, notes=(*read.notes, *hints))
+    return read
+
+
+#: Given and recorded active parameters closer than this (relative) agree.
+_SAME_ACTIVE = 1e-6
+
+
+def choose_active(
+    options: ReadOptions,
+    file: ControllerParams,
+    wheelbase: float | None,
+    recorded: RecordedActive | None,
+    *,
+    note_wheelbase: bool = True,
+) -> Chosen:
+    """The active parameters: the options' and the parameter file's; where none of the
+    ``--current-...`` options is given, what the source records (with a note). Warns where
+    the given ones differ from the recorded ones."""
+    from_file = options.current_params is not None
+    in_file = f"--current-params {os.fspath(options.current_params or '')}"
+    diameter = options.wheel_diameter
+    if diameter is None and file.wheel_radius is not None:
+        diameter = 2.0 * file.wheel_radius
+    if diameter is None and recorded is not None:
+        diameter = recorded.wheel_diameter
+    user_b = wheelbase if wheelbase is not None else file.wheel_separation
+    b_flag = "--wheelbase" if wheelbase is not None else in_file
+    factors = [
+        (options.current_c_l, "--current-c-l", file.left_wheel_radius_multiplier),
+        (options.current_c_r, "--current-c-r", file.right_wheel_radius_multiplier),
+        (
+            options.current_separation_multiplier,
+            "--current-separation-multiplier",
+            file.wheel_separation_multiplier,
+        ),
+    ]
+    given = [
+        (option, flag) if option is not None else (value, in_file) if from_file else (None, "")
+        for option, flag, value in factors
+    ]
+    origins = _given_origins(options, wheelbase, file)
+    if recorded is None:
+        return Chosen(given[0][0], given[1][0], given[2][0], user_b, diameter, (), origins)
+
+    def shown(value: float, unit: str = "") -> str:
+        return f"{value:.6g}{unit}"
+
+    where, notes = recorded.where, list[str]()
+    recorded_b = recorded.wheelbase
+    if all(value is None for value, _ in given):
+        # Nothing said what was active: what the source records was.
+        used = [
+            f"{label} = {shown(value)}"
+            for label, value in (
+                ("c_L", recorded.c_left),
+                ("c_R", recorded.c_right),
+                ("wheel_separation_multiplier", recorded.separation_multiplier),
+            )
+            if value != 1.0
+        ]
+        if user_b is None and recorded_b is not None and note_wheelbase:
+            used.append(f"wheelbase = {shown(recorded_b, ' m')}")
+        if used:
+            notes.append(
+                info(
+                    f"active parameters from {where}: {', '.join(used)} (the correction is "
+                    "composed with them; give --current-params or --current-c-l, --current-c-r, "
+                    "--current-separation-multiplier to override)"
+                )
+            )
+        if (
+            user_b is not None
+            and recorded_b is not None
+            and not math.isclose(user_b, recorded_b, rel_tol=_SAME_ACTIVE)
+        ):
+            notes.append(
+                f"{b_flag} gives wheelbase = {shown(user_b, ' m')}, but {where} records "
+                f"wheelbase = {shown(recorded_b, ' m')} (times wheel_separation_multiplier "
+                f"{shown(recorded.separation_multiplier)}) as active during the runs; "
+                f"using {shown(user_b, ' m')} times the recorded multiplier"
+            )
+        if recorded_b is not None:
+            origins.setdefault("wheelbase", recorded.origin("wheelbase"))
+        origins["separation_multiplier"] = recorded.origin("wheel_separation_multiplier")
+        return Chosen(
+            recorded.c_left,
+            recorded.c_right,
+            recorded.separation_multiplier,
+            user_b if user_b is not None else recorded_b,
+            diameter,
+            tuple(notes),
+            origins,
+        )
+
+    # Something was given: it wins; say where it contradicts the record.
+    for (value, flag), label, record in zip(
+        given[:2], ("c_L", "c_R"), (recorded.c_left, recorded.c_right), strict=True
+    ):
+        if value is not None and not math.isclose(value, record, rel_tol=_SAME_ACTIVE):
+            notes.append(
+                f"{flag} gives {label} = {shown(value)}, but {where} records {label} = "
+                f"{shown(record)} as active during the runs; using {shown(value)}"
+            )
+    separation = given[2][0]
+    configured = user_b
+    if configured is None and recorded_b is not None:
+        # The recorded wheelbase, as the odometry used it unless a multiplier is given.
+        configured = (
+            recorded_b if separation is not None else recorded_b * (recorded.separation_multiplier)
+        )
+    if configured is not None and recorded_b is not None:
+        used_b = configured * (1.0 if separation is None else separation)
+        record_b = recorded_b * recorded.separation_multiplier
+        if not math.isclose(used_b, record_b, rel_tol=_SAME_ACTIVE):
+            flags = " and ".join(
+                f for f in (b_flag if user_b is not None else "", given[2][1]) if f
+            )
+            notes.append(
+                f"the odometry's wheelbase from {flags or 'the options'} is "
+                f"{shown(used_b, ' m')}, but {where} records {shown(record_b, ' m')} "
+                f"(wheelbase {shown(recorded_b, ' m')} times wheel_separation_multiplier "
+                f"{shown(recorded.separation_multiplier)}) as active during the runs; "
+                f"using {shown(used_b, ' m')}"
+            )
+    if user_b is None and recorded_b is not None:
+        origins["wheelbase"] = recorded.origin("wheelbase")
+        if separation is None:
+            origins["separation_multiplier"] = recorded.origin("wheel_separation_multiplier")
+    return Chosen(given[0][0], given[1][0], separation, configured, diameter, tuple(notes), origins)
+
+
+def _given_origins(
+    options: ReadOptions, wheelbase: float | None, file: ControllerParams
+) -> dict[str, Origin]:
+    """Where the wheelbase and its multiplier come from when an option or the parameter
+    file gives them."""
+    params = os.fspath(options.current_params or "")
+    # A previous result gives its active wheelbase and its new multiplier.
+    result = bool(params) and is_result_file(params)
+    origins = {}
+    if wheelbase is not None:
+        origins["wheelbase"] = Origin("--wheelbase")
+    elif file.wheel_separation is not None:
+        origins["wheelbase"] = Origin("active.wheelbase" if result else "wheel_separation", params)
+    if options.current_separation_multiplier is not None:
+        origins["separation_multiplier"] = Origin("--current-separation-multiplier")
+    elif params:
+        field = "new.wheel_separation_multiplier" if result else "wheel_separation_multiplier"
+        origins["separation_multiplier"] = Origin(field, params)
+    return origins

@@ -1,0 +1,145 @@
+"""UMBmark passes on one robot (:class:`Passes`): each pass's calibration in the order
+driven, and with a single pass of recorded runs the *predicted* after
+(:func:`predict_after`): the same runs' wheel data integrated again with the new
+parameters, a prediction, not a measured pass.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
+from umbmark.calibration.report import CalibrationResult
+from umbmark.core.jsontext import JsonText
+from umbmark.core.version import __version__
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.runs import Run
+
+if TYPE_CHECKING:
+    from umbmark.calibration.validation import ValidationReport
+
+__all__ = ["Passes", "PredictedPass", "predict_after"]
+
+
+@dataclass(frozen=True)
+class PredictedPass:
+    """A pass's recorded runs integrated again with its new parameters.
+
+    What the runs' return errors would have been had the odometry used the corrected
+    parameters: a prediction from the recorded wheel data, not a measured pass (the
+    robot steered by its old odometry, so the paths driven were those of the pass).
+
+    Attributes
+    ----------
+    runs : tuple of Run
+        The pass's square runs, their odometry end poses integrated anew.
+    benchmark : Benchmark
+        Their UMBmark figures (Eqs. 3.1-3.4).
+    params : WheelParams
+        The parameters integrated with (:meth:`CalibrationResult.new_params` applied to
+        the pass's own, as :func:`umbmark.replay` does).
+    """
+
+    runs: tuple[Run, ...]
+    benchmark: Benchmark
+    params: WheelParams
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres)."""
+        bench = self.benchmark
+        return {
+            "kind": "prediction: the recorded wheel data replayed with the new parameters",
+            "e_max_syst": bench.e_max_syst,
+            "worst_direction": bench.worst.direction.value,
+            "sem": bench.sem,
+            "second_pass_threshold": bench.second_pass_threshold,
+            **{f"cg_{c.direction.value}": [float(v) for v in c.cg] for c in bench.clusters},
+            "runs": [
+                {
+                    "label": run.label,
+                    "direction": run.direction.value,
+                    "eps_x": run.return_error[0],
+                    "eps_y": run.return_error[1],
+                }
+                for run in self.runs
+            ],
+            "parameters": {
+                "wheelbase": self.params.wheelbase,
+                "wheel_diameter_left": self.params.diameter_left,
+                "wheel_diameter_right": self.params.diameter_right,
+            },
+        }
+
+
+def predict_after(calibration: CalibrationResult) -> PredictedPass | None:
+    """The pass after ``calibration`` as its recorded wheel data predicts it.
+
+    Returns None unless the pass has UMBmark figures and every square run carries its
+    recorded wheel data (run logs, OptiOdom sessions, bags; not runs tables).
+    """
+    if calibration.benchmark is None or calibration.params is None:
+        return None
+    squares = [run for run in calibration.runs if run.kind == "square"]
+    if not squares or any(run.log is None for run in squares):
+        return None
+    params = calibration.new_params().applied_to(calibration.params)
+    runs = tuple(run.reintegrated(params) for run in squares)
+    try:
+        bench = umbmark_benchmark(runs)
+    except ValueError:  # pragma: no cover - the pass had both directions
+        return None
+    return PredictedPass(runs=runs, benchmark=bench, params=params)
+
+
+@dataclass(frozen=True, repr=False)
+class Passes(JsonText):
+    """UMBmark passes on one robot, and what the page about them shows (the job's
+    :class:`umbmark.jobs.report.PassesReport` adds the page's file).
+
+    Attributes
+    ----------
+    passes : tuple of CalibrationResult
+        Each pass's calibration, in the order driven (pass 1 first).
+    predicted : PredictedPass or None
+        With a single pass of recorded runs: its runs replayed with the new parameters.
+    validation : ValidationReport or None
+        Held-out validation of the estimators on the last pass (``validate=True``).
+    command : str or None
+        The command line (or call) that made the report, for its provenance.
+    created : datetime
+        When the report was made (UTC).
+    """
+
+    passes: tuple[CalibrationResult, ...]
+    predicted: PredictedPass | None = None
+    validation: ValidationReport | None = None
+    command: str | None = None
+    created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
+
+    def __repr__(self) -> str:
+        figures = ", ".join("None" if e is None else f"{e * 1000:.1f} mm" for e in self.e_max_syst)
+        return f"{type(self).__name__}(passes={len(self.passes)}, e_max_syst=[{figures}])"
+
+    @property
+    def e_max_syst(self) -> tuple[float | None, ...]:
+        """``E_max,syst`` [m] of each pass (Eq. 3.4)."""
+        return tuple(p.e_max_syst for p in self.passes)
+
+    @property
+    def last(self) -> CalibrationResult:
+        """The last pass: its correction is the one to apply now."""
+        return self.passes[-1]
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (metres, radians): what ``report --json`` prints."""
+        return {
+            "umbmark_version": __version__,
+            "units": {"length": "m", "angle": "rad"},
+            "command": self.command,
+            "e_max_syst": list(self.e_max_syst),
+            "passes": [p.to_dict() for p in self.passes],
+            "predicted_after": None if self.predicted is None else self.predicted.to_dict(),
+            "validation": None if self.validation is None else self.validation.to_dict(),
+        }

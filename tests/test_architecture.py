@@ -1,0 +1,253 @@
+"""The package's architecture (docs/architecture.md): imports go down the layers, no
+import cycle, small modules, jobs hold values only.
+
+Every module of ``src/umbmark`` is parsed (not imported): every ``import`` statement
+counts, at module level, inside functions and under ``TYPE_CHECKING`` alike.
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+from helpers import ROOT
+
+SRC = ROOT / "src"
+PACKAGE = SRC / "umbmark"
+
+#: The layers, lowest first (docs/architecture.md). A module may import from its own
+#: top-level folder and from lower layers only.
+LAYERS = (
+    "core",
+    "options",
+    "model",
+    "sources",
+    "runs",
+    "benchmark",
+    "estimators",
+    "calibration",
+    "sim",
+    "store",
+    "outputs",
+    "robot",
+    "autocal",
+    "jobs",
+    "cli",
+)
+#: Modules above every layer: the lazy facade and the console script's entry.
+TOP = ("umbmark", "umbmark.__main__", "umbmark._entry")
+#: Data the package ships (below every layer; imports nothing of umbmark).
+DATA = "umbmark.data"
+#: Most lines a module may have.
+MAX_LINES = 600
+
+
+def _modules(root: Path = PACKAGE) -> dict[str, Path]:
+    """Every module by dotted name (a package by its own name)."""
+    found = {}
+    for path in sorted(root.rglob("*.py")):
+        parts = list(path.relative_to(root.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        found[".".join(parts)] = path
+    return found
+
+
+def _imports(name: str, path: Path, modules: dict[str, Path]) -> list[tuple[str, int]]:
+    """The umbmark modules ``name`` imports, with the line of each import statement."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out: list[tuple[str, int]] = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                target = ".".join([*base, *([node.module] if node.module else [])])
+            else:
+                target = node.module or ""
+            subs = [f"{target}.{alias.name}" for alias in node.names]
+            found = [t for t in subs if t in modules]
+            if target in modules and (target != "umbmark" or len(found) < len(subs)):
+                found.append(target)  # ``from umbmark import data`` imports the data only
+            out += [(t, node.lineno) for t in found]
+        elif isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names if a.name in modules]
+    return [(t, line) for t, line in out if t != name]
+
+
+def _layer(name: str) -> int | None:
+    """The rank of a module's layer (None: in no layer)."""
+    if name in TOP:
+        return len(LAYERS)
+    if name == DATA or name.startswith(DATA + "."):
+        return -1
+    folder = name.split(".")[1]
+    return LAYERS.index(folder) if folder in LAYERS else None
+
+
+def _folder(name: str) -> str:
+    return ".".join(name.split(".")[:2])
+
+
+def layer_violations(root: Path = PACKAGE) -> list[str]:
+    """Every import that does not go down the layers, and every module in no layer."""
+    modules = _modules(root)
+    bad = [f"{name}: in no layer" for name in modules if _layer(name) is None]
+    for name, path in modules.items():
+        ours = _layer(name)
+        if ours is None:
+            continue
+        for target, line in _imports(name, path, modules):
+            theirs = _layer(target)
+            if theirs is None or _folder(name) == _folder(target):
+                continue
+            if name.startswith("umbmark.cli.") and target == "umbmark":
+                continue  # the command line calls the library through its facade
+            if theirs >= ours and name not in TOP:
+                bad.append(f"{name} (line {line}) imports {target}")
+    return bad
+
+
+def import_cycles(root: Path = PACKAGE) -> list[list[str]]:
+    """The modules that import each other, directly or not: the strongly connected
+    components of more than one module (Tarjan's algorithm, iterative)."""
+    modules = _modules(root)
+    graph = {
+        name: sorted({t for t, _ in _imports(name, p, modules)}) for name, p in modules.items()
+    }
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    cycles: list[list[str]] = []
+    for start in graph:
+        if start in index:
+            continue
+        work = [(start, 0)]
+        while work:
+            node, i = work.pop()
+            if i == 0:
+                index[node] = low[node] = len(index)
+                stack.append(node)
+                on_stack.add(node)
+            if i < len(graph[node]):
+                work.append((node, i + 1))
+                nxt = graph[node][i]
+                if nxt not in index:
+                    work.append((nxt, 0))
+                elif nxt in on_stack:
+                    low[node] = min(low[node], index[nxt])
+                continue
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    cycles.append(sorted(component))
+            if work:
+                parent = work[-1][0]
+                low[parent] = min(low[parent], low[node])
+    return cycles
+
+
+def long_modules(root: Path = PACKAGE) -> list[str]:
+    """Every module over :data:`MAX_LINES` lines."""
+    out = []
+    for name, path in _modules(root).items():
+        lines = len(path.read_text(encoding="utf-8").splitlines())
+        if lines > MAX_LINES:
+            out.append(f"{name}: {lines} lines")
+    return out
+
+
+def job_classes_not_values(root: Path = PACKAGE) -> list[str]:
+    """Every class of ``jobs/`` that is not a frozen dataclass (a report or a part of
+    one): the jobs hold no machinery of their own."""
+    out = []
+    for name, path in _modules(root).items():
+        if not name.startswith("umbmark.jobs."):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.ClassDef):
+                continue
+            frozen = any(
+                isinstance(d, ast.Call)
+                and getattr(d.func, "id", None) == "dataclass"
+                and any(
+                    k.arg == "frozen" and getattr(k.value, "value", None) is True
+                    for k in d.keywords
+                )
+                for d in node.decorator_list
+            )
+            if not frozen:
+                out.append(f"{name}.{node.name} (line {node.lineno})")
+    return out
+
+
+def test_imports_go_down_the_layers():
+    bad = layer_violations()
+    assert not bad, "imports against the layers:\n" + "\n".join(bad)
+
+
+def test_no_import_cycle():
+    cycles = import_cycles()
+    assert not cycles, "import cycles:\n" + "\n".join(", ".join(c) for c in cycles)
+
+
+def test_no_module_over_600_lines():
+    long = long_modules()
+    assert not long, f"modules over {MAX_LINES} lines:\n" + "\n".join(long)
+
+
+def test_jobs_hold_only_frozen_dataclasses():
+    bad = job_classes_not_values()
+    assert not bad, "classes in jobs/ that are not frozen dataclasses:\n" + "\n".join(bad)
+
+
+def _package(tmp_path: Path, files: dict[str, str]) -> Path:
+    root = tmp_path / "umbmark"
+    for rel, text in files.items():
+        path = root / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+    return root
+
+
+def test_the_checks_find_what_they_look_for(tmp_path):
+    """Each check names the offender in a package made to break it."""
+    root = _package(
+        tmp_path,
+        {
+            "__init__.py": "",
+            "core/__init__.py": "",
+            "core/low.py": "def f():\n    from umbmark.jobs.high import g\n",
+            "jobs/__init__.py": "",
+            "jobs/high.py": "from umbmark.core import low\n\n\nclass Machine:\n    pass\n",
+            "jobs/a.py": "from umbmark.jobs.b import x\n",
+            "jobs/b.py": "import typing\nif typing.TYPE_CHECKING:\n    import umbmark.jobs.a\n"
+            + "x = 1\n" * 601,
+            "misc/__init__.py": "",
+            "cli/__init__.py": "",
+            "cli/main.py": "import umbmark\nfrom umbmark import data\n",
+            "data/__init__.py": "",
+        },
+    )
+    assert layer_violations(root) == [
+        "umbmark.misc: in no layer",
+        "umbmark.core.low (line 2) imports umbmark.jobs.high",
+    ]
+    assert sorted(import_cycles(root)) == [
+        ["umbmark.core.low", "umbmark.jobs.high"],
+        ["umbmark.jobs.a", "umbmark.jobs.b"],
+    ]
+    assert long_modules(root) == ["umbmark.jobs.b: 604 lines"]
+    assert job_classes_not_values(root) == ["umbmark.jobs.high.Machine (line 4)"]
+
+
+if __name__ == "__main__":  # pragma: no cover - a listing for people
+    for line in [*layer_violations(), *map(str, import_cycles()), *long_modules()]:
+        sys.stdout.write(line + "\n")
