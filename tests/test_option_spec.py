@@ -254,3 +254,16 @@ def test_tum_time_is_the_specs() -> None:
     assert typing.get_args(TumTime) == TUM_TIMES == TUM_TIME.choices
     for command in (calibrate_command, replay_command):
         _same_option(command, TUM_TIME, OUTPUTS, TUM_TIME.help)
+
+
+def test_none_is_refused_where_the_option_has_a_default() -> None:
+    """None means "not given" only for options without a default; ``max_gap=None`` is a
+    mistake, refused with one line (it was before the spec)."""
+    for keywords, line in [
+        ({"max_gap": None}, "--max-gap must be a number, not 'None'"),
+        ({"format": None}, "--format None: use one of auto, table, log, optiodom, bag"),
+    ]:
+        with pytest.raises(InputError) as caught:
+            ReadOptions.of(keywords)
+        assert caught.value.command_line() == line
+    assert ReadOptions.of({"wheel_diameter": None}).wheel_diameter is None

@@ -137,15 +137,15 @@ class Spec:
         return self.flags[0]
 
     def check(self, value: object, source: str | None = None) -> None:
-        """Refuse a value outside the choices or the bound (None, not given, passes);
-        ``source``: the file the message is about, if any.
+        """Refuse a value outside the choices or the bound; None passes where it is the
+        default (not given). ``source``: the file the message is about, if any.
 
         Raises
         ------
         InputError
             One line naming the flag and the allowed values.
         """
-        if value is None:
+        if value is None and self.default is None:
             return
         if self.kind == "choice":
             check_choice(self.flag, value, self.choices, source)
