@@ -342,3 +342,93 @@ def test_one_pass_without_verification_says_so(tmp_path):
     assert len(report.passes) == 1
     assert report.e_max_syst_after is None
     assert json.loads(report.to_json())["e_max_syst_after"] is None
+
+
+def test_range_sensors_that_lose_the_corner_say_which_run_and_what_to_do(tmp_path):
+    """Three single beams see both walls only near the start: the paper's LabMate errors
+    on 4 m squares end the ccw runs about a metre away (its E_max,syst is 1.04 m)."""
+    robot = VirtualRobot(E_d=E_D, E_b=E_B, slip=0.0004, seed=1)
+    with pytest.raises(InputError, match=r"at the end of (cw|ccw) run [1-5]\): the robot stopped"):
+        selfcal(robot, measure="ranges", out=tmp_path / "out")
+    _last_command_is_a_stop(robot)
+
+
+def test_range_sensors_calibrate_a_robot_with_moderate_errors(tmp_path):
+    """The paper's sonar calibrator: fixes within its 2 mm and 0.4 deg where the robot
+    returns near its start."""
+    robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=1)
+    report = selfcal(robot, measure="ranges", side_length=2.0, out=tmp_path / "out")
+    errors = report.measurement_errors()
+    assert errors is not None
+    assert errors[0] <= 0.003  # m rms
+    assert math.degrees(errors[1]) <= 0.4  # deg rms
+    before, after = report.e_max_syst_before, report.e_max_syst_after
+    assert before is not None
+    assert after is not None
+    assert before / after >= 5.0
+    final = report.final
+    assert final.wheel_separation_multiplier == pytest.approx(0.995, abs=0.001)
+    ratio = final.right_wheel_radius_multiplier / final.left_wheel_radius_multiplier
+    assert ratio == pytest.approx(1.001, abs=0.0002)
+
+
+def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
+    """Motion capture's fixes are in the world frame; the virtual robot's truth there is its
+    true pose: the errors are the capture's noise (0.5 mm, 0.05 deg per reading, five
+    readings averaged), not the distance between two frames."""
+    robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=1)
+    report = selfcal(
+        robot, measure="truth", side_length=1.0, runs=2, max_passes=1, out=tmp_path / "o"
+    )
+    errors = report.measurement_errors()
+    assert errors is not None
+    assert errors[0] <= 0.001  # m rms
+    assert math.degrees(errors[1]) <= 0.05  # deg rms
+
+
+def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path):
+    """The person is simulated by geometry: at each prompt, the distance from the named mark
+    on the robot to the named wall, square to it, read off the virtual robot's true pose in
+    the corner frame (walls along x = 0, the "y wall", and y = 0, the "x wall") and rounded
+    to the millimetre as a tape is read."""
+    import re
+
+    robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=3)
+    asked: list[str] = []
+
+    def person(prompt: str) -> str:
+        asked.append(prompt)
+        found = re.search(
+            r"mark \d \(x (-?\d+) mm, y (-?\d+) mm on the robot\) to the (x|y) wall", prompt
+        )
+        assert found, prompt
+        mark = Pose2D(float(found[1]) / 1000, float(found[2]) / 1000, 0.0)
+        where = robot.corner_truth()
+        assert where is not None
+        at = where.compose(mark)
+        distance = at.x if found[3] == "y" else at.y
+        return f"{round(distance * 1000)}"
+
+    report = selfcal(
+        robot, measure="tape", ask=person, side_length=1.0, runs=2, max_passes=1,
+        verify=False, out=tmp_path / "out",
+    )  # fmt: skip
+    fixes = report.fix_errors
+    assert fixes is not None
+    assert len(asked) == 3 * fixes.shape[0]  # three distances a fix
+    errors = report.measurement_errors()
+    assert errors is not None
+    assert errors[0] <= 0.002  # m rms: millimetre readings
+    assert math.degrees(errors[1]) <= 0.4  # deg rms (marks 0.5 m apart)
+
+
+def test_progress_names_the_pass_the_run_and_the_leg(tmp_path):
+    seen: list[tuple[str, int, object, str]] = []
+    selfcal(
+        VirtualRobot(E_d=1.001, E_b=0.995, seed=4), side_length=1.0, runs=2, max_passes=1,
+        verify=False, coarse=False, out=tmp_path / "out",
+        progress=lambda label, k, direction, what: seen.append((label, k, direction, what)),
+    )  # fmt: skip
+    assert ("pass 1", 1, Direction.CW, "driving, leg 1") in seen
+    assert ("pass 1", 4, Direction.CCW, "driving, turn 4") in seen
+    assert ("pass 1", 4, Direction.CCW, "measuring") in seen

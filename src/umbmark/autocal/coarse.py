@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass
 
 from umbmark.autocal.drive import DriveLimits, move_to, settle
-from umbmark.autocal.measure import Measure, measure
+from umbmark.autocal.measure import Measure, take_fix
 from umbmark.core.conventions import wrap_angle
 from umbmark.robot.base import Pose2D, Robot
 
@@ -79,10 +79,10 @@ def coarse_turning(robot: Robot, how: Measure, limits: DriveLimits) -> CoarseTur
     odometry_angle = true_angle = 0.0
     for sign in (1.0, -1.0):
         odom_before = settle(robot, limits).pose
-        before = measure(robot, how)
+        before = take_fix(robot, how)
         move_to(robot, Pose2D(0.0, 0.0, sign * COARSE_TURN), limits)
         odom_after = settle(robot, limits).pose
-        after = measure(robot, how)
+        after = take_fix(robot, how)
         odometry_angle += abs(float(wrap_angle(odom_after.theta - odom_before.theta)))
         true_angle += abs(float(wrap_angle(after.pose.theta - before.pose.theta)))
     ratio = odometry_angle / true_angle if true_angle > 0 else math.inf

@@ -23,7 +23,7 @@ from umbmark.autocal.corner_sensors import (
 )
 from umbmark.robot.base import LaserScan, Pose2D, RangeReading, Robot, Stamped
 
-__all__ = ["MEASURE_METHODS", "READINGS", "Measure", "MeasureMethod", "measure"]
+__all__ = ["MEASURE_METHODS", "READINGS", "Measure", "MeasureMethod", "take_fix"]
 
 MeasureMethod = Literal["lidar", "ranges", "truth", "tape"]
 MEASURE_METHODS: tuple[MeasureMethod, ...] = ("lidar", "ranges", "truth", "tape")
@@ -70,7 +70,7 @@ def _collect(robot: Robot, read: Callable[[], object], what: str, count: int) ->
     raise CornerNotFoundError("missing_echo", f"the robot gives no {what} (asked for {count})")
 
 
-def measure(
+def take_fix(
     robot: Robot,
     how: Measure,
     prior: Pose2D | None = None,

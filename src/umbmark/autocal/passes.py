@@ -9,9 +9,9 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from umbmark.autocal.corner import CornerFix, expected_pose
+from umbmark.autocal.corner import CornerFix, CornerNotFoundError, expected_pose
 from umbmark.autocal.drive import DriveLimits, drive_square, move_to, settle
-from umbmark.autocal.measure import Measure, measure
+from umbmark.autocal.measure import Measure, take_fix
 from umbmark.autocal.record import MeasuredRun
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.robot.base import Pose2D, Robot
@@ -53,14 +53,18 @@ class Home:
 
 def _fix_here(robot: Robot, how: Measure, home: Home, gate: tuple[float, float]) -> CornerFix:
     odom = settle(robot).pose
-    fix = measure(robot, how, home.prior(odom), gate)
+    fix = take_fix(robot, how, home.prior(odom), gate)
     home.fix, home.odometry = fix, odom
-    home.fixes.append((fix, corner_truth(robot)))
+    home.fixes.append((fix, corner_truth(robot, how)))
     return fix
 
 
-def corner_truth(robot: Robot) -> Pose2D | None:
-    """The robot's true pose in the corner frame, if it knows it (a virtual robot)."""
+def corner_truth(robot: Robot, how: Measure) -> Pose2D | None:
+    """The robot's true pose in the frame of ``how``'s fixes, if it knows it (a virtual
+    robot): the corner frame, or the world frame for fixes by the ground truth."""
+    if how.method == "truth":
+        pose = getattr(robot, "true_pose", None)
+        return pose if isinstance(pose, Pose2D) else None
     truth = getattr(robot, "corner_truth", None)
     return truth() if callable(truth) else None
 
@@ -103,9 +107,35 @@ def drive_pass(
         start = go_home(robot, how, home, limits)
         if progress is not None:
             progress(k, direction, "driving")
-        run = drive_square(robot, side, direction, limits)
+        legs = None
+        if progress is not None:
+
+            def legs(_: int, segment: str, k: int = k, direction: Direction = direction) -> None:
+                assert progress is not None
+                progress(k, direction, f"driving, {segment}")
+
+        run = drive_square(robot, side, direction, limits, progress=legs)
         if progress is not None:
             progress(k, direction, "measuring")
-        end = _fix_here(robot, how, home, (0.2 * side + 0.3, math.radians(30.0)))
+        try:
+            end = _fix_here(robot, how, home, (0.2 * side + 0.3, math.radians(30.0)))
+        except CornerNotFoundError as exc:
+            raise _lost_at_the_end(exc, how, direction, (k - 1) % runs + 1) from None
         out.append(MeasuredRun(run, start, end))
     return out
+
+
+def _lost_at_the_end(
+    exc: CornerNotFoundError, how: Measure, direction: Direction, k: int
+) -> CornerNotFoundError:
+    """The end fix failed: say which run, and for range sensors (which see the corner only
+    near the start) what to do."""
+    where = f"at the end of {direction.value} run {k}"
+    if how.method != "ranges" or exc.cause != "missing_echo":
+        return CornerNotFoundError(exc.cause, f"{exc} ({where})")
+    return CornerNotFoundError(
+        exc.cause,
+        f"{exc} ({where}): the robot stopped too far from its start for three range "
+        "sensors, which see both walls only within some 0.3 m and 10 deg of it; measure with "
+        "--measure lidar (or truth), or make the errors smaller first (a smaller square, -L)",
+    )

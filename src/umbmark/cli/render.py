@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import textwrap
 from collections.abc import Collection, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING
 
 from rich import box
 from rich.console import Console
@@ -15,8 +16,10 @@ from rich.text import Text
 from umbmark.benchmark.returns import Benchmark, sem_verdict
 from umbmark.estimators.registry import LOGGED, find, method_label
 from umbmark.jobs.calibrate import CalibrationReport
-from umbmark.jobs.selfcal import SelfCalReport
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
+
+if TYPE_CHECKING:
+    from umbmark.jobs.selfcal import SelfCalReport
 
 __all__ = ["column", "print_table", "render_calibration", "row", "table"]
 
@@ -405,7 +408,8 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
     errors = report.measurement_errors()
     if errors is not None:
         screen.print(
-            f"Corner fixes against the virtual robot's truth: {errors[0] * 1000:.2f} mm, "
+            f"Fixes ({report.measurement}) against the virtual robot's truth: "
+            f"{errors[0] * 1000:.2f} mm, "
             f"{math.degrees(errors[1]):.3f} deg rms."
         )
     for p in report.passes:

@@ -22,18 +22,21 @@ DRIVING = "Driving"
 @apply(
     [
         option("--sim", "backend", flag_value="sim", section=ROBOT,
-               help="The virtual robot (its errors: --sim-E-d, --sim-E-b, --sim-E-s)."),
+               help="The virtual robot (its errors: --sim-E-d, --sim-E-b, --sim-E-s, --sim-slip)."),
         option("--ros1", "backend", flag_value="ros1", section=ROBOT,
                help="A ROS 1 robot (rospy; ROS_MASTER_URI)."),
         option("--ros2", "backend", flag_value="ros2", section=ROBOT,
                help="A ROS 2 robot (rclpy; never run on our machines: see docs/selfcal.md)."),
-        option("--E-d", "E_d", section=ROBOT, type=float, default=1.004, show_default=True,
+        option("--sim-E-d", "--E-d", "E_d", section=ROBOT, type=float, default=1.004,
+               show_default=True,
                help="With --sim: the virtual robot's D_R / D_L."),
-        option("--E-b", "E_b", section=ROBOT, type=float, default=0.97, show_default=True,
+        option("--sim-E-b", "--E-b", "E_b", section=ROBOT, type=float, default=0.97,
+               show_default=True,
                help="With --sim: the virtual robot's true wheelbase over the nominal one."),
-        option("--E-s", "E_s", section=ROBOT, type=float, default=1.0, show_default=True,
+        option("--sim-E-s", "--E-s", "E_s", section=ROBOT, type=float, default=1.0,
+               show_default=True,
                help="With --sim: the virtual robot's mean wheel diameter over the nominal one."),
-        option("--slip", section=ROBOT, type=float, default=0.0004,
+        option("--sim-slip", "--slip", "slip", section=ROBOT, type=float, default=0.0004,
                show_default=True, help="With --sim: the virtual robot's wheel slip [m^0.5]."),
         option("--seed", section=ROBOT, type=click.IntRange(0, 2**63 - 1), default=1,
                show_default=True, help="Seed of the virtual robot's slip and sensor noise."),
@@ -51,9 +54,9 @@ DRIVING = "Driving"
         option("--max-passes", section=TEST, type=int, default=3, show_default=True,
                help="Most UMBmark passes before the verification (1 to 5)."),
         option("--verify/--no-verify", section=TEST, default=True,
-               help="Leave out the verification pass."),
+               help="Drive a last pass on the final parameters (--no-verify: leave it out)."),
         option("--coarse/--no-coarse", section=TEST, default=True,
-               help="Leave out the coarse turning check."),
+               help="Check first that the robot turns as its odometry believes."),
         option("--speed", section=DRIVING, type=float, default=0.2, show_default=True,
                help="Cruise speed on the legs [m/s] (0.01 to 1)."),
         option("--acceleration", section=DRIVING, type=float, default=0.3, show_default=True,
@@ -78,7 +81,7 @@ DRIVING = "Driving"
                help="The YAML the controller loads (--apply yaml writes the multipliers)."),
         option("--reload", section=ROS, is_flag=True,
                help="ROS 2: reload the controller after writing its parameter file."),
-        option("--robot-name", section=OUTPUTS, default=None,
+        option("--robot", section=OUTPUTS, default=None,
                help="Record every pass in the history under this name (umbmark history NAME)."),
         option("--history", section=OUTPUTS, type=click.Path(dir_okay=False), default=None,
                help="The history file [default: $UMBMARK_HISTORY, else the per-user one]."),
@@ -131,8 +134,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         turn_rate=options.pop("turn_rate"),
     )
     robot = connect(backend, ros=ros, **sim)  # type: ignore[arg-type]
-    measure_with = options.pop("measure")
-    ask = _ask_person if measure_with == "tape" else None
+    ask = _ask_person if options["measure"] == "tape" else None
     try:
         with status_line("self-calibration") as show:
 
@@ -141,8 +143,8 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
                 show(f"{label}{run}: {what}")
 
             report = run_selfcal(
-                robot, measure_with=measure_with, limits=limits, progress=progress,
-                ask=ask, **options,
+                robot, limits=limits, progress=progress, ask=ask,
+                robot_name=options.pop("robot"), **options,
             )  # fmt: skip
     finally:
         robot.close()

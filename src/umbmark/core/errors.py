@@ -47,6 +47,11 @@ FLAG_KEYWORDS = {
     "-m": "method",
     "-f": "format",
     "-p": "params",
+    # selfcal's virtual robot: the keywords of umbmark.connect and umbmark.VirtualRobot
+    "--sim-E-d": "E_d",
+    "--sim-E-b": "E_b",
+    "--sim-E-s": "E_s",
+    "--sim-slip": "slip",
 }
 
 

@@ -36,13 +36,13 @@ import numpy as np
 from umbmark.autocal.coarse import CoarseTurning, coarse_turning
 from umbmark.autocal.corner_sensors import TapeMarks
 from umbmark.autocal.drive import DriveLimits, settle
-from umbmark.autocal.measure import Measure, MeasureMethod, measure
+from umbmark.autocal.measure import MEASURE_METHODS, Measure, MeasureMethod, take_fix
 from umbmark.autocal.passes import Home, corner_truth, drive_pass
 from umbmark.autocal.preflight import preflight
 from umbmark.autocal.record import record_pass
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
-from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DriveParams, Robot
 
 if TYPE_CHECKING:
     from umbmark.jobs.calibrate import CalibrationReport
@@ -206,8 +206,8 @@ def selfcal(
     *,
     side_length: float = 4.0,
     runs: int = 5,
-    measure_with: MeasureMethod = "lidar",
-    apply: ApplyMethod = "reconfigure",
+    measure: MeasureMethod = "lidar",
+    apply: bool | ApplyMethod = True,
     verify: bool = True,
     max_passes: int = 3,
     robot_name: str | None = None,
@@ -228,10 +228,12 @@ def selfcal(
         Placed at the start, in view of the L-shaped corner.
     side_length, runs : float, int
         The square's side [m] and runs per direction (5 in the paper).
-    measure_with : {"lidar", "ranges", "truth", "tape"}
+    measure : {"lidar", "ranges", "truth", "tape"}
         How the fixes are taken (``tape``: a person answers ``ask`` at each stop).
-    apply : {"reconfigure", "yaml", "none"}
-        How corrections reach the controller (``none``: one pass, nothing applied).
+    apply : bool or {"reconfigure", "yaml", "none"}
+        How corrections reach the controller: ``True`` is ``reconfigure`` (at once, as
+        dynamic_reconfigure does), ``yaml`` writes the controller's parameter file,
+        ``False`` or ``none`` applies nothing (one pass).
     verify : bool
         Drive a verification pass on the final parameters.
     max_passes : int
@@ -253,10 +255,11 @@ def selfcal(
         The robot was stopped for safety (a zero velocity was the last command).
     """
     _check_counts(side_length, runs, max_passes)
+    if measure not in MEASURE_METHODS:
+        raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
+    method = _apply_method(apply)
     limits = limits or DriveLimits()
-    how = Measure(
-        measure_with, ask=ask, marks=_tape_marks(robot) if measure_with == "tape" else None
-    )
+    how = Measure(measure, ask=ask, marks=_tape_marks(robot) if measure == "tape" else None)
     name = robot_name or robot.name
     folder = Path(out) if out is not None else Path(f"selfcal-{_slug(name)}")
     if folder.exists() and any(folder.iterdir()):
@@ -264,11 +267,11 @@ def selfcal(
     try:
         checks = preflight(robot, how, side_length, limits)
         odom = settle(robot, limits).pose
-        first = measure(robot, how)
+        first = take_fix(robot, how)
         home = Home(first.pose, first, odom)
-        home.fixes.append((first, corner_truth(robot)))
+        home.fixes.append((first, corner_truth(robot, how)))
         coarse_check, coarse_applied = None, None
-        if coarse and apply != "none" and measure_with in ("lidar", "truth"):
+        if coarse and method != "none" and measure in ("lidar", "truth"):
             if progress is not None:
                 progress("coarse", 0, None, "turning check")
             coarse_check = coarse_turning(robot, how, limits)
@@ -280,18 +283,18 @@ def selfcal(
                         wheel_separation_multiplier=params.wheel_separation_multiplier
                         * coarse_check.ratio,
                     ),
-                    apply,
+                    method,
                 )
             # where it stands now, by a fix without a prior (the turns moved its odometry)
             home.odometry = settle(robot, limits).pose
-            home.fix = measure(robot, how)
+            home.fix = take_fix(robot, how)
         passes: list[PassResult] = []
         drive = _Passes(
             robot, how, folder, side_length, runs, home, limits, name, progress,
             record_as=robot_name, history=history,
         )  # fmt: skip
         for k in range(1, max_passes + 1):
-            result = _apply(robot, drive(f"pass {k}"), apply)
+            result = _apply(robot, drive(f"pass {k}"), method)
             drive.mark_applied(result)
             home.reanchor(robot)
             passes.append(result)
@@ -319,7 +322,7 @@ def selfcal(
     return SelfCalReport(
         robot=name,
         side_length=side_length,
-        measurement=measure_with,
+        measurement=measure,
         coarse=coarse_check,
         coarse_applied=coarse_applied,
         passes=tuple(passes),
@@ -420,3 +423,14 @@ def _tape_marks(robot: Robot) -> TapeMarks:
         if isinstance(found, TapeMarks):
             return found
     return TapeMarks(marks=((-0.35, 0.25), (-0.35, -0.25), (-0.35, -0.25)))
+
+
+def _apply_method(apply: bool | ApplyMethod) -> ApplyMethod:
+    """``apply`` as a method: True is ``reconfigure``, False is ``none``."""
+    if apply is True:
+        return "reconfigure"
+    if apply is False:
+        return "none"
+    if apply not in APPLY_METHODS:
+        raise InputError(f"--apply {apply!r}: use one of {', '.join(APPLY_METHODS)}")
+    return apply

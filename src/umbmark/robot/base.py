@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "APPLY_METHODS",
     "ApplyResult",
     "DriveParams",
     "LaserScan",
@@ -137,6 +138,8 @@ class DriveParams:
 
 
 ApplyMethod = Literal["reconfigure", "yaml", "none"]
+#: How parameters reach a controller (:meth:`Robot.apply`).
+APPLY_METHODS: tuple[ApplyMethod, ...] = ("reconfigure", "yaml", "none")
 
 
 @dataclass(frozen=True)

@@ -41,9 +41,11 @@ def connect(
         low, high = ERROR_RANGE
         for name, value in (("E_d", E_d), ("E_b", E_b), ("E_s", E_s)):
             if not (low <= value <= high):
-                raise InputError(f"--{name.replace('_', '-')} {value!r}: give {low:g} to {high:g}")
+                raise InputError(
+                    f"--sim-{name.replace('_', '-')} {value!r}: give {low:g} to {high:g}"
+                )
         if not (0.0 <= slip <= MAX_SLIP):
-            raise InputError(f"--slip {slip!r} m^0.5: give 0 to {MAX_SLIP:g}")
+            raise InputError(f"--sim-slip {slip!r} m^0.5: give 0 to {MAX_SLIP:g}")
         return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed)
     if backend == "ros1":
         from umbmark.robot.ros1 import Ros1Robot
