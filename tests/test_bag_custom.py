@@ -346,9 +346,10 @@ def test_malformed_field_options_are_refused_before_reading(tmp_path):
     err = api_error(read_bag, missing, BagOptions(left_field="left_ticks"))
     assert "give both or neither" in err
     err = api_error(read_bag, missing, BagOptions(msg_dir=tmp_path))
-    assert "msg_dir (--msg-dir) is for reading wheel data from a custom message type" in err
+    assert "--msg-dir is for wheel data in a custom message type" in err
     both = fields("a", "b", left_ticks_topic="/l", right_ticks_topic="/r", ticks_per_revolution=1)
-    assert "not both" in api_error(read_bag, missing, both)
+    err = api_error(read_bag, missing, both)
+    assert "--left-field/--right-field read the wheels from --wheel-topic: leave out" in err
 
 
 # --- through the job and the command ---------------------------------------------------

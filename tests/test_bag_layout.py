@@ -35,7 +35,13 @@ ORDER = {
 }
 #: What the bag may use of the rest of umbmark: the layers below sources/, and the two
 #: helpers every source shares.
-OUTSIDE = ("umbmark.core", "umbmark.model", "umbmark.sources.text", "umbmark.sources.progress")
+OUTSIDE = (
+    "umbmark.core",
+    "umbmark.options",
+    "umbmark.model",
+    "umbmark.sources.text",
+    "umbmark.sources.progress",
+)
 
 
 def _modules() -> dict[str, Path]:

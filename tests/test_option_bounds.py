@@ -19,7 +19,7 @@ from umbmark.jobs import info as info_job
 from umbmark.jobs import reproduce, simulate, study
 from umbmark.jobs.calibrate import calibrate
 from umbmark.jobs.validate import validate
-from umbmark.runs import options as read_options
+from umbmark.options import spec as read_options
 
 from helpers import api_error, cli_error, run_cli
 

@@ -26,16 +26,11 @@ from dataclasses import replace
 from pathlib import Path
 
 from umbmark.calibration.compose import Calibration
-from umbmark.core.bounds import (
-    MAX_SIDE_LENGTH,
-    MAX_WHEELBASE,
-    Origin,
-    check_length,
-    geometry_origins,
-)
+from umbmark.core.bounds import Origin, geometry_origins
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info
 from umbmark.estimators.plausibility import check_columns, unit_hints
+from umbmark.options.spec import SIDE_LENGTH, WHEELBASE
 from umbmark.runs.options import SAME_ROBOT_TOLERANCE, ReadOptions
 from umbmark.runs.read import (
     Chosen,
@@ -148,10 +143,8 @@ def read_runs(
     """
     if not sources:
         raise InputError("no source given: name a runs table, run log, OptiOdom session or bag")
-    if wheelbase is not None:
-        check_length("--wheelbase", wheelbase, MAX_WHEELBASE)
-    if side_length is not None:
-        check_length("--side-length", side_length, MAX_SIDE_LENGTH)
+    WHEELBASE.check(wheelbase)
+    SIDE_LENGTH.check(side_length)
     file = parameter_file(options)
     read = [_read_one(source, options, file, wheelbase, side_length) for source in sources]
     if options.current_params is not None and not force:

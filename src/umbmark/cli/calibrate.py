@@ -8,15 +8,15 @@ from typing import Any
 import click
 
 from umbmark.cli.options import (
-    OUTPUTS,
-    TEST,
     Command,
     apply,
     option,
     source_options,
+    spec_option,
     tum_time_option,
 )
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, method_help, names
+from umbmark.options.spec import OUTPUTS, SIDE_LENGTH, TEST, WHEELBASE
 
 __all__ = ["calibrate"]
 
@@ -25,23 +25,8 @@ __all__ = ["calibrate"]
 @click.argument("sources", nargs=-1, required=True, type=click.Path())
 @apply(
     [
-        option(
-            "--side-length",
-            "-L",
-            section=TEST,
-            type=float,
-            help="Side of the square path [m]. Logged sources may know it (OptiOdom L, "
-            "run-log side_length).",
-        ),
-        option(
-            "--wheelbase",
-            "-b",
-            section=TEST,
-            type=float,
-            help="Wheelbase b the odometry used during the runs [m] (ros2_control "
-            "wheel_separation); for logged runs, overrides the source's. Taken from "
-            "--current-params if it has it.",
-        ),
+        spec_option(SIDE_LENGTH),
+        spec_option(WHEELBASE, section=TEST),
         option(
             "--method",
             "-m",

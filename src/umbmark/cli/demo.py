@@ -6,8 +6,9 @@ from pathlib import Path
 
 import click
 
-from umbmark.cli.options import OUTPUTS, Command, option
+from umbmark.cli.options import Command, option
 from umbmark.estimators.registry import DEFAULT, SQUARE
+from umbmark.options.spec import OUTPUTS
 
 __all__ = ["demo"]
 

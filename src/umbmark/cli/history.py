@@ -6,7 +6,8 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import OTHER, OUTPUTS, Command, apply, option
+from umbmark.cli.options import OTHER, Command, apply, option
+from umbmark.options.spec import OUTPUTS
 
 __all__ = ["history"]
 

@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from umbmark.cli.options import LOGS, OUTPUTS, Command, apply, option
+from umbmark.cli.options import Command, apply, option
+from umbmark.options.spec import LOGS, OUTPUTS
 
 if TYPE_CHECKING:
     from rich.console import Console

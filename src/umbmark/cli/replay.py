@@ -8,14 +8,13 @@ from typing import Any
 import click
 
 from umbmark.cli.options import (
-    OUTPUTS,
-    PARAMETERS,
     Command,
     apply,
     option,
     source_options,
     tum_time_option,
 )
+from umbmark.options.spec import OUTPUTS, PARAMETERS
 
 __all__ = ["replay"]
 

@@ -9,7 +9,8 @@ import click
 
 from umbmark.cli.calibrate import calibrate as _calibrate_command
 from umbmark.cli.common import command_line
-from umbmark.cli.options import OUTPUTS, Command, apply, option, source_options
+from umbmark.cli.options import Command, apply, option, source_options
+from umbmark.options.spec import OUTPUTS
 
 if TYPE_CHECKING:
     from umbmark.benchmark.returns import Benchmark

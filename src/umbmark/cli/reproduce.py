@@ -6,7 +6,8 @@ import math
 
 import click
 
-from umbmark.cli.options import OUTPUTS, Command, option
+from umbmark.cli.options import Command, option
+from umbmark.options.spec import OUTPUTS
 
 __all__ = ["reproduce"]
 

@@ -7,8 +7,9 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import OUTPUTS, TEST, Command, apply, option
+from umbmark.cli.options import Command, apply, option
 from umbmark.core.errors import InputError
+from umbmark.options.spec import OUTPUTS, TEST
 
 __all__ = ["selfcal"]
 

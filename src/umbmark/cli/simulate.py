@@ -7,7 +7,8 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import OUTPUTS, Command, apply, option
+from umbmark.cli.options import Command, apply, option
+from umbmark.options.spec import OUTPUTS
 
 __all__ = ["simulate"]
 

@@ -8,8 +8,9 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
-from umbmark.cli.options import OUTPUTS, Command, option
+from umbmark.cli.options import Command, option
 from umbmark.estimators.registry import SQUARE
+from umbmark.options.spec import OUTPUTS
 
 if TYPE_CHECKING:
     from umbmark.jobs.study import CellResult

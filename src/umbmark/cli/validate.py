@@ -7,8 +7,9 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import OUTPUTS, TEST, Command, apply, option, source_options
+from umbmark.cli.options import Command, apply, option, source_options, spec_option
 from umbmark.estimators.registry import NAMES
+from umbmark.options.spec import OUTPUTS, SIDE_LENGTH, TEST
 
 __all__ = ["validate"]
 
@@ -22,7 +23,7 @@ __all__ = ["validate"]
             section=TEST,
             help=f"Estimators to compare, comma-separated [default: all: {', '.join(NAMES)}].",
         ),
-        option("--side-length", "-L", section=TEST, type=float, help="Side of squares [m]."),
+        spec_option(SIDE_LENGTH, help="Side of squares [m]."),
         option(
             "--force",
             section=TEST,

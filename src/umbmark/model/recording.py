@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.model.kinematics import IntegrationMethod, WheelParams, integrate_odometry
+from umbmark.options.spec import READ
 
 __all__ = [
     "DEFAULT_MAX_GAP",
@@ -34,7 +35,7 @@ BoolArray = NDArray[np.bool_]
 
 #: Longest stretch [s] without ground truth across which poses are interpolated (the
 #: default of ``--max-gap``; :mod:`umbmark.runs.association`).
-DEFAULT_MAX_GAP = 0.25
+DEFAULT_MAX_GAP: float = READ["max_gap"].default
 #: An interval between samples longer than this many typical sample periods (the
 #: median) is a gap (:func:`gap_mask`) ...
 GAP_FACTOR = 5.0

@@ -15,7 +15,7 @@ import io
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Literal
+from typing import Literal, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,12 +24,13 @@ from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
+from umbmark.options.spec import TUM_TIME
 
 __all__ = ["TUM_TIMES", "TumTime", "check_tum_time", "format_tum", "write_tum_runs"]
 
 TumTime = Literal["recording", "run"]
-#: The timestamps a TUM export can have.
-TUM_TIMES: tuple[TumTime, ...] = ("recording", "run")
+#: The timestamps a TUM export can have (``--tum-time``, :mod:`umbmark.options.spec`).
+TUM_TIMES = cast("tuple[TumTime, ...]", TUM_TIME.choices)
 
 
 def check_tum_time(time: str) -> TumTime:

@@ -25,7 +25,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, cast
 
 from umbmark.core.bounds import Origin
 from umbmark.core.conventions import axle_poses
@@ -33,6 +33,7 @@ from umbmark.core.errors import InputError
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import DEFAULT_MAX_GAP, PoseSeries, Recording
 from umbmark.model.runs import Run
+from umbmark.options.spec import READ
 from umbmark.runs.association import Association
 from umbmark.runs.logged import SplitMode, runs_from_recordings
 from umbmark.runs.segmentation import SplitOptions
@@ -43,7 +44,9 @@ if TYPE_CHECKING:
 __all__ = ["FORMATS", "Format", "LoadOptions", "Loaded", "detect_format", "load_runs"]
 
 Format = Literal["auto", "table", "log", "optiodom", "bag"]
-FORMATS: tuple[Format, ...] = ("auto", "table", "log", "optiodom", "bag")
+#: The formats ``--format`` takes (:data:`umbmark.options.spec.READ`; a test holds
+#: :data:`Format` equal).
+FORMATS = cast("tuple[Format, ...]", READ["format"].choices)
 
 
 @dataclass(frozen=True)

@@ -8,48 +8,31 @@ the options as the command line spells them.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from typing import Literal, TypedDict
 
-from umbmark.core.bounds import (
-    MAX_WHEELBASE,
-    check_length,
-    check_multiplier,
-    check_positive_option,
-    option_float,
-)
 from umbmark.core.errors import InputError
-from umbmark.model.recording import DEFAULT_MAX_GAP
-from umbmark.runs.load import FORMATS
+from umbmark.options.spec import READ, READ_OPTIONS, check_pairs
 
 __all__ = [
-    "LONGEST_GAP",
-    "LONGEST_REST",
-    "MAX_TRUTH_OFFSET",
     "SAME_ROBOT_TOLERANCE",
     "ReadOptions",
     "SourceOptions",
-    "check_choice",
 ]
 
 PathLike = str | os.PathLike[str]
 
 #: How far a result's nominal parameters may be from a source's (relative).
 SAME_ROBOT_TOLERANCE = 0.01
-#: Farthest a tracked point may sit from the axle centre [m].
-MAX_TRUTH_OFFSET = 5.0
-#: Largest --max-gap [s]: interpolating ground truth across longer gaps is guessing.
-LONGEST_GAP = 60.0
-#: Largest --min-rest [s].
-LONGEST_REST = 600.0
 
 
 class SourceOptions(TypedDict, total=False):
     """How to read a source: the keywords of :func:`umbmark.calibrate` and
-    :func:`umbmark.replay` beyond the square's geometry (see :class:`ReadOptions`)."""
+    :func:`umbmark.replay` beyond the square's geometry (see :class:`ReadOptions`): the
+    keys of :data:`umbmark.options.spec.READ`, typed for ``**options`` (a test holds them
+    equal)."""
 
     format: Literal["auto", "table", "log", "optiodom", "bag"]
     unit: Literal["m", "cm", "mm"]
@@ -87,7 +70,8 @@ class SourceOptions(TypedDict, total=False):
 
 @dataclass(frozen=True)
 class ReadOptions:
-    """The values of :class:`SourceOptions`, with their defaults, checked.
+    """The values of :class:`SourceOptions`, with their defaults, checked: defaults,
+    choices and bounds are those of :data:`umbmark.options.spec.READ`.
 
     Attributes
     ----------
@@ -155,20 +139,20 @@ class ReadOptions:
         (``wheel_left_link``), instead of joint states. Both or neither.
     """
 
-    format: str = "auto"
-    unit: str = "m"
-    angle_unit: str = "rad"
+    format: str = READ["format"].default
+    unit: str = READ["unit"].default
+    angle_unit: str = READ["angle_unit"].default
     wheel_diameter: float | None = None
     current_c_l: float | None = None
     current_c_r: float | None = None
     current_separation_multiplier: float | None = None
     current_params: PathLike | None = None
     controller: str | None = None
-    split: str = "rests"
+    split: str = READ["split"].default
     windows: str | Sequence[tuple[float, float]] | None = None
-    max_gap: float = DEFAULT_MAX_GAP
-    min_rest: float = 1.0
-    wheel_topic: str = "/joint_states"
+    max_gap: float = READ["max_gap"].default
+    min_rest: float = READ["min_rest"].default
+    wheel_topic: str = READ["wheel_topic"].default
     left_joint: str | Sequence[str] | None = None
     right_joint: str | Sequence[str] | None = None
     left_ticks_topic: str | None = None
@@ -177,7 +161,7 @@ class ReadOptions:
     truth_topic: str | None = None
     tf_parent: str | None = None
     tf_child: str | None = None
-    time_source: str = "header"
+    time_source: str = READ["time_source"].default
     odom_topic: str | None = None
     odom_tf: tuple[str, str] | None = None
     truth_offset: tuple[float, float] | None = None
@@ -189,75 +173,27 @@ class ReadOptions:
     right_wheel_frame: str | None = None
 
     def __post_init__(self) -> None:
-        check_choice("--format", self.format, FORMATS)
-        check_choice("--unit", self.unit, ("m", "cm", "mm"))
-        check_choice("--angle-unit", self.angle_unit, ("rad", "deg"))
-        check_choice("--split", self.split, ("rests", "none", "windows"))
-        check_choice("--time-source", self.time_source, ("header", "bag"))
-        for flag, value in (
-            ("--current-c-l", self.current_c_l),
-            ("--current-c-r", self.current_c_r),
-            ("--current-separation-multiplier", self.current_separation_multiplier),
-            ("--ticks-per-rev", self.ticks_per_rev),
-        ):
-            if value is not None and flag == "--ticks-per-rev":
-                check_positive_option(flag, value)
-            elif value is not None:
-                check_multiplier(flag, value)
-        for flag, value, high in (
-            ("--max-gap", self.max_gap, LONGEST_GAP),
-            ("--min-rest", self.min_rest, LONGEST_REST),
-        ):
-            check_positive_option(flag, value, "s")
-            if float(value) > high:
-                raise InputError(f"{flag} must be at most {high:g} s, got {float(value):g} s")
-        if self.wheel_diameter is not None:
-            check_length("--wheel-diameter", self.wheel_diameter, MAX_WHEELBASE)
-        if self.truth_offset is not None:
-            for given in self.truth_offset:
-                value = option_float("--truth-offset", given)
-                if not (math.isfinite(value) and abs(value) <= MAX_TRUTH_OFFSET):
-                    raise InputError(
-                        f"--truth-offset must be within {MAX_TRUTH_OFFSET:g} m of the axle "
-                        f"centre, not {value!r}"
-                    )
-        self._check_fields()
-        if (self.left_wheel_frame is None) != (self.right_wheel_frame is None):
-            raise InputError(
-                "--left-wheel-frame and --right-wheel-frame go together: give both or neither"
-            )
+        from umbmark.sources.bag.options import check_wheel_fields
+
+        for spec in READ_OPTIONS:
+            spec.check(getattr(self, spec.name))
+        check_pairs(vars(self))
+        check_wheel_fields(
+            self.left_field,
+            self.right_field,
+            self.msg_dir,
+            (
+                ("--left-joint", self.left_joint),
+                ("--right-joint", self.right_joint),
+                ("--left-ticks-topic", self.left_ticks_topic),
+                ("--right-ticks-topic", self.right_ticks_topic),
+                ("--odom-topic", self.odom_topic),
+                ("--odom-tf", self.odom_tf),
+                ("--left-wheel-frame", self.left_wheel_frame),
+            ),
+        )
         if self.split == "windows" and not self.windows:
             raise InputError("--split windows needs --windows start:end[,start:end...]")
-
-    def _check_fields(self) -> None:
-        """Refuse wheel fields that are malformed or given with other wheel data."""
-        from umbmark.sources.bag.fieldpath import parse_path
-
-        if (self.left_field is None) != (self.right_field is None):
-            raise InputError("--left-field and --right-field go together: give both or neither")
-        if self.left_field is None or self.right_field is None:
-            if self.msg_dir is not None:
-                raise InputError(
-                    "--msg-dir is for wheel data in a custom message type: give it with "
-                    "--left-field and --right-field"
-                )
-            return
-        parse_path(self.left_field, "--left-field")
-        parse_path(self.right_field, "--right-field")
-        for flag, value in (
-            ("--left-joint", self.left_joint),
-            ("--right-joint", self.right_joint),
-            ("--left-ticks-topic", self.left_ticks_topic),
-            ("--right-ticks-topic", self.right_ticks_topic),
-            ("--odom-topic", self.odom_topic),
-            ("--odom-tf", self.odom_tf),
-            ("--left-wheel-frame", self.left_wheel_frame),
-        ):
-            if value:
-                raise InputError(
-                    f"--left-field/--right-field read the wheels from --wheel-topic: leave "
-                    f"out {flag}"
-                )
 
     @classmethod
     def of(cls, options: Mapping[str, object]) -> ReadOptions:
@@ -276,11 +212,6 @@ class ReadOptions:
         if isinstance(self.windows, str):
             return _parse_windows(self.windows)
         return [(float(a), float(b)) for a, b in self.windows]
-
-
-def check_choice(flag: str, value: object, choices: Sequence[str]) -> None:
-    if value not in choices:
-        raise InputError(f"{flag} {value!r}: use one of {', '.join(choices)}")
 
 
 def _parse_windows(text: str) -> list[tuple[float, float]]:

@@ -48,15 +48,17 @@ that is the odometry the wheels are read from is refused
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry
+from umbmark.options.spec import READ, check_pairs
 from umbmark.sources.bag.fieldpath import parse_path
 
-__all__ = ["DEFAULT_JOINTS", "BagOptions", "check_options"]
+__all__ = ["DEFAULT_JOINTS", "BagOptions", "check_options", "check_wheel_fields"]
 
 #: The wheel joints read when the options name none and the bag has them.
 DEFAULT_JOINTS = ("left_wheel_joint", "right_wheel_joint")
@@ -64,7 +66,8 @@ DEFAULT_JOINTS = ("left_wheel_joint", "right_wheel_joint")
 
 @dataclass(frozen=True)
 class BagOptions:
-    """What to read from a bag; see the module docstring for the details.
+    """What to read from a bag; see the module docstring for the details. The defaults
+    are those of the reading options (:data:`umbmark.options.spec.READ`).
 
     Attributes
     ----------
@@ -116,7 +119,7 @@ class BagOptions:
         (both or neither).
     """
 
-    wheel_topic: str = "/joint_states"
+    wheel_topic: str = READ["wheel_topic"].default
     left_joint: str | tuple[str, ...] | None = None
     right_joint: str | tuple[str, ...] | None = None
     left_ticks_topic: str | None = None
@@ -125,7 +128,7 @@ class BagOptions:
     truth_topic: str | None = None
     tf_parent: str | None = None
     tf_child: str | None = None
-    time_source: Literal["header", "bag"] = "header"
+    time_source: Literal["header", "bag"] = READ["time_source"].default
     odom_topic: str | None = None
     odom_tf: tuple[str, str] | None = None
     odom_geometry: OdometryGeometry | None = None
@@ -169,7 +172,7 @@ def check_options(options: BagOptions, src: str) -> None:
     def fail(problem: str) -> None:
         raise InputError(problem, source=src)
 
-    if options.time_source not in ("header", "bag"):
+    if options.time_source not in READ["time_source"].choices:
         fail(f"time source must be 'header' or 'bag', not {options.time_source!r}")
     if (options.left_ticks_topic is None) != (options.right_ticks_topic is None):
         fail("the left and right ticks topics go together: give both or neither")
@@ -182,7 +185,26 @@ def check_options(options: BagOptions, src: str) -> None:
     tpr = options.ticks_per_revolution
     if tpr is not None and not (math.isfinite(tpr) and tpr > 0):
         fail(f"ticks_per_revolution must be a positive number, not {tpr!r}")
-    _check_fields(options, src)
+    check_pairs(vars(options), src)
+    check_wheel_fields(
+        options.left_field,
+        options.right_field,
+        options.msg_dir,
+        (
+            ("--left-ticks-topic", options.left_ticks_topic),
+            ("--right-ticks-topic", options.right_ticks_topic),
+            ("--odom-topic", options.odom_topic),
+            ("--odom-tf", options.odom_tf),
+        ),
+        src,
+    )
+    left_field, right_field = options.left_field, options.right_field
+    if (
+        left_field is not None
+        and right_field is not None
+        and (left_field.replace(" ", "") == right_field.replace(" ", ""))
+    ):
+        fail(f"the left and right fields are the same: {left_field!r}")
     for side, given, names in (
         ("left", options.left_joint, options.left_joints),
         ("right", options.right_joint, options.right_joints),
@@ -214,8 +236,6 @@ def check_options(options: BagOptions, src: str) -> None:
         )
     if options.truth_model is not None and options.truth_topic is None:
         fail("--truth-model names a model of the ground-truth topic: give --truth-topic too")
-    if (options.left_wheel_frame is None) != (options.right_wheel_frame is None):
-        fail("the left and right wheel frames go together: give both or neither")
     if options.left_wheel_frame is not None:
         other = (
             "ticks topics"
@@ -230,36 +250,40 @@ def check_options(options: BagOptions, src: str) -> None:
             fail(f"give the wheels as wheel frames on /tf or as {other}, not both")
 
 
-def _check_fields(options: BagOptions, src: str) -> None:
-    """Refuse field paths that are malformed, or given with other wheel data."""
-    if (options.left_field is None) != (options.right_field is None):
-        raise InputError("the left and right fields go together: give both or neither", source=src)
-    if options.left_field is None or options.right_field is None:
-        if options.msg_dir is not None:
+def check_wheel_fields(
+    left_field: str | None,
+    right_field: str | None,
+    msg_dir: object,
+    others: Sequence[tuple[str, object]],
+    source: str | None = None,
+) -> None:
+    """Refuse ``msg_dir`` without the wheel fields, malformed field paths, and the fields
+    given with other wheel data (``others``: ``(flag, value)``, given when true). The one
+    check of the field options, for :class:`umbmark.runs.options.ReadOptions` and
+    :func:`check_options` (:func:`umbmark.options.spec.check_pairs` checks that both are
+    given first).
+
+    Raises
+    ------
+    InputError
+        One line naming the options as the command line spells them (and ``source``).
+    """
+    if left_field is None or right_field is None:
+        if msg_dir is not None:
             raise InputError(
-                "msg_dir (--msg-dir) is for reading wheel data from a custom message type "
-                "with left_field and right_field (--left-field, --right-field)",
-                source=src,
+                "--msg-dir is for wheel data in a custom message type: give it with "
+                "--left-field and --right-field",
+                source=source,
             )
         return
-    other = (
-        "ticks topics"
-        if options.left_ticks_topic is not None
-        else "controller odometry"
-        if options.odom_topic is not None or options.odom_tf
-        else None
-    )
-    if other is not None:
-        raise InputError(
-            f"give the wheels as fields of {options.wheel_topic} or as {other}, not both",
-            source=src,
-        )
-    for what, text in (("left field", options.left_field), ("right field", options.right_field)):
+    for flag, text in (("--left-field", left_field), ("--right-field", right_field)):
         try:
-            parse_path(text, what)
+            parse_path(text, flag)
         except InputError as err:
-            raise InputError(err.problem, source=src) from None
-    if options.left_field.replace(" ", "") == options.right_field.replace(" ", ""):
-        raise InputError(
-            f"the left and right fields are the same: {options.left_field!r}", source=src
-        )
+            raise InputError(err.problem, source=source) from None
+    for flag, value in others:
+        if value:
+            raise InputError(
+                f"--left-field/--right-field read the wheels from --wheel-topic: leave out {flag}",
+                source=source,
+            )
