@@ -6,13 +6,13 @@ states which kinds of motion were held out (:mod:`umbmark.estimators.motions`).
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import join_names
 from umbmark.estimators.motions import KINDS, MotionKind
 
@@ -51,7 +51,7 @@ class Fold:
 
 
 @dataclass(frozen=True, repr=False)
-class ValidationReport:
+class ValidationReport(JsonText):
     """Held-out end errors of every candidate, and the recommendation.
 
     Attributes
@@ -155,7 +155,3 @@ class ValidationReport:
             "notes": list(self.notes),
             "warnings": list(self.warnings),
         }
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"

@@ -42,6 +42,7 @@ from umbmark.autocal.preflight import preflight
 from umbmark.autocal.record import record_pass
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
 from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DriveParams, Robot
 
 if TYPE_CHECKING:
@@ -100,7 +101,7 @@ class PassResult:
 
 
 @dataclass(frozen=True)
-class SelfCalReport:
+class SelfCalReport(JsonText):
     """What a self-calibration did and found.
 
     Attributes
@@ -176,12 +177,6 @@ class SelfCalReport:
             "measurement": measurement,
             "files": [str(f) for f in self.files],
         }
-
-    def to_json(self) -> str:
-        """The JSON text of :meth:`to_dict`."""
-        import json
-
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
 
 def _multipliers(params: DriveParams) -> dict[str, float]:
