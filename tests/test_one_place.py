@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+import umbmark
+
 from helpers import ROOT
 
 SRC = ROOT / "src" / "umbmark"
@@ -51,6 +53,12 @@ def test_the_reports_json_text_is_written_once():
 
     for cls in _report_classes():
         assert cls.to_json is JsonText.to_json, cls.__name__
+    # and no module of the package writes another
+    package = Path(umbmark.__file__).parent
+    written = [
+        p.relative_to(package) for p in package.rglob("*.py") if "def to_json" in p.read_text()
+    ]
+    assert written == [Path("core/jsontext.py")]
 
 
 def test_the_json_text_is_strict_indented_and_ends_in_a_newline():
