@@ -15,4 +15,3 @@ straight runs: :mod:`umbmark.estimators.scale`.
 Estimators never print: doubts come back as ``ErrorEstimate.warnings``. This package
 imports nothing, so that the command line reads the registry before numpy is loaded.
 """
-

@@ -43,6 +43,7 @@ __all__ = [
     "RosOptions",
     "controller_keys",
     "held_problem",
+    "master_problem",
     "mount_from_transform",
     "multipliers",
     "plan_apply",
@@ -321,7 +322,35 @@ def wait_on_clock(
                     f"ROS time stopped at {t:.3f} s for {stall:g} s: is the simulation "
                     "paused, or /clock not published?"
                 )
-            ticks.wait(slice_)
+            ticks.wait(min(slice_, max(end - t, 0.001)))
+
+
+def master_problem(uri: str, timeout: float) -> str | None:
+    """Why the ROS 1 master at ``uri`` cannot be used (None: it answers ``getPid`` within
+    ``timeout`` seconds). rospy itself would wait for it forever."""
+    import http.client
+    import xmlrpc.client
+    from urllib.parse import urlparse
+
+    parsed = urlparse(uri)
+    if parsed.scheme != "http" or not parsed.hostname:
+        return f"ROS_MASTER_URI {uri!r} is not an http:// address"
+
+    class _Transport(xmlrpc.client.Transport):
+        def make_connection(self, host: Any) -> http.client.HTTPConnection:  # noqa: ANN401
+            connection = super().make_connection(host)
+            connection.timeout = timeout
+            return connection
+
+    proxy = xmlrpc.client.ServerProxy(uri, transport=_Transport())
+    try:
+        answer = proxy.getPid("/umbmark")
+    except (OSError, xmlrpc.client.Error, http.client.HTTPException) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
+        return f"no ROS master at {uri} ({reason}): start roscore, or set ROS_MASTER_URI"
+    if not (isinstance(answer, list) and len(answer) == 3 and answer[0] == 1):
+        return f"the ROS master at {uri} answers {answer!r}"[:300]
+    return None
 
 
 # --- applying parameters ----------------------------------------------------------------
