@@ -342,9 +342,9 @@ def master_problem(uri: str, timeout: float) -> str | None:
             connection.timeout = timeout
             return connection
 
-    proxy = xmlrpc.client.ServerProxy(uri, transport=_Transport())
     try:
-        answer = proxy.getPid("/umbmark")
+        with xmlrpc.client.ServerProxy(uri, transport=_Transport()) as proxy:
+            answer = proxy.getPid("/umbmark")
     except (OSError, xmlrpc.client.Error, http.client.HTTPException) as exc:
         reason = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
         return f"no ROS master at {uri} ({reason}): start roscore, or set ROS_MASTER_URI"
