@@ -111,7 +111,7 @@ class DriveLimits:
     obstacle_period: float = 0.25
     margin: float = 0.5
     time_factor: float = 2.0
-    closing_time: float = 0.1
+    closing_time: float = 0.2
 
     def __post_init__(self) -> None:
         bounds = {
