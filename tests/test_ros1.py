@@ -41,7 +41,7 @@ if ROSMASTER is None:
 NODE = Path(__file__).with_name("ros1_robot_node.py")
 PROBE = Path(__file__).with_name("ros1_probe.py")
 #: The node's simulation runs this many times faster than real time.
-RATE = 8.0
+RATE = 5.0
 #: ROS time at the node's start (ros1_robot_node.T0).
 T0 = 1000.0
 #: The node's laser: 0.1 m ahead of the robot's centre.
@@ -124,6 +124,39 @@ def _umbmark(
     )  # fmt: skip
 
 
+# --- end to end -------------------------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_selfcal_end_to_end_over_ros1(tmp_path: Path) -> None:
+    """(First in this file: its robot alone on the machine, before the shared one starts.)
+    ``umbmark selfcal --ros1`` against a fresh robot (E_d 1.004, E_b 0.97, its laser
+    upside down): exit 0, E_max,syst reduced at least five-fold, and the multipliers the
+    reconfigure server holds are the report's. Uncorrected, E_b = 0.97 on 1 m squares is
+    about 0.16 m of E_max,syst (the virtual robot run directly gives 0.165 m)."""
+    g = RosGraph(tmp_path, "--upside-down")
+    try:
+        done = _umbmark(g.env, "selfcal", "--ros1", "--runs", "2", "-L", "1", "--max-passes",
+                        "1", "--out", str(tmp_path / "out"), "--json")  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout)
+        before, after = report["e_max_syst_before"], report["e_max_syst_after"]
+        assert 0.10 < before < 0.25
+        assert after < before / 5.0
+        held = _probe(g, "held")
+    finally:
+        g.close()
+    applied = report["applied"]
+    assert set(held) == set(applied)
+    for name, value in applied.items():
+        assert held[name] == pytest.approx(value, rel=1e-9)
+    # the robot's E_b of 0.97 is what the separation multiplier corrects
+    assert applied["wheel_separation_multiplier"] == pytest.approx(0.97, abs=0.005)
+
+
+# --- a shared master and robot -----------------------------------------------------------
+
+
 @pytest.fixture(scope="module")
 def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RosGraph]:
     """The master and node the probes and command lines share."""
@@ -144,13 +177,13 @@ def _probe(graph: RosGraph, *args: str) -> dict[str, Any]:
 
 
 def test_reads_odometry_scan_and_sim_time(graph: RosGraph) -> None:
-    """ROS time is the node's /clock (it starts at 1000 s and runs 8 times faster than the
+    """ROS time is the node's /clock (it starts at 1000 s and runs 5 times faster than the
     wall clock); the odometry and scan carry it; the laser's mounting comes from TF; the
     far wall (x = 6 m in the world) is 6 - x - 0.1 m ahead of the laser."""
     seen = _probe(graph, "read")
     assert T0 < seen["start"] < T0 + 600.0  # sim time, not the wall clock's 1.7e9 s
     assert 2.0 <= seen["now"] - seen["start"] < 2.3
-    assert seen["wall"] < 1.0  # faster than real time (8x: 0.25 s; 4 times that when busy)
+    assert seen["wall"] < 1.6  # faster than real time (5x: 0.4 s; 4 times that when busy)
     assert 0.0 <= seen["now"] - seen["odom_time"] <= 0.1
     assert 0.0 <= seen["now"] - seen["scan_time"] <= 0.2
     assert seen["mount"] == pytest.approx([LASER_X, 0.0, 0.0])
@@ -252,32 +285,3 @@ def test_no_master_is_one_line(tmp_path: Path) -> None:
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1, done.stderr
     assert "no ROS master" in lines[0]
-
-
-# --- end to end -------------------------------------------------------------------------------
-
-
-@pytest.mark.slow
-def test_selfcal_end_to_end_over_ros1(tmp_path: Path) -> None:
-    """``umbmark selfcal --ros1`` against a fresh robot (E_d 1.004, E_b 0.97, its laser
-    upside down): exit 0, E_max,syst reduced at least five-fold, and the multipliers the
-    reconfigure server holds are the report's. Uncorrected, E_b = 0.97 on 1 m squares is
-    about 0.16 m of E_max,syst (the virtual robot run directly gives 0.165 m)."""
-    g = RosGraph(tmp_path, "--upside-down")
-    try:
-        done = _umbmark(g.env, "selfcal", "--ros1", "--runs", "2", "-L", "1", "--max-passes",
-                        "1", "--out", str(tmp_path / "out"), "--json")  # fmt: skip
-        assert done.returncode == 0, done.stderr
-        report = json.loads(done.stdout)
-        before, after = report["e_max_syst_before"], report["e_max_syst_after"]
-        assert 0.10 < before < 0.25
-        assert after < before / 5.0
-        held = _probe(g, "held")
-    finally:
-        g.close()
-    applied = report["applied"]
-    assert set(held) == set(applied)
-    for name, value in applied.items():
-        assert held[name] == pytest.approx(value, rel=1e-9)
-    # the robot's E_b of 0.97 is what the separation multiplier corrects
-    assert applied["wheel_separation_multiplier"] == pytest.approx(0.97, abs=0.005)
