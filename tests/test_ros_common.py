@@ -294,3 +294,28 @@ def test_master_problem_without_a_master() -> None:
     assert master_problem("localhost:11311", 1.0) == (
         "ROS_MASTER_URI 'localhost:11311' is not an http:// address"
     )
+
+
+# --- the adapters without their client libraries --------------------------------------------
+
+
+def test_ros1_without_rospy_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+
+    from umbmark.robot.ros1 import Ros1Robot
+    from umbmark.robot.ros_common import RosOptions
+
+    monkeypatch.setitem(sys.modules, "rospy", None)  # import rospy raises ImportError
+    with pytest.raises(InputError, match="--ros1 needs rospy"):
+        Ros1Robot(RosOptions())
+
+
+def test_ros2_without_rclpy_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+
+    from umbmark.robot.ros2 import Ros2Robot
+    from umbmark.robot.ros_common import RosOptions
+
+    monkeypatch.setitem(sys.modules, "rclpy", None)
+    with pytest.raises(InputError, match="--ros2 needs rclpy"):
+        Ros2Robot(RosOptions())
