@@ -80,6 +80,11 @@ class DriveLimits:
     obstacle_period : float
         The scan ahead is looked at this often [s] on the legs (at 0.2 m/s the robot
         drives 5 cm in 0.25 s and stops within 7 cm at 0.3 m/s^2: well inside 0.3 m).
+    closing_time : float
+        Closing in, the speed (turn rate) is at most the remaining distance (angle) over
+        this [s]: an approach with this time constant, which a command arriving a few
+        periods late (a ROS robot's controller) follows without overshooting; at most
+        one period is a dead-beat approach, which such a robot overshoots back and forth.
     margin : float
         The odometry leaving the square by more than this [m] stops the robot.
     time_factor : float
@@ -108,6 +113,7 @@ class DriveLimits:
     obstacle_period: float = 0.25
     margin: float = 0.5
     time_factor: float = 2.0
+    closing_time: float = 0.2
 
     def __post_init__(self) -> None:
         bounds = {
@@ -119,6 +125,7 @@ class DriveLimits:
             "margin": (0.05, 5.0),
             "time_factor": (1.2, 10.0),
             "settle_limit": (1.0, 600.0),
+            "closing_time": (0.001, 2.0),
         }
         for name, (low, high) in bounds.items():
             value = getattr(self, name)
@@ -269,8 +276,9 @@ class _Driver:
                 self.check_ahead(True)
             k += 1
             brake = math.sqrt(2.0 * lim.acceleration * remaining)
-            goal = min(lim.speed, brake, remaining / dt)
-            goal = max(goal, min(lim.creep_speed, remaining / dt))
+            close = remaining / max(dt, lim.closing_time)
+            goal = min(lim.speed, brake, close)
+            goal = max(goal, min(lim.creep_speed, close))
             step = lim.acceleration * dt
             linear = min(max(goal, self.linear - step), self.linear + step)
             heading_error = float(wrap_angle(start.theta - pose.theta))
@@ -288,8 +296,9 @@ class _Driver:
             if abs(error) <= lim.heading_tolerance:
                 break
             brake = math.sqrt(2.0 * lim.turn_acceleration * abs(error))
-            goal = min(lim.turn_rate, brake, abs(error) / dt)
-            goal = max(goal, min(lim.creep_rate, abs(error) / dt))
+            close = abs(error) / max(dt, lim.closing_time)
+            goal = min(lim.turn_rate, brake, close)
+            goal = max(goal, min(lim.creep_rate, close))
             step = lim.turn_acceleration * dt
             rate = abs(self.angular) if self.angular * error > 0 else 0.0
             rate = min(max(goal, rate - step), rate + step)

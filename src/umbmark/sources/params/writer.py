@@ -20,20 +20,31 @@ import yaml
 
 from umbmark.sources.params.reader import DEFAULT_CONTROLLER
 
-__all__ = ["ros1_params", "ros2_control_overlay"]
+__all__ = ["multiplier_values", "parameter_document", "ros1_params", "ros2_control_overlay"]
+
+
+def multiplier_values(separation: float, left: float, right: float) -> dict[str, float]:
+    """The three multipliers by their parameter names, as the controller's doubles."""
+    return {
+        "wheel_separation_multiplier": _tidy(separation),
+        "left_wheel_radius_multiplier": _tidy(left),
+        "right_wheel_radius_multiplier": _tidy(right),
+    }
 
 
 def _multipliers(c_left: float, c_right: float, separation: float) -> dict[str, float]:
-    return {
-        "wheel_separation_multiplier": _tidy(separation),
-        "left_wheel_radius_multiplier": _tidy(c_left),
-        "right_wheel_radius_multiplier": _tidy(c_right),
-    }
+    return multiplier_values(separation, c_left, c_right)
 
 
 def _tidy(value: float) -> float:
     """Round to 10 significant digits: beyond any calibration's precision, easy to read."""
     return float(f"{value:.10g}")
+
+
+def parameter_document(body: Mapping[str, Any], comments: Sequence[str] = ()) -> str:
+    """A parameter file's text: ``comments`` as ``#`` lines, then ``body`` as block YAML,
+    keys in their order (floats keep their point: ``1.0``)."""
+    return _document(body, comments)
 
 
 def _document(body: Mapping[str, Any], comments: Sequence[str]) -> str:

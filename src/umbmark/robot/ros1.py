@@ -1,0 +1,344 @@
+"""A ROS 1 robot behind the :class:`~umbmark.robot.base.Robot` interface, through rospy.
+
+- Velocity out: ``geometry_msgs/Twist`` on ``options.cmd_vel``.
+- In: ``nav_msgs/Odometry`` (``options.odom``), ``sensor_msgs/LaserScan``
+  (``options.scan``), three ``sensor_msgs/Range`` (``options.ranges``), a ground-truth
+  ``geometry_msgs/PoseStamped`` (``options.truth``); each sensor's mounting from TF
+  (``/tf``, ``/tf_static``, a ``tf2_ros.Buffer``) as ``base_frame <- sensor frame``.
+- Time is ROS time, so ``/use_sim_time`` works: :meth:`Ros1Robot.wait` sleeps on the ROS
+  clock and refuses to hang when it stops.
+- Parameters: ``apply(..., "reconfigure")`` calls the diff_drive_controller's
+  dynamic_reconfigure server (``<controller>/set_parameters``), which takes multipliers
+  from 0.5 to 1.5 only: outside, or with ``"yaml"``, the controller's parameter file
+  (``options.params_file``) is written instead and the result says the controller must be
+  restarted on it.
+- Safety: a zero velocity on :meth:`close`, on rospy's shutdown, and before any error this
+  adapter raises once connected.
+
+Everything that does not need rospy (messages, TF mountings, the apply plan, the YAML) is in
+:mod:`umbmark.robot.ros_common`, tested without ROS; this module is tested against a real
+ROS 1 master and a simulated robot node (``tests/test_ros1.py``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import time
+from types import ModuleType
+from typing import Any
+
+from umbmark.core.errors import InputError
+from umbmark.robot.base import (
+    ApplyMethod,
+    ApplyResult,
+    DriveParams,
+    LaserScan,
+    RangeReading,
+    Stamped,
+)
+from umbmark.robot.ros_common import (
+    MULTIPLIERS,
+    Latest,
+    Mount,
+    RosOptions,
+    held_problem,
+    master_problem,
+    mount_from_transform,
+    multipliers,
+    plan_apply,
+    planar_pose,
+    range_reading,
+    scan_from_message,
+    stamp_seconds,
+    wait_on_clock,
+    write_params,
+)
+
+__all__ = ["Ros1Robot"]
+
+#: The node's base name (rospy makes it unique: ``anonymous``).
+NODE_NAME = "umbmark_selfcal"
+
+
+def _rospy() -> ModuleType:
+    """rospy and the message modules, or one line saying what is missing."""
+    try:
+        import rospy
+    except ImportError as exc:
+        raise InputError(
+            f"--ros1 needs rospy ({exc}): source your ROS 1 setup, or install python3-rospy"
+        ) from None
+    module: ModuleType = rospy
+    return module
+
+
+class Ros1Robot:
+    """The robot behind a ROS 1 master (``ROS_MASTER_URI``), driven through rospy.
+
+    Parameters
+    ----------
+    options : RosOptions
+        Topics, frames, the controller and its parameter file, and ``timeout`` [s]: how
+        long the master, the first odometry, a subscriber of the velocity topic, TF and the
+        reconfigure server may take.
+
+    Raises
+    ------
+    InputError
+        rospy is missing, the master does not answer, nobody subscribes the velocity
+        topic, or the odometry is silent for ``options.timeout`` (one line each).
+    """
+
+    name = "ROS 1 robot"
+
+    def __init__(self, options: RosOptions) -> None:
+        rospy = _rospy()
+        from geometry_msgs.msg import PoseStamped, Twist
+        from nav_msgs.msg import Odometry
+        from sensor_msgs.msg import LaserScan as ScanMsg
+        from sensor_msgs.msg import Range
+
+        self.options = options
+        self._rospy = rospy
+        self._twist = Twist
+        timeout = options.timeout
+        if not (0.0 < timeout < math.inf):
+            raise InputError(f"timeout {timeout!r} s: give a positive time")
+        import rosgraph
+
+        uri = rosgraph.get_master_uri()
+        problem = master_problem(uri, timeout)
+        if problem is not None:
+            raise InputError(problem)
+        rospy.init_node(NODE_NAME, anonymous=True, disable_signals=True)
+        self._closed = False
+        self._cmd = rospy.Publisher(options.cmd_vel, Twist, queue_size=1, tcp_nodelay=True)
+        self._odom: Latest[Stamped] = Latest()
+        self._scan: Latest[Any] = Latest()
+        self._truth: Latest[Stamped] = Latest()
+        self._ranges: list[Latest[Any]] = [Latest() for _ in options.ranges]
+        self._mounts: dict[str, Mount] = {}
+        subs = [
+            rospy.Subscriber(options.odom, Odometry, self._on_odom, queue_size=1, tcp_nodelay=True),
+        ]
+        if options.scan:
+            subs.append(
+                rospy.Subscriber(
+                    options.scan, ScanMsg, self._scan.put, queue_size=1, tcp_nodelay=True
+                )
+            )
+        for topic, latest in zip(options.ranges, self._ranges, strict=True):
+            subs.append(rospy.Subscriber(topic, Range, latest.put, queue_size=1, tcp_nodelay=True))
+        if options.truth:
+            subs.append(
+                rospy.Subscriber(
+                    options.truth, PoseStamped, self._on_truth, queue_size=1, tcp_nodelay=True
+                )
+            )
+        self._subs = subs
+        import tf2_ros
+
+        self._tf = tf2_ros.Buffer()
+        self._tf_listener = tf2_ros.TransformListener(self._tf)
+        rospy.on_shutdown(self._stop)
+        try:
+            self._wait_connected(timeout)
+        except BaseException:
+            self.close()
+            raise
+
+    # --- connection -----------------------------------------------------------------
+
+    def _wait_connected(self, timeout: float) -> None:
+        """Wait for a subscriber of the velocity topic and the first odometry."""
+        deadline = time.monotonic() + timeout
+        while self._cmd.get_num_connections() == 0:
+            if time.monotonic() > deadline:
+                raise InputError(
+                    f"nobody subscribes {self.options.cmd_vel} (geometry_msgs/Twist) after "
+                    f"{timeout:g} s: is the robot's controller running? (--cmd-vel)"
+                )
+            time.sleep(0.01)
+        if self._odom.wait(max(0.0, deadline - time.monotonic())) is None:
+            raise InputError(
+                f"no nav_msgs/Odometry on {self.options.odom} in {timeout:g} s: is the "
+                "controller publishing it? (--odom-topic)"
+            )
+
+    def _on_odom(self, msg: Any) -> None:  # noqa: ANN401 (a rospy message)
+        self._odom.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose.pose)))
+
+    def _on_truth(self, msg: Any) -> None:  # noqa: ANN401 (a rospy message)
+        self._truth.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose)))
+
+    def _mount(self, frame: str) -> Mount:
+        """The sensor frame's mounting in the base frame, from TF (looked up once)."""
+        mount = self._mounts.get(frame)
+        if mount is not None:
+            return mount
+        rospy = self._rospy
+        base = self.options.base_frame
+        try:
+            transform = self._tf.lookup_transform(
+                base, frame, rospy.Time(0), rospy.Duration.from_sec(self.options.timeout)
+            )
+        except Exception as exc:  # tf2's LookupException, ConnectivityException, ...
+            self._stop()
+            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputError(
+                f"no TF from {base} to {frame!r} in {self.options.timeout:g} s ({detail}): "
+                "publish the sensor's mounting on /tf_static (--base-frame)"
+            ) from None
+        mount = self._mounts[frame] = mount_from_transform(transform.transform)
+        return mount
+
+    # --- the Robot interface --------------------------------------------------------
+
+    def now(self) -> float:
+        """ROS time [s] (the simulation's with ``/use_sim_time``)."""
+        return float(self._rospy.get_rostime().to_sec())
+
+    def wait(self, duration: float) -> None:
+        """Sleep ``duration`` seconds of ROS time.
+
+        Raises
+        ------
+        InputError
+            ROS time stopped for ``options.timeout`` wall seconds, or went back, or ROS
+            shut down (after a zero velocity).
+        """
+        from rospy.rostime import get_rostime_cond
+
+        if self._rospy.is_shutdown():
+            raise InputError("ROS shut down while the robot was driven")
+        try:
+            wait_on_clock(self.now, duration, get_rostime_cond(), self.options.timeout)
+        except InputError:
+            self._stop()
+            raise
+
+    def send_velocity(self, linear: float, angular: float) -> None:
+        """Publish a ``geometry_msgs/Twist``: ``linear.x`` [m/s], ``angular.z`` [rad/s]."""
+        if not (math.isfinite(linear) and math.isfinite(angular)):
+            self._stop()
+            raise InputError(f"velocity ({linear!r}, {angular!r}) is not finite")
+        msg = self._twist()
+        msg.linear.x, msg.angular.z = float(linear), float(angular)
+        self._cmd.publish(msg)
+
+    def odometry(self) -> Stamped | None:
+        """The latest odometry pose, stamped with its header's time."""
+        return self._odom.get()
+
+    def scan(self) -> LaserScan | None:
+        """The latest scan with the laser's mounting from TF (None: no scan came)."""
+        msg = self._scan.get()
+        if msg is None:
+            return None
+        return scan_from_message(msg, self._mount(msg.header.frame_id))
+
+    def ranges(self) -> RangeReading | None:
+        """The latest reading of each range sensor (None: a sensor said nothing yet)."""
+        if not self._ranges:
+            return None
+        messages = [m for m in (latest.get() for latest in self._ranges) if m is not None]
+        if len(messages) < len(self._ranges):
+            return None
+        mounts = [self._mount(m.header.frame_id) for m in messages]
+        return range_reading(messages, mounts)
+
+    def ground_truth(self) -> Stamped | None:
+        """The latest ground-truth pose (None: no truth topic, or no message yet)."""
+        return self._truth.get()
+
+    def drive_params(self) -> DriveParams:
+        """The controller's parameters from the parameter server (``<controller>/...``;
+        the reconfigure server keeps the multipliers there).
+
+        Raises
+        ------
+        InputError
+            No ``wheel_separation`` or ``wheel_radius`` there nor in the options.
+        """
+        rospy, ns = self._rospy, self.options.controller.rstrip("/")
+        values: dict[str, float] = {}
+        for name, fallback in (
+            ("wheel_separation", self.options.wheel_separation),
+            ("wheel_radius", self.options.wheel_radius),
+        ):
+            value = rospy.get_param(f"{ns}/{name}", fallback)
+            if value is None:
+                raise InputError(
+                    f"the parameter server has no {ns}/{name} (the controller takes it from "
+                    "the URDF): set it, or give it in the options"
+                )
+            values[name] = float(value)
+        for name in MULTIPLIERS:
+            values[name] = float(rospy.get_param(f"{ns}/{name}", 1.0))
+        return DriveParams(**values)
+
+    def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
+        """Reconfigure the controller (multipliers within 0.5 to 1.5), or write its
+        parameter file (``yaml``, or outside that range), or nothing (``none``)."""
+        plan = plan_apply(params, method)
+        if plan.method == "none":
+            return ApplyResult("none", False, plan.reason)
+        if plan.method == "reconfigure":
+            return self._reconfigure(params)
+        return self._write_yaml(params, plan.reason)
+
+    def close(self) -> None:
+        """Send a zero velocity (and let it go out); the node stays for the process."""
+        if self._closed:
+            return
+        self._stop()
+        time.sleep(0.05)
+        self._closed = True
+
+    # --- applying ---------------------------------------------------------------------
+
+    def _reconfigure(self, params: DriveParams) -> ApplyResult:
+        from dynamic_reconfigure.client import Client
+
+        ns = self.options.controller.rstrip("/")
+        try:
+            client = Client(ns, timeout=self.options.timeout)
+            try:
+                held = client.update_configuration(multipliers(params))
+            finally:
+                client.close()
+        except Exception as exc:  # rospy.ROSException, ServiceException
+            self._stop()
+            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputError(
+                f"no dynamic_reconfigure server at {ns} ({detail}): is it a "
+                "diff_drive_controller? (--controller; or --apply yaml with --params-file)"
+            ) from None
+        problem = held_problem(params, held)
+        if problem is not None:
+            return ApplyResult("reconfigure", False, problem)
+        return ApplyResult("reconfigure", True, f"parameters reconfigured ({ns}/set_parameters)")
+
+    def _write_yaml(self, params: DriveParams, reason: str) -> ApplyResult:
+        path = self.options.params_file
+        lead = f"{reason}; " if reason else ""
+        if path is None:
+            return ApplyResult(
+                "none", False, f"{lead}no --params-file to write them to: not applied"
+            )
+        notes = write_params(path, params, self.options.controller, ros2=False)
+        extra = "".join(f"; {n}" for n in notes)
+        return ApplyResult(
+            "yaml",
+            False,
+            f"{lead}wrote {os.fspath(path)}: load it (rosparam load) and restart the "
+            f"controller to run with them{extra}",
+            file=os.fspath(path),
+        )
+
+    def _stop(self) -> None:
+        """A zero velocity, whatever state ROS is in."""
+        with contextlib.suppress(Exception):  # stopping must not raise
+            self._cmd.publish(self._twist())

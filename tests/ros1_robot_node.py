@@ -1,0 +1,268 @@
+"""A ROS 1 node simulating a differential-drive robot and its diff_drive_controller, with
+:class:`umbmark.robot.virtual.VirtualRobot` underneath (for tests/test_ros1.py and
+benchmarks/bench_ros1.py).
+
+Run it with ``ROS_MASTER_URI`` set; it prints ``ready`` on stdout once everything is up.
+
+- sets ``/use_sim_time`` and publishes ``/clock``: the simulation advances one controller
+  period (20 ms) at a time, ``--rate`` times faster than real time;
+- subscribes ``/cmd_vel`` (``geometry_msgs/Twist``), the command stamped with the
+  simulation's time when it arrives (the controller's ``cmd_vel_timeout`` is 0.5 s);
+- publishes ``/odom`` (``nav_msgs/Odometry``, frame ``odom`` -> ``base_link``) every period,
+  ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``) every ``--scan-every`` periods,
+  ``/ground_truth`` (``geometry_msgs/PoseStamped``, motion capture), ``/tf``
+  (``odom -> base_link``) and ``/tf_static`` (``base_link -> laser``: the laser
+  ``--laser-x`` metres ahead of the centre, ``--upside-down`` rolled by 180 degrees, its
+  beams then published in the reversed order such a laser has);
+- serves dynamic_reconfigure at ``/diff_drive_controller`` with the three multipliers of
+  ros_controllers' ``DiffDriveController.cfg`` (0.5 to 1.5, the server clamps), and keeps
+  ``wheel_separation``, ``wheel_radius`` and the multipliers on the parameter server;
+- ``/sim/control`` (``std_msgs/String``): ``mute_odom`` stops the odometry (the clock goes
+  on), ``unmute_odom`` starts it again; ``/sim/true_pose`` (``geometry_msgs/Pose2D``) is the
+  robot's true pose in the world, for checks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import threading
+import time
+import types
+from dataclasses import replace
+
+import rospy
+from dynamic_reconfigure.encoding import extract_params
+from dynamic_reconfigure.server import Server
+from geometry_msgs.msg import Pose2D as Pose2DMsg
+from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import LaserScan
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
+
+from umbmark.robot.base import Pose2D
+from umbmark.robot.virtual import VirtualRobot
+from umbmark.robot.world import Lidar, corner_world
+
+#: ROS time at the simulation's start [s] (ROS time 0 means "no time yet").
+T0 = 1000.0
+CONTROLLER = "/diff_drive_controller"
+MULTIPLIERS = (
+    "wheel_separation_multiplier",
+    "left_wheel_radius_multiplier",
+    "right_wheel_radius_multiplier",
+)
+
+
+def _param(name: str, description: str) -> dict[str, object]:
+    return {
+        "name": name,
+        "type": "double",
+        "default": 1.0,
+        "level": 0,
+        "description": description,
+        "min": 0.5,
+        "max": 1.5,
+        "edit_method": "",
+        "ctype": "double",
+        "cconsttype": "const double",
+    }
+
+
+def diff_drive_config() -> types.SimpleNamespace:
+    """What dynamic_reconfigure generates from DiffDriveController.cfg (its three
+    multipliers): ``config_description`` (the Default group), ``defaults``, ``min``,
+    ``max``, ``level``, ``type``, as ``dynamic_reconfigure.server.Server`` reads them."""
+    description = {
+        "name": "Default",
+        "type": "",
+        "state": True,
+        "cstate": "true",
+        "id": 0,
+        "parent": 0,
+        "parameters": [
+            _param("wheel_separation_multiplier", "Wheel separation multiplier."),
+            _param("left_wheel_radius_multiplier", "Left wheel radius multiplier."),
+            _param("right_wheel_radius_multiplier", "Right wheel radius multiplier."),
+        ],
+        "groups": [],
+        "class": "DEFAULT",
+        "parentclass": "",
+        "parentname": "Default",
+        "field": "default",
+        "upper": "DEFAULT",
+        "lower": "groups",
+    }
+    config = types.SimpleNamespace(
+        config_description=description, min={}, max={}, defaults={}, level={}, type={}
+    )
+    for p in extract_params(description):
+        for key, table in (
+            ("min", config.min),
+            ("max", config.max),
+            ("default", config.defaults),
+            ("level", config.level),
+            ("type", config.type),
+        ):
+            table[p["name"]] = p[key]
+    return config
+
+
+def _stamp(t: float) -> rospy.Time:
+    return rospy.Time.from_sec(T0 + t)
+
+
+def _quaternion(yaw: float, roll: float = 0.0) -> tuple[float, float, float, float]:
+    """x, y, z, w of a yaw about z followed by a roll about the new x axis."""
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    return (cy * sr, sy * sr, sy * cr, cy * cr)
+
+
+class SimNode:
+    def __init__(self, args: argparse.Namespace) -> None:
+        world = corner_world()
+        self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
+        world = replace(world, lidar=self.lidar)
+        self.robot = VirtualRobot(
+            E_d=args.E_d, E_b=args.E_b, slip=args.slip, seed=args.seed, world=world
+        )
+        self.upside_down = args.upside_down
+        self.rate, self.scan_every = args.rate, args.scan_every
+        self.lock = threading.Lock()
+        self.mute_odom = False
+        rospy.set_param(f"{CONTROLLER}/wheel_separation", 0.34)
+        rospy.set_param(f"{CONTROLLER}/wheel_radius", 0.075)
+        for name in MULTIPLIERS:  # as the controller's YAML loads them, before the server
+            rospy.set_param(f"{CONTROLLER}/{name}", 1.0)
+        self.clock = rospy.Publisher("/clock", Clock, queue_size=10)
+        self.odom = rospy.Publisher("/odom", Odometry, queue_size=10)
+        self.scan = rospy.Publisher("/scan", LaserScan, queue_size=2)
+        self.truth = rospy.Publisher("/ground_truth", PoseStamped, queue_size=2)
+        self.true_pose = rospy.Publisher("/sim/true_pose", Pose2DMsg, queue_size=2)
+        self.tf = rospy.Publisher("/tf", TFMessage, queue_size=10)
+        self.tf_static = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
+        self.tf_static.publish(TFMessage([self._laser_transform()]))
+        self.server = Server(diff_drive_config(), self._reconfigure, namespace=CONTROLLER)
+        rospy.Subscriber("/cmd_vel", Twist, self._on_cmd, queue_size=10, tcp_nodelay=True)
+        rospy.Subscriber("/sim/control", String, self._on_control, queue_size=10)
+
+    def _laser_transform(self) -> TransformStamped:
+        t = TransformStamped()
+        t.header.stamp = _stamp(0.0)
+        t.header.frame_id, t.child_frame_id = "base_link", "laser"
+        m = self.lidar.mount
+        t.transform.translation.x, t.transform.translation.y = m.x, m.y
+        q = _quaternion(m.theta, math.pi if self.upside_down else 0.0)
+        r = t.transform.rotation
+        r.x, r.y, r.z, r.w = q
+        return t
+
+    def _reconfigure(self, config: dict[str, float], level: int) -> dict[str, float]:
+        with self.lock:
+            old = self.robot.drive_params()
+            new = replace(old, **{k: float(config[k]) for k in MULTIPLIERS})
+            if new != old:
+                self.robot.apply(new, "reconfigure")
+        return config
+
+    def _on_cmd(self, msg: Twist) -> None:
+        with self.lock:
+            self.robot.send_velocity(msg.linear.x, msg.angular.z)
+
+    def _on_control(self, msg: String) -> None:
+        self.mute_odom = {"mute_odom": True, "unmute_odom": False}.get(msg.data, self.mute_odom)
+
+    def _publish(self, step: int) -> None:
+        robot = self.robot
+        t = robot.now()
+        stamp = _stamp(t)
+        self.clock.publish(Clock(stamp))
+        odom = robot.odometry()
+        pose = odom.pose
+        if not self.mute_odom:
+            msg = Odometry()
+            msg.header.stamp, msg.header.frame_id = stamp, "odom"
+            msg.child_frame_id = "base_link"
+            p = msg.pose.pose
+            p.position.x, p.position.y = pose.x, pose.y
+            q = _quaternion(pose.theta)
+            p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w = q
+            self.odom.publish(msg)
+            tf = TransformStamped()
+            tf.header = msg.header
+            tf.child_frame_id = "base_link"
+            tf.transform.translation.x, tf.transform.translation.y = pose.x, pose.y
+            tf.transform.rotation = p.orientation
+            self.tf.publish(TFMessage([tf]))
+        if step % self.scan_every == 0:
+            self._publish_sensors(stamp)
+
+    def _publish_sensors(self, stamp: rospy.Time) -> None:
+        robot = self.robot
+        scan = robot.scan()
+        if scan is not None:
+            msg = LaserScan()
+            msg.header.stamp, msg.header.frame_id = stamp, "laser"
+            ranges = scan.ranges
+            angle_min = scan.angle_min
+            if self.upside_down:  # its beams run clockwise seen from above
+                angle_min = -(scan.angle_min + scan.angle_increment * (ranges.size - 1))
+                ranges = ranges[::-1]
+            msg.angle_min, msg.angle_increment = angle_min, scan.angle_increment
+            msg.angle_max = angle_min + scan.angle_increment * (ranges.size - 1)
+            msg.range_min, msg.range_max = scan.range_min, scan.range_max
+            msg.ranges = [float(r) for r in ranges]
+            self.scan.publish(msg)
+        truth = robot.ground_truth()
+        if truth is not None:
+            msg_t = PoseStamped()
+            msg_t.header.stamp, msg_t.header.frame_id = stamp, "world"
+            msg_t.pose.position.x, msg_t.pose.position.y = truth.pose.x, truth.pose.y
+            o = msg_t.pose.orientation
+            o.x, o.y, o.z, o.w = _quaternion(truth.pose.theta)
+            self.truth.publish(msg_t)
+        true = robot.true_pose
+        self.true_pose.publish(Pose2DMsg(true.x, true.y, true.theta))
+
+    def run(self) -> None:
+        period = self.robot.period
+        wall_step = period / self.rate
+        with self.lock:
+            self._publish(0)
+        print("ready", flush=True)
+        step, start = 0, time.monotonic()
+        while not rospy.is_shutdown():
+            step += 1
+            with self.lock:
+                self.robot.wait(period)
+                self._publish(step)
+            delay = start + step * wall_step - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            elif delay < -0.5:  # fell behind (a busy machine): do not race to catch up
+                start = time.monotonic() - step * wall_step
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rate", type=float, default=5.0, help="times faster than real time")
+    parser.add_argument("--scan-every", type=int, default=5, help="periods between scans")
+    parser.add_argument("--E-d", dest="E_d", type=float, default=1.004)
+    parser.add_argument("--E-b", dest="E_b", type=float, default=0.97)
+    parser.add_argument("--slip", type=float, default=0.0004)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--laser-x", type=float, default=0.1)
+    parser.add_argument("--upside-down", action="store_true")
+    args = parser.parse_args()
+    import rosgraph
+
+    rosgraph.Master("/sim_robot_setup").setParam("/use_sim_time", True)
+    rospy.init_node("sim_robot", disable_signals=False)
+    SimNode(args).run()
+
+
+if __name__ == "__main__":
+    main()

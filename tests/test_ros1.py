@@ -1,0 +1,287 @@
+"""The ROS 1 adapter against a real ROS 1 master and a simulated robot node
+(``tests/ros1_robot_node.py``: VirtualRobot behind /cmd_vel, /clock, /odom, /scan, TF and a
+dynamic_reconfigure server like diff_drive_controller's).
+
+Each master runs on a free port (``rosmaster --core -p PORT``) and is ended by its PID. The
+adapter runs in subprocesses (``tests/ros1_probe.py``, which prints what it observed, and
+``umbmark`` itself): rospy keeps its node and threads for the rest of a process and warns
+from them, which pytest's warnings-as-errors would turn against later tests. The
+end-to-end test has its own master and a fresh robot with its laser mounted upside down.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+import os
+import select
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from umbmark.robot.ros_common import master_problem
+from umbmark.sources.params.reader import read_controller_params
+
+if importlib.util.find_spec("rospy") is None:
+    pytest.skip("ROS 1 (python3-rospy) is not installed", allow_module_level=True)
+ROSMASTER = shutil.which("rosmaster")
+if ROSMASTER is None:
+    pytest.skip("rosmaster is not installed (python3-rosmaster)", allow_module_level=True)
+
+NODE = Path(__file__).with_name("ros1_robot_node.py")
+PROBE = Path(__file__).with_name("ros1_probe.py")
+#: The node's simulation runs this many times faster than real time.
+RATE = 5.0
+#: ROS time at the node's start (ros1_robot_node.T0).
+T0 = 1000.0
+#: The node's laser: 0.1 m ahead of the robot's centre.
+LASER_X = 0.1
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+class RosGraph:
+    """A master and a simulated robot node on a free port, ended by their PIDs."""
+
+    def __init__(self, tmp: Path, *node_args: str) -> None:
+        self.uri = f"http://127.0.0.1:{_free_port()}"
+        self.env = {
+            **os.environ,
+            "ROS_MASTER_URI": self.uri,
+            "ROS_HOME": str(tmp / "ros_home"),
+            "ROS_LOG_DIR": str(tmp / "ros_log"),
+            "ROS_IP": "127.0.0.1",
+        }
+        self.env.pop("ROS_HOSTNAME", None)
+        port = self.uri.rsplit(":", 1)[1]
+        self.master = subprocess.Popen(
+            [ROSMASTER, "--core", "-p", port],  # type: ignore[list-item]
+            env=self.env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        self.node: subprocess.Popen[str] | None = None
+        self.watcher = threading.Thread()
+        try:
+            deadline = time.monotonic() + 20.0
+            while master_problem(self.uri, 1.0) is not None:
+                assert time.monotonic() < deadline, "rosmaster did not come up in 20 s"
+                time.sleep(0.1)
+            self.node = subprocess.Popen(
+                [sys.executable, str(NODE), "--rate", str(RATE), "--laser-x", str(LASER_X),
+                 *node_args],
+                env=self.env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+            )  # fmt: skip
+            ready = threading.Event()
+            self.watcher = threading.Thread(target=self._watch, args=(ready,), daemon=True)
+            self.watcher.start()
+            assert ready.wait(30.0), "the simulated robot node did not come up in 30 s"
+        except BaseException:
+            self.close()
+            raise
+
+    def _watch(self, ready: threading.Event) -> None:
+        assert self.node is not None
+        assert self.node.stdout is not None
+        for line in self.node.stdout:
+            if line.strip() == "ready":
+                ready.set()
+
+    def close(self) -> None:
+        for proc in (self.node, self.master):
+            if proc is not None and proc.poll() is None:
+                proc.send_signal(signal.SIGINT)
+                try:
+                    proc.wait(5.0)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
+        if self.node is not None and self.node.stdout is not None:
+            self.watcher.join(5.0)
+            self.node.stdout.close()
+
+
+def _umbmark(
+    graph_env: dict[str, str], *args: str, timeout: float = 240.0
+) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "umbmark", *args],
+        env=graph_env, capture_output=True, text=True, timeout=timeout, check=False,
+    )  # fmt: skip
+
+
+# --- end to end -------------------------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_selfcal_end_to_end_over_ros1(tmp_path: Path) -> None:
+    """(First in this file: its robot alone on the machine, before the shared one starts.)
+    ``umbmark selfcal --ros1`` against a fresh robot (E_d 1.004, E_b 0.97, its laser
+    upside down): exit 0, E_max,syst reduced at least five-fold, and the multipliers the
+    reconfigure server holds are the report's. Uncorrected, E_b = 0.97 on 1 m squares is
+    about 0.16 m of E_max,syst (the virtual robot run directly gives 0.165 m)."""
+    g = RosGraph(tmp_path, "--upside-down")
+    try:
+        done = _umbmark(g.env, "selfcal", "--ros1", "--runs", "2", "-L", "1", "--max-passes",
+                        "1", "--out", str(tmp_path / "out"), "--json")  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout)
+        before, after = report["e_max_syst_before"], report["e_max_syst_after"]
+        assert 0.10 < before < 0.25
+        assert after < before / 5.0
+        held = _probe(g, "held")
+    finally:
+        g.close()
+    applied = report["applied"]
+    assert set(held) == set(applied)
+    for name, value in applied.items():
+        assert held[name] == pytest.approx(value, rel=1e-9)
+    # the robot's E_b of 0.97 is what the separation multiplier corrects
+    assert applied["wheel_separation_multiplier"] == pytest.approx(0.97, abs=0.005)
+
+
+# --- a shared master and robot -----------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RosGraph]:
+    """The master and node the probes and command lines share."""
+    g = RosGraph(tmp_path_factory.mktemp("ros1"))
+    yield g
+    g.close()
+
+
+def _probe(graph: RosGraph, *args: str) -> dict[str, Any]:
+    """What tests/ros1_probe.py observed (it drives a Ros1Robot in a process of its own)."""
+    done = subprocess.run(
+        [sys.executable, str(PROBE), *args],
+        env=graph.env, capture_output=True, text=True, timeout=120, check=False,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    out: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
+    return out
+
+
+def test_reads_odometry_scan_and_sim_time(graph: RosGraph) -> None:
+    """ROS time is the node's /clock (it starts at 1000 s and runs 5 times faster than the
+    wall clock); the odometry and scan carry it; the laser's mounting comes from TF; the
+    far wall (x = 6 m in the world) is 6 - x - 0.1 m ahead of the laser."""
+    seen = _probe(graph, "read")
+    assert T0 < seen["start"] < T0 + 600.0  # sim time, not the wall clock's 1.7e9 s
+    assert 2.0 <= seen["now"] - seen["start"] < 2.3
+    assert seen["wall"] < 1.6  # faster than real time (5x: 0.4 s; 4 times that when busy)
+    assert 0.0 <= seen["now"] - seen["odom_time"] <= 0.1
+    assert 0.0 <= seen["now"] - seen["scan_time"] <= 0.2
+    assert seen["mount"] == pytest.approx([LASER_X, 0.0, 0.0])
+    x = seen["true"][0]
+    assert seen["ahead"] == pytest.approx(6.0 - x - LASER_X, abs=0.03)
+
+
+def test_reconfigure_within_range_is_held_by_the_server(graph: RosGraph) -> None:
+    """Multipliers within 0.5 to 1.5 go through dynamic_reconfigure; the server and the
+    parameter server hold them."""
+    seen = _probe(graph, "reconfigure")
+    assert (seen["method"], seen["active"], seen["file"]) == ("reconfigure", True, None)
+    assert seen["held"] == {
+        "wheel_separation_multiplier": 0.97,
+        "left_wheel_radius_multiplier": 0.998,
+        "right_wheel_radius_multiplier": 1.002,
+    }
+    assert seen["after"] == [0.34, 0.075, 0.97, 0.998, 1.002]
+
+
+def test_outside_range_writes_the_yaml_and_leaves_the_server(
+    graph: RosGraph, tmp_path: Path
+) -> None:
+    """1.6 is beyond DiffDriveController.cfg's 1.5: the server would clamp it, so the YAML
+    is written instead (readable by the project's reader) and the result says so."""
+    params = tmp_path / "controller.yaml"
+    seen = _probe(graph, "outside", str(params))
+    assert (seen["method"], seen["active"], seen["file"]) == ("yaml", False, str(params))
+    assert "wheel_separation_multiplier 1.6 outside 0.5 to 1.5" in seen["message"]
+    read = read_controller_params(params, "/diff_drive_controller")
+    assert (
+        read.wheel_separation_multiplier,
+        read.left_wheel_radius_multiplier,
+        read.right_wheel_radius_multiplier,
+    ) == (1.6, 0.9, 1.1)
+    assert read.ros2 is False
+    assert seen["after"] == seen["before"]  # the server was not asked
+    assert 1.6 not in seen["held"].values()
+
+
+def test_ctrl_c_stops_the_robot(graph: RosGraph, tmp_path: Path) -> None:
+    """Ctrl-C while ``umbmark selfcal --ros1`` drives: exit 130, and the last velocity it
+    sent is zero (the robot stands still afterwards)."""
+    watch = subprocess.Popen(
+        [sys.executable, str(PROBE), "watch"], env=graph.env, stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "umbmark", "selfcal", "--ros1", "--runs", "2", "-L", "1",
+         "--max-passes", "1", "--out", str(tmp_path / "out")],
+        env=graph.env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert watch.stdout is not None
+        ready, _, _ = select.select([watch.stdout], [], [], 90.0)
+        assert ready, "the robot never moved"
+        assert watch.stdout.readline().strip() == "moving"
+        proc.send_signal(signal.SIGINT)
+        _out, err = proc.communicate(timeout=30.0)
+        out, _ = watch.communicate("", timeout=30.0)
+    finally:
+        for p in (proc, watch):
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+    assert proc.returncode == 130, err
+    seen = json.loads(out.strip().splitlines()[-1])
+    assert seen["last"] == [0.0, 0.0]
+    a, b = seen["pose_a"], seen["pose_b"]
+    assert math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-3
+
+
+def test_stale_odometry_stops_the_robot(graph: RosGraph) -> None:
+    """The node stops publishing /odom while its clock runs on: the drive stops for safety
+    within its 0.5 s limit, and the last command on /cmd_vel is a zero velocity."""
+    seen = _probe(graph, "stale")
+    assert seen["error"].startswith("odometry stale (0.5")
+    assert seen["moving_commands"] > 0
+    assert seen["last"] == [0.0, 0.0]
+    assert seen["odom_age_after"] <= 0.1
+
+
+def test_unknown_odometry_topic_is_one_line(graph: RosGraph, tmp_path: Path) -> None:
+    done = _umbmark(graph.env, "selfcal", "--ros1", "--odom-topic", "/nope", "--out",
+                    str(tmp_path / "out"), timeout=60.0)  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert "/nope" in lines[0]
+
+
+def test_no_master_is_one_line(tmp_path: Path) -> None:
+    env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{_free_port()}",
+           "ROS_HOME": str(tmp_path)}  # fmt: skip
+    started = time.monotonic()
+    done = _umbmark(env, "selfcal", "--ros1", "--out", str(tmp_path / "out"), timeout=60.0)
+    assert time.monotonic() - started < 30.0
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert "no ROS master" in lines[0]
