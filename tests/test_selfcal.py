@@ -432,3 +432,23 @@ def test_progress_names_the_pass_the_run_and_the_leg(tmp_path):
     assert ("pass 1", 1, Direction.CW, "driving, leg 1") in seen
     assert ("pass 1", 4, Direction.CCW, "driving, turn 4") in seen
     assert ("pass 1", 4, Direction.CCW, "measuring") in seen
+
+
+def test_a_run_whose_odometry_does_not_end_where_it_was_sent_is_warned_of(tmp_path):
+    """The benchmark assumes the robot follows the square by its odometry: an end pose
+    far from the commanded one is said, naming the pass and the run."""
+    limits = DriveLimits(end_position=1e-6, end_heading=1e-9)  # nothing is that close
+    report = selfcal(
+        VirtualRobot(E_d=1.001, E_b=0.995, seed=4), side_length=1.0, runs=2, max_passes=1,
+        verify=False, coarse=False, out=tmp_path / "out", limits=limits,
+    )  # fmt: skip
+    (only,) = report.passes
+    assert len(only.warnings) == 4  # every run
+    assert only.warnings[0].startswith("cw run 1: the odometry ended ")
+    assert only.warnings[3].startswith("ccw run 2: ")
+    assert json.loads(report.to_json())["passes"][0]["warnings"] == list(only.warnings)
+    ordinary = selfcal(
+        VirtualRobot(E_d=1.001, E_b=0.995, seed=4), side_length=1.0, runs=2, max_passes=1,
+        verify=False, coarse=False, out=tmp_path / "out2",
+    )  # fmt: skip
+    assert ordinary.passes[0].warnings == ()

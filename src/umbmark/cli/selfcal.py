@@ -104,7 +104,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     controller, repeats while the paper's 3 x SEM rule says another pass is worth it, and
     verifies. A zero velocity is sent on any error, on Ctrl-C and on every safety stop.
     """
-    from umbmark.cli.common import console, note, status_line, wrote
+    from umbmark.cli.common import console, note, status_line, warn, wrote
     from umbmark.cli.render import render_selfcal
     from umbmark.core.errors import InputError
     from umbmark.jobs.selfcal import selfcal as run_selfcal
@@ -150,6 +150,9 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         robot.close()
     for line in report.checks:
         note(line)
+    for p in report.passes:
+        for line in p.warnings:
+            warn(f"{p.label}, {line}")
     wrote(report.files)
     if json_out:
         click.echo(report.to_json(), nl=False)

@@ -25,6 +25,7 @@ What a person still does: place the robot in the corner, and calibrate the scale
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -39,7 +40,7 @@ from umbmark.autocal.drive import DriveLimits, settle
 from umbmark.autocal.measure import MEASURE_METHODS, Measure, MeasureMethod, take_fix
 from umbmark.autocal.passes import Home, corner_truth, drive_pass
 from umbmark.autocal.preflight import preflight
-from umbmark.autocal.record import record_pass
+from umbmark.autocal.record import MeasuredRun, record_pass
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
@@ -75,6 +76,9 @@ class PassResult:
         The parameters the controller ran with during the pass.
     applied : ApplyResult or None
         What applying its correction did (None: not applied).
+    warnings : tuple of str
+        Runs whose odometry did not end where it was sent (the benchmark assumes the
+        robot follows the square by its odometry).
     """
 
     label: str
@@ -82,6 +86,7 @@ class PassResult:
     report: CalibrationReport
     params: DriveParams
     applied: ApplyResult | None = None
+    warnings: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (metres, radians)."""
@@ -97,6 +102,7 @@ class PassResult:
             "applied": None if self.applied is None else self.applied.active,
             "apply_method": None if self.applied is None else self.applied.method,
             "apply_message": None if self.applied is None else self.applied.message,
+            "warnings": list(self.warnings),
         }
 
 
@@ -359,7 +365,7 @@ class _Passes:
         where = self.folder / label.replace(" ", "-")
         record_pass(where, measured, params, self.side, self.how.method, self.name)
         report = calibrate(where, robot=self.record_as, history=self.history)
-        return PassResult(label, where, report, params)
+        return PassResult(label, where, report, params, warnings=_strays(measured, self.limits))
 
     def mark_applied(self, result: PassResult) -> None:
         """Mark the pass's calibration applied in the history (it was recorded last)."""
@@ -370,6 +376,24 @@ class _Passes:
         store = History(self.history)
         (last,) = store.calibrations(self.record_as)[-1:]
         store.mark_applied(self.record_as, last.id)
+
+
+def _strays(measured: list[MeasuredRun], limits: DriveLimits) -> tuple[str, ...]:
+    """A warning for each run whose odometry ended farther from the commanded end than the
+    limits (a robot answering commands late, a controller that does not settle)."""
+    out = []
+    counted: dict[Direction, int] = {}
+    for m in measured:
+        k = counted[m.run.direction] = counted.get(m.run.direction, 0) + 1
+        distance, heading = m.run.end_error
+        if distance > limits.end_position or heading > limits.end_heading:
+            out.append(
+                f"{m.run.direction.value} run {k}: the odometry ended {distance * 1000:.1f} mm "
+                f"and {math.degrees(heading):.2f} deg from where it was sent (limits "
+                f"{limits.end_position * 1000:g} mm, {math.degrees(limits.end_heading):g} deg): "
+                "the run is not the square the benchmark assumes"
+            )
+    return tuple(out)
 
 
 def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
