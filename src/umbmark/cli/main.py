@@ -7,26 +7,14 @@ input (:class:`umbmark.InputError`) and malformed options alike.
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import ItemsView, Iterator, KeysView, Sequence, ValuesView
 
 import click
 
-from umbmark.cli.calibrate import calibrate
 from umbmark.cli.common import EXIT_BAD_INPUT, error_line, reading_bar
-from umbmark.cli.demo import demo
-from umbmark.cli.example import example
-from umbmark.cli.history import history
-from umbmark.cli.info import info
-from umbmark.cli.plan import plan
-from umbmark.cli.replay import replay
-from umbmark.cli.report import report
-from umbmark.cli.reproduce import reproduce
-from umbmark.cli.selfcal import selfcal
-from umbmark.cli.simulate import simulate
-from umbmark.cli.study import study
-from umbmark.cli.validate import validate
 from umbmark.core.errors import InputError, SafetyError
 from umbmark.core.version import __version__
 
@@ -44,6 +32,64 @@ class _InterruptedError(Exception):
     """A Ctrl-C inside a command, kept from click (which would print a blank line)."""
 
 
+#: The subcommands, each in its module of ``umbmark.cli`` under its own name.
+COMMANDS = (
+    "demo",
+    "calibrate",
+    "replay",
+    "report",
+    "validate",
+    "info",
+    "plan",
+    "simulate",
+    "study",
+    "reproduce",
+    "example",
+    "history",
+    "selfcal",
+)
+
+
+class _Commands(dict[str, click.Command]):
+    """The subcommands, each imported the first time it is asked for, so that running one
+    command does not import the others (``--help`` asks for all of them)."""
+
+    def _load(self, name: str) -> click.Command | None:
+        if name not in COMMANDS:
+            return None
+        if not dict.__contains__(self, name):
+            command = getattr(importlib.import_module(f"umbmark.cli.{name}"), name)
+            dict.__setitem__(self, name, command)
+        return dict.__getitem__(self, name)
+
+    def __getitem__(self, name: str) -> click.Command:
+        command = self._load(name)
+        if command is None:
+            raise KeyError(name)
+        return command
+
+    def get(self, name: str, default: click.Command | None = None) -> click.Command | None:  # type: ignore[override]
+        return self._load(name) or default
+
+    def __contains__(self, name: object) -> bool:
+        return name in COMMANDS
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(COMMANDS)
+
+    def __len__(self) -> int:
+        return len(COMMANDS)
+
+    def keys(self) -> KeysView[str]:  # type: ignore[override]
+        return dict.fromkeys(COMMANDS).keys()
+
+    def values(self) -> ValuesView[click.Command]:  # type: ignore[override]
+        return {name: self[name] for name in COMMANDS}.values()
+
+    def items(self) -> ItemsView[str, click.Command]:  # type: ignore[override]
+        return {name: self[name] for name in COMMANDS}.items()
+
+
 class _Group(click.Group):
     """The ``umbmark`` group: a Ctrl-C inside a command reaches :func:`main` whole."""
 
@@ -56,6 +102,7 @@ class _Group(click.Group):
 
 @click.group(
     cls=_Group,
+    commands=_Commands(),
     context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
     no_args_is_help=True,
 )
@@ -64,24 +111,6 @@ def cli() -> None:
     """Measure and correct the systematic odometry errors of differential-drive robots
     (Borenstein & Feng's UMBmark). Lengths in metres and angles in radians unless an
     option says otherwise; every command has --help."""
-
-
-for command in (
-    demo,
-    calibrate,
-    replay,
-    report,
-    validate,
-    info,
-    plan,
-    simulate,
-    study,
-    reproduce,
-    example,
-    history,
-    selfcal,
-):
-    cli.add_command(command)
 
 
 def _usage(exc: click.UsageError) -> str:

@@ -18,7 +18,10 @@ ROS = "ROS robots (--ros1, --ros2)"
 DRIVING = "Driving"
 
 
-@click.command(cls=Command)
+@click.command(
+    cls=Command,
+    short_help="The robot calibrates itself: drives the squares, measures at a corner, applies.",
+)
 @apply(
     [
         option("--sim", "backend", flag_value="sim", section=ROBOT,

@@ -9,9 +9,11 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from umbmark.core.errors import InputError
-from umbmark.outputs.plotting import FIGURE_FORMATS
 
-__all__ = ["OutputPlan", "check_folder_output"]
+__all__ = ["FIGURE_FORMATS", "OutputPlan", "check_folder_output"]
+
+#: File extensions a figure can be saved as.
+FIGURE_FORMATS = (".png", ".svg", ".pdf")
 
 _YAML = (".yaml", ".yml")
 #: Outputs that are folders (made when missing); the others are files.

@@ -23,18 +23,18 @@ from umbmark.core.atomic import atomic_path
 from umbmark.core.conventions import Direction
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
-from umbmark.store.history import CalibrationRecord, RobotRecord, drift_verdict
+from umbmark.outputs.files import FIGURE_FORMATS
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from umbmark.sim.result import Trace
+    from umbmark.store.history import CalibrationRecord, RobotRecord
 
 __all__ = [
     "DIRECTION_COLOURS",
     "DIRECTION_MARKERS",
-    "FIGURE_FORMATS",
     "cluster_extent",
     "cluster_figure",
     "draw_clusters",
@@ -44,9 +44,6 @@ __all__ = [
     "save_figure",
     "trajectory_figure",
 ]
-
-#: File extensions a figure can be saved as.
-FIGURE_FORMATS = (".png", ".svg", ".pdf")
 
 #: The colour and the marker of each direction's runs in every cluster figure.
 DIRECTION_COLOURS = {Direction.CW: "#1f77b4", Direction.CCW: "#d62728"}
@@ -446,6 +443,8 @@ def history_figure(robot: RobotRecord, calibrations: Sequence[CalibrationRecord]
         f"Robot {robot.name}: nominal wheelbase {robot.wheelbase * _MM:.2f} mm, {diameter}; "
         f"{len(calibrations)} calibration(s)"
     )
+    from umbmark.store.history import drift_verdict
+
     verdict = drift_verdict(calibrations)
     if verdict is not None and verdict.startswith("drift"):
         title += "\n" + verdict

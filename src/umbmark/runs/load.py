@@ -34,11 +34,11 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import DEFAULT_MAX_GAP, PoseSeries, Recording
 from umbmark.model.runs import Run
 from umbmark.options.spec import READ
-from umbmark.runs.association import Association
-from umbmark.runs.logged import SplitMode, runs_from_recordings
-from umbmark.runs.segmentation import SplitOptions
 
 if TYPE_CHECKING:
+    from umbmark.runs.association import Association
+    from umbmark.runs.logged import SplitMode
+    from umbmark.runs.segmentation import SplitOptions
     from umbmark.sources.bag.options import BagOptions
 
 __all__ = ["FORMATS", "Format", "LoadOptions", "Loaded", "detect_format", "load_runs"]
@@ -157,9 +157,7 @@ def detect_format(path: str | Path) -> Format:
     InputError
         If ``path`` does not exist or is a folder of no known layout.
     """
-    from umbmark.sources.optiodom import is_optiodom_session
-    from umbmark.sources.runlog.reader import is_runlog
-
+    # The readers' modules only where the path needs them (start-up of a runs table).
     path = Path(path)
     if not path.exists():
         raise InputError("no such file or folder", source=path)
@@ -167,6 +165,9 @@ def detect_format(path: str | Path) -> Format:
     if path.suffix.lower() in (".bag", ".db3", ".mcap"):
         return "bag"
     if path.is_dir():
+        from umbmark.sources.optiodom import is_optiodom_session
+        from umbmark.sources.runlog.reader import is_runlog
+
         if _is_ros2_bag_folder(path):
             return "bag"
         if is_optiodom_session(path):
@@ -178,8 +179,11 @@ def detect_format(path: str | Path) -> Format:
             "run log with metadata.yaml)",
             source=path,
         )
-    if path.suffix.lower() == ".csv" and is_runlog(path) and not _looks_like_table(path):
-        return "log"
+    if path.suffix.lower() == ".csv" and not _looks_like_table(path):
+        from umbmark.sources.runlog.reader import is_runlog
+
+        if is_runlog(path):
+            return "log"
     return "table"
 
 
@@ -255,6 +259,8 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         side = options.side_length
     if options.truth_offset is not None:
         recordings = [_at_axle(recording, options.truth_offset) for recording in recordings]
+    from umbmark.runs.logged import runs_from_recordings  # recordings only: kept off start-up
+
     found = runs_from_recordings(
         recordings,
         params,

@@ -173,11 +173,19 @@ class ReadOptions:
     right_wheel_frame: str | None = None
 
     def __post_init__(self) -> None:
-        from umbmark.sources.bag.options import check_wheel_fields
-
         for spec in READ_OPTIONS:
             spec.check(getattr(self, spec.name))
         check_pairs(vars(self))
+        if (self.left_field, self.right_field, self.msg_dir) != (None, None, None):
+            self._check_wheel_fields()
+        if self.split == "windows" and not self.windows:
+            raise InputError("--split windows needs --windows start:end[,start:end...]")
+
+    def _check_wheel_fields(self) -> None:
+        """The wheel-field options' one check (in the bag's options, imported only when
+        they are given: a runs table's start-up does not need the bag)."""
+        from umbmark.sources.bag.options import check_wheel_fields
+
         check_wheel_fields(
             self.left_field,
             self.right_field,
@@ -192,8 +200,6 @@ class ReadOptions:
                 ("--left-wheel-frame", self.left_wheel_frame),
             ),
         )
-        if self.split == "windows" and not self.windows:
-            raise InputError("--split windows needs --windows start:end[,start:end...]")
 
     @classmethod
     def of(cls, options: Mapping[str, object]) -> ReadOptions:

@@ -22,14 +22,14 @@ from umbmark.core.messages import info
 from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
-from umbmark.runs.association import Association
 from umbmark.runs.load import Format, Loaded, LoadOptions, detect_format, load_runs
-from umbmark.runs.logged import SplitMode
 from umbmark.runs.options import ReadOptions
 from umbmark.sources.params.reader import ControllerParams, read_parameter_file
 from umbmark.sources.runs_table.reader import RecordedActive, read_table_active
 
 if TYPE_CHECKING:
+    from umbmark.runs.association import Association
+    from umbmark.runs.logged import SplitMode
     from umbmark.sources.bag.options import BagOptions
 
 __all__ = [
@@ -380,9 +380,12 @@ def _load_options(
     params: WheelParams | None,
     file: ControllerParams,
 ) -> LoadOptions:
-    from umbmark.runs.segmentation import SplitOptions
-
     windows = options.time_windows
+    split_options = None
+    if kind != "table":  # recordings only: kept off a runs table's start-up
+        from umbmark.runs.segmentation import SplitOptions
+
+        split_options = SplitOptions(min_rest=float(options.min_rest))
     return LoadOptions(
         unit=options.unit,
         angle_unit=options.angle_unit,
@@ -390,7 +393,7 @@ def _load_options(
         params=params,
         split=cast("SplitMode", "windows" if windows else options.split),
         windows=windows,
-        split_options=SplitOptions(min_rest=float(options.min_rest)),
+        split_options=split_options,
         max_gap=float(options.max_gap),
         bag=_bag_options(options, params, file) if kind == "bag" else None,
         truth_offset=(
