@@ -386,7 +386,10 @@ def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
     assert math.degrees(errors[1]) <= 0.05  # deg rms
 
 
-def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path):
+@pytest.mark.parametrize(
+    "marks", [None, [-0.3, 0.15, -0.3, -0.15, -0.2, -0.2]], ids=["the robot's", "given"]
+)
+def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path, marks):
     """The person is simulated by geometry: at each prompt, the distance from the named mark
     on the robot to the named wall, square to it, read off the virtual robot's true pose in
     the corner frame (walls along x = 0, the "y wall", and y = 0, the "x wall") and rounded
@@ -410,7 +413,7 @@ def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path):
         return f"{round(distance * 1000)}"
 
     report = selfcal(
-        robot, measure="tape", ask=person, side_length=1.0, runs=2, max_passes=1,
+        robot, measure="tape", ask=person, tape_marks=marks, side_length=1.0, runs=2, max_passes=1,
         verify=False, out=tmp_path / "out",
     )  # fmt: skip
     fixes = report.fix_errors
@@ -452,3 +455,17 @@ def test_a_run_whose_odometry_does_not_end_where_it_was_sent_is_warned_of(tmp_pa
         verify=False, coarse=False, out=tmp_path / "out2",
     )  # fmt: skip
     assert ordinary.passes[0].warnings == ()
+
+
+def test_a_tape_measurement_needs_the_marks_of_a_robot_that_has_none(tmp_path):
+    class Unmarked(VirtualRobot):
+        tape_marks = None  # a real robot: nobody knows where on it a person measures from
+
+    robot = Unmarked(seed=1)
+    with pytest.raises(InputError, match=r'^measure="tape" needs tape_marks: the three points'):
+        umbmark.selfcal(robot, measure="tape", ask=input, out=tmp_path / "out")
+    assert robot.commands == []
+    with pytest.raises(InputError, match="at least 50 mm apart"):
+        umbmark.selfcal(
+            robot, measure="tape", tape_marks=[-0.3, 0.1, -0.3, 0.11, 0.0, -0.2], out=tmp_path
+        )

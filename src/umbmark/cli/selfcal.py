@@ -51,6 +51,10 @@ DRIVING = "Driving"
                default="lidar", show_default=True,
                help="How the robot's pose in the corner is measured at each stop: the laser, "
                "three range sensors, motion capture, or a person with a tape (prompted)."),
+        option("--tape-marks", section=TEST, default=None, metavar="X1,Y1,X2,Y2,X3,Y3",
+               help="With --measure tape: the three points on the robot (its base frame, "
+               "metres) the distances are measured from; the first two to the wall behind "
+               "the start, the third to the side wall [default: the virtual robot's]."),
         option("--apply", section=TEST, type=click.Choice(["reconfigure", "yaml", "none"]),
                default="reconfigure", show_default=True,
                help="How corrections reach the controller (none: one pass, nothing applied)."),
@@ -138,6 +142,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     )
     robot = connect(backend, ros=ros, **sim)  # type: ignore[arg-type]
     ask = _ask_person if options["measure"] == "tape" else None
+    options["tape_marks"] = _numbers(options.pop("tape_marks"))
     try:
         with status_line("self-calibration") as show:
 
@@ -171,4 +176,16 @@ def _ask_person(prompt: str) -> str:
         raise InputError(
             "--measure tape: the input ended before the distances were given "
             "(a person types them at each stop)"
+        ) from None
+
+
+def _numbers(text: str | None) -> list[float] | None:
+    """``--tape-marks``' comma-separated numbers (None when not given)."""
+    if text is None:
+        return None
+    try:
+        return [float(part) for part in text.split(",")]
+    except ValueError:
+        raise InputError(
+            f"--tape-marks {text[:60]!r}: give six numbers X1,Y1,X2,Y2,X3,Y3 in metres"
         ) from None

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -218,6 +218,7 @@ def selfcal(
     progress: Progress | None = None,
     limits: DriveLimits | None = None,
     ask: Callable[[str], str] | None = None,
+    tape_marks: Sequence[float] | None = None,
     coarse: bool = True,
 ) -> SelfCalReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
@@ -247,6 +248,14 @@ def selfcal(
         The HTML page of all passes [default: ``report.html`` in ``out``].
     limits : DriveLimits, optional
         Speeds, accelerations and safety limits.
+    ask : callable, optional
+        For ``tape``: shows a prompt, returns the person's answer.
+    tape_marks : six floats, optional
+        For ``tape``: ``x1, y1, x2, y2, x3, y3`` [m], the marks on the robot (its base
+        frame) the distances are measured from, the first two to the wall behind the
+        start, the third to the side wall [default: the robot's ``tape_marks()``].
+    coarse : bool
+        Check first that the robot turns as its odometry believes (lidar or truth).
 
     Raises
     ------
@@ -260,7 +269,8 @@ def selfcal(
         raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
     method = _apply_method(apply)
     limits = limits or DriveLimits()
-    how = Measure(measure, ask=ask, marks=_tape_marks(robot) if measure == "tape" else None)
+    marks = _tape_marks(robot, tape_marks) if measure == "tape" else None
+    how = Measure(measure, ask=ask, marks=marks)
     name = robot_name or robot.name
     folder = Path(out) if out is not None else Path(f"selfcal-{_slug(name)}")
     if folder.exists() and any(folder.iterdir()):
@@ -433,15 +443,31 @@ def _slug(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "-" for c in name)[:60] or "robot"
 
 
-def _tape_marks(robot: Robot) -> TapeMarks:
-    """The marks a person measures from: the robot's own (``tape_marks()``), else three at
-    the back of a LabMate-sized robot, as the paper's sensors."""
-    marks = getattr(robot, "tape_marks", None)
-    if callable(marks):
-        found = marks()
-        if isinstance(found, TapeMarks):
-            return found
-    return TapeMarks(marks=((-0.35, 0.25), (-0.35, -0.25), (-0.35, -0.25)))
+def _tape_marks(robot: Robot, given: Sequence[float] | None) -> TapeMarks:
+    """The marks a person measures from: the given ones, else the robot's own
+    (``tape_marks()``, as the virtual robot has); refused when neither."""
+    if given is not None:
+        values = [float(v) for v in given]
+        if len(values) != 6 or not all(math.isfinite(v) and abs(v) <= 2.0 for v in values):
+            raise InputError(
+                f"--tape-marks {','.join(f'{v:g}' for v in values)}: give X1,Y1,X2,Y2,X3,Y3, "
+                "three points on the robot in its base frame, in metres (within 2 m)"
+            )
+        marks = ((values[0], values[1]), (values[2], values[3]), (values[4], values[5]))
+        if math.dist(marks[0], marks[1]) < 0.05:
+            raise InputError(
+                "--tape-marks: the first two marks (measured to the same wall) must be at "
+                "least 50 mm apart, or the heading cannot be told"
+            )
+        return TapeMarks(marks=marks)
+    own = getattr(robot, "tape_marks", None)
+    if callable(own):
+        return TapeMarks(marks=tuple((float(x), float(y)) for x, y in own()))
+    raise InputError(
+        "--measure tape needs --tape-marks: the three points on the robot the distances "
+        "are measured from (X1,Y1,X2,Y2,X3,Y3 in its base frame, metres; the first two to "
+        "the wall behind the start, the third to the side wall)"
+    )
 
 
 def _apply_method(apply: bool | ApplyMethod) -> ApplyMethod:

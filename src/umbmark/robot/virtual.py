@@ -212,6 +212,12 @@ class VirtualRobot:
         """The robot's true pose in the world [m, rad] (for checks against the truth)."""
         return self._pose
 
+    def tape_marks(self) -> tuple[tuple[float, float], ...]:
+        """Where a person measures from on this robot [m, base frame]: three marks at its
+        back, where the paper's LabMate carried its sensors (x = -350 mm, y = +-250 mm);
+        the first two to the wall behind, the third to the side wall."""
+        return ((-0.35, 0.25), (-0.35, -0.25), (-0.35, -0.25))
+
     def corner_truth(self) -> Pose2D | None:
         """The true pose in the corner frame (None: the world has no corner)."""
         corner = self.world.corner
