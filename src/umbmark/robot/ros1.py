@@ -22,9 +22,9 @@ ROS 1 master and a simulated robot node (``tests/test_ros1.py``).
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
+import threading
 import time
 from types import ModuleType
 from typing import Any
@@ -34,27 +34,17 @@ from umbmark.robot.base import (
     ApplyMethod,
     ApplyResult,
     DriveParams,
-    LaserScan,
-    RangeReading,
-    Stamped,
 )
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
-    Latest,
-    Mount,
     RosOptions,
     held_problem,
     master_problem,
-    mount_from_transform,
     multipliers,
     plan_apply,
-    planar_pose,
-    range_reading,
-    scan_from_message,
-    stamp_seconds,
-    wait_on_clock,
     write_params,
 )
+from umbmark.robot.ros_robot import RosRobot
 
 __all__ = ["Ros1Robot"]
 
@@ -74,7 +64,7 @@ def _rospy() -> ModuleType:
     return module
 
 
-class Ros1Robot:
+class Ros1Robot(RosRobot):
     """The robot behind a ROS 1 master (``ROS_MASTER_URI``), driven through rospy.
 
     Parameters
@@ -100,9 +90,7 @@ class Ros1Robot:
         from sensor_msgs.msg import LaserScan as ScanMsg
         from sensor_msgs.msg import Range
 
-        self.options = options
         self._rospy = rospy
-        self._twist = Twist
         timeout = options.timeout
         if not (0.0 < timeout < math.inf):
             raise InputError(f"timeout {timeout!r} s: give a positive time")
@@ -114,12 +102,8 @@ class Ros1Robot:
             raise InputError(problem)
         rospy.init_node(NODE_NAME, anonymous=True, disable_signals=True)
         self._closed = False
-        self._cmd = rospy.Publisher(options.cmd_vel, Twist, queue_size=1, tcp_nodelay=True)
-        self._odom: Latest[Stamped] = Latest()
-        self._scan: Latest[Any] = Latest()
-        self._truth: Latest[Stamped] = Latest()
-        self._ranges: list[Latest[Any]] = [Latest() for _ in options.ranges]
-        self._mounts: dict[str, Mount] = {}
+        cmd = rospy.Publisher(options.cmd_vel, Twist, queue_size=1, tcp_nodelay=True)
+        self._start(options, Twist, cmd)
         subs = [
             rospy.Subscriber(options.odom, Odometry, self._on_odom, queue_size=1, tcp_nodelay=True),
         ]
@@ -144,55 +128,24 @@ class Ros1Robot:
         self._tf_listener = tf2_ros.TransformListener(self._tf)
         rospy.on_shutdown(self._stop)
         try:
-            self._wait_connected(timeout)
+            self._wait_connected(
+                self._cmd.get_num_connections, "geometry_msgs/Twist", "nav_msgs/Odometry"
+            )
         except BaseException:
             self.close()
             raise
 
-    # --- connection -----------------------------------------------------------------
-
-    def _wait_connected(self, timeout: float) -> None:
-        """Wait for a subscriber of the velocity topic and the first odometry."""
-        deadline = time.monotonic() + timeout
-        while self._cmd.get_num_connections() == 0:
-            if time.monotonic() > deadline:
-                raise InputError(
-                    f"nobody subscribes {self.options.cmd_vel} (geometry_msgs/Twist) after "
-                    f"{timeout:g} s: is the robot's controller running? (--cmd-vel)"
-                )
-            time.sleep(0.01)
-        if self._odom.wait(max(0.0, deadline - time.monotonic())) is None:
-            raise InputError(
-                f"no nav_msgs/Odometry on {self.options.odom} in {timeout:g} s: is the "
-                "controller publishing it? (--odom-topic)"
-            )
-
-    def _on_odom(self, msg: Any) -> None:  # noqa: ANN401 (a rospy message)
-        self._odom.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose.pose)))
-
-    def _on_truth(self, msg: Any) -> None:  # noqa: ANN401 (a rospy message)
-        self._truth.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose)))
-
-    def _mount(self, frame: str) -> Mount:
-        """The sensor frame's mounting in the base frame, from TF (looked up once)."""
-        mount = self._mounts.get(frame)
-        if mount is not None:
-            return mount
+    def _lookup(self, base: str, frame: str) -> Any:  # noqa: ANN401 (a TransformStamped)
         rospy = self._rospy
-        base = self.options.base_frame
-        try:
-            transform = self._tf.lookup_transform(
-                base, frame, rospy.Time(0), rospy.Duration.from_sec(self.options.timeout)
-            )
-        except Exception as exc:  # tf2's LookupException, ConnectivityException, ...
-            self._stop()
-            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise InputError(
-                f"no TF from {base} to {frame!r} in {self.options.timeout:g} s ({detail}): "
-                "publish the sensor's mounting on /tf_static (--base-frame)"
-            ) from None
-        mount = self._mounts[frame] = mount_from_transform(transform.transform)
-        return mount
+        return self._tf.lookup_transform(
+            base, frame, rospy.Time(0), rospy.Duration.from_sec(self.options.timeout)
+        )
+
+    def _clock(self) -> threading.Condition:
+        from rospy.rostime import get_rostime_cond
+
+        cond: threading.Condition = get_rostime_cond()
+        return cond
 
     # --- the Robot interface --------------------------------------------------------
 
@@ -201,57 +154,10 @@ class Ros1Robot:
         return float(self._rospy.get_rostime().to_sec())
 
     def wait(self, duration: float) -> None:
-        """Sleep ``duration`` seconds of ROS time.
-
-        Raises
-        ------
-        InputError
-            ROS time stopped for ``options.timeout`` wall seconds, or went back, or ROS
-            shut down (after a zero velocity).
-        """
-        from rospy.rostime import get_rostime_cond
-
+        """Sleep ``duration`` seconds of ROS time (refusing to hang: :class:`RosRobot`)."""
         if self._rospy.is_shutdown():
             raise InputError("ROS shut down while the robot was driven")
-        try:
-            wait_on_clock(self.now, duration, get_rostime_cond(), self.options.timeout)
-        except InputError:
-            self._stop()
-            raise
-
-    def send_velocity(self, linear: float, angular: float) -> None:
-        """Publish a ``geometry_msgs/Twist``: ``linear.x`` [m/s], ``angular.z`` [rad/s]."""
-        if not (math.isfinite(linear) and math.isfinite(angular)):
-            self._stop()
-            raise InputError(f"velocity ({linear!r}, {angular!r}) is not finite")
-        msg = self._twist()
-        msg.linear.x, msg.angular.z = float(linear), float(angular)
-        self._cmd.publish(msg)
-
-    def odometry(self) -> Stamped | None:
-        """The latest odometry pose, stamped with its header's time."""
-        return self._odom.get()
-
-    def scan(self) -> LaserScan | None:
-        """The latest scan with the laser's mounting from TF (None: no scan came)."""
-        msg = self._scan.get()
-        if msg is None:
-            return None
-        return scan_from_message(msg, self._mount(msg.header.frame_id))
-
-    def ranges(self) -> RangeReading | None:
-        """The latest reading of each range sensor (None: a sensor said nothing yet)."""
-        if not self._ranges:
-            return None
-        messages = [m for m in (latest.get() for latest in self._ranges) if m is not None]
-        if len(messages) < len(self._ranges):
-            return None
-        mounts = [self._mount(m.header.frame_id) for m in messages]
-        return range_reading(messages, mounts)
-
-    def ground_truth(self) -> Stamped | None:
-        """The latest ground-truth pose (None: no truth topic, or no message yet)."""
-        return self._truth.get()
+        super().wait(duration)
 
     def drive_params(self) -> DriveParams:
         """The controller's parameters from the parameter server (``<controller>/...``;
@@ -337,8 +243,3 @@ class Ros1Robot:
             f"controller to run with them{extra}",
             file=os.fspath(path),
         )
-
-    def _stop(self) -> None:
-        """A zero velocity, whatever state ROS is in."""
-        with contextlib.suppress(Exception):  # stopping must not raise
-            self._cmd.publish(self._twist())

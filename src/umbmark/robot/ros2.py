@@ -2,9 +2,11 @@
 
 **Never run.** rclpy cannot be installed on the machines this was written on, so this
 adapter has not been run against any ROS 2 system, not even once. It is kept thin on
-purpose: every conversion, the apply plan and the parameter file are
-:mod:`umbmark.robot.ros_common`'s, unit-tested and exercised through the ROS 1 adapter
-(:mod:`umbmark.robot.ros1`, tested against a real ROS 1 master). What is specific to ROS 2
+purpose: the latest messages, the velocity out, the mountings, waiting and sleeping are
+:class:`umbmark.robot.ros_robot.RosRobot`'s, every conversion, the apply plan and the
+parameter file :mod:`umbmark.robot.ros_common`'s, unit-tested and exercised through the
+ROS 1 adapter (:mod:`umbmark.robot.ros1`, tested against a real ROS 1 master). What is
+specific to ROS 2
 here (rclpy's node, executor, QoS, services) follows rclpy's and ros2_control's documented
 APIs but is untested: try it on a robot that stands on blocks first.
 
@@ -38,24 +40,14 @@ from umbmark.robot.base import (
     ApplyMethod,
     ApplyResult,
     DriveParams,
-    LaserScan,
-    RangeReading,
-    Stamped,
 )
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
-    Latest,
-    Mount,
     RosOptions,
-    mount_from_transform,
     plan_apply,
-    planar_pose,
-    range_reading,
-    scan_from_message,
-    stamp_seconds,
-    wait_on_clock,
     write_params,
 )
+from umbmark.robot.ros_robot import RosRobot
 
 __all__ = ["Ros2Robot"]
 
@@ -63,7 +55,7 @@ __all__ = ["Ros2Robot"]
 CONTROLLER_MANAGER = "/controller_manager"
 
 
-class Ros2Robot:
+class Ros2Robot(RosRobot):
     """The robot behind a ROS 2 graph (``ROS_DOMAIN_ID``), driven through rclpy.
     Never run (module documentation).
 
@@ -93,18 +85,11 @@ class Ros2Robot:
 
         if not (0.0 < options.timeout < math.inf):
             raise InputError(f"timeout {options.timeout!r} s: give a positive time")
-        self.options = options
-        self._twist = Twist
         if not rclpy.ok():
             rclpy.init()
         node = self._node = rclpy.create_node("umbmark_selfcal")
         self._ticks = threading.Condition()
-        self._odom: Latest[Stamped] = Latest()
-        self._scan: Latest[Any] = Latest()
-        self._truth: Latest[Stamped] = Latest()
-        self._ranges: list[Latest[Any]] = [Latest() for _ in options.ranges]
-        self._mounts: dict[str, Mount] = {}
-        self._cmd = node.create_publisher(Twist, options.cmd_vel, 10)
+        self._start(options, Twist, node.create_publisher(Twist, options.cmd_vel, 10))
         node.create_subscription(Odometry, options.odom, self._on_odom, 10)
         node.create_subscription(Clock, "/clock", self._on_clock, 10)
         if options.scan:
@@ -122,25 +107,14 @@ class Ros2Robot:
         self._spin = threading.Thread(target=self._executor.spin, daemon=True)
         self._spin.start()
         try:
-            self._wait_connected()
+            self._wait_connected(
+                self._cmd.get_subscription_count,
+                "geometry_msgs/msg/Twist",
+                "nav_msgs/msg/Odometry",
+            )
         except BaseException:
             self.close()
             raise
-
-    def _wait_connected(self) -> None:
-        timeout = self.options.timeout
-        deadline = time.monotonic() + timeout
-        while self._cmd.get_subscription_count() == 0:
-            if time.monotonic() > deadline:
-                raise InputError(
-                    f"nobody subscribes {self.options.cmd_vel} (geometry_msgs/msg/Twist) after "
-                    f"{timeout:g} s: is the controller active? (--cmd-vel)"
-                )
-            time.sleep(0.01)
-        if self._odom.wait(max(0.0, deadline - time.monotonic())) is None:
-            raise InputError(
-                f"no nav_msgs/msg/Odometry on {self.options.odom} in {timeout:g} s (--odom-topic)"
-            )
 
     def _on_clock(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
         from rclpy.parameter import Parameter
@@ -151,74 +125,26 @@ class Ros2Robot:
             self._ticks.notify_all()
 
     def _on_odom(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
-        self._odom.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose.pose)))
+        super()._on_odom(msg)
         with self._ticks:
             self._ticks.notify_all()
 
-    def _on_truth(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
-        self._truth.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose)))
-
-    def _mount(self, frame: str) -> Mount:
-        mount = self._mounts.get(frame)
-        if mount is not None:
-            return mount
+    def _lookup(self, base: str, frame: str) -> Any:  # noqa: ANN401 (a TransformStamped)
         from rclpy.duration import Duration
         from rclpy.time import Time
 
-        base = self.options.base_frame
-        try:
-            transform = self._tf.lookup_transform(
-                base, frame, Time(), timeout=Duration(seconds=self.options.timeout)
-            )
-        except Exception as exc:  # tf2's LookupException, ...
-            self._stop()
-            raise InputError(
-                f"no TF from {base} to {frame!r} ({type(exc).__name__}): publish the "
-                "sensor's mounting on /tf_static (--base-frame)"
-            ) from None
-        mount = self._mounts[frame] = mount_from_transform(transform.transform)
-        return mount
+        return self._tf.lookup_transform(
+            base, frame, Time(), timeout=Duration(seconds=self.options.timeout)
+        )
+
+    def _clock(self) -> threading.Condition:
+        return self._ticks
 
     # --- the Robot interface --------------------------------------------------------
 
     def now(self) -> float:
         """The node's clock [s] (sim time once ``/clock`` is published)."""
         return float(self._node.get_clock().now().nanoseconds) * 1e-9
-
-    def wait(self, duration: float) -> None:
-        """Sleep ``duration`` seconds of the node's clock (refusing to hang on a stopped one)."""
-        try:
-            wait_on_clock(self.now, duration, self._ticks, self.options.timeout)
-        except InputError:
-            self._stop()
-            raise
-
-    def send_velocity(self, linear: float, angular: float) -> None:
-        """Publish a ``geometry_msgs/msg/Twist``."""
-        if not (math.isfinite(linear) and math.isfinite(angular)):
-            self._stop()
-            raise InputError(f"velocity ({linear!r}, {angular!r}) is not finite")
-        msg = self._twist()
-        msg.linear.x, msg.angular.z = float(linear), float(angular)
-        self._cmd.publish(msg)
-
-    def odometry(self) -> Stamped | None:
-        return self._odom.get()
-
-    def scan(self) -> LaserScan | None:
-        msg = self._scan.get()
-        if msg is None:
-            return None
-        return scan_from_message(msg, self._mount(msg.header.frame_id))
-
-    def ranges(self) -> RangeReading | None:
-        messages = [m for m in (latest.get() for latest in self._ranges) if m is not None]
-        if not self._ranges or len(messages) < len(self._ranges):
-            return None
-        return range_reading(messages, [self._mount(m.header.frame_id) for m in messages])
-
-    def ground_truth(self) -> Stamped | None:
-        return self._truth.get()
 
     def drive_params(self) -> DriveParams:
         """The controller's parameters, by its ``get_parameters`` service."""
@@ -337,10 +263,6 @@ class Ros2Robot:
         named(LoadController, "load_controller")
         named(ConfigureController, "configure_controller")
         switch([name], [])
-
-    def _stop(self) -> None:
-        with contextlib.suppress(Exception):  # stopping must not raise
-            self._cmd.publish(self._twist())
 
 
 def _double(value: Any) -> float | None:  # noqa: ANN401 (rcl_interfaces/ParameterValue)

@@ -1,0 +1,165 @@
+"""What a ROS 1 and a ROS 2 robot share behind the :class:`~umbmark.robot.base.Robot`
+interface, written once and exercised through the ROS 1 adapter (tested against a real
+master): the latest odometry, scan, ranges and ground truth; the velocity out and the zero
+velocity that stops the robot; the sensors' mountings, looked up in TF once; waiting for
+the connection; sleeping on the robot's clock.
+
+:mod:`umbmark.robot.ros1` and :mod:`umbmark.robot.ros2` add what differs: the node, its
+clock, how a transform is looked up, how parameters are read and applied.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from umbmark.core.errors import InputError
+from umbmark.robot.base import LaserScan, RangeReading, Stamped
+from umbmark.robot.ros_common import (
+    Latest,
+    Mount,
+    RosOptions,
+    mount_from_transform,
+    planar_pose,
+    range_reading,
+    scan_from_message,
+    stamp_seconds,
+    wait_on_clock,
+)
+
+__all__ = ["RosRobot"]
+
+
+class RosRobot:
+    """The part of a ROS robot that does not depend on the ROS version.
+
+    A subclass calls :meth:`_start` with its velocity publisher and the ``Twist`` type,
+    subscribes its topics to :meth:`_on_odom`, :meth:`_on_truth` and the :class:`Latest`
+    holders, and provides :meth:`now`, :meth:`_clock` and :meth:`_lookup`.
+    """
+
+    options: RosOptions
+
+    def _start(self, options: RosOptions, twist: type[Any], cmd: Any) -> None:  # noqa: ANN401
+        """The shared state: ``cmd`` publishes ``twist`` messages on ``options.cmd_vel``."""
+        self.options = options
+        self._twist = twist
+        self._cmd = cmd
+        self._odom: Latest[Stamped] = Latest()
+        self._scan: Latest[Any] = Latest()
+        self._truth: Latest[Stamped] = Latest()
+        self._ranges: list[Latest[Any]] = [Latest() for _ in options.ranges]
+        self._mounts: dict[str, Mount] = {}
+
+    # --- what a subclass provides -------------------------------------------------------
+
+    def now(self) -> float:
+        """The robot's clock [s]."""
+        raise NotImplementedError
+
+    def _clock(self) -> threading.Condition:
+        """Notified whenever the clock may have moved (a message came)."""
+        raise NotImplementedError
+
+    def _lookup(self, base: str, frame: str) -> Any:  # noqa: ANN401 (a TransformStamped)
+        """The transform from ``base`` to ``frame``, waiting ``options.timeout``; raises
+        whatever tf2 raises."""
+        raise NotImplementedError
+
+    # --- callbacks ------------------------------------------------------------------------
+
+    def _on_odom(self, msg: Any) -> None:  # noqa: ANN401 (a nav_msgs Odometry)
+        self._odom.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose.pose)))
+
+    def _on_truth(self, msg: Any) -> None:  # noqa: ANN401 (a geometry_msgs PoseStamped)
+        self._truth.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose)))
+
+    # --- connection -----------------------------------------------------------------------
+
+    def _wait_connected(
+        self, subscribers: Callable[[], int], twist_type: str, odom_type: str
+    ) -> None:
+        """Wait for a subscriber of the velocity topic and the first odometry."""
+        timeout = self.options.timeout
+        deadline = time.monotonic() + timeout
+        while subscribers() == 0:
+            if time.monotonic() > deadline:
+                raise InputError(
+                    f"nobody subscribes {self.options.cmd_vel} ({twist_type}) after "
+                    f"{timeout:g} s: is the robot's controller running? (--cmd-vel)"
+                )
+            time.sleep(0.01)
+        if self._odom.wait(max(0.0, deadline - time.monotonic())) is None:
+            raise InputError(
+                f"no {odom_type} on {self.options.odom} in {timeout:g} s: "
+                "is the controller publishing it? (--odom-topic)"
+            )
+
+    def _mount(self, frame: str) -> Mount:
+        """The sensor frame's mounting in the base frame, from TF (looked up once)."""
+        mount = self._mounts.get(frame)
+        if mount is not None:
+            return mount
+        base = self.options.base_frame
+        try:
+            transform = self._lookup(base, frame)
+        except Exception as exc:  # tf2's LookupException, ConnectivityException, ...
+            self._stop()
+            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputError(
+                f"no TF from {base} to {frame!r} in {self.options.timeout:g} s ({detail}): "
+                "publish the sensor's mounting on /tf_static (--base-frame)"
+            ) from None
+        mount = self._mounts[frame] = mount_from_transform(transform.transform)
+        return mount
+
+    # --- the Robot interface ----------------------------------------------------------
+
+    def wait(self, duration: float) -> None:
+        """Sleep ``duration`` seconds of the robot's clock, refusing to hang on a stopped
+        one (after a zero velocity)."""
+        try:
+            wait_on_clock(self.now, duration, self._clock(), self.options.timeout)
+        except InputError:
+            self._stop()
+            raise
+
+    def send_velocity(self, linear: float, angular: float) -> None:
+        """Publish a ``geometry_msgs`` Twist: ``linear.x`` [m/s], ``angular.z`` [rad/s]."""
+        if not (math.isfinite(linear) and math.isfinite(angular)):
+            self._stop()
+            raise InputError(f"velocity ({linear!r}, {angular!r}) is not finite")
+        msg = self._twist()
+        msg.linear.x, msg.angular.z = float(linear), float(angular)
+        self._cmd.publish(msg)
+
+    def odometry(self) -> Stamped | None:
+        """The latest odometry pose, stamped with its header's time."""
+        return self._odom.get()
+
+    def scan(self) -> LaserScan | None:
+        """The latest scan with the laser's mounting from TF (None: no scan came)."""
+        msg = self._scan.get()
+        if msg is None:
+            return None
+        return scan_from_message(msg, self._mount(msg.header.frame_id))
+
+    def ranges(self) -> RangeReading | None:
+        """The latest reading of each range sensor (None: a sensor said nothing yet)."""
+        messages = [m for m in (latest.get() for latest in self._ranges) if m is not None]
+        if not self._ranges or len(messages) < len(self._ranges):
+            return None
+        return range_reading(messages, [self._mount(m.header.frame_id) for m in messages])
+
+    def ground_truth(self) -> Stamped | None:
+        """The latest ground-truth pose (None: no truth topic, or no message yet)."""
+        return self._truth.get()
+
+    def _stop(self) -> None:
+        """A zero velocity, whatever state ROS is in."""
+        with contextlib.suppress(Exception):  # stopping must not raise
+            self._cmd.publish(self._twist())
