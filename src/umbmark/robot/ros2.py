@@ -6,9 +6,9 @@ purpose: the latest messages, the velocity out, the mountings, waiting and sleep
 :class:`umbmark.robot.ros_robot.RosRobot`'s, every conversion, the apply plan and the
 parameter file :mod:`umbmark.robot.ros_common`'s, unit-tested and exercised through the
 ROS 1 adapter (:mod:`umbmark.robot.ros1`, tested against a real ROS 1 master). What is
-specific to ROS 2
-here (rclpy's node, executor, QoS, services) follows rclpy's and ros2_control's documented
-APIs but is untested: try it on a robot that stands on blocks first.
+specific to ROS 2 here (rclpy's node, executor, QoS, services) follows rclpy's and
+ros2_control's documented APIs but is untested: try it on a robot that stands on blocks
+first.
 
 - Velocity out: ``geometry_msgs/msg/Twist`` on ``options.cmd_vel``.
 - In: ``nav_msgs/msg/Odometry``, ``sensor_msgs/msg/LaserScan`` (sensor-data QoS), three
