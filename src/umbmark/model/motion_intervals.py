@@ -1,0 +1,65 @@
+"""Synchronized motion intervals: what the wheels turned against how a sensor moved.
+
+The input of the simultaneous calibration of odometry and sensor mounting (Censi,
+Franchi, Marchionni and Oriolo, IEEE T-RO 2013): for each interval ``k`` of driving, its
+duration, the rotation of the left and right wheel over it, and the sensor's own
+displacement over it (measured by scan matching), expressed in the sensor frame at the
+interval's start. One interval is one row of the reference implementation's ``.tuple``
+files (``T``, ``phi_l``, ``phi_r``, ``sm``).
+
+Units: seconds, radians (wheel rotation, sensor yaw), metres. The robot frame follows
+``docs/conventions.md``: x forward, y left, yaw counter-clockwise positive.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["MotionIntervals"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class MotionIntervals:
+    """``n`` intervals of driving, wheels against the sensor's measured motion.
+
+    Attributes:
+        duration: ``(n,)`` seconds each interval lasts (> 0).
+        phi_left: ``(n,)`` rotation of the left wheel over the interval [rad], positive
+            when the wheel drives the robot forward.
+        phi_right: ``(n,)`` rotation of the right wheel [rad], same sign rule.
+        sensor_motion: ``(n, 3)`` the sensor's displacement ``(x, y, yaw)`` over the
+            interval in the sensor frame at its start [m, m, rad] (scan matching).
+        sensor_covariance: ``(n, 3, 3)`` covariance of ``sensor_motion`` where the
+            matcher gives one, else ``None``.
+        start_time: ``(n,)`` when each interval starts [s] on the recording's clock, or
+            ``None`` (tuple files carry no time).
+        source: where the intervals came from (a file or bag path, for messages).
+    """
+
+    duration: FloatArray
+    phi_left: FloatArray
+    phi_right: FloatArray
+    sensor_motion: FloatArray
+    sensor_covariance: FloatArray | None = None
+    start_time: FloatArray | None = None
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        n = self.duration.shape[0]
+        for name in ("duration", "phi_left", "phi_right"):
+            if getattr(self, name).shape != (n,):
+                raise ValueError(f"MotionIntervals.{name} must have shape ({n},)")
+        if self.sensor_motion.shape != (n, 3):
+            raise ValueError(f"MotionIntervals.sensor_motion must have shape ({n}, 3)")
+        if self.sensor_covariance is not None and self.sensor_covariance.shape != (n, 3, 3):
+            raise ValueError(f"MotionIntervals.sensor_covariance must have shape ({n}, 3, 3)")
+        if self.start_time is not None and self.start_time.shape != (n,):
+            raise ValueError(f"MotionIntervals.start_time must have shape ({n},)")
+
+    def __len__(self) -> int:
+        return int(self.duration.shape[0])
