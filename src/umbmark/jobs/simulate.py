@@ -193,7 +193,6 @@ class SimulationReport(JsonText):
             ``logs`` holds a ``.csv`` that is not one of its run log's.
         """
         from umbmark.sources.bag.writer import bag_target
-
         from umbmark.sources.runlog.writer import clear_run_log
 
         plan = _plan(self.path, output, logs, bag, bag_storage, force)

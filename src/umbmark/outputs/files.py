@@ -68,9 +68,10 @@ class OutputPlan:
         """Check the requested outputs' names; the folders ``tum`` and ``logs`` may be new.
 
         No output may be one of ``inputs`` or lie inside one (:meth:`check_not_inputs`),
-        even with ``force``. Without ``force`` an output file that exists, or an output folder that holds files
-        already, is refused (:func:`check_new_file`, :func:`check_new_folder`); a bag is
-        checked by its writer (:func:`umbmark.sources.bag.writer.bag_target`).
+        even with ``force``. Without ``force`` an output file that exists, or an output
+        folder that holds files already, is refused (:func:`check_new_file`,
+        :func:`check_new_folder`); a bag is checked by its writer
+        (:func:`umbmark.sources.bag.writer.bag_target`).
 
         Raises
         ------
