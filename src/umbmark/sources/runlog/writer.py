@@ -26,7 +26,8 @@ __all__ = [
 ]
 
 #: The run files of a whole run log written by umbmark: ``run-01.csv``, ``run-02.csv``, ...
-_RUN_FILE = re.compile(r"run-\d{2,}\.csv")
+#: (``simulate --logs``), ``run-01-cw.csv``, ... (a self-calibration's pass).
+_RUN_FILE = re.compile(r"run-\d{2,}(-cw|-ccw)?\.csv")
 
 
 def run_file_name(k: int) -> str:
@@ -36,8 +37,8 @@ def run_file_name(k: int) -> str:
 
 def clear_run_log(folder: str | Path, *, remove: bool) -> list[Path]:
     """The files of the run log umbmark wrote into ``folder`` (``metadata.yaml`` and
-    ``run-NN.csv``), removed when ``remove``: a new run log replaces them whole, never
-    mixed with them. Files of other kinds are kept.
+    ``run-NN.csv`` or ``run-NN-cw.csv``), removed when ``remove``: a new run log replaces
+    them whole, never mixed with them. Files of other kinds are kept.
 
     Raises
     ------
