@@ -192,11 +192,9 @@ class SimulationReport(JsonText):
             ``bag``, an output exists or ``logs`` holds files (without ``force``), or
             ``logs`` holds a ``.csv`` that is not one of its run log's.
         """
-        from umbmark.sources.bag.writer import bag_target
         from umbmark.sources.runlog.writer import clear_run_log
 
-        plan = _plan(self.path, output, logs, bag, bag_storage, force)
-        target = None if plan.bag is None else bag_target(plan.bag, bag_storage, force=force)
+        plan, target = _plan(self.path, output, logs, bag, bag_storage, force)
         if (plan.logs is not None or target is not None) and self.result.trace is None:
             raise InputError(
                 f"{'--logs' if plan.logs is not None else '--bag'} needs the time series: "
@@ -475,23 +473,21 @@ def _plan(
     bag_storage: str | None,
     force: bool,
     inputs: Sequence[str | os.PathLike[str]] = (),
-) -> OutputPlan:
-    """The outputs, checked before anything is simulated or written: none replaces a file
-    without ``force``; ``logs`` is a new or empty folder, or (``force``) one whose run log
-    the new one replaces whole (:func:`~umbmark.sources.runlog.writer.clear_run_log`)."""
+) -> tuple[OutputPlan, BagTarget | None]:
+    """The outputs and the bag, checked before anything is simulated or written: none
+    replaces a file without ``force``; ``logs`` is new or empty, or (``force``) one whose
+    run log the new one replaces whole (:func:`~umbmark.sources.runlog.writer.clear_run_log`)."""
+    from umbmark.sources.bag.writer import bag_target
     from umbmark.sources.runlog.writer import clear_run_log
 
     _check_square_outputs(path, output, bag)
     plan = OutputPlan.of(force=force, inputs=inputs, output=output, logs=logs, bag=bag)
     if bag_storage is not None and plan.bag is None:
         raise InputError("--bag-storage says how to store --bag: give --bag too")
-    if plan.bag is not None:
-        from umbmark.sources.bag.writer import bag_target
-
-        bag_target(plan.bag, bag_storage, force=force)
+    target = None if plan.bag is None else bag_target(plan.bag, bag_storage, force=force)
     if plan.logs is not None:
         clear_run_log(plan.logs, remove=False)
-    return plan
+    return plan, target
 
 
 def _check_square_outputs(path: str, output: object, bag: object) -> None:
