@@ -219,3 +219,23 @@ def test_the_command_makes_a_new_folder_for_a_second_selfcal(tmp_path: Path) -> 
     proc = run_cli(*args, "--no-verify", "--out", str(first), "--force")
     assert proc.returncode == 0, proc.stderr
     assert _snapshot(first).keys() == before.keys()
+
+
+def test_the_readme_first_command_writes_no_tracked_file() -> None:
+    """``umbmark demo`` in the repository writes into umbmark-demo/ (or -2, ...): not part
+    of the repository, ignored by git."""
+    import shutil
+    import subprocess
+
+    from umbmark.cli.demo import DEMO_FOLDER
+
+    root = Path(__file__).resolve().parents[1]
+    git = shutil.which("git")
+    if git is None or not (root / ".git").exists():
+        pytest.skip("not a git checkout")
+    listed = [git, "ls-files", "--", DEMO_FOLDER]
+    tracked = subprocess.run(listed, cwd=root, capture_output=True, text=True, check=True)
+    assert tracked.stdout == ""
+    names = [f"{DEMO_FOLDER}/clusters.png", f"{DEMO_FOLDER}-2/result.json"]
+    ignored = subprocess.run([git, "check-ignore", "--no-index", *names], cwd=root, check=False)
+    assert ignored.returncode == 0
