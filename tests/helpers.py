@@ -178,8 +178,14 @@ def umbmark_command() -> str:
     return found
 
 
-def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 300):
-    """Run the installed ``umbmark ARGS`` as a user would; returns the finished process."""
+def run_cli(
+    *args: str,
+    env: dict[str, str] | None = None,
+    timeout: float = 300,
+    cwd: Path | None = None,
+):
+    """Run the installed ``umbmark ARGS`` as a user would (in ``cwd``, if given); returns the
+    finished process."""
     import subprocess
 
     return subprocess.run(
@@ -189,6 +195,7 @@ def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 300)
         check=False,
         env=env,
         timeout=timeout,
+        cwd=cwd,
     )
 
 

@@ -29,7 +29,7 @@ def runs(tmp_path: Path) -> Path:
     return path
 
 
-def _calibrate(runs: Path, **outputs: Path) -> umbmark.CalibrationReport:
+def _calibrate(runs: Path, **outputs: Path | bool) -> umbmark.CalibrationReport:
     return umbmark.calibrate(runs, side_length=4, wheelbase=0.34, unit="mm", **outputs)
 
 
@@ -100,7 +100,7 @@ def test_replace_keeps_permissions(runs: Path, tmp_path: Path) -> None:
     target = tmp_path / "result.json"
     target.write_text("old\n")
     target.chmod(0o600)
-    _calibrate(runs, output=target)
+    _calibrate(runs, output=target, force=True)  # replacing is asked for
     assert stat.S_IMODE(target.stat().st_mode) == 0o600
     assert target.read_text() != "old\n"
     new = tmp_path / "new.json"
@@ -117,7 +117,7 @@ def test_replace_follows_symlink_and_keeps_link(runs: Path, tmp_path: Path) -> N
     target.write_text("old\n")
     link = tmp_path / "link.yaml"
     link.symlink_to(target)
-    _calibrate(runs, yaml=link)
+    _calibrate(runs, yaml=link, force=True)
     assert link.is_symlink()
     assert link.resolve() == target.resolve()
     assert "old" not in target.read_text()

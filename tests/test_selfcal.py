@@ -170,8 +170,11 @@ def test_something_on_the_squares_path_is_refused_naming_where(tmp_path):
 def test_a_folder_with_files_is_refused(tmp_path):
     (tmp_path / "keep.txt").write_text("mine")
     robot = VirtualRobot(seed=1)
-    with pytest.raises(InputError, match="is not empty"):
-        selfcal(robot, out=tmp_path)
+    for force in (False, True):  # not a self-calibration's: refused even with force
+        with pytest.raises(InputError, match=r"holds keep\.txt, which a self-calibration did not"):
+            selfcal(robot, out=tmp_path, force=force)
+    assert [p.name for p in tmp_path.iterdir()] == ["keep.txt"]
+    assert robot.true_pose == robot.world.start  # refused before it moved
 
 
 @pytest.mark.parametrize(

@@ -211,12 +211,14 @@ def test_existing_bag_is_refused_without_force(tmp_path, bags):
     bag.write_bytes(bags["ros1"].read_bytes())
     before = _digest(bag)
     line = cli_error("simulate", "-L", "1", "--runs", "2", "--bag", str(bag))
-    assert f"{bag}: exists; give --force to replace it" in line
+    assert f"{bag}: exists already; pass --force to replace it" in line
     assert _digest(bag) == before
     folder = tmp_path / "session"
     umbmark.simulate(**TINY, bag=folder)
     before = _digest(folder)
-    assert "exists; give force=True" in api_error(umbmark.simulate, **TINY, seed=2, bag=folder)
+    assert "exists already; pass force=True" in api_error(
+        umbmark.simulate, **TINY, seed=2, bag=folder
+    )
     assert _digest(folder) == before
     # --force replaces it: another seed, another bag, whole and readable.
     umbmark.simulate(**{**TINY, "noise_free": False}, seed=2, bag=folder, force=True)

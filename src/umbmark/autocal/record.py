@@ -13,6 +13,7 @@ written at the samples where the robot stood still before and after the run
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,12 +22,67 @@ import numpy as np
 
 from umbmark.autocal.corner import CornerFix
 from umbmark.autocal.drive import DrivenRun
+from umbmark.core.errors import InputError
 from umbmark.model.kinematics import wheel_travel_from_poses
 from umbmark.robot.base import DriveParams
 from umbmark.sources.runlog.reader import LogMetadata
-from umbmark.sources.runlog.writer import write_log_csv, write_metadata
+from umbmark.sources.runlog.writer import clear_run_log, write_log_csv, write_metadata
 
-__all__ = ["MeasuredRun", "record_pass"]
+__all__ = [
+    "OVERLAY_FILE",
+    "REPORT_FILE",
+    "MeasuredRun",
+    "clear_selfcal",
+    "pass_folder",
+    "record_pass",
+]
+
+#: The page of all passes a self-calibration writes into its folder.
+REPORT_FILE = "report.html"
+#: The overlay of the final parameters it writes there.
+OVERLAY_FILE = "overlay.yaml"
+#: Its passes' run-log folders: ``pass-1``, ``pass-2``, ..., ``verification``.
+_PASS_FOLDER = re.compile(r"pass-\d+|verification")
+
+
+def pass_folder(folder: Path, label: str) -> Path:
+    """The run-log folder of pass ``label`` (``pass 1``: ``folder/pass-1``)."""
+    return folder / label.replace(" ", "-")
+
+
+def clear_selfcal(folder: Path, *, remove: bool) -> None:
+    """Check that ``folder`` holds only what a self-calibration wrote (its passes' run
+    logs, :data:`REPORT_FILE`, :data:`OVERLAY_FILE`), and remove it when ``remove``: a new
+    self-calibration replaces an earlier one whole, never mixed with it.
+
+    Raises
+    ------
+    InputError
+        Naming the first thing a self-calibration did not write (nothing is removed).
+    """
+    if not folder.is_dir():
+        return
+    passes = []
+    for entry in sorted(folder.iterdir()):
+        foreign: Path | None = entry
+        if entry.is_dir() and not entry.is_symlink() and _PASS_FOLDER.fullmatch(entry.name):
+            mine = clear_run_log(entry, remove=False)
+            foreign = min(set(entry.iterdir()) - set(mine), default=None)
+            passes.append(entry)
+        elif entry.is_file() and entry.name in (REPORT_FILE, OVERLAY_FILE):
+            foreign = None
+        if foreign is not None:
+            raise InputError(
+                f"holds {foreign.relative_to(folder)}, which a self-calibration did not "
+                "write: choose a new or empty folder",
+                source=folder,
+            )
+    if remove:
+        for entry in passes:
+            clear_run_log(entry, remove=True)
+            entry.rmdir()
+        for name in (REPORT_FILE, OVERLAY_FILE):
+            (folder / name).unlink(missing_ok=True)
 
 
 @dataclass(frozen=True)

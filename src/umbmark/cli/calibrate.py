@@ -10,6 +10,7 @@ import click
 from umbmark.cli.options import (
     Command,
     apply,
+    force_option,
     option,
     source_options,
     spec_option,
@@ -44,14 +45,12 @@ __all__ = ["calibrate"]
             "truth's tracked point (a motion-capture marker) sits in the robot frame, instead of "
             "taking it as the axle centre (see --truth-offset to give it).",
         ),
-        option(
-            "--force",
-            section=TEST,
-            is_flag=True,
-            help="Take --current-params even when it is a result for another nominal "
+        force_option(
+            "Also: take --current-params even when it is a result for another nominal "
             "wheelbase or wheel diameter than the sources' own (more than 1 % apart); "
             "print and write the overlay (--yaml, --ros1-yaml) even when the verdict is do "
             "not apply.",
+            section=TEST,
         ),
         option(
             "--robot",

@@ -6,11 +6,14 @@ from pathlib import Path
 
 import click
 
-from umbmark.cli.options import Command, option
+from umbmark.cli.options import Command, force_option, option
 from umbmark.estimators.registry import DEFAULT, SQUARE
 from umbmark.options.spec import OUTPUTS
 
-__all__ = ["demo"]
+__all__ = ["DEMO_FOLDER", "demo"]
+
+#: Where ``umbmark demo`` writes when not told (not part of the repository: .gitignore).
+DEMO_FOLDER = "umbmark-demo"
 
 
 @click.command(cls=Command)
@@ -19,10 +22,11 @@ __all__ = ["demo"]
     "--out",
     section=OUTPUTS,
     type=click.Path(file_okay=False),
-    default="umbmark-demo",
-    show_default=True,
-    help="Folder for the plots, runs tables, result and overlay.",
+    default=None,
+    help=f"Folder for the plots, runs tables, result and overlay [default: {DEMO_FOLDER}, or "
+    f"{DEMO_FOLDER}-2, -3, ... when an earlier demo left files there].",
 )
+@force_option()
 @option("--seed", section="Options", type=int, default=1, show_default=True,
         help="Seed of the non-systematic errors (0 to 2^63-1).")  # fmt: skip
 @option(
@@ -36,7 +40,7 @@ __all__ = ["demo"]
 )
 @option("--runs", "-n", section="Options", type=int, default=5, show_default=True,
         help="Runs in each direction (2 to 1000).")  # fmt: skip
-def demo(json_out: bool, out: str, seed: int, method: str, runs: int) -> None:
+def demo(json_out: bool, out: str | None, seed: int, method: str, runs: int, force: bool) -> None:
     """UMBmark before, calibration, UMBmark after, on a virtual LabMate (Sec. 5).
 
     The robot has b = 340 mm, the errors of the paper's Fig. 11 (b 340.00 -> 336.17 mm,
@@ -49,9 +53,17 @@ def demo(json_out: bool, out: str, seed: int, method: str, runs: int) -> None:
     from umbmark.benchmark.returns import sem_verdict
     from umbmark.cli.common import console, progress_bar, warn, wrote
     from umbmark.cli.render import render_calibration
+    from umbmark.outputs.files import fresh_folder
 
     with progress_bar("UMBmark before and after calibration") as progress:
-        result = run_demo(out=Path(out), seed=seed, method=method, runs=runs, progress=progress)
+        result = run_demo(
+            out=fresh_folder(DEMO_FOLDER) if out is None else Path(out),
+            seed=seed,
+            method=method,
+            runs=runs,
+            force=force,
+            progress=progress,
+        )
     for message in result.report.warnings:
         warn(message)
     wrote(result.files.values())

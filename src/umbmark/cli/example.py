@@ -4,16 +4,14 @@ from __future__ import annotations
 
 import click
 
+from umbmark.cli.options import force_option
+
 __all__ = ["example"]
 
 
 @click.command()
 @click.argument("path", required=False, type=click.Path())
-@click.option(
-    "--force",
-    is_flag=True,
-    help="Overwrite an existing file (or write into a folder that is not empty, with --real).",
-)
+@force_option()
 @click.option(
     "--real",
     is_flag=True,

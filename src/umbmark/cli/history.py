@@ -6,7 +6,7 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import OTHER, Command, apply, option
+from umbmark.cli.options import OTHER, Command, apply, force_option, option
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["history"]
@@ -22,8 +22,8 @@ __all__ = ["history"]
         option("--applied", section=OTHER, type=click.IntRange(min=1),
                help="Mark this calibration (its id) of the robot as applied; refused for "
                "a calibration whose verdict was do not apply."),
-        option("--force", section=OTHER, is_flag=True,
-               help="With --applied: mark it even when its verdict was do not apply."),
+        force_option("Also, with --applied: mark it even when its verdict was do not "
+                     "apply.", section=OTHER),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print one JSON object (metres)."),
         option("--plot", section=OUTPUTS, type=click.Path(),

@@ -13,12 +13,13 @@ from typing import Any, TypeVar
 
 import click
 
-from umbmark.options.spec import READ_OPTIONS, TUM_TIME, WHEELBASE, Spec
+from umbmark.options.spec import FORCE, READ_OPTIONS, TUM_TIME, WHEELBASE, Spec
 
 __all__ = [
     "OTHER",
     "Command",
     "apply",
+    "force_option",
     "option",
     "source_options",
     "spec_option",
@@ -93,6 +94,8 @@ def spec_option(
         attrs["type"] = click.Path(dir_okay=False)
     elif spec.kind == "folder":
         attrs["type"] = click.Path(file_okay=False)
+    elif spec.kind == "flag":
+        attrs["is_flag"] = True
     if spec.default is not None:
         attrs["default"] = spec.default
         attrs["show_default"] = True
@@ -107,6 +110,12 @@ def spec_option(
         help=spec.help if help is None else help,
         **attrs,
     )
+
+
+def force_option(also: str = "", *, section: str | None = None) -> Callable[[F], F]:
+    """``--force`` (:data:`~umbmark.options.spec.FORCE`): replace existing outputs; ``also``
+    says what else it lifts on this command."""
+    return spec_option(FORCE, section=section, help=f"{FORCE.help} {also}".strip())
 
 
 def tum_time_option() -> Callable[[F], F]:

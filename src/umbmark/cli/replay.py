@@ -10,6 +10,7 @@ import click
 from umbmark.cli.options import (
     Command,
     apply,
+    force_option,
     option,
     source_options,
     tum_time_option,
@@ -31,13 +32,11 @@ __all__ = ["replay"]
             help="Calibration result (calibrate -o result.json) to replay with; without it, "
             "only the source's nominal parameters are replayed.",
         ),
-        option(
-            "--force",
-            section=PARAMETERS,
-            is_flag=True,
-            help="Replay --params (or take --current-params) even when it is a result for "
+        force_option(
+            "Also: replay --params (or take --current-params) even when it is a result for "
             "another nominal wheelbase or wheel diameter than the source's own (more than "
             "1 % apart).",
+            section=PARAMETERS,
         ),
     ]
 )

@@ -6,7 +6,7 @@ import math
 
 import click
 
-from umbmark.cli.options import Command, option
+from umbmark.cli.options import Command, force_option, option
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["reproduce"]
@@ -96,9 +96,10 @@ def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) 
     type=click.Path(),
     help="Draw the paths of the tuned robot (Figs. 4 and 5) to a .png, .svg or .pdf file.",
 )
+@force_option()
 @option("--leg-bend", section="Options", type=float, default=1.0, show_default=True,
         help="How much each leg bends left [deg].")  # fmt: skip
-def fig4(json_out: bool, plot: str | None, leg_bend: float) -> None:
+def fig4(json_out: bool, plot: str | None, leg_bend: float, force: bool) -> None:
     """Fig. 4: the uni-directional trap.
 
     A robot with unequal wheels (legs bend left) is "calibrated" by tuning only the
@@ -110,7 +111,9 @@ def fig4(json_out: bool, plot: str | None, leg_bend: float) -> None:
     from umbmark.cli.render import row, table
 
     with progress_bar("Fig. 4: tuning the wheelbase on cw runs") as progress:
-        report = reproduce_fig4(leg_bend=math.radians(leg_bend), plot=plot, progress=progress)
+        report = reproduce_fig4(
+            leg_bend=math.radians(leg_bend), plot=plot, force=force, progress=progress
+        )
     wrote([plot] if plot else [])
     if json_out:
         click.echo(report.to_json(), nl=False)

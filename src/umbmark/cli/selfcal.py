@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import Command, apply, option
+from umbmark.cli.options import Command, apply, force_option, option
 from umbmark.core.errors import InputError
 from umbmark.options.spec import OUTPUTS, TEST
 
@@ -93,10 +93,15 @@ DRIVING = "Driving"
         option("--history", section=OUTPUTS, type=click.Path(dir_okay=False), default=None,
                help="The history file [default: $UMBMARK_HISTORY, else the per-user one]."),
         option("--out", section=OUTPUTS, type=click.Path(file_okay=False), default=None,
-               help="Folder for the passes' run logs, the report and the overlay "
-               "[default: selfcal-ROBOT]; must be new or empty."),
+               help="Folder for the passes' run logs, the report and the overlay: new or "
+               "empty, or (--force) one holding an earlier self-calibration [default: "
+               "selfcal-ROBOT, or selfcal-ROBOT-2, -3, ... when an earlier run left files "
+               "there]."),
         option("--report", section=OUTPUTS, type=click.Path(dir_okay=False), default=None,
                help="The HTML page of all passes [default: report.html in --out]."),
+        force_option("In --out, an earlier self-calibration is replaced whole (its passes "
+                     "removed once the checks before moving have passed); a folder holding "
+                     "anything else is refused all the same.", section=OUTPUTS),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print one JSON object (metres, radians)."),
     ]
@@ -114,7 +119,9 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     from umbmark.cli.common import console, note, status_line, warn, wrote
     from umbmark.cli.render import render_selfcal
     from umbmark.core.errors import InputError
+    from umbmark.jobs.selfcal import default_folder
     from umbmark.jobs.selfcal import selfcal as run_selfcal
+    from umbmark.outputs.files import fresh_folder
     from umbmark.robot.connect import connect
     from umbmark.robot.ros_common import RosOptions
 
@@ -141,6 +148,8 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         turn_rate=options.pop("turn_rate"),
     )
     robot = connect(backend, ros=ros, **sim)  # type: ignore[arg-type]
+    if options["out"] is None:  # the command's own folder; a new one beside an earlier run's
+        options["out"] = fresh_folder(default_folder(options["robot"] or robot.name))
     ask = _ask_person if options["measure"] == "tape" else None
     options["tape_marks"] = _numbers(options.pop("tape_marks"))
     try:

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import Command, apply, option
+from umbmark.cli.options import Command, apply, force_option, option
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["simulate"]
@@ -86,9 +86,9 @@ def _number(*decls: str, section: str, default: float, help_text: str) -> Any:
                "bag folder (needs the ros extra)."),
         option("--bag-storage", section=OUTPUTS, type=click.Choice(["sqlite3", "mcap"]),
                help="Storage of a ROS 2 --bag [default: sqlite3, as rosbags writes]."),
-        option("--force", section=OUTPUTS, is_flag=True,
-               help="Write --logs into a folder that is not empty (its other runs would be "
-               "calibrated together with these); replace an existing --bag."),
+        force_option("A --logs folder's run log is replaced whole (its older runs are "
+                     "removed, never mixed with the new ones; a folder holding another "
+                     ".csv is refused all the same)."),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print a JSON summary."),
     ]

@@ -98,7 +98,8 @@ class CalibrationReport(CalibrationResult):
         report : path, optional
             One self-contained HTML page of the calibration (:meth:`html`).
         force : bool
-            Write ``yaml`` and ``ros1_yaml`` even when the verdict is "do not apply".
+            Replace files that exist (and write into a ``tum`` folder that holds files);
+            write ``yaml`` and ``ros1_yaml`` even when the verdict is "do not apply".
 
         Returns
         -------
@@ -109,7 +110,8 @@ class CalibrationReport(CalibrationResult):
         ------
         InputError
             For a file that cannot be written, an output this report cannot give, or
-            parameter files of a calibration not to apply (without ``force``).
+            (without ``force``) a file that exists or parameter files of a calibration
+            not to apply.
         """
         from umbmark.outputs.tum import check_tum_time
 
@@ -122,6 +124,7 @@ class CalibrationReport(CalibrationResult):
             plot=plot,
             tum=tum,
             report=report,
+            force=force,
         )
         if plan.plot is not None and self.benchmark is None:
             raise InputError(
@@ -162,10 +165,10 @@ class CalibrationReport(CalibrationResult):
         return written
 
 
-def _plan(sources: Sequence[str], **paths: str | os.PathLike[str] | None) -> OutputPlan:
-    plan = OutputPlan.of(**paths)
-    plan.check_not_inputs(sources)
-    return plan
+def _plan(
+    sources: Sequence[str], *, force: bool, **paths: str | os.PathLike[str] | None
+) -> OutputPlan:
+    return OutputPlan.of(force=force, inputs=sources, **paths)
 
 
 def calibrate(
@@ -274,7 +277,7 @@ def calibrate(
         raise InputError(f"--fit-truth-offset needs --method {' or '.join(fitting)}, not {method}")
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
-          plot=plot, tum=tum, report=report)  # fmt: skip
+          plot=plot, tum=tum, report=report, force=force)  # fmt: skip
     entry = find(method)
     if side_length is None and entry is not None and entry.side_required:
         from umbmark.runs.read import is_table

@@ -136,12 +136,14 @@ def demo(
     seed: int = 1,
     method: str = DEFAULT.name,
     runs: int = 5,
+    force: bool = False,
     progress: Callable[[float], None] | None = None,
 ) -> DemoReport:
     """UMBmark before, calibration, UMBmark after, on a virtual LabMate.
 
-    What ``umbmark demo`` does. Unlike the command, which writes into ``umbmark-demo/``,
-    the function writes files only when given a folder.
+    What ``umbmark demo`` does. Unlike the command, which writes into ``umbmark-demo/``
+    (``umbmark-demo-2/``, ... when an earlier demo left files there), the function writes
+    files only when given a folder.
 
     Parameters
     ----------
@@ -153,13 +155,16 @@ def demo(
         Estimator to calibrate with.
     runs : int
         Runs in each direction, 2 to :data:`umbmark.jobs.simulate.MAX_RUNS` (1000).
+    force : bool
+        Replace the files of ``out`` (:data:`DEMO_FILES`) that exist.
     progress : callable, optional
         Called with the fraction done (0 to 1).
 
     Raises
     ------
     InputError
-        For an option out of range, or a folder that cannot be written.
+        For an option out of range, a folder that cannot be written, or one holding a
+        file the demo writes (without ``force``).
     """
     from umbmark.core.atomic import atomic_write_text
     from umbmark.outputs.plotting import save_figure
@@ -174,9 +179,12 @@ def demo(
         raise InputError(f"the demo calibrates from end points: use {join_names(SQUARE, 'or')}")
     folder = None if out is None else Path(out)
     if folder is not None:
-        from umbmark.outputs.files import check_folder_output
+        from umbmark.outputs.files import check_folder_output, check_new_file
 
         check_folder_output(folder)  # before anything is computed or written
+        for name in DEMO_FILES.values():
+            if not force:
+                check_new_file(folder / name)
 
     def stage(start: float) -> Callable[[float], None] | None:
         return None if progress is None else (lambda f: progress(start + 0.5 * f))

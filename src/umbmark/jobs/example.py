@@ -45,9 +45,10 @@ def example(
 
     text = resources.files("umbmark.data").joinpath(EXAMPLE_RUNS).read_text(encoding="utf-8")
     if path is not None:
+        from umbmark.outputs.files import OutputPlan
+
         target = Path(path)
-        if target.exists() and not force:
-            raise InputError("exists already; pass --force to overwrite it", source=target)
+        OutputPlan.of(force=force, output=target)  # writable; new unless force
         atomic_write_text(target, text)
     return text
 
@@ -71,16 +72,16 @@ def example_sessions(folder: str | os.PathLike[str], *, force: bool = False) -> 
         If ``folder`` holds files already and ``force`` is not set, or cannot be written.
     """
     from umbmark.core.atomic import atomic_path
+    from umbmark.outputs.files import check_folder_output, check_new_folder
 
     def write(path: Path, data: bytes) -> None:
         with atomic_path(path) as tmp:
             tmp.write_bytes(data)
 
     target = Path(folder)
-    if target.exists() and not target.is_dir():
-        raise InputError("exists and is not a folder", source=target)
-    if target.is_dir() and any(target.iterdir()) and not force:
-        raise InputError("is not empty; pass --force to write the sessions into it", source=target)
+    check_folder_output(target)
+    if not force:
+        check_new_folder(target)
     shipped = resources.files("umbmark.data").joinpath("optiodom")
     sessions = []
     try:

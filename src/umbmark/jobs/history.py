@@ -89,8 +89,11 @@ class HistoryReport(JsonText):
         return history_figure(self.nominal, self.calibrations)
 
     @python_api
-    def write(self, *, plot: str | os.PathLike[str] | None = None) -> list[Path]:
-        """Write the trend figure (.png, .svg, .pdf), checked before it is drawn.
+    def write(
+        self, *, plot: str | os.PathLike[str] | None = None, force: bool = False
+    ) -> list[Path]:
+        """Write the trend figure (.png, .svg, .pdf), checked before it is drawn; a file
+        that exists is replaced only with ``force``.
 
         Returns
         -------
@@ -100,10 +103,10 @@ class HistoryReport(JsonText):
         Raises
         ------
         InputError
-            For a bad or unwritable name, or one that is the history file itself.
+            For a bad or unwritable name, one that is the history file itself, or a file
+            that exists (without ``force``).
         """
-        plan = OutputPlan.of(plot=plot)
-        plan.check_not_inputs([self.path])
+        plan = OutputPlan.of(force=force, inputs=[self.path], plot=plot)
         written: list[Path] = []
         if plan.plot is not None:
             from umbmark.outputs.plotting import save_figure
@@ -128,12 +131,14 @@ def history(
     robot : str, optional
         The robot; None lists the robots.
     history : path, optional
-        The history file (default: ``$UMBMARK_HISTORY``, else the per-user file).
+        The history file (default: ``$UMBMARK_HISTORY``, else the per-user file); read
+        only: a file that does not exist is refused, never created.
     applied : int, optional
         Mark this calibration of ``robot`` as applied first (refused for a calibration
         whose verdict was "do not apply").
     force : bool
-        Mark ``applied`` even when its verdict was "do not apply".
+        Replace ``plot`` if it exists; mark ``applied`` even when its verdict was "do not
+        apply".
     plot : path, optional
         Draw the robot's E_d, E_b and the passes' E_max,syst over time
         (:meth:`HistoryReport.figure`)
@@ -151,10 +156,10 @@ def history(
     """
     if plot is not None and robot is None:
         raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
-    store = History(history)
+    store = History(history, read_only=True)  # a read never creates the file
     path = str(store.path)
     if plot is not None:  # the output is checked before a calibration is marked applied
-        OutputPlan.of(plot=plot).check_not_inputs([store.path])
+        OutputPlan.of(force=force, inputs=[store.path], plot=plot)
     if robot is None:
         if applied is not None:
             raise InputError("--applied needs the robot's NAME")
@@ -168,7 +173,7 @@ def history(
         from umbmark.core.bounds import check_int_option
 
         number = check_int_option("--applied", applied, 1, 2**63 - 1)
-        store.mark_applied(robot, number, force=force)
+        History(store.path).mark_applied(robot, number, force=force)
         notes = (f"calibration {applied} of {robot} marked applied",)
     calibrations = tuple(store.calibrations(robot))
     report = HistoryReport(
@@ -180,5 +185,5 @@ def history(
         nominal=nominal,
     )
     if plot is not None:
-        report.write(plot=plot)
+        report.write(plot=plot, force=force)
     return report

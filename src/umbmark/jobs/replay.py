@@ -196,6 +196,7 @@ class ReplayReport(JsonText):
         plot: str | os.PathLike[str] | None = None,
         tum: str | os.PathLike[str] | None = None,
         tum_time: TumTime = "recording",
+        force: bool = False,
     ) -> list[Path]:
         """Write the figure and the TUM trajectories, each checked before any is written.
 
@@ -208,6 +209,8 @@ class ReplayReport(JsonText):
         tum_time : {"recording", "run"}
             Timestamps of the TUM files: the recording's own clock [s] (default), or
             seconds from each run's start.
+        force : bool
+            Replace files that exist, write into a ``tum`` folder that holds files.
 
         Returns
         -------
@@ -217,8 +220,7 @@ class ReplayReport(JsonText):
         from umbmark.outputs.tum import check_tum_time
 
         time = check_tum_time(tum_time)
-        plan = OutputPlan.of(plot=plot, tum=tum)
-        plan.check_not_inputs([self.source])
+        plan = OutputPlan.of(force=force, inputs=[self.source], plot=plot, tum=tum)
         written: list[Path] = []
         if plan.tum is not None:
             from umbmark.outputs.tum import write_tum_runs
@@ -266,7 +268,8 @@ def replay(
         can match them with other trajectories of the same recording), or seconds from
         each run's start.
     force : bool
-        Replay ``params`` (or take ``current_params``) even when it is a result for other
+        Replace ``plot`` if it exists and write into a ``tum`` folder that holds files;
+        replay ``params`` (or take ``current_params``) even when it is a result for other
         nominal parameters (wheelbase, wheel diameter) than the source's own.
     **options
         How to read the source: see :class:`umbmark.runs.options.ReadOptions`.
@@ -280,7 +283,7 @@ def replay(
     from umbmark.outputs.tum import check_tum_time
 
     check_tum_time(tum_time)
-    OutputPlan.of(plot=plot, tum=tum).check_not_inputs([source_name(source)])
+    OutputPlan.of(force=force, inputs=[source_name(source)], plot=plot, tum=tum)
     if is_table(source, read_options):
         raise InputError(
             "replay needs recorded wheel data (a run log, an OptiOdom session or a bag), "
@@ -319,7 +322,7 @@ def replay(
         notes=split_messages(read.notes)[0],
         warnings=split_messages(read.notes)[1],
     )
-    report.write(plot=plot, tum=tum, tum_time=tum_time)
+    report.write(plot=plot, tum=tum, tum_time=tum_time, force=force)
     return report
 
 

@@ -49,29 +49,30 @@ class PassesReport(Passes):
         return passes_html(self)
 
     @python_api
-    def write(self, output: str | os.PathLike[str]) -> Path:
-        """Write :meth:`html` to ``output`` (.html or .htm), atomically.
+    def write(self, output: str | os.PathLike[str], *, force: bool = False) -> Path:
+        """Write :meth:`html` to ``output`` (.html or .htm), atomically; a file that exists
+        is replaced only with ``force``.
 
         Raises
         ------
         InputError
-            For a name that is not .html, an input's name, or a file that cannot be
-            written.
+            For a name that is not .html, an input's name, a file that cannot be
+            written, or one that exists (without ``force``).
         """
         inputs = [s for p in self.passes for s in p.sources]
-        path = check_output(output, inputs)
+        path = check_output(output, inputs, force=force)
         atomic_write_text(path, self.html())
         return path
 
 
-def check_output(output: str | os.PathLike[str], inputs: list[str]) -> Path:
+def check_output(output: str | os.PathLike[str], inputs: list[str], *, force: bool = False) -> Path:
     """Check the page's file name (``-o``) before anything is computed.
 
     Raises
     ------
     InputError
         If it does not end in .html or .htm, is an input or lies inside an input folder,
-        or cannot be written.
+        cannot be written, or exists (without ``force``).
     """
     from umbmark.outputs.files import OutputPlan
 
@@ -92,7 +93,7 @@ def check_output(output: str | os.PathLike[str], inputs: list[str]) -> Path:
             )
     if path.suffix.lower() not in _HTML:
         raise InputError(f"-o {path}: the file name should end in .html or .htm")
-    OutputPlan.of(report=path)  # a writable folder, not a directory
+    OutputPlan.of(report=path, force=force)  # a writable folder, new unless force
     return path
 
 
@@ -123,7 +124,7 @@ def report(
         directions.
     side_length, wheelbase, method, fit_truth_offset, force :
         As for :func:`umbmark.calibrate`, for every pass (``method="auto"`` chooses
-        for each pass on its own).
+        for each pass on its own); ``force`` also replaces ``output`` if it exists.
     validate : bool
         Add :func:`umbmark.validate` of the last pass (held-out replay of its recorded
         runs) to the page.
@@ -159,7 +160,7 @@ def report(
     names = [source_name(s) for s in sources]
     current = options.get("current_params")
     if output is not None:
-        check_output(output, [*names, *([] if current is None else [str(current)])])
+        check_output(output, [*names, *([] if current is None else [str(current)])], force=force)
     passes: list[CalibrationReport] = []
     pass_options: SourceOptions = options
     for k, (one, name) in enumerate(zip(sources, names, strict=True), 1):
@@ -203,7 +204,7 @@ def report(
         passes=tuple(passes), predicted=predicted, validation=validation, command=command
     )
     if output is not None:
-        page.write(output)
+        page.write(output, force=force)
     return page
 
 

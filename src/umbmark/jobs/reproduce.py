@@ -126,6 +126,7 @@ def reproduce_fig4(
     *,
     leg_bend: float = math.radians(1.0),
     plot: str | os.PathLike[str] | None = None,
+    force: bool = False,
     progress: Callable[[float], None] | None = None,
 ) -> Fig4Report:
     """Fig. 4: tune only the wheelbase on cw runs, then look at ccw runs too.
@@ -136,6 +137,8 @@ def reproduce_fig4(
         How much each leg bends left [rad] (the command's ``--leg-bend`` is in degrees).
     plot : path, optional
         Draw the tuned robot's paths (:meth:`Fig4Report.figure`) to a .png, .svg or .pdf.
+    force : bool
+        Replace ``plot`` if it exists.
     progress : callable, optional
         Called with the fraction done.
     """
@@ -146,7 +149,7 @@ def reproduce_fig4(
         raise InputError(
             f"--leg-bend {math.degrees(leg_bend):g} deg: give a bend between 0 and 10 deg"
         )
-    plan = OutputPlan.of(plot=plot)
+    plan = OutputPlan.of(force=force, plot=plot)
     result = fig4(leg_bend_deg=math.degrees(leg_bend), progress=progress)
     report = Fig4Report(result=result, leg_bend=leg_bend)
     if plan.plot is not None:

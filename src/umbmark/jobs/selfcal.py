@@ -10,7 +10,9 @@ is what ``umbmark selfcal --json`` prints. The steps:
 2. a coarse turning check (:mod:`umbmark.autocal.coarse`), corrected when the robot turns
    far from what its odometry believes, so that a square is possible at all;
 3. a UMBmark pass: ``runs`` cw then ``runs`` ccw runs, each from the start, recorded as a
-   run log in ``out/pass-N`` (what ``umbmark calibrate``, ``report`` and ``replay`` read);
+   run log in ``out/pass-N`` (what ``umbmark calibrate``, ``report`` and ``replay`` read;
+   without ``out``, in a temporary folder removed at the end: the library writes only
+   where its caller says);
 4. the calibration (:func:`umbmark.calibrate`, the default estimator), composed with the
    parameters active during the pass;
 5. applying it (unless its verdict is "do not apply");
@@ -25,8 +27,10 @@ What a person still does: place the robot in the corner, and calibrate the scale
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -40,7 +44,14 @@ from umbmark.autocal.drive import DriveLimits, settle
 from umbmark.autocal.measure import MEASURE_METHODS, Measure, MeasureMethod, take_fix
 from umbmark.autocal.passes import Home, corner_truth, drive_pass
 from umbmark.autocal.preflight import preflight
-from umbmark.autocal.record import MeasuredRun, record_pass
+from umbmark.autocal.record import (
+    OVERLAY_FILE,
+    REPORT_FILE,
+    MeasuredRun,
+    clear_selfcal,
+    pass_folder,
+    record_pass,
+)
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
@@ -49,7 +60,7 @@ from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DrivePar
 if TYPE_CHECKING:
     from umbmark.jobs.calibrate import CalibrationReport
 
-__all__ = ["MAX_SELFCAL_PASSES", "PassResult", "SelfCalReport", "selfcal"]
+__all__ = ["MAX_SELFCAL_PASSES", "PassResult", "SelfCalReport", "default_folder", "selfcal"]
 
 #: Most UMBmark passes one self-calibration drives (verification not counted).
 MAX_SELFCAL_PASSES = 5
@@ -68,8 +79,8 @@ class PassResult:
     ----------
     label : str
         ``pass 1``, ``pass 2``, ..., ``verification``.
-    folder : Path
-        Its run log.
+    folder : Path or None
+        Its run log (None: not kept, the self-calibration was given no ``out``).
     report : CalibrationReport
         Its calibration (composed with the parameters active during it).
     params : DriveParams
@@ -82,7 +93,7 @@ class PassResult:
     """
 
     label: str
-    folder: Path
+    folder: Path | None
     report: CalibrationReport
     params: DriveParams
     applied: ApplyResult | None = None
@@ -93,7 +104,7 @@ class PassResult:
         estimate = self.report.estimate
         return {
             "label": self.label,
-            "folder": str(self.folder),
+            "folder": None if self.folder is None else str(self.folder),
             "e_max_syst": self.report.e_max_syst,
             "E_d": estimate.E_d,
             "E_b": estimate.E_b,
@@ -220,6 +231,7 @@ def selfcal(
     ask: Callable[[str], str] | None = None,
     tape_marks: Sequence[float] | None = None,
     coarse: bool = True,
+    force: bool = False,
 ) -> SelfCalReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
     corner, applied and verified (module documentation).
@@ -243,9 +255,14 @@ def selfcal(
     robot_name, history : optional
         Record every pass in the robot's history (SQLite) and mark the applied ones.
     out : path, optional
-        Folder for the run logs, the report and the overlay [default: ``selfcal-<robot>``].
+        Folder for the passes' run logs, the report and the overlay; a new or empty one, or
+        (``force``) one holding an earlier self-calibration, which is replaced whole.
+        Without it nothing is written (the run logs go to a temporary folder, removed at
+        the end) and the report is the returned value; ``umbmark selfcal`` writes into
+        ``selfcal-<robot>`` (:func:`default_folder`).
     report : path, optional
-        The HTML page of all passes [default: ``report.html`` in ``out``].
+        The HTML page of all passes [default: ``report.html`` in ``out``; none without
+        ``out``].
     limits : DriveLimits, optional
         Speeds, accelerations and safety limits.
     ask : callable, optional
@@ -256,6 +273,8 @@ def selfcal(
         start, the third to the side wall [default: the robot's ``tape_marks()``].
     coarse : bool
         Check first that the robot turns as its odometry believes (lidar or truth).
+    force : bool
+        Replace an earlier self-calibration in ``out`` and a ``report`` file that exists.
 
     Raises
     ------
@@ -272,17 +291,101 @@ def selfcal(
     marks = _tape_marks(robot, tape_marks) if measure == "tape" else None
     how = Measure(measure, ask=ask, marks=marks)
     name = robot_name or robot.name
-    folder = Path(out) if out is not None else Path(f"selfcal-{_slug(name)}")
-    if folder.exists() and any(folder.iterdir()):
-        raise InputError("is not empty: a self-calibration writes its passes there", source=folder)
+    folder = None if out is None else Path(out)
+    page = None if report is None else Path(report)
+    _check_outputs(folder, page, force)  # before anything moves
+    kept = contextlib.nullcontext(str(folder))
+    with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
+        drive = _Passes(
+            robot, how, Path(logs), side_length, runs, limits, name, progress,
+            record_as=robot_name, history=history,
+        )  # fmt: skip
+        found = _calibrate(drive, method, verify, max_passes, coarse, folder if force else None)
+        files = _outputs(found.passes, folder, page, force)
+    passes = found.passes if folder is not None else [replace(p, folder=None) for p in found.passes]
+    errors = [
+        (
+            fix.pose.x - truth.x,
+            fix.pose.y - truth.y,
+            float(wrap_angle(fix.pose.theta - truth.theta)),
+        )
+        for fix, truth in found.home.fixes
+        if truth is not None
+    ]
+    return SelfCalReport(
+        robot=name,
+        side_length=side_length,
+        measurement=measure,
+        coarse=found.coarse,
+        coarse_applied=found.coarse_applied,
+        passes=tuple(passes),
+        final=robot.drive_params(),
+        fix_errors=np.asarray(errors, dtype=np.float64).reshape(-1, 3) if errors else None,
+        checks=tuple(found.checks),
+        files=tuple(files),
+    )
+
+
+def default_folder(robot: str) -> Path:
+    """Where ``umbmark selfcal`` writes when not told: ``selfcal-<robot>`` (the command
+    takes ``selfcal-<robot>-2``, ... when an earlier run left files there)."""
+    return Path(f"selfcal-{_slug(robot)}")
+
+
+def _check_outputs(folder: Path | None, page: Path | None, force: bool) -> None:
+    """Refuse, before the robot moves, a folder holding anything but an earlier
+    self-calibration (and, without ``force``, anything at all), or a page that exists."""
+    from umbmark.outputs.files import OutputPlan
+
+    if folder is not None:
+        OutputPlan.of(logs=folder, force=True)  # a folder, or one that can be made
+        clear_selfcal(folder, remove=False)  # nothing but an earlier self-calibration
+        if not force and folder.is_dir() and any(folder.iterdir()):
+            raise InputError(
+                "holds an earlier self-calibration: choose a new or empty folder, leave "
+                "--out out (umbmark selfcal then makes selfcal-ROBOT-2, ...), or pass "
+                "--force to replace it",
+                source=folder,
+                python="holds an earlier self-calibration: choose a new or empty folder, "
+                "or pass force=True to replace it",
+            )
+    if page is not None and (folder is None or page.parent.resolve() != folder.resolve()):
+        OutputPlan.of(report=page, force=force)
+
+
+@dataclass(frozen=True)
+class _Found:
+    """What driving the passes gave."""
+
+    checks: list[str]
+    home: Home
+    coarse: CoarseTurning | None
+    coarse_applied: ApplyResult | None
+    passes: list[PassResult]
+
+
+def _calibrate(
+    drive: _Passes,
+    method: ApplyMethod,
+    verify: bool,
+    max_passes: int,
+    coarse: bool,
+    replacing: Path | None,
+) -> _Found:
+    """The checks, the coarse turning check, the passes and the verification; a zero
+    velocity at the end and on any error. ``replacing``: the folder whose earlier
+    self-calibration is removed once the checks before moving have passed."""
+    robot, how, limits, progress = drive.robot, drive.how, drive.limits, drive.progress
     try:
-        checks = preflight(robot, how, side_length, limits)
+        checks = preflight(robot, how, drive.side, limits)
         odom = settle(robot, limits).pose
         first = take_fix(robot, how)
         home = Home(first.pose, first, odom)
         home.fixes.append((first, corner_truth(robot, how)))
+        if replacing is not None:
+            clear_selfcal(replacing, remove=True)
         coarse_check, coarse_applied = None, None
-        if coarse and method != "none" and measure in ("lidar", "truth"):
+        if coarse and method != "none" and how.method in ("lidar", "truth"):
             if progress is not None:
                 progress("coarse", 0, None, "turning check")
             coarse_check = coarse_turning(robot, how, limits)
@@ -300,12 +403,8 @@ def selfcal(
             home.odometry = settle(robot, limits).pose
             home.fix = take_fix(robot, how)
         passes: list[PassResult] = []
-        drive = _Passes(
-            robot, how, folder, side_length, runs, home, limits, name, progress,
-            record_as=robot_name, history=history,
-        )  # fmt: skip
         for k in range(1, max_passes + 1):
-            result = _apply(robot, drive(f"pass {k}"), method)
+            result = _apply(robot, drive(f"pass {k}", home), method)
             drive.mark_applied(result)
             home.reanchor(robot)
             passes.append(result)
@@ -315,33 +414,12 @@ def selfcal(
             if bench is None or not bench.second_pass_recommended:
                 break
         if verify and passes and passes[-1].applied is not None and passes[-1].applied.active:
-            passes.append(drive("verification"))
+            passes.append(drive("verification", home))
     except BaseException:
         robot.send_velocity(0.0, 0.0)
         raise
     robot.send_velocity(0.0, 0.0)
-    files = _outputs(passes, folder, Path(report) if report is not None else None)
-    errors = [
-        (
-            fix.pose.x - truth.x,
-            fix.pose.y - truth.y,
-            float(wrap_angle(fix.pose.theta - truth.theta)),
-        )
-        for fix, truth in home.fixes
-        if truth is not None
-    ]
-    return SelfCalReport(
-        robot=name,
-        side_length=side_length,
-        measurement=measure,
-        coarse=coarse_check,
-        coarse_applied=coarse_applied,
-        passes=tuple(passes),
-        final=robot.drive_params(),
-        fix_errors=np.asarray(errors, dtype=np.float64).reshape(-1, 3) if errors else None,
-        checks=tuple(checks),
-        files=tuple(files),
-    )
+    return _Found(checks, home, coarse_check, coarse_applied, passes)
 
 
 @dataclass(frozen=True)
@@ -353,14 +431,13 @@ class _Passes:
     folder: Path
     side: float
     runs: int
-    home: Home
     limits: DriveLimits
     name: str
     progress: Progress | None
     record_as: str | None = None
     history: str | os.PathLike[str] | None = None
 
-    def __call__(self, label: str) -> PassResult:
+    def __call__(self, label: str, home: Home) -> PassResult:
         from umbmark.jobs.calibrate import calibrate
 
         params = self.robot.drive_params()
@@ -369,10 +446,8 @@ class _Passes:
             if self.progress is not None:
                 self.progress(label, k, direction, what)
 
-        measured = drive_pass(
-            self.robot, self.how, self.side, self.runs, self.home, self.limits, said
-        )
-        where = self.folder / label.replace(" ", "-")
+        measured = drive_pass(self.robot, self.how, self.side, self.runs, home, self.limits, said)
+        where = pass_folder(self.folder, label)
         record_pass(where, measured, params, self.side, self.how.method, self.name)
         report = calibrate(where, robot=self.record_as, history=self.history)
         return PassResult(label, where, report, params, warnings=_strays(measured, self.limits))
@@ -421,19 +496,23 @@ def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
     return replace(result, applied=robot.apply(new, method))
 
 
-def _outputs(passes: list[PassResult], folder: Path, page: Path | None) -> list[Path]:
-    """The report of all passes and the overlay of the final parameters."""
+def _outputs(
+    passes: list[PassResult], folder: Path | None, page: Path | None, force: bool
+) -> list[Path]:
+    """The report of all passes [``folder/report.html``] and, in ``folder``, the overlay of
+    the final parameters; checked before the robot moved (:func:`_check_outputs`)."""
     from umbmark.jobs.report import report
 
     written: list[Path] = []
     if not passes:
         return written
-    page = page or folder / "report.html"
-    report(*(p.folder for p in passes), output=page)
-    written.append(page)
+    page = page or (None if folder is None else folder / REPORT_FILE)
+    if page is not None:
+        report(*(p.folder for p in passes if p.folder is not None), output=page, force=force)
+        written.append(page)
     last_applied = [p for p in passes if p.applied is not None and p.applied.active]
-    if last_applied:
-        overlay = folder / "overlay.yaml"
+    if last_applied and folder is not None:
+        overlay = folder / OVERLAY_FILE
         last_applied[-1].report.write(yaml=overlay)
         written.append(overlay)
     return written

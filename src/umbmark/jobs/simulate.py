@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
@@ -179,35 +179,29 @@ class SimulationReport(JsonText):
         runs as one recording in a ROS bag (``bag``: ``NAME.bag`` for ROS 1, a folder for
         ROS 2 with ``bag_storage`` sqlite3 or mcap).
 
-        ``logs`` must be an empty or new folder, ``bag`` a new path, unless ``force``.
-        ``progress`` is called with the fraction of the bag written.
+        Without ``force`` no file is replaced: ``output`` and ``bag`` must be new paths,
+        ``logs`` a new or empty folder. With ``force`` they are replaced, and the run log in
+        ``logs`` (``metadata.yaml``, ``run-NN.csv``) is replaced whole: its older runs are
+        removed, never mixed with the new ones (a folder holding another ``.csv`` is
+        refused all the same). ``progress`` is called with the fraction of the bag written.
 
         Raises
         ------
         InputError
             If a file cannot be written, the runs have no time series for ``logs`` or
-            ``bag``, ``logs`` holds files already or ``bag`` exists (without ``force``).
+            ``bag``, an output exists or ``logs`` holds files (without ``force``), or
+            ``logs`` holds a ``.csv`` that is not one of its run log's.
         """
-        from umbmark.sources.bag.writer import bag_target
+        from umbmark.sources.runlog.writer import clear_run_log
 
-        plan = OutputPlan.of(output=output, logs=logs, bag=bag)
-        _check_square_outputs(self.path, plan)
-        target = None if plan.bag is None else bag_target(plan.bag, bag_storage, force=force)
+        plan, target = _plan(self.path, output, logs, bag, bag_storage, force)
         if (plan.logs is not None or target is not None) and self.result.trace is None:
             raise InputError(
                 f"{'--logs' if plan.logs is not None else '--bag'} needs the time series: "
                 "simulate with record=True"
             )
         if plan.logs is not None:
-            if plan.logs.exists() and not plan.logs.is_dir():
-                raise InputError("exists and is not a folder", source=plan.logs)
-            if plan.logs.is_dir() and any(plan.logs.iterdir()) and not force:
-                raise InputError(
-                    "is not empty: run logs written into it would mix with what it holds "
-                    "(calibrate reads every run in the folder); choose an empty folder or "
-                    "give --force",
-                    source=plan.logs,
-                )
+            clear_run_log(plan.logs, remove=True)  # the new run log replaces the old whole
         written: list[Path] = []
         if plan.output is not None:
             from umbmark.sources.runs_table.writer import active_of, write_runs_table
@@ -230,7 +224,7 @@ class SimulationReport(JsonText):
 
     def _write_logs(self, folder: Path) -> list[Path]:
         from umbmark.sources.runlog.reader import LogMetadata
-        from umbmark.sources.runlog.writer import write_log_csv, write_metadata
+        from umbmark.sources.runlog.writer import run_file_name, write_log_csv, write_metadata
         from umbmark.sources.runs_table.writer import active_of
 
         trace = self.result.trace
@@ -258,7 +252,7 @@ class SimulationReport(JsonText):
         written = [write_metadata(folder, metadata)]
         for i in range(len(self.result.directions)):
             end = int(self.result.samples_used[i])
-            path = folder / f"run-{i + 1:02d}.csv"
+            path = folder / run_file_name(i + 1)
             write_log_csv(
                 path,
                 trace.time[: end + 1],
@@ -339,7 +333,8 @@ def simulate(
     output, logs : path, optional
         Write the runs table (CSV, metres, radians) and the run logs (a folder).
     force : bool
-        Write ``logs`` into a folder that is not empty; replace an existing ``bag``.
+        Replace ``output`` and ``bag`` if they exist, and the run log in ``logs`` whole
+        (its older runs removed; see :meth:`SimulationReport.write`).
     bag : path, optional
         Write the runs as one recording in a ROS bag, as a robot with motion capture
         records them (:mod:`umbmark.sources.bag.writer`): ``NAME.bag`` is ROS 1, another
@@ -409,22 +404,8 @@ def simulate(
             f"--turn-angle {math.degrees(turn_angle):g} deg: give a turn of up to "
             f"{math.degrees(MAX_TURN):g} deg either way, not zero"
         )
-    plan = OutputPlan.of(output=output, logs=logs, bag=bag)
-    if isinstance(params, (str, os.PathLike)):
-        plan.check_not_inputs([params])
-    _check_square_outputs(path, plan)
-    if bag_storage is not None and plan.bag is None:
-        raise InputError("--bag-storage says how to store --bag: give --bag too")
-    if plan.bag is not None:
-        from umbmark.sources.bag.writer import bag_target
-
-        bag_target(plan.bag, bag_storage, force=force)
-    if plan.logs is not None and plan.logs.is_dir() and any(plan.logs.iterdir()) and not force:
-        raise InputError(
-            "is not empty: run logs written into it would mix with what it holds (calibrate "
-            "reads every run in the folder); choose an empty folder or give --force",
-            source=plan.logs,
-        )
+    inputs = [params] if isinstance(params, (str, os.PathLike)) else []
+    _plan(path, output, logs, bag, bag_storage, force, inputs)
 
     from umbmark.sim import paths
     from umbmark.sim.engine import simulate as run_simulation
@@ -484,13 +465,38 @@ def simulate(
     return report
 
 
-def _check_square_outputs(path: str, plan: OutputPlan) -> None:
+def _plan(
+    path: str,
+    output: str | os.PathLike[str] | None,
+    logs: str | os.PathLike[str] | None,
+    bag: str | os.PathLike[str] | None,
+    bag_storage: str | None,
+    force: bool,
+    inputs: Sequence[str | os.PathLike[str]] = (),
+) -> tuple[OutputPlan, BagTarget | None]:
+    """The outputs and the bag, checked before anything is simulated or written: none
+    replaces a file without ``force``; ``logs`` is new or empty, or (``force``) one whose
+    run log the new one replaces whole (:func:`~umbmark.sources.runlog.writer.clear_run_log`)."""
+    from umbmark.sources.bag.writer import bag_target
+    from umbmark.sources.runlog.writer import clear_run_log
+
+    _check_square_outputs(path, output, bag)
+    plan = OutputPlan.of(force=force, inputs=inputs, output=output, logs=logs, bag=bag)
+    if bag_storage is not None and plan.bag is None:
+        raise InputError("--bag-storage says how to store --bag: give --bag too")
+    target = None if plan.bag is None else bag_target(plan.bag, bag_storage, force=force)
+    if plan.logs is not None:
+        clear_run_log(plan.logs, remove=False)
+    return plan, target
+
+
+def _check_square_outputs(path: str, output: object, bag: object) -> None:
     """Refuse a runs table or a bag of runs that are not squares."""
     if path == "square":
         return
-    if plan.output is not None:
+    if output is not None:
         raise InputError("-o writes a runs table of square runs: use --path square")
-    if plan.bag is not None:
+    if bag is not None:
         raise InputError(
             "--bag writes square runs (one recording, split where the robot rests near the "
             "start): use --path square"

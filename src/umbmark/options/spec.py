@@ -27,6 +27,7 @@ from umbmark.core.errors import InputError
 
 __all__ = [
     "BAGS",
+    "FORCE",
     "LOGS",
     "LONGEST_GAP",
     "LONGEST_REST",
@@ -64,7 +65,7 @@ LONGEST_REST = 600.0
 #: Farthest a tracked point may sit from the axle centre [m].
 MAX_TRUTH_OFFSET = 5.0
 
-Kind = Literal["text", "number", "choice", "file", "folder"]
+Kind = Literal["text", "number", "choice", "file", "folder", "flag"]
 
 
 @dataclass(frozen=True)
@@ -100,8 +101,9 @@ class Spec:
         The section of ``--help`` that lists it.
     help : str
         Its ``--help`` text.
-    kind : {"text", "number", "choice", "file", "folder"}
-        What it takes: a text, a number, one of ``choices``, a file or a folder.
+    kind : {"text", "number", "choice", "file", "folder", "flag"}
+        What it takes: a text, a number, one of ``choices``, a file or a folder; a flag
+        takes nothing (given: True).
     default : object
         Its value when not given (None: not given; ``--help`` shows the others).
     choices : tuple of str
@@ -235,6 +237,18 @@ TUM_TIME = Spec(
     kind="choice",
     default="recording",
     choices=("recording", "run"),
+)
+
+#: ``--force`` of every command that writes files (``force=True`` of the library): without
+#: it no file is replaced (:class:`umbmark.outputs.files.OutputPlan`). Commands where it
+#: also lifts another refusal say so after this text.
+FORCE = Spec(
+    "force",
+    ("--force",),
+    OUTPUTS,
+    "Replace output files that exist, and write into output folders that hold files "
+    "(without it, nothing is replaced).",
+    kind="flag",
 )
 
 # --- how to read a source (calibrate, replay, report, validate) -----------------------

@@ -1,4 +1,10 @@
-"""The files a job is asked to write, checked together before any is written."""
+"""The files a job is asked to write, checked together before any is written.
+
+No file a user has is replaced unless the caller says so: :meth:`OutputPlan.of` refuses an
+output file that exists and an output folder that holds files already (what would be
+written into it would mix with what it holds), unless ``force`` (``--force``). This is
+the one place every command and library function that writes checks it.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +16,14 @@ from pathlib import Path
 
 from umbmark.core.errors import InputError
 
-__all__ = ["FIGURE_FORMATS", "OutputPlan", "check_folder_output"]
+__all__ = [
+    "FIGURE_FORMATS",
+    "OutputPlan",
+    "check_folder_output",
+    "check_new_file",
+    "check_new_folder",
+    "fresh_folder",
+]
 
 #: File extensions a figure can be saved as.
 FIGURE_FORMATS = (".png", ".svg", ".pdf")
@@ -45,13 +58,26 @@ class OutputPlan:
     bag: Path | None = None
 
     @classmethod
-    def of(cls, **paths: str | os.PathLike[str] | None) -> OutputPlan:
+    def of(
+        cls,
+        *,
+        force: bool = False,
+        inputs: Iterable[str | os.PathLike[str]] = (),
+        **paths: str | os.PathLike[str] | None,
+    ) -> OutputPlan:
         """Check the requested outputs' names; the folders ``tum`` and ``logs`` may be new.
+
+        No output may be one of ``inputs`` or lie inside one (:meth:`check_not_inputs`),
+        even with ``force``. Without ``force`` an output file that exists, or an output
+        folder that holds files already, is refused (:func:`check_new_file`,
+        :func:`check_new_folder`); a bag is checked by its writer
+        (:func:`umbmark.sources.bag.writer.bag_target`).
 
         Raises
         ------
         InputError
-            For a name of the wrong kind, or two outputs onto one file.
+            For a name of the wrong kind, two outputs onto one file, an output that cannot
+            be written, or one that would replace a file (without ``force``).
         """
         plan = cls(**{k: None if v is None else Path(v) for k, v in paths.items()})
         for name in ("yaml", "ros1_yaml"):
@@ -76,6 +102,13 @@ class OutputPlan:
                 )
             seen[key] = name
         plan.check_writable()
+        plan.check_not_inputs(inputs)
+        if not force:
+            for name, path in plan.requested():
+                if name in _FOLDERS:
+                    check_new_folder(path)
+                elif name != "bag":
+                    check_new_file(path)
         return plan
 
     def requested(self) -> list[tuple[str, Path]]:
@@ -151,6 +184,48 @@ def check_folder_output(folder: str | os.PathLike[str]) -> None:
     if target.exists() and not target.is_dir():
         raise InputError("exists and is not a folder", source=path)
     _check_folder(path, _nearest_existing(target))
+
+
+def check_new_file(path: str | os.PathLike[str]) -> None:
+    """Refuse to replace ``path`` if it exists (a link counts, even a broken one).
+
+    Raises
+    ------
+    InputError
+        ``PATH: exists already; pass --force to replace it`` (``force=True`` from Python).
+    """
+    if os.path.lexists(path):
+        raise InputError("exists already; pass --force to replace it", source=Path(path))
+
+
+def check_new_folder(folder: str | os.PathLike[str]) -> None:
+    """Refuse to write into ``folder`` if it holds anything: new files would mix with the
+    ones it holds.
+
+    Raises
+    ------
+    InputError
+        ``FOLDER: is not empty ...; pass --force ...`` (``force=True`` from Python).
+    """
+    path = Path(folder)
+    if path.is_dir() and any(path.iterdir()):
+        raise InputError(
+            "is not empty: what is written would mix with what it holds; choose a new or "
+            "empty folder, or pass --force to write into it",
+            source=path,
+        )
+
+
+def fresh_folder(default: str | os.PathLike[str]) -> Path:
+    """``default`` if it is new or empty, else the first new or empty of ``default-2``,
+    ``default-3``, ...: where a command writes into its default folder when an earlier run
+    left files in it (``umbmark demo``, ``umbmark selfcal``)."""
+    base = Path(default)
+    candidate, k = base, 1
+    while candidate.exists() and (not candidate.is_dir() or any(candidate.iterdir())):
+        k += 1
+        candidate = base.with_name(f"{base.name}-{k}")
+    return candidate
 
 
 def _nearest_existing(path: Path) -> Path:

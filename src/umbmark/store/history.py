@@ -127,27 +127,50 @@ class History:
     Parameters
     ----------
     path : path, optional
-        The file (created with its folder when missing); :func:`default_history_path`
-        when None.
+        The file; :func:`default_history_path` when None.
+    read_only : bool
+        Only read it: the file must exist (nothing is created) and is opened read-only
+        (SQLite ``mode=ro``); otherwise it is created with its folder when missing.
 
     Raises
     ------
     InputError
-        When the file is not an SQLite database, or is of a newer schema.
+        When the file is not an SQLite database, is of a newer schema, or (``read_only``)
+        does not exist.
     """
 
-    def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
+    def __init__(
+        self, path: str | os.PathLike[str] | None = None, *, read_only: bool = False
+    ) -> None:
         self.path = Path(path) if path is not None else default_history_path()
+        self.read_only = read_only
         if self.path.is_dir():
             raise InputError("is a folder, not a history file", source=self.path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        if read_only:
+            if not self.path.exists():
+                raise InputError(
+                    "no history here (umbmark calibrate --robot NAME records one)",
+                    source=self.path,
+                )
+        else:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
         self._migrate()
+
+    def _open(self) -> sqlite3.Connection:
+        """A connection: read-only (``mode=ro``, never creating the file) when
+        :attr:`read_only`."""
+        if self.read_only:
+            uri = f"{self.path.resolve().as_uri()}?mode=ro"
+            return sqlite3.connect(uri, uri=True, timeout=BUSY_TIMEOUT, isolation_level=None)
+        return sqlite3.connect(self.path, timeout=BUSY_TIMEOUT, isolation_level=None)
 
     @contextmanager
     def _connect(self, *, write: bool = False) -> Iterator[sqlite3.Connection]:
         """A connection in one transaction (``BEGIN IMMEDIATE`` when writing)."""
+        if write and self.read_only:
+            raise InputError("opened to read only: cannot write to it", source=self.path)
         try:
-            db = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT, isolation_level=None)
+            db = self._open()
         except sqlite3.Error as exc:
             raise InputError(f"cannot open the history: {exc}", source=self.path) from None
         try:
@@ -166,9 +189,22 @@ class History:
             db.close()
 
     def _migrate(self) -> None:
-        """Set WAL mode and bring the schema to :data:`SCHEMA_VERSION`."""
+        """Set WAL mode and bring the schema to :data:`SCHEMA_VERSION`. Read-only, a file
+        of this schema is only read; an older one (it exists: nothing is created) is
+        brought up to date first, as it must be to be read."""
+        if self.read_only:
+            with self._connect() as db:
+                version = int(db.execute("PRAGMA user_version").fetchone()[0])
+            if version == SCHEMA_VERSION:
+                return
+            self.read_only = False
+            try:
+                self._migrate()
+            finally:
+                self.read_only = True
+            return
         try:
-            db = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT, isolation_level=None)
+            db = self._open()
             try:
                 db.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT * 1000)}")
                 if db.execute("PRAGMA journal_mode").fetchone()[0] != "wal":

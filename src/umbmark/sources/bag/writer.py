@@ -149,7 +149,7 @@ def bag_target(
     real = shown.resolve()
     if real.exists() or real.is_symlink():
         if not force:
-            raise InputError("exists; give --force to replace it", source=shown)
+            raise InputError("exists already; pass --force to replace it", source=shown)
         if fmt == "ros1" and not real.is_file():
             raise InputError("exists and is not a file; not replaced", source=shown)
         if fmt != "ros1" and not _is_ros2_bag_or_empty(real):

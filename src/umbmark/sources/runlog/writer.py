@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -13,9 +14,53 @@ import yaml
 from numpy.typing import NDArray
 
 from umbmark.core.atomic import atomic_write_text
+from umbmark.core.errors import InputError
 from umbmark.sources.runlog.reader import FORMAT_NAME, LOG_COLUMNS, METADATA_FILE, LogMetadata
 
-__all__ = ["format_metadata", "write_log_csv", "write_metadata"]
+__all__ = [
+    "clear_run_log",
+    "format_metadata",
+    "run_file_name",
+    "write_log_csv",
+    "write_metadata",
+]
+
+#: The run files of a whole run log written by umbmark: ``run-01.csv``, ``run-02.csv``, ...
+#: (``simulate --logs``), ``run-01-cw.csv``, ... (a self-calibration's pass).
+_RUN_FILE = re.compile(r"run-\d{2,}(-cw|-ccw)?\.csv")
+
+
+def run_file_name(k: int) -> str:
+    """The name of run ``k`` (from 1) of a whole run log: ``run-01.csv``."""
+    return f"run-{k:02d}.csv"
+
+
+def clear_run_log(folder: str | Path, *, remove: bool) -> list[Path]:
+    """The files of the run log umbmark wrote into ``folder`` (``metadata.yaml`` and
+    ``run-NN.csv`` or ``run-NN-cw.csv``), removed when ``remove``: a new run log replaces
+    them whole, never mixed with them. Files of other kinds are kept.
+
+    Raises
+    ------
+    InputError
+        If ``folder`` holds another ``.csv`` (read as a run with the new ones): it is
+        not removed, and nothing is.
+    """
+    path = Path(folder)
+    if not path.is_dir():
+        return []
+    mine = [f for f in path.iterdir() if f.name == METADATA_FILE or _RUN_FILE.fullmatch(f.name)]
+    other = sorted(f.name for f in path.iterdir() if f.suffix.lower() == ".csv" and f not in mine)
+    if other:
+        raise InputError(
+            f"holds {other[0]}, not a run of a run log umbmark wrote: it would be read "
+            "with the new runs; choose a new or empty folder",
+            source=path,
+        )
+    if remove:
+        for f in mine:
+            f.unlink()
+    return mine
 
 
 def format_metadata(metadata: LogMetadata) -> str:
