@@ -288,6 +288,34 @@ def test_circles_with_a_few_squares_identify_the_scrub_model(robot):
             assert scrub_error < _end_error(held_out, single.params(NOMINAL)) / 2
 
 
+def test_validate_does_not_credit_a_scrub_fit_that_falls_back(tmp_path):
+    """Circles with one square: the rest hold both kinds of turn when the circles alone
+    are held out, but the one run of spot turns cannot pin b_spot (the jackknife leaves
+    it out): trajectory-scrub gives one wheelbase there, which validate does not credit
+    to it."""
+    circles = drive_sim.write_session(
+        tmp_path / "circles", drive_sim.circles(SCRUB, 3, shares=(0.3,))
+    )
+    mixed = drive_sim.write_session(
+        tmp_path / "mixed",
+        drive_sim.circles(SCRUB, 5, shares=(0.3,)) + drive_sim.squares(SCRUB, 4, runs=1),
+    )
+    report = umbmark.validate(circles, mixed, methods=["trajectory", "trajectory-scrub"])
+    first, second = report.folds
+    assert first.trained_on == ("straight", "arc", "spot")
+    assert first.errors["trajectory"] is not None
+    assert first.errors["trajectory-scrub"] is None
+    assert first.refused["trajectory-scrub"].startswith(
+        "the scrub model's turn-rate term is not identified: the recorded motion does not "
+        "pin down the wheelbase"
+    )
+    assert "single-wheelbase" not in first.refused["trajectory-scrub"]
+    assert second.refused["trajectory-scrub"] == (
+        "the rest hold only arcs, which do not identify its turn-rate term"
+    )
+    assert report.mean_error("trajectory-scrub") is None
+
+
 @pytest.fixture(scope="module")
 def folders(sims, tmp_path_factory):
     """Run-log folders: two sessions of squares of the robot with scrub, and three of

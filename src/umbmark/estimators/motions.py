@@ -35,8 +35,9 @@ The turn-rate term is identified when both hold:
    at most :data:`MAX_TERM_SE` of the wheelbase (:func:`term_problem`, applied by
    :func:`umbmark.estimators.trajectory_fit.scrub_term_problem`). How the turning's weight
    splits between the two kinds does not decide beyond that: the six OptiOdom circle
-   sessions of day 2506 with one session of spot turns hold 9 % of the turning on the
-   spot and 91 % on arcs, and pin the term to about 0.1 mm (0.06 % of the wheelbase).
+   sessions of day 2506 with the square session 0029 hold 9 % of the turning on the spot
+   and 91 % on arcs, and pin the term to 0.12 mm (0.06 % of the wheelbase); with the
+   spot-turn session 1636 instead, to 0.37 mm.
 
 Before (commit 8f0b291) the rule was a spread of turning shares: a straight line through
 the turns' points ``(w_j, b_eff)`` had to be at most 3 times less certain at every turning
@@ -89,7 +90,7 @@ STRAIGHT_SHARE = 0.1
 HELD_SHARE = 0.05
 #: Largest standard error of the fitted turn-rate term ``b_spot - b_arc``, as a share of
 #: the wheelbase, for the fit to pin it (module documentation): 1 mm on a 0.2 m wheelbase.
-#: Fits that pin it give 0.05 to 0.1 % on the OptiOdom sessions, squares fitted anyway 1
+#: Fits that pin it give 0.05 to 0.2 % on the OptiOdom sessions, squares fitted anyway 1
 #: to 2 %.
 MAX_TERM_SE = 0.005
 #: What to record for the scrub model.

@@ -240,9 +240,14 @@ def trajectory_estimate(
     problem = motion_coverage(logs, active).scrub_problem() if model == "scrub" else None
     advice = SCRUB_ADVICE
     if model == "scrub" and problem is None:
-        scrub = fit_trajectories(logs, active, model="scrub", check_coverage=False, **options)
-        problem, advice = scrub_term_problem(scrub), SCRUB_MORE
-        fit = single if problem is not None else scrub
+        advice = SCRUB_MORE
+        try:
+            scrub = fit_trajectories(logs, active, model="scrub", check_coverage=False, **options)
+        except ValueError as exc:  # a wheelbase not pinned at all: no turn-rate term either
+            problem = f"the scrub model's turn-rate term is not identified: {exc}"
+        else:
+            problem = scrub_term_problem(scrub)
+            fit = single if problem is not None else scrub
     if fit.spot_wheelbase is not None:
         components.update(
             arc_wheelbase=fit.wheelbase,

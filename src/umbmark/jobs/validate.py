@@ -29,7 +29,7 @@ from umbmark.calibration.active import read_runs
 from umbmark.calibration.validation import Fold, ValidationReport
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info, split_messages
-from umbmark.estimators.motions import MotionCoverage, motion_coverage
+from umbmark.estimators.motions import SCRUB_FALLBACK, MotionCoverage, motion_coverage
 from umbmark.estimators.registry import NAMES, names
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run, end_errors
@@ -205,7 +205,7 @@ def _calibrated(
     fell_back = None
     if candidate in names(turn_rate=True) and (fit is None or fit.spot_wheelbase is None):
         said = [w for w in report.estimate.warnings if "turn-rate term" in w]
-        fell_back = said[0] if said else "it gave the single-wheelbase fit"
+        fell_back = said[0].split(f"; {SCRUB_FALLBACK}")[0] if said else SCRUB_FALLBACK
     return report.new_params().applied_to(nominal), fell_back
 
 
