@@ -417,7 +417,7 @@ def _cli_options() -> set[str]:
 OTHER_PROGRAMS = {
     "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--ref",
     "--align_origin", "--once", "--list", "--filter", "--jobs", "--keep", "--data", "--strict",
-    "--auto", "--accuracy", "--side",
+    "--auto", "--accuracy", "--side", "--loso", "--single",
 }  # fmt: skip
 
 

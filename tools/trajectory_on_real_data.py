@@ -9,8 +9,9 @@
    other nine sessions, replay the one left out.
 3. What the fit finds on every session alone: wheel diameters, wheelbase(s), the time
    offset between wheels and ground truth, with their standard errors, and whether the
-   session identifies the scrub model's turn-rate term (scrub k <= 3). The scrub model is
-   fitted even where it is not identified, to show what it would find.
+   session identifies the scrub model's turn-rate term (it holds arcs and turns on the
+   spot; "both turns"). The scrub model is fitted even where it is not identified, to
+   show what it would find.
 
 Run: python tools/trajectory_on_real_data.py [--data ../shared/data/optiodom] [--no-loo]
 """
@@ -108,10 +109,9 @@ def replay_table(sessions: Sessions) -> None:
                     continue
                 row(label, fit.params)
         cover = sessions.coverage(source)
-        identified = "identified" if cover.identifies_scrub else "NOT identified (extrapolates)"
+        problem = cover.scrub_problem()
         print(
-            f"  {short(source)} holds {cover.held_text()}: scrub term {identified}, k = "
-            f"{cover.inflation:.1f}"
+            f"  {short(source)}: scrub term {'may be identified' if problem is None else problem}"
         )
     print()
 
@@ -143,7 +143,7 @@ def per_session(sessions: Sessions) -> None:
     print("3. Each session alone (start pose fitted): +- one standard error")
     print(
         f"{'session':16s}{'runs':>5s}{'D_L [mm]':>16s}{'D_R [mm]':>16s}{'b [mm]':>16s}"
-        f"{'b_arc [mm]':>16s}{'b_spot [mm]':>16s}{'offset [ms]':>14s}{'scrub k':>9s}"
+        f"{'b_arc [mm]':>16s}{'b_spot [mm]':>16s}{'offset [ms]':>14s}{'both turns':>11s}"
     )
     for name in sessions.names:
         diff = sessions.fit([name])
@@ -168,11 +168,11 @@ def per_session(sessions: Sessions) -> None:
             + pm(1000 * diff.wheelbase, 1000 * se["wheelbase"])
             + scrub_cells
             + pm(1000 * diff.time_offset, 1000 * se["time_offset"], 14, 1)
-            + f"{sessions.coverage(name).inflation:9.1f}"
+            + f"{'yes' if sessions.coverage(name).holds_both_turns else 'no':>11s}"
         )
-    print("scrub k: how much less certain the scrub model's wheelbase is than one wheelbase")
-    print("somewhere between straight and spot turns; above 3 its turn-rate term is not")
-    print("identified by the session (umbmark.estimators.motions), and b_arc extrapolates.")
+    print("both turns: whether the session holds arcs and turns on the spot; without, the")
+    print("scrub model's turn-rate term is not identified by the session")
+    print("(umbmark.estimators.motions), and b_arc or b_spot extrapolates.")
     print()
 
 

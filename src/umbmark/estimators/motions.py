@@ -1,15 +1,12 @@
-"""What recorded runs hold (straight legs, arcs, turns on the spot), and whether that
-identifies the scrub model's turn-rate term.
+"""What recorded runs hold (straight legs, arcs, turns on the spot), and whether they
+identify the scrub model's turn-rate term.
 
 The scrub model (:mod:`umbmark.estimators.trajectory`) gives every sampling interval the
 wheelbase ``b_eff(w) = b_arc + (b_spot - b_arc) w`` of its turning share ``w = |dU_R -
 dU_L| / (|dU_R| + |dU_L|)`` (0 straight, 1 on the spot). A wheelbase is seen only through
 the heading it turns: a turn through ``Theta`` with the wrong wheelbase ``b + db`` ends
 ``Theta db / b`` off. So what the recordings tell of ``b_eff`` at a turning share is what
-they turn at that share, and the turn-rate term (``b_spot - b_arc``, the slope of
-``b_eff`` in ``w``) is identified only when they turn at turning shares far apart:
-squares (straight legs, spot turns) turn almost only at ``w = 1``, circles of one radius
-only at their own ``w``.
+they turn at that share.
 
 Coherent turns
 --------------
@@ -18,30 +15,40 @@ Each run is cut into coherent turns: maximal stretches whose intervals turn the 
 not); standing still continues the stretch. A turn through ``Theta_j = |sum (dU_R -
 dU_L)| / b`` at the travel-weighted turning share ``w_j`` tells ``b_eff(w_j)`` with weight
 ``Theta_j^2`` (the heading it ends off, squared). A controller's weaving on a straight leg
-is many small turns of alternating sign, and weighs accordingly little.
+is many small turns of alternating sign, and weighs accordingly little; a coherent turn
+with ``w_j <= STRAIGHT_SHARE`` counts as a straight leg, one above as an arc.
 
-The criterion
--------------
-The two wheelbases form a straight line in ``w`` fitted to the turns' points ``(w_j,
-b_eff)`` with weights ``Theta_j^2``: its value at a turning share ``w`` is uncertain by
-``k(w) = sqrt(1 + (w - w_bar)^2 / s_w^2)`` times a single wheelbase fitted to the same
-turns (``w_bar``, ``s_w``: the weighted mean and standard deviation of the ``w_j``; the
-variance of a prediction in linear regression, whatever the noise). The term is
-identified when ``k`` stays within :data:`MAX_INFLATION` over all turning shares 0 to 1:
-with turns at both ends, each end holding at least a ninth of the weight. Beyond, the
-recorded turning sits at too narrow a range of ``w`` and the model extrapolates to the
-rest: a fit of it rests on a sliver of the data (a square's weaving legs) and its
-standard errors, honest for the model, do not see that the model's straight line is
-not checked where it will be used. The criterion depends on the wheel data alone, not on
-the noise. On the OptiOdom sessions squares give ``k`` = 5 to 12 and straights with spot
-turns about 150, squares or straights with a session of circles 1.8 to 2; simulated
-squares with weaving legs 5.8, with circles of three radii 2.0
-(``tools/scrub_identification.py``, ``tests/test_motions.py``).
+The rule
+--------
+The turn-rate term is identified when both hold:
+
+1. **The recordings turn both ways the model separates** (the wheel data alone, before any
+   fit): arcs and turns on the spot each hold at least :data:`HELD_SHARE` of the
+   turning's weight (:attr:`MotionCoverage.holds_both_turns`). Without one kind the
+   model's straight line in ``w`` is checked at one end only and extrapolates to the other,
+   and the fit cannot see it: on squares (straight legs, spot turns) ``b_arc`` rests on
+   the weaving of the legs, with standard errors that are honest for the model and small
+   (the OptiOdom square sessions give 195 +- 4 and 205 +- 3 mm, pooled 212 +- 2 mm, where
+   the circles want 202 mm). Squares alone, circles alone and straights with spot turns
+   are refused here, with what they lack.
+2. **The fit pins the term**: the cluster-robust standard error of ``b_spot - b_arc`` is
+   at most :data:`MAX_TERM_SE` of the wheelbase (:func:`term_problem`, applied by
+   :func:`umbmark.estimators.trajectory_fit.scrub_term_problem`). How the turning's weight
+   splits between the two kinds does not decide beyond that: the six OptiOdom circle
+   sessions of day 2506 with the square session 0029 hold 9 % of the turning on the spot
+   and 91 % on arcs, and pin the term to 0.12 mm (0.06 % of the wheelbase); with the
+   spot-turn session 1636 instead, to 0.37 mm.
+
+Before (commit 8f0b291) the rule was a spread of turning shares: a straight line through
+the turns' points ``(w_j, b_eff)`` had to be at most 3 times less certain at every turning
+share than a single wheelbase. That refused those 9 % (``k`` = 3.3): less certain than a
+single wheelbase is no fault where the single wheelbase is the wrong model, and leaving one
+session out the held-out squares ended 20 and 31 mm off with one wheelbase instead of 10
+(``tools/scrub_identification.py --loso``, ``docs/turning-coverage.md``).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -54,13 +61,16 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 
 __all__ = [
+    "HELD_SHARE",
     "KINDS",
-    "MAX_INFLATION",
+    "MAX_TERM_SE",
     "SCRUB_ADVICE",
     "SCRUB_FALLBACK",
+    "SCRUB_MORE",
     "MotionCoverage",
     "MotionKind",
     "motion_coverage",
+    "term_problem",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -76,20 +86,45 @@ SPOT_SHARE = 0.9
 #: Turning share up to which a coherent turn is a straight leg (weaving or drifting): a
 #: radius of five wheelbases or more.
 STRAIGHT_SHARE = 0.1
-#: Most the scrub model may inflate the uncertainty of the wheelbase at any turning share
-#: against a single wheelbase (module documentation).
-MAX_INFLATION = 3.0
 #: Least share of the travel or of the turning's weight for the recordings to hold a kind.
 HELD_SHARE = 0.05
+#: Largest standard error of the fitted turn-rate term ``b_spot - b_arc``, as a share of
+#: the wheelbase, for the fit to pin it (module documentation): 1 mm on a 0.2 m wheelbase.
+#: Fits that pin it give 0.05 to 0.2 % on the OptiOdom sessions, squares fitted anyway 1
+#: to 2 %.
+MAX_TERM_SE = 0.005
 #: What to record for the scrub model.
 SCRUB_ADVICE = "record arcs (circles of several radii) as well as turns on the spot to fit it"
+#: What to record where the fit does not pin the term.
+SCRUB_MORE = "record more runs of arcs and of turns on the spot to fit it"
 #: What the scrub estimator gives instead.
-SCRUB_FALLBACK = f"the result is the single-wheelbase fit, as --method trajectory; {SCRUB_ADVICE}"
+SCRUB_FALLBACK = "the result is the single-wheelbase fit, as --method trajectory"
+
+
+def term_problem(b_arc: float, b_spot: float, se_term: float) -> str | None:
+    """Why the fit does not pin the turn-rate term (None when it does): its standard error
+    is over :data:`MAX_TERM_SE` of the wheelbase.
+
+    Parameters
+    ----------
+    b_arc, b_spot : float
+        The fitted wheelbases [m].
+    se_term : float
+        Standard error of ``b_spot - b_arc`` [m] (NaN: not known, not pinned).
+    """
+    limit = MAX_TERM_SE * b_arc
+    if se_term <= limit:
+        return None
+    return (
+        f"the fit does not pin the scrub model's turn-rate term: b_spot - b_arc = "
+        f"{1000 * (b_spot - b_arc):.1f} ± {1000 * se_term:.1f} mm, a standard error over "
+        f"{100 * MAX_TERM_SE:g} % of the wheelbase ({1000 * limit:.1f} mm)"
+    )
 
 
 @dataclass(frozen=True)
 class MotionCoverage:
-    """The motion of recorded runs, by kind, and what it identifies.
+    """The motion of recorded runs, by kind.
 
     Attributes
     ----------
@@ -100,23 +135,11 @@ class MotionCoverage:
         Share of the turning's weight ``sum Theta_j^2`` on each kind.
     turned : dict of kind to float
         Heading turned in the coherent turns of each kind [rad].
-    mean_share, share_spread : float
-        ``w_bar`` and ``s_w`` of the turns (weighted by ``Theta_j^2``); NaN without turns.
-    worst_share : float
-        The turning share 0 or 1 farthest from ``w_bar``, where the scrub model is least
-        certain.
-    inflation : float
-        ``k`` there: how many times less certain the scrub model's wheelbase is than a
-        single wheelbase (inf when the turns sit at one turning share).
     """
 
     travel: dict[MotionKind, float]
     weight: dict[MotionKind, float]
     turned: dict[MotionKind, float]
-    mean_share: float
-    share_spread: float
-    worst_share: float
-    inflation: float
 
     @property
     def held(self) -> tuple[MotionKind, ...]:
@@ -130,10 +153,10 @@ class MotionCoverage:
         )
 
     @property
-    def identifies_scrub(self) -> bool:
-        """Whether the turning spreads over enough turning shares for the scrub model's
-        turn-rate term (module documentation)."""
-        return self.inflation <= MAX_INFLATION
+    def holds_both_turns(self) -> bool:
+        """Whether the recordings hold arcs and turns on the spot, the first condition of
+        the scrub model's turn-rate term (module documentation; the second is the fit's)."""
+        return "arc" in self.held and "spot" in self.held
 
     def held_text(self, only: bool = False) -> str:
         """``straight legs and turns on the spot``: what the recordings hold (``only``:
@@ -142,10 +165,9 @@ class MotionCoverage:
         return f"only {text}" if only and 0 < len(self.held) < len(KINDS) else text
 
     def missing_text(self) -> str:
-        """What the scrub model would extrapolate to: the kinds of turn not held, else
-        the kind at :attr:`worst_share` (arcs near 0, turns on the spot at 1)."""
-        missing = [KINDS[k] for k in ("arc", "spot") if k not in self.held]
-        return join_names(missing) or KINDS["arc" if self.worst_share < 0.5 else "spot"]
+        """The kinds of turn not held, which the scrub model would extrapolate to
+        (``arcs``, ``turns on the spot`` or both)."""
+        return join_names([KINDS[k] for k in ("arc", "spot") if k not in self.held])
 
     def describe(self, only: bool = False) -> str:
         """The kinds held (see :meth:`held_text`), and how the turning's weight splits
@@ -159,19 +181,15 @@ class MotionCoverage:
         return f"{self.held_text(only)} (of the turning, {split})"
 
     def scrub_problem(self) -> str | None:
-        """Why the recordings do not identify the scrub model's turn-rate term (None when
-        they do): what they hold, and what the model would extrapolate to."""
-        if self.identifies_scrub:
+        """Why the recordings cannot identify the scrub model's turn-rate term, whatever
+        the fit (None when they hold both kinds of turn): what they hold, and what the
+        model would extrapolate to."""
+        if self.holds_both_turns:
             return None
-        certain = (
-            f"{self.inflation:.0f} times less certain than a single wheelbase"
-            if math.isfinite(self.inflation)
-            else "not pinned at all"
-        )
         return (
             f"the recordings hold {self.describe(only=True)}; the scrub model's turn-rate term "
-            f"is not identified: it would extrapolate to {self.missing_text()} (its "
-            f"wheelbase there {certain})"
+            f"is not identified: it would extrapolate to {self.missing_text()}, which they do "
+            "not turn on"
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -181,16 +199,8 @@ class MotionCoverage:
             "travel_share": dict(self.travel),
             "turning_weight_share": dict(self.weight),
             "turned": dict(self.turned),
-            "mean_turning_share": _finite(self.mean_share),
-            "turning_share_spread": _finite(self.share_spread),
-            "worst_turning_share": _finite(self.worst_share),
-            "scrub_inflation": _finite(self.inflation),
-            "identifies_scrub": self.identifies_scrub,
+            "holds_both_turns": self.holds_both_turns,
         }
-
-
-def _finite(value: float) -> float | None:
-    return value if math.isfinite(value) else None
 
 
 def _turns(d_left: FloatArray, d_right: FloatArray) -> tuple[FloatArray, ...]:
@@ -247,21 +257,8 @@ def motion_coverage(logs: Sequence[RunLog], params: WheelParams) -> MotionCovera
         total = float(values.sum())
         return {k: float(values[m].sum()) / total if total > 0 else 0.0 for k, m in kinds.items()}
 
-    total = float(weight.sum())
-    mean = spread = worst = math.nan
-    inflation = math.inf
-    if total > 0.0:
-        mean = float(np.sum(weight * w) / total)
-        spread = math.sqrt(float(np.sum(weight * (w - mean) ** 2) / total))
-        worst = 0.0 if mean >= 0.5 else 1.0
-        if spread > 0.0:
-            inflation = math.sqrt(1.0 + ((worst - mean) / spread) ** 2)
     return MotionCoverage(
         travel=shares(travel),
         weight=shares(weight),
         turned={k: float(theta[m].sum()) for k, m in kinds.items()},
-        mean_share=mean,
-        share_spread=spread,
-        worst_share=worst,
-        inflation=inflation,
     )

@@ -100,9 +100,10 @@ class Estimator:
         minutes, and pooled sources are fitted one by one as well to see whether they
         disagree.
     turn_rate : bool
-        It fits the scrub model's turn-rate term, which only recordings that turn at
-        turning shares far apart identify (:mod:`umbmark.estimators.motions`):
-        ``validate`` and ``--method auto`` leave it out elsewhere.
+        It fits the scrub model's turn-rate term, which only recordings that hold arcs
+        and turns on the spot, with a fit that pins the term, identify
+        (:mod:`umbmark.estimators.motions`): ``validate`` and ``--method auto`` leave it
+        out elsewhere.
     options : tuple of (str, str)
         Keyword arguments of ``function`` that make this estimator of it.
     """

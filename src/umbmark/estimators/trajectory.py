@@ -38,10 +38,11 @@ as much as each of its two coordinates. The weights are reported
 ``r_L, r_R, b``). ``"scrub"``: the effective wheelbase of each sampling interval depends on
 its turning share ``w = |dU_R - dU_L| / (|dU_R| + |dU_L|)``, ``b_eff = b_arc + (b_spot -
 b_arc) w`` (:mod:`umbmark.model.kinematics`; parameters ``r_L, r_R, b_arc, b_spot``), so that
-on-the-spot turns and arcs need not share one wheelbase. Its turn-rate term is pinned
-only by turns at turning shares far apart (:mod:`umbmark.estimators.motions`): squares
-alone (straight legs, spot turns) leave ``b_arc`` to the weaving of the legs, with a
-small standard error that does not see the extrapolation to arcs; the fit refuses them.
+on-the-spot turns and arcs need not share one wheelbase. Its turn-rate term is identified
+(:mod:`umbmark.estimators.motions`) only by runs that hold both arcs and turns on the spot
+(squares alone leave ``b_arc`` to the weaving of the legs, with a small standard error
+that does not see the extrapolation to arcs) and a fit whose standard error of the term
+``b_spot - b_arc`` is small; elsewhere the fit refuses it.
 
 **Time offset** (``fit_time_offset``). One time offset ``delta`` [s] between wheel data
 and ground truth, shared by all runs, is fitted as a nuisance: the odometry at wheel time
@@ -96,9 +97,14 @@ from typing import Any
 import numpy as np
 
 from umbmark.estimators.base import ErrorEstimate
-from umbmark.estimators.motions import SCRUB_FALLBACK, motion_coverage
+from umbmark.estimators.motions import (
+    SCRUB_ADVICE,
+    SCRUB_FALLBACK,
+    SCRUB_MORE,
+    motion_coverage,
+)
 from umbmark.estimators.registry import TRAJECTORY, TRAJECTORY_SCRUB
-from umbmark.estimators.trajectory_fit import TrajectoryFit, fit_trajectories
+from umbmark.estimators.trajectory_fit import TrajectoryFit, fit_trajectories, scrub_term_problem
 from umbmark.estimators.trajectory_model import MODELS, FloatArray, StartPose, TrajectoryModel
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
@@ -158,7 +164,8 @@ def trajectory_estimate(
         wheelbase), and the components add the scrub fit's ``arc_wheelbase`` and
         ``spot_wheelbase`` with their standard errors: what the richer model finds for
         arcs and for turns on the spot. Runs that do not identify its turn-rate term
-        (:mod:`umbmark.estimators.motions`) give the single set alone, with a warning.
+        (:mod:`umbmark.estimators.motions`: no arcs or no turns on the spot, or a fit
+        that does not pin the term) give the single set alone, with a warning.
     fit_time_offset : bool
         Fit a time offset between wheels and ground truth.
     start_pose : {"fitted", "truth"}
@@ -231,9 +238,17 @@ def trajectory_estimate(
     fit = single
     method = (TRAJECTORY_SCRUB if model == "scrub" else TRAJECTORY).name
     problem = motion_coverage(logs, active).scrub_problem() if model == "scrub" else None
+    advice = SCRUB_ADVICE
     if model == "scrub" and problem is None:
-        fit = fit_trajectories(logs, active, model="scrub", check_coverage=False, **options)
-        assert fit.spot_wheelbase is not None
+        advice = SCRUB_MORE
+        try:
+            scrub = fit_trajectories(logs, active, model="scrub", check_coverage=False, **options)
+        except ValueError as exc:  # a wheelbase not pinned at all: no turn-rate term either
+            problem = f"the scrub model's turn-rate term is not identified: {exc}"
+        else:
+            problem = scrub_term_problem(scrub)
+            fit = single if problem is not None else scrub
+    if fit.spot_wheelbase is not None:
         components.update(
             arc_wheelbase=fit.wheelbase,
             spot_wheelbase=fit.spot_wheelbase,
@@ -256,7 +271,7 @@ def trajectory_estimate(
         components=components,
         standard_errors=standard_errors,
         dof=float(single.clusters - 1),
-        warnings=() if problem is None else (f"{problem}; {SCRUB_FALLBACK}",),
+        warnings=() if problem is None else (f"{problem}; {SCRUB_FALLBACK}; {advice}",),
     )
     return estimate, fit
 

@@ -15,7 +15,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from umbmark.estimators.motions import SCRUB_ADVICE, motion_coverage
+from umbmark.estimators.motions import (
+    SCRUB_ADVICE,
+    SCRUB_MORE,
+    motion_coverage,
+    term_problem,
+)
 from umbmark.estimators.trajectory_model import (
     DEFAULT_MAX_TRUTH_OFFSET,
     MODELS,
@@ -31,7 +36,13 @@ from umbmark.estimators.trajectory_model import (
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 
-__all__ = ["DEFAULT_MAX_TIME_OFFSET", "MIN_OFFSET_TURN", "TrajectoryFit", "fit_trajectories"]
+__all__ = [
+    "DEFAULT_MAX_TIME_OFFSET",
+    "MIN_OFFSET_TURN",
+    "TrajectoryFit",
+    "fit_trajectories",
+    "scrub_term_problem",
+]
 
 #: Bound of the fitted time offset between wheels and ground truth [s].
 DEFAULT_MAX_TIME_OFFSET = 0.5
@@ -141,6 +152,19 @@ class TrajectoryFit:
             wheelbase=self.wheelbase,
             spot_wheelbase=self.spot_wheelbase,
         )
+
+
+def scrub_term_problem(fit: TrajectoryFit) -> str | None:
+    """Why a scrub fit does not pin its turn-rate term ``b_spot - b_arc`` (None when it
+    does, or for a single wheelbase): the second condition of
+    :mod:`umbmark.estimators.motions`, from the fit's covariance."""
+    if fit.spot_wheelbase is None:
+        return None
+    arc, spot = fit.parameters.index("wheelbase"), fit.parameters.index("spot_wheelbase")
+    cov = fit.covariance
+    variance = float(cov[arc, arc] + cov[spot, spot] - 2.0 * cov[arc, spot])
+    se = math.sqrt(variance) if variance >= 0.0 else math.nan
+    return term_problem(fit.wheelbase, fit.spot_wheelbase, se)
 
 
 @dataclass(frozen=True)
@@ -324,8 +348,10 @@ def fit_trajectories(
     max_truth_offset : float
         Bound of ``|truth_offset_x|`` and ``|truth_offset_y|`` [m].
     check_coverage : bool
-        ``"scrub"``: refuse runs whose motion does not identify the turn-rate term
-        (:mod:`umbmark.estimators.motions`); False fits it anyway (to study it).
+        ``"scrub"``: refuse runs that do not identify the turn-rate term
+        (:mod:`umbmark.estimators.motions`): runs without both arcs and turns on the
+        spot, before fitting, and a fit that does not pin the term
+        (:func:`scrub_term_problem`); False fits it anyway (to study it).
 
     Returns
     -------
@@ -335,9 +361,9 @@ def fit_trajectories(
     ------
     ValueError
         If the runs have too little recorded motion to pin the parameters down (for the
-        truth offset: no run turns by :data:`MIN_OFFSET_TURN`; for the scrub model: turns
-        at too narrow a range of turning shares), or the fitted truth offset reaches its
-        bound.
+        truth offset: no run turns by :data:`MIN_OFFSET_TURN`; for the scrub model: no
+        arcs or no turns on the spot, or a turn-rate term the fit does not pin), or the
+        fitted truth offset reaches its bound.
     """
     if model not in MODELS:
         raise ValueError(f"unknown trajectory model {model!r}; use diff or scrub")
@@ -407,7 +433,7 @@ def fit_trajectories(
         standard_errors,
     )
     err = problem.errors(fit.x, sigma)
-    return TrajectoryFit(
+    result = TrajectoryFit(
         model=model,
         r_left=r_left,
         r_right=r_right,
@@ -430,3 +456,7 @@ def fit_trajectories(
         truth_offset_y=truth_offset[1],
         truth_offset_fitted=fit_truth_offset,
     )
+    loose = scrub_term_problem(result) if check_coverage else None
+    if loose is not None:
+        raise ValueError(f"{loose}: {SCRUB_MORE}")
+    return result

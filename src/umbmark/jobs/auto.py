@@ -3,9 +3,9 @@
 :func:`umbmark.validate` ranks the estimators by their held-out end error. The richer
 estimators of a turn-rate term (``trajectory-scrub``) are taken only where the recordings
 identify it (:mod:`umbmark.estimators.motions`), in the pool and with every source held
-out: held-out runs that one cannot be calibrated for say nothing of it, and a pool of
-squares cannot see that it extrapolates to arcs. Otherwise the simpler estimators compete
-without it, and the note says why.
+out: held-out runs that one cannot be calibrated for say nothing of it, and a pool
+without arcs or without turns on the spot cannot see what it extrapolates to. Otherwise
+the simpler estimators compete without it, and the note says why.
 """
 
 from __future__ import annotations

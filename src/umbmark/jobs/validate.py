@@ -10,9 +10,10 @@ held-out error is recommended; ``umbmark calibrate --method auto`` calibrates wi
 The figures say how well each calibration predicts the kinds of motion held out, and
 nothing of others: :attr:`umbmark.calibration.validation.ValidationReport.coverage`
 states which (straight legs, arcs, turns on the spot; :mod:`umbmark.estimators.motions`).
-An estimator of a turn-rate term (``trajectory-scrub``) calibrates only where the rest of
-the runs identify it (turns at turning shares far apart), so that it is never credited
-with runs it extrapolates to.
+An estimator of a turn-rate term (``trajectory-scrub``) is credited only where the rest of
+the runs identify it (they hold arcs and turns on the spot, and the fit pins the term),
+so that it is never credited with runs it extrapolates to, nor with the single
+wheelbase it falls back to.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from umbmark.calibration.active import read_runs
 from umbmark.calibration.validation import Fold, ValidationReport
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info, split_messages
-from umbmark.estimators.motions import MotionCoverage, motion_coverage
+from umbmark.estimators.motions import SCRUB_FALLBACK, MotionCoverage, motion_coverage
 from umbmark.estimators.registry import NAMES, names
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run, end_errors
@@ -162,14 +163,19 @@ def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> F
     errors: dict[str, float | None] = {}
     refused: dict[str, str] = {}
     for candidate in candidates:
-        if candidate in names(turn_rate=True) and not trained_on.identifies_scrub:
+        turn_rate = candidate in names(turn_rate=True)
+        if turn_rate and not trained_on.holds_both_turns:
             errors[candidate] = None
             refused[candidate] = (
                 f"the rest hold {trained_on.held_text(only=True)}, which do not identify "
                 "its turn-rate term"
             )
             continue
-        params = _calibrated(training, candidate, held.params)
+        params, fell_back = _calibrated(training, candidate, held.params)
+        if fell_back is not None:  # not credited with the single wheelbase's figures
+            errors[candidate] = None
+            refused[candidate] = fell_back
+            continue
         errors[candidate] = None if params is None else _mean_error(held.runs, params)
     return Fold(
         held_out=name,
@@ -181,18 +187,26 @@ def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> F
     )
 
 
-def _calibrated(training: Runs, candidate: str, nominal: WheelParams) -> WheelParams | None:
+def _calibrated(
+    training: Runs, candidate: str, nominal: WheelParams
+) -> tuple[WheelParams | None, str | None]:
     """The held-out source's parameters after calibrating on ``training`` (None: the
-    candidate cannot calibrate on it)."""
+    candidate cannot calibrate on it), and why a scrub fit gave one wheelbase (None: it
+    gave two, or is not one)."""
     from umbmark.calibration.estimate import calibrate_runs
 
     if candidate == "nominal":
-        return nominal
+        return nominal, None
     try:
         report = calibrate_runs(training, candidate)
-        return report.new_params().applied_to(nominal)
     except ValueError:  # InputError included: the candidate cannot calibrate on these runs
-        return None
+        return None, None
+    fit = report.model_fit
+    fell_back = None
+    if candidate in names(turn_rate=True) and (fit is None or fit.spot_wheelbase is None):
+        said = [w for w in report.estimate.warnings if "turn-rate term" in w]
+        fell_back = said[0].split(f"; {SCRUB_FALLBACK}")[0] if said else SCRUB_FALLBACK
+    return report.new_params().applied_to(nominal), fell_back
 
 
 def _mean_error(runs: Sequence[Run], params: WheelParams) -> float:
