@@ -41,6 +41,7 @@ from umbmark.autocal.measure import MEASURE_METHODS, Measure, MeasureMethod, tak
 from umbmark.autocal.passes import Home, corner_truth, drive_pass
 from umbmark.autocal.preflight import preflight
 from umbmark.autocal.record import MeasuredRun, record_pass
+from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
@@ -124,7 +125,11 @@ class SelfCalReport(JsonText):
     passes : tuple of PassResult
         The UMBmark passes, the verification last.
     final : DriveParams
-        The parameters the controller holds at the end.
+        The parameters the controller holds at the end, as it reports them.
+    holds : Holds
+        What the controller holds: the pass whose correction (the last applied) and the
+        multipliers of ``final``; the terminal, the JSON, ``overlay.yaml`` and the HTML
+        page all say this one thing.
     fix_errors : array, shape (k, 3), or None
         Each fix's error against the truth (a virtual robot): ``x, y`` [m], heading [rad].
     checks : tuple of str
@@ -140,6 +145,7 @@ class SelfCalReport(JsonText):
     coarse_applied: ApplyResult | None
     passes: tuple[PassResult, ...]
     final: DriveParams
+    holds: Holds
     fix_errors: np.ndarray | None = None
     checks: tuple[str, ...] = ()
     files: tuple[Path, ...] = field(default=(), compare=False)
@@ -179,7 +185,8 @@ class SelfCalReport(JsonText):
             "passes": [p.to_dict() for p in self.passes],
             "e_max_syst_before": self.e_max_syst_before,
             "e_max_syst_after": self.e_max_syst_after,
-            "applied": _multipliers(self.final),
+            "applied": self.holds.multipliers(),
+            "holds": self.holds.to_dict(),
             "measurement": measurement,
             "files": [str(f) for f in self.files],
         }
@@ -320,7 +327,9 @@ def selfcal(
         robot.send_velocity(0.0, 0.0)
         raise
     robot.send_velocity(0.0, 0.0)
-    files = _outputs(passes, folder, Path(report) if report is not None else None)
+    final = robot.drive_params()
+    holds = _holds(passes, final)
+    files = _outputs(passes, holds, folder, Path(report) if report is not None else None)
     errors = [
         (
             fix.pose.x - truth.x,
@@ -337,7 +346,8 @@ def selfcal(
         coarse=coarse_check,
         coarse_applied=coarse_applied,
         passes=tuple(passes),
-        final=robot.drive_params(),
+        final=final,
+        holds=holds,
         fix_errors=np.asarray(errors, dtype=np.float64).reshape(-1, 3) if errors else None,
         checks=tuple(checks),
         files=tuple(files),
@@ -421,20 +431,32 @@ def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
     return replace(result, applied=robot.apply(new, method))
 
 
-def _outputs(passes: list[PassResult], folder: Path, page: Path | None) -> list[Path]:
-    """The report of all passes and the overlay of the final parameters."""
+def _holds(passes: list[PassResult], final: DriveParams) -> Holds:
+    """What the controller holds: the last pass applied (passes are applied in order until
+    one is not) and the multipliers the controller reports."""
+    applied = [k for k, p in enumerate(passes, 1) if p.applied is not None and p.applied.active]
+    return Holds(
+        labels=tuple(p.label for p in passes),
+        held=applied[-1] if applied else None,
+        separation_multiplier=final.wheel_separation_multiplier,
+        c_left=final.left_wheel_radius_multiplier,
+        c_right=final.right_wheel_radius_multiplier,
+    )
+
+
+def _outputs(passes: list[PassResult], holds: Holds, folder: Path, page: Path | None) -> list[Path]:
+    """The report of all passes and the overlay of the parameters the controller holds."""
     from umbmark.jobs.report import report
 
     written: list[Path] = []
     if not passes:
         return written
     page = page or folder / "report.html"
-    report(*(p.folder for p in passes), output=page)
+    replace(report(*(p.folder for p in passes)), holds=holds).write(page)
     written.append(page)
-    last_applied = [p for p in passes if p.applied is not None and p.applied.active]
-    if last_applied:
+    if holds.held is not None:
         overlay = folder / "overlay.yaml"
-        last_applied[-1].report.write(yaml=overlay)
+        passes[holds.held - 1].report.write(yaml=overlay)
         written.append(overlay)
     return written
 
