@@ -115,7 +115,8 @@ def test_every_output_names_what_the_controller_holds(paper_robot):
     held.append(truth.right_wheel_radius_multiplier)
     applied = [k for k, p in enumerate(report.passes, 1) if p.applied and p.applied.active]
     verification = report.passes[-1]
-    assert verification.label == "verification" and verification.applied is None
+    assert verification.label == "verification"
+    assert verification.applied is None
     k = applied[-1]
     label = report.passes[k - 1].label
     assert k == len(report.passes) - 1

@@ -60,9 +60,7 @@ def _named(k: int, labels: tuple[str, ...]) -> str:
 
 
 def _holds_section(page: Passes, holds: Holds) -> str:
-    said = (
-        f'<p class="big" id="holds" data-pass="{holds.held or ""}">{escape(holds.words())}</p>\n'
-    )
+    said = f'<p class="big" id="holds" data-pass="{holds.held or ""}">{escape(holds.words())}</p>\n'
     box = ""
     if holds.held is not None:
         verdict = page.passes[holds.held - 1].verdict
