@@ -19,6 +19,12 @@ threshold here and the reason for it:
   in heading): slip, a wrong wheel geometry, a time offset, a tracked point off the axle,
   a ground truth that lost the robot. Do not apply (apply with care below the larger
   thresholds).
+- **The model check fails strongly**: the end poses are this improbable under every robot
+  of the model (p below :data:`MODEL_REFUSE`) and the clusters' centres miss the nearest
+  one by more than the paper's scatter on the square: no robot of the model drove these
+  runs, so the correction is no robot's. Do not apply, with the likely cause (every cw
+  and ccw label swapped, when the runs fit with them swapped back). A marginal failure
+  (p between :data:`MODEL_REFUSE` and the check's level) is a warning: apply with care.
 - **Too few runs** (:data:`MIN_RUNS`): apply with care.
 - **Implausible errors** (:data:`PLAUSIBLE_E_D`, :data:`PLAUSIBLE_E_B`,
   :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry.
@@ -54,6 +60,7 @@ __all__ = [
     "MISFIT_CARE",
     "MISFIT_FLOOR",
     "MISFIT_REFUSE",
+    "MODEL_REFUSE",
     "NOTICEABLE_ANGLE",
     "PAPER_SCATTER",
     "PLAUSIBLE_E_B",
@@ -99,6 +106,14 @@ MISFIT_FLOOR = (0.025, 0.1)
 HEADING_CARE = math.radians(4.0)
 #: ... and twice as much.
 HEADING_REFUSE = math.radians(8.0)
+#: The model check of the end poses warns below p = 0.001 (one in a thousand sets of
+#: Gaussian runs about a robot of the model); below this, ten times rarer, and with
+#: centres missed by more than the paper's scatter, the model is refused. The p of a
+#: grossly wrong table saturates far above Gaussian tails (the scatter is estimated from
+#: a few runs: Hotelling's F on 8 degrees of freedom for 5 runs each way puts cw and ccw
+#: swapped on the bundled example at 3e-7), so a refusal level much smaller than this
+#: would let such tables through.
+MODEL_REFUSE = 1e-4
 #: Fewer runs in a direction (square tests) or recorded runs (fits) than this: the
 #: scatter is known poorly (the paper drove 5 each way).
 MIN_RUNS = 3
@@ -294,6 +309,30 @@ def _misfit(estimate: ErrorEstimate, evidence: Evidence) -> list[_Finding]:
     return found
 
 
+def _model_check(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
+    from umbmark.estimators.diagnostics import MODEL_CAUSES, swapped_words
+
+    failure = estimate.model_failure
+    scatter = PAPER_SCATTER * test.side_length
+    if failure is None or failure.p_value >= MODEL_REFUSE or failure.misfit < scatter:
+        return []  # passed, or marginal: its warning makes it "apply with care"
+    reason = (
+        f"the model check fails strongly (p = {failure.p_value:.2g} < {MODEL_REFUSE:g}): a "
+        f"cluster's centre lies {1000 * failure.misfit:.0f} mm from the nearest robot of the "
+        f"model, more than the {1000 * scatter:.0f} mm runs scatter by on the "
+        f"{test.side_length:g} m square, so the correction is no robot's"
+    )
+    if failure.swapped_fits:
+        return [
+            (
+                "do-not-apply",
+                f"{reason}; {swapped_words(failure)}",
+                "swap the cw and ccw labels of the runs and calibrate again",
+            )
+        ]
+    return [("do-not-apply", reason, MODEL_CAUSES)]
+
+
 def _few_runs(evidence: Evidence) -> list[_Finding]:
     advice = f"drive at least {MIN_RUNS} runs each way (the paper drove 5)"
     if evidence.runs_per_direction is not None:
@@ -379,6 +418,7 @@ def judge(estimate: ErrorEstimate, test: SquareTest, evidence: Evidence) -> Verd
         )
     found += _intervals(estimate, test)
     found += _misfit(estimate, evidence)
+    found += _model_check(estimate, test)
     found += _few_runs(evidence)
     found += _implausible(estimate)
     if evidence.warnings:

@@ -27,7 +27,7 @@ import numpy as np
 from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.core.errors import InputError
 from umbmark.estimators.base import ErrorEstimate, SquareTest
-from umbmark.estimators.diagnostics import check_reach, model_warnings, require_headings
+from umbmark.estimators.diagnostics import check_model, check_reach, require_headings
 from umbmark.estimators.endpose import fit_end_poses
 from umbmark.estimators.registry import SQUARE, estimator, find
 from umbmark.estimators.scale import scale_from_straights, scale_only
@@ -72,8 +72,8 @@ def estimate_errors(
         estimate = function(bench, runs=runs, test=test)
         if E_s is not None:
             estimate = estimate.with_scale(E_s)
-    warnings = model_warnings(bench, runs, test, fit)
-    return replace(estimate, warnings=(*warnings, *estimate.warnings))
+    warnings, failure = check_model(bench, runs, test, fit, E_s=1.0 if E_s is None else E_s)
+    return replace(estimate, warnings=(*warnings, *estimate.warnings), model_failure=failure)
 
 
 def estimate_square_test(
