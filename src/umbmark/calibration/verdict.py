@@ -198,6 +198,9 @@ class Evidence:
     nominal_best : bool
         ``--method auto`` found no estimator that predicts held-out runs better than the
         nominal parameters.
+    wheel_diameter : float, optional
+        The nominal wheel diameter [m] recorded runs were integrated with (a scale error
+        of about 2 or 1/2 names it: a radius given for a diameter).
     """
 
     runs_per_direction: tuple[int, int] | None = None
@@ -205,6 +208,7 @@ class Evidence:
     path_length: float | None = None
     warnings: Sequence[str] = ()
     nominal_best: bool = False
+    wheel_diameter: float | None = None
 
 
 def noticeable(name: str, test: SquareTest) -> float:
@@ -353,7 +357,9 @@ def _few_runs(evidence: Evidence) -> list[_Finding]:
     return []
 
 
-def _implausible(estimate: ErrorEstimate) -> list[_Finding]:
+def _implausible(estimate: ErrorEstimate, diameter: float | None) -> list[_Finding]:
+    from umbmark.estimators.scale import diameter_mixup
+
     found: list[_Finding] = []
     check = "check the nominal wheelbase and wheel diameter, the encoder resolution and gear ratio"
     if abs(estimate.E_d - 1.0) > PLAUSIBLE_E_D:
@@ -376,10 +382,13 @@ def _implausible(estimate: ErrorEstimate) -> list[_Finding]:
             )
         )
     if estimate.E_s is not None and abs(estimate.E_s - 1.0) > PLAUSIBLE_E_S:
+        said = f"E_s = {estimate.E_s:.4f}: the wheels' mean diameter over the one given"
+        mixup = diameter_mixup(estimate.E_s, diameter, said)
         found.append(
             (
                 "care",
-                f"E_s = {estimate.E_s:.4f}: a mean wheel diameter "
+                mixup
+                or f"E_s = {estimate.E_s:.4f}: a mean wheel diameter "
                 f"{100 * abs(estimate.E_s - 1):.0f} % off the nominal one",
                 check,
             )
@@ -420,7 +429,7 @@ def judge(estimate: ErrorEstimate, test: SquareTest, evidence: Evidence) -> Verd
     found += _misfit(estimate, evidence)
     found += _model_check(estimate, test)
     found += _few_runs(evidence)
-    found += _implausible(estimate)
+    found += _implausible(estimate, evidence.wheel_diameter)
     if evidence.warnings:
         n = len(evidence.warnings)
         said = f"{n} warnings come" if n > 1 else "a warning comes"
