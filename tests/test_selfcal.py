@@ -148,6 +148,22 @@ def test_every_output_names_what_the_controller_holds(paper_robot):
         assert f"{name} {value:.6f}" in page.holds_text
 
 
+def test_with_nothing_applied_the_page_offers_the_last_pass_by_hand(tmp_path):
+    # --apply none: the controller holds none of the passes' corrections; the page says so
+    # and offers the last pass's correction to apply by hand (its verdict is apply)
+    from umbmark.calibration.passes import Holds
+
+    table = tmp_path / "runs.csv"
+    umbmark.example(str(table))
+    page = umbmark.report(table, side_length=4, wheelbase=0.34, unit="mm")
+    held = Holds(("pass 1",), None, 1.0, 1.0, 1.0)
+    parsed = _Page()
+    parsed.feed(replace(page, holds=held).html())
+    assert parsed.holds_pass == ""
+    assert parsed.holds_text.startswith("The controller holds no correction of these passes")
+    assert parsed.overlay == page.last.overlay_yaml()
+
+
 def test_the_corner_is_measured_within_the_target(paper_robot):
     _, report, _ = paper_robot
     errors = report.measurement_errors()

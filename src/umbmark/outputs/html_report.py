@@ -419,12 +419,12 @@ def _overlay(page: Passes) -> str:
     n = len(page.passes)
     which = "" if n == 1 else f" of the last pass (pass {n})"
     shown = page.last
-    if page.holds is not None:
-        if page.holds.held is None:
-            return f'<p id="overlay-none">{escape(page.holds.words())} No overlay.</p>\n'
+    if page.holds is not None and page.holds.held is not None:
         shown = page.passes[page.holds.held - 1]
         which = f" the controller holds ({page.holds.label})"
-    elif page.last.overlay_withheld:
+    elif page.holds is not None:
+        which = f" of the last pass (pass {n}), not applied"
+    if shown.overlay_withheld:
         return WITHHELD
     return (
         f"<p>The correction{which}, composed with the values active during its runs; "

@@ -61,15 +61,15 @@ def _named(k: int, labels: tuple[str, ...]) -> str:
 
 def _holds_section(page: Passes, holds: Holds) -> str:
     said = f'<p class="big" id="holds" data-pass="{holds.held or ""}">{escape(holds.words())}</p>\n'
-    box = ""
-    if holds.held is not None:
-        verdict = page.passes[holds.held - 1].verdict
-        box = _box(verdict, f"{_named(holds.held, holds.labels)}, applied: ")
+    # the pass it holds; with none applied, the last pass's correction, to apply by hand
+    shown = holds.held or len(page.passes)
+    applied = "applied" if holds.held is not None else "not applied"
+    box = _box(page.passes[shown - 1].verdict, f"{_named(shown, holds.labels)}, {applied}: ")
     lines = "".join(
         f"<li>{escape(_named(k, holds.labels))}: {escape(one.verdict.words)}; "
         f"{'applied' if holds.applied(k) else 'not applied'}</li>\n"
         for k, one in enumerate(page.passes, 1)
-        if k != holds.held
+        if k != shown
     )
     return said + box + (f"<ul>\n{lines}</ul>\n" if lines else "")
 
