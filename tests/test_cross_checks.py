@@ -30,7 +30,7 @@ TABLE = {"side_length": 4.0, "wheelbase": 0.34, "unit": "mm"}
         ("current_c_l", 1e300, "current_c_l=1e+300 is not a plausible factor"),
         ("current_c_r", 0.01, "current_c_r=0.01 is not a plausible factor"),
         ("current_separation_multiplier", 1e308, "current_separation_multiplier=1e+308"),
-        ("current_separation_multiplier", math.nan, "current_separation_multiplier=nan"),
+        ("current_separation_multiplier", math.nan, "must be a finite number, got nan"),
         ("wheel_diameter", 1e-300, "wheel_diameter=1e-300 m is implausibly small"),
         ("wheel_diameter", 150.0, "wheel_diameter=150 m is implausibly large"),
         ("wheelbase", 1e-300, "wheelbase=1e-300 m is implausibly small"),
