@@ -789,7 +789,7 @@ def test_without_rosbags(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "rosbags.highlevel", None)
     with pytest.raises(InputError) as err:
         read_bag(path, BagOptions())
-    assert_one_line(err.value, path, "pip install 'umbmark[ros]'")
+    assert_one_line(err.value, path, "python -m pip install 'rosbags")
 
 
 @pytest.mark.parametrize("fmt", FORMATS)

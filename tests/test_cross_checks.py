@@ -30,7 +30,6 @@ TABLE = {"side_length": 4.0, "wheelbase": 0.34, "unit": "mm"}
         ("current_c_l", 1e300, "current_c_l=1e+300 is not a plausible factor"),
         ("current_c_r", 0.01, "current_c_r=0.01 is not a plausible factor"),
         ("current_separation_multiplier", 1e308, "current_separation_multiplier=1e+308"),
-        ("current_separation_multiplier", math.nan, "current_separation_multiplier=nan"),
         ("wheel_diameter", 1e-300, "wheel_diameter=1e-300 m is implausibly small"),
         ("wheel_diameter", 150.0, "wheel_diameter=150 m is implausibly large"),
         ("wheelbase", 1e-300, "wheelbase=1e-300 m is implausibly small"),
@@ -42,6 +41,12 @@ def test_implausible_parameters_are_refused_with_the_range(
     message = api_error(umbmark.calibrate, runs_csv, **{**TABLE, option: value})
     assert expected in message
     assert ("0.2 to 5" if option.startswith("current") else "0.001 to 10 m") in message
+
+
+def test_a_nan_parameter_is_refused_as_no_finite_number(runs_csv: Path) -> None:
+    options = {**TABLE, "current_separation_multiplier": math.nan}
+    message = api_error(umbmark.calibrate, runs_csv, **options)
+    assert message == "current_separation_multiplier must be a finite number, got nan"
 
 
 def test_cli_refuses_huge_multiplier_without_numpy_warnings(runs_csv: Path) -> None:

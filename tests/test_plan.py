@@ -272,7 +272,7 @@ def test_the_command_and_its_refusals():
     assert "--floor" in cli_error("plan", "--scatter", "0.01")
     assert "--scatter" in cli_error("plan", "-L", "4", "--runs", "5")
     assert "twice its wheelbase" in api_error(umbmark.plan, scatter=0.01, floor=0.8)
-    assert "outside" in api_error(umbmark.plan, scatter=math.nan, side_length=4, runs=5)
+    assert "finite number" in api_error(umbmark.plan, scatter=math.nan, side_length=4, runs=5)
     assert "runs per direction" in api_error(umbmark.plan, scatter=0.05, floor=1.6, target_E_d=1e-6)
     assert "noise='x'" in api_error(umbmark.plan, scatter=0.01, side_length=4, runs=5, noise="x")
     assert "reading_error" in api_error(

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import replace
+from html.parser import HTMLParser
 
 import numpy as np
 import pytest
@@ -62,6 +63,105 @@ def test_the_applied_multipliers_are_the_robots_truth(paper_robot):
     assert ratio == pytest.approx(E_D, abs=5e-4)
     mean = 0.5 * (final.right_wheel_radius_multiplier + final.left_wheel_radius_multiplier)
     assert mean == pytest.approx(1.0, abs=1e-3)
+
+
+class _Page(HTMLParser):
+    """The page's statement of what the controller holds and its overlay's text."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.holds_pass: str | None = None
+        self.holds_text = ""
+        self.overlay = ""
+        self._in: str | None = None
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        named = dict(attrs)
+        if named.get("id") == "holds":
+            self.holds_pass, self._in = named.get("data-pass"), "holds"
+        elif named.get("id") == "overlay-yaml":
+            self._in = "overlay"
+
+    def handle_endtag(self, tag: str) -> None:
+        if tag in ("p", "pre"):
+            self._in = None
+
+    def handle_data(self, data: str) -> None:
+        if self._in == "holds":
+            self.holds_text += data
+        elif self._in == "overlay":
+            self.overlay += data
+
+
+def test_every_output_names_what_the_controller_holds(paper_robot):
+    # the verification pass is driven on the held parameters and not applied: the page,
+    # the terminal, overlay.yaml and the JSON all name the pass the robot holds and its
+    # multipliers, and those are what the virtual robot runs with (its own truth)
+    import io
+
+    import yaml
+    from rich.console import Console
+
+    from umbmark.cli.render import render_selfcal
+
+    robot, report, _ = paper_robot
+    truth = robot.drive_params()
+    names = (
+        "wheel_separation_multiplier",
+        "left_wheel_radius_multiplier",
+        "right_wheel_radius_multiplier",
+    )
+    held = [truth.wheel_separation_multiplier, truth.left_wheel_radius_multiplier]
+    held.append(truth.right_wheel_radius_multiplier)
+    applied = [k for k, p in enumerate(report.passes, 1) if p.applied and p.applied.active]
+    verification = report.passes[-1]
+    assert verification.label == "verification"
+    assert verification.applied is None
+    k = applied[-1]
+    label = report.passes[k - 1].label
+    assert k == len(report.passes) - 1
+    # the verification's own correction is not what the robot holds (a page showing it
+    # would be told apart)
+    new = verification.report.calibration.new_separation_multiplier
+    assert abs(new - truth.wheel_separation_multiplier) > 1e-5
+
+    folder = report.passes[0].folder.parent
+    page = _Page()
+    page.feed((folder / "report.html").read_text(encoding="utf-8"))
+    assert page.holds_pass == str(k)
+    assert f"correction of {label}:" in page.holds_text
+    shown = yaml.safe_load(page.overlay)["diff_drive_controller"]["ros__parameters"]
+    overlay = yaml.safe_load((folder / "overlay.yaml").read_text(encoding="utf-8"))
+    overlay = overlay["diff_drive_controller"]["ros__parameters"]
+    data = json.loads(report.to_json())
+    assert data["holds"]["pass"] == label
+    screen = Console(file=io.StringIO(), width=400)
+    render_selfcal(report, screen)
+    text = " ".join(screen.file.getvalue().split())  # type: ignore[attr-defined]
+    assert f"The controller holds the correction of {label}:" in text
+    for name, value in zip(names, held, strict=True):
+        assert shown[name] == pytest.approx(value, abs=1e-9)
+        assert overlay[name] == pytest.approx(value, abs=1e-9)
+        assert data["holds"][name] == pytest.approx(value, abs=1e-12)
+        assert data["applied"][name] == pytest.approx(value, abs=1e-12)
+        assert f"{name} {value:.6f}" in text
+        assert f"{name} {value:.6f}" in page.holds_text
+
+
+def test_with_nothing_applied_the_page_offers_the_last_pass_by_hand(tmp_path):
+    # --apply none: the controller holds none of the passes' corrections; the page says so
+    # and offers the last pass's correction to apply by hand (its verdict is apply)
+    from umbmark.calibration.passes import Holds
+
+    table = tmp_path / "runs.csv"
+    umbmark.example(str(table))
+    page = umbmark.report(table, side_length=4, wheelbase=0.34, unit="mm")
+    held = Holds(("pass 1",), None, 1.0, 1.0, 1.0)
+    parsed = _Page()
+    parsed.feed(replace(page, holds=held).html())
+    assert parsed.holds_pass == ""
+    assert parsed.holds_text.startswith("The controller holds no correction of these passes")
+    assert parsed.overlay == page.last.overlay_yaml()
 
 
 def test_the_corner_is_measured_within_the_target(paper_robot):

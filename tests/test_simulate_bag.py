@@ -290,7 +290,9 @@ def test_without_rosbags(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "rosbags.rosbag2", None)
     line = api_error(umbmark.simulate, **TINY, bag=tmp_path / "square.bag")
     assert re.fullmatch(
-        r".*square\.bag: writing bags needs rosbags: pip install 'umbmark\[ros\]'", line
+        r".*square\.bag: writing bags needs rosbags, which is not installed: python -m pip "
+        r"install 'rosbags.*'\.\[ros\]'\)",
+        line,
     )
     assert list(tmp_path.iterdir()) == []
 

@@ -28,8 +28,15 @@ import pytest
 import drive_sim
 import umbmark
 from robot_bags import TB3, drive, turtlebot3_bag
-from umbmark.calibration.verdict import NOTICEABLE_ANGLE, Evidence, judge, noticeable
-from umbmark.estimators.base import ErrorEstimate, SquareTest
+from umbmark.calibration.verdict import (
+    MODEL_REFUSE,
+    NOTICEABLE_ANGLE,
+    Evidence,
+    Verdict,
+    judge,
+    noticeable,
+)
+from umbmark.estimators.base import ErrorEstimate, ModelCheckFailure, SquareTest
 from umbmark.store.history import MIGRATIONS, History
 
 from helpers import OPTIODOM, linear_cgs, run_cli, runs_around, write_table
@@ -105,6 +112,88 @@ def test_the_other_criteria():
     skid = judge(_estimate(1.5, 0.001), TEST, Evidence())  # a wheelbase 50 % off
     assert skid.level == "care"
     assert "skid-steer" in skid.reasons[0]
+
+
+def test_a_strongly_failed_model_check_is_not_applied():
+    def check(p: float, misfit: float, swapped: float | None = None) -> Verdict:
+        failure = ModelCheckFailure(p, misfit, swapped, swapped is not None and swapped > 0.001)
+        warned = ("the runs' positions do not fit one robot of the model",)
+        return judge(_estimate(model_failure=failure), TEST, Evidence(warnings=warned))  # type: ignore[arg-type]
+
+    # the paper's scatter on its 4 m square is 25 mm: a miss of 300 mm at p = 1e-6 is no
+    # robot's; a marginal p, or a miss within the scatter, stays a warning
+    assert check(1e-6, 0.3).level == "do-not-apply"
+    assert check(MODEL_REFUSE / 2, 0.3).level == "do-not-apply"
+    assert check(MODEL_REFUSE * 2, 0.3).level == "care"
+    assert check(1e-6, 0.02).level == "care"
+    unlabelled = check(1e-6, 0.3)
+    assert "swapped" not in unlabelled.reasons[0]
+    assert unlabelled.instead is not None
+    assert "direction labels" in unlabelled.instead
+    swapped = check(1e-6, 0.3, swapped=0.5)
+    assert "the direction labels are likely swapped" in swapped.reasons[0]
+    assert swapped.instead == "swap the cw and ccw labels of the runs and calibrate again"
+
+
+def _swapped(table: Path, out: Path) -> Path:
+    lines = table.read_text(encoding="utf-8").splitlines()
+    other = {"cw": "ccw", "ccw": "cw"}
+    swapped = [
+        f"{other[x.split(',', 1)[0]]},{x.split(',', 1)[1]}" if x.split(",")[0] in other else x
+        for x in lines
+    ]
+    out.write_text("\n".join(swapped) + "\n", encoding="utf-8")
+    return out
+
+
+def _linear_misfit(table: Path) -> float:
+    """How far [m] the clusters' centres lie from the nearest robot of the paper's
+    first-order model (least squares in alpha and beta; ``helpers.linear_cgs``)."""
+    rows = [line.split(",") for line in table.read_text().splitlines() if line[:2] in ("cw", "cc")]
+    errors = {
+        d: [[float(r[1]) - float(r[3]), float(r[2]) - float(r[4])] for r in rows if r[0] == d]
+        for d in ("cw", "ccw")
+    }
+    centres = {d: np.mean(e, axis=0) / 1000 for d, e in errors.items()}  # mm to m
+    basis = [
+        np.concatenate([linear_cgs(*unit, L)[d] for d in ("cw", "ccw")])
+        for unit in ((1, 0), (0, 1))
+    ]
+    design = np.column_stack(basis)
+    observed = np.concatenate([centres["cw"], centres["ccw"]])
+    fitted, *_ = np.linalg.lstsq(design, observed, rcond=None)
+    return float(np.max(np.hypot(*(observed - design @ fitted).reshape(2, 2).T)))
+
+
+def test_the_example_with_cw_and_ccw_swapped_is_not_applied(tmp_path: Path):
+    table = tmp_path / "runs.csv"
+    umbmark.example(str(table))
+    swapped = _swapped(table, tmp_path / "swapped.csv")
+    # the paper's first-order model, independently: the example fits one robot within the
+    # scatter, the swapped table misses every robot by far more than the 25 mm scatter
+    assert _linear_misfit(table) < 0.025
+    assert _linear_misfit(swapped) > 0.1
+    p = umbmark.calibrate(swapped, side_length=L, wheelbase=B, unit="mm", method="endpose")
+    p_value = p.estimate.components["model_check_p"]
+    assert p_value < MODEL_REFUSE
+    yaml = tmp_path / "o.yaml"
+    args = ("calibrate", str(swapped), "-L", "4", "-b", "0.34", "--unit", "mm")
+    proc = run_cli(*args, "--yaml", str(yaml))
+    assert proc.returncode == 0, proc.stderr
+    first = proc.stdout.splitlines()[0]
+    assert first.startswith(
+        f"Verdict: do not apply: the model check fails strongly (p = {p_value:.2g}"
+    )
+    assert "the direction labels are likely swapped" in first
+    assert "Instead: swap the cw and ccw labels" in first
+    assert "ros__parameters" not in proc.stdout  # no overlay printed
+    assert "No ros2_control overlay: the verdict is do not apply" in proc.stdout
+    assert not yaml.exists()
+    data = json.loads(run_cli(*args, "--json").stdout)
+    assert data["apply"]["level"] == "do-not-apply"
+    # swapped back, the same runs apply
+    back = _swapped(swapped, tmp_path / "back.csv")
+    assert umbmark.calibrate(back, side_length=L, wheelbase=B, unit="mm").verdict.level == "apply"
 
 
 # --- recordings that give each case ----------------------------------------------------

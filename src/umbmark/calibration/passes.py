@@ -20,7 +20,7 @@ from umbmark.model.runs import Run
 if TYPE_CHECKING:
     from umbmark.calibration.validation import ValidationReport
 
-__all__ = ["Passes", "PredictedPass", "predict_after"]
+__all__ = ["Holds", "Passes", "PredictedPass", "predict_after"]
 
 
 @dataclass(frozen=True)
@@ -93,6 +93,66 @@ def predict_after(calibration: CalibrationResult) -> PredictedPass | None:
     return PredictedPass(runs=runs, benchmark=bench, params=params)
 
 
+@dataclass(frozen=True)
+class Holds:
+    """What the robot's controller holds after a self-calibration: the one statement the
+    terminal, the JSON, ``overlay.yaml`` and the HTML page all render.
+
+    Attributes
+    ----------
+    labels : tuple of str
+        Every pass's name in the order driven (``pass 1``, ..., ``verification``).
+    held : int or None
+        The pass (1-based) whose correction the controller holds: the last one applied
+        (None: no pass's correction was applied).
+    separation_multiplier, c_left, c_right : float
+        The multipliers the controller holds (``wheel_separation_multiplier``,
+        ``left_wheel_radius_multiplier``, ``right_wheel_radius_multiplier``), as it
+        reports them.
+    """
+
+    labels: tuple[str, ...]
+    held: int | None
+    separation_multiplier: float
+    c_left: float
+    c_right: float
+
+    def __post_init__(self) -> None:
+        if self.held is not None and not 1 <= self.held <= len(self.labels):
+            raise ValueError(f"held pass {self.held} of {len(self.labels)}")
+
+    @property
+    def label(self) -> str | None:
+        """The name of the pass whose correction the controller holds."""
+        return None if self.held is None else self.labels[self.held - 1]
+
+    def applied(self, k: int) -> bool:
+        """Whether pass ``k`` (1-based) was applied: passes are applied in order until one
+        is not, so every pass up to the held one."""
+        return self.held is not None and k <= self.held
+
+    def multipliers(self) -> dict[str, float]:
+        """The multipliers under the controller's parameter names."""
+        return {
+            "wheel_separation_multiplier": self.separation_multiplier,
+            "left_wheel_radius_multiplier": self.c_left,
+            "right_wheel_radius_multiplier": self.c_right,
+        }
+
+    def words(self) -> str:
+        """One sentence for people: which pass's correction, and the multipliers."""
+        values = ", ".join(f"{name} {value:.6f}" for name, value in self.multipliers().items())
+        if self.label is None:
+            return f"The controller holds no correction of these passes: {values}."
+        later = [f"{label} (not applied)" for label in self.labels[self.held or 0 :]]
+        after = f"; measured after it: {', '.join(later)}" if later else ""
+        return f"The controller holds the correction of {self.label}: {values}{after}."
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the pass's name (or None) and the multipliers."""
+        return {"pass": self.label, **self.multipliers()}
+
+
 @dataclass(frozen=True, repr=False)
 class Passes(JsonText):
     """UMBmark passes on one robot, and what the page about them shows (the job's
@@ -108,6 +168,9 @@ class Passes(JsonText):
         Held-out validation of the estimators on the last pass (``validate=True``).
     command : str or None
         The command line (or call) that made the report, for its provenance.
+    holds : Holds or None
+        After a self-calibration, what the controller holds (the page then shows that
+        pass's verdict and overlay); None: the last pass's correction is the one to apply.
     created : datetime
         When the report was made (UTC).
     """
@@ -116,6 +179,7 @@ class Passes(JsonText):
     predicted: PredictedPass | None = None
     validation: ValidationReport | None = None
     command: str | None = None
+    holds: Holds | None = None
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
 
     def __repr__(self) -> str:
@@ -142,4 +206,5 @@ class Passes(JsonText):
             "passes": [p.to_dict() for p in self.passes],
             "predicted_after": None if self.predicted is None else self.predicted.to_dict(),
             "validation": None if self.validation is None else self.validation.to_dict(),
+            "holds": None if self.holds is None else self.holds.to_dict(),
         }

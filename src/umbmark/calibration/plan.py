@@ -72,7 +72,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, TypeAlias
 
-from umbmark.core.bounds import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
+from umbmark.core.bounds import (
+    MAX_SIDE_LENGTH,
+    MAX_WHEELBASE,
+    check_length,
+    finite_float,
+    in_metres,
+)
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import info, split_messages
@@ -83,10 +89,12 @@ __all__ = [
     "DEFAULT_WHEELBASE",
     "MAX_PLAN_RUNS",
     "NOISE_MODELS",
+    "SCATTER_RANGE",
     "Noise",
     "PlanReport",
     "PreviousScatter",
     "Scatter",
+    "check_scatter",
     "plan_test",
     "read_previous_scatter",
     "slip_coefficients",
@@ -96,6 +104,32 @@ __all__ = [
 Noise: TypeAlias = Literal["slip", "tape"]
 #: The noise models of :func:`plan`, the default first.
 NOISE_MODELS: tuple[Noise, ...] = ("slip", "tape")
+#: Plausible scatter of the return errors per axis [m]: from a tape's hundredth of a
+#: millimetre to a metre (the paper's: 25 mm on a 4 m square).
+SCATTER_RANGE = (1e-5, 1.0)
+
+
+def check_scatter(scatter: float) -> None:
+    """Refuse a scatter [m] outside :data:`SCATTER_RANGE`, one given in millimetres or
+    centimetres with what it is in metres.
+
+    Raises
+    ------
+    InputError
+        Naming ``--scatter``, the range and, for a large one, the value in metres.
+    """
+    low, high = SCATTER_RANGE
+    value = finite_float("--scatter", scatter)
+    if value > high:
+        hint = in_metres("--scatter", value, SCATTER_RANGE)
+        raise InputError(
+            f"--scatter {value:g} m is implausibly large: lengths are in metres (plausible: "
+            f"{low:g} to {high:g} m per axis){'; ' + hint if hint else ''}"
+        )
+    if value < low:
+        raise InputError(f"--scatter {value:g} m is outside {low:g} to {high:g} m per axis")
+
+
 #: Most runs per direction a plan recommends.
 MAX_PLAN_RUNS = 100
 #: Fewest runs per direction a plan recommends (the paper's five).
@@ -176,8 +210,11 @@ def read_previous_scatter(path: str | Path) -> PreviousScatter:
             source=path,
         )
     scatter = math.sqrt(sum(squares) / 4.0)
-    if not 1e-5 <= scatter <= 1.0:
-        raise InputError(f"scatter {scatter:g} m per axis is outside 1e-05 to 1 m", source=path)
+    if not SCATTER_RANGE[0] <= scatter <= SCATTER_RANGE[1]:
+        low, high = SCATTER_RANGE
+        raise InputError(
+            f"scatter {scatter:g} m per axis is outside {low:g} to {high:g} m", source=path
+        )
     side = finite(data.get("side_length"))
     if side is None or not 0.0 < side <= MAX_SIDE_LENGTH:
         raise InputError("has no plausible side_length [m]", source=path)

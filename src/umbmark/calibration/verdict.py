@@ -19,6 +19,12 @@ threshold here and the reason for it:
   in heading): slip, a wrong wheel geometry, a time offset, a tracked point off the axle,
   a ground truth that lost the robot. Do not apply (apply with care below the larger
   thresholds).
+- **The model check fails strongly**: the end poses are this improbable under every robot
+  of the model (p below :data:`MODEL_REFUSE`) and the clusters' centres miss the nearest
+  one by more than the paper's scatter on the square: no robot of the model drove these
+  runs, so the correction is no robot's. Do not apply, with the likely cause (every cw
+  and ccw label swapped, when the runs fit with them swapped back). A marginal failure
+  (p between :data:`MODEL_REFUSE` and the check's level) is a warning: apply with care.
 - **Too few runs** (:data:`MIN_RUNS`): apply with care.
 - **Implausible errors** (:data:`PLAUSIBLE_E_D`, :data:`PLAUSIBLE_E_B`,
   :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry.
@@ -54,6 +60,7 @@ __all__ = [
     "MISFIT_CARE",
     "MISFIT_FLOOR",
     "MISFIT_REFUSE",
+    "MODEL_REFUSE",
     "NOTICEABLE_ANGLE",
     "PAPER_SCATTER",
     "PLAUSIBLE_E_B",
@@ -99,6 +106,14 @@ MISFIT_FLOOR = (0.025, 0.1)
 HEADING_CARE = math.radians(4.0)
 #: ... and twice as much.
 HEADING_REFUSE = math.radians(8.0)
+#: The model check of the end poses warns below p = 0.001 (one in a thousand sets of
+#: Gaussian runs about a robot of the model); below this, ten times rarer, and with
+#: centres missed by more than the paper's scatter, the model is refused. The p of a
+#: grossly wrong table saturates far above Gaussian tails (the scatter is estimated from
+#: a few runs: Hotelling's F on 8 degrees of freedom for 5 runs each way puts cw and ccw
+#: swapped on the bundled example at 3e-7), so a refusal level much smaller than this
+#: would let such tables through.
+MODEL_REFUSE = 1e-4
 #: Fewer runs in a direction (square tests) or recorded runs (fits) than this: the
 #: scatter is known poorly (the paper drove 5 each way).
 MIN_RUNS = 3
@@ -183,6 +198,9 @@ class Evidence:
     nominal_best : bool
         ``--method auto`` found no estimator that predicts held-out runs better than the
         nominal parameters.
+    wheel_diameter : float, optional
+        The nominal wheel diameter [m] recorded runs were integrated with (a scale error
+        of about 2 or 1/2 names it: a radius given for a diameter).
     """
 
     runs_per_direction: tuple[int, int] | None = None
@@ -190,6 +208,7 @@ class Evidence:
     path_length: float | None = None
     warnings: Sequence[str] = ()
     nominal_best: bool = False
+    wheel_diameter: float | None = None
 
 
 def noticeable(name: str, test: SquareTest) -> float:
@@ -294,6 +313,30 @@ def _misfit(estimate: ErrorEstimate, evidence: Evidence) -> list[_Finding]:
     return found
 
 
+def _model_check(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
+    from umbmark.estimators.diagnostics import MODEL_CAUSES, swapped_words
+
+    failure = estimate.model_failure
+    scatter = PAPER_SCATTER * test.side_length
+    if failure is None or failure.p_value >= MODEL_REFUSE or failure.misfit < scatter:
+        return []  # passed, or marginal: its warning makes it "apply with care"
+    reason = (
+        f"the model check fails strongly (p = {failure.p_value:.2g} < {MODEL_REFUSE:g}): a "
+        f"cluster's centre lies {1000 * failure.misfit:.0f} mm from the nearest robot of the "
+        f"model, more than the {1000 * scatter:.0f} mm runs scatter by on the "
+        f"{test.side_length:g} m square, so the correction is no robot's"
+    )
+    if failure.swapped_fits:
+        return [
+            (
+                "do-not-apply",
+                f"{reason}; {swapped_words(failure)}",
+                "swap the cw and ccw labels of the runs and calibrate again",
+            )
+        ]
+    return [("do-not-apply", reason, MODEL_CAUSES)]
+
+
 def _few_runs(evidence: Evidence) -> list[_Finding]:
     advice = f"drive at least {MIN_RUNS} runs each way (the paper drove 5)"
     if evidence.runs_per_direction is not None:
@@ -314,7 +357,9 @@ def _few_runs(evidence: Evidence) -> list[_Finding]:
     return []
 
 
-def _implausible(estimate: ErrorEstimate) -> list[_Finding]:
+def _implausible(estimate: ErrorEstimate, diameter: float | None) -> list[_Finding]:
+    from umbmark.estimators.scale import diameter_mixup
+
     found: list[_Finding] = []
     check = "check the nominal wheelbase and wheel diameter, the encoder resolution and gear ratio"
     if abs(estimate.E_d - 1.0) > PLAUSIBLE_E_D:
@@ -337,10 +382,13 @@ def _implausible(estimate: ErrorEstimate) -> list[_Finding]:
             )
         )
     if estimate.E_s is not None and abs(estimate.E_s - 1.0) > PLAUSIBLE_E_S:
+        said = f"E_s = {estimate.E_s:.4f}: the wheels' mean diameter over the one given"
+        mixup = diameter_mixup(estimate.E_s, diameter, said)
         found.append(
             (
                 "care",
-                f"E_s = {estimate.E_s:.4f}: a mean wheel diameter "
+                mixup
+                or f"E_s = {estimate.E_s:.4f}: a mean wheel diameter "
                 f"{100 * abs(estimate.E_s - 1):.0f} % off the nominal one",
                 check,
             )
@@ -379,8 +427,9 @@ def judge(estimate: ErrorEstimate, test: SquareTest, evidence: Evidence) -> Verd
         )
     found += _intervals(estimate, test)
     found += _misfit(estimate, evidence)
+    found += _model_check(estimate, test)
     found += _few_runs(evidence)
-    found += _implausible(estimate)
+    found += _implausible(estimate, evidence.wheel_diameter)
     if evidence.warnings:
         n = len(evidence.warnings)
         said = f"{n} warnings come" if n > 1 else "a warning comes"

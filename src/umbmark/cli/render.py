@@ -398,13 +398,7 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
             else "nothing was applied, so there is nothing to verify"
         )
         screen.print(f"E_max,syst {before * 1000:.1f} mm; {why}.")
-    final = report.final
-    screen.print(
-        "The controller now holds: wheel_separation_multiplier "
-        f"{final.wheel_separation_multiplier:.6f}, left_wheel_radius_multiplier "
-        f"{final.left_wheel_radius_multiplier:.6f}, right_wheel_radius_multiplier "
-        f"{final.right_wheel_radius_multiplier:.6f}."
-    )
+    screen.print(report.holds.words(), markup=False, highlight=False)
     errors = report.measurement_errors()
     if errors is not None:
         screen.print(

@@ -32,6 +32,8 @@ __all__ = [
     "check_multiplier",
     "check_positive_option",
     "check_range",
+    "finite_float",
+    "in_metres",
     "option_float",
 ]
 
@@ -92,10 +94,19 @@ def option_float(flag: str, value: float, source: Source = None) -> float:
         ) from None
 
 
+def finite_float(flag: str, value: float, source: Source = None) -> float:
+    """:func:`option_float`, refusing infinity and NaN (``--wheelbase inf``) as what they
+    are rather than as out of a range."""
+    number = option_float(flag, value, source)
+    if not math.isfinite(number):
+        raise InputError(f"{flag} must be a finite number, got {number}", source=source)
+    return number
+
+
 def check_positive_option(flag: str, value: float, unit: str = "", source: Source = None) -> None:
     """Refuse a value that is not a positive finite number."""
-    value = option_float(flag, value, source)
-    if not (math.isfinite(value) and value > 0):
+    value = finite_float(flag, value, source)
+    if not value > 0:
         shown = f"{value:g} {unit}".strip()
         raise InputError(f"{flag} must be > 0, got {shown}", source=source)
 
@@ -141,10 +152,23 @@ def check_length(
         )
 
 
+def in_metres(flag: str, value: float, plausible: tuple[float, float]) -> str:
+    """What a length given in millimetres or centimetres is in metres, for each of the two
+    that lands within ``plausible`` [m]: ``10 mm is --scatter 0.01, 10 cm is --scatter
+    0.1`` (empty when neither does)."""
+    low, high = plausible
+    said = [
+        f"{value:g} {unit} is {flag} {value * factor:g}"
+        for unit, factor in (("mm", 0.001), ("cm", 0.01))
+        if low <= value * factor <= high
+    ]
+    return ", ".join(said)
+
+
 def check_multiplier(flag: str, value: float, source: Source = None) -> None:
     """Refuse a wheel factor or multiplier outside :data:`MULTIPLIER_RANGE`."""
     low, high = MULTIPLIER_RANGE
-    value = option_float(flag, value, source)
+    value = finite_float(flag, value, source)
     if not (math.isfinite(value) and low <= value <= high):
         raise InputError(
             f"{flag} {value:g} is not a plausible factor: it must be within {low:g} to {high:g}",
@@ -157,7 +181,7 @@ def check_range(
 ) -> None:
     """Refuse a number outside ``bounds`` (inclusive) or not finite."""
     low, high = bounds
-    value = option_float(flag, value, source)
+    value = finite_float(flag, value, source)
     if not (math.isfinite(value) and low <= value <= high):
         raise InputError(f"{flag} {value:g} is outside {low:g} to {high:g}", source=source)
 

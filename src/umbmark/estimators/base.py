@@ -14,6 +14,7 @@ from umbmark.core.validation import check_positive
 
 __all__ = [
     "ErrorEstimate",
+    "ModelCheckFailure",
     "SquareTest",
     "cg_blocks",
     "propagate_blocks",
@@ -44,6 +45,31 @@ class SquareTest:
 
 
 @dataclass(frozen=True)
+class ModelCheckFailure:
+    """A failed model check of the end poses: one robot of the model does not explain both
+    clusters (:func:`umbmark.estimators.diagnostics.check_model`).
+
+    Attributes
+    ----------
+    p_value : float
+        The check's p (below :data:`umbmark.estimators.endpose.LEVEL`).
+    misfit : float
+        How far the farther cluster's centre lies from the model's [m] (positions).
+    swapped_p : float or None
+        The check's p with every cw label made ccw and every ccw label cw (None: that fit
+        could not be made).
+    swapped_fits : bool
+        With the labels swapped the runs pass the check (``swapped_p`` at or above its
+        level): the labels are likely swapped.
+    """
+
+    p_value: float
+    misfit: float
+    swapped_p: float | None = None
+    swapped_fits: bool = False
+
+
+@dataclass(frozen=True)
 class ErrorEstimate:
     """Systematic errors estimated from a test.
 
@@ -68,6 +94,9 @@ class ErrorEstimate:
         Degrees of freedom of the standard errors (of the scatter they come from), one for
         all or one per figure, for Student's t intervals; None: large-sample (normal)
         intervals.
+    model_failure : ModelCheckFailure or None
+        The model check of the end poses failed (None: it passed, or was not made); its
+        warning is among ``warnings``.
     """
 
     method: str
@@ -80,6 +109,7 @@ class ErrorEstimate:
     warnings: tuple[str, ...] = ()
     E_s: float | None = None
     dof: float | Mapping[str, float] | None = None
+    model_failure: ModelCheckFailure | None = None
 
     def with_scale(self, E_s: float) -> ErrorEstimate:
         """This estimate of a square test, completed by a scale error ``E_s`` measured

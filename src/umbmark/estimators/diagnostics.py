@@ -10,11 +10,13 @@ Called once per estimate by :mod:`umbmark.estimators.dispatch`, for whichever es
   (``reach="side"``); the exact geometry inverts anything a robot driving the
   square can do, and only refuses errors farther from the start than the whole path is
   long (a unit slip, ``reach="path"``).
-- :func:`model_warnings`: the model check of the end-pose fit
+- :func:`check_model`: the model check of the end-pose fit
   (:mod:`umbmark.estimators.endpose`) tests whether one robot of the model explains both
   clusters (and the headings); it fires on one in a thousand sets of runs with Gaussian
   scatter. When it fires, the warning gives the numbers and looks for the usual causes: a
-  run whose direction label contradicts its cluster, headings in other units.
+  run whose direction label contradicts its cluster, every cw and ccw label swapped (the
+  runs fit with them swapped back), headings in other units. The failure's figures go
+  with the estimate (``ErrorEstimate.model_failure``) for the verdict.
 
 What an estimator cannot identify it refuses itself (the exact geometry's
 :func:`umbmark.estimators.exact.check_identified`, a fit that does not converge).
@@ -24,23 +26,26 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark
+from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError
 from umbmark.core.messages import join_names
-from umbmark.estimators.base import SquareTest
+from umbmark.estimators.base import ModelCheckFailure, SquareTest
 from umbmark.estimators.endpose import FLOOR, LEVEL, EndPoseFit, fit_end_poses
 from umbmark.estimators.registry import Estimator, names
 from umbmark.model.runs import Run, split_by_direction
 
 __all__ = [
+    "MODEL_CAUSES",
+    "check_model",
     "check_reach",
-    "model_warnings",
     "require_headings",
     "runs_label",
+    "swapped_words",
 ]
 
 _MM = 1000.0
@@ -190,36 +195,75 @@ def _heading_units(
     return []
 
 
-def model_warnings(
-    bench: Benchmark, runs: Sequence[Run], test: SquareTest, fit: EndPoseFit | None = None
-) -> list[str]:
-    """Warnings when one robot of the model does not explain the runs (see the module).
+#: What to check when the model check fails and no cause is found in the runs.
+MODEL_CAUSES = (
+    "check the runs' direction labels, axes and signs, the heading units and the side "
+    "length; if they are right, the robot has errors the model leaves out (slip on the "
+    "turns, a marker off the axle centre, E_s)"
+)
 
-    ``fit`` is the end-pose fit of the runs, made here (``E_s = 1``) when not given.
+
+def check_model(
+    bench: Benchmark,
+    runs: Sequence[Run],
+    test: SquareTest,
+    fit: EndPoseFit | None = None,
+    *,
+    E_s: float = 1.0,
+) -> tuple[list[str], ModelCheckFailure | None]:
+    """The model check of the end poses: its warnings (see the module) and, when it
+    fails, the failure (p, misfit, and whether the runs fit with cw and ccw swapped).
+
+    ``fit`` is the end-pose fit of the runs with the scale error ``E_s``, made here when
+    not given.
     """
     if fit is None:
         try:
-            fit = fit_end_poses(bench, runs, test)
+            fit = fit_end_poses(bench, runs, test, E_s=E_s)
         except ValueError:
-            return _swapped_labels(runs)
+            return _swapped_labels(runs), None
     swapped = _swapped_labels(runs)
     check = fit.check
     if not check.failed:
-        return swapped
+        return swapped, None
     what = "positions and headings" if fit.headings else "positions"
+    failure = _failure(fit, runs, test, E_s)
     causes = swapped + _heading_units(bench, runs, test, fit)
-    likely = (
-        "; ".join(causes)
-        if causes
-        else "check the runs' direction labels, axes and signs, the heading units and the "
-        "side length; if they are right, the robot has errors the model leaves out (slip on "
-        "the turns, a marker off the axle centre, E_s)"
-    )
-    return [
+    if failure.swapped_fits:
+        causes.insert(0, swapped_words(failure))
+    likely = "; ".join(causes) if causes else MODEL_CAUSES
+    warning = (
         f"the runs' {what} do not fit one robot of the model: the centres miss it by "
         f"{_misfit_text(fit)} (model check {check.statistic:.1f} on {check.dof} degrees of "
         f"freedom, p = {check.p_value:.2g} < {LEVEL:g}); {likely}"
-    ]
+    )
+    return [warning], failure
+
+
+def swapped_words(failure: ModelCheckFailure) -> str:
+    """What a failed check whose runs fit with cw and ccw swapped says of the labels."""
+    return (
+        f"with every cw and ccw label swapped the runs fit one robot of the model (p = "
+        f"{failure.swapped_p:.2g}): the direction labels are likely swapped (a cw run turns "
+        "right, clockwise seen from above); swap them"
+    )
+
+
+def _failure(
+    fit: EndPoseFit, runs: Sequence[Run], test: SquareTest, E_s: float
+) -> ModelCheckFailure:
+    """The failed check's figures, and the same check with every label swapped."""
+    misfit = max(math.hypot(m[0], m[1]) for m in fit.check.misfit.values())
+    other = {Direction.CW: Direction.CCW, Direction.CCW: Direction.CW}
+    relabelled = [replace(run, direction=other[run.direction]) for run in runs]
+    try:
+        again = fit_end_poses(
+            umbmark_benchmark(relabelled), relabelled, test, E_s=E_s, headings=fit.headings
+        )
+    except ValueError:
+        return ModelCheckFailure(fit.check.p_value, misfit)
+    p = again.check.p_value
+    return ModelCheckFailure(fit.check.p_value, misfit, p, p >= LEVEL)
 
 
 def check_reach(method: Estimator, runs: Sequence[Run], test: SquareTest) -> None:

@@ -27,7 +27,7 @@ import numpy as np
 from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.core.errors import InputError
 from umbmark.estimators.base import ErrorEstimate, SquareTest
-from umbmark.estimators.diagnostics import check_reach, model_warnings, require_headings
+from umbmark.estimators.diagnostics import check_model, check_reach, require_headings
 from umbmark.estimators.endpose import fit_end_poses
 from umbmark.estimators.registry import SQUARE, estimator, find
 from umbmark.estimators.scale import scale_from_straights, scale_only
@@ -38,6 +38,10 @@ if TYPE_CHECKING:
     from umbmark.estimators.trajectory_fit import TrajectoryFit
 
 __all__ = ["Estimated", "estimate_errors", "estimate_runs", "estimate_square_test"]
+
+#: Runs read with another wheel diameter are taken for the right reading when their
+#: E_max,syst is within this fraction of the side (the paper's uncalibrated robots: 7 %).
+_IDENTIFIED = 0.25
 
 
 def estimate_errors(
@@ -72,8 +76,8 @@ def estimate_errors(
         estimate = function(bench, runs=runs, test=test)
         if E_s is not None:
             estimate = estimate.with_scale(E_s)
-    warnings = model_warnings(bench, runs, test, fit)
-    return replace(estimate, warnings=(*warnings, *estimate.warnings))
+    warnings, failure = check_model(bench, runs, test, fit, E_s=1.0 if E_s is None else E_s)
+    return replace(estimate, warnings=(*warnings, *estimate.warnings), model_failure=failure)
 
 
 def estimate_square_test(
@@ -185,38 +189,91 @@ def estimate_runs(
         For runs the method cannot use, or a fit that fails (why, and what to try).
     """
     try:
-        entry = estimator(method)
-        require_headings(entry, runs, where)
-        if entry.needs == "square":
-            squares = any(run.kind == "square" for run in runs)
-            side = square_side() if squares else (side_length or 1.0)
-            test = SquareTest(side, wheelbase)
-            estimate, bench = estimate_square_test(method, runs, test)
-            return Estimated(estimate, test, bench)
-        logs = [run.log for run in runs if run.log is not None]
-        if not logs or params is None:
-            raise InputError(
-                f"the {method} method needs logged runs (a run log, an OptiOdom session "
-                "or a bag), not a runs table",
-                source=where,
-            )
-        options: dict[str, object] = dict(entry.options)
-        if entry.trajectories:
-            options["fit_truth_offset"] = fit_truth_offset
-        estimate, fit = entry.load()(logs, params, side_length, **options)
-        test = SquareTest(side_length or 1.0, wheelbase)
-        # UMBmark's figures where the runs are squares of a known side.
-        bench = None
-        directions = {run.direction for run in runs if run.kind == "square"}
-        if side_length is not None and len(directions) == 2:
-            try:
-                bench = umbmark_benchmark(runs)
-            except ValueError:
-                bench = None
-        return Estimated(estimate, test, bench, fit if entry.trajectories else None)
+        return _estimate(
+            method, runs, wheelbase, params, side_length, square_side, fit_truth_offset, where
+        )
     except InputError:
         raise
     except np.linalg.LinAlgError as exc:  # a ValueError: caught before the others
         raise InputError(_failed(method, f"a singular system: {exc}"), source=where) from None
     except ValueError as exc:
-        raise InputError(str(exc), source=where) from None
+        mixup = _diameter_mixup(method, runs, params, wheelbase, square_side, fit_truth_offset)
+        said = str(exc) if mixup is None else f"{mixup}. Read as given: {exc}"
+        raise InputError(said, source=where) from None
+
+
+def _estimate(
+    method: str,
+    runs: Sequence[Run],
+    wheelbase: float,
+    params: WheelParams | None,
+    side_length: float | None,
+    square_side: Callable[[], float],
+    fit_truth_offset: bool,
+    where: str | None,
+) -> Estimated:
+    """:func:`estimate_runs` without its translation of failures."""
+    entry = estimator(method)
+    require_headings(entry, runs, where)
+    if entry.needs == "square":
+        squares = any(run.kind == "square" for run in runs)
+        side = square_side() if squares else (side_length or 1.0)
+        test = SquareTest(side, wheelbase)
+        estimate, bench = estimate_square_test(method, runs, test)
+        return Estimated(estimate, test, bench)
+    logs = [run.log for run in runs if run.log is not None]
+    if not logs or params is None:
+        raise InputError(
+            f"the {method} method needs logged runs (a run log, an OptiOdom session "
+            "or a bag), not a runs table",
+            source=where,
+        )
+    options: dict[str, object] = dict(entry.options)
+    if entry.trajectories:
+        options["fit_truth_offset"] = fit_truth_offset
+    estimate, fit = entry.load()(logs, params, side_length, **options)
+    test = SquareTest(side_length or 1.0, wheelbase)
+    # UMBmark's figures where the runs are squares of a known side.
+    bench = None
+    directions = {run.direction for run in runs if run.kind == "square"}
+    if side_length is not None and len(directions) == 2:
+        try:
+            bench = umbmark_benchmark(runs)
+        except ValueError:
+            bench = None
+    return Estimated(estimate, test, bench, fit if entry.trajectories else None)
+
+
+def _diameter_mixup(
+    method: str,
+    runs: Sequence[Run],
+    params: WheelParams | None,
+    wheelbase: float,
+    square_side: Callable[[], float],
+    fit_truth_offset: bool,
+) -> str | None:
+    """Where recorded runs cannot be estimated, whether they can with the wheel diameter
+    doubled or halved (a radius given for a diameter, or the reverse): the cause and the
+    fix (:func:`umbmark.estimators.scale.diameter_mixup`), or None."""
+    from umbmark.estimators.scale import diameter_mixup
+
+    if params is None or not runs or any(run.log is None for run in runs):
+        return None
+    for factor in (2.0, 0.5):
+        scaled = replace(params, wheel_diameter=params.wheel_diameter * factor)
+        try:
+            again = [run.reintegrated(scaled) for run in runs]
+            found = _estimate(method, again, wheelbase, scaled, None, square_side,
+                              fit_truth_offset, None)  # fmt: skip
+        except (ValueError, InputError):
+            continue
+        bench, E_s = found.benchmark, found.estimate.E_s
+        if bench is not None and bench.e_max_syst <= _IDENTIFIED * found.test.side_length:
+            how = f"the runs are squares a robot drives: E_max,syst {bench.e_max_syst * 1e3:.0f} mm"
+        elif bench is None and E_s is not None and abs(E_s - 1.0) <= _IDENTIFIED:
+            how = f"the runs are fitted with E_s = {E_s:.3f}"
+        else:
+            continue
+        said = f"read with {'twice' if factor > 1 else 'half'} that, {how}"
+        return diameter_mixup(factor, params.wheel_diameter, said)
+    return None

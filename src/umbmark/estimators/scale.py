@@ -20,10 +20,33 @@ from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.registry import STRAIGHT
 from umbmark.model.runs import Run
 
-__all__ = ["ScaleEstimate", "scale_from_straights", "scale_only"]
+__all__ = ["ScaleEstimate", "diameter_mixup", "scale_from_straights", "scale_only"]
 
 #: Shortest straight run that can measure a scale [m].
 MIN_DISTANCE = 0.05
+#: A scale error within this fraction of 2 or 1/2 is a radius taken for a diameter (the
+#: usual ROS mix-up: ``diff_drive_controller`` takes ``wheel_radius``) or the reverse;
+#: tyres and wear differ from their nominal diameter by per cent, not by half.
+MIXUP_TOLERANCE = 0.15
+
+
+def diameter_mixup(E_s: float, diameter: float | None, evidence: str) -> str | None:
+    """The cause and the fix when the wheels' true mean diameter is about twice (or half)
+    the ``diameter`` [m] given (``E_s`` = true over given; ``evidence`` says how that is
+    known); None otherwise."""
+    if diameter is None or not math.isfinite(E_s):
+        return None
+    if abs(E_s / 2.0 - 1.0) <= MIXUP_TOLERANCE:
+        return (
+            f"the wheel diameter given, {diameter:g} m, looks like the wheels' radius "
+            f"({evidence}): pass --wheel-diameter {2.0 * diameter:g}, twice it"
+        )
+    if abs(2.0 * E_s - 1.0) <= MIXUP_TOLERANCE:
+        return (
+            f"the wheel diameter given, {diameter:g} m, looks like twice the wheels' "
+            f"diameter ({evidence}): pass --wheel-diameter {0.5 * diameter:g}, half of it"
+        )
+    return None
 
 
 @dataclass(frozen=True)

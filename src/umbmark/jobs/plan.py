@@ -16,6 +16,7 @@ from umbmark.calibration.plan import (
     Noise,
     PlanReport,
     Scatter,
+    check_scatter,
     plan_test,
     read_previous_scatter,
 )
@@ -98,8 +99,7 @@ def plan(
             wheelbase = found.wheelbase
     if scatter is None:
         raise InputError("give --scatter (per axis [m]) or --from (a calibrate --json result)")
-    if not (math.isfinite(scatter) and 1e-5 <= scatter <= 1.0):
-        raise InputError(f"--scatter {scatter:g} m is outside 1e-05 to 1 m")
+    check_scatter(scatter)
     if wheelbase is None:
         wheelbase = DEFAULT_WHEELBASE
     check_length("--wheelbase", wheelbase, MAX_WHEELBASE)

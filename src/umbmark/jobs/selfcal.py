@@ -52,6 +52,7 @@ from umbmark.autocal.record import (
     pass_folder,
     record_pass,
 )
+from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
@@ -135,7 +136,11 @@ class SelfCalReport(JsonText):
     passes : tuple of PassResult
         The UMBmark passes, the verification last.
     final : DriveParams
-        The parameters the controller holds at the end.
+        The parameters the controller holds at the end, as it reports them.
+    holds : Holds
+        What the controller holds: the pass whose correction (the last applied) and the
+        multipliers of ``final``; the terminal, the JSON, ``overlay.yaml`` and the HTML
+        page all say this one thing.
     fix_errors : array, shape (k, 3), or None
         Each fix's error against the truth (a virtual robot): ``x, y`` [m], heading [rad].
     checks : tuple of str
@@ -151,6 +156,7 @@ class SelfCalReport(JsonText):
     coarse_applied: ApplyResult | None
     passes: tuple[PassResult, ...]
     final: DriveParams
+    holds: Holds
     fix_errors: np.ndarray | None = None
     checks: tuple[str, ...] = ()
     files: tuple[Path, ...] = field(default=(), compare=False)
@@ -190,7 +196,8 @@ class SelfCalReport(JsonText):
             "passes": [p.to_dict() for p in self.passes],
             "e_max_syst_before": self.e_max_syst_before,
             "e_max_syst_after": self.e_max_syst_after,
-            "applied": _multipliers(self.final),
+            "applied": self.holds.multipliers(),
+            "holds": self.holds.to_dict(),
             "measurement": measurement,
             "files": [str(f) for f in self.files],
         }
@@ -301,7 +308,9 @@ def selfcal(
             record_as=robot_name, history=history,
         )  # fmt: skip
         found = _calibrate(drive, method, verify, max_passes, coarse, folder if force else None)
-        files = _outputs(found.passes, folder, page, force)
+        final = robot.drive_params()
+        holds = _holds(found.passes, final)
+        files = _outputs(found.passes, holds, folder, page, force)
     passes = found.passes if folder is not None else [replace(p, folder=None) for p in found.passes]
     errors = [
         (
@@ -319,7 +328,8 @@ def selfcal(
         coarse=found.coarse,
         coarse_applied=found.coarse_applied,
         passes=tuple(passes),
-        final=robot.drive_params(),
+        final=final,
+        holds=holds,
         fix_errors=np.asarray(errors, dtype=np.float64).reshape(-1, 3) if errors else None,
         checks=tuple(found.checks),
         files=tuple(files),
@@ -496,11 +506,25 @@ def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
     return replace(result, applied=robot.apply(new, method))
 
 
+def _holds(passes: list[PassResult], final: DriveParams) -> Holds:
+    """What the controller holds: the last pass applied (passes are applied in order until
+    one is not) and the multipliers the controller reports."""
+    applied = [k for k, p in enumerate(passes, 1) if p.applied is not None and p.applied.active]
+    return Holds(
+        labels=tuple(p.label for p in passes),
+        held=applied[-1] if applied else None,
+        separation_multiplier=final.wheel_separation_multiplier,
+        c_left=final.left_wheel_radius_multiplier,
+        c_right=final.right_wheel_radius_multiplier,
+    )
+
+
 def _outputs(
-    passes: list[PassResult], folder: Path | None, page: Path | None, force: bool
+    passes: list[PassResult], holds: Holds, folder: Path | None, page: Path | None, force: bool
 ) -> list[Path]:
     """The report of all passes [``folder/report.html``] and, in ``folder``, the overlay of
-    the final parameters; checked before the robot moved (:func:`_check_outputs`)."""
+    the parameters the controller holds; checked before the robot moved
+    (:func:`_check_outputs`)."""
     from umbmark.jobs.report import report
 
     written: list[Path] = []
@@ -508,12 +532,12 @@ def _outputs(
         return written
     page = page or (None if folder is None else folder / REPORT_FILE)
     if page is not None:
-        report(*(p.folder for p in passes if p.folder is not None), output=page, force=force)
+        pages = report(*(p.folder for p in passes if p.folder is not None))
+        replace(pages, holds=holds).write(page, force=force)
         written.append(page)
-    last_applied = [p for p in passes if p.applied is not None and p.applied.active]
-    if last_applied and folder is not None:
+    if holds.held is not None and folder is not None:
         overlay = folder / OVERLAY_FILE
-        last_applied[-1].report.write(yaml=overlay)
+        passes[holds.held - 1].report.write(yaml=overlay)
         written.append(overlay)
     return written
 

@@ -21,7 +21,7 @@ from umbmark.core.bounds import (
     check_length,
     check_multiplier,
     check_positive_option,
-    option_float,
+    finite_float,
 )
 from umbmark.core.errors import InputError
 
@@ -170,8 +170,8 @@ class Spec:
                 )
         else:
             for given in cast("Sequence[float]", value):
-                number = option_float(self.flag, given, source)
-                if not (math.isfinite(number) and abs(number) <= high):
+                number = finite_float(self.flag, given, source)
+                if not abs(number) <= high:
                     raise InputError(
                         f"{self.flag} must be within {high:g} {self.unit} of the axle centre, "
                         f"not {number!r}",

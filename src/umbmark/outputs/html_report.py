@@ -418,12 +418,18 @@ def _overlay(page: Passes) -> str:
 
     n = len(page.passes)
     which = "" if n == 1 else f" of the last pass (pass {n})"
-    if page.last.overlay_withheld:
+    shown = page.last
+    if page.holds is not None and page.holds.held is not None:
+        shown = page.passes[page.holds.held - 1]
+        which = f" the controller holds ({page.holds.label})"
+    elif page.holds is not None:
+        which = f" of the last pass (pass {n}), not applied"
+    if shown.overlay_withheld:
         return WITHHELD
     return (
         f"<p>The correction{which}, composed with the values active during its runs; "
         "copy it into the controller's parameters:</p>\n"
-        f'<pre id="overlay-yaml">{escape(page.last.overlay_yaml())}</pre>\n'
+        f'<pre id="overlay-yaml">{escape(shown.overlay_yaml())}</pre>\n'
     )
 
 

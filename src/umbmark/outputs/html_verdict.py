@@ -12,7 +12,7 @@ from html import escape
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from umbmark.calibration.passes import Passes
+    from umbmark.calibration.passes import Holds, Passes
     from umbmark.calibration.verdict import Verdict
 
 __all__ = ["CSS", "WITHHELD", "verdict_section"]
@@ -39,7 +39,11 @@ def _box(verdict: Verdict, lead: str) -> str:
 
 
 def verdict_section(page: Passes) -> str:
-    """The last pass's verdict in a box, and the earlier passes' in a line each."""
+    """The last pass's verdict in a box, and the earlier passes' in a line each; after a
+    self-calibration (``page.holds``), what the controller holds first, the verdict of
+    the pass it holds in the box, and every other pass in a line (applied or not)."""
+    if page.holds is not None:
+        return _holds_section(page, page.holds)
     n = len(page.passes)
     lead = "" if n == 1 else f"Pass {n}, the last: "
     earlier = "".join(
@@ -47,6 +51,27 @@ def verdict_section(page: Passes) -> str:
         for k, one in enumerate(page.passes[:-1], 1)
     )
     return _box(page.last.verdict, lead) + (f"<ul>\n{earlier}</ul>\n" if earlier else "")
+
+
+def _named(k: int, labels: tuple[str, ...]) -> str:
+    """``Pass 2``, or ``Pass 3 (verification)`` where the pass has a name of its own."""
+    label = labels[k - 1]
+    return f"Pass {k}" if label == f"pass {k}" else f"Pass {k} ({label})"
+
+
+def _holds_section(page: Passes, holds: Holds) -> str:
+    said = f'<p class="big" id="holds" data-pass="{holds.held or ""}">{escape(holds.words())}</p>\n'
+    # the pass it holds; with none applied, the last pass's correction, to apply by hand
+    shown = holds.held or len(page.passes)
+    applied = "applied" if holds.held is not None else "not applied"
+    box = _box(page.passes[shown - 1].verdict, f"{_named(shown, holds.labels)}, {applied}: ")
+    lines = "".join(
+        f"<li>{escape(_named(k, holds.labels))}: {escape(one.verdict.words)}; "
+        f"{'applied' if holds.applied(k) else 'not applied'}</li>\n"
+        for k, one in enumerate(page.passes, 1)
+        if k != shown
+    )
+    return said + box + (f"<ul>\n{lines}</ul>\n" if lines else "")
 
 
 #: What the overlay section says when the verdict is "do not apply" (not forced).

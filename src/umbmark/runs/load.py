@@ -11,11 +11,12 @@ Formats
     An OptiOdom session folder (:mod:`umbmark.sources.optiodom`).
 ``bag``
     A ROS 1 bag (``.bag``) or ROS 2 bag (folder with ``metadata.yaml``, or its ``.db3`` /
-    ``.mcap`` file) (:mod:`umbmark.sources.bag`).
+    ``.mcap`` file or that ``metadata.yaml``) (:mod:`umbmark.sources.bag`).
 ``auto``
-    Decide from the path: a ``.bag``, ``.db3`` or ``.mcap`` file or a folder with a ROS 2
-    ``metadata.yaml`` is a bag; a folder with ``*_metadata.csv`` and ``*_run-NN.csv`` is
-    OptiOdom; a folder (or a CSV beside) with umbmark's ``metadata.yaml`` is a run log; any
+    Decide from the path: a ``.bag``, ``.db3`` or ``.mcap`` file, a folder with a ROS 2
+    ``metadata.yaml`` or that file is a bag; a folder with ``*_metadata.csv`` and
+    ``*_run-NN.csv`` is OptiOdom; a folder (or a CSV beside) with umbmark's
+    ``metadata.yaml`` is a run log (its ``metadata.yaml`` is refused: give the folder); any
     other file a runs table.
 """
 
@@ -179,12 +180,33 @@ def detect_format(path: str | Path) -> Format:
             "run log with metadata.yaml)",
             source=path,
         )
+    if path.name == "metadata.yaml":
+        if _is_ros2_bag_folder(path.parent):
+            return "bag"  # the bag reader takes it for its folder, as a .db3 or .mcap file
+        _refuse_runlog_metadata(path)
     if path.suffix.lower() == ".csv" and not _looks_like_table(path):
         from umbmark.sources.runlog.reader import is_runlog
 
         if is_runlog(path):
             return "log"
     return "table"
+
+
+def _refuse_runlog_metadata(path: Path) -> None:
+    """Refuse the ``metadata.yaml`` of a run log given for its folder.
+
+    Raises
+    ------
+    InputError
+        Naming what it is and the folder to give.
+    """
+    from umbmark.sources.runlog.reader import is_runlog
+
+    if is_runlog(path.parent):
+        raise InputError(
+            f"is an umbmark run log's metadata, not its runs: give the folder, {path.parent}",
+            source=path,
+        )
 
 
 def _looks_like_table(path: Path) -> bool:

@@ -2,7 +2,7 @@
 
 Everything that touches rosbags' reader lives here, and every failure of it becomes an
 :class:`umbmark.core.errors.InputError` of one line naming the bag: a path that is not a bag,
-a missing rosbags (``pip install 'umbmark[ros]'``), a bag that cannot be opened, a topic
+a missing rosbags (:func:`missing_rosbags`), a bag that cannot be opened, a topic
 that is absent or of the wrong type (the message lists the topics present), a storage
 error while reading messages, or a message that cannot be deserialized.
 
@@ -84,8 +84,32 @@ def _bag_location(path: Path, src: str) -> Path:
 
 
 def missing_rosbags(src: str, doing: str = "reading") -> InputError:
-    """The one line for a bag without rosbags installed (``doing``: reading or writing)."""
-    return InputError(f"{doing} bags needs rosbags: pip install 'umbmark[ros]'", source=src)
+    """The one line for a bag without rosbags installed (``doing``: reading or writing).
+
+    umbmark is installed from its checkout, not from an index, so the line names the
+    index's package (as umbmark's ``ros`` extra requires it) and the extra for a checkout.
+    """
+    return InputError(
+        f"{doing} bags needs rosbags, which is not installed: python -m pip install "
+        f"'{rosbags_requirement()}' (or, in umbmark's checkout, python -m pip install '.[ros]')",
+        source=src,
+    )
+
+
+def rosbags_requirement() -> str:
+    """rosbags as umbmark's ``ros`` extra requires it (``rosbags>=0.11``), from the
+    installed package's metadata (pyproject.toml says it once); ``rosbags`` without it."""
+    from importlib.metadata import PackageNotFoundError, requires
+
+    try:
+        required = requires("umbmark") or []
+    except PackageNotFoundError:  # pragma: no cover - a source tree on the path
+        required = []
+    for line in required:
+        name, _, marker = line.partition(";")
+        if name.strip().startswith("rosbags") and "ros" in marker:
+            return name.strip().replace(" ", "")
+    return "rosbags"
 
 
 @contextmanager

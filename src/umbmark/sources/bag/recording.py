@@ -3,7 +3,7 @@
 Reads ROS 1 bags (``.bag`` files) and ROS 2 bags (a folder with ``metadata.yaml`` and
 sqlite3 ``.db3`` or ``.mcap`` storage; the path of the storage file or of
 ``metadata.yaml`` itself also works and means its folder) through ``rosbags``
-(``pip install 'umbmark[ros]'``), and returns a :class:`umbmark.model.recording.WheelSeries`
+(umbmark's ``ros`` extra), and returns a :class:`umbmark.model.recording.WheelSeries`
 and, if asked for, a :class:`umbmark.model.recording.PoseSeries` of ground truth.
 
 What is read is set by :class:`umbmark.sources.bag.options.BagOptions` (its module

@@ -21,7 +21,7 @@ renamed onto it; on any failure (``KeyboardInterrupt`` too) the temporary folder
 removed and an existing bag (replaced only on request) is left as it was.
 
 rosbags is imported only by :func:`write_bag` and :func:`bag_target`; without it both
-give the readers' one line (``pip install 'umbmark[ros]'``).
+give the readers' one line (:func:`umbmark.sources.bag.reader.missing_rosbags`).
 """
 
 from __future__ import annotations
