@@ -19,6 +19,10 @@ threshold here and the reason for it:
   in heading): slip, a wrong wheel geometry, a time offset, a tracked point off the axle,
   a ground truth that lost the robot. Do not apply (apply with care below the larger
   thresholds).
+- **No error and no scatter**: ``E_max,syst`` and ``3 x SEM`` both under
+  :data:`umbmark.benchmark.returns.NO_RETURN_ERROR` (``0.0 mm`` as printed): the runs came
+  back exactly where the odometry says, which no measured reference shows; the ground
+  truth reproduces the odometry. Do not apply.
 - **Too few runs** (:data:`MIN_RUNS`): apply with care.
 - **Implausible errors** (:data:`PLAUSIBLE_E_D`, :data:`PLAUSIBLE_E_B`,
   :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry.
@@ -40,7 +44,9 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from umbmark.benchmark.returns import NO_RETURN_ERROR
 from umbmark.estimators.base import ErrorEstimate, SquareTest
+from umbmark.sources.bag.truth.independence import REFERENCES
 
 if TYPE_CHECKING:
     from umbmark.model.kinematics import WheelParams
@@ -183,6 +189,8 @@ class Evidence:
     nominal_best : bool
         ``--method auto`` found no estimator that predicts held-out runs better than the
         nominal parameters.
+    returns : tuple of (float, float), optional
+        The runs' ``E_max,syst`` and ``3 x SEM`` [m] (squares driven both ways).
     """
 
     runs_per_direction: tuple[int, int] | None = None
@@ -190,6 +198,7 @@ class Evidence:
     path_length: float | None = None
     warnings: Sequence[str] = ()
     nominal_best: bool = False
+    returns: tuple[float, float] | None = None
 
 
 def noticeable(name: str, test: SquareTest) -> float:
@@ -294,6 +303,23 @@ def _misfit(estimate: ErrorEstimate, evidence: Evidence) -> list[_Finding]:
     return found
 
 
+def _no_return_error(evidence: Evidence) -> list[_Finding]:
+    if evidence.returns is None:
+        return []
+    e_max, three_sem = evidence.returns
+    if max(e_max, three_sem) >= NO_RETURN_ERROR:
+        return []
+    return [
+        (
+            "do-not-apply",
+            f"E_max,syst = {1000 * e_max:.1f} mm and 3 x SEM = {1000 * three_sem:.1f} mm: the "
+            "runs came back exactly where the odometry says, without any scatter, which no "
+            "measured reference shows: the ground truth reproduces the odometry",
+            REFERENCES,
+        )
+    ]
+
+
 def _few_runs(evidence: Evidence) -> list[_Finding]:
     advice = f"drive at least {MIN_RUNS} runs each way (the paper drove 5)"
     if evidence.runs_per_direction is not None:
@@ -377,6 +403,7 @@ def judge(estimate: ErrorEstimate, test: SquareTest, evidence: Evidence) -> Verd
                 "more runs, squares in both directions, longer paths",
             )
         )
+    found += _no_return_error(evidence)
     found += _intervals(estimate, test)
     found += _misfit(estimate, evidence)
     found += _few_runs(evidence)

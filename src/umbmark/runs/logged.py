@@ -24,6 +24,7 @@ from umbmark.model.recording import DEFAULT_MAX_GAP, Recording, RunLog, gap_mask
 from umbmark.model.runs import EndPose, Run
 from umbmark.runs.association import Association, associate
 from umbmark.runs.gaps import Gap, describe_gaps, find_gaps
+from umbmark.runs.reproduced import check_not_reproduced
 from umbmark.runs.rests import Reset, find_resets
 from umbmark.runs.segmentation import LeftOut, SplitOptions, find_runs, split_by_windows
 
@@ -341,6 +342,7 @@ def runs_from_recordings(
         )
         gaps = find_gaps(recording.wheels.time, recording.wheels.angles, params)
         found = 0
+        first_run = len(out.runs)
         for first, last in segments:
             label = recording.name if len(segments) == 1 else f"{recording.name} run {found + 1}"
             why = _broken(recording, truth, gaps, first, last, split_options)
@@ -371,6 +373,8 @@ def runs_from_recordings(
             left.append((recording.name, line))
         if found == 0:
             out.notes.append(f"{recording.name}: no run found")
+        logs = [run.log for run in out.runs[first_run:] if run.log is not None]
+        check_not_reproduced(recording, logs, params)
     if not out.runs:
         if left:
             name, line = left[0]
