@@ -345,7 +345,7 @@ def runs_from_recordings(
         first_run = len(out.runs)
         for first, last in segments:
             label = recording.name if len(segments) == 1 else f"{recording.name} run {found + 1}"
-            why = _broken(recording, truth, gaps, first, last, split_options)
+            why = _broken(recording, truth, gaps, first, last, split_options, params)
             if why is not None:
                 left_out.append(LeftOut(first, last, why))
                 continue
@@ -405,16 +405,25 @@ def _segments(
         truth = truth.copy()
         truth[:, 2] = np.where(_known(truth, False), log.odometry(params, method)[:, 2], np.nan)
     rest_speed = (split_options or SplitOptions()).rest_speed
-    resets = find_resets(time, angles, truth, rest_speed)
+    radius = _jump_radius(recording, params)
+    resets = find_resets(time, angles, truth, rest_speed, radius)
     check_motion(recording.where, time, angles, truth, headings=headings, resets=resets)
     if split == "none":
         return [(0, time.size - 1)], []
-    found = find_runs(time, angles, truth, split_options)
+    found = find_runs(time, angles, truth, split_options, radius)
     out.notes.extend(
         info(f"{recording.name}: {reset.describe(time)}: a run ends there")
         for reset in found.resets
     )
     return found.runs, list(found.left_out)
+
+
+def _jump_radius(recording: Recording, params: WheelParams) -> float | None:
+    """The wheel radius [m] the ground truth's jumps are judged with
+    (:func:`umbmark.runs.rests.find_resets`); None for a truth measured only at stops."""
+    if recording.truth_at_stops:
+        return None
+    return 0.5 * params.wheel_diameter * max(params.c_left, params.c_right)
 
 
 def _broken(
@@ -424,6 +433,7 @@ def _broken(
     first: int,
     last: int,
     split_options: SplitOptions | None,
+    params: WheelParams,
 ) -> str | None:
     """Why the run from sample ``first`` to ``last`` cannot be used, or None: a gap that is
     not bridged, or a reset of the ground truth inside it."""
@@ -433,7 +443,8 @@ def _broken(
     time, angles = recording.wheels.time, recording.wheels.angles
     sl = slice(first, last + 1)
     rest_speed = (split_options or SplitOptions()).rest_speed
-    resets = find_resets(time[sl], angles[sl], truth[sl], rest_speed)
+    radius = _jump_radius(recording, params)
+    resets = find_resets(time[sl], angles[sl], truth[sl], rest_speed, radius)
     inside = [r for r in resets if r.last > 0 and r.first < last - first]
     if inside:
         seen = inside[0].describe(time[first:], float(time[0]))

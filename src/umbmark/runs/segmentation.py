@@ -137,6 +137,7 @@ def find_runs(
     angles: FloatArray,
     poses: FloatArray,
     options: SplitOptions | None = None,
+    wheel_radius: float | None = None,
 ) -> Segmentation:
     """Runs of a recording, split at rests near the start and at resets of the truth.
 
@@ -148,6 +149,8 @@ def find_runs(
     poses : array, shape (n, 3)
         Ground truth (or odometry) ``x, y, theta`` at the same samples, NaN where unknown;
         theta unwrapped.
+    wheel_radius : float, optional
+        [m]: the ground truth's jumps are resets too (:func:`umbmark.runs.rests.find_resets`).
 
     Returns
     -------
@@ -162,7 +165,7 @@ def find_runs(
     options = options or SplitOptions()
     known = np.all(np.isfinite(poses), axis=1)
     all_stops = stops(time, angles, options.rest_speed)
-    resets = find_resets(time, angles, poses, options.rest_speed)
+    resets = find_resets(time, angles, poses, options.rest_speed, wheel_radius)
     if not known.any():
         return Segmentation(runs=_trim_to_motion(time, angles, options))
     radius = options.return_radius
@@ -173,6 +176,8 @@ def find_runs(
     finder = _Finder(time, angles, poses, known, radius, options, resets)
     reset_at = {r.first for r in resets}
     rests = [(i, j) for i, j in all_stops if time[j] - time[i] >= options.min_rest or i in reset_at]
+    # a jump while the wheels turned ends a run as a reset at a stop does
+    rests = sorted({*rests, *((r.first, r.last) for r in resets)})
     runs, left_out = finder.loops(rests, 0, time.size - 1, open_end=True)
     kept: list[tuple[int, int]] = []
     for a, b in runs:
