@@ -26,7 +26,13 @@ from umbmark.runs.association import Association, associate
 from umbmark.runs.gaps import Gap, describe_gaps, find_gaps
 from umbmark.runs.reproduced import check_not_reproduced
 from umbmark.runs.rests import Reset, find_resets
-from umbmark.runs.segmentation import LeftOut, SplitOptions, find_runs, split_by_windows
+from umbmark.runs.segmentation import (
+    LeftOut,
+    SplitOptions,
+    find_runs,
+    split_by_windows,
+    trim_to_motion,
+)
 
 __all__ = [
     "LoadedRuns",
@@ -337,10 +343,12 @@ def runs_from_recordings(
         # A truth measured only where the robot stood matches few samples, as intended.
         if association.fraction < 0.9 and not recording.truth_at_stops:
             out.notes.append(f"{recording.name}: only {association.describe()}")
-        segments, left_out = _segments(
+        segments, left_out, whole = _segments(
             recording, truth, split, windows, split_options, out, params, method
         )
         gaps = find_gaps(recording.wheels.time, recording.wheels.angles, params)
+        if whole:  # a path of any shape: what a gap leaves on either side is a run
+            segments = _split_at_gaps(recording, segments, gaps, split_options, out.notes)
         found = 0
         first_run = len(out.runs)
         for first, last in segments:
@@ -394,11 +402,12 @@ def _segments(
     params: WheelParams,
     method: IntegrationMethod,
 ) -> tuple[list[tuple[int, int]], list[LeftOut]]:
-    """The sample ranges of the runs of ``recording``, and the motion left out; the whole
-    recording is checked first unless ``windows`` select parts of it."""
+    """The sample ranges of the runs of ``recording``, the motion left out, and whether
+    no run could be told apart (the recording's motion is one run of any shape); the
+    whole recording is checked first unless ``windows`` select parts of it."""
     time, angles = recording.wheels.time, recording.wheels.angles
     if split == "windows":
-        return split_by_windows(time, windows, recording.where), []
+        return split_by_windows(time, windows, recording.where), [], False
     headings = recording.truth is None or recording.truth.headings
     if not headings:  # a position-only reference: the turns come from the odometry
         log = RunLog(time=time - time[0], wheel_angles=angles, truth=truth)
@@ -409,13 +418,47 @@ def _segments(
     resets = find_resets(time, angles, truth, rest_speed, radius)
     check_motion(recording.where, time, angles, truth, headings=headings, resets=resets)
     if split == "none":
-        return [(0, time.size - 1)], []
+        return [(0, time.size - 1)], [], False
     found = find_runs(time, angles, truth, split_options, radius)
     out.notes.extend(
         info(f"{recording.name}: {reset.describe(time)}: a run ends there")
         for reset in found.resets
     )
-    return found.runs, list(found.left_out)
+    return found.runs, list(found.left_out), found.whole
+
+
+def _split_at_gaps(
+    recording: Recording,
+    segments: list[tuple[int, int]],
+    gaps: Sequence[Gap],
+    split_options: SplitOptions | None,
+    notes: list[str],
+) -> list[tuple[int, int]]:
+    """``segments`` (a recording's motion as one run) cut at the gaps that are not
+    bridged into stretches, each trimmed to its motion; a line for each cut to ``notes``."""
+    rest_speed = (split_options or SplitOptions()).rest_speed
+    time, angles = recording.wheels.time, recording.wheels.angles
+    out: list[tuple[int, int]] = []
+    for first, last in segments:
+        cuts = [g for g in gaps if first <= g.index < last and not g.bridged]
+        starts = [first, *(g.index + 1 for g in cuts)]
+        ends = [*(g.index for g in cuts), last]
+        pieces = []
+        for a, b in zip(starts, ends, strict=True):
+            if b > a:
+                pieces += [
+                    (a + c, a + d)
+                    for c, d in trim_to_motion(time[a : b + 1], angles[a : b + 1], rest_speed)
+                ]
+        for gap in cuts:
+            notes.append(
+                info(
+                    f"{recording.name}: split at the gap: {gap.describe(recording.wheel_sample)}:"
+                    f" {gap.why}; the motion before and after it are runs apart"
+                )
+            )
+        out += pieces
+    return out
 
 
 def _jump_radius(recording: Recording, params: WheelParams) -> float | None:

@@ -48,6 +48,7 @@ __all__ = [
     "find_runs",
     "split_by_rests",
     "split_by_windows",
+    "trim_to_motion",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -112,11 +113,15 @@ class Segmentation:
     left_out : list of LeftOut
         Motion left out: ended by a reset before it closed its square, or closing the
         square more than once with no stop between.
+    whole : bool
+        No run could be told apart: ``runs`` is the recording's motion as one run (a
+        path of any shape, for the estimators of whole trajectories).
     """
 
     runs: list[tuple[int, int]]
     resets: list[Reset] = field(default_factory=list)
     left_out: list[LeftOut] = field(default_factory=list)
+    whole: bool = False
 
 
 def split_by_rests(
@@ -167,7 +172,7 @@ def find_runs(
     all_stops = stops(time, angles, options.rest_speed)
     resets = find_resets(time, angles, poses, options.rest_speed, wheel_radius)
     if not known.any():
-        return Segmentation(runs=_trim_to_motion(time, angles, options))
+        return Segmentation(runs=trim_to_motion(time, angles, options.rest_speed), whole=True)
     radius = options.return_radius
     if radius is None:
         first = poses[np.argmax(known)]
@@ -198,7 +203,8 @@ def find_runs(
             else:
                 kept.append((c, d))
     if not kept and not left_out:
-        kept = _trim_to_motion(time, angles, options)
+        whole = trim_to_motion(time, angles, options.rest_speed)
+        return Segmentation(runs=whole, resets=resets, whole=True)
     return Segmentation(runs=sorted(kept), resets=resets, left_out=left_out)
 
 
@@ -309,13 +315,15 @@ class _Finder:
         )
 
 
-def _trim_to_motion(
-    time: FloatArray, angles: FloatArray, options: SplitOptions
+def trim_to_motion(
+    time: FloatArray, angles: FloatArray, rest_speed: float
 ) -> list[tuple[int, int]]:
-    """The whole recording as one run, without its still start and end."""
+    """The whole recording (``time`` (n,), wheel ``angles`` (n, 2)) as one run ``(first,
+    last)``, without its still start and end (wheel speeds under ``rest_speed``); empty
+    if the wheels never turn."""
     dt = np.diff(time)
     speed = np.abs(np.diff(angles, axis=0)) / dt[:, None]
-    moving = np.flatnonzero(np.any(speed >= options.rest_speed, axis=1))
+    moving = np.flatnonzero(np.any(speed >= rest_speed, axis=1))
     if moving.size == 0:
         return []
     return [(int(moving[0]), int(moving[-1]) + 1)]
