@@ -319,14 +319,18 @@ def runs_from_recordings(
 
     Gaps in the wheel samples (:mod:`umbmark.runs.gaps`) are bridged with a note, or
     the run holding one is left out with a note; so is a run (a window, a whole
-    recording) across which the ground truth was reset.
+    recording) across which the ground truth was reset. A recording in which no loop
+    tells runs apart (a drive of any shape) is split at such a gap instead, the motion
+    on either side a run. A ground truth that the wheels' odometry reproduces exactly is
+    refused (:mod:`umbmark.runs.reproduced`).
 
     Raises
     ------
     InputError
         If a recording has no ground truth, its wheels never turn, its ground truth never
         moves or jumps, a wheel jumps in one sample (see :func:`check_motion`), a run has
-        no motion, its odometry overflows, or no run is found or left at all.
+        no motion, its odometry overflows, its ground truth is the wheels' odometry, or no
+        run is found or left at all.
     """
     out = LoadedRuns(runs=[])
     left: list[tuple[str, str]] = []
@@ -401,7 +405,7 @@ def _segments(
     out: LoadedRuns,
     params: WheelParams,
     method: IntegrationMethod,
-) -> tuple[list[tuple[int, int]], list[LeftOut]]:
+) -> tuple[list[tuple[int, int]], list[LeftOut], bool]:
     """The sample ranges of the runs of ``recording``, the motion left out, and whether
     no run could be told apart (the recording's motion is one run of any shape); the
     whole recording is checked first unless ``windows`` select parts of it."""

@@ -203,8 +203,8 @@ def find_runs(
             else:
                 kept.append((c, d))
     if not kept and not left_out:
-        whole = trim_to_motion(time, angles, options.rest_speed)
-        return Segmentation(runs=whole, resets=resets, whole=True)
+        motion = trim_to_motion(time, angles, options.rest_speed)
+        return Segmentation(runs=motion, resets=resets, whole=True)
     return Segmentation(runs=sorted(kept), resets=resets, left_out=left_out)
 
 
