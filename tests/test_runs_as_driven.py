@@ -266,8 +266,9 @@ def test_a_simulators_world_reset_between_squares_splits_them(tmp_path, pause):
 
 def test_a_jump_while_the_wheels_turn_is_a_reset():
     """Closed form: driving straight at 0.2 m/s, the truth put back 0.3 m between two
-    samples at 5 s; the wheels allow 2 x 4 mm there. A tracker's millimetre of noise and
-    AMCL-like 2 cm corrections every half second are no resets."""
+    samples at 5 s; the wheels allow 2 x 4 mm there. A tracker's millimetre of noise,
+    AMCL-like 2 cm corrections every half second, and a tracker that jumps aside and back
+    are no resets."""
     from umbmark.runs.rests import find_resets
 
     dt, speed, wheel = 0.01, 0.2, 0.5 * TB3.wheel_diameter
@@ -283,3 +284,7 @@ def test_a_jump_while_the_wheels_turn_is_a_reset():
     assert find_resets(t, angles, poses, 0.05) == []  # without the wheel radius: stops only
     amcl = np.column_stack([speed * t + 0.02 * np.floor(t / 0.5) % 2, 0 * t, 0 * t])
     assert find_resets(t, angles, amcl, 0.05, wheel) == []
+    # a tracker on a reflection 0.6 m aside from 3 to 4 s, and back: no reset
+    lost = poses.copy()
+    lost[(t >= 3.0) & (t < 4.0), 1] += 0.6
+    assert [t[r.at] for r in find_resets(t, angles, lost, 0.05, wheel)] == [pytest.approx(5.0)]

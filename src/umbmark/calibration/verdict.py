@@ -21,8 +21,9 @@ threshold here and the reason for it:
   thresholds).
 - **No error and no scatter**: ``E_max,syst`` and ``3 x SEM`` both under
   :data:`umbmark.benchmark.returns.NO_RETURN_ERROR` (``0.0 mm`` as printed): the runs came
-  back exactly where the odometry says, which no measured reference shows; the ground
-  truth reproduces the odometry. Do not apply.
+  back exactly where the odometry says, which no measured reference shows: a ground truth
+  that reproduces the odometry (refused where the runs are read when it does so exactly:
+  :mod:`umbmark.runs.reproduced`), or a simulation without noise. Apply with care.
 - **Too few runs** (:data:`MIN_RUNS`): apply with care.
 - **Implausible errors** (:data:`PLAUSIBLE_E_D`, :data:`PLAUSIBLE_E_B`,
   :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry.
@@ -311,10 +312,11 @@ def _no_return_error(evidence: Evidence) -> list[_Finding]:
         return []
     return [
         (
-            "do-not-apply",
+            "care",
             f"E_max,syst = {1000 * e_max:.1f} mm and 3 x SEM = {1000 * three_sem:.1f} mm: the "
             "runs came back exactly where the odometry says, without any scatter, which no "
-            "measured reference shows: the ground truth reproduces the odometry",
+            "measured reference shows: a ground truth that reproduces the odometry, or a "
+            "simulation without noise",
             REFERENCES,
         )
     ]

@@ -26,7 +26,8 @@ wheels' travel, enough for a tracked point two wheelbases off the axle) by more 
 over the recording) and at least :data:`MIN_JUMP`: a simulator's world reset that puts
 the robot back at its start between squares, however little it strayed from there, and
 whether or not the wheels stood still meanwhile. A localization that corrects itself by
-centimetres (AMCL) scatters by as much, and stays below.
+centimetres (AMCL) scatters by as much, and stays below; a jump that the next one undoes
+(:data:`GLITCH_RETURN`) is a tracker that lost the robot for a while, no reset.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "CREEP_WINDOW",
+    "GLITCH_RETURN",
     "JUMP_ALLOWANCE",
     "JUMP_FACTOR",
     "MIN_JUMP",
@@ -77,6 +79,10 @@ JUMP_ALLOWANCE = 2.0
 JUMP_FACTOR = 10.0
 #: ... and this [m].
 MIN_JUMP = 0.01
+#: A jump the next one undoes to within this share of the larger is no reset but a
+#: tracker that lost the robot and found it again (left to the checks of the ground
+#: truth's steps and to the fit).
+GLITCH_RETURN = 0.25
 
 
 def still_intervals(time: FloatArray, angles: FloatArray, rest_speed: float) -> BoolArray:
@@ -231,9 +237,18 @@ def _jumps(
     excess = np.where(both, step - allowed, 0.0)
     scatter = float(np.percentile(np.maximum(excess[both], 0.0), 99))
     limit = max(MIN_JUMP, JUMP_FACTOR * scatter)
-    out = []
     # A reference slower than the wheels spreads one jump over several wheel intervals.
-    for first, stop in _true_runs(excess > limit):
+    found = _true_runs(excess > limit)
+    shifts = [poses[stop, :2] - poses[first, :2] for first, stop in found]
+    glitch = set()
+    for k in range(len(found) - 1):  # out and back again: a tracker that lost the robot
+        back = float(np.hypot(*(shifts[k] + shifts[k + 1])))
+        if back < GLITCH_RETURN * max(float(np.hypot(*shifts[k])), float(np.hypot(*shifts[k + 1]))):
+            glitch |= {k, k + 1}
+    out = []
+    for k, (first, stop) in enumerate(found):
+        if k in glitch:
+            continue
         a, b = poses[first], poses[stop]
         moved = math.hypot(float(b[0] - a[0]), float(b[1] - a[1]))
         turn = abs(float(b[2] - a[2])) if np.isfinite(a[2]) and np.isfinite(b[2]) else 0.0
