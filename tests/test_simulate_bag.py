@@ -313,8 +313,7 @@ def test_the_controller_odometry_alone_gives_the_same_runs(bags, table_result):
 def test_the_controllers_odometry_as_ground_truth_is_refused_whatever_its_topic(bags):
     """The README's bag, calibrated against its ``/odom`` (the controller's odometry,
     integrated from the ``/joint_states`` the wheels are read from): refused, one line,
-    exit 2, even with a wheelbase the odometry was not computed with (the fit finds its
-    own: 340 mm, the simulated controller's)."""
+    exit 2."""
     joints = ["--left-joint", "left_wheel_joint", "--right-joint", "right_wheel_joint"]
     proc = run_cli("calibrate", str(bags["ros1"]), "--truth-topic", "/odom", *joints,
                    *GEOMETRY_ARGS)  # fmt: skip
@@ -326,6 +325,12 @@ def test_the_controllers_odometry_as_ground_truth_is_refused_whatever_its_topic(
         "odometry: with wheel radii 75.000 and 75.000 mm and a wheelbase of 340.00 mm"
     )
     assert "give a reference that does not come from the wheels" in line
+
+
+@pytest.mark.slow
+def test_the_controllers_odometry_is_refused_whatever_parameters_are_given(bags):
+    """Given a wheelbase and diameter the odometry was not computed with, the fit still
+    finds the controller's own (radii 75 mm, wheelbase 340 mm) and refuses."""
     for fmt in ("sqlite3", "mcap"):
         err = api_error(
             umbmark.calibrate, bags[fmt], wheelbase=0.36, wheel_diameter=0.14, side_length=SIDE,

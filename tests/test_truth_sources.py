@@ -210,6 +210,7 @@ def test_gazebo_model_states_are_a_ground_truth(tb3):
     assert "truth_model names a model of a gazebo_msgs/msg/ModelStates topic" in err
 
 
+@pytest.mark.slow
 def test_model_states_against_wheels_on_sim_time_are_read_on_the_bag_clock(tmp_path, tb3_motion):
     """Gazebo with use_sim_time: the joint states' header stamps count from 12.5 s of
     simulated time, the model states have no header (the bag's receive times, on the wall
