@@ -89,8 +89,9 @@ class BagWriter:
     """Messages to write: ``(topic, stamp [s from T0], message)``; written sorted by time,
     each received :data:`DELAY` after its stamp."""
 
-    def __init__(self, fmt: str) -> None:
+    def __init__(self, fmt: str, stamp_origin: float = T0) -> None:
         self.fmt = fmt
+        self.stamp_origin = stamp_origin  # header stamps count from here [s]: T0, or sim time
         self.ts = typestore(fmt)
         self.types: dict[str, str] = {}
         self.messages: list[tuple[str, float, object]] = []
@@ -105,7 +106,7 @@ class BagWriter:
     # --- pieces ---------------------------------------------------------------------
 
     def header(self, t: float, frame: str):
-        sec, nsec = divmod(round((T0 + t) * 1e9), 1_000_000_000)
+        sec, nsec = divmod(round((self.stamp_origin + t) * 1e9), 1_000_000_000)
         stamp = self.T("builtin_interfaces/msg/Time")(sec=sec, nanosec=nsec)
         if self.fmt == "ros1":
             return self.T("std_msgs/msg/Header")(seq=0, stamp=stamp, frame_id=frame)
@@ -422,9 +423,12 @@ def turtlebot3_bag(
     robot_description: bool = True,
     ground_truth: bool = False,
     strip_definitions: bool = False,
+    sim_time: float | None = None,
 ) -> Path:
-    """A TurtleBot3 Burger in Gazebo (see the module docstring); each part optional."""
-    bag = BagWriter(fmt)
+    """A TurtleBot3 Burger in Gazebo (see the module docstring); each part optional.
+    ``sim_time``: header stamps on the simulation's clock, from this many seconds at the
+    first sample (``use_sim_time``), while the bag's receive times stay on the wall clock."""
+    bag = BagWriter(fmt, T0 if sim_time is None else sim_time)
     odo = motion.odometry
     names = ("wheel_left_joint", "wheel_right_joint")
     for k in range(0, motion.time.size, 3):  # 33 Hz

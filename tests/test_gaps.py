@@ -29,6 +29,8 @@ from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
 pytest.importorskip("rosbags")
 
+from test_bag import T0
+
 ROBOT = VirtualRobot.with_errors(TB3, E_d=1.002, E_b=1.01)
 DIRS = ["cw", "cw", "ccw", "ccw", "ccw"]
 GAP = 1.76  # [s] of /odom messages dropped, as in the bag that asked for this
@@ -266,3 +268,61 @@ def test_a_recorders_hiccup_while_the_robot_speeds_up_is_bridged(tmp_path, sessi
         )
         assert "bridged, one arc across it ends at most 0." in note  # a tenth of a mm
         assert note.endswith(" mm from any path of its length and turn")
+
+
+def _wander(rest: float = 2.0):
+    """A drive that is no loop, as a person drives a robot about a room: four legs with
+    turns of +90, -120 and +60 degrees between them (30 degrees net), standing ``rest`` s
+    before and after; from the simulator, as a :class:`driven.Session` of one path."""
+    from driven import CONTROL, Session
+    from umbmark.core.conventions import Direction
+    from umbmark.sim.engine import simulate
+    from umbmark.sim.paths import Path as SimPath
+    from umbmark.sim.paths import Segment
+
+    legs = [Segment("straight", 2.0), Segment("turn", math.pi / 2)]
+    legs += [Segment("straight", 1.5), Segment("turn", -2 * math.pi / 3)]
+    legs += [Segment("straight", 2.0), Segment("turn", math.pi / 3), Segment("straight", 1.0)]
+    result = simulate(
+        ROBOT, SimPath("wander", tuple(legs)), [Direction.CCW], CONTROL,
+        np.random.default_rng(0), record=True,
+    )  # fmt: skip
+    trace = result.trace
+    dt = float(trace.time[1] - trace.time[0])
+    n = int(result.samples_used[0]) + 1
+    still = round(rest / dt)
+    angles = trace.counts[0, :n] * ROBOT.odometry.radians_per_pulse
+    angles = np.vstack([np.repeat(angles[:1], still, 0), angles, np.repeat(angles[-1:], still, 0)])
+    truth = trace.true_pose[0, :n]
+    truth = np.vstack([np.repeat(truth[:1], still, 0), truth, np.repeat(truth[-1:], still, 0)])
+    time = dt * np.arange(angles.shape[0])
+    start, stop = still * dt, (still + n - 1) * dt
+    return Session(time, angles, truth, [tuple(truth[-1])], [start], [stop])
+
+
+def test_a_gap_in_a_drive_of_any_shape_splits_it_into_two_runs(tmp_path):
+    # No loop to tell runs apart: the drive is one run of its motion. 1.76 s without /odom
+    # from half a second before the second turn, as the robot stops and turns: the path
+    # across is unknown. Before: "left out the motion from 2.00 to ... s ...; no run is
+    # left". Now the drive is split there, and each side is a run.
+    drive = _wander()
+    turning = _turn(drive, 0) - 0.5
+    assert _turn(drive, 0) < turning + GAP  # the first turn starts inside it
+    bag = write_session_bag(tmp_path / "tb3", "mcap", drive, drop=[(turning, turning + GAP)])
+    report = _calibrate(bag, method="trajectory")
+    assert [run.label for run in report.runs] == [f"{bag.name} run 1", f"{bag.name} run 2"]
+    at, length, travel = _gap_seen(drive, turning, turning + GAP)
+    (note,) = [n for n in report.notes if "split at the gap" in n]
+    assert note.startswith(
+        f"{bag.name}: split at the gap: no /odom message for {length:.2f} s from {at:.2f} s "
+        f"(the wheels moved {travel:.2f} m meanwhile): the wheels changed speed (before, "
+    )
+    assert note.endswith(
+        "the path across it is unknown; the motion before and after it are runs apart"
+    )
+    first, second = (run.log for run in report.runs)
+    assert first.start - T0 + first.time[-1] == pytest.approx(at, abs=1e-6)  # up to the gap
+    assert second.start - T0 == pytest.approx(at + length, abs=1e-6)  # on from its end
+    # the robot's errors, from the two runs' whole trajectories
+    assert report.estimate.E_d == pytest.approx(1.002, abs=3e-4)
+    assert report.estimate.E_b == pytest.approx(1.01, abs=3e-3)

@@ -269,3 +269,27 @@ def test_optiodom_parameters_and_runs_are_named_by_their_files(tmp_path):
     message = api_error(umbmark.calibrate, session)
     assert message.startswith(f"{run}: the ground truth never moves")
     shutil.rmtree(session)
+
+
+@pytest.mark.parametrize("session", ["square/230620202042", "circular/250620202104"])
+def test_motion_capture_is_no_reproduced_odometry(session):
+    """The bundled OptiOdom sessions (OptiTrack): the best-fitting wheel odometry follows
+    their heading to 4e-4 to 1e-3 rad per radian turned, five orders of magnitude above
+    rounding; they are read, never refused as the odometry itself."""
+    from importlib.resources import files
+
+    from umbmark.runs.load import LoadOptions, load_runs
+    from umbmark.runs.reproduced import EXACT, reproduction
+
+    folder = files("umbmark.data") / "optiodom" / session
+    loaded = load_runs(str(folder), "optiodom", LoadOptions())
+    assert len(loaded.runs) == 6
+    params = loaded.params
+    assert params is not None
+    for run in loaded.runs:
+        assert run.log is not None
+        times = run.log.start + run.log.time  # the session's truth shares the wheels' stamps
+        found = reproduction([run.log], times, params)
+        assert found is not None
+        assert found.heading_rms > 1e4 * EXACT * found.turned
+        assert not found.exact

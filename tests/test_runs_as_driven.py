@@ -229,3 +229,62 @@ def test_the_json_gives_each_runs_start_and_end_on_the_recordings_clock(tmp_path
         start, end = run["start_time"] - 500.0, run["end_time"] - 500.0
         assert session.starts[k] - REST <= start <= session.starts[k] + 1e-6
         assert session.stops[k] - 0.05 <= end <= session.stops[k] + REST
+
+
+@pytest.mark.parametrize("pause", [0.3, 0.05])
+def test_a_simulators_world_reset_between_squares_splits_them(tmp_path, pause):
+    """A simulator's world reset: put back at the start between squares with no rest (a
+    0.3 s or 0.05 s pause, shorter than the 1 s of a rest), the truth jumping by the
+    return error (8 to 9 cm), under the 0.1 m a stop's reset needs. Before: one run of
+    four squares (their turns cancel: cw, cw, ccw, ccw). Now the jumps, which the wheels
+    standing still cannot explain, end the runs."""
+    robot = VirtualRobot.with_errors(TB3, E_d=1.002, E_b=1.01)
+    pauses = [REST, pause, pause, pause, REST]
+    session = squares(robot, ["cw", "cw", "ccw", "ccw"], side=1.0, pauses=pauses, reset=True)
+    jumps = [math.hypot(e[0], e[1]) for e in session.ends]
+    assert 0.07 < jumps[0] < 0.09  # the resets after the cw squares
+    assert 0.07 < jumps[1] < 0.09
+    bag = write_session_bag(tmp_path / "tb3", "mcap", session, wheels="joints")
+    report = umbmark.calibrate(
+        bag, wheelbase=TB3.wheelbase, wheel_diameter=TB3.wheel_diameter, side_length=1.0,
+        truth_topic="/ground_truth", left_joint=LEFT, right_joint=RIGHT, method="exact",
+    )  # fmt: skip
+    assert [run.direction.value for run in report.runs] == DIRS
+    # the third square's end: 0.05 s before an 8 mm reset the 33 Hz truth half sees
+    _assert_ends(report.runs, session, range(4), within=1e-6 if pause > 0.1 else 1e-4)
+    resets = [n for n in report.notes if "reset at" in n]
+    assert len(resets) == 2  # the third jump, 8 mm, is under MIN_JUMP: a stop ends that run
+    for note, stop, jump in zip(resets, session.stops[:2], jumps[:2], strict=True):
+        at = float(note.split("reset at ", 1)[1].split(" s", 1)[0])
+        assert stop <= at <= stop + pause + 0.04, note
+        assert f"(it jumped {jump:.3f} m in " in note
+        assert note.endswith("where the wheels allow 0.000 m): a run ends there")
+    # the simulated robot's errors come back (noise-free: quantization only)
+    assert report.estimate.E_d == pytest.approx(1.002, abs=1e-4)
+    assert report.estimate.E_b == pytest.approx(1.01, abs=1e-3)
+
+
+def test_a_jump_while_the_wheels_turn_is_a_reset():
+    """Closed form: driving straight at 0.2 m/s, the truth put back 0.3 m between two
+    samples at 5 s; the wheels allow 2 x 4 mm there. A tracker's millimetre of noise,
+    AMCL-like 2 cm corrections every half second, and a tracker that jumps aside and back
+    are no resets."""
+    from umbmark.runs.rests import find_resets
+
+    dt, speed, wheel = 0.01, 0.2, 0.5 * TB3.wheel_diameter
+    t = np.arange(0.0, 10.0, dt)
+    angles = np.column_stack([speed * t / wheel, speed * t / wheel])
+    x = speed * t - 0.3 * (t >= 5.0)
+    rng = np.random.default_rng(3)
+    poses = np.column_stack([x + rng.normal(0, 1e-3, t.size), 0 * t, 0 * t])
+    (reset,) = find_resets(t, angles, poses, 0.05, wheel)
+    assert t[reset.at] == pytest.approx(5.0)
+    assert reset.allowed == pytest.approx(2 * 2 * speed * dt, rel=1e-6)
+    assert reset.describe(t).startswith("the ground truth was reset at 5.00 s (it jumped 0.29")
+    assert find_resets(t, angles, poses, 0.05) == []  # without the wheel radius: stops only
+    amcl = np.column_stack([speed * t + 0.02 * np.floor(t / 0.5) % 2, 0 * t, 0 * t])
+    assert find_resets(t, angles, amcl, 0.05, wheel) == []
+    # a tracker on a reflection 0.6 m aside from 3 to 4 s, and back: no reset
+    lost = poses.copy()
+    lost[(t >= 3.0) & (t < 4.0), 1] += 0.6
+    assert [t[r.at] for r in find_resets(t, angles, lost, 0.05, wheel)] == [pytest.approx(5.0)]

@@ -309,3 +309,52 @@ def test_the_controller_odometry_alone_gives_the_same_runs(bags, table_result):
     ).to_dict()
     for key in ("cg_cw", "cg_ccw"):
         assert data[key] == pytest.approx(table_result[key], abs=1e-6)
+
+
+# --- a reference that is the robot's own odometry (issue 21, item 4) ------------------------
+
+
+def test_the_controllers_odometry_as_ground_truth_is_refused_whatever_its_topic(bags):
+    """The README's bag, calibrated against its ``/odom`` (the controller's odometry,
+    integrated from the ``/joint_states`` the wheels are read from): refused, one line,
+    exit 2."""
+    joints = ["--left-joint", "left_wheel_joint", "--right-joint", "right_wheel_joint"]
+    proc = run_cli("calibrate", str(bags["ros1"]), "--truth-topic", "/odom", *joints,
+                   *GEOMETRY_ARGS)  # fmt: skip
+    assert proc.returncode == 2, proc.stdout
+    assert "Verdict" not in proc.stdout
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith(
+        f"umbmark: error: {bags['ros1']}: the ground truth /odom reproduces the wheels' own "
+        "odometry: with wheel radii 75.000 and 75.000 mm and a wheelbase of 340.00 mm"
+    )
+    assert "give a reference that does not come from the wheels" in line
+
+
+@pytest.mark.slow
+def test_the_controllers_odometry_is_refused_whatever_parameters_are_given(bags):
+    """Given a wheelbase and diameter the odometry was not computed with, the fit still
+    finds the controller's own (radii 75 mm, wheelbase 340 mm) and refuses."""
+    for fmt in ("sqlite3", "mcap"):
+        err = api_error(
+            umbmark.calibrate, bags[fmt], wheelbase=0.36, wheel_diameter=0.14, side_length=SIDE,
+            truth_topic="/odom", left_joint="left_wheel_joint", right_joint="right_wheel_joint",
+        )  # fmt: skip
+        assert "the ground truth /odom reproduces the wheels' own odometry" in err
+        assert "75.000 and 75.000 mm and a wheelbase of 340.00 mm" in err
+
+
+def test_a_noise_free_simulations_motion_capture_stays_a_reference(tmp_path):
+    """Without slip the motion capture differs from the wheels' odometry only by the
+    encoders' quantization (2000 pulses a motor turn): far more than rounding, so it
+    stays a reference, and the simulated errors come back."""
+    bag = tmp_path / "quiet.bag"
+    umbmark.simulate(**{**SIM, "runs": 2}, noise_free=True, bag=bag)
+    report = umbmark.calibrate(
+        bag, wheelbase=WHEELBASE, wheel_diameter=DIAMETER, side_length=SIDE,
+        truth_topic="/mocap/robot/pose", left_joint="left_wheel_joint",
+        right_joint="right_wheel_joint",
+    )  # fmt: skip
+    assert report.estimate.E_d == pytest.approx(E_D, abs=2e-4)
+    assert report.estimate.E_b == pytest.approx(E_B, abs=2e-3)
+    assert report.verdict.level != "do-not-apply"

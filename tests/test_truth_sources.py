@@ -210,6 +210,39 @@ def test_gazebo_model_states_are_a_ground_truth(tb3):
     assert "truth_model names a model of a gazebo_msgs/msg/ModelStates topic" in err
 
 
+@pytest.mark.slow
+def test_model_states_against_wheels_on_sim_time_are_read_on_the_bag_clock(tmp_path, tb3_motion):
+    """Gazebo with use_sim_time: the joint states' header stamps count from 12.5 s of
+    simulated time, the model states have no header (the bag's receive times, on the wall
+    clock, 1.77e9 s). Before: "do not overlap in time"; now both are read on the bag's
+    clock, as ``info`` suggests, and the robot's errors come back."""
+    bag = turtlebot3_bag(tmp_path / "sim", "mcap", tb3_motion, wheel_tf=False, sim_time=12.5)
+    assert "--time-source bag" in umbmark.info(bag).to_dict()["suggested_options"]
+    report = umbmark.calibrate(
+        bag, side_length=1.0, truth_topic="/gazebo/model_states",
+        left_joint="wheel_left_joint", right_joint="wheel_right_joint",
+    )  # fmt: skip
+    assert report.estimate.E_d == pytest.approx(E_D, abs=2e-5)
+    assert report.estimate.E_b == pytest.approx(E_B, abs=5e-5)
+    (note,) = [n for n in report.notes if "receive clock" in n]
+    last = 12.5 + float(tb3_motion.time[(tb3_motion.time.size - 1) // 3 * 3])
+    assert note == (
+        "ground truth /gazebo/model_states has no header stamps (the bag's receive times) and "
+        f"the wheels' header stamps (12.500 to {last:.3f} s, a simulation's clock) do not "
+        "overlap them: both read on the bag's receive clock (--time-source bag, as umbmark "
+        "info suggests)"
+    )
+    # The diff-drive plugin's /odom, stamped like the joints, integrated from the wheels
+    # at 100 Hz while the joint states are recorded at 33 Hz: its heading is still the
+    # wheels' to rounding. Refused, read on the stamps' clock.
+    err = api_error(
+        umbmark.calibrate, bag, side_length=1.0, truth_topic="/odom",
+        left_joint="wheel_left_joint", right_joint="wheel_right_joint",
+    )  # fmt: skip
+    assert err.startswith(f"{bag}: the ground truth /odom reproduces the wheels' own odometry")
+    assert "wheel radii 33.000 and 33.000 mm and a wheelbase of 160.00 mm" in err
+
+
 def test_model_states_in_a_bag_without_definitions(tmp_path, tb3_motion):
     """rosbag2 before Iron kept no definitions, and no typestore knows gazebo_msgs."""
     bag = turtlebot3_bag(

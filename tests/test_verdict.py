@@ -485,3 +485,31 @@ def test_the_verdict_is_printed_first_and_is_json_s_first_key(tmp_path: Path):
     (line,) = [x for x in recorded.stderr.splitlines() if "recorded" in x]
     suggested = shlex.split(line.split("configured on the robot: umbmark ", 1)[1])
     assert suggested == ["history", "r", "--history", str(db), "--applied", "1"]
+
+
+def test_runs_without_error_and_without_scatter_are_not_applied(tmp_path: Path):
+    # Every run came back exactly where its odometry says: E_max,syst = 0.0 mm and
+    # 3 x SEM = 0.0 mm, what a ground truth that is the odometry gives (or a noise-free
+    # simulation's second pass), never a measured one: not plainly "apply".
+    table = write_table(
+        tmp_path / "same.csv",
+        [(d, 0.0, 0.0, 0.0, 0.0) for d in ("cw",) * 5 + ("ccw",) * 5],
+        "direction,x_abs,y_abs,x_odo,y_odo",
+    )
+    proc = run_cli("calibrate", str(table), "-L", "4", "-b", "0.34")
+    assert proc.returncode == 0, proc.stderr
+    first = proc.stdout.splitlines()[0]
+    assert first.startswith(
+        "Verdict: apply with care: E_max,syst = 0.0 mm and 3 x SEM = 0.0 mm: the runs came "
+        "back exactly where the odometry says, without any scatter, which no measured "
+        "reference shows: a ground truth that reproduces the odometry, or a simulation "
+        "without noise."
+    )
+    assert "Verdict: apply." not in proc.stdout
+    assert "E_max,syst = 0.0 mm > 3 x SEM" not in proc.stdout
+    assert "nothing was measured (a ground truth that reproduces the odometry)" in proc.stdout
+    # a tenth of a millimetre of scatter is a measurement: judged as before
+    spread = [(d, 1e-4 * (k % 2), 0.0, 0.0, 0.0) for k, d in enumerate(("cw",) * 5 + ("ccw",) * 5)]
+    table = write_table(tmp_path / "tiny.csv", spread, "direction,x_abs,y_abs,x_odo,y_odo")
+    report = umbmark.calibrate(table, side_length=4.0, wheelbase=0.34)
+    assert not any("without any scatter" in r for r in report.verdict.reasons)

@@ -31,6 +31,7 @@ from umbmark.model.runs import Run, return_errors, split_by_direction
 __all__ = [
     "CLEARLY_ABOVE",
     "MIN_RUNS_PER_DIRECTION",
+    "NO_RETURN_ERROR",
     "WELL_ABOVE",
     "Benchmark",
     "Cluster",
@@ -47,6 +48,9 @@ SEM_RULE_FACTOR = 3.0
 CLEARLY_ABOVE = 1.25
 #: ... and from this many times 3 SEM on "well above" it.
 WELL_ABOVE = 2.0
+#: ``E_max,syst`` and ``3 SEM`` both under this [m] (``0.0 mm`` as printed): the runs show
+#: neither an error nor any scatter, which no measured reference does.
+NO_RETURN_ERROR = 5e-5
 
 
 @dataclass(frozen=True)
@@ -141,6 +145,12 @@ class Benchmark:
         return self.e_max_syst > self.second_pass_threshold
 
     @property
+    def unmeasured(self) -> bool:
+        """``E_max,syst`` and ``3 SEM`` both under :data:`NO_RETURN_ERROR`: the runs came
+        back where the odometry says, without scatter (a reference that is the odometry)."""
+        return max(self.e_max_syst, self.second_pass_threshold) < NO_RETURN_ERROR
+
+    @property
     def sem_ratio(self) -> float:
         """``E_max,syst / 3 SEM`` (infinite for runs without scatter, NaN for neither)."""
         if self.second_pass_threshold > 0:
@@ -168,6 +178,12 @@ def sem_verdict(bench: Benchmark) -> str:
     :data:`WELL_ABOVE` times 3 SEM on; the ratio is stated.
     """
     e, t = bench.e_max_syst * 1000.0, bench.second_pass_threshold * 1000.0
+    if bench.unmeasured:
+        return (
+            f"E_max,syst = {e:.1f} mm and 3 x SEM = {t:.1f} mm: the runs came back where the "
+            "odometry says, without any scatter: nothing was measured (a ground truth that "
+            "reproduces the odometry)."
+        )
     standing = scatter_standing(bench)
     if standing == "within":
         return (

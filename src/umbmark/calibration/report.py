@@ -174,6 +174,7 @@ class CalibrationResult(JsonText):
             warnings=(*self.input_warnings, *self.estimate.warnings),
             nominal_best=self.nominal_best,
             wheel_diameter=None if self.params is None else self.params.wheel_diameter,
+            returns=None if bench is None else (bench.e_max_syst, bench.second_pass_threshold),
         )
 
     @property

@@ -25,6 +25,11 @@ threshold here and the reason for it:
   runs, so the correction is no robot's. Do not apply, with the likely cause (every cw
   and ccw label swapped, when the runs fit with them swapped back). A marginal failure
   (p between :data:`MODEL_REFUSE` and the check's level) is a warning: apply with care.
+- **No error and no scatter**: ``E_max,syst`` and ``3 x SEM`` both under
+  :data:`umbmark.benchmark.returns.NO_RETURN_ERROR` (``0.0 mm`` as printed): the runs came
+  back exactly where the odometry says, which no measured reference shows: a ground truth
+  that reproduces the odometry (refused where the runs are read when it does so exactly:
+  :mod:`umbmark.runs.reproduced`), or a simulation without noise. Apply with care.
 - **Too few runs** (:data:`MIN_RUNS`): apply with care.
 - **Implausible errors** (:data:`PLAUSIBLE_E_D`, :data:`PLAUSIBLE_E_B`,
   :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry.
@@ -46,7 +51,9 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from umbmark.benchmark.returns import NO_RETURN_ERROR
 from umbmark.estimators.base import ErrorEstimate, SquareTest
+from umbmark.sources.bag.truth.independence import REFERENCES
 
 if TYPE_CHECKING:
     from umbmark.model.kinematics import WheelParams
@@ -201,6 +208,8 @@ class Evidence:
     wheel_diameter : float, optional
         The nominal wheel diameter [m] recorded runs were integrated with (a scale error
         of about 2 or 1/2 names it: a radius given for a diameter).
+    returns : tuple of (float, float), optional
+        The runs' ``E_max,syst`` and ``3 x SEM`` [m] (squares driven both ways).
     """
 
     runs_per_direction: tuple[int, int] | None = None
@@ -209,6 +218,7 @@ class Evidence:
     warnings: Sequence[str] = ()
     nominal_best: bool = False
     wheel_diameter: float | None = None
+    returns: tuple[float, float] | None = None
 
 
 def noticeable(name: str, test: SquareTest) -> float:
@@ -337,6 +347,24 @@ def _model_check(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
     return [("do-not-apply", reason, MODEL_CAUSES)]
 
 
+def _no_return_error(evidence: Evidence) -> list[_Finding]:
+    if evidence.returns is None:
+        return []
+    e_max, three_sem = evidence.returns
+    if max(e_max, three_sem) >= NO_RETURN_ERROR:
+        return []
+    return [
+        (
+            "care",
+            f"E_max,syst = {1000 * e_max:.1f} mm and 3 x SEM = {1000 * three_sem:.1f} mm: the "
+            "runs came back exactly where the odometry says, without any scatter, which no "
+            "measured reference shows: a ground truth that reproduces the odometry, or a "
+            "simulation without noise",
+            REFERENCES,
+        )
+    ]
+
+
 def _few_runs(evidence: Evidence) -> list[_Finding]:
     advice = f"drive at least {MIN_RUNS} runs each way (the paper drove 5)"
     if evidence.runs_per_direction is not None:
@@ -425,6 +453,7 @@ def judge(estimate: ErrorEstimate, test: SquareTest, evidence: Evidence) -> Verd
                 "more runs, squares in both directions, longer paths",
             )
         )
+    found += _no_return_error(evidence)
     found += _intervals(estimate, test)
     found += _misfit(estimate, evidence)
     found += _model_check(estimate, test)

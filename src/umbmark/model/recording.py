@@ -150,6 +150,8 @@ class Recording:
     truth_at_stops : bool
         The ground truth was measured only where the robot stood (a self-calibration's
         corner fixes): few wheel samples have one, as intended.
+    truth_name : str
+        The ground truth, for messages (``"the ground truth /odom"``).
     """
 
     name: str
@@ -166,6 +168,7 @@ class Recording:
 
     wheel_sample: str = "wheel sample"
     truth_at_stops: bool = False
+    truth_name: str = "the ground truth"
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,9 @@ motion was steady:
   robot barely turned across it (one arc ends at most :data:`MAX_ARC_ERROR` from any
   path of the same length and turn, whatever the speeds did: a recorder's hiccup while
   the robot speeds up);
-- otherwise the path across it is unknown: the run holding it is left out (see
+- otherwise the path across it is unknown: the run holding it is left out, or, where
+  the recording holds no loop to tell runs apart (its motion is one run of any shape),
+  the recording is split there and the motion on either side is a run of its own (see
   :func:`umbmark.runs.logged.runs_from_recordings`).
 
 Times in messages are seconds from the recording's first wheel sample, as ``--windows``

@@ -335,8 +335,16 @@ def _read_bag(
         truth=read.truth,
         path=str(source),
         wheel_sample=_wheel_sample(bag),
+        truth_name=_truth_name(bag),
     )
     return [recording], None, None
+
+
+def _truth_name(bag: BagOptions) -> str:
+    """The ground truth of ``bag``, for messages: ``the ground truth /odom``."""
+    if bag.truth_topic is not None:
+        return f"the ground truth {bag.truth_topic}"
+    return f"the ground truth {bag.tf_parent} -> {bag.tf_child}"
 
 
 def _wheel_sample(bag: BagOptions) -> str:

@@ -24,8 +24,15 @@ from umbmark.model.recording import DEFAULT_MAX_GAP, Recording, RunLog, gap_mask
 from umbmark.model.runs import EndPose, Run
 from umbmark.runs.association import Association, associate
 from umbmark.runs.gaps import Gap, describe_gaps, find_gaps
+from umbmark.runs.reproduced import check_not_reproduced
 from umbmark.runs.rests import Reset, find_resets
-from umbmark.runs.segmentation import LeftOut, SplitOptions, find_runs, split_by_windows
+from umbmark.runs.segmentation import (
+    LeftOut,
+    SplitOptions,
+    find_runs,
+    split_by_windows,
+    trim_to_motion,
+)
 
 __all__ = [
     "LoadedRuns",
@@ -312,14 +319,18 @@ def runs_from_recordings(
 
     Gaps in the wheel samples (:mod:`umbmark.runs.gaps`) are bridged with a note, or
     the run holding one is left out with a note; so is a run (a window, a whole
-    recording) across which the ground truth was reset.
+    recording) across which the ground truth was reset. A recording in which no loop
+    tells runs apart (a drive of any shape) is split at such a gap instead, the motion
+    on either side a run. A ground truth that the wheels' odometry reproduces exactly is
+    refused (:mod:`umbmark.runs.reproduced`).
 
     Raises
     ------
     InputError
         If a recording has no ground truth, its wheels never turn, its ground truth never
         moves or jumps, a wheel jumps in one sample (see :func:`check_motion`), a run has
-        no motion, its odometry overflows, or no run is found or left at all.
+        no motion, its odometry overflows, its ground truth is the wheels' odometry, or no
+        run is found or left at all.
     """
     out = LoadedRuns(runs=[])
     left: list[tuple[str, str]] = []
@@ -336,14 +347,17 @@ def runs_from_recordings(
         # A truth measured only where the robot stood matches few samples, as intended.
         if association.fraction < 0.9 and not recording.truth_at_stops:
             out.notes.append(f"{recording.name}: only {association.describe()}")
-        segments, left_out = _segments(
+        segments, left_out, whole = _segments(
             recording, truth, split, windows, split_options, out, params, method
         )
         gaps = find_gaps(recording.wheels.time, recording.wheels.angles, params)
+        if whole:  # a path of any shape: what a gap leaves on either side is a run
+            segments = _split_at_gaps(recording, segments, gaps, split_options, out.notes)
         found = 0
+        first_run = len(out.runs)
         for first, last in segments:
             label = recording.name if len(segments) == 1 else f"{recording.name} run {found + 1}"
-            why = _broken(recording, truth, gaps, first, last, split_options)
+            why = _broken(recording, truth, gaps, first, last, split_options, params)
             if why is not None:
                 left_out.append(LeftOut(first, last, why))
                 continue
@@ -371,6 +385,8 @@ def runs_from_recordings(
             left.append((recording.name, line))
         if found == 0:
             out.notes.append(f"{recording.name}: no run found")
+        logs = [run.log for run in out.runs[first_run:] if run.log is not None]
+        check_not_reproduced(recording, logs, params)
     if not out.runs:
         if left:
             name, line = left[0]
@@ -389,28 +405,72 @@ def _segments(
     out: LoadedRuns,
     params: WheelParams,
     method: IntegrationMethod,
-) -> tuple[list[tuple[int, int]], list[LeftOut]]:
-    """The sample ranges of the runs of ``recording``, and the motion left out; the whole
-    recording is checked first unless ``windows`` select parts of it."""
+) -> tuple[list[tuple[int, int]], list[LeftOut], bool]:
+    """The sample ranges of the runs of ``recording``, the motion left out, and whether
+    no run could be told apart (the recording's motion is one run of any shape); the
+    whole recording is checked first unless ``windows`` select parts of it."""
     time, angles = recording.wheels.time, recording.wheels.angles
     if split == "windows":
-        return split_by_windows(time, windows, recording.where), []
+        return split_by_windows(time, windows, recording.where), [], False
     headings = recording.truth is None or recording.truth.headings
     if not headings:  # a position-only reference: the turns come from the odometry
         log = RunLog(time=time - time[0], wheel_angles=angles, truth=truth)
         truth = truth.copy()
         truth[:, 2] = np.where(_known(truth, False), log.odometry(params, method)[:, 2], np.nan)
     rest_speed = (split_options or SplitOptions()).rest_speed
-    resets = find_resets(time, angles, truth, rest_speed)
+    radius = _jump_radius(recording, params)
+    resets = find_resets(time, angles, truth, rest_speed, radius)
     check_motion(recording.where, time, angles, truth, headings=headings, resets=resets)
     if split == "none":
-        return [(0, time.size - 1)], []
-    found = find_runs(time, angles, truth, split_options)
+        return [(0, time.size - 1)], [], False
+    found = find_runs(time, angles, truth, split_options, radius)
     out.notes.extend(
         info(f"{recording.name}: {reset.describe(time)}: a run ends there")
         for reset in found.resets
     )
-    return found.runs, list(found.left_out)
+    return found.runs, list(found.left_out), found.whole
+
+
+def _split_at_gaps(
+    recording: Recording,
+    segments: list[tuple[int, int]],
+    gaps: Sequence[Gap],
+    split_options: SplitOptions | None,
+    notes: list[str],
+) -> list[tuple[int, int]]:
+    """``segments`` (a recording's motion as one run) cut at the gaps that are not
+    bridged into stretches, each trimmed to its motion; a line for each cut to ``notes``."""
+    rest_speed = (split_options or SplitOptions()).rest_speed
+    time, angles = recording.wheels.time, recording.wheels.angles
+    out: list[tuple[int, int]] = []
+    for first, last in segments:
+        cuts = [g for g in gaps if first <= g.index < last and not g.bridged]
+        starts = [first, *(g.index + 1 for g in cuts)]
+        ends = [*(g.index for g in cuts), last]
+        pieces = []
+        for a, b in zip(starts, ends, strict=True):
+            if b > a:
+                pieces += [
+                    (a + c, a + d)
+                    for c, d in trim_to_motion(time[a : b + 1], angles[a : b + 1], rest_speed)
+                ]
+        for gap in cuts:
+            notes.append(
+                info(
+                    f"{recording.name}: split at the gap: {gap.describe(recording.wheel_sample)}:"
+                    f" {gap.why}; the motion before and after it are runs apart"
+                )
+            )
+        out += pieces
+    return out
+
+
+def _jump_radius(recording: Recording, params: WheelParams) -> float | None:
+    """The wheel radius [m] the ground truth's jumps are judged with
+    (:func:`umbmark.runs.rests.find_resets`); None for a truth measured only at stops."""
+    if recording.truth_at_stops:
+        return None
+    return 0.5 * params.wheel_diameter * max(params.c_left, params.c_right)
 
 
 def _broken(
@@ -420,6 +480,7 @@ def _broken(
     first: int,
     last: int,
     split_options: SplitOptions | None,
+    params: WheelParams,
 ) -> str | None:
     """Why the run from sample ``first`` to ``last`` cannot be used, or None: a gap that is
     not bridged, or a reset of the ground truth inside it."""
@@ -429,7 +490,8 @@ def _broken(
     time, angles = recording.wheels.time, recording.wheels.angles
     sl = slice(first, last + 1)
     rest_speed = (split_options or SplitOptions()).rest_speed
-    resets = find_resets(time[sl], angles[sl], truth[sl], rest_speed)
+    radius = _jump_radius(recording, params)
+    resets = find_resets(time[sl], angles[sl], truth[sl], rest_speed, radius)
     inside = [r for r in resets if r.last > 0 and r.first < last - first]
     if inside:
         seen = inside[0].describe(time[first:], float(time[0]))

@@ -18,6 +18,16 @@ A *reset* is a stop across which the ground truth moved by more than
 :data:`RESET_DISTANCE` or turned by more than :data:`RESET_TURN`: the wheels stood still,
 so the robot was carried, or a simulation put back, to another place. A run cannot go on
 across it.
+
+Given the wheel radius, a reset is also a *jump*: a step of the ground truth between two
+samples larger than the wheels allow in that time (:data:`JUMP_ALLOWANCE` times the two
+wheels' travel, enough for a tracked point two wheelbases off the axle) by more than
+:data:`JUMP_FACTOR` times the reference's own scatter (the 99th percentile of that excess
+over the recording) and at least :data:`MIN_JUMP`: a simulator's world reset that puts
+the robot back at its start between squares, however little it strayed from there, and
+whether or not the wheels stood still meanwhile. A localization that corrects itself by
+centimetres (AMCL) scatters by as much, and stays below; a jump that the next one undoes
+(:data:`GLITCH_RETURN`) is a tracker that lost the robot for a while, no reset.
 """
 
 from __future__ import annotations
@@ -31,6 +41,10 @@ from numpy.typing import NDArray
 
 __all__ = [
     "CREEP_WINDOW",
+    "GLITCH_RETURN",
+    "JUMP_ALLOWANCE",
+    "JUMP_FACTOR",
+    "MIN_JUMP",
     "RESET_DISTANCE",
     "RESET_TURN",
     "TWITCH_ANGLE",
@@ -57,6 +71,18 @@ RESET_DISTANCE = 0.1
 #: ... or turning this far [rad] while the wheels stand still is a reset (a localization
 #: that corrects itself by a few centimetres at a stop is not).
 RESET_TURN = 0.2
+#: A step of the ground truth is within what the wheels allow up to this many times the
+#: two wheels' travel in that time ...
+JUMP_ALLOWANCE = 2.0
+#: ... beyond which it is a jump when it exceeds this many times the reference's scatter
+#: (the 99th percentile of the excess over the recording) ...
+JUMP_FACTOR = 10.0
+#: ... and this [m].
+MIN_JUMP = 0.01
+#: A jump the next one undoes to within this share of the larger is no reset but a
+#: tracker that lost the robot and found it again (left to the checks of the ground
+#: truth's steps and to the fit).
+GLITCH_RETURN = 0.25
 
 
 def still_intervals(time: FloatArray, angles: FloatArray, rest_speed: float) -> BoolArray:
@@ -142,6 +168,9 @@ class Reset:
         How far the ground truth moved across it [m].
     turned : float
         How far it turned [rad].
+    allowed : float or None
+        A jump (see the module): how far the wheels allow the ground truth to move
+        meanwhile [m]; None for a reset found at a stop.
     """
 
     first: int
@@ -149,12 +178,19 @@ class Reset:
     at: int
     moved: float
     turned: float
+    allowed: float | None = None
 
     def describe(self, time: FloatArray, origin: float | None = None) -> str:
         """``the ground truth was reset at 35.20 s (it moved 0.50 m and turned 0.10 rad
         while the wheels stood still)``; ``time`` holds the sample times the indices
         count, ``origin`` the time [s] times are given from (default ``time[0]``)."""
         at = float(time[self.at] - (time[0] if origin is None else origin))
+        if self.allowed is not None:
+            return (
+                f"the ground truth was reset at {at:.2f} s (it jumped {self.moved:.3f} m in "
+                f"{float(time[self.last] - time[self.first]):.2f} s, where the wheels allow "
+                f"{self.allowed:.3f} m)"
+            )
         return (
             f"the ground truth was reset at {at:.2f} s (it moved {self.moved:.2f} m and "
             f"turned {self.turned:.2f} rad while the wheels stood still)"
@@ -162,10 +198,70 @@ class Reset:
 
 
 def find_resets(
-    time: FloatArray, angles: FloatArray, poses: FloatArray, rest_speed: float
+    time: FloatArray,
+    angles: FloatArray,
+    poses: FloatArray,
+    rest_speed: float,
+    wheel_radius: float | None = None,
 ) -> list[Reset]:
     """The stops across which the ground truth ``poses`` (shape (n, 3), NaN rows where
-    unknown, theta unwrapped) moved (see the module docstring)."""
+    unknown, theta unwrapped) moved and, given ``wheel_radius`` [m], its jumps (see the
+    module docstring), in time order."""
+    found = _stop_resets(time, angles, poses, rest_speed)
+    if wheel_radius is None:
+        return found
+    all_stops = stops(time, angles, rest_speed)
+    for jump in _jumps(time, angles, poses, wheel_radius):
+        if any(r.first <= jump.first and jump.last <= r.last for r in found):
+            continue  # a reset at a stop already
+        inside = [(a, b) for a, b in all_stops if a <= jump.first and jump.last <= b]
+        if inside:  # at a stop: a run ends at the stop, as at any reset there
+            a, b = inside[0]
+            found.append(Reset(a, b, jump.at, jump.moved, jump.turned, jump.allowed))
+        else:
+            found.append(jump)
+    return sorted(found, key=lambda r: r.first)
+
+
+def _jumps(
+    time: FloatArray, angles: FloatArray, poses: FloatArray, wheel_radius: float
+) -> list[Reset]:
+    """The steps of the ground truth the wheels cannot explain (see the module)."""
+    ok = np.all(np.isfinite(poses[:, :2]), axis=1)
+    both = ok[:-1] & ok[1:]
+    if np.count_nonzero(both) < 2:
+        return []
+    step = np.hypot(*np.diff(poses[:, :2], axis=0).T)
+    travel = wheel_radius * np.sum(np.abs(np.diff(angles, axis=0)), axis=1)
+    allowed = JUMP_ALLOWANCE * travel
+    excess = np.where(both, step - allowed, 0.0)
+    scatter = float(np.percentile(np.maximum(excess[both], 0.0), 99))
+    limit = max(MIN_JUMP, JUMP_FACTOR * scatter)
+    # A reference slower than the wheels spreads one jump over several wheel intervals.
+    found = _true_runs(excess > limit)
+    shifts = [poses[stop, :2] - poses[first, :2] for first, stop in found]
+    glitch = set()
+    for k in range(len(found) - 1):  # out and back again: a tracker that lost the robot
+        back = float(np.hypot(*(shifts[k] + shifts[k + 1])))
+        if back < GLITCH_RETURN * max(float(np.hypot(*shifts[k])), float(np.hypot(*shifts[k + 1]))):
+            glitch |= {k, k + 1}
+    out = []
+    for k, (first, stop) in enumerate(found):
+        if k in glitch:
+            continue
+        a, b = poses[first], poses[stop]
+        moved = math.hypot(float(b[0] - a[0]), float(b[1] - a[1]))
+        turn = abs(float(b[2] - a[2])) if np.isfinite(a[2]) and np.isfinite(b[2]) else 0.0
+        largest = first + int(np.argmax(step[first:stop]))
+        wheels = float(np.sum(allowed[first:stop]))
+        out.append(Reset(first, stop, largest + 1, moved, turn, wheels))
+    return out
+
+
+def _stop_resets(
+    time: FloatArray, angles: FloatArray, poses: FloatArray, rest_speed: float
+) -> list[Reset]:
+    """The resets at stops (see the module docstring)."""
     known = np.all(np.isfinite(poses), axis=1)
     out = []
     for first, last in stops(time, angles, rest_speed):

@@ -48,6 +48,7 @@ __all__ = [
     "find_runs",
     "split_by_rests",
     "split_by_windows",
+    "trim_to_motion",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -112,11 +113,15 @@ class Segmentation:
     left_out : list of LeftOut
         Motion left out: ended by a reset before it closed its square, or closing the
         square more than once with no stop between.
+    whole : bool
+        No run could be told apart: ``runs`` is the recording's motion as one run (a
+        path of any shape, for the estimators of whole trajectories).
     """
 
     runs: list[tuple[int, int]]
     resets: list[Reset] = field(default_factory=list)
     left_out: list[LeftOut] = field(default_factory=list)
+    whole: bool = False
 
 
 def split_by_rests(
@@ -137,6 +142,7 @@ def find_runs(
     angles: FloatArray,
     poses: FloatArray,
     options: SplitOptions | None = None,
+    wheel_radius: float | None = None,
 ) -> Segmentation:
     """Runs of a recording, split at rests near the start and at resets of the truth.
 
@@ -148,6 +154,8 @@ def find_runs(
     poses : array, shape (n, 3)
         Ground truth (or odometry) ``x, y, theta`` at the same samples, NaN where unknown;
         theta unwrapped.
+    wheel_radius : float, optional
+        [m]: the ground truth's jumps are resets too (:func:`umbmark.runs.rests.find_resets`).
 
     Returns
     -------
@@ -162,9 +170,9 @@ def find_runs(
     options = options or SplitOptions()
     known = np.all(np.isfinite(poses), axis=1)
     all_stops = stops(time, angles, options.rest_speed)
-    resets = find_resets(time, angles, poses, options.rest_speed)
+    resets = find_resets(time, angles, poses, options.rest_speed, wheel_radius)
     if not known.any():
-        return Segmentation(runs=_trim_to_motion(time, angles, options))
+        return Segmentation(runs=trim_to_motion(time, angles, options.rest_speed), whole=True)
     radius = options.return_radius
     if radius is None:
         first = poses[np.argmax(known)]
@@ -173,6 +181,8 @@ def find_runs(
     finder = _Finder(time, angles, poses, known, radius, options, resets)
     reset_at = {r.first for r in resets}
     rests = [(i, j) for i, j in all_stops if time[j] - time[i] >= options.min_rest or i in reset_at]
+    # a jump while the wheels turned ends a run as a reset at a stop does
+    rests = sorted({*rests, *((r.first, r.last) for r in resets)})
     runs, left_out = finder.loops(rests, 0, time.size - 1, open_end=True)
     kept: list[tuple[int, int]] = []
     for a, b in runs:
@@ -193,7 +203,8 @@ def find_runs(
             else:
                 kept.append((c, d))
     if not kept and not left_out:
-        kept = _trim_to_motion(time, angles, options)
+        motion = trim_to_motion(time, angles, options.rest_speed)
+        return Segmentation(runs=motion, resets=resets, whole=True)
     return Segmentation(runs=sorted(kept), resets=resets, left_out=left_out)
 
 
@@ -304,13 +315,15 @@ class _Finder:
         )
 
 
-def _trim_to_motion(
-    time: FloatArray, angles: FloatArray, options: SplitOptions
+def trim_to_motion(
+    time: FloatArray, angles: FloatArray, rest_speed: float
 ) -> list[tuple[int, int]]:
-    """The whole recording as one run, without its still start and end."""
+    """The whole recording (``time`` (n,), wheel ``angles`` (n, 2)) as one run ``(first,
+    last)``, without its still start and end (wheel speeds under ``rest_speed``); empty
+    if the wheels never turn."""
     dt = np.diff(time)
     speed = np.abs(np.diff(angles, axis=0)) / dt[:, None]
-    moving = np.flatnonzero(np.any(speed >= options.rest_speed, axis=1))
+    moving = np.flatnonzero(np.any(speed >= rest_speed, axis=1))
     if moving.size == 0:
         return []
     return [(int(moving[0]), int(moving[-1]) + 1)]

@@ -31,6 +31,17 @@ NAV_SAT_FIX = "sensor_msgs/msg/NavSatFix"
 POSITION_TYPES = (POINT_STAMPED, NAV_SAT_FIX)
 #: Everything a ground truth may be read from.
 REFERENCE_TYPES = (*TRUTH_TYPES, MODEL_STATES, *POSITION_TYPES)
+#: References without a header: stamped with the bag's receive times, the recording's
+#: clock (``umbmark info`` suggests ``--time-source bag`` for them; the reader reads the
+#: wheels on that clock too where their header stamps are on another).
+UNSTAMPED_REFERENCES = (MODEL_STATES,)
+
+
+def unstamped(msgtype: str | None) -> bool:
+    """Whether a reference of ``msgtype`` has no header stamps (:data:`UNSTAMPED_REFERENCES`)."""
+    return msgtype in UNSTAMPED_REFERENCES
+
+
 STRING = "std_msgs/msg/String"
 
 # std_msgs number types: numpy type code of ``data`` and bits of a counter that wraps

@@ -52,7 +52,7 @@ read, a topic read twice (finding the wheel joints) counted twice.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -66,6 +66,7 @@ from umbmark.sources.bag.msgtypes import (
     REFERENCE_TYPES,
     TF_STATIC_TOPIC,
     TF_TOPIC,
+    unstamped,
 )
 from umbmark.sources.bag.options import BagOptions, check_options
 from umbmark.sources.bag.truth import independence, references, transforms
@@ -195,11 +196,52 @@ def _planned(
 
 def _read(reader: AnyReader, topics: dict[str, str], options: BagOptions, src: str) -> BagRead:
     """What :func:`read_recording` returns, from the open bag."""
-    odometry: PoseSeries | None = None
     header = options.time_source == "header"
+    wheels, odometry = _read_wheels(reader, topics, options, src)
+    truth: PoseSeries | None = None
+    notes: list[str] = []
+    if options.truth_topic is not None:
+        truth = _read_truth_topic(reader, topics, options, src, notes)
+    elif options.tf_parent is not None and options.tf_child is not None:
+        edges = transforms.read_edges(reader, topics, src, header=header)
+        if options.odom_tf is not None:
+            independence.check_chain(
+                edges, (options.tf_parent, options.tf_child), options.odom_tf, src
+            )
+        time, poses = transforms.chain_poses(edges, options.tf_parent, options.tf_child, src)
+        truth = PoseSeries(time=time, poses=poses)
+    if truth is not None and header and unstamped(topics.get(options.truth_topic or "")):
+        stamped = wheels.time
+        if stamped[0] > truth.time[-1] or stamped[-1] < truth.time[0]:
+            wheels, odometry = _read_wheels(
+                reader, topics, replace(options, time_source="bag"), src
+            )
+            notes.append(
+                info(
+                    f"ground truth {options.truth_topic} has no header stamps (the bag's "
+                    f"receive times) and the wheels' header stamps ({stamped[0]:.3f} to "
+                    f"{stamped[-1]:.3f} s, a simulation's clock) do not overlap them: both read "
+                    "on the bag's receive clock (--time-source bag, as umbmark info suggests)"
+                )
+            )
+    if odometry is not None and truth is not None:
+        odom = options.odom_topic or " -> ".join(options.odom_tf or ())
+        ref = options.truth_topic or f"{options.tf_parent} -> {options.tf_child}"
+        what = f"ground truth {ref} and odometry {odom}"
+        independence.check_not_reproduced(odometry, truth, what, src)
+    return BagRead(wheels, truth, tuple(notes))
+
+
+def _read_wheels(
+    reader: AnyReader, topics: dict[str, str], options: BagOptions, src: str
+) -> tuple[WheelSeries, PoseSeries | None]:
+    """The wheel rotation as the options say, and the controller's odometry where it is
+    read from that."""
+    odometry: PoseSeries | None = None
     if options.odom_topic is not None or options.odom_tf is not None:
         wheels, odometry = _read_odometry(reader, topics, options, src)
     elif options.left_wheel_frame is not None and options.right_wheel_frame is not None:
+        header = options.time_source == "header"
         wheels = read_wheel_transforms(
             reader, topics, options.left_wheel_frame, options.right_wheel_frame, header, src
         )
@@ -217,24 +259,7 @@ def _read(reader: AnyReader, topics: dict[str, str], options: BagOptions, src: s
         )
     else:
         wheels = read_joint_states(reader, topics, options, src)
-    truth: PoseSeries | None = None
-    notes: list[str] = []
-    if options.truth_topic is not None:
-        truth = _read_truth_topic(reader, topics, options, src, notes)
-    elif options.tf_parent is not None and options.tf_child is not None:
-        edges = transforms.read_edges(reader, topics, src, header=header)
-        if options.odom_tf is not None:
-            independence.check_chain(
-                edges, (options.tf_parent, options.tf_child), options.odom_tf, src
-            )
-        time, poses = transforms.chain_poses(edges, options.tf_parent, options.tf_child, src)
-        truth = PoseSeries(time=time, poses=poses)
-    if odometry is not None and truth is not None:
-        odom = options.odom_topic or " -> ".join(options.odom_tf or ())
-        ref = options.truth_topic or f"{options.tf_parent} -> {options.tf_child}"
-        what = f"ground truth {ref} and odometry {odom}"
-        independence.check_not_reproduced(odometry, truth, what, src)
-    return BagRead(wheels, truth, tuple(notes))
+    return wheels, odometry
 
 
 def _read_odometry(
@@ -275,15 +300,10 @@ def _read_truth_topic(
     header = options.time_source == "header"
     if msgtype == MODEL_STATES:
         truth, model = references.read_model_states(reader, topics, topic, options.truth_model, src)
-        clock = (
-            "; the wheels use their header stamps: if the two clocks differ, give --time-source bag"
-            if header
-            else ""
-        )
         notes.append(
             info(
                 f"ground truth: model {model} of {topic}, which has no header: stamped with the "
-                f"bag's receive times{clock}"
+                "bag's receive times"
             )
         )
         return truth

@@ -20,7 +20,10 @@ measured. Three ways to be the same data are refused, each with its reason:
 Wheels read from joint states, encoder counts or wheel transforms are not judged by
 these rules: a simulator's ground truth (Gazebo's ``p3d`` odometry, its model states, or a
 diff-drive plugin whose ``/odom`` comes from the world pose) may agree closely with
-perfect simulated wheels, and is a valid reference for them.
+perfect simulated wheels, and is a valid reference for them. A reference that the wheels'
+odometry reproduces *exactly*, to rounding, whatever the wheels are read from and
+whatever the topic (the controller's ``/odom`` against the ``/joint_states`` it was
+computed from), is refused once the runs are found: :mod:`umbmark.runs.reproduced`.
 """
 
 from __future__ import annotations
@@ -35,6 +38,8 @@ from umbmark.model.recording import PoseSeries
 from umbmark.sources.bag.truth.transforms import Edge, chain_steps
 
 __all__ = [
+    "INSTEAD",
+    "REFERENCES",
     "REPRODUCED_SHARE",
     "check_chain",
     "check_distinct",
@@ -48,17 +53,19 @@ REPRODUCED_SHARE = 1e-4
 #: Shortest distance driven [m] over which the comparison means something.
 MIN_DRIVEN = 0.5
 
-_INSTEAD = (
+#: What to give instead of a reference that is the odometry, in any format ...
+REFERENCES = (
     "give a reference that does not come from the wheels (motion capture, a simulator's "
-    "ground truth, RTK GPS, a localization such as AMCL); umbmark info lists the candidates"
+    "ground truth, RTK GPS, a localization such as AMCL)"
 )
+#: ... and in a bag (every refusal here ends with it).
+INSTEAD = f"{REFERENCES}; umbmark info lists the candidates"
 
 
 def _refuse(problem: str, src: str, python: str | None = None) -> InputError:
     """The refusal; ``python``: the problem as Python callers name the options."""
     why = (
-        "calibrating the odometry against itself gives E_d = E_b = 1 whatever the robot; "
-        f"{_INSTEAD}"
+        f"calibrating the odometry against itself gives E_d = E_b = 1 whatever the robot; {INSTEAD}"
     )
     return InputError(
         f"{problem}: {why}",
