@@ -121,6 +121,15 @@ def test_the_readme_starts_with_the_two_commands():
     assert second.body == ci + "\n"
 
 
+def test_ci_runs_the_linters_and_the_type_check_before_the_tests():
+    """ruff and mypy run in CI's command, not inside pytest (where they cost the quick loop
+    a minute): lint, format, strict types, then the tests."""
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").rstrip("\n").splitlines()[-1]
+    steps = ci.split(" && ")
+    tail = [".venv/bin/ruff check .", ".venv/bin/ruff format --check .", ".venv/bin/mypy"]
+    assert steps[-4:] == [*tail, ".venv/bin/python -m pytest"]
+
+
 # (b) Links stay in the repository and land -------------------------------------------
 
 
