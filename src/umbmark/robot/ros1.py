@@ -103,12 +103,12 @@ def ros1_problem(*modules: str) -> str | None:
             importlib.import_module(name)
         except ImportError as exc:
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            missing = getattr(exc, "name", None)
-            if not isinstance(exc, ModuleNotFoundError) or not missing:
-                package = ROS1_PACKAGES.get(name.split(".")[0], "its package")
+            missing = exc.name if isinstance(exc, ModuleNotFoundError) else None
+            if not missing:
+                owner = ROS1_PACKAGES.get(name.split(".")[0], "its package")
                 return (
                     f"--ros1 cannot import {name} ({detail}): source your ROS 1 setup, or "
-                    f"install {package}"
+                    f"install {owner}"
                 )
             top = missing.split(".")[0]
             needed = "" if top == name.split(".")[0] else f" (which {name} imports)"
