@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -251,3 +252,12 @@ ROS1_TEST_MODULES = (
     "dynamic_reconfigure.server",
     "dynamic_reconfigure.encoding",
 )
+
+
+@dataclass(frozen=True)
+class DemoCommand:
+    """What ``umbmark demo --out FOLDER`` printed and wrote (the ``demo_command`` fixture)."""
+
+    folder: Path
+    stdout: str
+    stderr: str

@@ -79,12 +79,12 @@ def test_replay_plot_is_written(real: Path, tmp_path: Path) -> None:
     assert float(pixels.std()) > 0.05
 
 
-def test_every_figure_has_units_and_a_name(tmp_path: Path) -> None:
+def test_every_figure_has_units_and_a_name(tmp_path: Path, demo: umbmark.DemoReport) -> None:
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))
     figures = {
         "calibrate": umbmark.calibrate(str(table), side_length=4, wheelbase=0.34, unit="mm"),
-        "demo": umbmark.demo(out=tmp_path / "demo"),
+        "demo": demo,
         "fig4": umbmark.reproduce_fig4(),
     }
     names = {"calibrate": str(table), "demo": "Virtual LabMate", "fig4": "Wheelbase tuned"}

@@ -16,21 +16,14 @@ from typing import Any
 import pytest
 
 import umbmark
+from conftest import DemoCommand
 
 from helpers import run_cli
 
 
-@pytest.fixture(scope="module")
-def demo_out(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    """``umbmark demo`` as a user runs it: its folder and what it printed."""
-    out = tmp_path_factory.mktemp("demo") / "demo"
-    proc = run_cli("demo", "--out", str(out))
-    assert proc.returncode == 0, proc.stderr
-    return out, proc.stdout
-
-
-def test_demo_says_just_above_for_27_5_against_26_3(demo_out: tuple[Path, str]) -> None:
-    _, printed = demo_out
+def test_demo_says_just_above_for_27_5_against_26_3(demo_command: DemoCommand) -> None:
+    """``umbmark demo`` as a user runs it (the shared run, tests/conftest.py)."""
+    printed = demo_command.stdout
     after = next(line for line in printed.splitlines() if line.startswith("After calibration"))
     assert "E_max,syst = 27.5 mm > 3 x SEM = 26.3 mm" in after
     assert "(1.05 times 3 x SEM)" in after or "(1.04 times 3 x SEM)" in after
@@ -41,8 +34,8 @@ def test_demo_says_just_above_for_27_5_against_26_3(demo_out: tuple[Path, str]) 
     assert "well above the scatter" in before
 
 
-def test_one_verdict_on_terminal_page_and_json(demo_out: tuple[Path, str], tmp_path: Path) -> None:
-    folder, _ = demo_out
+def test_one_verdict_on_terminal_page_and_json(demo_command: DemoCommand, tmp_path: Path) -> None:
+    folder = demo_command.folder
     runs = folder / "runs_after.csv"
     common = [str(runs), "-L", "4", "-b", "0.34"]
     page = tmp_path / "after.html"

@@ -132,10 +132,9 @@ def test_simulate_logs_refuse_a_folder_with_runs_in_it(tmp_path):
     umbmark.simulate(runs=2, logs=folder, force=True)
 
 
-@pytest.mark.slow
-def test_demo_report_and_files(tmp_path):
-    out = tmp_path / "demo"
-    demo = umbmark.demo(out=out, seed=4)
+def test_demo_report_and_files(demo):
+    """The shared demo run (tests/conftest.py: seed 1, its own folder)."""
+    out = demo.files["plot"].parent
     data = demo.to_dict()
     for key in ("true_E_d", "true_E_b", "E_d", "E_b", "e_max_before", "e_max_after"):
         assert isinstance(data[key], float), key
@@ -149,7 +148,7 @@ def test_demo_report_and_files(tmp_path):
     again = _calibrate(out / "runs_before.csv")
     assert again["E_d"] == pytest.approx(data["E_d"], rel=1e-9)
     # Without a folder the library writes nothing.
-    assert umbmark.demo(seed=4).files == {}
+    assert umbmark.demo(seed=4, runs=2).files == {}
 
 
 @pytest.mark.slow
@@ -204,13 +203,11 @@ def test_simulate_command_prints_and_writes_what_the_library_returns(tmp_path):
     assert "--turn-angle 0 deg" in cli_error("simulate", "--path", "turn", "--turn-angle", "0")
 
 
-@pytest.mark.slow
-def test_demo_command_writes_its_folder(tmp_path):
-    out = tmp_path / "demo"
-    proc = run_cli("demo", "--out", str(out), "--seed", "2")
-    assert proc.returncode == 0, proc.stderr
-    assert re.search(r"E_max,syst before: [\d.]+ mm, after: [\d.]+ mm", proc.stdout)
-    assert f"umbmark: wrote {out / 'clusters.png'}" in proc.stderr
+def test_demo_command_writes_its_folder(demo_command):
+    """The shared ``umbmark demo --out FOLDER`` run (tests/conftest.py)."""
+    out = demo_command.folder
+    assert re.search(r"E_max,syst before: [\d.]+ mm, after: [\d.]+ mm", demo_command.stdout)
+    assert f"umbmark: wrote {out / 'clusters.png'}" in demo_command.stderr
     assert sorted(p.name for p in out.iterdir()) == [
         "clusters.png",
         "overlay.yaml",

@@ -357,13 +357,13 @@ def test_a_fit_that_diverges_says_why_and_what_to_try(tmp_path: Path):
 # --- the good cases stay "apply" -----------------------------------------------------
 
 
-def test_the_example_and_the_demo_apply(tmp_path: Path):
+def test_the_example_and_the_demo_apply(tmp_path: Path, demo: umbmark.DemoReport):
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))
     assert umbmark.calibrate(table, side_length=4, wheelbase=0.34, unit="mm").verdict.level == (
         "apply"
     )
-    assert umbmark.demo().report.verdict.level == "apply"
+    assert demo.report.verdict.level == "apply"
     square, _circles = umbmark.example_sessions(tmp_path / "real")
     assert square.parent.name == "square"
     assert umbmark.calibrate(square).verdict.level == "apply"
