@@ -24,7 +24,7 @@ from umbmark.estimators.trajectory_fit import fit_trajectories
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 
-from helpers import OPTIODOM, cli_json, run_cli
+from helpers import OPTIODOM, run_cli
 
 #: Radius 1 m: wheel angles are travel [m]; wheelbase 0.2 m.
 UNIT = WheelParams(wheelbase=0.2, wheel_diameter=2.0)
@@ -254,7 +254,6 @@ def test_validate_says_what_its_figures_cover(folders):
     assert data["coverage"]["not_held_out"] == ["arc"]
     assert data["folds"][0]["motions"] == ["straight", "spot"]
     sources = [str(p) for p in folders["squares"]]
-    assert cli_json("validate", *sources, "--methods", "trajectory,trajectory-scrub") == data
     printed = run_cli("validate", *sources, "--methods", "trajectory")
     assert printed.returncode == 0, printed.stderr
     assert (
