@@ -324,6 +324,7 @@ def test_bag_of_controller_odometry_recovers_the_robots_errors(
     assert est.E_b == pytest.approx(E_B, abs=5e-4)
 
 
+@pytest.mark.slow
 def test_odometry_bag_through_the_command_and_its_refusals(tmp_path, session):
     bag = write_odometry_bag(tmp_path / "odom", "sqlite3", session, Humble(0.34, 0.075, 0.075))
     params = tmp_path / "diff_cont.yaml"

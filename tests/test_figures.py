@@ -131,6 +131,7 @@ def test_calibrate_table_keeps_values_whole(real: Path, tmp_path: Path) -> None:
     assert " ───" in out  # the rule under the headers
 
 
+@pytest.mark.slow
 def test_replay_info_validate_history_tables_keep_rows_whole(real: Path, tmp_path: Path) -> None:
     square, circles = str(real / SQUARE), str(real / CIRCLES)
     result = real.parent / "square.json"

@@ -249,6 +249,7 @@ def test_trend_figure_draws_the_recorded_calibrations(tmp_path: Path) -> None:
     assert "drift between calibrations 1 and 3" in title  # E_b moved by 0.02, ~40 se
 
 
+@pytest.mark.slow
 def test_history_plot_command_writes_png_svg_pdf(tmp_path: Path) -> None:
     from matplotlib.image import imread
 

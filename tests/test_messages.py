@@ -70,6 +70,7 @@ def test_the_parameters_of_the_last_applied_calibration_are_a_note(tmp_path: Pat
     assert line.startswith("umbmark: robot r: taken as active during the runs, the new param")
 
 
+@pytest.mark.slow
 def test_what_a_bag_says_of_itself_is_a_note(tmp_path: Path):
     """The wheels from the robot description, the model-state truth stamped with receive
     times: what was read and how, nothing doubtful."""

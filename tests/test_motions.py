@@ -223,6 +223,7 @@ def test_auto_does_not_pick_the_scrub_model_for_a_pool_of_squares(folders):
     ) in note
 
 
+@pytest.mark.slow
 def test_auto_picks_the_scrub_model_where_the_recordings_cover_arcs(folders):
     checked = umbmark.validate(*folders["mixed"], methods=["trajectory", "trajectory-scrub"])
     assert all(fold.refused == {} for fold in checked.folds)
@@ -237,6 +238,7 @@ def test_auto_picks_the_scrub_model_where_the_recordings_cover_arcs(folders):
     assert report.model_fit.spot_wheelbase is not None
 
 
+@pytest.mark.slow
 def test_validate_says_what_its_figures_cover(folders):
     report = umbmark.validate(*folders["squares"], methods=["trajectory", "trajectory-scrub"])
     assert report.covered == ("straight", "spot")

@@ -142,6 +142,7 @@ def test_temporary_file_removed_on_any_exception(
     assert target.read_text() == "old\n"
 
 
+@pytest.mark.slow
 def test_every_written_file_reported(runs: Path, tmp_path: Path) -> None:
     outputs = {
         "-o": tmp_path / "r.json",

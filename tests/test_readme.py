@@ -300,7 +300,11 @@ def test_every_readme_section_with_commands_is_checked():
 
 
 #: Sections whose commands take more than a few seconds (validate: about 10 s).
-SLOW_SECTIONS = {"Quick start: motion capture or run logs"}
+SLOW_SECTIONS = {
+    "Quick start: motion capture or run logs",
+    "Quick start: the robot calibrates itself",
+    "Quick start: a ROS bag",
+}
 
 
 def test_the_slow_sections_are_readme_sections():
@@ -324,6 +328,7 @@ def test_the_readme_commands_run_as_written_and_print_what_it_quotes(section, tm
     _check_quotes(mine, outputs, prose(sections(text)[section]))
 
 
+@pytest.mark.slow
 def test_the_quoted_figures_are_todays(tmp_path):
     """The demo's figures (README and docs/paper.md) and the tape-measure quick start's,
     as the commands print them today (quick: the two commands alone, not the whole

@@ -480,6 +480,7 @@ def _check_in_browser(browser: Chromium, page: Path, figures: int) -> None:
     assert browser.errors() == []
 
 
+@pytest.mark.slow
 def test_two_pass_page_in_headless_chromium(
     browser: Chromium, two_passes: tuple[Path, Path], tmp_path: Path
 ) -> None:

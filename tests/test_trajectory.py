@@ -203,6 +203,7 @@ def test_time_offset_is_found_and_can_be_left_out():
     assert fixed.rms_heading > 3 * fit.rms_heading  # 40 ms of turning left unexplained
 
 
+@pytest.mark.slow
 def test_standard_errors_are_honest():
     """95 % intervals cover the truth about 95 % of the time over many noisy sessions.
 

@@ -58,6 +58,7 @@ def test_validation_needs_recorded_runs(table):
     assert "methods='median'" in api_error(umbmark.validate, path, methods=["median"])
 
 
+@pytest.mark.slow
 def test_method_auto_takes_the_recommendation(sessions):
     report = umbmark.calibrate(*sessions, method="auto")
     checked = umbmark.validate(*sessions)
@@ -70,6 +71,7 @@ def test_validate_command_names_a_missing_source_plainly():
     assert "needs" not in cli_error("validate", "nothing.csv")
 
 
+@pytest.mark.slow
 def test_study_reports_what_each_estimator_reaches(monkeypatch):
     monkeypatch.setattr(study_module, "CHUNK", 3)  # several chunks, one worker
     report = umbmark.study(trials=6, methods=["truth", "exact"], workers=1, seed=4)

@@ -129,6 +129,7 @@ def lost_truth(tmp_path_factory: pytest.TempPathFactory) -> Path:
 BAG = ("--truth-topic", "/ground_truth/odom", "-L", "1")
 
 
+@pytest.mark.slow
 def test_a_trajectory_fit_to_a_lost_truth_is_not_applied(lost_truth: Path, tmp_path: Path):
     outputs = {"--yaml": tmp_path / "o.yaml", "--ros1-yaml": tmp_path / "p.yaml"}
     files = [a for flag, path in outputs.items() for a in (flag, str(path))]
@@ -207,6 +208,7 @@ class _Ids(HTMLParser):
             self.levels.append(a["data-level"] or "")
 
 
+@pytest.mark.slow
 def test_the_history_records_it_but_does_not_mark_it_applied(lost_truth: Path, tmp_path: Path):
     db = tmp_path / "h.sqlite3"
     where = ("--robot", "tb3", "--history", str(db))
@@ -302,6 +304,7 @@ def test_umbmark_report_shows_the_verdict(wide: Path, tmp_path: Path):
     assert "overlay-withheld" in html.ids
 
 
+@pytest.mark.slow
 def test_auto_finding_the_nominal_parameters_best_is_not_applied(tmp_path: Path):
     """Run logs of a robot with no error at all (true radii and wheelbase the nominal
     ones), with random slip: no estimator predicts held-out sessions better than the
