@@ -111,6 +111,7 @@ def log_result(session, tmp_path_factory):
     return umbmark.calibrate(folder).to_dict()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmt", ["ros1", "sqlite3", "mcap"])
 def test_bag_calibrates_like_the_same_session_as_a_log(tmp_path, session, log_result, fmt):
     bag = _write(tmp_path / "session", fmt, session)
@@ -126,6 +127,7 @@ def test_bag_calibrates_like_the_same_session_as_a_log(tmp_path, session, log_re
     assert assoc["largest_gap"] == pytest.approx(0.02, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_bag_replay_and_trajectory_fit(tmp_path, session):
     bag = _write(tmp_path / "session", "sqlite3", session)
     result = tmp_path / "fit.json"
@@ -141,6 +143,7 @@ def test_bag_replay_and_trajectory_fit(tmp_path, session):
     assert replay.mean_end_error_nominal > 0.02
 
 
+@pytest.mark.slow
 def test_the_command_names_the_bag_in_its_errors(tmp_path, session):
     """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
     bag = _write(tmp_path / "session", "ros1", session)
@@ -148,6 +151,7 @@ def test_the_command_names_the_bag_in_its_errors(tmp_path, session):
     assert err.startswith(f"umbmark: error: {bag}: ")
 
 
+@pytest.mark.slow
 def test_bad_recordings_give_one_line(tmp_path, session):
     def bad(source, **options) -> str:
         return api_error(umbmark.calibrate, source, **options)

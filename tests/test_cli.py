@@ -150,6 +150,7 @@ def test_json_is_the_reports_dictionary_for_a_real_session():
     assert printed == umbmark.calibrate(SQUARE, method="exact").to_dict()
 
 
+@pytest.mark.slow
 def test_output_files_and_what_was_written(table, tmp_path):
     out, overlay = tmp_path / "result.json", tmp_path / "overlay.yaml"
     proc = run_cli(
@@ -162,6 +163,7 @@ def test_output_files_and_what_was_written(table, tmp_path):
     assert overlay.read_text().startswith("# Written by umbmark")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
 def test_plot_on_a_machine_without_display(table, tmp_path, suffix):
     out = tmp_path / f"clusters{suffix}"
@@ -180,6 +182,7 @@ def test_plot_on_a_machine_without_display(table, tmp_path, suffix):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".clusters")]
 
 
+@pytest.mark.slow
 def test_bad_input_gives_one_line_and_exit_2(table, tmp_path):
     good = str(table(_rows(), name="good.csv"))
     assert cli_error("calibrate", good, "-L", "0", "-b", "0.34") == (

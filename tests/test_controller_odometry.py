@@ -295,6 +295,7 @@ diff_drive_controller:
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("fmt", "kind", "odom_as"),
     [("ros1", Humble, "topic"), ("sqlite3", Humble, "topic"), ("mcap", Jazzy, "tf")],
@@ -378,6 +379,7 @@ def test_odometry_bag_through_the_command_and_its_refusals(tmp_path, session):
     assert "too sparse" in line
 
 
+@pytest.mark.slow
 def test_wheel_joints_named_in_the_controller_file(tmp_path, session):
     """Joints no rule could tell apart (a spinning lidar, wheels called drive_l/drive_r)
     are read by the names of the controller's left_wheel_names / right_wheel_names."""

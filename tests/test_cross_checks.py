@@ -44,6 +44,7 @@ def test_implausible_parameters_are_refused_with_the_range(
     assert ("0.2 to 5" if option.startswith("current") else "0.001 to 10 m") in message
 
 
+@pytest.mark.slow
 def test_cli_refuses_huge_multiplier_without_numpy_warnings(runs_csv: Path) -> None:
     line = cli_error(
         "calibrate", str(runs_csv), "-L", "4", "-b", "0.34", "--unit", "mm",
@@ -124,6 +125,7 @@ def test_result_matches_its_own_source(logs: dict[str, Path]) -> None:
     assert "calibrated" in report.parameter_sets
 
 
+@pytest.mark.slow
 def test_replay_refuses_result_of_another_robot(logs: dict[str, Path]) -> None:
     message = api_error(umbmark.replay, logs["other"], logs["result"])
     assert "0.34 m" in message
@@ -138,6 +140,7 @@ def test_replay_refuses_result_of_another_robot(logs: dict[str, Path]) -> None:
     assert forced
 
 
+@pytest.mark.slow
 def test_calibrate_refuses_current_params_of_another_robot(logs: dict[str, Path]) -> None:
     message = api_error(umbmark.calibrate, logs["other"], current_params=logs["result"])
     assert "0.34 m" in message

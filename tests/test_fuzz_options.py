@@ -478,9 +478,9 @@ NAMES = [
 ]
 
 
-#: The commands whose examples take seconds each (a demo, a self-calibration, a study, a
-#: reproduction): fuzzed in the full run only.
-SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study"}
+#: The commands whose examples take seconds each (a demo, a self-calibration, a study, the
+#: reproductions, a report page): fuzzed in the full run only.
+SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study", "table1", "report"}
 
 
 @pytest.mark.parametrize(

@@ -148,6 +148,7 @@ def test_squares_alone_do_not_identify_the_turn_rate_term(sims, robot):
     assert "the result is the single-wheelbase fit, as --method trajectory" in warning
 
 
+@pytest.mark.slow
 def test_the_unidentified_term_costs_a_robot_without_scrub_on_circles(sims):
     """Why the fallback: fitted anyway, the squares' turn-rate term rests on the weaving
     of the legs and misses the circles of a robot that has one wheelbase (known truth)
@@ -208,6 +209,7 @@ def folders(sims, tmp_path_factory):
     return {"squares": squares, "mixed": mixed}
 
 
+@pytest.mark.slow
 def test_auto_does_not_pick_the_scrub_model_for_a_pool_of_squares(folders):
     report = umbmark.calibrate(*folders["squares"], method="auto")
     assert report.estimate.method != "trajectory-scrub"

@@ -34,6 +34,7 @@ def test_demo_says_just_above_for_27_5_against_26_3(demo_command: DemoCommand) -
     assert "well above the scatter" in before
 
 
+@pytest.mark.slow
 def test_one_verdict_on_terminal_page_and_json(demo_command: DemoCommand, tmp_path: Path) -> None:
     folder = demo_command.folder
     runs = folder / "runs_after.csv"
@@ -101,6 +102,7 @@ def study_json() -> dict[str, Any]:
     return data
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("columns", [120, 40])
 def test_study_table_fits_the_terminal_and_cuts_no_number(
     columns: int, study_json: dict[str, Any]
@@ -130,6 +132,7 @@ def test_study_table_fits_the_terminal_and_cuts_no_number(
 # --- simulate --params: one convention per line, stated -----------------------------------
 
 
+@pytest.mark.slow
 def test_simulate_params_states_one_convention_per_line(tmp_path: Path) -> None:
     first, result = tmp_path / "first.csv", tmp_path / "result.json"
     umbmark.simulate(E_d=1.004, E_b=1.03, noise_free=True, output=first)

@@ -427,9 +427,10 @@ def _cli_options() -> set[str]:
     return found | {"--help"}  # every command's, from click's context settings
 
 
-#: Options of other programs that the pages name (pip, venv, evo, ros2, the project's tools).
+#: Options of other programs that the pages name (pip, venv, ruff, evo, ros2, the project's
+#: tools).
 OTHER_PROGRAMS = {
-    "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--ref",
+    "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--check", "--ref",
     "--align_origin", "--once", "--list", "--filter", "--jobs", "--keep", "--data", "--strict",
     "--auto", "--accuracy", "--side",
 }  # fmt: skip

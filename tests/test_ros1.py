@@ -206,6 +206,7 @@ def _probe(graph: RosGraph, *args: str) -> dict[str, Any]:
     return out
 
 
+@pytest.mark.slow
 def test_reads_odometry_scan_and_sim_time(graph: RosGraph) -> None:
     """ROS time is the node's /clock (it starts at 1000 s and runs 5 times faster than the
     wall clock); the odometry and scan carry it; the laser's mounting comes from TF; the
@@ -234,6 +235,7 @@ def test_reconfigure_within_range_is_held_by_the_server(graph: RosGraph) -> None
     assert seen["after"] == [0.34, 0.075, 0.97, 0.998, 1.002]
 
 
+@pytest.mark.slow
 def test_outside_range_writes_the_yaml_and_leaves_the_server(
     graph: RosGraph, tmp_path: Path
 ) -> None:
@@ -254,6 +256,7 @@ def test_outside_range_writes_the_yaml_and_leaves_the_server(
     assert 1.6 not in seen["held"].values()
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_the_robot(graph: RosGraph, tmp_path: Path) -> None:
     """Ctrl-C while ``umbmark selfcal --ros1`` drives: exit 130, and the last velocity it
     sent is zero (the robot stands still afterwards)."""
@@ -286,6 +289,7 @@ def test_ctrl_c_stops_the_robot(graph: RosGraph, tmp_path: Path) -> None:
     assert math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-3
 
 
+@pytest.mark.slow
 def test_stale_odometry_stops_the_robot(graph: RosGraph) -> None:
     """The node stops publishing /odom while its clock runs on: the drive stops for safety
     within its 0.5 s limit, and the last command on /cmd_vel is a zero velocity."""
@@ -296,6 +300,7 @@ def test_stale_odometry_stops_the_robot(graph: RosGraph) -> None:
     assert seen["odom_age_after"] <= 0.1
 
 
+@pytest.mark.slow
 def test_unknown_odometry_topic_is_one_line(graph: RosGraph, tmp_path: Path) -> None:
     done = _umbmark(graph.env, "selfcal", "--ros1", "--odom-topic", "/nope", "--out",
                     str(tmp_path / "out"), timeout=60.0)  # fmt: skip

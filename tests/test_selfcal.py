@@ -353,6 +353,7 @@ def test_one_pass_without_verification_says_so(tmp_path):
     assert json.loads(report.to_json())["e_max_syst_after"] is None
 
 
+@pytest.mark.slow
 def test_range_sensors_that_lose_the_corner_say_which_run_and_what_to_do(tmp_path):
     """Three single beams see both walls only near the start: the paper's LabMate errors
     on 4 m squares end the ccw runs about a metre away (its E_max,syst is 1.04 m)."""
@@ -382,6 +383,7 @@ def test_range_sensors_calibrate_a_robot_with_moderate_errors(tmp_path):
     assert ratio == pytest.approx(1.001, abs=0.0002)
 
 
+@pytest.mark.slow
 def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
     """Motion capture's fixes are in the world frame; the virtual robot's truth there is its
     true pose: the errors are the capture's noise (0.5 mm, 0.05 deg per reading, five
@@ -396,6 +398,7 @@ def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
     assert math.degrees(errors[1]) <= 0.05  # deg rms
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "marks", [None, [-0.3, 0.15, -0.3, -0.15, -0.2, -0.2]], ids=["the robot's", "given"]
 )
@@ -435,6 +438,7 @@ def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path, marks):
     assert math.degrees(errors[1]) <= 0.4  # deg rms (marks 0.5 m apart)
 
 
+@pytest.mark.slow
 def test_progress_names_the_pass_the_run_and_the_leg(tmp_path):
     seen: list[tuple[str, int, object, str]] = []
     selfcal(

@@ -120,6 +120,7 @@ def test_simulate_refuses_bad_options(options, message):
     assert message in api_error(umbmark.simulate, **options)
 
 
+@pytest.mark.slow
 def test_simulate_logs_refuse_a_folder_with_runs_in_it(tmp_path):
     folder = tmp_path / "logs"
     umbmark.simulate(runs=2, logs=folder)
@@ -190,6 +191,7 @@ def test_reproduce_fig4_exposes_the_unidirectional_trap(tmp_path):
 # --- the user's view ----------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_simulate_command_writes_and_prints(tmp_path):
     """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
     runs = tmp_path / "runs.csv"

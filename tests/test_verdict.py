@@ -291,6 +291,7 @@ def test_an_interval_that_holds_no_correction_and_its_double_is_not_applied(
     assert report.write(yaml=yaml, force=True) == [yaml]
 
 
+@pytest.mark.slow
 def test_umbmark_report_shows_the_verdict(wide: Path, tmp_path: Path):
     page = tmp_path / "p.html"
     proc = run_cli("report", str(wide), "-L", "4", "-b", "0.34", "-o", str(page))
@@ -381,6 +382,7 @@ def test_real_square_sessions_apply(session: str):
     assert report.overlay_withheld is False
 
 
+@pytest.mark.slow
 def test_the_verdict_is_printed_first_and_is_json_s_first_key(tmp_path: Path):
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))
