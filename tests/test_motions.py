@@ -308,6 +308,7 @@ def test_real_auto_does_not_pick_the_scrub_model_for_straights_and_spot_turns():
     assert umbmark.replay(CIRCLE, report, force=True).mean_end_error < 0.02
 
 
+@pytest.mark.slow
 @real
 def test_real_validate_on_squares_says_nothing_about_arcs():
     report = umbmark.validate(SQUARE, SQUARE2, methods=["trajectory", "trajectory-scrub"])
@@ -321,6 +322,7 @@ def test_real_validate_on_squares_says_nothing_about_arcs():
     )
 
 
+@pytest.mark.slow
 @real
 def test_real_squares_with_circles_identify_the_scrub_model():
     report = umbmark.calibrate(SQUARE, CIRCLE, method="trajectory-scrub")
@@ -328,6 +330,7 @@ def test_real_squares_with_circles_identify_the_scrub_model():
     assert report.to_dict()["model"]["spot_wheelbase"] > 0
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(len(SAME_DAY) != 4, reason="../shared/data is not here")
 def test_real_straights_with_spot_turns_of_the_circles_day_fall_back():
     """Straight legs and spot turns: the scrub fit was refused outright (its arcs
