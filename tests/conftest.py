@@ -7,7 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from helpers import write_table
+import umbmark
+
+from helpers import DemoCommand, run_cli, write_table
 
 
 @pytest.fixture
@@ -22,3 +24,20 @@ def table(tmp_path: Path):
         return write_table(tmp_path / name, rows, header)
 
     return make
+
+
+@pytest.fixture(scope="session")
+def demo(tmp_path_factory: pytest.TempPathFactory) -> umbmark.DemoReport:
+    """``umbmark.demo`` with its defaults (seed 1), its files in a folder of its own: one run
+    for every test that reads the demo's result (do not write into its folder)."""
+    return umbmark.demo(out=tmp_path_factory.mktemp("demo") / "demo")
+
+
+@pytest.fixture(scope="session")
+def demo_command(tmp_path_factory: pytest.TempPathFactory) -> DemoCommand:
+    """``umbmark demo --out FOLDER`` (seed 1, as the library's :func:`demo` fixture): one run
+    for every test of what the command prints and writes (do not write into its folder)."""
+    out = tmp_path_factory.mktemp("demo-command") / "demo"
+    proc = run_cli("demo", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    return DemoCommand(out, proc.stdout, proc.stderr)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -231,3 +232,39 @@ def api_error(fn, *args, **kwargs) -> str:  # type: ignore[no-untyped-def]
     message = str(caught.value)
     assert "\n" not in message
     return message
+
+
+def in_ci() -> bool:
+    """CI runs (``CI`` set, as ``.ci/run`` and the usual CI services do), where every piece
+    is installed, so that a missing one fails rather than skips."""
+    return bool(os.environ.get("CI"))
+
+
+def unavailable(reason: str) -> None:
+    """Skip the calling test module for ``reason`` (a piece that cannot be had here), or fail
+    it under CI, which installs everything."""
+    import pytest
+
+    if in_ci():
+        pytest.fail(f"{reason} (CI installs it: .ci/run)", pytrace=False)
+    pytest.skip(reason, allow_module_level=True)
+
+
+#: What the ROS 1 tests' robot node and probe (tests/ros1_robot_node.py, ros1_probe.py)
+#: import besides the adapter's own modules (umbmark.robot.ros1.ROS1_MODULES).
+ROS1_TEST_MODULES = (
+    "std_msgs.msg",
+    "rosgraph_msgs.msg",
+    "tf2_msgs.msg",
+    "dynamic_reconfigure.server",
+    "dynamic_reconfigure.encoding",
+)
+
+
+@dataclass(frozen=True)
+class DemoCommand:
+    """What ``umbmark demo --out FOLDER`` printed and wrote (the ``demo_command`` fixture)."""
+
+    folder: Path
+    stdout: str
+    stderr: str

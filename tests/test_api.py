@@ -30,6 +30,7 @@ def test_source_options_are_the_read_options():
     assert set(SourceOptions.__annotations__) == {f.name for f in dataclasses.fields(ReadOptions)}
 
 
+@pytest.mark.slow
 def test_readme_python_example_runs_as_written(tmp_path, monkeypatch):
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     section = readme.split("## Use from Python")[1].split("\n## ")[0]
@@ -95,6 +96,7 @@ def test_a_misspelt_keyword_is_a_type_error_naming_the_close_one(
     assert str(caught.value) == message
 
 
+@pytest.mark.slow
 def test_input_errors_name_keywords_to_python_and_flags_to_the_command_line(tmp_path) -> None:
     from helpers import api_error, cli_error
 

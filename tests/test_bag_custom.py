@@ -252,6 +252,7 @@ def test_time_is_the_bag_time_without_a_header_or_when_asked(tmp_path, bags):
 # --- definitions from .msg files -------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_a_bag_without_definitions_needs_msg_dir(tmp_path, bare):
     options = fields("left_ticks", "right_ticks", ticks_per_revolution=TPR)
     err = api_error(read_bag, bare, options)
@@ -273,6 +274,7 @@ def test_a_bag_without_definitions_needs_msg_dir(tmp_path, bare):
         np.testing.assert_allclose(wheels.time, expected_time(), rtol=0, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_msg_dir_errors_name_the_type_or_the_file(tmp_path, bare):
     def error(msg_dir: Path) -> str:
         options = fields("left_ticks", "right_ticks", ticks_per_revolution=TPR, msg_dir=msg_dir)
@@ -408,6 +410,7 @@ def write_session(path: Path, session) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_the_command_calibrates_from_a_custom_message(tmp_path):
     session = simulated_session(ROBOT, ["cw", "cw", "ccw", "ccw"], side=1.0, rest=1.5)
     bag = write_session(tmp_path / "session", session)

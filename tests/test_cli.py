@@ -54,26 +54,103 @@ def test_summary_states_every_figure_with_its_unit(table):
     assert proc.stderr == ""
 
 
-def _same_as_the_library(args: list[str], *sources, **options) -> None:
-    printed = cli_json(*args)
-    assert printed == umbmark.calibrate(*sources, **options).to_dict()
-
-
-def test_json_is_the_reports_dictionary_for_the_bundled_example(tmp_path):
+def test_the_bundled_example_is_written_with_what_to_run_next(tmp_path):
     path = tmp_path / "runs.csv"
     proc = run_cli("example", str(path))
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == f"umbmark: wrote {path}\n"
     assert "now run: umbmark calibrate" in proc.stdout
-    args = ["calibrate", str(path), "-L", "4", "-b", "0.34", "--unit", "mm"]
-    _same_as_the_library(args, path, side_length=4, wheelbase=0.34, unit="mm")
+    assert path.read_text(encoding="utf-8") == umbmark.example()
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+    """The inputs of the commands compared with the library: the bundled runs table, two
+    sessions of run logs of one virtual robot (E_d 1.004, E_b 1.02, 2 + 2 runs on 2 m
+    squares), a ROS 2 bag of the first, and the calibration of the first."""
+    folder = tmp_path_factory.mktemp("recorded")
+    table = folder / "runs.csv"
+    umbmark.example(table)
+    robot = {"E_d": 1.004, "E_b": 1.02, "runs": 2, "side_length": 2}
+    for seed in (1, 2):
+        umbmark.simulate(**robot, seed=seed, logs=folder / f"session-{seed}")
+    umbmark.simulate(**robot, seed=1, bag=folder / "bag")
+    umbmark.calibrate(folder / "session-1", output=folder / "result.json")
+    return {
+        "table": str(table),
+        **{f"session-{seed}": str(folder / f"session-{seed}") for seed in (1, 2)},
+        "bag": str(folder / "bag"),
+        "result": str(folder / "result.json"),
+    }
+
+
+#: ``--json`` of each job's command against its library function on the same inputs
+#: (``{name}``: a path of :func:`recorded`): command-line arguments, library call.
+_AGREE: dict[str, tuple[list[str], typing.Callable[[dict[str, str]], object]]] = {
+    "calibrate a runs table": (
+        ["calibrate", "{table}", "-L", "4", "-b", "0.34", "--unit", "mm"],
+        lambda r: umbmark.calibrate(r["table"], side_length=4, wheelbase=0.34, unit="mm"),
+    ),
+    "calibrate a bag": (
+        [
+            "calibrate",
+            "{bag}",
+            "-L",
+            "2",
+            "-b",
+            "0.34",
+            "--wheel-diameter",
+            "0.15",
+            "--truth-topic",
+            "/mocap/robot/pose",
+        ],
+        lambda r: umbmark.calibrate(
+            r["bag"],
+            side_length=2,
+            wheelbase=0.34,
+            wheel_diameter=0.15,
+            truth_topic="/mocap/robot/pose",
+        ),
+    ),
+    "info": (["info", "{bag}"], lambda r: umbmark.info(r["bag"])),
+    "validate": (
+        ["validate", "{session-1}", "{session-2}", "--methods", "exact"],
+        lambda r: umbmark.validate(r["session-1"], r["session-2"], methods=["exact"]),
+    ),
+    "replay": (
+        ["replay", "{session-2}", "--params", "{result}"],
+        lambda r: umbmark.replay(r["session-2"], params=r["result"]),
+    ),
+    "plan": (
+        ["plan", "--scatter", "0.01", "-L", "4", "--runs", "5"],
+        lambda r: umbmark.plan(scatter=0.01, side_length=4, runs=5),
+    ),
+    "simulate": (
+        ["simulate", "--E-d", "1.002", "--seed", "7", "--runs", "2"],
+        lambda r: umbmark.simulate(E_d=1.002, seed=7, runs=2),
+    ),
+}
+
+
+@pytest.mark.parametrize("job", list(_AGREE))
+def test_the_command_prints_the_dictionary_of_what_the_library_returns(
+    job: str, recorded: dict[str, str]
+) -> None:
+    """A command's ``--json`` is ``to_dict()`` of its library function's report on the same
+    inputs (one test for the rendering all commands share)."""
+    args, call = _AGREE[job]
+    printed = cli_json(*(a.format(**recorded) for a in args))
+    report = call(recorded)
+    assert printed == report.to_dict()  # type: ignore[attr-defined]
 
 
 @pytest.mark.skipif(not SQUARE.is_dir(), reason="../shared/data is not here")
 def test_json_is_the_reports_dictionary_for_a_real_session():
-    _same_as_the_library(["calibrate", str(SQUARE), "-m", "exact"], SQUARE, method="exact")
+    printed = cli_json("calibrate", str(SQUARE), "-m", "exact")
+    assert printed == umbmark.calibrate(SQUARE, method="exact").to_dict()
 
 
+@pytest.mark.slow
 def test_output_files_and_what_was_written(table, tmp_path):
     out, overlay = tmp_path / "result.json", tmp_path / "overlay.yaml"
     proc = run_cli(
@@ -86,6 +163,7 @@ def test_output_files_and_what_was_written(table, tmp_path):
     assert overlay.read_text().startswith("# Written by umbmark")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
 def test_plot_on_a_machine_without_display(table, tmp_path, suffix):
     out = tmp_path / f"clusters{suffix}"
@@ -104,6 +182,7 @@ def test_plot_on_a_machine_without_display(table, tmp_path, suffix):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".clusters")]
 
 
+@pytest.mark.slow
 def test_bad_input_gives_one_line_and_exit_2(table, tmp_path):
     good = str(table(_rows(), name="good.csv"))
     assert cli_error("calibrate", good, "-L", "0", "-b", "0.34") == (

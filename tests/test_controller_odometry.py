@@ -295,6 +295,7 @@ diff_drive_controller:
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("fmt", "kind", "odom_as"),
     [("ros1", Humble, "topic"), ("sqlite3", Humble, "topic"), ("mcap", Jazzy, "tf")],
@@ -324,6 +325,7 @@ def test_bag_of_controller_odometry_recovers_the_robots_errors(
     assert est.E_b == pytest.approx(E_B, abs=5e-4)
 
 
+@pytest.mark.slow
 def test_odometry_bag_through_the_command_and_its_refusals(tmp_path, session):
     bag = write_odometry_bag(tmp_path / "odom", "sqlite3", session, Humble(0.34, 0.075, 0.075))
     params = tmp_path / "diff_cont.yaml"
@@ -377,6 +379,7 @@ def test_odometry_bag_through_the_command_and_its_refusals(tmp_path, session):
     assert "too sparse" in line
 
 
+@pytest.mark.slow
 def test_wheel_joints_named_in_the_controller_file(tmp_path, session):
     """Joints no rule could tell apart (a spinning lidar, wheels called drive_l/drive_r)
     are read by the names of the controller's left_wheel_names / right_wheel_names."""

@@ -115,6 +115,7 @@ def test_open_loop_is_read_and_said(tmp_path, table):
     assert "open_loop is true" in report.overlay_yaml()
 
 
+@pytest.mark.slow
 def test_skid_steer_multiplier_is_calibrated_on_top_of_its_large_value(tmp_path):
     """A skid-steer turns as if its wheels were 1.3-2 times the track apart; ros2_control
     models that with wheel_separation_multiplier. Track 0.5 m, multiplier 1.6 active (0.8 m

@@ -133,6 +133,7 @@ def test_runs_helper_centres_are_exact():
     np.testing.assert_allclose(cw.mean(axis=0), [0.1, -0.2], atol=1e-15)
 
 
+@pytest.mark.slow
 def test_tracked_point_off_the_axle_adds_rotated_offset_to_return_errors(tmp_path):
     """A marker at d in the robot frame: eps_marker = eps_axle + (R(dtheta) - I) d, with
     dtheta the run's true heading change; --truth-offset d takes it away."""

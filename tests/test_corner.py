@@ -79,6 +79,7 @@ def _rms(errors: np.ndarray) -> tuple[float, float]:
 # --- accuracy against the truth ---------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_accuracy_over_200_poses_near_the_start_meets_the_target():
     # the target: 2 mm and 0.2 deg rms (the paper's calibrator: 2 mm and 0.4 deg)
     errors, z = _accuracy(corner_world(), seed=11, trials=200)
@@ -90,6 +91,7 @@ def test_accuracy_over_200_poses_near_the_start_meets_the_target():
     assert np.all((spread > 0.7) & (spread < 1.4)), spread
 
 
+@pytest.mark.slow
 def test_accuracy_with_30_percent_dropouts_an_offset_rotated_laser_and_no_prior():
     lidar = Lidar(mount=Pose2D(0.15, -0.05, math.radians(30.0)), dropout=0.3)
     world = replace(corner_world(), lidar=lidar)
@@ -123,6 +125,7 @@ def test_a_single_scan_is_within_a_few_millimetres():
     assert math.degrees(fix.wall_angle) == pytest.approx(90.0, abs=1.5)
 
 
+@pytest.mark.slow
 def test_the_walls_angle_is_unbiased_where_beams_meet_the_walls_obliquely():
     # A laser's noise lies along its beams. Lines fitted to the points by orthogonal
     # distance (total least squares) turn where beams meet a wall obliquely: with a 2 cm

@@ -49,6 +49,7 @@ def test_a_nan_parameter_is_refused_as_no_finite_number(runs_csv: Path) -> None:
     assert message == "current_separation_multiplier must be a finite number, got nan"
 
 
+@pytest.mark.slow
 def test_cli_refuses_huge_multiplier_without_numpy_warnings(runs_csv: Path) -> None:
     line = cli_error(
         "calibrate", str(runs_csv), "-L", "4", "-b", "0.34", "--unit", "mm",
@@ -129,6 +130,7 @@ def test_result_matches_its_own_source(logs: dict[str, Path]) -> None:
     assert "calibrated" in report.parameter_sets
 
 
+@pytest.mark.slow
 def test_replay_refuses_result_of_another_robot(logs: dict[str, Path]) -> None:
     message = api_error(umbmark.replay, logs["other"], logs["result"])
     assert "0.34 m" in message
@@ -143,6 +145,7 @@ def test_replay_refuses_result_of_another_robot(logs: dict[str, Path]) -> None:
     assert forced
 
 
+@pytest.mark.slow
 def test_calibrate_refuses_current_params_of_another_robot(logs: dict[str, Path]) -> None:
     message = api_error(umbmark.calibrate, logs["other"], current_params=logs["result"])
     assert "0.34 m" in message

@@ -28,6 +28,7 @@ def _within(estimate, name: str, true: float) -> bool:
     return low <= true <= high
 
 
+@pytest.mark.slow
 def test_squares_give_the_ratios_and_hold_the_scale(recorded):
     report = umbmark.calibrate(recorded / "squares", method="endpoints")
     est = report.estimate

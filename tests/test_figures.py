@@ -68,6 +68,7 @@ def test_replay_zooms_on_every_end_point(real: Path) -> None:
     assert str(real / CIRCLES) in _title(fig)
 
 
+@pytest.mark.slow
 def test_replay_plot_is_written(real: Path, tmp_path: Path) -> None:
     from matplotlib.image import imread
 
@@ -79,12 +80,13 @@ def test_replay_plot_is_written(real: Path, tmp_path: Path) -> None:
     assert float(pixels.std()) > 0.05
 
 
-def test_every_figure_has_units_and_a_name(tmp_path: Path) -> None:
+@pytest.mark.slow
+def test_every_figure_has_units_and_a_name(tmp_path: Path, demo: umbmark.DemoReport) -> None:
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))
     figures = {
         "calibrate": umbmark.calibrate(str(table), side_length=4, wheelbase=0.34, unit="mm"),
-        "demo": umbmark.demo(out=tmp_path / "demo"),
+        "demo": demo,
         "fig4": umbmark.reproduce_fig4(),
     }
     names = {"calibrate": str(table), "demo": "Virtual LabMate", "fig4": "Wheelbase tuned"}
@@ -114,6 +116,7 @@ def _piped(*args: str) -> str:
     return proc.stdout
 
 
+@pytest.mark.slow
 def test_calibrate_table_keeps_values_whole(real: Path, tmp_path: Path) -> None:
     table = real.parent / "runs.csv"
     umbmark.example(str(table))
@@ -131,6 +134,7 @@ def test_calibrate_table_keeps_values_whole(real: Path, tmp_path: Path) -> None:
     assert " ───" in out  # the rule under the headers
 
 
+@pytest.mark.slow
 def test_replay_info_validate_history_tables_keep_rows_whole(real: Path, tmp_path: Path) -> None:
     square, circles = str(real / SQUARE), str(real / CIRCLES)
     result = real.parent / "square.json"
@@ -180,6 +184,7 @@ def test_replay_info_validate_history_tables_keep_rows_whole(real: Path, tmp_pat
     assert printed["drift"] in out.splitlines()  # the verdict on one line
 
 
+@pytest.mark.slow
 def test_calibration_figure_and_page_name_the_robot_and_the_command(tmp_path: Path) -> None:
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))

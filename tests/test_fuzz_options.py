@@ -478,7 +478,14 @@ NAMES = [
 ]
 
 
-@pytest.mark.parametrize("name", NAMES)
+#: The commands whose examples take seconds each (a demo, a self-calibration, a study, the
+#: reproductions, a report page): fuzzed in the full run only.
+SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study", "table1", "report"}
+
+
+@pytest.mark.parametrize(
+    "name", [pytest.param(n, marks=[pytest.mark.slow] if n in SLOW_COMMANDS else []) for n in NAMES]
+)
 def test_every_command_option_gives_a_result_or_one_line(data: Path, name: str) -> None:
     command = commands(data)[name]
 

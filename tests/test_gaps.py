@@ -149,6 +149,7 @@ def test_dropped_odom_is_bridged_on_a_straight_and_leaves_a_turning_run_out(tmp_
     assert session.stops[2] <= end <= session.stops[2] + 2.0
 
 
+@pytest.mark.slow
 def test_windows_leave_a_gap_out_before_any_check(tmp_path, session):
     turning = _turn(session, 2) - 0.5
     bag = write_session_bag(tmp_path / "tb3", "sqlite3", session, drop=[(turning, turning + 4)])
@@ -162,6 +163,7 @@ def test_windows_leave_a_gap_out_before_any_check(tmp_path, session):
         assert run.true_end.y == pytest.approx(session.ends[k][1], abs=1e-6)
 
 
+@pytest.mark.slow
 def test_one_run_broken_by_a_gap_is_refused_with_what_was_seen(tmp_path, session):
     turning = _turn(session, 2) - 0.5
     bag = write_session_bag(tmp_path / "tb3", "sqlite3", session, drop=[(turning, turning + 4)])

@@ -58,6 +58,7 @@ def test_calibrate_records_and_api_lists(tmp_path: Path) -> None:
     assert store.calibrations("nobody") == []
 
 
+@pytest.mark.slow
 def test_history_command_lists_robots_and_calibrations(tmp_path: Path) -> None:
     table, db = _table(tmp_path), tmp_path / "history.sqlite3"
     for _ in range(3):
@@ -83,6 +84,7 @@ def test_history_command_lists_robots_and_calibrations(tmp_path: Path) -> None:
     assert "not a usable history file" in api_error(umbmark.history, history=table)
 
 
+@pytest.mark.slow
 def test_calibrate_command_records(tmp_path: Path) -> None:
     table, db = _table(tmp_path), tmp_path / "history.sqlite3"
     args = ("calibrate", str(table), "-L", "4", "-b", "0.34", "--unit", "mm")
@@ -143,6 +145,7 @@ def _record_ten(table: str, db: str) -> None:
         umbmark.calibrate(table, side_length=4, wheelbase=0.34, unit="mm", robot="r1", history=db)
 
 
+@pytest.mark.slow
 def test_concurrent_writers(tmp_path: Path) -> None:
     table, db = _table(tmp_path), tmp_path / "history.sqlite3"
     methods = multiprocessing.get_all_start_methods()
@@ -212,6 +215,7 @@ def _line(ax, label: str):  # type: ignore[no-untyped-def]
     return line
 
 
+@pytest.mark.slow
 def test_trend_figure_draws_the_recorded_calibrations(tmp_path: Path) -> None:
     import datetime as dt
 
@@ -249,6 +253,7 @@ def test_trend_figure_draws_the_recorded_calibrations(tmp_path: Path) -> None:
     assert "drift between calibrations 1 and 3" in title  # E_b moved by 0.02, ~40 se
 
 
+@pytest.mark.slow
 def test_history_plot_command_writes_png_svg_pdf(tmp_path: Path) -> None:
     from matplotlib.image import imread
 
@@ -269,6 +274,7 @@ def test_history_plot_command_writes_png_svg_pdf(tmp_path: Path) -> None:
     assert pdf.read_bytes().startswith(b"%PDF")
 
 
+@pytest.mark.slow
 def test_history_plot_refusals(tmp_path: Path) -> None:
     table, db = _table(tmp_path), tmp_path / "history.png"  # a history named like a figure
     _calibrate(table, db)

@@ -38,6 +38,7 @@ def _passes(db: Path, later_E_b: float = TRUE_E_B) -> list[umbmark.CalibrationRe
     return reports
 
 
+@pytest.mark.slow
 def test_passes_on_corrected_odometry_are_no_drift(tmp_path: Path) -> None:
     db = tmp_path / "history.sqlite3"
     reports = _passes(db)
@@ -71,6 +72,7 @@ def test_passes_on_corrected_odometry_are_no_drift(tmp_path: Path) -> None:
         )
 
 
+@pytest.mark.slow
 def test_a_robot_that_changed_is_drift_though_the_passes_look_alike(tmp_path: Path) -> None:
     # After pass 1 was applied the wheelbase shrank by 2 % more (true E_b 0.98 x 0.98):
     # on the corrected odometry the passes measure E_b near 0.9604 / 0.9797 = 0.980, as
@@ -147,6 +149,7 @@ def test_hand_built_history_is_composed(tmp_path: Path) -> None:
     assert verdict.startswith("drift between calibrations 1 and 3: robot E_b 0.970000 -> 1.000000")
 
 
+@pytest.mark.slow
 def test_history_columns_say_what_they_compare(tmp_path: Path) -> None:
     db = tmp_path / "history.sqlite3"
     _passes(db)
@@ -217,6 +220,7 @@ def test_marked_applied_is_not_a_warning(tmp_path: Path) -> None:
     assert marked.stderr == "umbmark: calibration 1 of r1 marked applied\n"
 
 
+@pytest.mark.slow
 def test_calibrate_says_where_it_recorded(tmp_path: Path) -> None:
     table, db = tmp_path / "runs.csv", tmp_path / "history.sqlite3"
     umbmark.example(str(table))

@@ -145,6 +145,7 @@ def _distinct_colours(png: Path) -> int:
     return len({tuple(p) for p in flat[:: max(1, len(flat) // 200_000)].tolist()})
 
 
+@pytest.mark.slow
 def test_html_report_in_headless_chromium(
     report: umbmark.CalibrationReport, tmp_path: Path
 ) -> None:

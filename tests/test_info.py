@@ -17,7 +17,7 @@ import pytest
 import umbmark
 from umbmark.core.errors import InputError
 
-from helpers import OPTIODOM, api_error, cli_error, cli_json, run_cli
+from helpers import OPTIODOM, api_error, cli_error, run_cli
 
 pytest.importorskip("rosbags")
 
@@ -380,8 +380,9 @@ def test_a_bag_without_candidates(tmp_path):
     assert data["complete"] is True
 
 
-def test_the_command_prints_the_reports_dictionary_and_a_summary(robot):
-    assert cli_json("info", str(robot)) == umbmark.info(robot).to_dict()
+@pytest.mark.slow
+def test_the_command_prints_a_summary(robot):
+    """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
     proc = run_cli("info", str(robot))
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
@@ -441,6 +442,7 @@ def test_chains_leave_sensor_mounts_out():
 # --- missing ground truth ----------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_calibrating_a_bag_without_ground_truth_names_the_candidates(robot):
     err = api_error(umbmark.calibrate, robot, wheelbase=0.3, wheel_diameter=0.1, side_length=1)
     assert err.startswith(f"{robot}: no ground truth given (truth_topic or tf_parent/tf_child)")
@@ -477,6 +479,7 @@ def logs(tmp_path_factory):
     return folder
 
 
+@pytest.mark.slow
 def test_a_run_log(logs):
     report = umbmark.info(logs / "log")
     data = report.to_dict()
@@ -511,6 +514,7 @@ def test_an_optiodom_session():
     assert data["side_length"] == 0.75
 
 
+@pytest.mark.slow
 def test_other_sources_are_refused_with_one_line(logs, tmp_path):
     err = api_error(umbmark.info, logs / "runs.csv")
     assert err.startswith(f"{logs / 'runs.csv'}: is read as a runs table")

@@ -40,6 +40,7 @@ def second_pass(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return folder / "pass2.csv"
 
 
+@pytest.mark.slow
 def test_the_active_parameters_a_header_records_are_a_note(second_pass: Path):
     proc = run_cli("calibrate", str(second_pass), "-L", "4")
     assert proc.returncode == 0, proc.stderr
@@ -58,6 +59,7 @@ def test_a_conflict_with_the_header_stays_a_warning(second_pass: Path):
     assert line.startswith("umbmark: warning: --current-c-l gives c_L = 1, but the table's")
 
 
+@pytest.mark.slow
 def test_the_parameters_of_the_last_applied_calibration_are_a_note(tmp_path: Path):
     table, db = tmp_path / "runs.csv", tmp_path / "h.sqlite3"
     umbmark.example(str(table))
@@ -70,6 +72,7 @@ def test_the_parameters_of_the_last_applied_calibration_are_a_note(tmp_path: Pat
     assert line.startswith("umbmark: robot r: taken as active during the runs, the new param")
 
 
+@pytest.mark.slow
 def test_what_a_bag_says_of_itself_is_a_note(tmp_path: Path):
     """The wheels from the robot description, the model-state truth stamped with receive
     times: what was read and how, nothing doubtful."""
@@ -88,6 +91,7 @@ def test_what_a_bag_says_of_itself_is_a_note(tmp_path: Path):
     assert "warning" not in replayed.stderr
 
 
+@pytest.mark.slow
 def test_plan_says_what_it_chose_plainly_and_warns_where_it_is_rough():
     chosen = run_cli("plan", "--floor", "3", "--scatter", "0.025", "--wheelbase", "0.34")
     assert chosen.returncode == 0, chosen.stderr
@@ -105,6 +109,7 @@ def test_plan_says_what_it_chose_plainly_and_warns_where_it_is_rough():
     assert data["warnings"] == [rough.stderr[len("umbmark: warning: ") : -1]]
 
 
+@pytest.mark.slow
 def test_a_unit_that_looks_wrong_stays_a_warning(tmp_path: Path):
     # Return errors of 2 to 5 cm written in metres, read as mm: 20 to 54 micrometres.
     rows = [

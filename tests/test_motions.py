@@ -25,7 +25,7 @@ from umbmark.estimators.trajectory_fit import TrajectoryFit, fit_trajectories, s
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 
-from helpers import OPTIODOM, cli_json, run_cli
+from helpers import OPTIODOM, run_cli
 
 #: Radius 1 m: wheel angles are travel [m]; wheelbase 0.2 m.
 UNIT = WheelParams(wheelbase=0.2, wheel_diameter=2.0)
@@ -191,6 +191,7 @@ def test_squares_alone_do_not_identify_the_turn_rate_term(sims, robot):
     assert "the result is the single-wheelbase fit, as --method trajectory" in warning
 
 
+@pytest.mark.slow
 def test_the_unidentified_term_costs_a_robot_without_scrub_on_circles(sims):
     """Why the fallback: fitted anyway, the squares' turn-rate term rests on the weaving
     of the legs and misses the circles of a robot that has one wheelbase (known truth)
@@ -335,6 +336,7 @@ def folders(sims, tmp_path_factory):
     return {"squares": squares, "mixed": mixed}
 
 
+@pytest.mark.slow
 def test_auto_does_not_pick_the_scrub_model_for_a_pool_of_squares(folders):
     report = umbmark.calibrate(*folders["squares"], method="auto")
     assert report.estimate.method != "trajectory-scrub"
@@ -350,6 +352,7 @@ def test_auto_does_not_pick_the_scrub_model_for_a_pool_of_squares(folders):
     ) in note
 
 
+@pytest.mark.slow
 def test_auto_picks_the_scrub_model_where_the_recordings_cover_arcs(folders):
     checked = umbmark.validate(*folders["mixed"], methods=["trajectory", "trajectory-scrub"])
     assert all(fold.refused == {} for fold in checked.folds)
@@ -364,6 +367,7 @@ def test_auto_picks_the_scrub_model_where_the_recordings_cover_arcs(folders):
     assert report.model_fit.spot_wheelbase is not None
 
 
+@pytest.mark.slow
 def test_validate_says_what_its_figures_cover(folders):
     report = umbmark.validate(*folders["squares"], methods=["trajectory", "trajectory-scrub"])
     assert report.covered == ("straight", "spot")
@@ -381,7 +385,6 @@ def test_validate_says_what_its_figures_cover(folders):
     assert data["coverage"]["not_held_out"] == ["arc"]
     assert data["folds"][0]["motions"] == ["straight", "spot"]
     sources = [str(p) for p in folders["squares"]]
-    assert cli_json("validate", *sources, "--methods", "trajectory,trajectory-scrub") == data
     printed = run_cli("validate", *sources, "--methods", "trajectory")
     assert printed.returncode == 0, printed.stderr
     assert (
@@ -432,6 +435,7 @@ def test_real_auto_does_not_pick_the_scrub_model_for_straights_and_spot_turns():
     assert umbmark.replay(CIRCLE, report, force=True).mean_end_error < 0.02
 
 
+@pytest.mark.slow
 @real
 def test_real_validate_on_squares_says_nothing_about_arcs():
     report = umbmark.validate(SQUARE, SQUARE2, methods=["trajectory", "trajectory-scrub"])
@@ -445,6 +449,7 @@ def test_real_validate_on_squares_says_nothing_about_arcs():
     )
 
 
+@pytest.mark.slow
 @real
 def test_real_squares_with_circles_identify_the_scrub_model():
     report = umbmark.calibrate(SQUARE, CIRCLE, method="trajectory-scrub")
@@ -452,6 +457,7 @@ def test_real_squares_with_circles_identify_the_scrub_model():
     assert report.to_dict()["model"]["spot_wheelbase"] > 0
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(len(SAME_DAY) != 4, reason="../shared/data is not here")
 def test_real_straights_with_spot_turns_of_the_circles_day_fall_back():
     """Straight legs and spot turns: the scrub fit was refused outright (its arcs

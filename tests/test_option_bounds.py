@@ -97,6 +97,7 @@ def test_reading_options_at_their_bound_are_taken(logs: Path) -> None:
     assert len(report.runs) == 4
 
 
+@pytest.mark.slow
 def test_seeds_at_their_bound_are_taken() -> None:
     assert umbmark.study(trials=1, methods=["exact"], seed=SEED_TOP, workers=64).seed == SEED_TOP
 
@@ -235,6 +236,7 @@ def other_result(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return folder / "result.json"
 
 
+@pytest.mark.slow
 def test_force_reaches_the_validation_of_method_auto(logs: Path, other_result: Path) -> None:
     # Without --force: the other robot's result is refused, by auto as by any method.
     for method in ("exact", "auto"):
@@ -253,6 +255,7 @@ def test_force_reaches_the_validation_of_method_auto(logs: Path, other_result: P
     assert any(note.startswith(f"method auto: {chosen}") for note in report.notes)
 
 
+@pytest.mark.slow
 def test_validate_takes_force_too(logs: Path, other_result: Path) -> None:
     assert "give --force" in cli_error("validate", str(logs), "--current-params", str(other_result))
     proc = run_cli("validate", str(logs), "--current-params", str(other_result), "--force")

@@ -33,6 +33,7 @@ def _calibrate(runs: Path, **outputs: Path | bool) -> umbmark.CalibrationReport:
     return umbmark.calibrate(runs, side_length=4, wheelbase=0.34, unit="mm", **outputs)
 
 
+@pytest.mark.slow
 def test_output_onto_input_refused_before_anything_written(runs: Path, tmp_path: Path) -> None:
     before = runs.read_bytes()
     line = cli_error("calibrate", str(runs), *GEOMETRY, "-o", str(runs))
@@ -142,6 +143,7 @@ def test_temporary_file_removed_on_any_exception(
     assert target.read_text() == "old\n"
 
 
+@pytest.mark.slow
 def test_every_written_file_reported(runs: Path, tmp_path: Path) -> None:
     outputs = {
         "-o": tmp_path / "r.json",

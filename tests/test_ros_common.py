@@ -319,3 +319,40 @@ def test_ros2_without_rclpy_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None
     monkeypatch.setitem(sys.modules, "rclpy", None)
     with pytest.raises(InputError, match="--ros2 needs rclpy"):
         Ros2Robot(RosOptions())
+
+
+def test_a_missing_ros1_piece_skips_here_and_fails_under_ci(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The ROS 1 tests skip, naming the package, only where it cannot be had; CI (which
+    installs everything) fails instead."""
+    from helpers import unavailable
+
+    monkeypatch.delenv("CI", raising=False)
+    with pytest.raises(pytest.skip.Exception, match="install python3-nav-msgs"):
+        unavailable("--ros1 needs nav_msgs, ...: install python3-nav-msgs (Debian)")
+    monkeypatch.setenv("CI", "true")
+    with pytest.raises(pytest.fail.Exception, match=r"python3-nav-msgs.*\(CI installs it"):
+        unavailable("--ros1 needs nav_msgs, ...: install python3-nav-msgs (Debian)")
+
+
+def test_ci_installs_every_ros1_package_imported() -> None:
+    """.ci/run (and so the README's test command) installs the package of every module the
+    ROS 1 adapter, the tests' robot node and probe import directly, and rosmaster; the
+    packages beneath them are their Debian dependencies. Its check and its install name
+    the same packages."""
+    import re
+
+    from umbmark.robot.ros1 import ROS1_MODULES, ROS1_PACKAGES
+
+    from helpers import ROOT, ROS1_TEST_MODULES
+
+    run = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    checked = re.search(r"dpkg -s ([^>]+)>", run)
+    installed = re.search(r"apt-get install -y -qq ([^>]+)>", run)
+    assert checked is not None
+    assert installed is not None
+    assert checked.group(1).split() == installed.group(1).split()
+    tops = {m.split(".")[0] for m in (*ROS1_MODULES, *ROS1_TEST_MODULES)}
+    needed = {ROS1_PACKAGES[top] for top in tops} | {"python3-rosmaster"}
+    assert needed - set(installed.group(1).split()) == set()

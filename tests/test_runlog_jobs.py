@@ -70,6 +70,7 @@ def test_one_csv_of_a_log_is_one_recording(logs):
     assert data["E_d"] == pytest.approx(1.003, abs=5e-4)
 
 
+@pytest.mark.slow
 def test_replay_of_logs_with_and_without_parameters(logs, tmp_path):
     result = tmp_path / "r.json"
     umbmark.calibrate(logs / "log", method="trajectory", output=result)

@@ -179,6 +179,7 @@ def test_a_window_across_a_reset_is_left_out(reset_session):
     assert note.endswith("a run cannot go on across it; split the runs there (--split rests)")
 
 
+@pytest.mark.slow
 def test_a_reset_farther_than_a_corrupt_jump_splits_the_runs(tmp_path):
     # Squares of 2 m, the cw ones ending 1.23 m from their start: their resets jump
     # farther than the 1 m a tracker may not jump between two samples, but while the

@@ -41,6 +41,7 @@ def paper_robot(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-un
     return robot, selfcal(robot, out=out, robot_name="labmate", history=history), history
 
 
+@pytest.mark.slow
 def test_the_papers_errors_are_reduced_at_least_tenfold(paper_robot):
     _, report, _ = paper_robot
     before, after = report.e_max_syst_before, report.e_max_syst_after
@@ -52,6 +53,7 @@ def test_the_papers_errors_are_reduced_at_least_tenfold(paper_robot):
     assert report.passes[-1].applied is None
 
 
+@pytest.mark.slow
 def test_the_applied_multipliers_are_the_robots_truth(paper_robot):
     robot, report, _ = paper_robot
     final = report.final
@@ -93,6 +95,7 @@ class _Page(HTMLParser):
             self.overlay += data
 
 
+@pytest.mark.slow
 def test_every_output_names_what_the_controller_holds(paper_robot):
     # the verification pass is driven on the held parameters and not applied: the page,
     # the terminal, overlay.yaml and the JSON all name the pass the robot holds and its
@@ -164,6 +167,7 @@ def test_with_nothing_applied_the_page_offers_the_last_pass_by_hand(tmp_path):
     assert parsed.overlay == page.last.overlay_yaml()
 
 
+@pytest.mark.slow
 def test_the_corner_is_measured_within_the_target(paper_robot):
     _, report, _ = paper_robot
     errors = report.measurement_errors()
@@ -174,6 +178,7 @@ def test_the_corner_is_measured_within_the_target(paper_robot):
     assert report.fix_errors.shape[0] >= 40
 
 
+@pytest.mark.slow
 def test_the_json_holds_what_the_issue_names(paper_robot):
     _, report, _ = paper_robot
     data = json.loads(report.to_json())
@@ -191,6 +196,7 @@ def test_the_json_holds_what_the_issue_names(paper_robot):
     assert data["measurement"]["rms_position_error"] <= 0.002
 
 
+@pytest.mark.slow
 def test_every_pass_is_a_run_log_that_calibrate_reads(paper_robot, tmp_path):
     import umbmark
 
@@ -215,6 +221,7 @@ def test_every_pass_is_a_run_log_that_calibrate_reads(paper_robot, tmp_path):
     assert after < before / 5
 
 
+@pytest.mark.slow
 def test_the_history_has_every_pass_and_marks_the_applied(paper_robot):
     import umbmark
 
@@ -227,6 +234,7 @@ def test_the_history_has_every_pass_and_marks_the_applied(paper_robot):
     assert "no drift" in found.drift
 
 
+@pytest.mark.slow
 def test_a_skid_steer_like_robot_is_calibrated_through_the_coarse_pass(tmp_path):
     # E_b 1.6: the robot turns 1/1.6 of what its odometry believes; no square is possible
     # until the coarse turning check multiplies the separation by about 1.6
@@ -410,6 +418,7 @@ def test_the_odometry_ends_where_it_was_sent():
 # --- the command ------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_the_command_on_the_virtual_robot(tmp_path):
     proc = run_cli(
         "selfcal", "--sim", "--side-length", "2", "--runs", "3", "--max-passes", "1",
@@ -428,6 +437,7 @@ def test_the_command_needs_a_robot():
     assert proc.stderr.strip() == "umbmark: error: choose the robot: --sim, --ros1 or --ros2"
 
 
+@pytest.mark.slow
 def test_one_pass_without_verification_says_so(tmp_path):
     """With one pass and no verification nothing measured the corrected robot: no 'after'
     figure is shown, and the reason is."""
@@ -447,6 +457,7 @@ def test_one_pass_without_verification_says_so(tmp_path):
     assert json.loads(report.to_json())["e_max_syst_after"] is None
 
 
+@pytest.mark.slow
 def test_range_sensors_that_lose_the_corner_say_which_run_and_what_to_do(tmp_path):
     """Three single beams see both walls only near the start: the paper's LabMate errors
     on 4 m squares end the ccw runs about a metre away (its E_max,syst is 1.04 m)."""
@@ -456,6 +467,7 @@ def test_range_sensors_that_lose_the_corner_say_which_run_and_what_to_do(tmp_pat
     _last_command_is_a_stop(robot)
 
 
+@pytest.mark.slow
 def test_range_sensors_calibrate_a_robot_with_moderate_errors(tmp_path):
     """The paper's sonar calibrator: fixes within its 2 mm and 0.4 deg where the robot
     returns near its start."""
@@ -475,6 +487,7 @@ def test_range_sensors_calibrate_a_robot_with_moderate_errors(tmp_path):
     assert ratio == pytest.approx(1.001, abs=0.0002)
 
 
+@pytest.mark.slow
 def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
     """Motion capture's fixes are in the world frame; the virtual robot's truth there is its
     true pose: the errors are the capture's noise (0.5 mm, 0.05 deg per reading, five
@@ -489,6 +502,7 @@ def test_fixes_by_motion_capture_are_compared_in_its_own_frame(tmp_path):
     assert math.degrees(errors[1]) <= 0.05  # deg rms
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "marks", [None, [-0.3, 0.15, -0.3, -0.15, -0.2, -0.2]], ids=["the robot's", "given"]
 )
@@ -528,6 +542,7 @@ def test_a_person_with_a_tape_measure_is_asked_at_each_stop(tmp_path, marks):
     assert math.degrees(errors[1]) <= 0.4  # deg rms (marks 0.5 m apart)
 
 
+@pytest.mark.slow
 def test_progress_names_the_pass_the_run_and_the_leg(tmp_path):
     seen: list[tuple[str, int, object, str]] = []
     selfcal(
@@ -540,6 +555,7 @@ def test_progress_names_the_pass_the_run_and_the_leg(tmp_path):
     assert ("pass 1", 4, Direction.CCW, "measuring") in seen
 
 
+@pytest.mark.slow
 def test_a_run_whose_odometry_does_not_end_where_it_was_sent_is_warned_of(tmp_path):
     """The benchmark assumes the robot follows the square by its odometry: an end pose
     far from the commanded one is said, naming the pass and the run."""

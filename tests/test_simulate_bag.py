@@ -31,6 +31,9 @@ pytest.importorskip("rosbags")
 from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
+#: Every test here simulates and writes whole bags (seconds each): the full run only.
+pytestmark = pytest.mark.slow
+
 E_D, E_B = 1.002, 1.01
 WHEELBASE, DIAMETER, SIDE, RUNS, DT = 0.34, 0.15, 1.0, 3, 0.02
 SIM = {"E_d": E_D, "E_b": E_B, "side_length": SIDE, "runs": RUNS, "seed": 1, "dt": DT}

@@ -90,6 +90,7 @@ def test_comments_cost_no_memory(tmp_path):
     assert peak < 2_000_000  # the old reader held the whole text: over 18 MB
 
 
+@pytest.mark.slow
 def test_memory_per_run_of_a_long_table(tmp_path):
     # 20 000 runs: the runs themselves (a Run and two EndPoses each) and no more.
     path = tmp_path / "runs.csv"
@@ -141,6 +142,7 @@ def _write_log(folder, n, extra_row=None):  # type: ignore[no-untyped-def]
     return t
 
 
+@pytest.mark.slow
 def test_run_log_is_read_into_compact_columns(tmp_path):
     n = 30_000
     t = _write_log(tmp_path / "log", n)

@@ -187,6 +187,7 @@ def _delayed(log: RunLog, delay: float) -> RunLog:
     return RunLog(t, log.wheel_angles, truth, log.source)
 
 
+@pytest.mark.slow
 def test_time_offset_is_found_and_can_be_left_out():
     sim = umbmark.simulate(E_d=1.002, E_b=1.01, runs=2, side_length=1.0, record=True, seed=2)
     odo = sim.robot.odometry
@@ -203,6 +204,7 @@ def test_time_offset_is_found_and_can_be_left_out():
     assert fixed.rms_heading > 3 * fit.rms_heading  # 40 ms of turning left unexplained
 
 
+@pytest.mark.slow
 def test_standard_errors_are_honest():
     """95 % intervals cover the truth about 95 % of the time over many noisy sessions.
 
@@ -342,6 +344,7 @@ def _scrub_session(b_arc, b_spot, seed, runs=6):
 NOMINAL = WheelParams(wheelbase=0.2, wheel_diameter=0.084)
 
 
+@pytest.mark.slow
 def test_scrub_fit_recovers_both_wheelbases():
     logs = _scrub_session(b_arc=0.200, b_spot=0.206, seed=1)
     fit = fit_trajectories(logs, NOMINAL, model="scrub")
@@ -446,6 +449,7 @@ def test_fit_finds_the_tracked_point(marker_session, start_pose, rel):
         assert estimate.standard_errors[key] == fit.standard_errors[key]
 
 
+@pytest.mark.slow
 def test_truth_offset_at_its_bound_is_refused(marker_session):
     # The marker sits 250 mm ahead: a bound of 100 mm cannot hold it.
     with pytest.raises(
@@ -464,6 +468,7 @@ def test_offset_left_alone_is_not_fitted(session):
     assert "truth_offset_x" not in estimate.components
 
 
+@pytest.mark.slow
 def test_offset_on_noisy_runs_is_honest():
     """With slip: axle truth gives an offset of zero within its standard error and the
     errors of the plain fit; the marker's truth gives the marker's offset and the same
@@ -510,6 +515,7 @@ def test_truth_offset_needs_turns():
         trajectory_estimate([arc, arc], ODO, fit_truth_offset=True)
 
 
+@pytest.mark.slow
 def test_calibrate_fits_the_truth_offset_of_run_logs(tmp_path):
     """The whole path: run logs written by the simulator, their ground truth moved to the
     marker by hand, calibrated and summarized; other methods refuse the flag (exit 2)."""

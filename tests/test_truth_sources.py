@@ -32,6 +32,9 @@ from robot_bags import (
     wheel_quaternion,
 )
 
+#: Every test here writes and reads whole robot bags (seconds each): the full run only.
+pytestmark = pytest.mark.slow
+
 E_D, E_B = 1.004, 1.015  # the TurtleBot3's
 HUSKY_E_D, HUSKY_E_B = 1.003, 1.012
 HUSKY_GEOMETRY = {"wheelbase": 0.555, "wheel_diameter": 0.33, "side_length": 2.0}

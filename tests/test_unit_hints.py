@@ -159,6 +159,7 @@ def test_large_return_errors_are_inverted_exactly(tmp_path, E_d, E_b):
     assert report.estimate.E_b == pytest.approx(E_b, abs=3e-3)
 
 
+@pytest.mark.slow
 def test_errors_beyond_the_square_test_are_refused_naming_cause_and_remedy(tmp_path):
     # E_d = 1.1 and E_b = 0.6: legs bending by 69 degrees and turns 60 degrees too far.
     # No robot of the exact geometry within turns 60 degrees short or long ends where

@@ -10,7 +10,7 @@ import pytest
 import umbmark
 from umbmark.jobs import study as study_module
 
-from helpers import api_error, cli_error, cli_json
+from helpers import api_error, cli_error
 
 
 @pytest.fixture(scope="module")
@@ -58,6 +58,7 @@ def test_validation_needs_recorded_runs(table):
     assert "methods='median'" in api_error(umbmark.validate, path, methods=["median"])
 
 
+@pytest.mark.slow
 def test_method_auto_takes_the_recommendation(sessions):
     report = umbmark.calibrate(*sessions, method="auto")
     checked = umbmark.validate(*sessions)
@@ -65,12 +66,12 @@ def test_method_auto_takes_the_recommendation(sessions):
     assert report.notes[-1].startswith(f"method auto: {checked.recommended}, by held-out")
 
 
-def test_validate_command_prints_the_reports_dictionary(sessions):
-    printed = cli_json("validate", *map(str, sessions), "--methods", "exact")
-    assert printed == umbmark.validate(*sessions, methods=["exact"]).to_dict()
+def test_validate_command_names_a_missing_source_plainly():
+    """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
     assert "needs" not in cli_error("validate", "nothing.csv")
 
 
+@pytest.mark.slow
 def test_study_reports_what_each_estimator_reaches(monkeypatch):
     monkeypatch.setattr(study_module, "CHUNK", 3)  # several chunks, one worker
     report = umbmark.study(trials=6, methods=["truth", "exact"], workers=1, seed=4)

@@ -218,6 +218,7 @@ def lost_truth(tmp_path_factory: pytest.TempPathFactory) -> Path:
 BAG = ("--truth-topic", "/ground_truth/odom", "-L", "1")
 
 
+@pytest.mark.slow
 def test_a_trajectory_fit_to_a_lost_truth_is_not_applied(lost_truth: Path, tmp_path: Path):
     outputs = {"--yaml": tmp_path / "o.yaml", "--ros1-yaml": tmp_path / "p.yaml"}
     files = [a for flag, path in outputs.items() for a in (flag, str(path))]
@@ -296,6 +297,7 @@ class _Ids(HTMLParser):
             self.levels.append(a["data-level"] or "")
 
 
+@pytest.mark.slow
 def test_the_history_records_it_but_does_not_mark_it_applied(lost_truth: Path, tmp_path: Path):
     db = tmp_path / "h.sqlite3"
     where = ("--robot", "tb3", "--history", str(db))
@@ -378,6 +380,7 @@ def test_an_interval_that_holds_no_correction_and_its_double_is_not_applied(
     assert report.write(yaml=yaml, force=True) == [yaml]
 
 
+@pytest.mark.slow
 def test_umbmark_report_shows_the_verdict(wide: Path, tmp_path: Path):
     page = tmp_path / "p.html"
     proc = run_cli("report", str(wide), "-L", "4", "-b", "0.34", "-o", str(page))
@@ -391,6 +394,7 @@ def test_umbmark_report_shows_the_verdict(wide: Path, tmp_path: Path):
     assert "overlay-withheld" in html.ids
 
 
+@pytest.mark.slow
 def test_auto_finding_the_nominal_parameters_best_is_not_applied(tmp_path: Path):
     """Run logs of a robot with no error at all (true radii and wheelbase the nominal
     ones), with random slip: no estimator predicts held-out sessions better than the
@@ -446,13 +450,13 @@ def test_a_fit_that_diverges_says_why_and_what_to_try(tmp_path: Path):
 # --- the good cases stay "apply" -----------------------------------------------------
 
 
-def test_the_example_and_the_demo_apply(tmp_path: Path):
+def test_the_example_and_the_demo_apply(tmp_path: Path, demo: umbmark.DemoReport):
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))
     assert umbmark.calibrate(table, side_length=4, wheelbase=0.34, unit="mm").verdict.level == (
         "apply"
     )
-    assert umbmark.demo().report.verdict.level == "apply"
+    assert demo.report.verdict.level == "apply"
     square, _circles = umbmark.example_sessions(tmp_path / "real")
     assert square.parent.name == "square"
     assert umbmark.calibrate(square).verdict.level == "apply"
@@ -467,6 +471,7 @@ def test_real_square_sessions_apply(session: str):
     assert report.overlay_withheld is False
 
 
+@pytest.mark.slow
 def test_the_verdict_is_printed_first_and_is_json_s_first_key(tmp_path: Path):
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))

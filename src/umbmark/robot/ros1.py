@@ -22,6 +22,7 @@ ROS 1 master and a simulated robot node (``tests/test_ros1.py``).
 
 from __future__ import annotations
 
+import importlib
 import math
 import os
 import threading
@@ -46,20 +47,88 @@ from umbmark.robot.ros_common import (
 )
 from umbmark.robot.ros_robot import RosRobot
 
-__all__ = ["Ros1Robot"]
+__all__ = ["ROS1_MODULES", "ROS1_PACKAGES", "Ros1Robot", "ros1_problem"]
 
 #: The node's base name (rospy makes it unique: ``anonymous``).
 NODE_NAME = "umbmark_selfcal"
 
+#: What the adapter imports: rospy, rosgraph (the master's address), the messages, TF and
+#: the dynamic_reconfigure client (imported before the node starts, so that a missing one is
+#: named at once, not after the robot has driven).
+ROS1_MODULES = (
+    "rospy",
+    "rosgraph",
+    "geometry_msgs.msg",
+    "nav_msgs.msg",
+    "sensor_msgs.msg",
+    "tf2_ros",
+    "dynamic_reconfigure.client",
+)
+
+#: The Debian package of each module the adapter (or the tests' robot node) imports,
+#: directly or through the others: what a missing module's message says to install.
+ROS1_PACKAGES = {
+    "rospy": "python3-rospy",
+    "rosgraph": "python3-rosgraph",
+    "rosmaster": "python3-rosmaster",
+    "roslib": "python3-roslib",
+    "rospkg": "python3-rospkg",
+    "catkin_pkg": "python3-catkin-pkg",
+    "genpy": "python3-genpy",
+    "genmsg": "python3-genmsg",
+    "roscpp": "python3-roscpp-msg",
+    "std_msgs": "python3-std-msgs",
+    "rosgraph_msgs": "python3-rosgraph-msgs",
+    "geometry_msgs": "python3-geometry-msgs",
+    "nav_msgs": "python3-nav-msgs",
+    "sensor_msgs": "python3-sensor-msgs",
+    "actionlib": "python3-actionlib",
+    "actionlib_msgs": "python3-actionlib-msgs",
+    "tf2_ros": "python3-tf2-ros",
+    "tf2_py": "python3-tf2",
+    "tf2_msgs": "python3-tf2-msgs",
+    "dynamic_reconfigure": "python3-dynamic-reconfigure",
+    "yaml": "python3-yaml",
+}
+
+
+def ros1_problem(*modules: str) -> str | None:
+    """The one line naming the first of ``modules`` (default :data:`ROS1_MODULES`) that
+    cannot be imported and the package to install, or None when all import.
+
+    A module missing beneath one of them (``tf2_ros`` needs ``tf2_py``) is named as such.
+    """
+    for name in modules or ROS1_MODULES:
+        try:
+            importlib.import_module(name)
+        except ImportError as exc:
+            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            missing = exc.name if isinstance(exc, ModuleNotFoundError) else None
+            if not missing:
+                owner = ROS1_PACKAGES.get(name.split(".")[0], "its package")
+                return (
+                    f"--ros1 cannot import {name} ({detail}): source your ROS 1 setup, or "
+                    f"install {owner}"
+                )
+            top = missing.split(".")[0]
+            needed = "" if top == name.split(".")[0] else f" (which {name} imports)"
+            package = ROS1_PACKAGES.get(top)
+            fix = f"install {package} (Debian)" if package else "install it"
+            return (
+                f"--ros1 needs {top}{needed}, which is not installed: "
+                f"{fix}, or source the ROS 1 setup that has it"
+            )
+    return None
+
 
 def _rospy() -> ModuleType:
-    """rospy and the message modules, or one line saying what is missing."""
-    try:
-        import rospy
-    except ImportError as exc:
-        raise InputError(
-            f"--ros1 needs rospy ({exc}): source your ROS 1 setup, or install python3-rospy"
-        ) from None
+    """rospy, once every module the adapter needs imports; else one line naming the package
+    that is missing."""
+    problem = ros1_problem()
+    if problem is not None:
+        raise InputError(problem)
+    import rospy
+
     module: ModuleType = rospy
     return module
 
