@@ -21,10 +21,10 @@ from umbmark.calibration.report import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError, python_api
-from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, NAMES, find, names
+from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.options import ReadOptions, SourceOptions
-from umbmark.runs.read import RunSource, source_name
+from umbmark.runs.read import RunSource, is_intervals, source_name
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -275,6 +275,81 @@ def calibrate(
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
           plot=plot, tum=tum, report=report)  # fmt: skip
+    chosen, note, nominal_best = method, None, False
+    if any(is_intervals(s, read_options) for s in sources) or method in INTERVALS:
+        result = _calibrate_intervals(sources, read_options, method, wheelbase, side_length)
+    else:
+        result, chosen, note, nominal_best = _calibrate_runs(
+            sources, read_options, method, wheelbase, side_length, options, force=force,
+            fit_truth_offset=fit_truth_offset,
+        )  # fmt: skip
+    result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
+    if note is not None:
+        result = replace(result, notes=(*result.notes, note))
+    if store is not None and robot is not None:
+        active = result.calibration.active
+        store.check_identity(robot, active.wheelbase, active.wheel_diameter)
+        if composed is not None:
+            result = replace(result, notes=(*result.notes, composed))
+    files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
+    result = replace(result, forced=force)
+    if result.overlay_withheld:  # the verdict says what to do instead
+        result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
+        files = dict.fromkeys(files)
+    result.write(
+        output=output, plot=plot, tum=tum, tum_time=tum_time, report=report, force=force,
+        **files,
+    )  # fmt: skip
+    if store is not None and robot is not None:
+        inputs = [n for n in map(source_name, sources) if n != "runs"]
+        id = store.record(robot, _history_entry(result), inputs)
+        said = store.recorded_line(robot, id, result.verdict, forced=force)
+        result = replace(result, recorded=said)
+    return result
+
+
+def _calibrate_intervals(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    method: str,
+    wheelbase: float | None,
+    side_length: float | None,
+) -> CalibrationReport:
+    """A calibration of tuple files by an estimator of motion intervals (``auto`` takes
+    the first)."""
+    from umbmark.calibration.scan import calibrate_intervals
+
+    if method not in (*INTERVALS, AUTO):
+        raise InputError(
+            f"motion intervals (tuple files) are calibrated by --method {' or '.join(INTERVALS)}, "
+            f"not {method}"
+        )
+    if not all(is_intervals(s, options) for s in sources):
+        raise InputError(
+            f"--method {method} calibrates motion intervals (tuple files; docs/formats.md), "
+            "not runs"
+        )
+    chosen = INTERVALS[0] if method == AUTO else method
+    paths = [Path(source_name(s)) for s in sources]
+    result = calibrate_intervals(
+        paths, options, chosen, wheelbase=wheelbase, side_length=side_length
+    )
+    return CalibrationReport.of(result)
+
+
+def _calibrate_runs(
+    sources: Sequence[RunSource],
+    read_options: ReadOptions,
+    method: str,
+    wheelbase: float | None,
+    side_length: float | None,
+    options: SourceOptions,
+    *,
+    force: bool,
+    fit_truth_offset: bool,
+) -> tuple[CalibrationReport, str, str | None, bool]:
+    """A calibration of runs: the result, the method chosen, a note on the choice, and
+    whether ``auto`` found the nominal parameters best."""
     entry = find(method)
     if side_length is None and entry is not None and entry.side_required:
         from umbmark.runs.read import is_table
@@ -297,32 +372,10 @@ def calibrate(
             sources, read, side_length, wheelbase, options, force=force
         )
     result = CalibrationReport.of(calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset))
-    result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
-    if note is not None:
-        result = replace(result, notes=(*result.notes, note))
-    if chosen in fitting and len(read.parts) > 1:
+    if chosen in names(trajectories=True) and len(read.parts) > 1:
         disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
         result = replace(result, input_warnings=(*result.input_warnings, *disagree))
-    if store is not None and robot is not None:
-        active = result.calibration.active
-        store.check_identity(robot, active.wheelbase, active.wheel_diameter)
-        if composed is not None:
-            result = replace(result, notes=(*result.notes, composed))
-    files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
-    result = replace(result, forced=force)
-    if result.overlay_withheld:  # the verdict says what to do instead
-        result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
-        files = dict.fromkeys(files)
-    result.write(
-        output=output, plot=plot, tum=tum, tum_time=tum_time, report=report, force=force,
-        **files,
-    )  # fmt: skip
-    if store is not None and robot is not None:
-        inputs = [n for n in map(source_name, sources) if n != "runs"]
-        id = store.record(robot, _history_entry(result), inputs)
-        said = store.recorded_line(robot, id, result.verdict, forced=force)
-        result = replace(result, recorded=said)
-    return result
+    return result, chosen, note, nominal_best
 
 
 def _history_entry(result: CalibrationResult) -> NewCalibration:

@@ -314,10 +314,11 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "format",
         ("--format", "-f"),
         LOGS,
-        "Source format (auto: by the path).",
+        "Source format (auto: by the path; tuples: motion intervals of the wheels against a "
+        "laser's scan matching, for --method scan-matching).",
         kind="choice",
         default="auto",
-        choices=("auto", "table", "log", "optiodom", "bag"),
+        choices=("auto", "table", "log", "optiodom", "bag", "tuples"),
     ),
     Spec(
         "split",

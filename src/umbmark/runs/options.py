@@ -34,7 +34,7 @@ class SourceOptions(TypedDict, total=False):
     keys of :data:`umbmark.options.spec.READ`, typed for ``**options`` (a test holds them
     equal)."""
 
-    format: Literal["auto", "table", "log", "optiodom", "bag"]
+    format: Literal["auto", "table", "log", "optiodom", "bag", "tuples"]
     unit: Literal["m", "cm", "mm"]
     angle_unit: Literal["rad", "deg"]
     wheel_diameter: float | None
@@ -75,8 +75,9 @@ class ReadOptions:
 
     Attributes
     ----------
-    format : {"auto", "table", "log", "optiodom", "bag"}
-        Source format; ``auto`` decides by the path.
+    format : {"auto", "table", "log", "optiodom", "bag", "tuples"}
+        Source format; ``auto`` decides by the path (``tuples``: motion intervals, a
+        ``.tuple`` file, for the estimators of motion intervals).
     unit, angle_unit : str
         Units of a runs table's lengths (``m``, ``cm``, ``mm``) and headings (``rad``,
         ``deg``).

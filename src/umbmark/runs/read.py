@@ -182,6 +182,16 @@ def is_table(source: RunSource, options: ReadOptions) -> bool:
     return detect_format(Path(cast("PathLike", source))) == "table"
 
 
+def is_intervals(source: RunSource, options: ReadOptions) -> bool:
+    """Whether ``source`` holds motion intervals (a tuple file), not runs."""
+    if is_runs(source):
+        return False
+    if options.format != "auto":
+        return options.format == "tuples"
+    path = Path(cast("PathLike", source))
+    return path.is_file() and detect_format(path) == "tuples"
+
+
 def source_format(source: RunSource, options: ReadOptions) -> tuple[Path | None, Format]:
     """The path of ``source`` (None for runs in memory) and its format (``"table"`` for
     runs in memory), as ``options.format`` says or detected."""
