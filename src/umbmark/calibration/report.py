@@ -425,7 +425,7 @@ _ABSOLUTE = (
 
 def _intervals(estimate: ErrorEstimate) -> dict[str, list[float]]:
     """95 % confidence intervals of the estimate's figures that have a standard error."""
-    named = ("E_d", "E_b", "E_s", "alpha", "beta")
+    named: tuple[str, ...] = ("E_d", "E_b", "E_s", "alpha", "beta")
     named += tuple(n for n in _ABSOLUTE if n in estimate.components)
     pairs = ((name, estimate.interval(name)) for name in named)
     return {name: [pair[0], pair[1]] for name, pair in pairs if pair is not None}

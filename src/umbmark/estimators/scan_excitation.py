@@ -79,7 +79,6 @@ class Excitation:
     def missing(self) -> list[str]:
         """The motion to drive more of, for people ("turns on the spot", ...)."""
         turning = self.n_spot + self.n_arc
-        driving = self.n_straight + self.n_arc
         out = []
         if not self.excited and (self.n_spot < max(1, self.n_straight // 10)):
             out.append("turns on the spot")

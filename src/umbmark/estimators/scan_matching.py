@@ -224,7 +224,8 @@ def _outliers(residual: FloatArray, fraction: float) -> BoolArray:
     index = min(max(round((1.0 - fraction) * n), 0), n - 1)
     rot = np.abs(residual[:, 2])
     xy = np.hypot(residual[:, 0], residual[:, 1])
-    return (rot > np.sort(rot)[index]) | (xy > np.sort(xy)[index])
+    drop: BoolArray = (rot > np.sort(rot)[index]) | (xy > np.sort(xy)[index])
+    return drop
 
 
 def _covariance(

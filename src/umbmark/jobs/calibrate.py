@@ -275,11 +275,11 @@ def calibrate(
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
           plot=plot, tum=tum, report=report)  # fmt: skip
-    chosen, note, nominal_best = method, None, False
+    note, nominal_best = None, False
     if any(is_intervals(s, read_options) for s in sources) or method in INTERVALS:
         result = _calibrate_intervals(sources, read_options, method, wheelbase, side_length)
     else:
-        result, chosen, note, nominal_best = _calibrate_runs(
+        result, note, nominal_best = _calibrate_runs(
             sources, read_options, method, wheelbase, side_length, options, force=force,
             fit_truth_offset=fit_truth_offset,
         )  # fmt: skip
@@ -347,9 +347,9 @@ def _calibrate_runs(
     *,
     force: bool,
     fit_truth_offset: bool,
-) -> tuple[CalibrationReport, str, str | None, bool]:
-    """A calibration of runs: the result, the method chosen, a note on the choice, and
-    whether ``auto`` found the nominal parameters best."""
+) -> tuple[CalibrationReport, str | None, bool]:
+    """A calibration of runs: the result, a note on the method chosen, and whether
+    ``auto`` found the nominal parameters best."""
     entry = find(method)
     if side_length is None and entry is not None and entry.side_required:
         from umbmark.runs.read import is_table
@@ -375,7 +375,7 @@ def _calibrate_runs(
     if chosen in names(trajectories=True) and len(read.parts) > 1:
         disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
         result = replace(result, input_warnings=(*result.input_warnings, *disagree))
-    return result, chosen, note, nominal_best
+    return result, note, nominal_best
 
 
 def _history_entry(result: CalibrationResult) -> NewCalibration:

@@ -18,9 +18,9 @@ Formats
     (:func:`umbmark.calibration.scan.calibrate_intervals`); :func:`load_runs` refuses it.
 ``auto``
     Decide from the path: a ``.tuple`` file is tuples; a ``.bag``, ``.db3`` or ``.mcap``
-    file or a folder with a ROS 2 ``metadata.yaml`` is a bag; a folder with ``*_metadata.csv`` and ``*_run-NN.csv`` is
-    OptiOdom; a folder (or a CSV beside) with umbmark's ``metadata.yaml`` is a run log; any
-    other file a runs table.
+    file or a folder with a ROS 2 ``metadata.yaml`` is a bag; a folder with
+    ``*_metadata.csv`` and ``*_run-NN.csv`` is OptiOdom; a folder (or a CSV beside) with
+    umbmark's ``metadata.yaml`` is a run log; any other file a runs table.
 """
 
 from __future__ import annotations

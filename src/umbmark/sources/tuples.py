@@ -3,7 +3,7 @@
 The format of the reference implementation of Censi et al. 2013 (``AndreaCensi/calibration``,
 its ``reference-output/*.tuple``): one JSON object a line, one interval each::
 
-    { "T": 0.794396, "phi_l": 0.1401765, "phi_r": -0.1373157, "sm": [0.0010926, -0.00050897, -0.0274885] }
+    { "T": 0.794396, "phi_l": 0.14018, "phi_r": -0.13732, "sm": [0.00109, -0.00051, -0.02749] }
 
 - ``T``: the interval's duration [s] (> 0);
 - ``phi_l``, ``phi_r``: the left and right wheel's **average angular velocity** over the
