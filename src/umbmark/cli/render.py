@@ -79,7 +79,17 @@ def render_calibration(
     est, active = cal.estimate, cal.active
     se = est.standard_errors
 
-    if bench is None:
+    sensor = report.sensor
+    if sensor is not None:
+        console.print(
+            Text.assemble(
+                ("Calibration of ", "bold"),
+                (report.source, "bold cyan"),
+                f"  ({sensor.n_used} of {len(sensor.kept)} motion intervals, "
+                f"{len(sensor.kept) - sensor.n_used} dropped as outliers; no UMBmark figures)",
+            )
+        )
+    elif bench is None:
         console.print(
             Text.assemble(
                 ("Calibration of ", "bold"),
@@ -111,6 +121,8 @@ def render_calibration(
         _row(errors, "E_s = D_avg / D_active", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "scale")
     if est.method in LOGGED:
         _trajectory_rows(errors, est.components, se)
+    if sensor is not None:
+        _sensor_rows(errors, est.components, se)
     console.print(errors)
     intervals = [
         f"{name} [{low:.6f}, {high:.6f}]"
@@ -185,6 +197,22 @@ def render_calibration(
         )
         # Plain text, no box: it must copy and paste as it is.
         console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
+
+
+def _sensor_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:
+    """The absolute figures of a calibration from motion intervals (mm, degrees)."""
+    for key, label, scale, unit, fmt in (
+        ("wheel_diameter_left", "left wheel diameter", _MM, "mm", ".3f"),
+        ("wheel_diameter_right", "right wheel diameter", _MM, "mm", ".3f"),
+        ("wheelbase", "wheelbase", _MM, "mm", ".3f"),
+        ("laser_x", "laser x (forward)", _MM, "mm", ".2f"),
+        ("laser_y", "laser y (left)", _MM, "mm", ".2f"),
+        ("laser_yaw", "laser yaw", 180.0 / math.pi, "deg", ".3f"),
+    ):
+        if key in comp:
+            error = se.get(key)
+            shown = _plus_minus(comp[key] * scale, None if error is None else error * scale, fmt)
+            _row(errors, label, f"{shown} {unit}", "scan matching")
 
 
 def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:

@@ -30,7 +30,9 @@ rotation residual or translation residual is beyond the ``1 - fraction`` quantil
 Uncertainty: the Cramer-Rao bound at the estimate, the inverse of the Fisher
 information ``sum_k J_k^T Sigma^-1 J_k`` of the six parameters ``(r_L, r_R, b, l_x, l_y,
 l_theta)`` (``J_k``: the Jacobian of the predicted sensor motion), with the sensor noise
-``Sigma`` diagonal and estimated from the kept intervals' residuals, as the paper does.
+``Sigma`` diagonal and estimated from the residuals (the paper's choice; here robustly,
+by their median absolute deviation, so that neither the outliers nor the cut tails of the
+kept intervals bias it).
 The scan matcher's own covariances are not used: matchers are often optimistic.
 """
 
@@ -85,8 +87,8 @@ class ScanCalibration:
     kept : array of bool, shape (n,)
         The intervals the estimate is made from (the others: outliers).
     noise : tuple of float
-        Standard deviation of the sensor-motion residuals ``(x, y, yaw)`` [m, m, rad] on
-        the kept intervals: the noise the covariance assumes.
+        Standard deviation of the sensor's noise ``(x, y, yaw)`` [m, m, rad], from the
+        residuals' median absolute deviation: the noise the covariance assumes.
     excitation : Excitation
         What motion the intervals hold.
     warnings : tuple of str
@@ -231,9 +233,15 @@ def _outliers(residual: FloatArray, fraction: float) -> BoolArray:
 def _covariance(
     intervals: MotionIntervals, params: FloatArray, rows: BoolArray
 ) -> tuple[FloatArray, FloatArray]:
-    """The Cramer-Rao bound of the parameters, and the residuals' ``(3,)`` deviations."""
-    residual = predicted_motion(intervals, params, rows) - intervals.sensor_motion[rows]
-    noise = residual.std(axis=0, ddof=1)
+    """The Cramer-Rao bound of the parameters, and the sensor noise's ``(3,)`` deviations.
+
+    The noise is the residuals' median absolute deviation over every interval (outliers
+    included) times 1.4826: the standard deviation of Gaussian noise, which the residuals
+    of the kept intervals alone would understate (their tails were cut).
+    """
+    residual = predicted_motion(intervals, params) - intervals.sensor_motion
+    spread = np.median(np.abs(residual - np.median(residual, axis=0)), axis=0)
+    noise = 1.482602218505602 * spread
     noise = np.where(noise > 0.0, noise, 1e-12)
     jac = np.empty((int(rows.sum()), 3, 6))
     for j in range(6):
