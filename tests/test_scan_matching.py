@@ -143,9 +143,7 @@ def test_outliers_are_rejected():
     motion = intervals.sensor_motion.copy()
     motion[bad, 0] += 0.15  # a scan matcher's wrong match: 15 cm and 25 degrees off
     motion[bad, 2] += math.radians(25)
-    spoiled = MotionIntervals(
-        intervals.duration, intervals.phi_left, intervals.phi_right, motion
-    )
+    spoiled = MotionIntervals(intervals.duration, intervals.phi_left, intervals.phi_right, motion)
     cal = calibrate_intervals(spoiled)
     assert not cal.kept[bad].any()
     se = np.sqrt(np.diag(cal.covariance))
@@ -281,9 +279,8 @@ def test_calibrate_reads_a_tuple_file(tmp_path):
     ):
         assert abs(out[key] - truth) < 4 * se[key]
         assert out[f"{key}_standard_error"] == se[key]
-    assert np.all(
-        np.abs(np.array(out["laser_pose"]) - LASER) < 4 * np.array(out["laser_pose_standard_errors"])
-    )
+    off = np.abs(np.array(out["laser_pose"]) - LASER)
+    assert np.all(off < 4 * np.array(out["laser_pose_standard_errors"]))
     assert out["E_d"] == pytest.approx(out["wheel_diameter_right"] / out["wheel_diameter_left"])
     json.dumps(out)
     assert "--wheel-diameter is required" in cli_error(*args)
