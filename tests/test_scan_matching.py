@@ -17,7 +17,7 @@ import pytest
 
 from umbmark.core.errors import InputError
 from umbmark.estimators.scan_excitation import excitation
-from umbmark.estimators.scan_matching import calibrate_intervals, scan_matching_estimate
+from umbmark.estimators.scan_matching import fit_intervals, scan_matching_estimate
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.sources.tuples import read_tuples, write_tuples
@@ -89,7 +89,7 @@ def _mix(n: int) -> list[str]:
 
 
 def test_noiseless_intervals_give_the_truth_exactly():
-    cal = calibrate_intervals(simulate(_mix(80), rng=np.random.default_rng(1)), rounds=0)
+    cal = fit_intervals(simulate(_mix(80), rng=np.random.default_rng(1)), rounds=0)
     assert cal.radius_left == pytest.approx(R_L, rel=1e-6)
     assert cal.radius_right == pytest.approx(R_R, rel=1e-6)
     assert cal.wheelbase == pytest.approx(B, rel=1e-6)
@@ -101,7 +101,7 @@ def test_the_mirrored_solution_is_resolved_to_a_positive_wheelbase(yaw):
     # x and -x minimise the same form: -x is a negative wheelbase with the laser turned by
     # 180 degrees; a laser mounted backwards must come out as itself.
     laser = (-0.1, 0.03, yaw)
-    cal = calibrate_intervals(simulate(_mix(60), rng=np.random.default_rng(2), laser=laser))
+    cal = fit_intervals(simulate(_mix(60), rng=np.random.default_rng(2), laser=laser))
     assert cal.wheelbase == pytest.approx(B, rel=1e-6)
     assert cal.laser_pose[:2] == pytest.approx(laser[:2], abs=1e-6)
     assert math.remainder(cal.laser_pose[2] - yaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-6)
@@ -111,7 +111,7 @@ NOISE = (0.002, 0.002, math.radians(0.5))
 
 
 def test_noisy_estimates_lie_within_their_intervals():
-    cal = calibrate_intervals(simulate(_mix(600), rng=np.random.default_rng(3), noise=NOISE))
+    cal = fit_intervals(simulate(_mix(600), rng=np.random.default_rng(3), noise=NOISE))
     se = np.sqrt(np.diag(cal.covariance))
     truth = np.array([R_L, R_R, B, *LASER])
     assert np.all(np.abs(cal.values - truth) < 4.0 * se), (cal.values - truth) / se
@@ -128,7 +128,7 @@ def test_standard_errors_match_the_monte_carlo_scatter(rounds, high):
     rng = np.random.default_rng(4)
     values, errors = [], []
     for _ in range(60):
-        cal = calibrate_intervals(simulate(_mix(300), rng=rng, noise=NOISE), rounds=rounds)
+        cal = fit_intervals(simulate(_mix(300), rng=rng, noise=NOISE), rounds=rounds)
         values.append(cal.values)
         errors.append(np.sqrt(np.diag(cal.covariance)))
     scatter = np.std(values, axis=0, ddof=1)
@@ -144,12 +144,12 @@ def test_outliers_are_rejected():
     motion[bad, 0] += 0.15  # a scan matcher's wrong match: 15 cm and 25 degrees off
     motion[bad, 2] += math.radians(25)
     spoiled = MotionIntervals(intervals.duration, intervals.phi_left, intervals.phi_right, motion)
-    cal = calibrate_intervals(spoiled)
+    cal = fit_intervals(spoiled)
     assert not cal.kept[bad].any()
     se = np.sqrt(np.diag(cal.covariance))
     truth = np.array([R_L, R_R, B, *LASER])
     assert np.all(np.abs(cal.values - truth) < 4.0 * se)
-    naive = calibrate_intervals(spoiled, rounds=0)
+    naive = fit_intervals(spoiled, rounds=0)
     assert np.max(np.abs(naive.values - truth) / se) > 5.0  # without rejection: off
 
 
@@ -165,7 +165,7 @@ def test_outliers_are_rejected():
 def test_unexcited_motion_is_refused_naming_what_to_drive(kinds, missing):
     intervals = simulate(kinds, rng=np.random.default_rng(6), noise=NOISE)
     with pytest.raises(InputError, match="does not excite") as caught:
-        calibrate_intervals(intervals)
+        fit_intervals(intervals)
     assert f"drive more {missing}" in str(caught.value)
 
 
@@ -173,8 +173,8 @@ def test_turning_one_way_only_is_refused_when_ill_conditioned_and_warned_otherwi
     rng = np.random.default_rng(7)
     one_way = simulate(["straight"] * 300 + ["left"], rng=rng, noise=NOISE)
     with pytest.raises(InputError, match="turns in both directions"):
-        calibrate_intervals(one_way)
-    cal = calibrate_intervals(simulate(["straight", "left"] * 40, rng=rng, noise=NOISE))
+        fit_intervals(one_way)
+    cal = fit_intervals(simulate(["straight", "left"] * 40, rng=rng, noise=NOISE))
     assert any("every turn is to the left" in w for w in cal.warnings)
 
 
@@ -186,7 +186,7 @@ def test_excitation_counts_the_kinds_of_motion():
 
 def test_too_few_intervals_are_refused():
     with pytest.raises(InputError, match="at least 10"):
-        calibrate_intervals(simulate(_mix(8), rng=np.random.default_rng(8)))
+        fit_intervals(simulate(_mix(8), rng=np.random.default_rng(8)))
 
 
 def test_errors_against_the_active_parameters():

@@ -55,7 +55,7 @@ from umbmark.model.systematic import alpha_from_E_b, beta_from_E_d
 __all__ = [
     "PARAMETERS",
     "ScanCalibration",
-    "calibrate_intervals",
+    "fit_intervals",
     "predicted_motion",
     "scan_matching_estimate",
     "solve_intervals",
@@ -256,7 +256,7 @@ def _covariance(
     return np.linalg.inv(fisher), noise
 
 
-def calibrate_intervals(
+def fit_intervals(
     intervals: MotionIntervals, *, rounds: int = 4, fraction: float = 0.01
 ) -> ScanCalibration:
     """The wheels and the sensor's mounting from motion intervals (module documentation).
@@ -356,7 +356,7 @@ def scan_matching_estimate(
     components hold the absolute figures: ``wheel_diameter_left``,
     ``wheel_diameter_right``, ``wheelbase``, ``laser_x``, ``laser_y``, ``laser_yaw``.
     """
-    cal = calibrate_intervals(intervals, rounds=rounds, fraction=fraction)
+    cal = fit_intervals(intervals, rounds=rounds, fraction=fraction)
     half_l, half_r = 0.5 * active.diameter_left, 0.5 * active.diameter_right
     f_l, f_r = cal.radius_left / half_l, cal.radius_right / half_r
     E_d, E_b, E_s = f_r / f_l, cal.wheelbase / active.wheelbase, 0.5 * (f_l + f_r)

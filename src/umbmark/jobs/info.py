@@ -261,6 +261,14 @@ def info(
             " into; umbmark info looks into ROS bags, run logs and OptiOdom sessions",
             source=name,
         )
+    if kind == "tuples":
+        from umbmark.estimators.registry import INTERVALS
+
+        raise InputError(
+            "holds motion intervals (a tuple file): umbmark info looks into ROS bags, run logs "
+            f"and OptiOdom sessions; calibrate it with --method {' or '.join(INTERVALS)}",
+            source=name,
+        )
     if kind == "bag":
         from umbmark.sources.bag.info.report import DEFAULT_MAX_MESSAGES, bag_info
 
