@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from umbmark.estimators.trajectory_fit import TrajectoryFit
 
 __all__ = [
+    "ABSOLUTE_FIGURES",
     "Calibrated",
     "CalibrationResult",
     "calibrated_name",
@@ -412,8 +413,9 @@ def calibrated_name(params: Calibrated) -> str:
     return "the calibration"
 
 
-#: The absolute figures an estimator may give as components, with a standard error.
-_ABSOLUTE = (
+#: The absolute figures an estimator may give as components, with a standard error
+#: (scan matching): the JSON's intervals, the summary and the HTML page list them.
+ABSOLUTE_FIGURES = (
     "wheel_diameter_left",
     "wheel_diameter_right",
     "wheelbase",
@@ -426,7 +428,7 @@ _ABSOLUTE = (
 def _intervals(estimate: ErrorEstimate) -> dict[str, list[float]]:
     """95 % confidence intervals of the estimate's figures that have a standard error."""
     named: tuple[str, ...] = ("E_d", "E_b", "E_s", "alpha", "beta")
-    named += tuple(n for n in _ABSOLUTE if n in estimate.components)
+    named += tuple(n for n in ABSOLUTE_FIGURES if n in estimate.components)
     pairs = ((name, estimate.interval(name)) for name in named)
     return {name: [pair[0], pair[1]] for name, pair in pairs if pair is not None}
 

@@ -14,6 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from umbmark.benchmark.returns import Benchmark, sem_verdict
+from umbmark.calibration.report import ABSOLUTE_FIGURES
 from umbmark.estimators.registry import LOGGED, find, method_label
 from umbmark.jobs.calibrate import CalibrationReport
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
@@ -200,19 +201,14 @@ def render_calibration(
 
 
 def _sensor_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:
-    """The absolute figures of a calibration from motion intervals (mm, degrees)."""
-    for key, label, scale, unit, fmt in (
-        ("wheel_diameter_left", "left wheel diameter", _MM, "mm", ".3f"),
-        ("wheel_diameter_right", "right wheel diameter", _MM, "mm", ".3f"),
-        ("wheelbase", "wheelbase", _MM, "mm", ".3f"),
-        ("laser_x", "laser x (forward)", _MM, "mm", ".2f"),
-        ("laser_y", "laser y (left)", _MM, "mm", ".2f"),
-        ("laser_yaw", "laser yaw", 180.0 / math.pi, "deg", ".3f"),
-    ):
+    """The absolute figures of a calibration from motion intervals, in their units."""
+    for key in ABSOLUTE_FIGURES:
         if key in comp:
-            error = se.get(key)
-            shown = _plus_minus(comp[key] * scale, None if error is None else error * scale, fmt)
-            _row(errors, label, f"{shown} {unit}", "scan matching")
+            shown = component(key)
+            value, error = shown.show(comp[key]), se.get(key)
+            if error is not None and math.isfinite(error):
+                value += f" ± {shown.show(error)}"
+            _row(errors, shown.label, f"{value} {shown.unit}", shown.meaning)
 
 
 def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:
