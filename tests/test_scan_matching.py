@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -22,7 +23,7 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.sources.tuples import read_tuples, write_tuples
 
-from helpers import cli_error, cli_json
+from helpers import cli_error, cli_json, run_cli
 
 R_L, R_R, B = 0.0412, 0.0415, 0.088  # truth: wheel radii and wheelbase [m]
 LASER = (0.05, -0.02, 0.3)  # truth: the laser's mounting [m, m, rad]
@@ -184,6 +185,29 @@ def test_excitation_counts_the_kinds_of_motion():
     assert (found.n_left, found.n_right) == (2, 1)
 
 
+def test_intervals_with_values_that_are_not_numbers_are_refused():
+    intervals = simulate(_mix(20), rng=np.random.default_rng(12))
+    motion = intervals.sensor_motion.copy()
+    motion[4, 1] = np.nan
+    spoiled = MotionIntervals(intervals.duration, intervals.phi_left, intervals.phi_right, motion)
+    with pytest.raises(InputError, match="not finite numbers .the first: interval 5"):
+        fit_intervals(spoiled)
+
+
+def test_runs_methods_and_intervals_do_not_mix():
+    from umbmark.estimators.dispatch import estimate_runs
+    from umbmark.estimators.registry import INTERVALS, RUNS
+    from umbmark.jobs.validate import CANDIDATES
+
+    assert not set(INTERVALS) & set(CANDIDATES)  # validate and auto compare runs' methods
+    assert not set(INTERVALS) & set(RUNS)
+    with pytest.raises(InputError, match="needs motion intervals"):
+        estimate_runs(
+            INTERVALS[0], [], wheelbase=0.3, params=None, side_length=None,
+            square_side=lambda: 1.0,
+        )  # fmt: skip
+
+
 def test_too_few_intervals_are_refused():
     with pytest.raises(InputError, match="at least 10"):
         fit_intervals(simulate(_mix(8), rng=np.random.default_rng(8)))
@@ -283,6 +307,9 @@ def test_calibrate_reads_a_tuple_file(tmp_path):
     assert np.all(off < 4 * np.array(out["laser_pose_standard_errors"]))
     assert out["E_d"] == pytest.approx(out["wheel_diameter_right"] / out["wheel_diameter_left"])
     json.dumps(out)
+    summary = run_cli(*args, "--wheel-diameter", "0.082").stdout
+    assert re.search(r"laser yaw +1[67]\.\d+ ± 0\.\d+ deg", summary), summary
+    assert re.search(r"wheelbase +8[78]\.\d+ ± 0\.\d+ mm", summary), summary
     assert "--wheel-diameter is required" in cli_error(*args)
     assert "calibrated by --method scan-matching, not exact" in cli_error(
         "calibrate", str(path), "--method", "exact", "--wheelbase", "0.09"

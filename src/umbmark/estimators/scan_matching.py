@@ -283,6 +283,17 @@ def fit_intervals(
             source=where,
         )
     n = len(intervals)
+    values = (intervals.duration, intervals.phi_left, intervals.phi_right)
+    finite = np.all([np.isfinite(v) for v in values], axis=0)
+    finite &= np.isfinite(intervals.sensor_motion).all(axis=1)
+    if not finite.all():
+        raise InputError(
+            f"{int((~finite).sum())} motion interval(s) hold values that are not finite "
+            f"numbers (the first: interval {int(np.flatnonzero(~finite)[0]) + 1})",
+            source=where,
+        )
+    if (intervals.duration <= 0.0).any():
+        raise InputError("a motion interval lasts 0 s or less", source=where)
     if n < MIN_INTERVALS:
         raise InputError(
             f"{n} motion interval(s): the scan-matching calibration needs at least {MIN_INTERVALS}",
