@@ -190,7 +190,7 @@ def test_intervals_with_values_that_are_not_numbers_are_refused():
     motion = intervals.sensor_motion.copy()
     motion[4, 1] = np.nan
     spoiled = MotionIntervals(intervals.duration, intervals.phi_left, intervals.phi_right, motion)
-    with pytest.raises(InputError, match="not finite numbers .the first: interval 5"):
+    with pytest.raises(InputError, match=r"not finite numbers \(the first: interval 5\)"):
         fit_intervals(spoiled)
 
 
