@@ -429,6 +429,4 @@ def room_world(clutter: bool = True) -> World:
     if clutter:
         parts += [box(-2.7, -1.0, 0.5, 1.2), box(4.4, -2.0, 0.9, 1.6, 0.1)]
         circles += [chair(-1.8, 2.2, 0.4), legs(2.4, -1.8, 0.9)]
-    return World.build(
-        np.vstack(parts), np.vstack(circles) if circles else (), lidar=DEFAULT_LIDAR
-    )
+    return World.build(np.vstack(parts), np.vstack(circles) if circles else (), lidar=DEFAULT_LIDAR)

@@ -240,7 +240,7 @@ def match(
     info = scaled @ h @ scaled / max(pairs, 1)
     constraint = float(np.linalg.eigvalsh(0.5 * (info + info.T))[0])
     try:
-        covariance = state.sigma2 * np.linalg.inv(h)
+        covariance = np.asarray(state.sigma2 * np.linalg.inv(h), dtype=np.float64)
     except np.linalg.LinAlgError:
         covariance = np.full((3, 3), np.nan)
     status: Status = "ok"

@@ -134,7 +134,11 @@ def compose(a: FloatArray, b: FloatArray) -> FloatArray:
     """The planar pose ``a (+) b``: ``b`` ``(x, y, yaw)`` given in the frame ``a``."""
     c, s = math.cos(a[2]), math.sin(a[2])
     return np.array(
-        [a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], math.remainder(a[2] + b[2], math.tau)]
+        [
+            a[0] + c * b[0] - s * b[1],
+            a[1] + s * b[0] + c * b[1],
+            math.remainder(a[2] + b[2], math.tau),
+        ]
     )
 
 
@@ -162,9 +166,7 @@ def _wheel_angles(wheels: WheelSeries, t0: float, t1: float) -> FloatArray:
     """Wheel angles ``(k, 2)`` at ``t0``, at every sample inside, and at ``t1``."""
     inner = (wheels.time > t0) & (wheels.time < t1)
     times = np.concatenate([[t0], wheels.time[inner], [t1]])
-    return np.column_stack(
-        [np.interp(times, wheels.time, wheels.angles[:, i]) for i in range(2)]
-    )
+    return np.column_stack([np.interp(times, wheels.time, wheels.angles[:, i]) for i in range(2)])
 
 
 def match_intervals(
@@ -222,12 +224,15 @@ def match_intervals(
             continue
         if guess is not None:
             off = result.pose - guess
-            if math.hypot(off[0], off[1]) > options.max_disagreement[0] or abs(
-                math.remainder(off[2], math.tau)
-            ) > options.max_disagreement[1]:
+            if (
+                math.hypot(off[0], off[1]) > options.max_disagreement[0]
+                or abs(math.remainder(off[2], math.tau)) > options.max_disagreement[1]
+            ):
                 left_out["far from the wheels' guess"] += 1
                 continue
-        rows.append((t0, t1 - t0, float(phi[0]), float(phi[1]), result.pose, result.covariance, result.rms))
+        rows.append(
+            (t0, t1 - t0, float(phi[0]), float(phi[1]), result.pose, result.covariance, result.rms)
+        )
     k = len(rows)
     intervals = MotionIntervals(
         duration=np.array([r[1] for r in rows], dtype=np.float64),
