@@ -153,6 +153,7 @@ def _iterate(
     assert tree is not None
     ref_pts, ref_nrm = reference.line_points, reference.normals
     pose = state.pose
+    visited: list[FloatArray] = []
     for _ in range(budget):
         state.iterations += 1
         c, s = math.cos(pose[2]), math.sin(pose[2])
@@ -191,6 +192,12 @@ def _iterate(
         state.distance = min(state.distance, max(settings.min_distance, 4 * settings.trim * scale))
         if float(np.max(np.abs(step))) < tolerance:
             return True
+        # pairings that alternate make the pose cycle: back where it was, it has converged
+        for back in range(2, min(len(visited), 4) + 1):
+            if float(np.max(np.abs(pose - visited[-back]))) < tolerance:
+                pose[:] = np.mean([*visited[-back + 1 :], pose], axis=0)
+                return True
+        visited.append(pose.copy())
     return False
 
 
