@@ -39,6 +39,23 @@ PATTERN: tuple[tuple[float, float, float], ...] = (
 )
 
 
+def ramped(
+    pattern: Sequence[tuple[float, float, float]], ramp: float = 0.4, step: float = 0.01
+) -> tuple[tuple[float, float, float], ...]:
+    """``pattern`` with every change of ``(v, omega)`` spread linearly over ``ramp`` [s]
+    (at the end of the segment before it), as a robot's controller accelerates."""
+    out: list[tuple[float, float, float]] = []
+    for k, (duration, v, w) in enumerate(pattern):
+        nv, nw = pattern[k + 1][1:] if k + 1 < len(pattern) else (v, w)
+        steady = max(duration - ramp, 0.0) if (nv, nw) != (v, w) else duration
+        out.append((steady, v, w))
+        n = round((duration - steady) / step)
+        for i in range(n):
+            f = (i + 0.5) / n
+            out.append((step, v + f * (nv - v), w + f * (nw - w)))
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class Drive:
     """The simulated recording and its truth."""
@@ -76,9 +93,15 @@ def simulate(
     jitter: float = 0.3,
     wheel_rate: float = 100.0,
     seed: int = 3,
+    sweep_time: float = 0.0,
 ) -> Drive:
     """Drive ``pattern`` from the world's start; sweeps at ``scan_rate`` [Hz] with their
-    spacing jittered by up to ``jitter`` of a period (irregular rates)."""
+    spacing jittered by up to ``jitter`` of a period (irregular rates).
+
+    ``sweep_time`` [s]: a rotating scanner's beams are measured one after the other over
+    this time from the sweep's stamp (``time_increment = sweep_time / beams``), each from
+    the pose the robot has then (interpolated linearly between the 100 Hz poses); 0: all
+    at once."""
     world = world or room_world()
     assert world.lidar is not None
     lidar = dataclasses.replace(
@@ -116,6 +139,9 @@ def simulate(
     index = np.unique(np.round(np.array(stamps) * wheel_rate).astype(int))
     sweeps = []
     for i in index:
+        if sweep_time > 0.0:
+            sweeps.append(_rolling_sweep(world, pose_times, pose_arr, i, sweep_time, rng))
+            continue
         px, py, pth = pose_arr[i]
         scan = world.scan(Pose2D(float(px), float(py), float(pth)), float(pose_times[i]), rng)
         assert scan is not None
@@ -127,6 +153,35 @@ def simulate(
         angle_increment=lidar.increment,
         range_min=lidar.range_min,
         range_max=lidar.range_max,
+        time_increment=sweep_time / beams,
     )
     wheels = WheelSeries(time=pose_times, angles=np.array(angles))
     return Drive(scans, wheels, pose_times, pose_arr)
+
+
+def _rolling_sweep(
+    world: World,
+    pose_times: np.ndarray,
+    poses: np.ndarray,
+    i: int,
+    sweep_time: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """The ranges of a sweep stamped at ``pose_times[i]`` whose beam ``k`` is cast at
+    ``k * sweep_time / beams`` later, from the laser's pose then."""
+    lidar = world.lidar
+    assert lidar is not None
+    k = np.arange(lidar.beams)
+    t = pose_times[i] + k * sweep_time / lidar.beams
+    x = np.interp(t, pose_times, poses[:, 0])
+    y = np.interp(t, pose_times, poses[:, 1])
+    th = np.interp(t, pose_times, poses[:, 2])
+    m = lidar.mount
+    lx = x + np.cos(th) * m.x - np.sin(th) * m.y
+    ly = y + np.sin(th) * m.x + np.cos(th) * m.y
+    angles = th + m.theta + lidar.angle_min + lidar.increment * k
+    true = world.cast(np.column_stack([lx, ly]), angles)
+    ranges = true + lidar.sigma * rng.standard_normal(lidar.beams)
+    ranges[~np.isfinite(true) | (ranges > lidar.range_max)] = np.inf
+    ranges[rng.random(lidar.beams) < lidar.dropout] = np.nan
+    return ranges

@@ -55,6 +55,16 @@ def test_scans_round_trip(drive, tmp_path: Path, fmt: str) -> None:  # type: ign
     assert read.angle_min == pytest.approx(-math.pi)
     assert read.angle_increment == pytest.approx(2 * math.pi / 360)
     assert (read.range_min, read.range_max) == pytest.approx((0.05, 12.0))
+    assert read.time_increment == 0.0  # the simulated sweeps are taken at once
+
+
+def test_a_rolling_sweep_keeps_its_timing(tmp_path: Path) -> None:
+    drive = simulate(((2.0, 0.0, 0.6),), sweep_time=0.1)
+    poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
+    bag = write_bag(
+        bag_target(tmp_path / "rolling.bag"), drive.wheels, poses, poses, scans=drive.scans
+    )
+    assert read_scan_bag(bag, "/scan").time_increment == pytest.approx(0.1 / 360, rel=1e-6)
 
 
 @pytest.mark.parametrize("upside_down", [False, True])

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from scan_sim import LASER, PATTERN, mirrored, simulate
+from scan_sim import LASER, PATTERN, mirrored, ramped, simulate
 from umbmark.model.scans import ScanSeries
 from umbmark.robot.base import Pose2D
 from umbmark.robot.world import World, legs, room_world
@@ -206,3 +206,29 @@ def test_the_pattern_stays_in_the_room(drive) -> None:  # type: ignore[no-untype
     assert drive.scans.beams == 360
     assert len(PATTERN) == 7
     assert LASER.x > 0
+
+
+@pytest.fixture(scope="module")
+def rolling():  # type: ignore[no-untyped-def]
+    # a 10 Hz scanner whose beams take the whole period, on a drive that accelerates
+    return simulate(ramped(PATTERN), sweep_time=0.1)
+
+
+def test_the_motion_during_a_sweep_is_undone(rolling) -> None:  # type: ignore[no-untyped-def]
+    assert rolling.scans.time_increment == pytest.approx(0.1 / 360)
+    # taken as measured at once, the turns come out bent: short by the sweep's share of
+    # a revolution, and more where the robot accelerates within a sweep
+    at_once = dataclasses.replace(rolling.scans, time_increment=0.0)
+    iv = match_intervals(at_once, rolling.wheels).intervals
+    err = iv.sensor_motion - _truth(rolling, iv)
+    assert np.max(np.abs(err[:, 2])) > 3 * YAW_TOL
+    # undone with the motion fitted to the sweeps (no guess), or with the wheels' guess
+    guess = OdometryGuess(0.05, 0.05, 0.35, (0.1, 0.0, 0.0))
+    for options in (IntervalOptions(), IntervalOptions(guess=guess)):
+        report = match_intervals(rolling.scans, rolling.wheels, options)
+        iv = report.intervals
+        assert len(iv) >= 45
+        assert report.left_out == {}
+        err = iv.sensor_motion - _truth(rolling, iv)
+        assert np.max(np.hypot(err[:, 0], err[:, 1])) < POSITION_TOL
+        assert np.max(np.abs(err[:, 2])) < YAW_TOL

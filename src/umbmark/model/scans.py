@@ -33,6 +33,10 @@ class ScanSeries:
             above. The points and motions of :mod:`umbmark.scans` are then given in the
             scanner's frame turned right side up (same x axis, y and yaw mirrored), so that
             they read counter-clockwise like the robot's own frame.
+        time_increment: time between two beams [s] (``sensor_msgs/LaserScan``'s): beam
+            ``k`` is measured ``k * time_increment`` after the sweep's stamp; 0 (or a sweep
+            taken at once) leaves the sweeps as they are, otherwise the matcher undoes the
+            scanner's motion during the sweep.
         frame: the scanner's frame (``header.frame_id``), for messages.
         source: where the scans came from (a bag and topic), for messages.
     """
@@ -44,6 +48,7 @@ class ScanSeries:
     range_min: float
     range_max: float
     upside_down: bool = False
+    time_increment: float = 0.0
     frame: str = ""
     source: str = ""
 
@@ -57,6 +62,8 @@ class ScanSeries:
             raise ValueError("ScanSeries.times must be strictly increasing")
         if not (math.isfinite(self.angle_increment) and self.angle_increment != 0.0):
             raise ValueError("ScanSeries.angle_increment must be a finite non-zero angle")
+        if not (math.isfinite(self.time_increment) and self.time_increment >= 0.0):
+            raise ValueError("ScanSeries.time_increment must be a time >= 0")
         if not (0.0 <= self.range_min < self.range_max):
             raise ValueError("ScanSeries needs 0 <= range_min < range_max")
 

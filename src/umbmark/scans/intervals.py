@@ -22,12 +22,24 @@ The guess: with the nominal geometry (:class:`OdometryGuess`), the wheels' rotat
 the interval is integrated into the robot's motion (an arc between every two wheel
 samples) and moved into the scanner's frame by its nominal mounting; without it, the
 match starts from no motion, which holds for slow driving and fast sweeps only.
+
+The motion during a sweep: a rotating scanner measures its beams one after the other
+(``ScanSeries.time_increment``), so a sweep taken while turning is bent; matched as it
+is, the turns come out short by about the sweep's share of a revolution (0.6 % at 10 Hz
+and 0.6 rad/s). Each sweep's points are moved into the scanner's frame at its stamp
+(:func:`umbmark.scans.points.series_points`) with the scanner's velocity during the
+sweep, by the wheels (their angles at every sample, turned into the scanner's motion by
+the nominal geometry, :func:`jacobian`); without a guess, by the geometry fitted to a
+first matching of the sweeps as they are (:func:`fit_jacobian`), after which every
+interval is matched again.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -44,8 +56,10 @@ __all__ = [
     "IntervalReport",
     "OdometryGuess",
     "compose",
+    "fit_jacobian",
     "intervals_from_scans",
     "invert",
+    "jacobian",
     "match_intervals",
 ]
 
@@ -148,31 +162,74 @@ def invert(a: FloatArray) -> FloatArray:
     return np.array([-c * a[0] - s * a[1], s * a[0] - c * a[1], -a[2]])
 
 
-def _robot_motion(guess: OdometryGuess, angles: FloatArray) -> FloatArray:
-    """The robot's motion ``(x, y, yaw)`` over wheel angles ``(k, 2)`` [rad], arcs between
-    samples, in its frame at the first sample."""
-    d = np.diff(angles, axis=0) * [guess.wheel_radius_left, guess.wheel_radius_right]
-    ds = 0.5 * (d[:, 0] + d[:, 1])
-    dth = (d[:, 1] - d[:, 0]) / guess.wheelbase
-    heading = np.concatenate([[0.0], np.cumsum(dth)])
-    mid = heading[:-1] + 0.5 * dth
-    chord = ds * np.sinc(dth / (2 * math.pi))  # 2 sin(dth/2)/dth, times ds
-    return np.array(
-        [float(np.sum(chord * np.cos(mid))), float(np.sum(chord * np.sin(mid))), heading[-1]]
-    )
+def jacobian(guess: OdometryGuess) -> FloatArray:
+    """The scanner's motion per wheel rotation: its twist ``(vx, vy, w)`` [m, m, rad] in its
+    own frame is ``J @ (phi_left, phi_right)``, ``J`` shape (3, 2), for the nominal
+    geometry (the robot's twist moved into the scanner's frame by its mounting)."""
+    rl, rr, b = guess.wheel_radius_left, guess.wheel_radius_right, guess.wheelbase
+    lx, ly, lth = guess.laser_pose
+    forward, turn = np.array([rl / 2, rr / 2]), np.array([-rl / b, rr / b])
+    # at the scanner: v + w x l, turned into its frame
+    vx, vy = forward - turn * ly, turn * lx
+    c, s = math.cos(lth), math.sin(lth)
+    return np.array([c * vx + s * vy, -s * vx + c * vy, turn])
 
 
-def _wheel_angles(wheels: WheelSeries, t0: float, t1: float) -> FloatArray:
-    """Wheel angles ``(k, 2)`` at ``t0``, at every sample inside, and at ``t1``."""
+def fit_jacobian(intervals: MotionIntervals) -> FloatArray | None:
+    """:func:`jacobian` fitted to matched intervals by least squares (their motions as
+    twists, the logarithm of SE(2)); None when they do not determine it (fewer than 6,
+    or the wheels never turned against each other)."""
+    if len(intervals) < 6:
+        return None
+    wheels = np.column_stack([intervals.phi_left, intervals.phi_right])
+    if np.linalg.cond(wheels) > 1e3:
+        return None
+    x, y, th = intervals.sensor_motion.T
+    half = 0.5 * th
+    with np.errstate(invalid="ignore", divide="ignore"):
+        a = np.where(np.abs(half) > 1e-9, half / np.tan(half), 1.0)
+    twists = np.column_stack([a * x + half * y, -half * x + a * y, th])
+    fitted, *_ = np.linalg.lstsq(wheels, twists, rcond=None)
+    return np.asarray(fitted.T, dtype=np.float64)
+
+
+def _laser_path(
+    jac: FloatArray, wheels: WheelSeries, t0: float, t1: float
+) -> tuple[FloatArray, FloatArray]:
+    """The scanner's poses ``(k, 3)`` in its frame at ``t0``, at ``t0``, every wheel sample
+    inside and ``t1``, and those times ``(k,)`` [s] from ``t0``: constant twists between
+    samples (exact arcs)."""
     inner = (wheels.time > t0) & (wheels.time < t1)
     times = np.concatenate([[t0], wheels.time[inner], [t1]])
-    return np.column_stack([np.interp(times, wheels.time, wheels.angles[:, i]) for i in range(2)])
+    angles = np.column_stack([np.interp(times, wheels.time, wheels.angles[:, i]) for i in (0, 1)])
+    xi = np.diff(angles, axis=0) @ jac.T
+    w = xi[:, 2]
+    heading = np.concatenate([[0.0], np.cumsum(w)])
+    mid = heading[:-1] + 0.5 * w
+    arc = np.sinc(w / (2 * math.pi))  # sin(w/2) / (w/2)
+    dx = arc * (np.cos(mid) * xi[:, 0] - np.sin(mid) * xi[:, 1])
+    dy = arc * (np.sin(mid) * xi[:, 0] + np.cos(mid) * xi[:, 1])
+    poses = np.column_stack(
+        [np.concatenate([[0.0], np.cumsum(dx)]), np.concatenate([[0.0], np.cumsum(dy)]), heading]
+    )
+    return times - t0, poses
+
+
+def _path_motion(times: FloatArray, poses: FloatArray) -> Callable[[FloatArray], FloatArray]:
+    def motion(tau: FloatArray) -> FloatArray:
+        return np.column_stack([np.interp(tau, times, poses[:, i]) for i in range(3)])
+
+    return motion
 
 
 def match_intervals(
     scans: ScanSeries, wheels: WheelSeries, options: IntervalOptions = DEFAULT_OPTIONS
 ) -> IntervalReport:
     """The motion intervals of a recording and what was left out (the module's docstring).
+
+    Without a guess, sweeps with a ``time_increment`` are matched twice: once as they
+    are, to fit the scanner's motion per wheel rotation (:func:`fit_jacobian`), then
+    again with the motion during each sweep undone by it.
 
     Parameters
     ----------
@@ -182,16 +239,42 @@ def match_intervals(
         The wheels' cumulative rotation on the same clock.
     options : IntervalOptions
     """
+    if options.guess is not None:
+        return _matched(scans, wheels, options, jacobian(options.guess), check=True)
+    if scans.time_increment * scans.beams <= 0.0:
+        return _matched(scans, wheels, options, None, check=False)
+    first = _matched(dataclasses.replace(scans, time_increment=0.0), wheels, options, None)
+    jac = fit_jacobian(first.intervals)
+    if jac is None:
+        return first
+    return _matched(scans, wheels, options, jac, check=False)
+
+
+def _matched(
+    scans: ScanSeries,
+    wheels: WheelSeries,
+    options: IntervalOptions,
+    jac: FloatArray | None,
+    *,
+    check: bool = False,
+) -> IntervalReport:
+    """:func:`match_intervals` with the scanner's motion per wheel rotation ``jac`` (the
+    first guesses, the motion during the sweeps) or without (no motion); ``check``: leave
+    out matches far from the guess."""
     left_out: Counter[str] = Counter()
     rows: list[tuple[float, float, float, float, FloatArray, FloatArray, float]] = []
     times = scans.times
-    mount = None if options.guess is None else np.asarray(options.guess.laser_pose, np.float64)
     prepared: dict[int, PreparedScan] = {}
+    span = scans.time_increment * scans.beams  # how long a sweep takes [s]
 
     def sweep(i: int) -> PreparedScan:
         if i not in prepared:
             prepared.clear()  # only the key sweep is ever needed again
-            prepared[i] = prepare(series_points(scans, i))
+            motion = None
+            if span > 0.0 and jac is not None:
+                t = float(times[i])
+                motion = _path_motion(*_laser_path(jac, wheels, t, t + span))
+            prepared[i] = prepare(series_points(scans, i, motion))
         return prepared[i]
 
     i = 0
@@ -208,21 +291,17 @@ def match_intervals(
         if t0 < wheels.time[0] or t1 > wheels.time[-1]:
             left_out["no wheel data"] += 1
             continue
-        angles = _wheel_angles(wheels, t0, t1)
-        phi = angles[-1] - angles[0]
+        phi = np.array([np.interp([t0, t1], wheels.time, wheels.angles[:, k]) for k in (0, 1)])
+        phi = phi[:, 1] - phi[:, 0]
         if np.max(np.abs(phi)) < options.min_rotation:
             left_out["standing still"] += 1
             continue
-        guess = None
-        if options.guess is not None and mount is not None:
-            robot = _robot_motion(options.guess, angles)
-            guess = compose(compose(invert(mount), robot), mount)
-        reference = sweep(start)
-        result = match(reference, sweep(j), guess, options.settings)
+        guess = None if jac is None else _laser_path(jac, wheels, t0, t1)[1][-1]
+        result = match(sweep(start), sweep(j), guess, options.settings)
         if not result.ok:
             left_out[result.status] += 1
             continue
-        if guess is not None:
+        if check and guess is not None:
             off = result.pose - guess
             if (
                 math.hypot(off[0], off[1]) > options.max_disagreement[0]

@@ -12,6 +12,7 @@ points with a normal (scipy's ``cKDTree``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,15 +54,37 @@ def scan_points(
     return np.column_stack([r * np.cos(a), -y if upside_down else y])
 
 
-def series_points(scans: ScanSeries, index: int) -> FloatArray:
-    """The points ``(m, 2)`` of sweep ``index`` of ``scans`` (:func:`scan_points`)."""
-    return scan_points(
+def series_points(
+    scans: ScanSeries,
+    index: int,
+    motion: Callable[[FloatArray], FloatArray] | None = None,
+) -> FloatArray:
+    """The points ``(m, 2)`` of sweep ``index`` of ``scans`` (:func:`scan_points`), in the
+    scanner's frame at the sweep's stamp.
+
+    With ``motion`` and a ``time_increment``, the scanner's motion during the sweep is
+    undone: beam ``k`` is measured ``tau = k * time_increment`` after the stamp, from the
+    pose ``motion(tau)`` (shape ``(m, 3)`` for ``tau`` shape ``(m,)``: ``x, y`` [m], yaw
+    [rad] in the scanner's frame at the stamp, right side up), and is moved by that pose
+    into the frame at the stamp.
+    """
+    points = scan_points(
         scans.ranges[index],
         scans.angles(),
         scans.range_min,
         scans.range_max,
         upside_down=scans.upside_down,
     )
+    if motion is None or scans.time_increment <= 0.0:
+        return points
+    r = scans.ranges[index]
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(r) & (r >= scans.range_min) & (r <= scans.range_max)
+    pose = motion(np.flatnonzero(valid).astype(np.float64) * scans.time_increment)
+    c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+    x = c * points[:, 0] - s * points[:, 1] + pose[:, 0]
+    y = s * points[:, 0] + c * points[:, 1] + pose[:, 1]
+    return np.column_stack([x, y])
 
 
 @dataclass(frozen=True)

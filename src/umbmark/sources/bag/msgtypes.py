@@ -193,6 +193,7 @@ class LaserScan(Stamped, Protocol):
     angle_min: float
     angle_max: float
     angle_increment: float
+    time_increment: float
     range_min: float
     range_max: float
     ranges: NDArray[np.float32]

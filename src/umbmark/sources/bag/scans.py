@@ -13,6 +13,11 @@ sweeps of a topic must share their beams: the count, ``angle_min``,
 ``angle_increment`` and the range limits; a sweep that differs ends the read with one
 line naming the bag, the topic and what changed.
 
+The motion during a sweep: the first sweep's ``time_increment`` (its absolute value)
+goes into the series, so that the matcher can undo the scanner's motion between its first
+and its last beam; a value that is not finite or makes a sweep last more than
+:data:`MAX_SWEEP` is not believed (0: the sweep is taken as measured at once).
+
 Upside down: given, or (``upside_down=None``) read from ``/tf_static``: the scanner's
 frame (``header.frame_id``) is upside down when, composed up its chain of static
 transforms to the root, its z axis points down (as :mod:`umbmark.robot.ros_common` reads
@@ -36,12 +41,21 @@ from umbmark.sources.bag.msgtypes import LASER_SCAN, TF_STATIC_TOPIC, TF_TYPES, 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-__all__ = ["MAX_BEAMS", "MAX_SCANS", "read_scan_bag", "read_scans", "upside_down_frame"]
+__all__ = [
+    "MAX_BEAMS",
+    "MAX_SCANS",
+    "MAX_SWEEP",
+    "read_scan_bag",
+    "read_scans",
+    "upside_down_frame",
+]
 
 #: Sweeps held at most (about 2.8 hours at 10 Hz; 720 beams take 2.9 kB each).
 MAX_SCANS = 100_000
 #: Beams a sweep may have at most.
 MAX_BEAMS = 16_384
+#: Longest sweep [s] whose ``time_increment`` is believed (longer: taken as 0).
+MAX_SWEEP = 1.0
 
 
 def read_scan_bag(
@@ -110,6 +124,7 @@ def read_scans(
     where = f"{topic}: "
     beams: tuple[int, float, float, float, float] | None = None
     frame = ""
+    time_increment = 0.0
     stamps: list[int] = []
     rows: list[NDArray[np.float32]] = []
     last = -math.inf
@@ -126,6 +141,9 @@ def read_scans(
         if beams is None:
             _check_beams(these, where, src)
             beams, frame = these, str(msg.header.frame_id).lstrip("/")
+            time_increment = abs(float(msg.time_increment))
+            if not (math.isfinite(time_increment) and time_increment * these[0] <= MAX_SWEEP):
+                time_increment = 0.0
         elif these != beams:
             raise InputError(
                 f"{where}sweep {k + 1} has {_describe(these)}, the first {_describe(beams)}: "
@@ -169,6 +187,7 @@ def read_scans(
         range_min=range_min,
         range_max=range_max,
         upside_down=upside_down,
+        time_increment=time_increment,
         frame=frame,
         source=f"{src} {topic}",
     )

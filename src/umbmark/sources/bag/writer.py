@@ -517,7 +517,7 @@ class _Messages:
                 angle_min=scans.angle_min,
                 angle_max=angle_max,
                 angle_increment=scans.angle_increment,
-                time_increment=0.0,
+                time_increment=scans.time_increment,
                 scan_time=period,
                 range_min=scans.range_min,
                 range_max=scans.range_max,
