@@ -19,9 +19,10 @@ position [mm] and yaw [deg] errors, and the pairs off by more than 2 cm or 0.5 d
 ("bad"). Speed: scan pairs per second of CPU time of this process (the machine may be
 shared) and of wall time, with ``OMP_NUM_THREADS=1`` and friends set before numpy loads.
 
-The last lines time :func:`umbmark.scans.intervals.intervals_from_scans` on a simulated
-drive (every sweep prepared once, matched against the one before it): intervals per
-second, the rate that an hour of driving needs.
+The last lines time :func:`umbmark.scans.intervals.intervals_from_scans` on the tests'
+simulated drive (every sweep used prepared once, matched against the one before it),
+with sweeps taken at once and with rolling sweeps (``time_increment``; without a guess
+they are matched twice): intervals per second, the rate that an hour of driving needs.
 
 Run: python benchmarks/bench_scan_matching.py [--pairs 200] [--beams 360 720]
 """
@@ -185,18 +186,19 @@ def evaluate(name: str, matcher: Matcher, pairs: list[Pair], base: float | None)
     return per
 
 
-def drive_rate(beams: int) -> None:
+def drive_rate(beams: int, sweep_time: float = 0.0) -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-    from scan_sim import simulate  # the tests' simulated drive with its truth
+    from scan_sim import PATTERN, ramped, simulate  # the tests' simulated drive
 
-    drive = simulate(beams=beams)
+    drive = simulate(ramped(PATTERN), beams=beams, sweep_time=sweep_time)
     cpu0, wall0 = time.process_time(), time.perf_counter()
     report = match_intervals(drive.scans, drive.wheels, IntervalOptions())
     cpu, wall = time.process_time() - cpu0, time.perf_counter() - wall0
     n = report.tried
+    kind = "rolling sweeps (matched twice)" if sweep_time else "sweeps taken at once"
     print(
-        f"  intervals_from_scans, {beams} beams: {n} intervals of {len(drive.scans)} sweeps "
-        f"in {cpu:.2f} s cpu ({n / cpu:.0f} /s cpu, {n / wall:.0f} /s wall); "
+        f"  intervals_from_scans, {beams} beams, {kind}: {n} intervals of {len(drive.scans)}"
+        f" sweeps in {cpu:.2f} s cpu ({n / cpu:.0f} /s cpu, {n / wall:.0f} /s wall); "
         f"an hour at 5 Hz (9000 pairs) in {9000 * cpu / n:.0f} s"
     )
 
@@ -230,6 +232,7 @@ def main() -> None:
             base = base or per
     for beams in args.beams:
         drive_rate(beams)
+        drive_rate(beams, sweep_time=0.1)
 
 
 if __name__ == "__main__":
