@@ -194,9 +194,9 @@ def test_a_guess_from_the_wheels_agrees_and_catches_a_slipped_match(drive) -> No
     assert report.left_out == {}
     assert len(report.intervals) >= 45
     assert np.max(np.abs(err[:, 2])) < YAW_TOL
-    # wheels that say the opposite turn: every turning interval disagrees and is left out
-    wrong = dataclasses.replace(guess, wheelbase=-0.35)
-    report = match_intervals(drive.scans, drive.wheels, IntervalOptions(guess=wrong))
+    # the left and right wheels swapped (joints mixed up): every turn is the wrong way
+    swapped = dataclasses.replace(drive.wheels, angles=drive.wheels.angles[:, ::-1].copy())
+    report = match_intervals(drive.scans, swapped, IntervalOptions(guess=guess))
     assert report.left_out.get("far from the wheels' guess", 0) >= 10
 
 

@@ -21,7 +21,8 @@ interval is left out, and counted by its reason in :class:`IntervalReport`, when
 The guess: with the nominal geometry (:class:`OdometryGuess`), the wheels' rotation over
 the interval is integrated into the robot's motion (an arc between every two wheel
 samples) and moved into the scanner's frame by its nominal mounting; without it, the
-match starts from no motion, which holds for slow driving and fast sweeps only.
+match starts from no motion, which holds for slow driving and fast sweeps only (rolling
+sweeps, below, are matched a second time from the fitted motion).
 
 The motion during a sweep: a rotating scanner measures its beams one after the other
 (``ScanSeries.time_increment``), so a sweep taken while turning is bent; matched as it
@@ -55,10 +56,8 @@ __all__ = [
     "IntervalOptions",
     "IntervalReport",
     "OdometryGuess",
-    "compose",
     "fit_jacobian",
     "intervals_from_scans",
-    "invert",
     "jacobian",
     "match_intervals",
 ]
@@ -85,6 +84,13 @@ class OdometryGuess:
     wheel_radius_right: float
     wheelbase: float
     laser_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        values = (self.wheel_radius_left, self.wheel_radius_right, self.wheelbase)
+        if not all(math.isfinite(v) and v > 0.0 for v in values):
+            raise ValueError("OdometryGuess needs wheel radii and a wheelbase > 0 [m]")
+        if not all(math.isfinite(v) for v in self.laser_pose):
+            raise ValueError("OdometryGuess.laser_pose must be finite")
 
 
 @dataclass(frozen=True)
@@ -142,24 +148,6 @@ class IntervalReport:
     def tried(self) -> int:
         """Intervals considered, kept or not."""
         return len(self.intervals) + sum(self.left_out.values())
-
-
-def compose(a: FloatArray, b: FloatArray) -> FloatArray:
-    """The planar pose ``a (+) b``: ``b`` ``(x, y, yaw)`` given in the frame ``a``."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return np.array(
-        [
-            a[0] + c * b[0] - s * b[1],
-            a[1] + s * b[0] + c * b[1],
-            math.remainder(a[2] + b[2], math.tau),
-        ]
-    )
-
-
-def invert(a: FloatArray) -> FloatArray:
-    """The planar pose ``(-) a``: ``compose(a, invert(a))`` is no motion."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return np.array([-c * a[0] - s * a[1], s * a[0] - c * a[1], -a[2]])
 
 
 def jacobian(guess: OdometryGuess) -> FloatArray:
