@@ -12,10 +12,12 @@ import pytest
 from rosbags.rosbag2 import Writer as Writer2
 from rosbags.typesys import Stores, get_typestore
 
-from scan_sim import LASER, mirrored, simulate
+from scan_sim import LASER, RADIUS_LEFT, RADIUS_RIGHT, WHEELBASE, mirrored, simulate
 from umbmark.core.errors import InputError
+from umbmark.model.kinematics import OdometryGeometry
 from umbmark.model.recording import PoseSeries
 from umbmark.scans.bag import intervals_from_bag, scan_intervals_from_bag
+from umbmark.sources.bag.options import BagOptions
 from umbmark.sources.bag.scans import read_scan_bag
 from umbmark.sources.bag.writer import START_EPOCH, bag_target, write_bag
 
@@ -72,8 +74,6 @@ def test_intervals_from_a_bag_match_the_true_laser_motion(
     drive, tmp_path: Path, upside_down: bool
 ) -> None:  # type: ignore[no-untyped-def]
     bag = _write(drive, tmp_path, "sqlite3", upside_down=upside_down)
-    from umbmark.sources.bag.options import BagOptions
-
     wheels = BagOptions(left_joint="left_wheel_joint", right_joint="right_wheel_joint")
     report = scan_intervals_from_bag(bag, "/scan", wheels)
     iv = report.intervals
@@ -130,3 +130,29 @@ def test_a_scanner_that_changes_its_beams_is_refused(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="/scan: sweep 3 has 720 beams") as err:
         read_scan_bag(path, "/scan")
     assert "\n" not in str(err.value)
+
+
+def test_wheels_from_the_controllers_odometry(drive, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    # the bag's /odom is the true motion; turned back into wheel rotation with radii of
+    # 0.05 m and the true wheelbase, each wheel's angle is its true travel over 0.05 m
+    bag = _write(drive, tmp_path, "mcap")
+    wheels = BagOptions(odom_topic="/odom", odom_geometry=OdometryGeometry(0.05, 0.05, WHEELBASE))
+    report = scan_intervals_from_bag(bag, "/scan", wheels)
+    iv = report.intervals
+    assert len(iv) >= 45
+    start = iv.start_time - START_EPOCH
+    truth = np.array(
+        [drive.laser_motion(s, s + t) for s, t in zip(start, iv.duration, strict=True)]
+    )
+    err = iv.sensor_motion - truth
+    assert np.max(np.hypot(err[:, 0], err[:, 1])) < 0.006
+    assert np.max(np.abs(err[:, 2])) < math.radians(0.15)
+    angles = drive.wheels.angles
+    true_left = np.interp(start + iv.duration, drive.wheels.time, angles[:, 0]) - np.interp(
+        start, drive.wheels.time, angles[:, 0]
+    )
+    true_right = np.interp(start + iv.duration, drive.wheels.time, angles[:, 1]) - np.interp(
+        start, drive.wheels.time, angles[:, 1]
+    )
+    np.testing.assert_allclose(iv.phi_left, true_left * RADIUS_LEFT / 0.05, atol=2e-3)
+    np.testing.assert_allclose(iv.phi_right, true_right * RADIUS_RIGHT / 0.05, atol=2e-3)
