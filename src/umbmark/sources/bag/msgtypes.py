@@ -32,6 +32,7 @@ POSITION_TYPES = (POINT_STAMPED, NAV_SAT_FIX)
 #: Everything a ground truth may be read from.
 REFERENCE_TYPES = (*TRUTH_TYPES, MODEL_STATES, *POSITION_TYPES)
 STRING = "std_msgs/msg/String"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
 
 # std_msgs number types: numpy type code of ``data`` and bits of a counter that wraps
 # (None: no wrap).
@@ -184,3 +185,15 @@ class String(Protocol):
     """``std_msgs/String``."""
 
     data: str
+
+
+class LaserScan(Stamped, Protocol):
+    """``sensor_msgs/LaserScan``: ``ranges`` [m] shape (beams,), angles [rad]."""
+
+    angle_min: float
+    angle_max: float
+    angle_increment: float
+    time_increment: float
+    range_min: float
+    range_max: float
+    ranges: NDArray[np.float32]
