@@ -64,12 +64,13 @@ class Drive:
     wheels: WheelSeries
     pose_times: np.ndarray  # (k,) [s]
     poses: np.ndarray  # (k, 3) true robot poses in the world
+    laser: Pose2D = LASER  # the laser's true mounting
 
     def laser_pose(self, t: float) -> Pose2D:
         """The laser's true pose in the world at time ``t`` (nearest pose sample)."""
         i = int(np.argmin(np.abs(self.pose_times - t)))
         x, y, th = self.poses[i]
-        return Pose2D(float(x), float(y), float(th)).compose(LASER)
+        return Pose2D(float(x), float(y), float(th)).compose(self.laser)
 
     def laser_motion(self, t0: float, t1: float) -> np.ndarray:
         """The laser's true displacement from ``t0`` to ``t1`` in its frame at ``t0``."""
@@ -94,6 +95,9 @@ def simulate(
     wheel_rate: float = 100.0,
     seed: int = 3,
     sweep_time: float = 0.0,
+    radii: tuple[float, float] = (RADIUS_LEFT, RADIUS_RIGHT),
+    wheelbase: float = WHEELBASE,
+    laser: Pose2D = LASER,
 ) -> Drive:
     """Drive ``pattern`` from the world's start; sweeps at ``scan_rate`` [Hz] with their
     spacing jittered by up to ``jitter`` of a period (irregular rates).
@@ -101,11 +105,11 @@ def simulate(
     ``sweep_time`` [s]: a rotating scanner's beams are measured one after the other over
     this time from the sweep's stamp (``time_increment = sweep_time / beams``), each from
     the pose the robot has then (interpolated linearly between the 100 Hz poses); 0: all
-    at once."""
+    at once. ``radii``, ``wheelbase`` [m] and ``laser`` (its mounting): the truth."""
     world = world or room_world()
     assert world.lidar is not None
     lidar = dataclasses.replace(
-        world.lidar, mount=LASER, beams=beams, increment=2 * math.pi / beams
+        world.lidar, mount=laser, beams=beams, increment=2 * math.pi / beams
     )
     world = dataclasses.replace(world, lidar=lidar)
     rng = np.random.default_rng(seed)
@@ -123,8 +127,8 @@ def simulate(
                 x += v * dt * math.cos(th)
                 y += v * dt * math.sin(th)
             th += w * dt
-            phi_l += (v - w * WHEELBASE / 2) / RADIUS_LEFT * dt
-            phi_r += (v + w * WHEELBASE / 2) / RADIUS_RIGHT * dt
+            phi_l += (v - w * wheelbase / 2) / radii[0] * dt
+            phi_r += (v + w * wheelbase / 2) / radii[1] * dt
             t += dt
             times.append(t)
             poses.append((x, y, th))
@@ -156,7 +160,7 @@ def simulate(
         time_increment=sweep_time / beams,
     )
     wheels = WheelSeries(time=pose_times, angles=np.array(angles))
-    return Drive(scans, wheels, pose_times, pose_arr)
+    return Drive(scans, wheels, pose_times, pose_arr, laser)
 
 
 def _rolling_sweep(

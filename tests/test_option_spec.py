@@ -86,7 +86,7 @@ def test_the_spec_holds_the_documented_values() -> None:
     assert WHEELBASE.flags == ("--wheelbase", "-b")
     assert SIDE_LENGTH.flags == ("--side-length", "-L")
     # one entry per keyword, flags the keyword with "-" for "_"
-    assert len(READ) == len(READ_OPTIONS) == 32
+    assert len(READ) == len(READ_OPTIONS) == 33
     for spec in READ_OPTIONS:
         assert spec.flag == "--" + spec.name.replace("_", "-")
 

@@ -457,6 +457,15 @@ READ_OPTIONS: tuple[Spec, ...] = (
         metavar="FRAME",
     ),
     Spec(
+        "scan_topic",
+        ("--scan-topic",),
+        BAGS,
+        "calibrate only: a sensor_msgs/LaserScan topic; the wheels are calibrated against the "
+        "laser's scan matching (--method scan-matching: both wheel diameters, the wheelbase "
+        "and the laser's mounting from ordinary driving; no ground truth needed).",
+        metavar="TOPIC",
+    ),
+    Spec(
         "truth_topic",
         ("--truth-topic",),
         BAGS,

@@ -11,8 +11,10 @@ the sweeps by :func:`umbmark.sources.bag.scans.read_scans`. Both on the clock
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
+from umbmark.core.messages import info
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.scans.intervals import (
     DEFAULT_OPTIONS,
@@ -23,7 +25,7 @@ from umbmark.scans.intervals import (
 )
 from umbmark.sources.bag.options import BagOptions
 from umbmark.sources.bag.recording import read_recording
-from umbmark.sources.bag.scans import MAX_SCANS, read_scan_bag
+from umbmark.sources.bag.scans import MAX_SCANS, read_scan_bag, scan_mounting
 
 __all__ = ["intervals_from_bag", "scan_intervals_from_bag"]
 
@@ -37,6 +39,7 @@ def scan_intervals_from_bag(
     upside_down: bool | None = None,
     min_period: float = 0.0,
     max_scans: int = MAX_SCANS,
+    tf_mounting: bool = False,
 ) -> IntervalReport:
     """The motion intervals of a bag and what was left out.
 
@@ -57,6 +60,10 @@ def scan_intervals_from_bag(
     min_period, max_scans
         Thin the sweeps while reading; most sweeps held
         (:func:`umbmark.sources.bag.scans.read_scans`).
+    tf_mounting : bool
+        With a guess: its laser pose is the mounting ``/tf_static`` states for the
+        sweeps' frame, where it states one (:func:`~umbmark.sources.bag.scans.scan_mounting`;
+        a note in the report says so).
 
     Raises
     ------
@@ -79,7 +86,21 @@ def scan_intervals_from_bag(
     if options.guess is None and geometry is not None:
         guess = OdometryGuess(geometry.left_radius, geometry.right_radius, geometry.separation)
         options = dataclasses.replace(options, guess=guess)
-    return match_intervals(scans, wheel_series, options)
+    notes: tuple[str, ...] = ()
+    mounted = scan_mounting(path, scans.frame) if tf_mounting and options.guess else None
+    if options.guess is not None and mounted is not None:
+        base, pose = mounted
+        guess = dataclasses.replace(options.guess, laser_pose=pose)
+        options = dataclasses.replace(options, guess=guess)
+        notes = (
+            info(
+                f"the laser's nominal mounting from /tf_static: {scans.frame} at x = "
+                f"{pose[0]:.4f} m, y = {pose[1]:.4f} m, yaw = {math.degrees(pose[2]):.2f} "
+                f"deg in {base} (the first guess of the scan matching only)"
+            ),
+        )
+    report = match_intervals(scans, wheel_series, options)
+    return dataclasses.replace(report, guess=options.guess, notes=notes)
 
 
 def intervals_from_bag(

@@ -138,11 +138,17 @@ class IntervalReport:
         ``"far from the wheels' guess"``).
     rms : array, shape (n,)
         Each kept match's residual [m] (root mean square point-to-line distance).
+    guess : OdometryGuess or None
+        The nominal geometry the matches started from.
+    notes : tuple of str
+        Where the guess came from, for people.
     """
 
     intervals: MotionIntervals
     left_out: dict[str, int] = field(default_factory=dict)
     rms: FloatArray = field(default_factory=lambda: np.zeros(0))
+    guess: OdometryGuess | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def tried(self) -> int:

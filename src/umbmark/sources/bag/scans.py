@@ -47,6 +47,7 @@ __all__ = [
     "MAX_SWEEP",
     "read_scan_bag",
     "read_scans",
+    "scan_mounting",
     "upside_down_frame",
 ]
 
@@ -214,35 +215,101 @@ def _check_beams(beams: tuple[int, float, float, float, float], where: str, src:
         raise InputError(f"{where}the sweeps have {problem}", source=src)
 
 
-def upside_down_frame(reader: AnyReader, topics: dict[str, str], frame: str, src: str) -> bool:
-    """Whether ``frame`` is upside down in its tree of static transforms (module notes)."""
+_Static = dict[str, tuple[str, tuple[float, float, float], tuple[float, float, float, float]]]
+
+#: The frames a scanner's mounting is stated in, where its chain of static transforms
+#: passes through one (else the chain's root).
+BASE_FRAMES = ("base_link", "base_footprint")
+
+
+def _static_tree(reader: AnyReader, topics: dict[str, str], src: str) -> _Static:
+    """Every frame of ``/tf_static``: its parent, translation [m] and rotation (``x, y,
+    z, w``); at most 10 000 frames."""
     msgtype = topics.get(TF_STATIC_TOPIC)
-    if not frame or msgtype not in TF_TYPES:
-        return False
-    parents: dict[str, tuple[str, tuple[float, float, float, float]]] = {}
+    parents: _Static = {}
+    if msgtype not in TF_TYPES:
+        return parents
     conns = [c for c in reader.connections if c.topic == TF_STATIC_TOPIC]
     for _, raw in bag_reader.messages(reader, conns, TF_STATIC_TOPIC, src):
         msg: TFMessage = bag_reader.deserialize(reader, raw, msgtype, TF_STATIC_TOPIC, src)  # type: ignore[assignment]
         for tf in msg.transforms:
-            q = tf.transform.rotation
+            q, t = tf.transform.rotation, tf.transform.translation
             parents[tf.child_frame_id.lstrip("/")] = (
                 tf.header.frame_id.lstrip("/"),
+                (float(t.x), float(t.y), float(t.z)),
                 (float(q.x), float(q.y), float(q.z), float(q.w)),
             )
         if len(parents) > 10_000:
             break
+    return parents
+
+
+def _compose_up(
+    parents: _Static, frame: str, stop: tuple[str, ...] = ()
+) -> tuple[str, tuple[float, float, float], tuple[float, float, float, float]]:
+    """``frame``'s pose in the root of its static chain (or the first frame of ``stop``
+    on the way): that frame, the translation and the rotation."""
     total = (0.0, 0.0, 0.0, 1.0)
+    position = (0.0, 0.0, 0.0)
     seen = {frame}
     at = frame
-    while at in parents:
-        at, rotation = parents[at]
-        total = _product(rotation, total)  # parent <- child: the parent's rotation on the left
+    while at in parents and at not in stop:
+        at, shift, rotation = parents[at]
+        # parent <- child: the parent's rotation on the left, its translation added
+        rx, ry, rz = _rotate(rotation, position)
+        position = (rx + shift[0], ry + shift[1], rz + shift[2])
+        total = _product(rotation, total)
         if at in seen:
             break
         seen.add(at)
+    return at, position, total
+
+
+def upside_down_frame(reader: AnyReader, topics: dict[str, str], frame: str, src: str) -> bool:
+    """Whether ``frame`` is upside down in its tree of static transforms (module notes)."""
+    if not frame or topics.get(TF_STATIC_TOPIC) not in TF_TYPES:
+        return False
+    _, _, total = _compose_up(_static_tree(reader, topics, src), frame)
     x, y, _, _ = total
     norm = sum(c * c for c in total) or 1.0
     return 1.0 - 2.0 * (x * x + y * y) / norm < 0.0
+
+
+def scan_mounting(path: str | Path, frame: str) -> tuple[str, tuple[float, float, float]] | None:
+    """The scanner's mounting as the bag's ``/tf_static`` states it: the base frame (the
+    first of :data:`BASE_FRAMES` up the chain, else its root) and the pose ``x, y, yaw``
+    [m, m, rad] of ``frame`` in it (of its frame right side up: the same origin and x
+    axis). None without a static transform for ``frame``.
+
+    Raises
+    ------
+    InputError
+        The bag cannot be read.
+    """
+    src = str(path)
+    frame = frame.lstrip("/")
+    with bag_reader.open_bag(Path(path), src) as reader:
+        parents = _static_tree(reader, bag_reader.topic_types(reader), src)
+    if not frame or frame not in parents:
+        return None
+    base, (x, y, _), rotation = _compose_up(parents, frame, BASE_FRAMES)
+    ex, ey, _ = _rotate(rotation, (1.0, 0.0, 0.0))
+    return base, (x, y, math.atan2(ey, ex))
+
+
+def _rotate(
+    q: tuple[float, float, float, float], v: tuple[float, float, float]
+) -> tuple[float, float, float]:
+    """The vector ``v`` rotated by the quaternion ``q`` (``x, y, z, w``, normalized here)."""
+    norm = math.sqrt(sum(c * c for c in q)) or 1.0
+    x, y, z, w = (c / norm for c in q)
+    # v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z)
+    cx, cy, cz = y * v[2] - z * v[1], z * v[0] - x * v[2], x * v[1] - y * v[0]
+    return (
+        v[0] + 2.0 * (w * cx + y * cz - z * cy),
+        v[1] + 2.0 * (w * cy + z * cx - x * cz),
+        v[2] + 2.0 * (w * cz + x * cy - y * cx),
+    )
 
 
 def _product(
