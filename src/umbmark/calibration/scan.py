@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-
 from dataclasses import replace
 from pathlib import Path
 
