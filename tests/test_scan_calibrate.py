@@ -11,7 +11,6 @@ from pathlib import Path
 import pytest
 
 import umbmark
-from helpers import api_error, cli_error, cli_json, run_cli
 from scan_sim import simulate
 from umbmark.calibration.scan import calibrate_scan_bags
 from umbmark.core.errors import InputError
@@ -20,6 +19,8 @@ from umbmark.robot.base import Pose2D
 from umbmark.runs.options import ReadOptions
 from umbmark.sources.bag.scans import scan_mounting
 from umbmark.sources.bag.writer import bag_target, write_bag
+
+from helpers import api_error, cli_error, cli_json, run_cli
 
 #: What the odometry used: wheelbase and wheel diameter [m].
 B_NOMINAL, D_NOMINAL = 0.34, 0.10
@@ -78,7 +79,9 @@ def _check_truth(data: dict) -> None:  # type: ignore[type-arg]
     for k, what in enumerate(("laser x", "laser y", "laser yaw")):
         _within(data["laser_pose"][k], truth[k], data["laser_pose_standard_errors"][k], what)
     # and the errors are small enough to say something: the units are metres and radians
-    assert se["E_d"] < 5e-4 and se["E_b"] < 5e-3 and se["E_s"] < 5e-3
+    assert se["E_d"] < 5e-4
+    assert se["E_b"] < 5e-3
+    assert se["E_s"] < 5e-3
     assert max(data["laser_pose_standard_errors"][:2]) < 0.003  # [m]
     assert data["laser_pose_standard_errors"][2] < math.radians(0.5)
     assert data["wheelbase_standard_error"] < 0.002  # [m]
@@ -128,21 +131,24 @@ def test_the_command_gives_the_same_in_metres_and_radians(
 def test_info_proposes_the_scan_topic(bag: Path, tmp_path: Path) -> None:
     proposed = "--scan-topic /scan --left-joint left_wheel_joint --right-joint right_wheel_joint"
     report = umbmark.info(bag)
-    assert report.bag is not None and report.bag.scan_options == proposed
+    assert report.bag is not None
+    assert report.bag.scan_options == proposed
     assert report.to_dict()["laser_scans"] == ["/scan"]
     proc = run_cli("info", str(bag))
     assert proc.returncode == 0, proc.stderr
     text = " ".join(proc.stdout.split())
     assert f"umbmark calibrate {bag} {proposed} --wheelbase ... --wheel-diameter ..." in text
     no_scans = umbmark.info(_bag(tmp_path, ((3.0, 0.2, 0.0),), scans=False)).to_dict()
-    assert no_scans["scan_options"] is None and no_scans["laser_scans"] == []
+    assert no_scans["scan_options"] is None
+    assert no_scans["laser_scans"] == []
 
 
 def test_a_bag_driven_straight_only_is_refused_with_what_to_drive(tmp_path: Path) -> None:
     straight = ((4.0, 0.25, 0.0), (4.0, -0.25, 0.0), (4.0, 0.25, 0.0), (4.0, -0.25, 0.0))
     bag = _bag(tmp_path, straight)
     line = cli_error("calibrate", str(bag), "--scan-topic", "/scan", *NOMINAL)
-    assert str(bag) in line and "drive more turns on the spot" in line
+    assert str(bag) in line
+    assert "drive more turns on the spot" in line
     assert "0 turns on the spot" in line
 
 
@@ -151,7 +157,8 @@ def test_a_bag_turning_on_the_spot_only_is_refused(tmp_path: Path) -> None:
     message = api_error(
         umbmark.calibrate, bag, scan_topic="/scan", wheelbase=B_NOMINAL, wheel_diameter=0.1
     )
-    assert str(bag) in message and "drive more straights" in message
+    assert str(bag) in message
+    assert "drive more straights" in message
 
 
 def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
@@ -159,15 +166,18 @@ def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
     assert line.startswith(f"umbmark: error: {bag}: no topic /laser (laser scans)")
     kw = {"wheelbase": B_NOMINAL, "wheel_diameter": D_NOMINAL}
     message = api_error(umbmark.calibrate, bag, scan_topic="/odom", **kw)
-    assert "/odom has messages of type nav_msgs/msg/Odometry" in message and str(bag) in message
+    assert "/odom has messages of type nav_msgs/msg/Odometry" in message
+    assert str(bag) in message
     message = api_error(umbmark.calibrate, bag, scan_topic="/scan", method="exact", **kw)
     assert "scan_topic calibrates by method='scan-matching'" in message
     message = api_error(umbmark.calibrate, bag, scan_topic="/scan", wheel_topic="/nope", **kw)
-    assert str(bag) in message and "no topic /nope" in message
+    assert str(bag) in message
+    assert "no topic /nope" in message
     with pytest.raises(InputError, match="scan_topic is read by calibrate only"):
         umbmark.replay(bag, scan_topic="/scan", **kw)
 
 
 def test_without_the_nominal_parameters_the_bag_says_what_is_missing(bag: Path) -> None:
     message = api_error(umbmark.calibrate, bag, scan_topic="/scan")
-    assert str(bag) in message and "give wheelbase and wheel_diameter" in message
+    assert str(bag) in message
+    assert "give wheelbase and wheel_diameter" in message
