@@ -5,13 +5,14 @@ proposing it; the refusals."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
 import pytest
 
 import umbmark
-from scan_sim import simulate
+from scan_sim import mirrored, simulate
 from umbmark.calibration.scan import calibrate_scan_bags
 from umbmark.core.errors import InputError
 from umbmark.model.recording import PoseSeries
@@ -113,6 +114,20 @@ def test_the_mounting_read_from_tf_static(bag: Path) -> None:
     assert base == "base_link"
     assert pose == pytest.approx(STATED, abs=1e-9)
     assert scan_mounting(bag, "no_such_frame") is None
+
+
+def test_an_upside_down_mounting_keeps_its_position_and_heading(tmp_path: Path) -> None:
+    drive = simulate(((1.0, 0.2, 0.0),))
+    scans = dataclasses.replace(drive.scans, ranges=mirrored(drive.scans.ranges), upside_down=True)
+    poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
+    bag = write_bag(
+        bag_target(tmp_path / "flipped.bag"), drive.wheels, poses, poses, scans=scans,
+        laser_pose=STATED,
+    )  # fmt: skip
+    # turned over about its x axis: the frame right side up has the same origin and x axis
+    base, pose = scan_mounting(bag, "laser")  # type: ignore[misc]
+    assert base == "base_link"
+    assert pose == pytest.approx(STATED, abs=1e-9)
 
 
 @pytest.mark.slow
