@@ -188,6 +188,10 @@ def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
     message = api_error(umbmark.calibrate, bag, scan_topic="/scan", wheel_topic="/nope", **kw)
     assert str(bag) in message
     assert "no topic /nope" in message
+    message = api_error(
+        umbmark.calibrate, bag, scan_topic="/scan", left_joint="nope", right_joint="nix", **kw
+    )
+    assert message.startswith(f"{bag}: no joint 'nope' and 'nix' in /joint_states")
     with pytest.raises(InputError, match="scan_topic is read by calibrate only"):
         umbmark.replay(bag, scan_topic="/scan", **kw)
 

@@ -460,7 +460,7 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "scan_topic",
         ("--scan-topic",),
         BAGS,
-        "calibrate only: a sensor_msgs/LaserScan topic; the wheels are calibrated against the "
+        "A sensor_msgs/LaserScan topic (calibrate only): the wheels are calibrated against the "
         "laser's scan matching (--method scan-matching: both wheel diameters, the wheelbase "
         "and the laser's mounting from ordinary driving; no ground truth needed).",
         metavar="TOPIC",
