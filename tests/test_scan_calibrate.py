@@ -95,7 +95,7 @@ def test_the_python_api_recovers_the_truth(result: umbmark.CalibrationReport) ->
     assert result.warnings == ()
     said = " ".join(result.notes)
     assert "motion intervals matched" in said
-    assert "x = 0.0800 m, y = 0.0300 m, yaw = 8.59 deg in base_link" in said  # the guess
+    assert "from /tf_static in base_link: laser at x = 0.0800 m, y = 0.0300 m, yaw = 8.59" in said
     # the overlay composes the factors: new wheel multipliers are f_L, f_R (active 1)
     assert result.calibration.new_c_left == pytest.approx(data["wheel_diameter_left"] / 0.1)
 
@@ -200,3 +200,19 @@ def test_without_the_nominal_parameters_the_bag_says_what_is_missing(bag: Path) 
     message = api_error(umbmark.calibrate, bag, scan_topic="/scan")
     assert str(bag) in message
     assert "give wheelbase and wheel_diameter" in message
+
+
+def test_the_mounting_read_from_a_robot_description() -> None:
+    from robot_bags import TB3_URDF
+    from umbmark.sources.bag.urdf import parse_robot_description
+
+    # a laser turned over (roll pi) and yawed by 0.2 rad, as a URDF mounts it
+    laser = (
+        '<joint name="scan_joint" type="fixed"><parent link="base_link"/>'
+        '<child link="base_scan"/><origin xyz="-0.032 0.01 0.172" rpy="3.141592653589793 0 0.2"/>'
+        '</joint><link name="base_scan"/></robot>'
+    )
+    described = parse_robot_description(TB3_URDF.replace("</robot>", laser))
+    assert described.mountings["base_scan"] == pytest.approx((-0.032, 0.01, 0.2), abs=1e-12)
+    assert described.mountings["base_link"] == pytest.approx((0.0, 0.0, 0.0))  # 1 cm up only
+    assert "wheel_left_link" not in described.mountings  # on a turning joint: no mounting

@@ -62,8 +62,9 @@ def scan_intervals_from_bag(
         (:func:`umbmark.sources.bag.scans.read_scans`).
     tf_mounting : bool
         With a guess: its laser pose is the mounting ``/tf_static`` states for the
-        sweeps' frame, where it states one (:func:`~umbmark.sources.bag.scans.scan_mounting`;
-        a note in the report says so).
+        sweeps' frame (:func:`~umbmark.sources.bag.scans.scan_mounting`), else the bag's
+        robot description (:attr:`~umbmark.sources.bag.urdf.RobotDescription.mountings`),
+        where either states one; a note in the report says so.
 
     Raises
     ------
@@ -87,20 +88,36 @@ def scan_intervals_from_bag(
         guess = OdometryGuess(geometry.left_radius, geometry.right_radius, geometry.separation)
         options = dataclasses.replace(options, guess=guess)
     notes: tuple[str, ...] = ()
-    mounted = scan_mounting(path, scans.frame) if tf_mounting and options.guess else None
+    mounted = _mounting(path, scans.frame, bag) if tf_mounting and options.guess else None
     if options.guess is not None and mounted is not None:
-        base, pose = mounted
+        where, pose = mounted
         guess = dataclasses.replace(options.guess, laser_pose=pose)
         options = dataclasses.replace(options, guess=guess)
         notes = (
             info(
-                f"the laser's nominal mounting from /tf_static: {scans.frame} at x = "
+                f"the laser's nominal mounting from {where}: {scans.frame} at x = "
                 f"{pose[0]:.4f} m, y = {pose[1]:.4f} m, yaw = {math.degrees(pose[2]):.2f} "
-                f"deg in {base} (the first guess of the scan matching only)"
+                "deg (the first guess of the scan matching only)"
             ),
         )
     report = match_intervals(scans, wheel_series, options)
     return dataclasses.replace(report, guess=options.guess, notes=notes)
+
+
+def _mounting(
+    path: str | Path, frame: str, bag: BagOptions
+) -> tuple[str, tuple[float, float, float]] | None:
+    """The scanner's nominal mounting: from ``/tf_static``, else from the bag's robot
+    description; where it came from (for people) and ``x, y, yaw`` [m, m, rad]."""
+    found = scan_mounting(path, frame)
+    if found is not None:
+        return f"/tf_static in {found[0]}", found[1]
+    from umbmark.sources.bag.urdf import bag_robot_description
+
+    description, _ = bag_robot_description(path, bag.left_joints, bag.right_joints)
+    if description is None or frame not in description.mountings:
+        return None
+    return f"the robot description ({description.topic})", description.mountings[frame]
 
 
 def intervals_from_bag(

@@ -37,6 +37,7 @@ from umbmark.core.errors import InputError
 from umbmark.model.scans import ScanSeries
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.msgtypes import LASER_SCAN, TF_STATIC_TOPIC, TF_TYPES, LaserScan, TFMessage
+from umbmark.sources.bag.urdf import BASE_LINKS
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
@@ -217,10 +218,6 @@ def _check_beams(beams: tuple[int, float, float, float, float], where: str, src:
 
 _Static = dict[str, tuple[str, tuple[float, float, float], tuple[float, float, float, float]]]
 
-#: The frames a scanner's mounting is stated in, where its chain of static transforms
-#: passes through one (else the chain's root).
-BASE_FRAMES = ("base_link", "base_footprint")
-
 
 def _static_tree(reader: AnyReader, topics: dict[str, str], src: str) -> _Static:
     """Every frame of ``/tf_static``: its parent, translation [m] and rotation (``x, y,
@@ -277,7 +274,7 @@ def upside_down_frame(reader: AnyReader, topics: dict[str, str], frame: str, src
 
 def scan_mounting(path: str | Path, frame: str) -> tuple[str, tuple[float, float, float]] | None:
     """The scanner's mounting as the bag's ``/tf_static`` states it: the base frame (the
-    first of :data:`BASE_FRAMES` up the chain, else its root) and the pose ``x, y, yaw``
+    first of :data:`BASE_LINKS` up the chain, else its root) and the pose ``x, y, yaw``
     [m, m, rad] of ``frame`` in it (of its frame right side up: the same origin and x
     axis). None without a static transform for ``frame``.
 
@@ -292,7 +289,7 @@ def scan_mounting(path: str | Path, frame: str) -> tuple[str, tuple[float, float
         parents = _static_tree(reader, bag_reader.topic_types(reader), src)
     if not frame or frame not in parents:
         return None
-    base, (x, y, _), rotation = _compose_up(parents, frame, BASE_FRAMES)
+    base, (x, y, _), rotation = _compose_up(parents, frame, BASE_LINKS)
     ex, ey, _ = _rotate(rotation, (1.0, 0.0, 0.0))
     return base, (x, y, math.atan2(ey, ex))
 
