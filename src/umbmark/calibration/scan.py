@@ -172,7 +172,8 @@ def calibrate_scan_bags(
     ``method`` as :func:`calibrate_intervals` does. The nominal parameters: ``wheelbase``
     and ``options.wheel_diameter`` (or ``current_params``), else the bag's robot
     description; the first guess of every match is the nominal geometry with the
-    laser's mounting from ``/tf_static`` (where the bag has it).
+    laser's mounting from ``/tf_static``, else from the robot description (where the bag
+    has either; a note says which).
 
     Raises
     ------
