@@ -37,7 +37,7 @@ from umbmark.core.errors import InputError
 from umbmark.model.scans import ScanSeries
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.msgtypes import LASER_SCAN, TF_STATIC_TOPIC, TF_TYPES, LaserScan, TFMessage
-from umbmark.sources.bag.urdf import BASE_LINKS
+from umbmark.sources.bag.names import BASE_LINKS
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader

@@ -39,13 +39,12 @@ from numpy.typing import NDArray
 from umbmark.core.errors import InputError
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.msgtypes import STRING, String
-from umbmark.sources.bag.names import mirrored_pairs
+from umbmark.sources.bag.names import BASE_LINKS, mirrored_pairs
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
 __all__ = [
-    "BASE_LINKS",
     "MAX_URDF_CHARS",
     "RobotDescription",
     "bag_robot_description",
@@ -62,8 +61,6 @@ FloatArray = NDArray[np.float64]
 MAX_URDF_CHARS = 4_000_000
 _DECLARATION = re.compile(r"<!\s*(DOCTYPE|ENTITY)", re.IGNORECASE)
 _WHEEL_TYPES = ("continuous", "revolute")
-#: The links a sensor's mounting is stated in, where its chain passes through one.
-BASE_LINKS = ("base_link", "base_footprint")
 
 
 @dataclass(frozen=True)
