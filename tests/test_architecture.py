@@ -24,6 +24,7 @@ LAYERS = (
     "model",
     "sources",
     "runs",
+    "scans",
     "benchmark",
     "estimators",
     "calibration",

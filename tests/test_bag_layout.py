@@ -27,6 +27,7 @@ ORDER = {
     "fastpath": 4,
     "samples": 4,
     "custom": 4,
+    "scans": 4,
     "wheels": 5,
     "truth": 5,
     "recording": 6,

@@ -74,7 +74,7 @@ def _same_option(command: click.Command, spec: Spec, section: str, help_text: st
 
 
 def test_the_spec_holds_the_documented_values() -> None:
-    assert READ["format"].choices == ("auto", "table", "log", "optiodom", "bag")
+    assert READ["format"].choices == ("auto", "table", "log", "optiodom", "bag", "tuples")
     assert READ["format"].flags == ("--format", "-f")
     assert READ["max_gap"].default == 0.25
     assert READ["min_rest"].default == 1.0
@@ -86,7 +86,7 @@ def test_the_spec_holds_the_documented_values() -> None:
     assert WHEELBASE.flags == ("--wheelbase", "-b")
     assert SIDE_LENGTH.flags == ("--side-length", "-L")
     # one entry per keyword, flags the keyword with "-" for "_"
-    assert len(READ) == len(READ_OPTIONS) == 32
+    assert len(READ) == len(READ_OPTIONS) == 33
     for spec in READ_OPTIONS:
         assert spec.flag == "--" + spec.name.replace("_", "-")
 
@@ -261,7 +261,7 @@ def test_none_is_refused_where_the_option_has_a_default() -> None:
     mistake, refused with one line (it was before the spec)."""
     for keywords, line in [
         ({"max_gap": None}, "--max-gap must be a number, not 'None'"),
-        ({"format": None}, "--format None: use one of auto, table, log, optiodom, bag"),
+        ({"format": None}, "--format None: use one of auto, table, log, optiodom, bag, tuples"),
     ]:
         with pytest.raises(InputError) as caught:
             ReadOptions.of(keywords)

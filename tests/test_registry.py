@@ -42,6 +42,8 @@ def test_every_estimator_function_takes_its_kinds_calling_convention(entry):
         if entry.fits_end_poses:
             keywords |= {"E_s": None, "fit": None}
         signature.bind(None, **keywords)
+    elif entry.needs == "intervals":
+        signature.bind(None, None, None, **dict(entry.options))
     else:
         keywords = dict(entry.options)
         if entry.trajectories:

@@ -143,6 +143,11 @@ def read_runs(
     """
     if not sources:
         raise InputError("no source given: name a runs table, run log, OptiOdom session or bag")
+    if options.scan_topic is not None:
+        raise InputError(
+            "--scan-topic is read by calibrate only (the wheels against the laser's scan "
+            "matching), not with runs"
+        )
     WHEELBASE.check(wheelbase)
     SIDE_LENGTH.check(side_length)
     file = parameter_file(options)

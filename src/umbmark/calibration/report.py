@@ -33,9 +33,11 @@ from umbmark.sources.params.reader import (
 
 if TYPE_CHECKING:
     from umbmark.calibration.verdict import Evidence, Verdict
+    from umbmark.estimators.scan_matching import ScanCalibration
     from umbmark.estimators.trajectory_fit import TrajectoryFit
 
 __all__ = [
+    "ABSOLUTE_FIGURES",
     "Calibrated",
     "CalibrationResult",
     "calibrated_name",
@@ -94,6 +96,9 @@ class CalibrationResult(JsonText):
         not into :meth:`to_dict`.
     recorded : str or None
         Where the calibration was recorded in the history (``robot``), for people.
+    sensor : ScanCalibration or None
+        A calibration from motion intervals (``format="tuples"``, no runs): the wheels
+        and the sensor's mounting it found, with their covariance.
     """
 
     sources: tuple[str, ...]
@@ -115,6 +120,7 @@ class CalibrationResult(JsonText):
     robot: str | None = None
     command: str | None = field(default=None, compare=False)
     recorded: str | None = field(default=None, compare=False)
+    sensor: ScanCalibration | None = field(default=None, compare=False)
 
     def __repr__(self) -> str:
         est = self.estimate
@@ -308,6 +314,8 @@ class CalibrationResult(JsonText):
         model = self._model()
         if model is not None:
             out["model"] = {"kind": "scrub", **model}
+        if self.sensor is not None:
+            out.update(_sensor_dict(self.sensor))
         logs = [run.log for run in self.runs if run.log is not None]
         if self.params is not None and logs:
             from umbmark.estimators.motions import motion_coverage
@@ -407,10 +415,49 @@ def calibrated_name(params: Calibrated) -> str:
     return "the calibration"
 
 
+#: The absolute figures an estimator may give as components, with a standard error
+#: (scan matching): the JSON's intervals, the summary and the HTML page list them.
+ABSOLUTE_FIGURES = (
+    "wheel_diameter_left",
+    "wheel_diameter_right",
+    "wheelbase",
+    "laser_x",
+    "laser_y",
+    "laser_yaw",
+)
+
+
 def _intervals(estimate: ErrorEstimate) -> dict[str, list[float]]:
     """95 % confidence intervals of the estimate's figures that have a standard error."""
-    pairs = ((name, estimate.interval(name)) for name in ("E_d", "E_b", "E_s", "alpha", "beta"))
+    named: tuple[str, ...] = ("E_d", "E_b", "E_s", "alpha", "beta")
+    named += tuple(n for n in ABSOLUTE_FIGURES if n in estimate.components)
+    pairs = ((name, estimate.interval(name)) for name in named)
     return {name: [pair[0], pair[1]] for name, pair in pairs if pair is not None}
+
+
+def _sensor_dict(sensor: ScanCalibration) -> dict[str, Any]:
+    """What a calibration from motion intervals adds to the JSON (metres, radians)."""
+    se = sensor.standard_errors
+    return {
+        "laser_pose": list(sensor.laser_pose),
+        "laser_pose_standard_errors": [se["laser_x"], se["laser_y"], se["laser_yaw"]],
+        "wheel_diameter_left_standard_error": se["wheel_diameter_left"],
+        "wheel_diameter_right_standard_error": se["wheel_diameter_right"],
+        "wheelbase_standard_error": se["wheelbase"],
+        "motion_intervals": {
+            "n": int(sensor.kept.shape[0]),
+            "used": sensor.n_used,
+            "outliers": int(sensor.kept.shape[0] - sensor.n_used),
+            "noise": list(sensor.noise),
+            "condition": sensor.excitation.condition,
+            "turns_on_the_spot": sensor.excitation.n_spot,
+            "straights": sensor.excitation.n_straight,
+            "arcs": sensor.excitation.n_arc,
+            "turning_left": sensor.excitation.n_left,
+            "turning_right": sensor.excitation.n_right,
+        },
+        "uncertainty": "Cramer-Rao bound, sensor noise from the residuals",
+    }
 
 
 def _cluster_dict(cluster: Cluster) -> dict[str, Any]:

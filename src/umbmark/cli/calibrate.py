@@ -16,7 +16,7 @@ from umbmark.cli.options import (
     spec_option,
     tum_time_option,
 )
-from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, method_help, names
+from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, method_help, names
 from umbmark.options.spec import OUTPUTS, SIDE_LENGTH, TEST, WHEELBASE
 
 __all__ = ["calibrate"]
@@ -33,8 +33,8 @@ __all__ = ["calibrate"]
             "-m",
             section=TEST,
             type=click.Choice(CHOICES),
-            default=DEFAULT.name,
-            show_default=True,
+            default=None,
+            show_default=f"{DEFAULT.name}; {INTERVALS[0]} for tuple files and with --scan-topic",
             help=method_help(),
         ),
         option(
@@ -127,7 +127,10 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
 
     options["command"] = command_line(sys.argv)
     method = str(options.get("method"))
-    if method in names(trajectories=True) or method == AUTO:  # fits that can take minutes
+    if options.get("scan_topic") is not None:  # scan matching: seconds to minutes
+        with working(f"matching the scans of {options['scan_topic']}"):
+            report = run_calibration(*sources, **options)
+    elif method in names(trajectories=True) or method == AUTO:  # fits that can take minutes
         with working(f"calibrating, --method {method}"):
             report = run_calibration(*sources, **options)
     else:

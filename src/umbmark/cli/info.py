@@ -185,6 +185,15 @@ def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
         out.print(Text(f"Suggested options: {bag.suggested_options}", style="bold"))
     else:
         out.print(Text("No wheel data or ground truth found to suggest options for."))
+    if bag.scan_options is not None:
+        needs = "".join(f" {flag} ..." for flag in bag.needs)
+        out.print(
+            Text(
+                "Wheels against the laser's scan matching (docs/scan-matching.md): umbmark "
+                f"calibrate {bag.path} {bag.scan_options}{needs}",
+                style="bold",
+            )
+        )
     looked = (
         "every message of the topics looked into was read"
         if bag.complete

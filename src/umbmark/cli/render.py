@@ -14,6 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from umbmark.benchmark.returns import Benchmark, sem_verdict
+from umbmark.calibration.report import ABSOLUTE_FIGURES
 from umbmark.estimators.registry import LOGGED, find, method_label
 from umbmark.jobs.calibrate import CalibrationReport
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
@@ -79,7 +80,17 @@ def render_calibration(
     est, active = cal.estimate, cal.active
     se = est.standard_errors
 
-    if bench is None:
+    sensor = report.sensor
+    if sensor is not None:
+        console.print(
+            Text.assemble(
+                ("Calibration of ", "bold"),
+                (report.source, "bold cyan"),
+                f"  ({sensor.n_used} of {len(sensor.kept)} motion intervals, "
+                f"{len(sensor.kept) - sensor.n_used} dropped as outliers; no UMBmark figures)",
+            )
+        )
+    elif bench is None:
         console.print(
             Text.assemble(
                 ("Calibration of ", "bold"),
@@ -111,6 +122,8 @@ def render_calibration(
         _row(errors, "E_s = D_avg / D_active", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "scale")
     if est.method in LOGGED:
         _trajectory_rows(errors, est.components, se)
+    if sensor is not None:
+        _sensor_rows(errors, est.components, se)
     console.print(errors)
     intervals = [
         f"{name} [{low:.6f}, {high:.6f}]"
@@ -185,6 +198,17 @@ def render_calibration(
         )
         # Plain text, no box: it must copy and paste as it is.
         console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
+
+
+def _sensor_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:
+    """The absolute figures of a calibration from motion intervals, in their units."""
+    for key in ABSOLUTE_FIGURES:
+        if key in comp:
+            shown = component(key)
+            value, error = shown.show(comp[key]), se.get(key)
+            if error is not None and math.isfinite(error):
+                value += f" ± {shown.show(error)}"
+            _row(errors, shown.label, f"{value} {shown.unit}", shown.meaning)
 
 
 def _trajectory_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:

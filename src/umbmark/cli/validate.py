@@ -8,7 +8,7 @@ from typing import Any
 import click
 
 from umbmark.cli.options import Command, apply, option, source_options, spec_option
-from umbmark.estimators.registry import NAMES
+from umbmark.estimators.registry import RUNS
 from umbmark.options.spec import OUTPUTS, SIDE_LENGTH, TEST
 
 __all__ = ["validate"]
@@ -21,7 +21,7 @@ __all__ = ["validate"]
         option(
             "--methods",
             section=TEST,
-            help=f"Estimators to compare, comma-separated [default: all: {', '.join(NAMES)}].",
+            help=f"Estimators to compare, comma-separated [default: all: {', '.join(RUNS)}].",
         ),
         spec_option(SIDE_LENGTH, help="Side of squares [m]."),
         option(

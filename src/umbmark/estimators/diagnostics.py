@@ -36,7 +36,7 @@ from umbmark.core.errors import InputError
 from umbmark.core.messages import join_names
 from umbmark.estimators.base import ModelCheckFailure, SquareTest
 from umbmark.estimators.endpose import FLOOR, LEVEL, EndPoseFit, fit_end_poses
-from umbmark.estimators.registry import Estimator, names
+from umbmark.estimators.registry import RUNS, Estimator, names
 from umbmark.model.runs import Run, split_by_direction
 
 __all__ = [
@@ -292,7 +292,7 @@ def require_headings(method: Estimator, runs: Sequence[Run], where: str | None) 
     """
     if not method.headings:
         return
-    serve = join_names(names(headings=False), "or")
+    serve = join_names([n for n in names(headings=False) if n in RUNS], "or")
     for run in runs:
         if run.log is not None and not run.log.headings:
             raise InputError(

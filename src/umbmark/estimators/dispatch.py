@@ -214,6 +214,12 @@ def _estimate(
 ) -> Estimated:
     """:func:`estimate_runs` without its translation of failures."""
     entry = estimator(method)
+    if entry.needs == "intervals":
+        raise InputError(
+            f"the {method} method needs motion intervals (a .tuple file of the wheels "
+            "against a laser's scan matching), not runs",
+            source=where,
+        )
     require_headings(entry, runs, where)
     if entry.needs == "square":
         squares = any(run.kind == "square" for run in runs)

@@ -18,6 +18,11 @@ an estimator needs (:attr:`Estimator.needs`):
 - ``"logs"``, recorded runs of any shape: ``function(logs, params, side_length,
   **options)`` (``fit_truth_offset=...`` too where :attr:`Estimator.trajectories`)
   returns the estimate and the fit.
+- ``"intervals"``, motion intervals of the wheels against a sensor's own motion
+  (:class:`~umbmark.model.motion_intervals.MotionIntervals`: tuple files, scan matching
+  of a bag's laser): ``function(intervals, params, side_length, **options)`` returns the
+  estimate and the calibration (wheels and sensor mounting). No runs: the dispatch of
+  runs, ``validate`` and ``--method auto`` leave these estimators out (:data:`RUNS`).
 """
 
 from __future__ import annotations
@@ -36,9 +41,12 @@ __all__ = [
     "ESTIMATORS",
     "EXACT",
     "HEADING",
+    "INTERVALS",
     "LOGGED",
     "NAMES",
     "PAPER",
+    "RUNS",
+    "SCAN_MATCHING",
     "SQUARE",
     "STRAIGHT",
     "TRAJECTORY",
@@ -57,12 +65,23 @@ __all__ = [
 #: The estimators' names, as a type (:data:`NAMES` in the table's order; a test keeps
 #: them equal).
 Method = Literal[
-    "paper", "exact", "heading", "endpose", "endpoints", "trajectory", "trajectory-scrub"
+    "paper",
+    "exact",
+    "heading",
+    "endpose",
+    "endpoints",
+    "trajectory",
+    "trajectory-scrub",
+    "scan-matching",
 ]
-Needs = Literal["square", "logs"]
+Needs = Literal["square", "logs", "intervals"]
 Reach = Literal["side", "path"]
 #: How ``--help`` introduces the estimators of each kind.
-_KINDS: dict[Needs, str] = {"square": "Square tests", "logs": "Recorded runs of any shape"}
+_KINDS: dict[Needs, str] = {
+    "square": "Square tests",
+    "logs": "Recorded runs of any shape",
+    "intervals": "Wheels against a laser's scan matching (tuple files)",
+}
 
 
 @dataclass(frozen=True)
@@ -77,9 +96,10 @@ class Estimator:
         What it is, for people (the title of the summary's table of errors).
     summary : str
         What it does, in a phrase, for ``--help``.
-    needs : {"square", "logs"}
-        A square test's end points (runs tables too; the square's side is required), or
-        recorded runs (time series: run logs, OptiOdom sessions, bags).
+    needs : {"square", "logs", "intervals"}
+        A square test's end points (runs tables too; the square's side is required),
+        recorded runs (time series: run logs, OptiOdom sessions, bags), or motion
+        intervals (the wheels against a sensor's scan-matched motion).
     function : str
         ``"module:function"``, called as the module's documentation says.
     headings : bool
@@ -200,6 +220,14 @@ TRAJECTORY_SCRUB = Estimator(
     options=(("model", "scrub"),),
 )
 
+SCAN_MATCHING = Estimator(
+    name="scan-matching",
+    label="wheels and laser mounting from scan matching (Censi et al. 2013)",
+    summary="both wheel radii, the wheelbase and the laser's mounting, Censi et al. 2013",
+    needs="intervals",
+    function="umbmark.estimators.scan_matching:scan_matching_estimate",
+)
+
 #: Every estimator, in the order the documentation and ``--help`` list them.
 ESTIMATORS: tuple[Estimator, ...] = (
     PAPER,
@@ -209,6 +237,7 @@ ESTIMATORS: tuple[Estimator, ...] = (
     ENDPOINTS,
     TRAJECTORY,
     TRAJECTORY_SCRUB,
+    SCAN_MATCHING,
 )
 
 _BY_NAME: dict[str, Estimator] = {e.name: e for e in ESTIMATORS}
@@ -218,6 +247,10 @@ NAMES: tuple[Method, ...] = tuple(e.name for e in ESTIMATORS)
 SQUARE: tuple[Method, ...] = tuple(e.name for e in ESTIMATORS if e.needs == "square")
 #: ... and of recorded runs.
 LOGGED: tuple[Method, ...] = tuple(e.name for e in ESTIMATORS if e.needs == "logs")
+#: ... of motion intervals (the wheels against a sensor's own motion) ...
+INTERVALS: tuple[Method, ...] = tuple(e.name for e in ESTIMATORS if e.needs == "intervals")
+#: ... and of runs, square tests or recordings (what ``validate`` and ``auto`` compare).
+RUNS: tuple[Method, ...] = SQUARE + LOGGED
 #: The estimator used unless another is asked for: chosen by the evidence of
 #: ``umbmark study`` and ``umbmark validate`` (``docs/estimators.md``).
 DEFAULT: Estimator = EXACT

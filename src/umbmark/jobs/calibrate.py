@@ -21,10 +21,10 @@ from umbmark.calibration.report import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError, python_api
-from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, NAMES, find, names
+from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.options import ReadOptions, SourceOptions
-from umbmark.runs.read import RunSource, source_name
+from umbmark.runs.read import RunSource, is_intervals, source_name
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -176,7 +176,7 @@ def calibrate(
     *more_sources: RunSource,
     side_length: float | None = None,
     wheelbase: float | None = None,
-    method: str = DEFAULT.name,
+    method: str | None = None,
     fit_truth_offset: bool = False,
     output: str | os.PathLike[str] | None = None,
     yaml: str | os.PathLike[str] | None = None,
@@ -207,15 +207,17 @@ def calibrate(
     wheelbase : float, optional
         Wheelbase ``b`` the odometry used during the runs [m] (ros2_control
         ``wheel_separation``); required for runs tables unless ``current_params`` has it.
-    method : str
-        Estimator (``docs/estimators.md``). Square tests: ``paper`` (Eqs. 4.20-4.27 as
+    method : str, optional
+        Estimator (``docs/estimators.md``); default ``exact``, or ``scan-matching`` for
+        tuple files and with ``scan_topic``. Square tests: ``paper`` (Eqs. 4.20-4.27 as
         printed), ``exact`` (the default: the exact square geometry inverted), ``heading``
         (final headings, Jung & Chung 2011), ``endpose`` (maximum likelihood on every
         run's end pose). Recorded runs of any shape: ``endpoints`` (least squares on where
         they end), ``trajectory`` (on whole trajectories; finds ``E_s`` too),
         ``trajectory-scrub`` (with a turn-dependent wheelbase). ``auto``: the one that
         predicts held-out recorded runs best (:func:`umbmark.validate`; runs tables take
-        the default).
+        the default). Motion intervals (tuple files, or a bag with ``scan_topic``):
+        ``scan-matching`` (the wheels and the laser's mounting, Censi et al. 2013).
     fit_truth_offset : bool
         ``trajectory`` and ``trajectory-scrub`` only: fit where the ground truth's tracked
         point (a motion-capture marker) sits in the robot frame, the components
@@ -270,14 +272,121 @@ def calibrate(
     from umbmark.outputs.tum import check_tum_time
 
     check_tum_time(tum_time)
-    if method not in CHOICES:
+    if method is not None and method not in CHOICES:
         raise InputError(f"--method {method!r}: use one of {', '.join(NAMES)} or {AUTO}")
     fitting = names(trajectories=True)
     if fit_truth_offset and method not in fitting:
-        raise InputError(f"--fit-truth-offset needs --method {' or '.join(fitting)}, not {method}")
+        raise InputError(
+            f"--fit-truth-offset needs --method {' or '.join(fitting)}, not "
+            f"{method or DEFAULT.name}"
+        )
     sources = (source, *more_sources)
     _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
           plot=plot, tum=tum, report=report, force=force)  # fmt: skip
+    note, nominal_best = None, False
+    if read_options.scan_topic is not None:
+        result = _calibrate_scans(sources, read_options, method, wheelbase, side_length)
+    elif any(is_intervals(s, read_options) for s in sources) or method in INTERVALS:
+        result = _calibrate_intervals(sources, read_options, method or AUTO, wheelbase, side_length)
+    else:
+        method = method or DEFAULT.name
+        result, note, nominal_best = _calibrate_runs(
+            sources, read_options, method, wheelbase, side_length, options, force=force,
+            fit_truth_offset=fit_truth_offset,
+        )  # fmt: skip
+    result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
+    if note is not None:
+        result = replace(result, notes=(*result.notes, note))
+    if store is not None and robot is not None:
+        active = result.calibration.active
+        store.check_identity(robot, active.wheelbase, active.wheel_diameter)
+        if composed is not None:
+            result = replace(result, notes=(*result.notes, composed))
+    files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
+    result = replace(result, forced=force)
+    if result.overlay_withheld:  # the verdict says what to do instead
+        result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
+        files = dict.fromkeys(files)
+    result.write(
+        output=output, plot=plot, tum=tum, tum_time=tum_time, report=report, force=force,
+        **files,
+    )  # fmt: skip
+    if store is not None and robot is not None:
+        inputs = [n for n in map(source_name, sources) if n != "runs"]
+        id = store.record(robot, _history_entry(result), inputs)
+        said = store.recorded_line(robot, id, result.verdict, forced=force)
+        result = replace(result, recorded=said)
+    return result
+
+
+def _calibrate_intervals(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    method: str,
+    wheelbase: float | None,
+    side_length: float | None,
+) -> CalibrationReport:
+    """A calibration of tuple files by an estimator of motion intervals (``auto`` takes
+    the first)."""
+    from umbmark.calibration.scan import calibrate_intervals
+
+    if method not in (*INTERVALS, AUTO):
+        raise InputError(
+            f"motion intervals (tuple files) are calibrated by --method {' or '.join(INTERVALS)}, "
+            f"not {method}"
+        )
+    if not all(is_intervals(s, options) for s in sources):
+        raise InputError(
+            f"--method {method} calibrates motion intervals (tuple files; docs/formats.md), "
+            "not runs"
+        )
+    chosen = INTERVALS[0] if method == AUTO else method
+    paths = [Path(source_name(s)) for s in sources]
+    result = calibrate_intervals(
+        paths, options, chosen, wheelbase=wheelbase, side_length=side_length
+    )
+    return CalibrationReport.of(result)
+
+
+def _calibrate_scans(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    method: str | None,
+    wheelbase: float | None,
+    side_length: float | None,
+) -> CalibrationReport:
+    """A calibration of bags' wheels against their laser's scan matching (``--scan-topic``)."""
+    from umbmark.calibration.scan import calibrate_scan_bags
+    from umbmark.runs.read import is_runs
+
+    if method is not None and method not in (*INTERVALS, AUTO):
+        raise InputError(
+            f"--scan-topic calibrates by --method {' or '.join(INTERVALS)} (the default with "
+            f"it), not {method}"
+        )
+    if any(is_runs(s) for s in sources):
+        raise InputError("--scan-topic reads bags, not runs in memory")
+    chosen = INTERVALS[0] if method in (None, AUTO) else method
+    paths = [Path(source_name(s)) for s in sources]
+    result = calibrate_scan_bags(
+        paths, options, chosen, wheelbase=wheelbase, side_length=side_length
+    )
+    return CalibrationReport.of(result)
+
+
+def _calibrate_runs(
+    sources: Sequence[RunSource],
+    read_options: ReadOptions,
+    method: str,
+    wheelbase: float | None,
+    side_length: float | None,
+    options: SourceOptions,
+    *,
+    force: bool,
+    fit_truth_offset: bool,
+) -> tuple[CalibrationReport, str | None, bool]:
+    """A calibration of runs: the result, a note on the method chosen, and whether
+    ``auto`` found the nominal parameters best."""
     entry = find(method)
     if side_length is None and entry is not None and entry.side_required:
         from umbmark.runs.read import is_table
@@ -300,32 +409,10 @@ def calibrate(
             sources, read, side_length, wheelbase, options, force=force
         )
     result = CalibrationReport.of(calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset))
-    result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
-    if note is not None:
-        result = replace(result, notes=(*result.notes, note))
-    if chosen in fitting and len(read.parts) > 1:
+    if chosen in names(trajectories=True) and len(read.parts) > 1:
         disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
         result = replace(result, input_warnings=(*result.input_warnings, *disagree))
-    if store is not None and robot is not None:
-        active = result.calibration.active
-        store.check_identity(robot, active.wheelbase, active.wheel_diameter)
-        if composed is not None:
-            result = replace(result, notes=(*result.notes, composed))
-    files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
-    result = replace(result, forced=force)
-    if result.overlay_withheld:  # the verdict says what to do instead
-        result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
-        files = dict.fromkeys(files)
-    result.write(
-        output=output, plot=plot, tum=tum, tum_time=tum_time, report=report, force=force,
-        **files,
-    )  # fmt: skip
-    if store is not None and robot is not None:
-        inputs = [n for n in map(source_name, sources) if n != "runs"]
-        id = store.record(robot, _history_entry(result), inputs)
-        said = store.recorded_line(robot, id, result.verdict, forced=force)
-        result = replace(result, recorded=said)
-    return result
+    return result, note, nominal_best
 
 
 def _history_entry(result: CalibrationResult) -> NewCalibration:

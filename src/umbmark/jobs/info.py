@@ -189,7 +189,9 @@ class InfoReport(JsonText):
         ``robot_description`` (``wheelbase``, ``wheel_diameter``, ``left_joints``,
         ``right_joints``, ``topic``; or None), ``robot_description_problem``, ``needs``
         (the options still needed for the wheel geometry), ``independent_reference``,
-        ``suggested_options``, ``notes``, ``warnings``; for run logs and OptiOdom sessions
+        ``suggested_options``, ``laser_scans`` (the ``sensor_msgs/LaserScan`` topics),
+        ``scan_options`` (the options of ``calibrate --scan-topic``, or None), ``notes``,
+        ``warnings``; for run logs and OptiOdom sessions
         ``files``, ``runs``, ``duration``, ``wheel_parameters``, ``side_length``, ``notes``,
         ``warnings``.
         """
@@ -259,6 +261,14 @@ def info(
         raise InputError(
             "is read as a runs table (end points measured by hand): there is nothing to look"
             " into; umbmark info looks into ROS bags, run logs and OptiOdom sessions",
+            source=name,
+        )
+    if kind == "tuples":
+        from umbmark.estimators.registry import INTERVALS
+
+        raise InputError(
+            "holds motion intervals (a tuple file): umbmark info looks into ROS bags, run logs "
+            f"and OptiOdom sessions; calibrate it with --method {' or '.join(INTERVALS)}",
             source=name,
         )
     if kind == "bag":

@@ -30,7 +30,7 @@ from umbmark.calibration.validation import Fold, ValidationReport
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info, split_messages
 from umbmark.estimators.motions import SCRUB_FALLBACK, MotionCoverage, motion_coverage
-from umbmark.estimators.registry import NAMES, names
+from umbmark.estimators.registry import RUNS, names
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run, end_errors
 from umbmark.runs.options import ReadOptions, SourceOptions
@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 __all__ = ["CANDIDATES", "validate"]
 
 #: What is compared: the nominal parameters and every estimator.
-CANDIDATES = ("nominal", *NAMES)
+CANDIDATES = ("nominal", *RUNS)
 _MM = 1000.0
 
 

@@ -13,6 +13,7 @@ Units: seconds, radians (wheel rotation, sensor yaw), metres. The robot frame fo
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,3 +64,25 @@ class MotionIntervals:
 
     def __len__(self) -> int:
         return int(self.duration.shape[0])
+
+    @classmethod
+    def concatenate(cls, parts: Sequence[MotionIntervals]) -> MotionIntervals:
+        """The intervals of ``parts`` one after the other (covariances and start times
+        kept only where every part has them; sources joined by ", ")."""
+        if not parts:
+            raise ValueError("no motion intervals to join")
+        covs = [p.sensor_covariance for p in parts]
+        starts = [p.start_time for p in parts]
+        return cls(
+            duration=np.concatenate([p.duration for p in parts]),
+            phi_left=np.concatenate([p.phi_left for p in parts]),
+            phi_right=np.concatenate([p.phi_right for p in parts]),
+            sensor_motion=np.concatenate([p.sensor_motion for p in parts]),
+            sensor_covariance=None
+            if any(c is None for c in covs)
+            else np.concatenate([c for c in covs if c is not None]),
+            start_time=None
+            if any(t is None for t in starts)
+            else np.concatenate([t for t in starts if t is not None]),
+            source=", ".join(p.source for p in parts if p.source),
+        )

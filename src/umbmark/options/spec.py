@@ -328,10 +328,11 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "format",
         ("--format", "-f"),
         LOGS,
-        "Source format (auto: by the path).",
+        "Source format (auto: by the path; tuples: motion intervals of the wheels against a "
+        "laser's scan matching, for --method scan-matching).",
         kind="choice",
         default="auto",
-        choices=("auto", "table", "log", "optiodom", "bag"),
+        choices=("auto", "table", "log", "optiodom", "bag", "tuples"),
     ),
     Spec(
         "split",
@@ -468,6 +469,15 @@ READ_OPTIONS: tuple[Spec, ...] = (
         BAGS,
         "... and the right.",
         metavar="FRAME",
+    ),
+    Spec(
+        "scan_topic",
+        ("--scan-topic",),
+        BAGS,
+        "A sensor_msgs/LaserScan topic (calibrate only): the wheels are calibrated against the "
+        "laser's scan matching (--method scan-matching: both wheel diameters, the wheelbase "
+        "and the laser's mounting from ordinary driving; no ground truth needed).",
+        metavar="TOPIC",
     ),
     Spec(
         "truth_topic",

@@ -137,6 +137,14 @@ COMPONENTS: Mapping[str, Component] = {
     "scrub_rms_heading": Component(
         "heading residual of the scrub model (rms)", ANGLE_UNIT, _RESIDUALS, ".3f"
     ),
+    # scan-matching: wheels and laser mounting from motion intervals
+    "wheel_diameter_left": Component("left wheel diameter", "mm", "scan matching", ".3f"),
+    "wheel_diameter_right": Component("right wheel diameter", "mm", "scan matching", ".3f"),
+    "laser_x": Component("laser position, forward", "mm", "on the robot", ".2f"),
+    "laser_y": Component("laser position, left", "mm", "on the robot", ".2f"),
+    "laser_yaw": Component("laser yaw", ANGLE_UNIT, "on the robot", ".3f"),
+    "n_intervals": Component("motion intervals", "", "in the sources", ".0f"),
+    "n_used": Component("motion intervals used", "", "the others: outliers", ".0f"),
 }
 
 

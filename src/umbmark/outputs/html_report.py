@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from umbmark.calibration.passes import Passes
     from umbmark.calibration.report import CalibrationResult
     from umbmark.calibration.validation import ValidationReport
+    from umbmark.estimators.base import ErrorEstimate
 
 __all__ = ["calibration_html", "pass_name", "passes_html"]
 
@@ -331,6 +332,7 @@ def _estimate(one: CalibrationResult) -> str:
                 meaning,
             ]
         )
+    rows += _absolute_rows(est)
     table = _table(["", "estimate", "standard error", "95 % low", "95 % high", ""], rows, {5})
     active = cal.active
     correction = [
@@ -348,6 +350,28 @@ def _estimate(one: CalibrationResult) -> str:
         "<p>Correction, composed with the values active during the runs:</p>\n"
         + _table(["", "active", "new"], correction)
     )
+
+
+def _absolute_rows(est: ErrorEstimate) -> list[list[str]]:
+    """The rows of the absolute figures an estimate carries, in their units shown."""
+    rows = []
+    from umbmark.calibration.report import ABSOLUTE_FIGURES
+
+    for name in ABSOLUTE_FIGURES:
+        if name not in est.components or name not in est.standard_errors:
+            continue
+        shown = component(name)
+        interval = est.interval(name)
+        low, high = (None, None) if interval is None else interval
+        values = (est.components[name], est.standard_errors[name], low, high)
+        rows.append(
+            [
+                shown.heading,
+                *("–" if v is None else shown.show(v) for v in values),
+                shown.meaning,
+            ]
+        )
+    return rows
 
 
 def _estimates(page: Passes) -> str:

@@ -34,6 +34,7 @@ __all__ = [
     "chair",
     "corner_world",
     "legs",
+    "room_world",
     "square_path",
 ]
 
@@ -402,3 +403,30 @@ def corner_world(clutter: bool = True) -> World:
         sonars=CORNER_SENSORS,
         mocap=MotionCapture(),
     )
+
+
+def room_world(clutter: bool = True) -> World:
+    """An ordinary room for scan matching: 8 x 6 m (x from -3 to 5 m, y from -3 to 3 m
+    around the start) with a 0.9 m door gap in the left wall, a pillar and, with
+    ``clutter``, a cupboard and a table against the walls, a chair and a person standing
+    in the room. The robot starts at the origin heading +x and carries the standard laser
+    at its centre (360 degrees in 720 beams, 1 cm noise, 2 % dropouts, 12 m range).
+
+    The walls fix every direction of a scanner's motion from anywhere inside; a 2 x 2 m
+    square of floor around the start is free.
+    """
+    walls = np.array(
+        [
+            [-3.0, -3.0, 5.0, -3.0],  # right
+            [5.0, -3.0, 5.0, 3.0],  # ahead
+            [5.0, 3.0, 1.9, 3.0],  # left, up to the door
+            [1.0, 3.0, -3.0, 3.0],  # left, after the door
+            [-3.0, 3.0, -3.0, -3.0],  # behind
+        ]
+    )
+    parts = [walls, box(3.2, 1.6, 0.5, 0.5)]  # the pillar
+    circles: list[FloatArray] = []
+    if clutter:
+        parts += [box(-2.7, -1.0, 0.5, 1.2), box(4.4, -2.0, 0.9, 1.6, 0.1)]
+        circles += [chair(-1.8, 2.2, 0.4), legs(2.4, -1.8, 0.9)]
+    return World.build(np.vstack(parts), np.vstack(circles) if circles else (), lidar=DEFAULT_LIDAR)

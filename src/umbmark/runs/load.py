@@ -12,12 +12,16 @@ Formats
 ``bag``
     A ROS 1 bag (``.bag``) or ROS 2 bag (folder with ``metadata.yaml``, or its ``.db3`` /
     ``.mcap`` file or that ``metadata.yaml``) (:mod:`umbmark.sources.bag`).
+``tuples``
+    Motion intervals of the wheels against a laser's scan matching (a ``.tuple`` file,
+    :mod:`umbmark.sources.tuples`): not runs, calibrated by the estimators of intervals
+    (:func:`umbmark.calibration.scan.calibrate_intervals`); :func:`load_runs` refuses it.
 ``auto``
-    Decide from the path: a ``.bag``, ``.db3`` or ``.mcap`` file, a folder with a ROS 2
-    ``metadata.yaml`` or that file is a bag; a folder with ``*_metadata.csv`` and
-    ``*_run-NN.csv`` is OptiOdom; a folder (or a CSV beside) with umbmark's
-    ``metadata.yaml`` is a run log (its ``metadata.yaml`` is refused: give the folder); any
-    other file a runs table.
+    Decide from the path: a ``.tuple`` file is tuples; a ``.bag``, ``.db3`` or ``.mcap``
+    file, a folder with a ROS 2 ``metadata.yaml`` or that file is a bag; a folder with
+    ``*_metadata.csv`` and ``*_run-NN.csv`` is OptiOdom; a folder (or a CSV beside) with
+    umbmark's ``metadata.yaml`` is a run log (its ``metadata.yaml`` is refused: give the
+    folder); any other file a runs table.
 """
 
 from __future__ import annotations
@@ -44,7 +48,7 @@ if TYPE_CHECKING:
 
 __all__ = ["FORMATS", "Format", "LoadOptions", "Loaded", "detect_format", "load_runs"]
 
-Format = Literal["auto", "table", "log", "optiodom", "bag"]
+Format = Literal["auto", "table", "log", "optiodom", "bag", "tuples"]
 #: The formats ``--format`` takes (:data:`umbmark.options.spec.READ`; a test holds
 #: :data:`Format` equal).
 FORMATS = cast("tuple[Format, ...]", READ["format"].choices)
@@ -165,6 +169,8 @@ def detect_format(path: str | Path) -> Format:
     _regular_or_folder(path)
     if path.suffix.lower() in (".bag", ".db3", ".mcap"):
         return "bag"
+    if path.suffix.lower() == ".tuple" and path.is_file():
+        return "tuples"
     if path.is_dir():
         from umbmark.sources.optiodom import is_optiodom_session
         from umbmark.sources.runlog.reader import is_runlog
@@ -228,6 +234,12 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
     if fmt != "auto" and source.exists():
         _regular_or_folder(source)
     kind = detect_format(source) if fmt == "auto" else fmt
+    if kind == "tuples":
+        raise InputError(
+            "holds motion intervals (a tuple file), not runs: calibrate it with "
+            "--method scan-matching",
+            source=source,
+        )
     if kind == "table":
         from umbmark.sources.runs_table.reader import read_runs_table
 

@@ -34,7 +34,7 @@ class SourceOptions(TypedDict, total=False):
     keys of :data:`umbmark.options.spec.READ`, typed for ``**options`` (a test holds them
     equal)."""
 
-    format: Literal["auto", "table", "log", "optiodom", "bag"]
+    format: Literal["auto", "table", "log", "optiodom", "bag", "tuples"]
     unit: Literal["m", "cm", "mm"]
     angle_unit: Literal["rad", "deg"]
     wheel_diameter: float | None
@@ -66,6 +66,7 @@ class SourceOptions(TypedDict, total=False):
     truth_model: str | None
     left_wheel_frame: str | None
     right_wheel_frame: str | None
+    scan_topic: str | None
 
 
 @dataclass(frozen=True)
@@ -75,8 +76,9 @@ class ReadOptions:
 
     Attributes
     ----------
-    format : {"auto", "table", "log", "optiodom", "bag"}
-        Source format; ``auto`` decides by the path.
+    format : {"auto", "table", "log", "optiodom", "bag", "tuples"}
+        Source format; ``auto`` decides by the path (``tuples``: motion intervals, a
+        ``.tuple`` file, for the estimators of motion intervals).
     unit, angle_unit : str
         Units of a runs table's lengths (``m``, ``cm``, ``mm``) and headings (``rad``,
         ``deg``).
@@ -137,6 +139,9 @@ class ReadOptions:
     left_wheel_frame, right_wheel_frame : str or None
         Bags: the wheels as the child frames of their transforms on ``/tf``
         (``wheel_left_link``), instead of joint states. Both or neither.
+    scan_topic : str or None
+        Bags, ``calibrate`` only: a ``sensor_msgs/LaserScan`` topic; the wheels are
+        calibrated against the laser's scan matching (``docs/scan-matching.md``).
     """
 
     format: str = READ["format"].default
@@ -171,6 +176,7 @@ class ReadOptions:
     truth_model: str | None = None
     left_wheel_frame: str | None = None
     right_wheel_frame: str | None = None
+    scan_topic: str | None = None
 
     def __post_init__(self) -> None:
         for spec in READ_OPTIONS:

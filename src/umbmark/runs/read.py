@@ -37,6 +37,7 @@ __all__ = [
     "PathLike",
     "RunSource",
     "Runs",
+    "bag_options",
     "check_invertible",
     "is_runs",
     "is_table",
@@ -180,6 +181,16 @@ def is_table(source: RunSource, options: ReadOptions) -> bool:
     if options.format != "auto":
         return options.format == "table"
     return detect_format(Path(cast("PathLike", source))) == "table"
+
+
+def is_intervals(source: RunSource, options: ReadOptions) -> bool:
+    """Whether ``source`` holds motion intervals (a tuple file), not runs."""
+    if is_runs(source):
+        return False
+    if options.format != "auto":
+        return options.format == "tuples"
+    path = Path(cast("PathLike", source))
+    return path.is_file() and detect_format(path) == "tuples"
 
 
 def source_format(source: RunSource, options: ReadOptions) -> tuple[Path | None, Format]:
@@ -395,7 +406,7 @@ def _load_options(
         windows=windows,
         split_options=split_options,
         max_gap=float(options.max_gap),
-        bag=_bag_options(options, params, file) if kind == "bag" else None,
+        bag=bag_options(options, params, file) if kind == "bag" else None,
         truth_offset=(
             (float(options.truth_offset[0]), float(options.truth_offset[1]))
             if options.truth_offset is not None
@@ -404,9 +415,12 @@ def _load_options(
     )
 
 
-def _bag_options(
+def bag_options(
     options: ReadOptions, params: WheelParams | None, file: ControllerParams
 ) -> BagOptions:
+    """How to read a bag's wheels (and ground truth): the reading options as
+    :class:`~umbmark.sources.bag.options.BagOptions`, the controller's odometry turned back
+    into wheel rotation with ``params`` (the parameters the odometry used)."""
     from umbmark.model.kinematics import OdometryGeometry
     from umbmark.sources.bag.options import BagOptions
 

@@ -1,5 +1,5 @@
-"""ROS bags: wheel rotation and ground truth from ROS 1 and ROS 2 recordings, and what a
-bag holds.
+"""ROS bags: wheel rotation, ground truth and laser scans from ROS 1 and ROS 2
+recordings, and what a bag holds.
 
 Modules by concern, lowest first; a module imports only from those above it in this list
 (and from :mod:`umbmark.core`, :mod:`umbmark.model`, :mod:`umbmark.sources.text` and
@@ -14,7 +14,8 @@ Modules by concern, lowest first; a module imports only from those above it in t
    every rosbags failure one line) and :mod:`~umbmark.sources.bag.writer` (writing one).
 4. Messages to samples: :mod:`~umbmark.sources.bag.fastpath` (the byte-level decoder),
    :mod:`~umbmark.sources.bag.samples` (a topic's samples, times, cleaning),
-   :mod:`~umbmark.sources.bag.custom` (definitions of custom message types).
+   :mod:`~umbmark.sources.bag.custom` (definitions of custom message types),
+   :mod:`~umbmark.sources.bag.scans` (a laser's sweeps, ``sensor_msgs/LaserScan``).
 5. Side by side, neither importing the other: :mod:`umbmark.sources.bag.wheels` (joint
    states, encoder ticks and fields, wheel frames on ``/tf``, the controller's odometry
    turned back into wheel rotation) and :mod:`umbmark.sources.bag.truth` (pose topics,

@@ -43,6 +43,7 @@ def unstamped(msgtype: str | None) -> bool:
 
 
 STRING = "std_msgs/msg/String"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
 
 # std_msgs number types: numpy type code of ``data`` and bits of a counter that wraps
 # (None: no wrap).
@@ -195,3 +196,15 @@ class String(Protocol):
     """``std_msgs/String``."""
 
     data: str
+
+
+class LaserScan(Stamped, Protocol):
+    """``sensor_msgs/LaserScan``: ``ranges`` [m] shape (beams,), angles [rad]."""
+
+    angle_min: float
+    angle_max: float
+    angle_increment: float
+    time_increment: float
+    range_min: float
+    range_max: float
+    ranges: NDArray[np.float32]

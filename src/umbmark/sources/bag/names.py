@@ -11,6 +11,7 @@ import re
 from collections.abc import Sequence
 
 __all__ = [
+    "BASE_LINKS",
     "fixed_frame",
     "fused_like",
     "mirrored_pairs",
@@ -18,6 +19,9 @@ __all__ = [
     "truth_like",
     "words",
 ]
+
+#: The frames (links) a sensor's mounting is stated in, where its chain passes through one.
+BASE_LINKS = ("base_link", "base_footprint")
 
 _MIRRORS: tuple[tuple[re.Pattern[str], str], ...] = (
     (re.compile(r"left"), "right"),

@@ -13,7 +13,10 @@ needs:
   the root link's frame (every joint's ``<origin xyz rpy>`` composed from the root down),
   ``mean y of the left wheels - mean y of the right wheels``;
 - the wheel diameter: twice the radius of the wheel links' ``<cylinder>`` (their
-  collision geometry, else their visual one; a ``<sphere>`` also serves), averaged.
+  collision geometry, else their visual one; a ``<sphere>`` also serves), averaged;
+- the mountings: every link fixed to the robot (a chain of ``fixed`` joints up to
+  ``base_link`` or ``base_footprint``, else the root link), its pose ``x, y, yaw`` there
+  (a laser's nominal mounting, for the scan matching's first guess).
 
 Parsing is bounded: a description of more than :data:`MAX_URDF_CHARS` characters, or one
 with a document type declaration or entities (which could expand without bound), is
@@ -25,7 +28,8 @@ from __future__ import annotations
 import math
 import re
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -35,7 +39,7 @@ from numpy.typing import NDArray
 from umbmark.core.errors import InputError
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.msgtypes import STRING, String
-from umbmark.sources.bag.names import mirrored_pairs
+from umbmark.sources.bag.names import BASE_LINKS, mirrored_pairs
 
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
@@ -74,6 +78,10 @@ class RobotDescription:
         The wheel joints of each side.
     topic : str
         Where it came from (the bag's topic).
+    mountings : dict of str to (float, float, float)
+        The links fixed to the robot and their pose ``x, y, yaw`` [m, m, rad] in
+        ``base_link`` or ``base_footprint`` (else the root link), of the link's frame
+        right side up (its origin and x axis).
     """
 
     wheelbase: float
@@ -81,6 +89,9 @@ class RobotDescription:
     left_joints: tuple[str, ...]
     right_joints: tuple[str, ...]
     topic: str = ""
+    mountings: Mapping[str, tuple[float, float, float]] = field(
+        default_factory=dict, repr=False, compare=False
+    )
 
     def describe(self) -> str:
         """``wheelbase 0.16 m and wheel diameter 0.066 m from /robot_description
@@ -238,7 +249,27 @@ def parse_robot_description(
         radii.append(None if link is None else _radius(link))
     known = [r for r in radii if r is not None]
     diameter = 2.0 * float(np.mean(known)) if len(known) == len(radii) else None
-    return RobotDescription(wheelbase, diameter, left, right, source)
+    return RobotDescription(wheelbase, diameter, left, right, source, _mountings(joints, by_child))
+
+
+def _mountings(
+    joints: dict[str, _Joint], by_child: dict[str, _Joint]
+) -> dict[str, tuple[float, float, float]]:
+    """The links fixed to the robot and their planar poses (:class:`RobotDescription`)."""
+    out: dict[str, tuple[float, float, float]] = {}
+    for joint in joints.values():
+        rotation, point = np.eye(3), np.zeros(3)
+        at: _Joint | None = joint
+        seen: set[str] = set()
+        while at is not None and at.kind == "fixed" and at.name not in seen:
+            seen.add(at.name)
+            turn = _rotation(at.rpy)
+            point, rotation = turn @ point + np.array(at.xyz), turn @ rotation
+            at = None if at.parent in BASE_LINKS else by_child.get(at.parent)
+        if at is None and seen:  # every joint up the chain is fixed
+            yaw = math.atan2(float(rotation[1, 0]), float(rotation[0, 0]))
+            out[joint.child] = (float(point[0]), float(point[1]), yaw)
+    return out
 
 
 def _wheel_joints(

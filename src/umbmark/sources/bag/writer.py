@@ -9,7 +9,10 @@ differential-drive robot with motion capture publishes (names in :class:`BagTopi
 * ``/odom`` (``nav_msgs/Odometry``, ``odom -> base_link``): the robot's own odometry,
   with its body twist (the pose differences over time, in ``base_link``);
 * ``/tf`` (``tf2_msgs/TFMessage``): the same pose as the transform ``odom -> base_link``;
-* ``/mocap/robot/pose`` (``geometry_msgs/PoseStamped``, frame ``world``): the ground truth.
+* ``/mocap/robot/pose`` (``geometry_msgs/PoseStamped``, frame ``world``): the ground truth;
+* with ``scans``: ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``), the sweeps as
+  given, and ``/tf_static`` with the mounting ``base_link -> laser`` (``laser_pose``,
+  rolled by 180 degrees for a scanner mounted upside down).
 
 Header stamps and bag (receive) times are equal: the recording's start epoch plus each
 sample's time, in nanoseconds; messages are written in time order.
@@ -42,11 +45,14 @@ from numpy.typing import NDArray
 from umbmark.core.atomic import fsync
 from umbmark.core.errors import InputError
 from umbmark.model.recording import PoseSeries, WheelSeries
+from umbmark.model.scans import ScanSeries
 from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
+    LASER_SCAN,
     ODOMETRY,
     POSE_STAMPED,
     TF_MESSAGE,
+    TF_STATIC_TOPIC,
     TF_TOPIC,
 )
 from umbmark.sources.bag.reader import missing_rosbags, one_line
@@ -84,6 +90,8 @@ class BagTopics:
     odom_frame: str = "odom"
     base_frame: str = "base_link"
     world_frame: str = "world"
+    scan: str = "/scan"
+    laser_frame: str = "laser"
 
 
 @dataclass(frozen=True)
@@ -178,6 +186,8 @@ def write_bag(
     topics: BagTopics | None = None,
     start_epoch: float = START_EPOCH,
     progress: Callable[[float], None] | None = None,
+    scans: ScanSeries | None = None,
+    laser_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
 ) -> Path:
     """Write the wheels, the odometry and the ground truth as a ROS bag (module notes).
 
@@ -197,6 +207,10 @@ def write_bag(
         Stamp of time 0 [s since the Unix epoch].
     progress : callable, optional
         Called now and then with the fraction of messages written (0 to 1).
+    scans : ScanSeries, optional
+        A laser's sweeps, on the wheels' clock, written as ``/scan``.
+    laser_pose : tuple of float
+        The laser's mounting ``x, y, yaw`` [m, m, rad] in ``base_link`` (``/tf_static``).
 
     Returns
     -------
@@ -230,7 +244,7 @@ def write_bag(
         with _temporary_beside(real) as scratch:
             fresh = scratch / real.name
             _write(fresh, target.format, store, names, wheels, odometry, truth, start_epoch,
-                   progress)  # fmt: skip
+                   progress, scans, laser_pose)  # fmt: skip
             for file in [fresh] if fresh.is_file() else sorted(fresh.iterdir()):
                 fsync(file)
             _put(fresh, real, scratch)
@@ -300,6 +314,8 @@ def _write(
     truth: PoseSeries,
     start_epoch: float,
     progress: Callable[[float], None] | None,
+    scans: ScanSeries | None = None,
+    laser_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
 ) -> None:
     """Write the bag at ``path`` (which does not exist yet)."""
     from rosbags.rosbag1 import Writer as Writer1
@@ -307,12 +323,17 @@ def _write(
     from rosbags.rosbag2 import Writer as Writer2
 
     messages = _Messages(store, names, ros1=fmt == "ros1")
-    series: list[tuple[str, str, PoseSeries | WheelSeries, _Make]] = [
-        (names.joint_states, JOINT_STATE, wheels, messages.joint_states(wheels)),
-        (names.odometry, ODOMETRY, odometry, messages.odometry(odometry)),
-        (names.tf, TF_MESSAGE, odometry, messages.transform(odometry)),
-        (names.truth, POSE_STAMPED, truth, messages.truth(truth)),
+    series: list[tuple[str, str, FloatArray, _Make]] = [
+        (names.joint_states, JOINT_STATE, wheels.time, messages.joint_states(wheels)),
+        (names.odometry, ODOMETRY, odometry.time, messages.odometry(odometry)),
+        (names.tf, TF_MESSAGE, odometry.time, messages.transform(odometry)),
+        (names.truth, POSE_STAMPED, truth.time, messages.truth(truth)),
     ]
+    if scans is not None:
+        at_start = np.array([min(float(wheels.time[0]), float(scans.times[0]))])
+        mount = messages.mounting(laser_pose, upside_down=scans.upside_down)
+        series.append((TF_STATIC_TOPIC, TF_MESSAGE, at_start, mount))
+        series.append((names.scan, LASER_SCAN, scans.times, messages.scan(scans)))
     writer: Writer1 | Writer2
     if fmt == "ros1":
         writer = Writer1(path)
@@ -322,7 +343,7 @@ def _write(
         writer = Writer2(path, version=Writer2.VERSION_LATEST, storage_plugin=plugin)
         serialize = store.serialize_cdr
     # Every message in time order: (stamp, series) sorted, series order among equal stamps.
-    stamps = [_stamps(s.time, start_epoch) for _, _, s, _ in series]
+    stamps = [_stamps(s, start_epoch) for _, _, s, _ in series]
     when = np.concatenate(stamps)
     which = np.concatenate([np.full(s.size, k) for k, s in enumerate(stamps)])
     index = np.concatenate([np.arange(s.size) for s in stamps])
@@ -454,6 +475,54 @@ class _Messages:
             return t[POSE_STAMPED](
                 header=self.header(stamp, names.world_frame, names.truth),
                 pose=self.pose(*poses[i].tolist()),
+            )
+
+        return make
+
+    def mounting(self, pose: tuple[float, float, float], *, upside_down: bool) -> _Make:
+        """``/tf_static``: ``base_link -> laser`` (rolled by 180 degrees if upside down)."""
+        t, names = self.t, self.names
+        x, y, yaw = pose
+        c, s = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+        # yaw about z, then (upside down) roll by pi about the new x: q_yaw * q_roll
+        q = (c, s, 0.0, 0.0) if upside_down else (0.0, 0.0, s, c)  # x, y, z, w
+        rotation = t["geometry_msgs/msg/Quaternion"](x=q[0], y=q[1], z=q[2], w=q[3])
+
+        def make(i: int, stamp: int) -> _Msg:
+            return t[TF_MESSAGE](
+                transforms=[
+                    t["geometry_msgs/msg/TransformStamped"](
+                        header=self.header(stamp, names.base_frame, TF_STATIC_TOPIC),
+                        child_frame_id=names.laser_frame,
+                        transform=t["geometry_msgs/msg/Transform"](
+                            translation=self.vector(x, y, 0.0), rotation=rotation
+                        ),
+                    )
+                ]
+            )
+
+        return make
+
+    def scan(self, scans: ScanSeries) -> _Make:
+        """``/scan``: the sweeps as given (float32 ranges)."""
+        t, names = self.t, self.names
+        ranges = np.ascontiguousarray(scans.ranges, dtype=np.float32)
+        angle_max = scans.angle_min + scans.angle_increment * (scans.beams - 1)
+        period = float(np.median(np.diff(scans.times))) if len(scans) > 1 else 0.0
+        empty = np.empty(0, dtype=np.float32)
+
+        def make(i: int, stamp: int) -> _Msg:
+            return t[LASER_SCAN](
+                header=self.header(stamp, names.laser_frame, names.scan),
+                angle_min=scans.angle_min,
+                angle_max=angle_max,
+                angle_increment=scans.angle_increment,
+                time_increment=scans.time_increment,
+                scan_time=period,
+                range_min=scans.range_min,
+                range_max=scans.range_max,
+                ranges=ranges[i],
+                intensities=empty,
             )
 
         return make

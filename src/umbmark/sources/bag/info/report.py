@@ -61,6 +61,7 @@ from umbmark.sources.bag.info.frames import (
 from umbmark.sources.bag.info.scan import ScannedTopic, inspect_topics
 from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
+    LASER_SCAN,
     MODEL_STATES,
     ODOMETRY,
     REFERENCE_TYPES,
@@ -282,6 +283,8 @@ class BagInfo:
         Why a recorded robot description says no wheels.
     independent : bool
         Whether a ground-truth candidate without a warning was found.
+    laser_scans : tuple of str
+        The ``sensor_msgs/LaserScan`` topics.
     """
 
     path: str
@@ -308,6 +311,7 @@ class BagInfo:
     robot: RobotDescription | None = None
     robot_problem: str | None = None
     independent: bool = True
+    laser_scans: tuple[str, ...] = ()
 
     @property
     def suggested_options(self) -> str | None:
@@ -341,6 +345,20 @@ class BagInfo:
         ):
             parts.append("--time-source bag")
         return " ".join(parts) or None
+
+    @property
+    def scan_options(self) -> str | None:
+        """Options to calibrate the wheels against the laser's scan matching (``calibrate
+        --scan-topic``): the first laser scan topic and the likeliest wheels (else the
+        controller's odometry); None without both."""
+        inputs = self.wheels[:1] or self.odometry[:1]
+        if not self.laser_scans or not inputs or not inputs[0].options:
+            return None
+        wheels = [f"{f} {v}" for f, v in inputs[0].options if _DEFAULT_OPTIONS.get(f) != v]
+        stamps = _topic_of(inputs[0]) in self.empty_stamps
+        return " ".join(
+            [f"--scan-topic {self.laser_scans[0]}", *wheels, *(["--time-source bag"] * stamps)]
+        )
 
     @property
     def needs(self) -> tuple[str, ...]:
@@ -377,6 +395,8 @@ class BagInfo:
             "needs": list(self.needs),
             "independent_reference": self.independent,
             "suggested_options": self.suggested_options,
+            "laser_scans": list(self.laser_scans),
+            "scan_options": self.scan_options,
             "notes": list(self.notes),
             "warnings": list(self.warnings),
         }
@@ -542,6 +562,7 @@ def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> B
         robot=robot,
         robot_problem=robot_problem,
         independent=instead is None and any(c.warning is None for c in truth),
+        laser_scans=tuple(t.name for t in scanned if t.msgtype == LASER_SCAN),
     )
 
 

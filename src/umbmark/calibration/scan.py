@@ -1,0 +1,258 @@
+"""A calibration from motion intervals: the wheels against a laser's own motion.
+
+:func:`calibrate_intervals` runs an estimator of motion intervals (``needs="intervals"``
+in :mod:`umbmark.estimators.registry`: the scan-matching calibration of Censi et al.
+2013) on tuple files or intervals in memory, with the parameters active while they were
+driven, and returns the same :class:`~umbmark.calibration.report.CalibrationResult` as a
+calibration from runs: ``E_d``, ``E_b``, ``E_s``, the verdict, the overlay; and the
+sensor's mounting (:attr:`CalibrationResult.sensor`). :func:`calibrate_scan_bags` does
+the same from bags: the laser's sweeps and the wheels read, matched into intervals, and
+calibrated.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+
+from umbmark.calibration.active import check_calibration, choose_active
+from umbmark.calibration.compose import Calibration
+from umbmark.calibration.report import CalibrationResult
+from umbmark.core.errors import InputError
+from umbmark.core.messages import info, split_messages
+from umbmark.estimators.base import SquareTest
+from umbmark.estimators.registry import INTERVALS, Estimator, estimator
+from umbmark.model.active import ActiveParams
+from umbmark.model.kinematics import WheelParams
+from umbmark.model.motion_intervals import MotionIntervals
+from umbmark.options.spec import WHEELBASE
+from umbmark.runs.options import ReadOptions
+from umbmark.runs.read import Chosen, bag_options, check_invertible, parameter_file
+from umbmark.sources.params.reader import ControllerParams
+
+__all__ = ["IntervalSource", "calibrate_intervals", "calibrate_scan_bags", "read_intervals"]
+
+IntervalSource = str | os.PathLike[str] | MotionIntervals
+
+
+def read_intervals(sources: Sequence[IntervalSource]) -> MotionIntervals:
+    """The motion intervals of tuple files (or in memory), pooled in order.
+
+    Raises
+    ------
+    InputError
+        For a file that is not a tuple file (its line and problem).
+    """
+    from umbmark.sources.tuples import read_tuples
+
+    parts = [s if isinstance(s, MotionIntervals) else read_tuples(s) for s in sources]
+    return parts[0] if len(parts) == 1 else MotionIntervals.concatenate(parts)
+
+
+def calibrate_intervals(
+    sources: Sequence[IntervalSource],
+    options: ReadOptions,
+    method: str,
+    *,
+    wheelbase: float | None = None,
+    side_length: float | None = None,
+) -> CalibrationResult:
+    """The calibration of motion intervals by ``method`` (an estimator of intervals).
+
+    Parameters
+    ----------
+    sources : sequence of path or MotionIntervals
+        Tuple files (``docs/formats.md``) or intervals in memory; several are pooled.
+    options : ReadOptions
+        The active parameters: ``wheel_diameter`` (the nominal ``D_n`` [m], required:
+        ``E_s`` is the diameters against it), ``current_params``, ``current_c_l``,
+        ``current_c_r``, ``current_separation_multiplier``.
+    method : str
+        An estimator with ``needs="intervals"``.
+    wheelbase : float, optional
+        The wheelbase the odometry used [m] (else from ``current_params``).
+    side_length : float, optional
+        The square [m] ``alpha`` and ``beta`` are stated for (1 m by default).
+
+    Raises
+    ------
+    InputError
+        Unreadable intervals, a missing nominal parameter, or motion that does not excite
+        the parameters (what to drive).
+    """
+    entry = _interval_estimator(method)
+    names = [os.fspath(s) if not isinstance(s, MotionIntervals) else s.source for s in sources]
+    where = names[0] if len(names) == 1 and names[0] else None
+    intervals = read_intervals(sources)
+    file = parameter_file(options)
+    chosen = choose_active(options, file, wheelbase, None)
+    return _calibrate(
+        intervals, entry, chosen, file, tuple(n or "intervals" for n in names), where,
+        "tuples", side_length,
+    )  # fmt: skip
+
+
+def _interval_estimator(method: str) -> Estimator:
+    entry = estimator(method)
+    if entry.needs != "intervals":
+        raise InputError(f"motion intervals are calibrated by --method {' or '.join(INTERVALS)}")
+    return entry
+
+
+def _calibrate(
+    intervals: MotionIntervals,
+    entry: Estimator,
+    chosen: Chosen,
+    file: ControllerParams,
+    names: tuple[str, ...],
+    where: str | None,
+    format: str,
+    side_length: float | None,
+    notes: Sequence[str] = (),
+) -> CalibrationResult:
+    """The estimator ``entry`` on ``intervals`` with the active parameters ``chosen``."""
+    if chosen.wheelbase is None:
+        raise InputError(
+            "--wheelbase is required: the wheelbase the odometry used [m] (or --current-params)",
+            source=where,
+        )
+    if chosen.wheel_diameter is None:
+        raise InputError(
+            "--wheel-diameter is required: the nominal wheel diameter D_n the odometry used "
+            "[m] (or --current-params)",
+            source=where,
+        )
+    active = ActiveParams(
+        wheelbase=chosen.wheelbase,
+        c_left=1.0 if chosen.c_left is None else chosen.c_left,
+        c_right=1.0 if chosen.c_right is None else chosen.c_right,
+        separation_multiplier=1.0 if chosen.separation is None else chosen.separation,
+        wheel_diameter=chosen.wheel_diameter,
+    )
+    used = WheelParams(
+        wheelbase=active.effective_wheelbase,
+        wheel_diameter=chosen.wheel_diameter,
+        c_left=active.c_left,
+        c_right=active.c_right,
+    )
+    estimate, sensor = entry.load()(intervals, used, side_length, **dict(entry.options))
+    calibration = Calibration(estimate, active)
+    check_calibration(calibration, chosen.origins)
+    said, warnings = split_messages([*chosen.notes, *notes])
+    return CalibrationResult(
+        sources=names,
+        format=format,
+        runs=(),
+        benchmark=None,
+        test=SquareTest(side_length or 1.0, active.effective_wheelbase),
+        calibration=calibration,
+        controller=file,
+        notes=said,
+        input_warnings=warnings,
+        sensor=sensor,
+    )
+
+
+def calibrate_scan_bags(
+    bags: Sequence[str | os.PathLike[str]],
+    options: ReadOptions,
+    method: str = INTERVALS[0],
+    *,
+    wheelbase: float | None = None,
+    side_length: float | None = None,
+) -> CalibrationResult:
+    """The calibration of the wheels against a laser's scan matching, from bags.
+
+    Each bag is read (the sweeps of ``options.scan_topic``, the wheels as the other
+    reading options say: joint states, encoder ticks, fields, wheel transforms, or the
+    controller's odometry turned back into wheel rotation), cut into motion intervals
+    (:func:`umbmark.scans.bag.scan_intervals_from_bag`), pooled, and calibrated by
+    ``method`` as :func:`calibrate_intervals` does. The nominal parameters: ``wheelbase``
+    and ``options.wheel_diameter`` (or ``current_params``), else the bag's robot
+    description; the first guess of every match is the nominal geometry with the
+    laser's mounting from ``/tf_static``, else from the robot description (where the bag
+    has either; a note says which).
+
+    Raises
+    ------
+    InputError
+        One line naming the bag: no or a wrong scan topic, no wheels, no nominal
+        parameters, too few intervals, or motion that does not excite the parameters
+        (what to drive).
+    """
+    from umbmark.scans.bag import scan_intervals_from_bag
+    from umbmark.scans.intervals import IntervalOptions, OdometryGuess
+    from umbmark.sources.bag.urdf import described_geometry
+
+    entry = _interval_estimator(method)
+    topic = options.scan_topic
+    if not bags:
+        raise InputError("no bag given: name the bag that holds the scans and the wheels")
+    if topic is None:
+        raise InputError("--scan-topic is required: the bag's sensor_msgs/LaserScan topic")
+    WHEELBASE.check(wheelbase)
+    file = parameter_file(options)
+    chosen = choose_active(options, file, wheelbase, None)
+    paths = [Path(b) for b in bags]
+    parts, notes = [], list[str]()
+    for path in paths:
+        name = str(path)
+        configured, diameter = chosen.wheelbase, chosen.wheel_diameter
+        if configured is None or diameter is None:
+            joints = bag_options(options, None, file)
+            configured, diameter, described = described_geometry(
+                path, joints.left_joints, joints.right_joints, configured, diameter
+            )
+            chosen = replace(chosen, wheelbase=configured, wheel_diameter=diameter)
+            notes.append(described)
+        c_left = 1.0 if chosen.c_left is None else chosen.c_left
+        c_right = 1.0 if chosen.c_right is None else chosen.c_right
+        separation = 1.0 if chosen.separation is None else chosen.separation
+        used = WheelParams(
+            wheelbase=configured * separation,
+            wheel_diameter=diameter,
+            c_left=c_left,
+            c_right=c_right,
+        )
+        if options.odom_topic is not None or options.odom_tf is not None:
+            check_invertible(file, name)
+        radius = 0.5 * diameter
+        guess = OdometryGuess(c_left * radius, c_right * radius, used.wheelbase)
+        report = scan_intervals_from_bag(
+            path,
+            topic,
+            bag_options(options, used, file),
+            IntervalOptions(guess=guess),
+            tf_mounting=True,
+        )
+        notes += report.notes
+        kept = len(report.intervals)
+        dropped = ", ".join(f"{n} {why}" for why, n in sorted(report.left_out.items()))
+        notes.append(
+            info(
+                f"{name} {topic}: {kept} motion intervals matched of {report.tried}"
+                + (f" (left out: {dropped})" if dropped else "")
+            )
+        )
+        if kept:
+            parts.append(report.intervals)
+    if not parts:
+        raise InputError(
+            f"{topic}: no motion interval could be matched (the robot stood still, or the "
+            "scans are of a corridor or open space): drive turns on the spot and straights "
+            "where the laser sees walls",
+            source=str(paths[0]),
+        )
+    intervals = parts[0] if len(parts) == 1 else MotionIntervals.concatenate(parts)
+    where = str(paths[0]) if len(paths) == 1 else None
+    try:
+        return _calibrate(
+            intervals, entry, chosen, file, tuple(map(str, paths)), where, "bag",
+            side_length, notes,
+        )  # fmt: skip
+    except InputError as error:
+        if error.source is None and where is not None:
+            raise InputError(error.problem, source=where) from None
+        raise

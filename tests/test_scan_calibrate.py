@@ -1,0 +1,218 @@
+"""``umbmark calibrate BAG --scan-topic /scan`` and its Python API: a bag written with
+rosbags of a simulated drive through the virtual robot's room, whose true wheel radii,
+wheelbase and laser mounting are known (``scan_sim``), calibrated end to end; ``info``
+proposing it; the refusals."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import pytest
+
+import umbmark
+from scan_sim import mirrored, simulate
+from umbmark.calibration.scan import calibrate_scan_bags
+from umbmark.core.errors import InputError
+from umbmark.model.recording import PoseSeries
+from umbmark.robot.base import Pose2D
+from umbmark.runs.options import ReadOptions
+from umbmark.sources.bag.scans import scan_mounting
+from umbmark.sources.bag.writer import bag_target, write_bag
+
+from helpers import api_error, cli_error, cli_json, run_cli
+
+#: What the odometry used: wheelbase and wheel diameter [m].
+B_NOMINAL, D_NOMINAL = 0.34, 0.10
+#: The truth against them.
+E_D, E_B, E_S = 1.003, 1.02, 0.995
+#: f_L, f_R: each wheel's diameter over the nominal; E_s = (f_L + f_R) / 2, E_d = f_R / f_L.
+F_LEFT = 2 * E_S / (1 + E_D)
+F_RIGHT = E_D * F_LEFT
+TRUE_DIAMETERS = (F_LEFT * D_NOMINAL, F_RIGHT * D_NOMINAL)
+TRUE_WHEELBASE = E_B * B_NOMINAL
+#: The laser's true mounting, off the axle centre, and the one /tf_static states (the
+#: matcher's first guess only: 2 cm and 3 degrees off).
+LASER = Pose2D(0.1, 0.05, 0.2)
+STATED = (0.08, 0.03, 0.15)
+JOINTS = ("--left-joint", "left_wheel_joint", "--right-joint", "right_wheel_joint")
+NOMINAL = ("--wheelbase", str(B_NOMINAL), "--wheel-diameter", str(D_NOMINAL))
+
+
+def _bag(folder: Path, pattern=None, *, scans: bool = True) -> Path:  # type: ignore[no-untyped-def]
+    radii = (TRUE_DIAMETERS[0] / 2, TRUE_DIAMETERS[1] / 2)
+    drive = simulate(pattern, radii=radii, wheelbase=TRUE_WHEELBASE, laser=LASER) if pattern \
+        else simulate(radii=radii, wheelbase=TRUE_WHEELBASE, laser=LASER)  # fmt: skip
+    poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
+    target = bag_target(folder / "drive.bag")
+    if not scans:
+        return write_bag(target, drive.wheels, poses, poses)
+    return write_bag(target, drive.wheels, poses, poses, scans=drive.scans, laser_pose=STATED)
+
+
+@pytest.fixture(scope="module")
+def bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return _bag(tmp_path_factory.mktemp("scans"))
+
+
+@pytest.fixture(scope="module")
+def result(bag: Path) -> umbmark.CalibrationReport:
+    return umbmark.calibrate(bag, scan_topic="/scan", wheelbase=B_NOMINAL, wheel_diameter=D_NOMINAL)
+
+
+def _within(value: float, truth: float, error: float, what: str) -> None:
+    # 4 standard errors: of 9 estimates none should be this far off by chance (6e-5 each)
+    assert abs(value - truth) < 4 * error, f"{what}: {value} vs {truth} +- {error}"
+
+
+def _check_truth(data: dict) -> None:  # type: ignore[type-arg]
+    se = data["standard_errors"]
+    assert data["method"] == "scan-matching"
+    for key, truth in (("E_d", E_D), ("E_b", E_B), ("E_s", E_S)):
+        _within(data[key], truth, se[key], key)
+    for side, truth in zip(("left", "right"), TRUE_DIAMETERS, strict=True):
+        key = f"wheel_diameter_{side}"
+        assert data[f"{key}_standard_error"] == se[key]
+        _within(data[key], truth, se[key], key)
+    _within(data["wheelbase"], TRUE_WHEELBASE, data["wheelbase_standard_error"], "wheelbase")
+    truth = (LASER.x, LASER.y, LASER.theta)
+    for k, what in enumerate(("laser x", "laser y", "laser yaw")):
+        _within(data["laser_pose"][k], truth[k], data["laser_pose_standard_errors"][k], what)
+    # and the errors are small enough to say something: the units are metres and radians
+    assert se["E_d"] < 5e-4
+    assert se["E_b"] < 5e-3
+    assert se["E_s"] < 5e-3
+    assert max(data["laser_pose_standard_errors"][:2]) < 0.003  # [m]
+    assert data["laser_pose_standard_errors"][2] < math.radians(0.5)
+    assert data["wheelbase_standard_error"] < 0.002  # [m]
+
+
+def test_the_python_api_recovers_the_truth(result: umbmark.CalibrationReport) -> None:
+    data = result.to_dict()
+    _check_truth(data)
+    assert data["apply"]["level"] == "apply"
+    assert result.warnings == ()
+    said = " ".join(result.notes)
+    assert "motion intervals matched" in said
+    assert "from /tf_static in base_link: laser at x = 0.0800 m, y = 0.0300 m, yaw = 8.59" in said
+    # the overlay composes the factors: new wheel multipliers are f_L, f_R (active 1)
+    assert result.calibration.new_c_left == pytest.approx(data["wheel_diameter_left"] / 0.1)
+
+
+def test_the_library_pipeline_is_the_jobs(bag: Path, result: umbmark.CalibrationReport) -> None:
+    options = ReadOptions(scan_topic="/scan", wheel_diameter=D_NOMINAL)
+    direct = calibrate_scan_bags([bag], options, wheelbase=B_NOMINAL)
+    assert direct.estimate == result.estimate
+    ours, theirs = direct.to_dict(), result.to_dict()
+    for key in ("laser_pose", "laser_pose_standard_errors", "wheelbase", "motion_intervals"):
+        assert ours[key] == theirs[key]
+
+
+def test_the_mounting_read_from_tf_static(bag: Path) -> None:
+    base, pose = scan_mounting(bag, "laser")  # type: ignore[misc]
+    assert base == "base_link"
+    assert pose == pytest.approx(STATED, abs=1e-9)
+    assert scan_mounting(bag, "no_such_frame") is None
+
+
+def test_an_upside_down_mounting_keeps_its_position_and_heading(tmp_path: Path) -> None:
+    drive = simulate(((1.0, 0.2, 0.0),))
+    scans = dataclasses.replace(drive.scans, ranges=mirrored(drive.scans.ranges), upside_down=True)
+    poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
+    bag = write_bag(
+        bag_target(tmp_path / "flipped.bag"), drive.wheels, poses, poses, scans=scans,
+        laser_pose=STATED,
+    )  # fmt: skip
+    # turned over about its x axis: the frame right side up has the same origin and x axis
+    base, pose = scan_mounting(bag, "laser")  # type: ignore[misc]
+    assert base == "base_link"
+    assert pose == pytest.approx(STATED, abs=1e-9)
+
+
+@pytest.mark.slow
+def test_the_command_gives_the_same_in_metres_and_radians(
+    bag: Path, result: umbmark.CalibrationReport
+) -> None:
+    data = cli_json("calibrate", str(bag), "--scan-topic", "/scan", *JOINTS, *NOMINAL)
+    _check_truth(data)
+    api = result.to_dict()
+    for key in ("E_d", "E_b", "E_s", "wheel_diameter_left", "wheel_diameter_right", "wheelbase"):
+        assert data[key] == pytest.approx(api[key], rel=1e-12)
+    assert data["laser_pose"] == pytest.approx(api["laser_pose"], rel=1e-12)
+    assert data["new"] == pytest.approx(api["new"], rel=1e-12)  # the overlay's values
+
+
+def test_info_proposes_the_scan_topic(bag: Path, tmp_path: Path) -> None:
+    proposed = "--scan-topic /scan --left-joint left_wheel_joint --right-joint right_wheel_joint"
+    report = umbmark.info(bag)
+    assert report.bag is not None
+    assert report.bag.scan_options == proposed
+    assert report.to_dict()["laser_scans"] == ["/scan"]
+    proc = run_cli("info", str(bag))
+    assert proc.returncode == 0, proc.stderr
+    text = " ".join(proc.stdout.split())
+    assert f"umbmark calibrate {bag} {proposed} --wheelbase ... --wheel-diameter ..." in text
+    no_scans = umbmark.info(_bag(tmp_path, ((3.0, 0.2, 0.0),), scans=False)).to_dict()
+    assert no_scans["scan_options"] is None
+    assert no_scans["laser_scans"] == []
+
+
+def test_a_bag_driven_straight_only_is_refused_with_what_to_drive(tmp_path: Path) -> None:
+    straight = ((4.0, 0.25, 0.0), (4.0, -0.25, 0.0), (4.0, 0.25, 0.0), (4.0, -0.25, 0.0))
+    bag = _bag(tmp_path, straight)
+    line = cli_error("calibrate", str(bag), "--scan-topic", "/scan", *NOMINAL)
+    assert str(bag) in line
+    assert "drive more turns on the spot" in line
+    assert "0 turns on the spot" in line
+
+
+def test_a_bag_turning_on_the_spot_only_is_refused(tmp_path: Path) -> None:
+    bag = _bag(tmp_path, ((5.0, 0.0, 0.6), (5.0, 0.0, -0.6)))
+    message = api_error(
+        umbmark.calibrate, bag, scan_topic="/scan", wheelbase=B_NOMINAL, wheel_diameter=0.1
+    )
+    assert str(bag) in message
+    assert "drive more straights" in message
+
+
+def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
+    line = cli_error("calibrate", str(bag), "--scan-topic", "/laser", *NOMINAL)
+    assert line.startswith(f"umbmark: error: {bag}: no topic /laser (laser scans)")
+    kw = {"wheelbase": B_NOMINAL, "wheel_diameter": D_NOMINAL}
+    message = api_error(umbmark.calibrate, bag, scan_topic="/odom", **kw)
+    assert "/odom has messages of type nav_msgs/msg/Odometry" in message
+    assert str(bag) in message
+    message = api_error(umbmark.calibrate, bag, scan_topic="/scan", method="exact", **kw)
+    assert "scan_topic calibrates by method='scan-matching'" in message
+    message = api_error(umbmark.calibrate, bag, scan_topic="/scan", wheel_topic="/nope", **kw)
+    assert str(bag) in message
+    assert "no topic /nope" in message
+    message = api_error(
+        umbmark.calibrate, bag, scan_topic="/scan", left_joint="nope", right_joint="nix", **kw
+    )
+    assert message.startswith(f"{bag}: no joint 'nope' and 'nix' in /joint_states")
+    with pytest.raises(InputError, match="scan_topic is read by calibrate only"):
+        umbmark.replay(bag, scan_topic="/scan", **kw)
+
+
+def test_without_the_nominal_parameters_the_bag_says_what_is_missing(bag: Path) -> None:
+    message = api_error(umbmark.calibrate, bag, scan_topic="/scan")
+    assert str(bag) in message
+    assert "give wheelbase and wheel_diameter" in message
+
+
+def test_the_mounting_read_from_a_robot_description() -> None:
+    from robot_bags import TB3_URDF
+    from umbmark.sources.bag.urdf import parse_robot_description
+
+    # a laser turned over (roll pi) and yawed by 0.2 rad, as a URDF mounts it
+    laser = (
+        '<joint name="scan_joint" type="fixed"><parent link="base_link"/>'
+        '<child link="base_scan"/><origin xyz="-0.032 0.01 0.172" rpy="3.141592653589793 0 0.2"/>'
+        '</joint><link name="base_scan"/></robot>'
+    )
+    described = parse_robot_description(TB3_URDF.replace("</robot>", laser))
+    assert described.mountings["base_scan"] == pytest.approx((-0.032, 0.01, 0.2), abs=1e-12)
+    assert described.mountings["base_link"] == pytest.approx((0.0, 0.0, 0.0))  # 1 cm up only
+    assert "wheel_left_link" not in described.mountings  # on a turning joint: no mounting
