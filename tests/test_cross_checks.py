@@ -135,14 +135,19 @@ def test_replay_refuses_result_of_another_robot(logs: dict[str, Path]) -> None:
     message = api_error(umbmark.replay, logs["other"], logs["result"])
     assert "0.34 m" in message
     assert "0.5 m" in message
-    assert "force=True" in message
+    assert "override_verdict=True" in message
     line = cli_error("replay", str(logs["other"]), "--params", str(logs["result"]))
     assert "nominal wheelbase of 0.34 m" in line
     assert "has 0.5 m" in line
-    report = umbmark.replay(logs["other"], logs["result"], force=True)
+    assert "give --override-verdict" in line
+    # --force replaces files; it does not lift the check (issue 21: one meaning each).
+    assert "has 0.5 m" in api_error(umbmark.replay, logs["other"], logs["result"], force=True)
+    forced = ("replay", str(logs["other"]), "--params", str(logs["result"]), "--force")
+    assert "give --override-verdict" in cli_error(*forced)
+    report = umbmark.replay(logs["other"], logs["result"], override_verdict=True)
     assert "calibrated" in report.parameter_sets
-    forced = cli_json("replay", str(logs["other"]), "--params", str(logs["result"]), "--force")
-    assert forced
+    args = ("replay", str(logs["other"]), "--params", str(logs["result"]), "--override-verdict")
+    assert cli_json(*args)
 
 
 @pytest.mark.slow
@@ -152,7 +157,13 @@ def test_calibrate_refuses_current_params_of_another_robot(logs: dict[str, Path]
     assert "0.5 m" in message
     line = cli_error("calibrate", str(logs["other"]), "--current-params", str(logs["result"]))
     assert "more than 1 % apart" in line
-    report = umbmark.calibrate(logs["other"], current_params=logs["result"], force=True)
+    assert line.endswith("give --override-verdict to use it anyway\n")
+    # --force replaces files; it does not take another robot's parameters.
+    args = ("calibrate", str(logs["other"]), "--current-params", str(logs["result"]))
+    assert cli_error(*args, "--force") == line
+    forced = api_error(umbmark.calibrate, logs["other"], current_params=logs["result"], force=True)
+    assert forced.endswith("give override_verdict=True to use it anyway")
+    report = umbmark.calibrate(logs["other"], current_params=logs["result"], override_verdict=True)
     assert report.calibration.new_c_left > 0
     # the result's own source is fine
     assert umbmark.calibrate(logs["ours"], current_params=logs["result"]).runs

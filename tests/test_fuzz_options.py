@@ -326,7 +326,7 @@ def commands(folder: Path) -> dict[str, Command]:
             ],
         ),
         "report": Command(
-            ["report", logs, "-o", str(folder / "page.html")],
+            ["report", logs, "-o", str(folder / "page.html"), "--force"],
             [
                 number_opt("-L", real(3.9, 4.1), "--side-length"),
                 number_opt("-b", real(0.3, 0.4), "--wheelbase"),

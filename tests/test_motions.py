@@ -427,12 +427,12 @@ def test_real_auto_does_not_pick_the_scrub_model_for_straights_and_spot_turns():
     """The squares and the straights with spot turns of the circles' day: held out among
     themselves the scrub model predicted best (5.7 mm against 6.0), and auto took it; on
     the circles it then ended 92 mm off, the single wheelbase 12 mm."""
-    report = umbmark.calibrate(SQUARE, SQUARE2, *SAME_DAY, method="auto", force=True)
+    report = umbmark.calibrate(SQUARE, SQUARE2, *SAME_DAY, method="auto", override_verdict=True)
     assert report.estimate.method == "trajectory"
     note = report.notes[-1]
     assert "trajectory-scrub left out: the recordings hold only straight legs and turns" in note
     assert note.endswith("the figures say nothing about arcs")
-    assert umbmark.replay(CIRCLE, report, force=True).mean_end_error < 0.02
+    assert umbmark.replay(CIRCLE, report, override_verdict=True).mean_end_error < 0.02
 
 
 @pytest.mark.slow
@@ -441,7 +441,7 @@ def test_real_validate_on_squares_says_nothing_about_arcs():
     report = umbmark.validate(SQUARE, SQUARE2, methods=["trajectory", "trajectory-scrub"])
     assert report.coverage.endswith("the figures say nothing about arcs")
     assert report.mean_error("trajectory-scrub") is None
-    mixed = umbmark.validate(SQUARE, SQUARE2, CIRCLE, methods=["trajectory"], force=True)
+    mixed = umbmark.validate(SQUARE, SQUARE2, CIRCLE, methods=["trajectory"], override_verdict=True)
     assert mixed.covered == ("straight", "arc", "spot")
     assert mixed.coverage.endswith(
         "arcs are held out only against calibrations from runs without them "
@@ -462,7 +462,7 @@ def test_real_squares_with_circles_identify_the_scrub_model():
 def test_real_straights_with_spot_turns_of_the_circles_day_fall_back():
     """Straight legs and spot turns: the scrub fit was refused outright (its arcs
     wheelbase 250 +- 17 mm); it now gives the single wheelbase, with the reason."""
-    report = umbmark.calibrate(*SAME_DAY, method="trajectory-scrub", force=True)
+    report = umbmark.calibrate(*SAME_DAY, method="trajectory-scrub", override_verdict=True)
     assert report.model_fit is not None
     assert report.model_fit.spot_wheelbase is None
     assert any("it would extrapolate to arcs" in w for w in report.warnings)
@@ -482,12 +482,12 @@ def test_real_circles_with_a_square_session_identify_the_scrub_model_and_predict
     off with one wheelbase. The fit pins the term (about 0.1 mm), and the scrub model's
     calibration ends the held-out squares 9.7 mm off."""
     sources = [*CIRCLES_2506, SQUARE2]
-    scrub = umbmark.calibrate(*sources, method="trajectory-scrub", force=True)
+    scrub = umbmark.calibrate(*sources, method="trajectory-scrub", override_verdict=True)
     assert not any("turn-rate term" in w for w in scrub.warnings)
     assert scrub.model_fit is not None
     assert scrub.model_fit.spot_wheelbase is not None
     assert 0.07 < scrub.to_dict()["motions"]["turning_weight_share"]["spot"] < 0.11
-    single = umbmark.calibrate(*sources, method="trajectory", force=True)
-    held_out = umbmark.replay(SQUARE, scrub, force=True).mean_end_error
-    assert held_out < 0.7 * umbmark.replay(SQUARE, single, force=True).mean_end_error
+    single = umbmark.calibrate(*sources, method="trajectory", override_verdict=True)
+    held_out = umbmark.replay(SQUARE, scrub, override_verdict=True).mean_end_error
+    assert held_out < 0.7 * umbmark.replay(SQUARE, single, override_verdict=True).mean_end_error
     assert held_out < 0.015

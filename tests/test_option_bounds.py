@@ -223,7 +223,7 @@ def test_huge_and_tiny_parameters_give_one_line_and_no_warning(
     assert message in proc.stderr
 
 
-# --- --force reaches the validation of --method auto ----------------------------------
+# --- --override-verdict reaches the validation of --method auto ----------------------------------
 
 
 @pytest.fixture(scope="module")
@@ -237,26 +237,29 @@ def other_result(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.mark.slow
-def test_force_reaches_the_validation_of_method_auto(logs: Path, other_result: Path) -> None:
-    # Without --force: the other robot's result is refused, by auto as by any method.
+def test_override_reaches_the_validation_of_method_auto(logs: Path, other_result: Path) -> None:
+    # Without --override-verdict: the other robot's result is refused, by auto as by any
+    # method.
     for method in ("exact", "auto"):
         line = api_error(calibrate, logs, method=method, current_params=other_result)
         assert "nominal wheelbase of 0.5 m" in line
-        assert "give --force" in line
+        assert "give --override-verdict" in line
     # With it, auto validates on the runs as read with it, and calibrates as the method
     # it chose does with it.
-    report = calibrate(logs, method="auto", current_params=other_result, force=True)
-    checked = validate(logs, current_params=other_result, force=True)
+    report = calibrate(logs, method="auto", current_params=other_result, override_verdict=True)
+    checked = validate(logs, current_params=other_result, override_verdict=True)
     chosen = checked.recommended or "exact"
     assert report.estimate.method == chosen
-    same = calibrate(logs, method=chosen, current_params=other_result, force=True)
+    same = calibrate(logs, method=chosen, current_params=other_result, override_verdict=True)
     assert report.estimate.E_d == same.estimate.E_d
     assert report.estimate.E_b == same.estimate.E_b
     assert any(note.startswith(f"method auto: {chosen}") for note in report.notes)
 
 
 @pytest.mark.slow
-def test_validate_takes_force_too(logs: Path, other_result: Path) -> None:
-    assert "give --force" in cli_error("validate", str(logs), "--current-params", str(other_result))
-    proc = run_cli("validate", str(logs), "--current-params", str(other_result), "--force")
+def test_validate_takes_the_override_too(logs: Path, other_result: Path) -> None:
+    line = cli_error("validate", str(logs), "--current-params", str(other_result))
+    assert "give --override-verdict" in line
+    args = ("validate", str(logs), "--current-params", str(other_result))
+    proc = run_cli(*args, "--override-verdict")
     assert proc.returncode == 0, proc.stderr

@@ -3,10 +3,10 @@
 A verdict comes first (terminal, JSON ``apply``, HTML page, ``umbmark report``): apply;
 apply with care, and why; do not apply, why, and what to record instead. "Do not apply"
 withholds the overlay (``--yaml``, ``--ros1-yaml``, the terminal's) and the history's
-"applied" mark unless ``--force``. Recordings made the way robots make them: a
-TurtleBot3's bag whose ground truth lost the robot for a while, a tape-measured table of
-few runs with a large scatter, run logs of a robot without errors; and the normal good
-cases, which stay "apply".
+"applied" mark unless ``--override-verdict`` (``--force`` only replaces files).
+Recordings made the way robots make them: a TurtleBot3's bag whose ground truth lost the
+robot for a while, a tape-measured table of few runs with a large scatter, run logs of a
+robot without errors; and the normal good cases, which stay "apply".
 """
 
 from __future__ import annotations
@@ -237,7 +237,7 @@ def test_a_trajectory_fit_to_a_lost_truth_is_not_applied(lost_truth: Path, tmp_p
         assert f"wrote {path}" not in proc.stderr
     assert (
         "umbmark: warning: --yaml, --ros1-yaml not written: the verdict is do not apply "
-        "(--force writes them)\n"
+        "(--override-verdict writes them; --force only replaces files that exist)\n"
     ) in proc.stderr
     data = json.loads(json_out.read_text())
     assert next(iter(data)) == "apply"
@@ -257,8 +257,8 @@ def test_a_trajectory_fit_to_a_lost_truth_is_not_applied(lost_truth: Path, tmp_p
     assert html.levels == ["do-not-apply"]
     assert "overlay-withheld" in html.ids
     assert "overlay-yaml" not in html.ids
-    # --force writes the overlay, which says it is not to be applied.
-    forced = run_cli(*args, "--force")
+    # --override-verdict writes the overlay, which says it is not to be applied.
+    forced = run_cli(*args, "--override-verdict")
     assert forced.returncode == 0, forced.stderr
     assert "ros__parameters" in forced.stdout
     text = outputs["--yaml"].read_text()
@@ -315,9 +315,13 @@ def test_the_history_records_it_but_does_not_mark_it_applied(lost_truth: Path, t
     marked = run_cli("history", "tb3", "--history", str(db), "--applied", "1")
     assert marked.returncode == 2, marked.stderr
     assert "calibration 1 of tb3 was judged do not apply" in marked.stderr
-    assert "--force marks it applied all the same" in marked.stderr
+    assert "--override-verdict marks it applied all the same" in marked.stderr
     assert not History(db).calibrations("tb3")[0].applied
-    forced = run_cli("history", "tb3", "--history", str(db), "--applied", "1", "--force")
+    # --force replaces files; it does not mark a do-not-apply calibration applied.
+    marked = run_cli("history", "tb3", "--history", str(db), "--applied", "1", "--force")
+    assert marked.returncode == 2, marked.stderr
+    assert not History(db).calibrations("tb3")[0].applied
+    forced = run_cli("history", "tb3", "--history", str(db), "--applied", "1", "--override-verdict")
     assert forced.returncode == 0, forced.stderr
     assert History(db).calibrations("tb3")[0].applied
     table = run_cli("history", "tb3", "--history", str(db))
@@ -372,12 +376,15 @@ def test_an_interval_that_holds_no_correction_and_its_double_is_not_applied(
     assert data["apply"]["instead"].startswith("record more runs")
     assert not yaml.exists()
     assert "--yaml not written: the verdict is do not apply" in proc.stderr
-    # The Python API refuses to write it, unless forced.
+    # The Python API refuses to write it, even with force, unless overridden.
     report = umbmark.calibrate(wide, side_length=L, wheelbase=B)
     assert report.withheld == ()
     with pytest.raises(umbmark.InputError, match="Verdict: do not apply"):
         report.write(yaml=yaml)
-    assert report.write(yaml=yaml, force=True) == [yaml]
+    with pytest.raises(umbmark.InputError, match="override_verdict=True writes it"):
+        report.write(yaml=yaml, force=True)
+    assert not yaml.exists()
+    assert report.write(yaml=yaml, override_verdict=True) == [yaml]
 
 
 @pytest.mark.slow

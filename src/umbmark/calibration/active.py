@@ -117,7 +117,7 @@ def check_same_robot(
             raise InputError(
                 f"{result} is a calibration for a nominal {name} of {their:g} m, but "
                 f"{source} has {our:g} m (more than 1 % apart): a result of another robot "
-                "or setup; give --force to use it anyway"
+                "or setup; give --override-verdict to use it anyway"
             )
 
 
@@ -127,14 +127,14 @@ def read_runs(
     *,
     wheelbase: float | None = None,
     side_length: float | None = None,
-    force: bool = False,
+    override_verdict: bool = False,
 ) -> Runs:
     """Read the runs of every source, with the odometry parameters the options say.
 
     Several sources must agree on the square's side and on the parameters that were
     active; their runs are pooled (labels then start with the source's name). A result
     file as ``current_params`` must be for the sources' nominal wheelbase and wheel
-    diameter (within 1 %), unless ``force``.
+    diameter (within 1 %), unless ``override_verdict``.
 
     Raises
     ------
@@ -152,7 +152,7 @@ def read_runs(
     SIDE_LENGTH.check(side_length)
     file = parameter_file(options)
     read = [_read_one(source, options, file, wheelbase, side_length) for source in sources]
-    if options.current_params is not None and not force:
+    if options.current_params is not None and not override_verdict:
         path = Path(options.current_params)
         if is_result_file(path):
             theirs = result_nominal(path)

@@ -84,7 +84,8 @@ class CalibrationResult(JsonText):
         ``method="auto"`` found no estimator that predicts held-out runs better than the
         nominal parameters (the verdict is then "do not apply").
     forced : bool
-        ``force=True``: the overlay is written even when the verdict is "do not apply".
+        ``override_verdict=True``: the overlay is written even when the verdict is "do not
+        apply" (``force`` only replaces files and does not set it).
     withheld : tuple of str
         The outputs asked for and not written because of the verdict (``yaml``,
         ``ros1_yaml``).
@@ -155,7 +156,8 @@ class CalibrationResult(JsonText):
             flags = ", ".join("--" + key.replace("_", "-") for key in self.withheld)
             them = "them" if len(self.withheld) > 1 else "it"
             withheld = (
-                f"{flags} not written: the verdict is do not apply (--force writes {them})",
+                f"{flags} not written: the verdict is do not apply (--override-verdict writes "
+                f"{them}; --force only replaces files that exist)",
             )
         return (*self.input_warnings, *self.calibration.estimate.warnings, *withheld)
 
@@ -185,8 +187,8 @@ class CalibrationResult(JsonText):
 
     @property
     def overlay_withheld(self) -> bool:
-        """The parameter files are withheld: the verdict is "do not apply" and ``force``
-        was not given."""
+        """The parameter files are withheld: the verdict is "do not apply" and
+        ``override_verdict`` was not given."""
         return not self.verdict.applies and not self.forced
 
     @property

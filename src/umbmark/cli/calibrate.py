@@ -12,6 +12,7 @@ from umbmark.cli.options import (
     apply,
     force_option,
     option,
+    override_option,
     source_options,
     spec_option,
     tum_time_option,
@@ -45,11 +46,10 @@ __all__ = ["calibrate"]
             "truth's tracked point (a motion-capture marker) sits in the robot frame, instead of "
             "taking it as the axle centre (see --truth-offset to give it).",
         ),
-        force_option(
-            "Also: take --current-params even when it is a result for another nominal "
-            "wheelbase or wheel diameter than the sources' own (more than 1 % apart); "
-            "print and write the overlay (--yaml, --ros1-yaml) even when the verdict is do "
-            "not apply.",
+        override_option(
+            "Print and write the overlay (--yaml, --ros1-yaml) even when the verdict is do "
+            "not apply; take --current-params even when it is a result for another nominal "
+            "wheelbase or wheel diameter than the sources' own (more than 1 % apart).",
             section=TEST,
         ),
         option(
@@ -107,6 +107,7 @@ __all__ = ["calibrate"]
             "calibrated odometry) into this folder, for evo.",
         ),
         tum_time_option(),
+        force_option(),
     ]
 )
 def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
@@ -120,7 +121,8 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     their spread, the paper's 3 x SEM rule, the estimated errors alpha, beta, E_d, E_b
     (and E_s), the correction factors c_L, c_R and the corrected wheelbase, composed with
     the parameters active during the runs, and the ros2_control overlay: withheld, and
-    not written, when the verdict is do not apply (--force prints and writes it).
+    not written, when the verdict is do not apply (--override-verdict prints and writes
+    it; --force only replaces files that exist).
     """
     from umbmark import calibrate as run_calibration
     from umbmark.cli.common import command_line, console, note, warn, working, wrote

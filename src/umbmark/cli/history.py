@@ -6,7 +6,14 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import OTHER, Command, apply, force_option, option
+from umbmark.cli.options import (
+    OTHER,
+    Command,
+    apply,
+    force_option,
+    option,
+    override_option,
+)
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["history"]
@@ -22,14 +29,15 @@ __all__ = ["history"]
         option("--applied", section=OTHER, type=click.IntRange(min=1),
                help="Mark this calibration (its id) of the robot as applied; refused for "
                "a calibration whose verdict was do not apply."),
-        force_option("Also, with --applied: mark it even when its verdict was do not "
-                     "apply.", section=OTHER),
+        override_option("With --applied: mark it even when its verdict was do not "
+                        "apply.", section=OTHER),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print one JSON object (metres)."),
         option("--plot", section=OUTPUTS, type=click.Path(),
                help="Draw the robot's E_d, E_b (composed with the active parameters; 95 % "
                "error bars) and the passes' E_max,syst over time to a .png, .svg or .pdf "
                "file."),
+        force_option(),
     ]
 )  # fmt: skip
 def history(robot: str | None, json_out: bool, **options: Any) -> None:

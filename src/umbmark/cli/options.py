@@ -13,7 +13,7 @@ from typing import Any, TypeVar
 
 import click
 
-from umbmark.options.spec import FORCE, READ_OPTIONS, TUM_TIME, WHEELBASE, Spec
+from umbmark.options.spec import FORCE, OVERRIDE_VERDICT, READ_OPTIONS, TUM_TIME, WHEELBASE, Spec
 
 __all__ = [
     "OTHER",
@@ -21,6 +21,7 @@ __all__ = [
     "apply",
     "force_option",
     "option",
+    "override_option",
     "source_options",
     "spec_option",
     "tum_time_option",
@@ -116,6 +117,12 @@ def force_option(also: str = "", *, section: str | None = None) -> Callable[[F],
     """``--force`` (:data:`~umbmark.options.spec.FORCE`): replace existing outputs; ``also``
     says what else it lifts on this command."""
     return spec_option(FORCE, section=section, help=f"{FORCE.help} {also}".strip())
+
+
+def override_option(what: str, *, section: str | None = None) -> Callable[[F], F]:
+    """``--override-verdict`` (:data:`~umbmark.options.spec.OVERRIDE_VERDICT`); ``what``
+    says which refusal it lifts on this command."""
+    return spec_option(OVERRIDE_VERDICT, section=section, help=f"{what} {OVERRIDE_VERDICT.help}")
 
 
 def tum_time_option() -> Callable[[F], F]:

@@ -68,7 +68,7 @@ def render_calibration(
     report: CalibrationReport, console: Console, *, overlay: bool = True
 ) -> None:
     """Print the summary of ``report`` on ``console``: the verdict first, the overlay to
-    paste last (withheld when the verdict is "do not apply", unless forced)."""
+    paste last (withheld when the verdict is "do not apply", unless overridden)."""
     from umbmark.runs.association import summarize
 
     verdict = report.verdict
@@ -187,8 +187,8 @@ def render_calibration(
     if overlay and report.overlay_withheld:
         console.print(
             Text(
-                "No ros2_control overlay: the verdict is do not apply (--force prints and "
-                "writes it).",
+                "No ros2_control overlay: the verdict is do not apply (--override-verdict "
+                "prints and writes it).",
                 style="bold",
             )
         )

@@ -12,6 +12,7 @@ from umbmark.cli.options import (
     apply,
     force_option,
     option,
+    override_option,
     source_options,
     tum_time_option,
 )
@@ -32,8 +33,8 @@ __all__ = ["replay"]
             help="Calibration result (calibrate -o result.json) to replay with; without it, "
             "only the source's nominal parameters are replayed.",
         ),
-        force_option(
-            "Also: replay --params (or take --current-params) even when it is a result for "
+        override_option(
+            "Replay --params (or take --current-params) even when it is a result for "
             "another nominal wheelbase or wheel diameter than the source's own (more than "
             "1 % apart).",
             section=PARAMETERS,
@@ -57,6 +58,7 @@ __all__ = ["replay"]
             type=click.Path(),
             help="Draw every run's true path and odometry paths to a .png, .svg or .pdf file.",
         ),
+        force_option(),
     ]
 )
 def replay(source: str, json_out: bool, **options: Any) -> None:

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 __all__ = ["report"]
 
 #: The square-test options of ``calibrate``, shared (not copied): same flags, same help.
-_SHARED = ("side_length", "wheelbase", "method", "fit_truth_offset", "force")
+_SHARED = ("side_length", "wheelbase", "method", "fit_truth_offset", "override_verdict", "force")
 
 
 @click.command(cls=Command, no_args_is_help=True)

@@ -7,7 +7,14 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import Command, apply, option, source_options, spec_option
+from umbmark.cli.options import (
+    Command,
+    apply,
+    option,
+    override_option,
+    source_options,
+    spec_option,
+)
 from umbmark.estimators.registry import RUNS
 from umbmark.options.spec import OUTPUTS, SIDE_LENGTH, TEST
 
@@ -24,12 +31,10 @@ __all__ = ["validate"]
             help=f"Estimators to compare, comma-separated [default: all: {', '.join(RUNS)}].",
         ),
         spec_option(SIDE_LENGTH, help="Side of squares [m]."),
-        option(
-            "--force",
-            section=TEST,
-            is_flag=True,
-            help="Take --current-params even when it is a result for another nominal "
+        override_option(
+            "Take --current-params even when it is a result for another nominal "
             "wheelbase or wheel diameter than the sources' own (more than 1 % apart).",
+            section=TEST,
         ),
     ]
 )

@@ -29,13 +29,13 @@ def auto_method(
     wheelbase: float | None,
     options: SourceOptions,
     *,
-    force: bool = False,
+    override_verdict: bool = False,
 ) -> tuple[str, str, bool]:
     """The estimator that predicts held-out recorded runs best, a note saying so, and
     whether the nominal parameters predicted them better than every estimator (the
     calibration is then made with the default, and its verdict is "do not apply").
 
-    ``force`` is the caller's: the validation reads the sources as the calibration does.
+    ``override_verdict`` is the caller's: the validation reads the sources as the calibration does.
     """
     from umbmark.jobs.validate import validate
 
@@ -50,7 +50,7 @@ def auto_method(
         *(Path(str(s)) for s in sources),
         side_length=side_length,
         wheelbase=wheelbase,
-        force=force,
+        override_verdict=override_verdict,
         **options,
     )
     ranking = checked.ranking

@@ -79,6 +79,7 @@ class CalibrationReport(CalibrationResult):
         tum_time: TumTime = "recording",
         report: str | os.PathLike[str] | None = None,
         force: bool = False,
+        override_verdict: bool = False,
     ) -> list[Path]:
         """Write the requested files: every one checked before any is written.
 
@@ -99,7 +100,10 @@ class CalibrationReport(CalibrationResult):
             One self-contained HTML page of the calibration (:meth:`html`).
         force : bool
             Replace files that exist (and write into a ``tum`` folder that holds files);
-            write ``yaml`` and ``ros1_yaml`` even when the verdict is "do not apply".
+            nothing else.
+        override_verdict : bool
+            Write ``yaml`` and ``ros1_yaml`` even when the verdict is "do not apply" (as
+            does a report made with ``override_verdict``: :attr:`forced`).
 
         Returns
         -------
@@ -110,8 +114,8 @@ class CalibrationReport(CalibrationResult):
         ------
         InputError
             For a file that cannot be written, an output this report cannot give, or
-            (without ``force``) a file that exists or parameter files of a calibration
-            not to apply.
+            a file that exists (without ``force``), or parameter files of a calibration
+            not to apply (without ``override_verdict``).
         """
         from umbmark.outputs.tum import check_tum_time
 
@@ -131,9 +135,10 @@ class CalibrationReport(CalibrationResult):
                 "--plot needs runs in both directions (cw and ccw)", source=self.source
             )
         asked = [f for f, p in (("--yaml", plan.yaml), ("--ros1-yaml", plan.ros1_yaml)) if p]
-        if asked and self.overlay_withheld and not force:
+        if asked and self.overlay_withheld and not override_verdict:
             raise InputError(
-                f"{', '.join(asked)}: {self.verdict.line()} (--force writes it all the same)",
+                f"{', '.join(asked)}: {self.verdict.line()} (--override-verdict writes it all "
+                "the same; --force only replaces files that exist)",
                 source=self.source,
             )
         calibrated = self.calibrated_params
@@ -186,6 +191,7 @@ def calibrate(
     tum_time: TumTime = "recording",
     report: str | os.PathLike[str] | None = None,
     force: bool = False,
+    override_verdict: bool = False,
     robot: str | None = None,
     history: str | os.PathLike[str] | None = None,
     command: str | None = None,
@@ -230,10 +236,14 @@ def calibrate(
         can match them with other trajectories of the same recording), or seconds from
         each run's start.
     force : bool
-        Take ``current_params`` even when it is a result for other nominal parameters
-        (wheelbase, wheel diameter) than the sources' own; write ``yaml`` and
-        ``ros1_yaml`` even when the verdict (:attr:`CalibrationReport.verdict`) is "do
-        not apply" (without it they are not written, and the report's warnings say so).
+        Replace output files that exist (and write into a ``tum`` folder that holds
+        files); nothing else.
+    override_verdict : bool
+        Write ``yaml`` and ``ros1_yaml`` even when the verdict
+        (:attr:`CalibrationReport.verdict`) is "do not apply" (without it they are not
+        written, and the report's warnings say so); take ``current_params`` even when it
+        is a result for other nominal parameters (wheelbase, wheel diameter) than the
+        sources' own.
     robot : str, optional
         Record the calibration in the history under this robot's name
         (:class:`umbmark.store.history.History`); refused when the robot is known with another
@@ -291,8 +301,8 @@ def calibrate(
     else:
         method = method or DEFAULT.name
         result, note, nominal_best = _calibrate_runs(
-            sources, read_options, method, wheelbase, side_length, options, force=force,
-            fit_truth_offset=fit_truth_offset,
+            sources, read_options, method, wheelbase, side_length, options,
+            override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
         )  # fmt: skip
     result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
     if note is not None:
@@ -303,18 +313,18 @@ def calibrate(
         if composed is not None:
             result = replace(result, notes=(*result.notes, composed))
     files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
-    result = replace(result, forced=force)
+    result = replace(result, forced=override_verdict)
     if result.overlay_withheld:  # the verdict says what to do instead
         result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
         files = dict.fromkeys(files)
     result.write(
         output=output, plot=plot, tum=tum, tum_time=tum_time, report=report, force=force,
-        **files,
+        yaml=files["yaml"], ros1_yaml=files["ros1_yaml"],
     )  # fmt: skip
     if store is not None and robot is not None:
         inputs = [n for n in map(source_name, sources) if n != "runs"]
         id = store.record(robot, _history_entry(result), inputs)
-        said = store.recorded_line(robot, id, result.verdict, forced=force)
+        said = store.recorded_line(robot, id, result.verdict, overridden=override_verdict)
         result = replace(result, recorded=said)
     return result
 
@@ -382,7 +392,7 @@ def _calibrate_runs(
     side_length: float | None,
     options: SourceOptions,
     *,
-    force: bool,
+    override_verdict: bool,
     fit_truth_offset: bool,
 ) -> tuple[CalibrationReport, str | None, bool]:
     """A calibration of runs: the result, a note on the method chosen, and whether
@@ -394,7 +404,11 @@ def _calibrate_runs(
         if any(is_table(s, read_options) for s in sources):
             raise InputError("--side-length is required: the side of the square path, in metres")
     read = read_runs(
-        sources, read_options, wheelbase=wheelbase, side_length=side_length, force=force
+        sources,
+        read_options,
+        wheelbase=wheelbase,
+        side_length=side_length,
+        override_verdict=override_verdict,
     )
     if any(run.kind == "square" for run in read.runs):
         active = read.active
@@ -406,7 +420,7 @@ def _calibrate_runs(
         from umbmark.jobs.auto import auto_method
 
         chosen, note, nominal_best = auto_method(
-            sources, read, side_length, wheelbase, options, force=force
+            sources, read, side_length, wheelbase, options, override_verdict=override_verdict
         )
     result = CalibrationReport.of(calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset))
     if chosen in names(trajectories=True) and len(read.parts) > 1:

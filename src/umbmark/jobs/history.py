@@ -122,6 +122,7 @@ def history(
     history: str | os.PathLike[str] | None = None,
     applied: int | None = None,
     force: bool = False,
+    override_verdict: bool = False,
     plot: str | os.PathLike[str] | None = None,
 ) -> HistoryReport:
     """The robots of a history file, or one robot's calibrations and drift verdict.
@@ -137,8 +138,9 @@ def history(
         Mark this calibration of ``robot`` as applied first (refused for a calibration
         whose verdict was "do not apply").
     force : bool
-        Replace ``plot`` if it exists; mark ``applied`` even when its verdict was "do not
-        apply".
+        Replace ``plot`` if it exists; nothing else.
+    override_verdict : bool
+        Mark ``applied`` even when its verdict was "do not apply".
     plot : path, optional
         Draw the robot's E_d, E_b and the passes' E_max,syst over time
         (:meth:`HistoryReport.figure`)
@@ -152,7 +154,8 @@ def history(
     ------
     InputError
         For an unknown robot or calibration, a calibration not to apply (without
-        ``force``), or a file that is not a history.
+        ``override_verdict``), a plot that exists (without ``force``), or a file that is
+        not a history.
     """
     if plot is not None and robot is None:
         raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
@@ -173,7 +176,7 @@ def history(
         from umbmark.core.bounds import check_int_option
 
         number = check_int_option("--applied", applied, 1, 2**63 - 1)
-        History(store.path).mark_applied(robot, number, force=force)
+        History(store.path).mark_applied(robot, number, override_verdict=override_verdict)
         notes = (f"calibration {applied} of {robot} marked applied",)
     calibrations = tuple(store.calibrations(robot))
     report = HistoryReport(

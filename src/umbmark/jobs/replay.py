@@ -243,6 +243,7 @@ def replay(
     tum: str | os.PathLike[str] | None = None,
     tum_time: TumTime = "recording",
     force: bool = False,
+    override_verdict: bool = False,
     **options: Unpack[SourceOptions],
 ) -> ReplayReport:
     """Replay recorded runs: integrate their wheel data again and compare with the truth.
@@ -269,7 +270,9 @@ def replay(
         each run's start.
     force : bool
         Replace ``plot`` if it exists and write into a ``tum`` folder that holds files;
-        replay ``params`` (or take ``current_params``) even when it is a result for other
+        nothing else.
+    override_verdict : bool
+        Replay ``params`` (or take ``current_params``) even when it is a result for other
         nominal parameters (wheelbase, wheel diameter) than the source's own.
     **options
         How to read the source: see :class:`umbmark.runs.options.ReadOptions`.
@@ -291,11 +294,11 @@ def replay(
             source=source_name(source),
         )
     calibrated = None if params is None else calibrated_params(params)
-    read = read_runs([source], read_options, wheelbase=wheelbase, force=force)
+    read = read_runs([source], read_options, wheelbase=wheelbase, override_verdict=override_verdict)
     nominal = read.params
     if nominal is None:  # pragma: no cover - is_table() refused end points above
         raise InputError("has no recorded wheel data", source=read.sources[0])
-    if params is not None and read.nominal is not None and not force:
+    if params is not None and read.nominal is not None and not override_verdict:
         check_same_robot(
             calibrated_name(params),
             calibrated_nominal(params),

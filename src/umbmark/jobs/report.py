@@ -107,6 +107,7 @@ def report(
     validate: bool = False,
     output: str | os.PathLike[str] | None = None,
     force: bool = False,
+    override_verdict: bool = False,
     command: str | None = None,
     **options: Unpack[SourceOptions],
 ) -> PassesReport:
@@ -122,9 +123,12 @@ def report(
         pass 2 the runs driven after applying pass 1's correction, ... Each is read and
         calibrated as :func:`umbmark.calibrate` does, and must hold square runs in both
         directions.
-    side_length, wheelbase, method, fit_truth_offset, force :
+    side_length, wheelbase, method, fit_truth_offset, override_verdict :
         As for :func:`umbmark.calibrate`, for every pass (``method="auto"`` chooses
-        for each pass on its own); ``force`` also replaces ``output`` if it exists.
+        for each pass on its own; ``override_verdict`` shows the overlay of a pass whose
+        verdict is "do not apply").
+    force : bool
+        Replace ``output`` if it exists; nothing else.
     validate : bool
         Add :func:`umbmark.validate` of the last pass (held-out replay of its recorded
         runs) to the page.
@@ -182,7 +186,7 @@ def report(
             wheelbase=wheelbase,
             method=method,
             fit_truth_offset=fit_truth_offset,
-            force=force,
+            override_verdict=override_verdict,
             **pass_options,
         )
         if result.benchmark is None:

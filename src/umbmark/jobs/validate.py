@@ -52,7 +52,7 @@ def validate(
     methods: Sequence[str] | None = None,
     side_length: float | None = None,
     wheelbase: float | None = None,
-    force: bool = False,
+    override_verdict: bool = False,
     progress: Callable[[float], None] | None = None,
     **options: Unpack[SourceOptions],
 ) -> ValidationReport:
@@ -68,7 +68,7 @@ def validate(
         The estimators to compare (default: all of :data:`CANDIDATES`).
     side_length, wheelbase : float, optional
         As for :func:`umbmark.calibrate`.
-    force : bool
+    override_verdict : bool
         Take ``current_params`` even when it is a result for another robot's nominal
         wheelbase or wheel diameter (as for :func:`umbmark.calibrate`).
     progress : callable, optional
@@ -95,7 +95,13 @@ def validate(
                 source=source_name(path),
             )
     read = [
-        read_runs([path], read_options, wheelbase=wheelbase, side_length=side_length, force=force)
+        read_runs(
+            [path],
+            read_options,
+            wheelbase=wheelbase,
+            side_length=side_length,
+            override_verdict=override_verdict,
+        )
         for path in paths
     ]
     for one in read:

@@ -33,6 +33,7 @@ __all__ = [
     "LONGEST_REST",
     "MAX_TRUTH_OFFSET",
     "OUTPUTS",
+    "OVERRIDE_VERDICT",
     "PARAMETERS",
     "READ",
     "READ_OPTIONS",
@@ -240,14 +241,26 @@ TUM_TIME = Spec(
 )
 
 #: ``--force`` of every command that writes files (``force=True`` of the library): without
-#: it no file is replaced (:class:`umbmark.outputs.files.OutputPlan`). Commands where it
-#: also lifts another refusal say so after this text.
+#: it no file is replaced (:class:`umbmark.outputs.files.OutputPlan`). It lifts nothing
+#: else: overriding a verdict is :data:`OVERRIDE_VERDICT`.
 FORCE = Spec(
     "force",
     ("--force",),
     OUTPUTS,
     "Replace output files that exist, and write into output folders that hold files "
-    "(without it, nothing is replaced).",
+    "(without it, nothing is replaced). Nothing else: see --override-verdict.",
+    kind="flag",
+)
+
+#: ``--override-verdict`` of ``calibrate``, ``report``, ``replay``, ``validate`` and
+#: ``history`` (``override_verdict=True`` of the library): use a result its own checks
+#: advise against. Commands say after this text which refusal it lifts there.
+OVERRIDE_VERDICT = Spec(
+    "override_verdict",
+    ("--override-verdict",),
+    TEST,
+    "Override a refusal that protects the robot's parameters (never needed to replace "
+    "files: that is --force).",
     kind="flag",
 )
 

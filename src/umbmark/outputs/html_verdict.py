@@ -74,8 +74,8 @@ def _holds_section(page: Passes, holds: Holds) -> str:
     return said + box + (f"<ul>\n{lines}</ul>\n" if lines else "")
 
 
-#: What the overlay section says when the verdict is "do not apply" (not forced).
+#: What the overlay section says when the verdict is "do not apply" (not overridden).
 WITHHELD = (
     '<p id="overlay-withheld">No overlay: the verdict is do not apply (its reasons head the '
-    "page). <code>--force</code> writes it all the same.</p>\n"
+    "page). <code>--override-verdict</code> writes it all the same.</p>\n"
 )

@@ -304,12 +304,12 @@ class History:
             return int(cursor.lastrowid or 0)
 
     def recorded_line(
-        self, robot: str, id: int, verdict: Verdict | None = None, *, forced: bool = False
+        self, robot: str, id: int, verdict: Verdict | None = None, *, overridden: bool = False
     ) -> str:
         """One line saying that calibration ``id`` of ``robot`` was recorded, and how to
         mark it applied; for a ``verdict`` "do not apply", that it is not to be applied
-        (``forced``: its parameters were written all the same, and the command that marks
-        it applied needs ``--force``)."""
+        (``overridden``: its parameters were written all the same, and the command that
+        marks it applied needs ``--override-verdict``)."""
         import shlex
 
         given = self.path != default_history_path()
@@ -317,10 +317,11 @@ class History:
         mark += f" --history {shlex.quote(str(self.path))}" if given else ""
         said = f"recorded as calibration {id} of robot {robot} in {self.path}"
         if verdict is not None and not verdict.applies:
-            if forced:
+            if overridden:
                 return (
                     f"{said}; its verdict is do not apply; if its new parameters are "
-                    f"configured on the robot all the same: {mark} --applied {id} --force"
+                    f"configured on the robot all the same: {mark} --applied {id} "
+                    "--override-verdict"
                 )
             return f"{said}; its verdict is do not apply: not to be configured on the robot"
         return f"{said}; once its new parameters are configured on the robot: {mark} --applied {id}"
@@ -381,33 +382,37 @@ class History:
             ).fetchall()
         return [_calibration(row) for row in rows]
 
-    def mark_applied(self, robot: str, id: int, *, force: bool = False) -> None:
+    def mark_applied(self, robot: str, id: int, *, override_verdict: bool = False) -> None:
         """Mark calibration ``id`` of ``robot`` as applied to the robot.
 
         Parameters
         ----------
         robot : str
         id : int
-        force : bool
+        override_verdict : bool
             Mark it even when its verdict was "do not apply".
 
         Raises
         ------
         InputError
             When the robot has no calibration ``id``, or its verdict was "do not apply"
-            (without ``force``).
+            (without ``override_verdict``).
         """
         with self._connect(write=True) as db:
             row = db.execute(
                 "SELECT verdict FROM calibrations WHERE robot = ? AND id = ?", (robot, id)
             ).fetchone()
             verdict = None if row is None or row[0] is None else json.loads(row[0])
-            if verdict is not None and verdict.get("level") == "do-not-apply" and not force:
+            if (
+                verdict is not None
+                and verdict.get("level") == "do-not-apply"
+                and not override_verdict
+            ):
                 reasons = "; ".join(verdict.get("reasons") or [])
                 raise InputError(
                     f"--applied {id}: calibration {id} of {robot} was judged do not apply "
                     f"({reasons}): its parameters are not to be configured on the robot; "
-                    "--force marks it applied all the same",
+                    "--override-verdict marks it applied all the same",
                     source=self.path,
                 )
             cursor = db.execute(
