@@ -41,6 +41,7 @@ from umbmark.autocal.measure import MEASURE_METHODS, Measure, MeasureMethod, tak
 from umbmark.autocal.passes import Home, corner_truth, drive_pass
 from umbmark.autocal.preflight import preflight
 from umbmark.autocal.record import MeasuredRun, record_pass
+from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, write_state
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
@@ -131,6 +132,9 @@ class SelfCalReport(JsonText):
         What the checks before moving found.
     files : tuple of Path
         Files written.
+    restart : str or None
+        The routine stopped for a controller restart: what to do, and how to go on
+        (``umbmark selfcal --resume DIR``).
     """
 
     robot: str
@@ -143,6 +147,7 @@ class SelfCalReport(JsonText):
     fix_errors: np.ndarray | None = None
     checks: tuple[str, ...] = ()
     files: tuple[Path, ...] = field(default=(), compare=False)
+    restart: str | None = None
 
     @property
     def e_max_syst_before(self) -> float | None:
@@ -182,6 +187,7 @@ class SelfCalReport(JsonText):
             "applied": _multipliers(self.final),
             "measurement": measurement,
             "files": [str(f) for f in self.files],
+            "restart": self.restart,
         }
 
 
@@ -220,6 +226,8 @@ def selfcal(
     ask: Callable[[str], str] | None = None,
     tape_marks: Sequence[float] | None = None,
     coarse: bool = True,
+    resume: str | os.PathLike[str] | None = None,
+    notify: Callable[[str], None] | None = None,
 ) -> SelfCalReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
     corner, applied and verified (module documentation).
@@ -256,6 +264,12 @@ def selfcal(
         start, the third to the side wall [default: the robot's ``tape_marks()``].
     coarse : bool
         Check first that the robot turns as its odometry believes (lidar or truth).
+    resume : path, optional
+        The folder of a self-calibration stopped for a controller restart: go on with its
+        settings (the ones given here are not used), once the controller holds the
+        parameters it stopped on (:mod:`umbmark.autocal.resume`).
+    notify : callable, optional
+        Lines for a person, as they happen (the robot cannot take parameters live, ...).
 
     Raises
     ------
@@ -264,6 +278,12 @@ def selfcal(
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
     """
+    state = None
+    if resume is not None:
+        state = read_state(Path(resume))
+        s = state.settings
+        side_length, runs, measure = s["side_length"], s["runs"], s["measure"]
+        max_passes, verify, out, coarse = s["max_passes"], s["verify"], resume, False
     _check_counts(side_length, runs, max_passes)
     if measure not in MEASURE_METHODS:
         raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
@@ -273,54 +293,80 @@ def selfcal(
     how = Measure(measure, ask=ask, marks=marks)
     name = robot_name or robot.name
     folder = Path(out) if out is not None else Path(f"selfcal-{_slug(name)}")
-    if folder.exists() and any(folder.iterdir()):
+    if state is None and folder.exists() and any(folder.iterdir()):
         raise InputError("is not empty: a self-calibration writes its passes there", source=folder)
+    can_apply = getattr(robot, "can_apply", None)
+    restart_note = can_apply() if callable(can_apply) and method != "none" else None
+    passes: list[PassResult] = []
+    if state is not None:
+        problem = pending_problem(robot.drive_params(), state.pending)
+        if problem is not None:
+            raise InputError(f"{problem} ({folder / 'overlay.yaml'})")
+        passes = _resumed(folder, state)
     try:
         checks = preflight(robot, how, side_length, limits)
+        if restart_note is not None:
+            checks.append(restart_note)
+            if notify is not None:
+                notify(restart_note)
         odom = settle(robot, limits).pose
         first = take_fix(robot, how)
         home = Home(first.pose, first, odom)
         home.fixes.append((first, corner_truth(robot, how)))
-        coarse_check, coarse_applied = None, None
+        coarse_check, coarse_applied, pending = None, None, None
         if coarse and method != "none" and measure in ("lidar", "truth"):
             if progress is not None:
                 progress("coarse", 0, None, "turning check")
             coarse_check = coarse_turning(robot, how, limits)
             if coarse_check.needed:
                 params = robot.drive_params()
-                coarse_applied = robot.apply(
-                    replace(
-                        params,
-                        wheel_separation_multiplier=params.wheel_separation_multiplier
-                        * coarse_check.ratio,
-                    ),
-                    method,
+                coarse_params = replace(
+                    params,
+                    wheel_separation_multiplier=params.wheel_separation_multiplier
+                    * coarse_check.ratio,
                 )
+                coarse_applied = robot.apply(coarse_params, method)
+                if not coarse_applied.active:
+                    pending = coarse_params
             # where it stands now, by a fix without a prior (the turns moved its odometry)
             home.odometry = settle(robot, limits).pose
             home.fix = take_fix(robot, how)
-        passes: list[PassResult] = []
         drive = _Passes(
             robot, how, folder, side_length, runs, home, limits, name, progress,
             record_as=robot_name, history=history,
         )  # fmt: skip
-        for k in range(1, max_passes + 1):
-            result = _apply(robot, drive(f"pass {k}"), method)
+        first = len(passes) + 1
+        if passes:  # resumed: a further pass only where the last one's rule says so
+            bench = passes[-1].report.benchmark
+            if bench is None or not bench.second_pass_recommended:
+                first = max_passes + 1
+        for k in range(first, max_passes + 1):
+            if pending is not None:
+                break
+            result, new = _apply(robot, drive(f"pass {k}"), method)
             drive.mark_applied(result)
             home.reanchor(robot)
             passes.append(result)
             bench = result.report.benchmark
             if result.applied is None or not result.applied.active:
+                if restart_note is not None and result.applied is not None:
+                    pending = new
                 break
             if bench is None or not bench.second_pass_recommended:
                 break
-        if verify and passes and passes[-1].applied is not None and passes[-1].applied.active:
+        last = passes[-1].applied if passes else None
+        if verify and pending is None and last is not None and last.active:
             passes.append(drive("verification"))
     except BaseException:
         robot.send_velocity(0.0, 0.0)
         raise
     robot.send_velocity(0.0, 0.0)
     files = _outputs(passes, folder, Path(report) if report is not None else None)
+    restart = None
+    if pending is not None:
+        restart, more = _stop_for_restart(robot, folder, passes, pending, state, locals_settings(
+            side_length, runs, measure, max_passes, verify))
+        files.extend(more)
     errors = [
         (
             fix.pose.x - truth.x,
@@ -341,7 +387,62 @@ def selfcal(
         fix_errors=np.asarray(errors, dtype=np.float64).reshape(-1, 3) if errors else None,
         checks=tuple(checks),
         files=tuple(files),
+        restart=restart,
     )
+
+
+def locals_settings(
+    side_length: float, runs: int, measure: str, max_passes: int, verify: bool
+) -> dict[str, Any]:
+    """The test's settings a resumed self-calibration goes on with."""
+    return {
+        "side_length": side_length, "runs": runs, "measure": measure,
+        "max_passes": max_passes, "verify": verify,
+    }  # fmt: skip
+
+
+def _stop_for_restart(
+    robot: Robot,
+    folder: Path,
+    passes: list[PassResult],
+    pending: DriveParams,
+    state: SelfCalState | None,
+    settings: dict[str, Any],
+) -> tuple[str, list[Path]]:
+    """Write the overlay of the pending parameters and the state; what to do next."""
+    from umbmark.robot.ros_common import restart_commands, write_params
+
+    controller = getattr(getattr(robot, "options", None), "controller", "/diff_drive_controller")
+    overlay = folder / "restart-overlay.yaml"
+    write_params(overlay, pending, controller, ros2=True)
+    path = write_state(
+        folder,
+        SelfCalState(
+            settings,
+            tuple((p.label, str(p.folder.relative_to(folder)), p.params) for p in passes),
+            pending,
+        ),
+    )
+    text = (
+        f"stopped for a controller restart: {restart_commands(controller, pending, str(overlay))}"
+        f"; then: umbmark selfcal --resume {folder} (with the same robot options)"
+    )
+    return text, [overlay, path]
+
+
+def _resumed(folder: Path, state: SelfCalState) -> list[PassResult]:
+    """The passes a stopped self-calibration drove, their parameters now applied."""
+    from umbmark.jobs.calibrate import calibrate
+
+    out = []
+    for label, where, params in state.passes:
+        report = calibrate(folder / where)
+        out.append(PassResult(label, folder / where, report, params))
+    if out:
+        out[-1] = replace(
+            out[-1], applied=ApplyResult("yaml", True, "applied by the controller's restart")
+        )
+    return out
 
 
 @dataclass(frozen=True)
@@ -406,11 +507,13 @@ def _strays(measured: list[MeasuredRun], limits: DriveLimits) -> tuple[str, ...]
     return tuple(out)
 
 
-def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
+def _apply(
+    robot: Robot, result: PassResult, method: ApplyMethod
+) -> tuple[PassResult, DriveParams]:
     """Apply the pass's correction, composed with its active parameters, unless the
-    verdict says not to or ``method`` is ``none``."""
+    verdict says not to or ``method`` is ``none``; the corrected parameters."""
     if method == "none" or not result.report.verdict.applies:
-        return result
+        return result, result.params
     calibration = result.report.calibration
     new = replace(
         result.params,
@@ -418,7 +521,7 @@ def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
         left_wheel_radius_multiplier=calibration.new_c_left,
         right_wheel_radius_multiplier=calibration.new_c_right,
     )
-    return replace(result, applied=robot.apply(new, method))
+    return replace(result, applied=robot.apply(new, method)), new
 
 
 def _outputs(passes: list[PassResult], folder: Path, page: Path | None) -> list[Path]:

@@ -38,6 +38,7 @@ from umbmark.robot.base import (
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
     RosOptions,
+    default_topics,
     held_problem,
     master_problem,
     multipliers,
@@ -91,6 +92,7 @@ class Ros1Robot(RosRobot):
         from sensor_msgs.msg import Range
 
         self._rospy = rospy
+        options = default_topics(options, ros2=False)
         timeout = options.timeout
         if not (0.0 < timeout < math.inf):
             raise InputError(f"timeout {timeout!r} s: give a positive time")

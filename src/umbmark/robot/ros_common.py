@@ -42,6 +42,8 @@ __all__ = [
     "Mount",
     "RosOptions",
     "controller_keys",
+    "default_topics",
+    "laser_mount",
     "held_problem",
     "master_problem",
     "mount_from_transform",
@@ -49,8 +51,11 @@ __all__ = [
     "plan_apply",
     "planar_pose",
     "range_reading",
+    "restart_commands",
     "scan_from_message",
     "stamp_seconds",
+    "urdf_geometry",
+    "urdf_mount",
     "wait_on_clock",
     "write_params",
 ]
@@ -74,8 +79,9 @@ class RosOptions:
     Attributes
     ----------
     cmd_vel, odom : str
-        The velocity command topic (``geometry_msgs/Twist``) and the odometry topic
-        (``nav_msgs/Odometry``).
+        The velocity command topic (``geometry_msgs/Twist``, or ``TwistStamped`` where the
+        controller takes that) and the odometry topic (``nav_msgs/Odometry``); empty: the
+        default (:func:`default_topics`).
     scan : str or None
         The laser scan topic (``sensor_msgs/LaserScan``); its mounting comes from TF.
     ranges : tuple of str
@@ -98,10 +104,12 @@ class RosOptions:
         parameter file.
     timeout : float
         How long to wait for the first message of each topic and for services [s].
+    laser_mount : Pose2D or None
+        The laser's mounting in the base frame, where neither TF nor the URDF gives it.
     """
 
-    cmd_vel: str = "/cmd_vel"
-    odom: str = "/odom"
+    cmd_vel: str = ""
+    odom: str = ""
     scan: str | None = "/scan"
     ranges: tuple[str, ...] = ()
     truth: str | None = None
@@ -112,6 +120,34 @@ class RosOptions:
     wheel_radius: float | None = None
     reload: bool = False
     timeout: float = 5.0
+    laser_mount: Pose2D | None = None
+
+
+def default_topics(options: RosOptions, *, ros2: bool) -> RosOptions:
+    """``options`` with its empty topics filled in: ROS 2's diff_drive_controller has its
+    topics in its namespace (``<controller>/cmd_vel``, ``<controller>/odom``); on ROS 1
+    they are usually remapped to ``/cmd_vel`` and ``/odom``."""
+    from dataclasses import replace
+
+    ns = "/" + "/".join(controller_keys(options.controller)) if ros2 else ""
+    return replace(
+        options,
+        cmd_vel=options.cmd_vel or f"{ns}/cmd_vel",
+        odom=options.odom or f"{ns}/odom",
+    )
+
+
+def laser_mount(text: str) -> Pose2D:
+    """``--laser-mount x,y,yaw`` (metres, metres, degrees) as a pose in the base frame."""
+    try:
+        x, y, yaw = (float(v) for v in text.split(","))
+    except ValueError:
+        raise InputError(
+            f"--laser-mount {text[:60]!r}: give x,y,yaw (metres, metres, degrees)"
+        ) from None
+    if not all(math.isfinite(v) and abs(v) < 100.0 for v in (x, y)) or not math.isfinite(yaw):
+        raise InputError(f"--laser-mount {text[:60]!r}: give finite x, y within 100 m")
+    return Pose2D(x, y, math.radians(yaw))
 
 
 # --- messages -----------------------------------------------------------------------------
@@ -226,6 +262,123 @@ def range_reading(messages: Sequence[object], mounts: Sequence[Mount]) -> RangeR
         ranges=np.asarray(values, dtype=np.float64),
         mounts=tuple(m.pose for m in mounts),
     )
+
+
+# --- the URDF -------------------------------------------------------------------------------
+
+#: The longest robot description read [characters].
+MAX_URDF = 10_000_000
+
+
+def _rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """URDF's ``rpy``: fixed-axis roll, pitch, yaw, ``Rz(yaw) Ry(pitch) Rx(roll)`` (3, 3)."""
+    cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    out: np.ndarray = rz @ ry @ rx
+    return out
+
+
+def _numbers(text: str | None, what: str) -> tuple[float, float, float]:
+    try:
+        a, b, c = (float(v) for v in (text or "0 0 0").split())
+    except ValueError:
+        raise InputError(f"the robot description's {what} {text!r} is not three numbers") from None
+    return a, b, c
+
+
+def _urdf_joints(text: str) -> tuple[dict[str, tuple[str, np.ndarray, np.ndarray]], Any]:
+    """The URDF's joints by child link: (parent, translation (3,), rotation (3, 3)), and
+    the parsed document."""
+    import xml.etree.ElementTree as ET
+
+    if len(text) > MAX_URDF:
+        raise InputError(f"the robot description is longer than {MAX_URDF} characters")
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise InputError(f"the robot description is not a URDF ({exc})") from None
+    joints: dict[str, tuple[str, np.ndarray, np.ndarray]] = {}
+    for joint in root.iter("joint"):
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is None or child is None:
+            continue
+        origin = joint.find("origin")
+        xyz = _numbers(None if origin is None else origin.get("xyz"), "joint origin xyz")
+        rpy = _numbers(None if origin is None else origin.get("rpy"), "joint origin rpy")
+        joints[child.get("link", "")] = (
+            parent.get("link", ""), np.asarray(xyz, dtype=np.float64), _rotation(*rpy),
+        )  # fmt: skip
+    return joints, root
+
+
+def _in_base(
+    joints: dict[str, tuple[str, np.ndarray, np.ndarray]], base: str, frame: str
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """``frame``'s translation (3,) and rotation (3, 3) in ``base`` through the URDF's
+    fixed chain (None: ``frame`` does not hang under ``base``)."""
+    t, r = np.zeros(3), np.eye(3)
+    link = frame
+    for _ in range(len(joints) + 1):
+        if link == base:
+            return t, r
+        joint = joints.get(link)
+        if joint is None:
+            return None
+        parent, jt, jr = joint
+        t, r = jt + jr @ t, jr @ r
+        link = parent
+    return None
+
+
+def urdf_mount(text: str, base: str, frame: str) -> Mount | None:
+    """A sensor frame's mounting in ``base`` from the robot description (URDF), as
+    :func:`mount_from_transform` takes it from TF (None: the frame is not in it)."""
+    joints, _root = _urdf_joints(text)
+    found = _in_base(joints, base, frame)
+    if found is None:
+        return None
+    t, r = found
+    yaw = math.atan2(float(r[1, 0]), float(r[0, 0]))
+    return Mount(Pose2D(float(t[0]), float(t[1]), yaw), upside_down=bool(r[2, 2] < 0.0))
+
+
+def urdf_geometry(text: str, base: str = "base_link") -> tuple[float, float] | None:
+    """The wheel separation and radius [m] from the robot description, as ros_controllers'
+    diff_drive_controller takes them from it: the two wheel joints (names containing
+    ``wheel``, under ``base``) farthest apart sideways, and the radius of the left wheel's
+    cylinder (collision, else visual). None: no two such wheels."""
+    joints, root = _urdf_joints(text)
+    wheels = []
+    for joint in root.iter("joint"):
+        child = joint.find("child")
+        if child is None or "wheel" not in joint.get("name", "").lower():
+            continue
+        link = child.get("link", "")
+        found = _in_base(joints, base, link)
+        if found is not None:
+            wheels.append((float(found[0][1]), link))
+    if len(wheels) < 2:
+        return None
+    wheels.sort()
+    (y_right, _), (y_left, left) = wheels[0], wheels[-1]
+    separation = y_left - y_right
+    radius = None
+    for link in root.iter("link"):
+        if link.get("name") != left:
+            continue
+        for kind in ("collision", "visual"):
+            cylinder = link.find(f"{kind}/geometry/cylinder")
+            if cylinder is None:
+                cylinder = link.find(f"{kind}/geometry/sphere")
+            if cylinder is not None and cylinder.get("radius"):
+                radius = float(cylinder.get("radius", "nan"))
+                break
+    if radius is None or not (radius > 0.0 and separation > 0.0):
+        return None
+    return separation, radius
 
 
 # --- the latest message of a topic, and ROS time --------------------------------------------
@@ -483,3 +636,18 @@ def write_params(
     block.update(values)
     atomic_write_text(target, parameter_document(data, comments))
     return notes
+
+
+def restart_commands(controller: str, params: DriveParams, overlay: str | None) -> str:
+    """How a person restarts a ROS 2 diff_drive_controller on new multipliers (it reads
+    them only when configured): the overlay as a further parameter file of its spawner
+    or launch file (later files override), or the three values in the launch file."""
+    name = controller_keys(controller)[-1]
+    values = ", ".join(f"{k}: {v:.6g}" for k, v in multipliers(params).items())
+    if overlay is None:
+        return f"set {values} in {name}'s parameters (the launch file's YAML) and restart it"
+    return (
+        f"add {overlay} after {name}'s parameter file and restart it (ros2 run "
+        f"controller_manager spawner {name} --param-file YOUR_FILE --param-file {overlay}; "
+        f"or in the launch file); it holds {values}"
+    )

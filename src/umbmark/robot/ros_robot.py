@@ -133,9 +133,7 @@ class RosRobot:
         if not (math.isfinite(linear) and math.isfinite(angular)):
             self._stop()
             raise InputError(f"velocity ({linear!r}, {angular!r}) is not finite")
-        msg = self._twist()
-        msg.linear.x, msg.angular.z = float(linear), float(angular)
-        self._cmd.publish(msg)
+        self._cmd.publish(self._velocity(float(linear), float(angular)))
 
     def odometry(self) -> Stamped | None:
         """The latest odometry pose, stamped with its header's time."""
@@ -159,7 +157,13 @@ class RosRobot:
         """The latest ground-truth pose (None: no truth topic, or no message yet)."""
         return self._truth.get()
 
+    def _velocity(self, linear: float, angular: float) -> Any:  # noqa: ANN401 (a message)
+        """The velocity message: a ``Twist`` (a ROS 2 subclass may stamp it)."""
+        msg = self._twist()
+        msg.linear.x, msg.angular.z = linear, angular
+        return msg
+
     def _stop(self) -> None:
         """A zero velocity, whatever state ROS is in."""
         with contextlib.suppress(Exception):  # stopping must not raise
-            self._cmd.publish(self._twist())
+            self._cmd.publish(self._velocity(0.0, 0.0))
