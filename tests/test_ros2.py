@@ -102,7 +102,9 @@ class Robot2:
             self.proc.stdout.close()
 
 
-def _umbmark(env: dict[str, str], *args: str, timeout: float = 300.0) -> subprocess.CompletedProcess[str]:
+def _umbmark(
+    env: dict[str, str], *args: str, timeout: float = 300.0
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [str(PYTHON), "-m", "umbmark", *args],
         env=env, capture_output=True, text=True, timeout=timeout, check=False,

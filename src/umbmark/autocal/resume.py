@@ -89,8 +89,7 @@ def read_state(folder: Path) -> SelfCalState:
     path = folder / STATE_FILE
     if not path.is_file():
         raise InputError(
-            f"has no {STATE_FILE}: it is not a self-calibration stopped for a controller "
-            "restart",
+            f"has no {STATE_FILE}: it is not a self-calibration stopped for a controller restart",
             source=folder,
         )
     if path.stat().st_size > MAX_STATE:
@@ -106,7 +105,9 @@ def read_state(folder: Path) -> SelfCalState:
         raise InputError("has no settings or passes", source=path)
     read = []
     for p in passes:
-        if not isinstance(p, dict) or not all(isinstance(p.get(k), str) for k in ("label", "folder")):
+        if not isinstance(p, dict) or not all(
+            isinstance(p.get(k), str) for k in ("label", "folder")
+        ):
             raise InputError("has a pass without its label and folder", source=path)
         if Path(p["folder"]).is_absolute() or ".." in Path(p["folder"]).parts:
             raise InputError(f"has a pass folder {p['folder']!r} outside it", source=path)

@@ -335,12 +335,12 @@ def selfcal(
             robot, how, folder, side_length, runs, home, limits, name, progress,
             record_as=robot_name, history=history,
         )  # fmt: skip
-        first = len(passes) + 1
+        start_at = len(passes) + 1
         if passes:  # resumed: a further pass only where the last one's rule says so
             bench = passes[-1].report.benchmark
             if bench is None or not bench.second_pass_recommended:
-                first = max_passes + 1
-        for k in range(first, max_passes + 1):
+                start_at = max_passes + 1
+        for k in range(start_at, max_passes + 1):
             if pending is not None:
                 break
             result, new = _apply(robot, drive(f"pass {k}"), method)
@@ -364,8 +364,14 @@ def selfcal(
     files = _outputs(passes, folder, Path(report) if report is not None else None)
     restart = None
     if pending is not None:
-        restart, more = _stop_for_restart(robot, folder, passes, pending, state, locals_settings(
-            side_length, runs, measure, max_passes, verify))
+        restart, more = _stop_for_restart(
+            robot,
+            folder,
+            passes,
+            pending,
+            state,
+            locals_settings(side_length, runs, measure, max_passes, verify),
+        )
         files.extend(more)
     errors = [
         (
@@ -507,9 +513,7 @@ def _strays(measured: list[MeasuredRun], limits: DriveLimits) -> tuple[str, ...]
     return tuple(out)
 
 
-def _apply(
-    robot: Robot, result: PassResult, method: ApplyMethod
-) -> tuple[PassResult, DriveParams]:
+def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> tuple[PassResult, DriveParams]:
     """Apply the pass's correction, composed with its active parameters, unless the
     verdict says not to or ``method`` is ``none``; the corrected parameters."""
     if method == "none" or not result.report.verdict.applies:

@@ -14,7 +14,7 @@ not ``tf2_ros``, ``tf2_msgs`` nor ``controller_manager_msgs``.
   ``sensor_msgs/msg/Range``, a ground-truth ``geometry_msgs/msg/PoseStamped``, the URDF on
   ``/robot_description`` (transient local, as robot_state_publisher latches it).
 - Mountings: ``options.laser_mount`` (``--laser-mount``) where given, else from the URDF
-  (:func:`umbmark.robot.ros_common.urdf_mount`).
+  (:func:`umbmark.robot.urdf.urdf_mount`).
 - Geometry: the controller's ``wheel_separation`` and ``wheel_radius`` (its
   ``get_parameters`` service), else the URDF's wheels, else the options.
 - Time: one single-threaded executor spun in a thread of its own (joined on close); with
@@ -52,11 +52,10 @@ from umbmark.robot.ros_common import (
     default_topics,
     plan_apply,
     restart_commands,
-    urdf_geometry,
-    urdf_mount,
     write_params,
 )
 from umbmark.robot.ros_robot import RosRobot
+from umbmark.robot.urdf import urdf_geometry, urdf_mount
 
 __all__ = ["Ros2Robot"]
 
