@@ -6,6 +6,7 @@ controllers that take their geometry from it)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -95,37 +96,62 @@ def urdf_mount(text: str, base: str, frame: str) -> Mount | None:
     return Mount(Pose2D(float(t[0]), float(t[1]), yaw), upside_down=bool(r[2, 2] < 0.0))
 
 
-def urdf_geometry(text: str, base: str = "base_link") -> tuple[float, float] | None:
+def urdf_geometry(
+    text: str,
+    base: str = "base_link",
+    left: Sequence[str] = (),
+    right: Sequence[str] = (),
+) -> tuple[float, float] | None:
     """The wheel separation and radius [m] from the robot description, as ros_controllers'
-    diff_drive_controller takes them from it: the two wheel joints (names containing
-    ``wheel``, under ``base``) farthest apart sideways, and the radius of the left wheel's
-    cylinder (collision, else visual). None: no two such wheels."""
+    diff_drive_controller takes them from it: the distance between the left and right wheel
+    joints (``left``, ``right``: its ``left_wheel``/``right_wheel`` joint names; not given,
+    the two joints with ``wheel`` in their names farthest apart sideways) and the radius of
+    the left wheel's cylinder or sphere (collision, else visual). None: no such wheels."""
     joints, root = _urdf_joints(text)
-    wheels = []
+    by_name = {}
     for joint in root.iter("joint"):
         child = joint.find("child")
-        if child is None or "wheel" not in joint.get("name", "").lower():
+        if child is not None:
+            by_name[joint.get("name", "")] = child.get("link", "")
+    placed = []
+    for name, link in by_name.items():
+        if left or right:
+            if name not in (*left, *right):
+                continue
+        elif "wheel" not in name.lower():
             continue
-        link = child.get("link", "")
         found = _in_base(joints, base, link)
         if found is not None:
-            wheels.append((float(found[0][1]), link))
-    if len(wheels) < 2:
+            placed.append((name, link, found[0]))
+    if left and right:
+        lefts = [p for p in placed if p[0] in left]
+        rights = [p for p in placed if p[0] in right]
+    else:
+        placed.sort(key=lambda p: float(p[2][1]))
+        lefts, rights = placed[-1:], placed[:1]
+    if not lefts or not rights or lefts[0][0] == rights[0][0]:
         return None
-    wheels.sort()
-    (y_right, _), (y_left, left) = wheels[0], wheels[-1]
-    separation = y_left - y_right
-    radius = None
-    for link in root.iter("link"):
-        if link.get("name") != left:
-            continue
-        for kind in ("collision", "visual"):
-            cylinder = link.find(f"{kind}/geometry/cylinder")
-            if cylinder is None:
-                cylinder = link.find(f"{kind}/geometry/sphere")
-            if cylinder is not None and cylinder.get("radius"):
-                radius = float(cylinder.get("radius", "nan"))
-                break
+    (_, link, t_left), (_, _, t_right) = lefts[0], rights[0]
+    separation = float(np.linalg.norm(t_left - t_right))
+    radius = _radius(root, link)
     if radius is None or not (radius > 0.0 and separation > 0.0):
         return None
     return separation, radius
+
+
+def _radius(root: Any, link_name: str) -> float | None:  # noqa: ANN401 (an ElementTree)
+    """The radius of a link's cylinder or sphere (collision first), None: none."""
+    for link in root.iter("link"):
+        if link.get("name") != link_name:
+            continue
+        for kind in ("collision", "visual"):
+            for shape in ("cylinder", "sphere"):
+                found = link.find(f"{kind}/geometry/{shape}")
+                if found is not None and found.get("radius"):
+                    try:
+                        return float(found.get("radius", "nan"))
+                    except ValueError:
+                        raise InputError(
+                            f"the robot description's {link_name} radius is not a number"
+                        ) from None
+    return None
