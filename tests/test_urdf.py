@@ -116,3 +116,18 @@ def test_resume_without_a_state_is_one_line(tmp_path: Path) -> None:
                                                  '[{"label": "p", "folder": "../x"}]}')  # fmt: skip
     with pytest.raises(InputError, match="outside it"):
         read_state(tmp_path)
+
+
+def test_the_wheel_geometry_by_the_controllers_joint_names() -> None:
+    """ros_controllers names its wheels' joints (left_wheel, right_wheel): the distance
+    between those joints' origins, whatever else has "wheel" in its name."""
+    caster = URDF.replace(
+        "</robot>",
+        '<link name="caster"/><joint name="caster_wheel_joint" type="fixed">'
+        '<parent link="base_link"/><child link="caster"/><origin xyz="-0.3 0.5 0"/></joint>'
+        "</robot>",
+    )
+    assert urdf_geometry(caster) is None  # the farthest left is the caster: no radius
+    named = urdf_geometry(caster, left=("left_wheel_joint",), right=("right_wheel_joint",))
+    assert named == pytest.approx((0.4, 0.06))
+    assert urdf_geometry(caster, left=("nope",), right=("right_wheel_joint",)) is None
