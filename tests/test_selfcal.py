@@ -265,7 +265,7 @@ def test_a_controller_restart_mid_leg_stops_the_robot():
     """At 8 s the robot is about 1.3 m along its first leg (0.2 m/s after its 0.67 s
     ramp): the odometry jumps back to zero, far more than 20 ms of driving allows."""
     robot = _ResetOdometry(seed=1)
-    with pytest.raises(SafetyError, match="odometry jumped 1\\.[0-9]+ m .*restarted"):
+    with pytest.raises(SafetyError, match=r"odometry jumped 1\.[0-9]+ m .*restarted"):
         drive_square(robot, 4.0, Direction.CCW)
     _last_command_is_a_stop(robot)
     assert robot.now() < 8.0 + 0.05
