@@ -33,14 +33,14 @@ def read() -> dict[str, object]:
         while scan is None and time.monotonic() < deadline:
             scan = robot.scan()
             robot.wait(0.02)
-        odom = robot.odometry()
+        odom, now = robot.odometry(), robot.now()
         assert odom is not None
         assert scan is not None
         params = robot.drive_params()
         return {
             "start": start,
             "waited": waited,
-            "now": robot.now(),
+            "now": now,
             "odom_time": odom.time,
             "scan_time": scan.time,
             "mount": [scan.mount.x, scan.mount.y, scan.mount.theta],
@@ -63,14 +63,19 @@ def drive(seconds: float) -> dict[str, object]:
             robot.wait(0.02)
             loops += 1
         robot.send_velocity(0.0, 0.0)
-        sim, wall = robot.now() - t0, time.monotonic() - wall0
-        robot.wait(0.3)
+        stop = robot.now()
+        sim, wall = stop - t0, time.monotonic() - wall0
         last = robot.odometry()
-        assert last is not None
+        deadline = time.monotonic() + 20.0
+        while last is None or last.time < stop + 0.5:  # stopped, as its odometry says
+            assert time.monotonic() < deadline, "no odometry after the stop"
+            robot.wait(0.05)
+            last = robot.odometry()
         return {
             "loops_per_sim_second": loops / sim,
             "loops_per_wall_second": loops / wall,
             "sim_per_wall": sim / wall,
+            "sim": sim,
             "travel": math.hypot(last.pose.x - first.pose.x, last.pose.y - first.pose.y),
         }
     finally:

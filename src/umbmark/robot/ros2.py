@@ -17,8 +17,10 @@ not ``tf2_ros``, ``tf2_msgs`` nor ``controller_manager_msgs``.
   (:func:`umbmark.robot.urdf.urdf_mount`).
 - Geometry: the controller's ``wheel_separation`` and ``wheel_radius`` (its
   ``get_parameters`` service), else the URDF's wheels, else the options.
-- Time: one single-threaded executor spun in a thread of its own (joined on close); with
-  ``/clock`` published the node uses sim time and :meth:`Ros2Robot.wait` sleeps on it.
+- Time: one single-threaded executor spun in a thread of its own (joined on close). With
+  ``/clock`` published when connecting, ROS time is the latest ``/clock`` (sim time, read
+  in its callback, which then wakes the drive loop: no race with rclpy's time source), and
+  :meth:`Ros2Robot.wait` sleeps on it.
   rclpy's signal handlers are off: Ctrl-C reaches the routine, which sends a zero velocity
   before the context goes.
 - Applying: Jazzy's and Kilted's controller reads its multipliers only when it is
@@ -117,7 +119,6 @@ class Ros2Robot(RosRobot):
     def _connect(self, options: RosOptions) -> None:
         from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
         from nav_msgs.msg import Odometry
-        from rclpy.parameter import Parameter
         from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
         from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import LaserScan as ScanMsg
@@ -128,8 +129,8 @@ class Ros2Robot(RosRobot):
         kind = self._velocity_type(options)
         self._stamped = kind == STAMPED
         twist = TwistStamped if self._stamped else Twist
-        if node.count_publishers("/clock") > 0:
-            node.set_parameters([Parameter("use_sim_time", Parameter.Type.BOOL, True)])
+        self._use_sim = node.count_publishers("/clock") > 0  # sim time: /clock's, below
+        self._sim_time: float | None = None
         self._start(options, twist, node.create_publisher(twist, options.cmd_vel, 10))
         node.create_subscription(Odometry, options.odom, self._on_odom, 10)
         node.create_subscription(Clock, "/clock", self._on_clock, 10)
@@ -144,6 +145,14 @@ class Ros2Robot(RosRobot):
         if options.truth:
             node.create_subscription(PoseStamped, options.truth, self._on_truth, 10)
         self._wait_connected(self._cmd.get_subscription_count, kind, "nav_msgs/msg/Odometry")
+        deadline = time.monotonic() + options.timeout
+        with self._ticks:
+            while self._use_sim and self._sim_time is None:
+                if time.monotonic() > deadline:
+                    raise InputError(
+                        f"/clock is published but said nothing in {options.timeout:g} s"
+                    )
+                self._ticks.wait(0.01)
 
     def _velocity_type(self, options: RosOptions) -> str:
         """The twist type the velocity topic's subscriber takes, from the graph."""
@@ -169,7 +178,10 @@ class Ros2Robot(RosRobot):
         )
 
     def _on_clock(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
+        """Sim time: kept here, then the waiting drive loop is woken (rclpy's own time
+        source would update the node's clock in another callback, maybe after ours)."""
         with self._ticks:
+            self._sim_time = float(msg.clock.sec) + 1e-9 * float(msg.clock.nanosec)
             self._ticks.notify_all()
 
     def _on_odom(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
@@ -182,7 +194,8 @@ class Ros2Robot(RosRobot):
         twist = msg.twist if self._stamped else msg
         twist.linear.x, twist.angular.z = linear, angular
         if self._stamped:  # on the controller's clock: never stale, never zero
-            msg.header.stamp = self._node.get_clock().now().to_msg()
+            nanoseconds = round(self.now() * 1e9)
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(nanoseconds, 1_000_000_000)
         return msg
 
     def _mount(self, frame: str) -> Mount:
@@ -214,7 +227,10 @@ class Ros2Robot(RosRobot):
     # --- the Robot interface --------------------------------------------------------
 
     def now(self) -> float:
-        """The node's clock [s] (sim time once ``/clock`` is published)."""
+        """ROS time [s]: the latest ``/clock`` where it was published when connecting (sim
+        time), else the system clock."""
+        if self._use_sim and self._sim_time is not None:
+            return self._sim_time
         return float(self._node.get_clock().now().nanoseconds) * 1e-9
 
     def drive_params(self) -> DriveParams:
