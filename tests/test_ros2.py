@@ -256,6 +256,49 @@ def test_ctrl_c_stops_the_robot(stamped: dict[str, str], tmp_path: Path) -> None
     assert abs(b[0] - a[0]) + abs(b[1] - a[1]) < 1e-3
 
 
+@pytest.mark.slow
+def test_the_controller_going_away_mid_run_stops_the_robot(tmp_path: Path) -> None:
+    """The robot node (controller, clock and all) ends while ``umbmark selfcal --ros2``
+    drives: it stops with one line naming what went (the clock stopped, the velocity topic
+    lost its subscriber, or the odometry went stale), exit status 2 or 3, no traceback,
+    and its last command is a zero velocity."""
+    env = ros2_env(tmp_path)
+    node = Robot2(env)
+    watch = subprocess.Popen(
+        [str(PYTHON), str(PROBE), "watch"], env=env, stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )  # fmt: skip
+    proc = subprocess.Popen(
+        [str(PYTHON), "-m", "umbmark", "selfcal", "--ros2", "--runs", "2", "-L", "1",
+         "--max-passes", "1", "--out", str(tmp_path / "out")],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert watch.stdout is not None
+        ready, _, _ = select.select([watch.stdout], [], [], 240.0)
+        assert ready, "the robot never moved"
+        assert watch.stdout.readline().strip() == "moving"
+        time.sleep(0.5)
+        node.close()
+        _out, err = proc.communicate(timeout=60.0)
+        out, _ = watch.communicate("", timeout=30.0)
+    finally:
+        node.close()
+        for p in (proc, watch):
+            if p.poll() is None:
+                p.kill()
+                p.communicate()
+    assert proc.returncode in (2, 3), err
+    lines = [line for line in err.strip().splitlines() if "error" in line]
+    assert len(lines) == 1, err
+    assert any(
+        words in lines[0] for words in ("ROS time stopped", "nobody subscribes", "odometry stale")
+    ), lines[0]
+    assert "Traceback" not in err
+    seen = json.loads(out.strip().splitlines()[-1])
+    assert seen["last"] == [0.0, 0.0]
+
+
 def test_humble_unstamped_twist_is_found_on_the_graph(tmp_path: Path) -> None:
     """Humble's controller with ``use_stamped_vel: false`` takes geometry_msgs/Twist: the
     adapter finds that on the graph and the robot moves on it."""
