@@ -342,13 +342,16 @@ class _Driver:
         self.command(0.0, 0.0)
 
     def settle(self) -> Stamped:
-        """Wait until the odometry has been still for ``settle_time``; the settled pose."""
+        """Wait until the odometry has been still for ``settle_time`` and for half the
+        readings that takes (a loop stalled on a busy machine reads too few to show the
+        stand the run log needs); the settled pose."""
         lim = self.limits
         self.robot.send_velocity(0.0, 0.0)
         still_since = begun = self.robot.now()
         last = self.read()
         last_time = self.robot.now()
-        while self.robot.now() - still_since < lim.settle_time:
+        reads, needed = 0, max(2, round(0.5 * lim.settle_time / lim.period))
+        while self.robot.now() - still_since < lim.settle_time or reads < needed:
             if self.robot.now() - begun > lim.settle_limit:
                 raise stop_safely(
                     self.robot,
@@ -363,8 +366,9 @@ class _Driver:
             moved = math.hypot(pose.x - last.x, pose.y - last.y)
             turned = abs(float(wrap_angle(pose.theta - last.theta)))
             span = max(now - last_time, 1e-9)
+            reads += 1
             if moved / span > lim.still_speed or turned / span > lim.still_speed:
-                still_since = now
+                still_since, reads = now, 0
             last, last_time = pose, now
         odom = self.robot.odometry()
         assert odom is not None  # read() checked it
