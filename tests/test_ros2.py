@@ -209,6 +209,7 @@ def test_reads_sim_time_odometry_scan_and_the_urdf(stamped: dict[str, str]) -> N
     assert seen["params"] == [0.34, 0.075]
 
 
+@pytest.mark.slow
 def test_the_drive_loop_holds_50_hz_of_sim_time(stamped: dict[str, str]) -> None:
     """The loop is paced by sim time: at most one velocity per 20 ms period (50 per sim
     second), and not starved (on this 2-core machine shared with other jobs, at load 13, 12
@@ -223,6 +224,7 @@ def test_the_drive_loop_holds_50_hz_of_sim_time(stamped: dict[str, str]) -> None
     assert 0.1 * seen["sim"] <= seen["travel"] <= 0.2 * (seen["sim"] + 0.5)
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_the_robot(stamped: dict[str, str], tmp_path: Path) -> None:
     """Ctrl-C while ``umbmark selfcal --ros2`` drives: exit 130, the last velocity it sent
     is zero (rclpy's own handler would have shut the context first), and the robot stands."""
@@ -299,6 +301,7 @@ def test_the_controller_going_away_mid_run_stops_the_robot(tmp_path: Path) -> No
     assert seen["last"] == [0.0, 0.0]
 
 
+@pytest.mark.slow
 def test_humble_unstamped_twist_is_found_on_the_graph(tmp_path: Path) -> None:
     """Humble's controller with ``use_stamped_vel: false`` takes geometry_msgs/Twist: the
     adapter finds that on the graph and the robot moves on it."""
