@@ -45,6 +45,7 @@ from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
+from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
@@ -282,7 +283,7 @@ def main() -> None:
     parser.add_argument("--laser-x", type=float, default=0.1)
     parser.add_argument("--upside-down", action="store_true")
     args = parser.parse_args()
-    rclpy.init()
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # SIGINT: KeyboardInterrupt
     sim = SimNode(args)
     executor = SingleThreadedExecutor()
     executor.add_node(sim.node)
@@ -296,6 +297,7 @@ def main() -> None:
     finally:
         stop.set()
         runner.join(2.0)
+        executor.shutdown(timeout_sec=1.0)
         sim.node.destroy_node()
         rclpy.try_shutdown()
 

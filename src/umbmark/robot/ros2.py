@@ -129,7 +129,7 @@ class Ros2Robot(RosRobot):
         kind = self._velocity_type(options)
         self._stamped = kind == STAMPED
         twist = TwistStamped if self._stamped else Twist
-        self._use_sim = node.count_publishers("/clock") > 0  # sim time: /clock's, below
+        self._use_sim = False  # sim time: decided below, once the robot's node is seen
         self._sim_time: float | None = None
         self._start(options, twist, node.create_publisher(twist, options.cmd_vel, 10))
         node.create_subscription(Odometry, options.odom, self._on_odom, 10)
@@ -145,6 +145,8 @@ class Ros2Robot(RosRobot):
         if options.truth:
             node.create_subscription(PoseStamped, options.truth, self._on_truth, 10)
         self._wait_connected(self._cmd.get_subscription_count, kind, "nav_msgs/msg/Odometry")
+        # the odometry came: the robot's node is discovered, and with it its /clock
+        self._use_sim = node.count_publishers("/clock") > 0
         deadline = time.monotonic() + options.timeout
         with self._ticks:
             while self._use_sim and self._sim_time is None:
@@ -155,7 +157,8 @@ class Ros2Robot(RosRobot):
                 self._ticks.wait(0.01)
 
     def _velocity_type(self, options: RosOptions) -> str:
-        """The twist type the velocity topic's subscriber takes, from the graph."""
+        """The twist type the velocity topic's subscriber takes, from the graph (the
+        controller's: a TwistStamped subscriber wins over a Twist one)."""
         timeout = options.timeout
         deadline = time.monotonic() + timeout
         while True:
