@@ -68,6 +68,7 @@ def read(robot: Ros1Robot) -> dict[str, Any]:
         "mount": [scan.mount.x, scan.mount.y, scan.mount.theta],
         "true": true,
         "ahead": float(np.median(ranges[np.isfinite(ranges)])),
+        "params": _params(robot.drive_params()),
     }
 
 

@@ -110,6 +110,27 @@ def diff_drive_config() -> types.SimpleNamespace:
     return config
 
 
+def urdf(separation: float, radius: float, laser_x: float) -> str:
+    """A robot description with the wheels ``separation`` apart and the laser."""
+    wheels = "".join(
+        f"""
+  <link name="{side}_wheel"><collision><geometry><cylinder radius="{radius}" length="0.04"/>
+  </geometry></collision></link>
+  <joint name="{side}_wheel_joint" type="continuous">
+    <parent link="base_link"/><child link="{side}_wheel"/>
+    <origin xyz="0 {y} {radius}" rpy="-1.5707963267948966 0 0"/><axis xyz="0 0 1"/>
+  </joint>"""
+        for side, y in (("left", separation / 2), ("right", -separation / 2))
+    )
+    return f"""<?xml version="1.0"?>
+<robot name="sim_robot"><link name="base_link"/>{wheels}
+  <link name="laser"/>
+  <joint name="laser_joint" type="fixed"><parent link="base_link"/><child link="laser"/>
+    <origin xyz="{laser_x} 0 0.2"/></joint>
+</robot>
+"""
+
+
 def _stamp(t: float) -> rospy.Time:
     return rospy.Time.from_sec(T0 + t)
 
@@ -133,8 +154,13 @@ class SimNode:
         self.rate, self.scan_every = args.rate, args.scan_every
         self.lock = threading.Lock()
         self.mute_odom = False
-        rospy.set_param(f"{CONTROLLER}/wheel_separation", 0.34)
-        rospy.set_param(f"{CONTROLLER}/wheel_radius", 0.075)
+        if args.urdf_geometry:  # as most robots: the controller reads the URDF
+            rospy.set_param("/robot_description", urdf(0.34, 0.075, args.laser_x))
+            rospy.set_param(f"{CONTROLLER}/left_wheel", "left_wheel_joint")
+            rospy.set_param(f"{CONTROLLER}/right_wheel", ["right_wheel_joint"])
+        else:
+            rospy.set_param(f"{CONTROLLER}/wheel_separation", 0.34)
+            rospy.set_param(f"{CONTROLLER}/wheel_radius", 0.075)
         for name in MULTIPLIERS:  # as the controller's YAML loads them, before the server
             rospy.set_param(f"{CONTROLLER}/{name}", 1.0)
         self.clock = rospy.Publisher("/clock", Clock, queue_size=10)
@@ -256,6 +282,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--laser-x", type=float, default=0.1)
     parser.add_argument("--upside-down", action="store_true")
+    parser.add_argument(
+        "--urdf-geometry",
+        action="store_true",
+        help="wheel_separation and wheel_radius only in robot_description",
+    )
     args = parser.parse_args()
     import rosgraph
 

@@ -310,6 +310,18 @@ def test_unknown_odometry_topic_is_one_line(graph: RosGraph, tmp_path: Path) -> 
     assert "/nope" in lines[0]
 
 
+def test_geometry_only_in_the_urdf(tmp_path: Path) -> None:
+    """A controller with no wheel_separation or wheel_radius on the parameter server takes
+    them from the URDF (robot_description, its left_wheel/right_wheel joints): so does the
+    adapter. The node's URDF has the wheels 0.34 m apart, radius 0.075 m."""
+    g = RosGraph(tmp_path, "--urdf-geometry")
+    try:
+        seen = _probe(g, "read")
+    finally:
+        g.close()
+    assert seen["params"][:2] == pytest.approx([0.34, 0.075])
+
+
 def test_no_master_is_one_line(tmp_path: Path) -> None:
     env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{_free_port()}",
            "ROS_HOME": str(tmp_path)}  # fmt: skip

@@ -336,6 +336,52 @@ def test_stale_odometry_stops_the_robot():
     _last_command_is_a_stop(robot)
 
 
+class _SilentLaser(VirtualRobot):
+    """The laser stops after ``after`` seconds (its last scan stays the latest)."""
+
+    after = 5.0
+
+    def scan(self):  # type: ignore[no-untyped-def]
+        scan = super().scan()
+        if scan is not None and scan.time > self.after:
+            scan = replace(scan, time=self.after)
+        return scan
+
+
+def test_a_silent_laser_stops_the_robot():
+    """On the first leg (4 m at 0.2 m/s takes 20 s) the laser goes silent at 5 s: the
+    robot stops within the 1 s limit plus one look ahead (0.25 s)."""
+    robot = _SilentLaser(seed=1)
+    with pytest.raises(SafetyError, match="scan stale"):
+        drive_square(robot, 4.0, Direction.CCW)
+    _last_command_is_a_stop(robot)
+    assert robot.now() < 5.0 + 1.0 + 0.25 + 0.05
+
+
+class _ResetOdometry(VirtualRobot):
+    """The controller restarts at ``at`` seconds: its odometry starts again from zero."""
+
+    at = 8.0
+
+    def odometry(self):  # type: ignore[no-untyped-def]
+        odom = super().odometry()
+        if odom.time < self.at:
+            return odom
+        if not hasattr(self, "_zero"):
+            self._zero = odom.pose
+        return replace(odom, pose=odom.pose.relative_to(self._zero))
+
+
+def test_a_controller_restart_mid_leg_stops_the_robot():
+    """At 8 s the robot is about 1.3 m along its first leg (0.2 m/s after its 0.67 s
+    ramp): the odometry jumps back to zero, far more than 20 ms of driving allows."""
+    robot = _ResetOdometry(seed=1)
+    with pytest.raises(SafetyError, match=r"odometry jumped 1\.[0-9]+ m .*restarted"):
+        drive_square(robot, 4.0, Direction.CCW)
+    _last_command_is_a_stop(robot)
+    assert robot.now() < 8.0 + 0.05
+
+
 def test_a_person_stepping_in_stops_the_robot():
     base = corner_world()
     # someone stands on the first leg, 2 m ahead

@@ -74,6 +74,12 @@ class DriveLimits:
         the stop stops the routine.
     stale_odometry : float
         Odometry older than this [s] stops the robot.
+    stale_scan : float
+        A laser whose latest scan is older than this [s] stops the robot on the legs.
+    odometry_jump : float
+        The odometry moving between two readings by more than this [m] beyond what the
+        speed allows (or by more than ten times this in radians beyond the turn rate)
+        stops the robot: a controller restarted under it (its odometry reset).
     obstacle_distance, obstacle_half_angle : float
         A scan return closer than this [m] ahead (within this half angle [rad] of the
         direction of travel) stops the robot.
@@ -108,6 +114,8 @@ class DriveLimits:
     settle_limit: float = 30.0
     still_speed: float = 0.002
     stale_odometry: float = 0.5
+    stale_scan: float = 1.0
+    odometry_jump: float = 0.05
     obstacle_distance: float = 0.3
     obstacle_half_angle: float = math.radians(30.0)
     obstacle_period: float = 0.25
@@ -221,6 +229,8 @@ class _Driver:
                 f"the run takes more than {limits.time_factor:g} times its expected time",
             )
         pose = odom.pose
+        if self.samples and self.radius != math.inf:  # settling: an apply may make it jump
+            self._check_jump(self.samples[-1], odom.time, pose)
         self.samples.append((odom.time, pose.x, pose.y, pose.theta))
         local = pose.relative_to(self.origin)
         sign = self.direction.turn_sign
@@ -237,11 +247,37 @@ class _Driver:
             )
         return pose
 
+    def _check_jump(
+        self, last: tuple[float, float, float, float], time: float, pose: Pose2D
+    ) -> None:
+        """Stop when the odometry moved farther than the robot can since ``last``."""
+        limits = self.limits
+        dt = max(time - last[0], limits.period)
+        step = math.hypot(pose.x - last[1], pose.y - last[2])
+        turn = abs(float(wrap_angle(pose.theta - last[3])))
+        if (
+            step > 2.0 * limits.speed * dt + limits.odometry_jump
+            or turn > 2.0 * limits.turn_rate * dt + 10.0 * limits.odometry_jump
+        ):
+            raise stop_safely(
+                self.robot,
+                f"the odometry jumped {step:.3f} m and {math.degrees(turn):.1f} deg in "
+                f"{dt:.2f} s: was the controller restarted (its odometry reset)?",
+            )
+
     def check_ahead(self, forward: bool) -> None:
-        """Stop for a scan return within the obstacle distance in the direction of travel."""
+        """Stop for a scan return within the obstacle distance in the direction of travel,
+        and for a laser gone silent."""
         scan = self.robot.scan()
         if scan is None or not forward:
             return
+        age = self.robot.now() - scan.time
+        if age > self.limits.stale_scan:
+            raise stop_safely(
+                self.robot,
+                f"scan stale ({age:.2f} s old, limit {self.limits.stale_scan:g} s): the laser "
+                "went silent, and nothing watches for obstacles",
+            )
         distance = obstacle_ahead(scan, self.limits.obstacle_half_angle)
         if distance < self.limits.obstacle_distance:
             raise stop_safely(
@@ -306,13 +342,16 @@ class _Driver:
         self.command(0.0, 0.0)
 
     def settle(self) -> Stamped:
-        """Wait until the odometry has been still for ``settle_time``; the settled pose."""
+        """Wait until the odometry has been still for ``settle_time`` and for half the
+        readings that takes (a loop stalled on a busy machine reads too few to show the
+        stand the run log needs); the settled pose."""
         lim = self.limits
         self.robot.send_velocity(0.0, 0.0)
         still_since = begun = self.robot.now()
         last = self.read()
         last_time = self.robot.now()
-        while self.robot.now() - still_since < lim.settle_time:
+        reads, needed = 0, max(2, round(0.5 * lim.settle_time / lim.period))
+        while self.robot.now() - still_since < lim.settle_time or reads < needed:
             if self.robot.now() - begun > lim.settle_limit:
                 raise stop_safely(
                     self.robot,
@@ -327,8 +366,9 @@ class _Driver:
             moved = math.hypot(pose.x - last.x, pose.y - last.y)
             turned = abs(float(wrap_angle(pose.theta - last.theta)))
             span = max(now - last_time, 1e-9)
+            reads += 1
             if moved / span > lim.still_speed or turned / span > lim.still_speed:
-                still_since = now
+                still_since, reads = now, 0
             last, last_time = pose, now
         odom = self.robot.odometry()
         assert odom is not None  # read() checked it

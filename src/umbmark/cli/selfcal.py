@@ -29,7 +29,8 @@ DRIVING = "Driving"
         option("--ros1", "backend", flag_value="ros1", section=ROBOT,
                help="A ROS 1 robot (rospy; ROS_MASTER_URI)."),
         option("--ros2", "backend", flag_value="ros2", section=ROBOT,
-               help="A ROS 2 robot (rclpy; never run on our machines: see docs/selfcal.md)."),
+               help="A ROS 2 robot (rclpy: pip install '.[ros2]' in umbmark's checkout; "
+               "ROS_DOMAIN_ID)."),
         option("--sim-E-d", "--E-d", "E_d", section=ROBOT, type=float, default=1.004,
                show_default=True,
                help="With --sim: the virtual robot's D_R / D_L."),
@@ -70,10 +71,15 @@ DRIVING = "Driving"
                help="Acceleration limit [m/s^2] (0.01 to 5)."),
         option("--turn-rate", section=DRIVING, type=float, default=0.8, show_default=True,
                help="Top turn rate on the spot [rad/s] (0.05 to 3)."),
-        option("--cmd-vel", section=ROS, default="/cmd_vel", show_default=True,
-               help="Velocity command topic (geometry_msgs/Twist)."),
-        option("--odom-topic", section=ROS, default="/odom", show_default=True,
-               help="Odometry topic (nav_msgs/Odometry)."),
+        option("--cmd-vel", section=ROS, default="",
+               help="Velocity command topic, Twist or TwistStamped as the controller takes it "
+               "[default: ROS 2 CONTROLLER/cmd_vel, ROS 1 /cmd_vel]."),
+        option("--odom-topic", section=ROS, default="",
+               help="Odometry topic, nav_msgs/Odometry [default: ROS 2 CONTROLLER/odom, "
+               "ROS 1 /odom]."),
+        option("--laser-mount", section=ROS, default=None, metavar="X,Y,YAW",
+               help="ROS 2: the laser's mounting in the base frame (metres, degrees) "
+               "[default: from the URDF on /robot_description]."),
         option("--scan-topic", section=ROS, default="/scan", show_default=True,
                help="Laser scan topic (sensor_msgs/LaserScan); its mounting from TF."),
         option("--range-topics", section=ROS, default=None,
@@ -88,6 +94,10 @@ DRIVING = "Driving"
                help="The YAML the controller loads (--apply yaml writes the multipliers)."),
         option("--reload", section=ROS, is_flag=True,
                help="ROS 2: reload the controller after writing its parameter file."),
+        option("--resume", section=OUTPUTS, type=click.Path(file_okay=False), default=None,
+               metavar="DIR",
+               help="Go on with the self-calibration that stopped in DIR for a controller "
+               "restart (its settings; the robot options as before)."),
         option("--robot", section=OUTPUTS, default=None,
                help="Record every pass in the history under this name (umbmark history NAME)."),
         option("--history", section=OUTPUTS, type=click.Path(dir_okay=False), default=None,
@@ -123,7 +133,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     from umbmark.jobs.selfcal import selfcal as run_selfcal
     from umbmark.outputs.files import fresh_folder
     from umbmark.robot.connect import connect
-    from umbmark.robot.ros_common import RosOptions
+    from umbmark.robot.ros_common import RosOptions, laser_mount
 
     if backend is None:
         raise InputError("choose the robot: --sim, --ros1 or --ros2")
@@ -138,7 +148,9 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         controller=options.pop("controller"),
         params_file=options.pop("params_file"),
         reload=options.pop("reload"),
+        laser_mount=None if options["laser_mount"] is None else laser_mount(options["laser_mount"]),
     )
+    options.pop("laser_mount")
     sim = {k: options.pop(k) for k in ("E_d", "E_b", "E_s", "slip", "seed")}
     from umbmark.autocal.drive import DriveLimits
 
@@ -161,7 +173,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
 
             report = run_selfcal(
                 robot, limits=limits, progress=progress, ask=ask,
-                robot_name=options.pop("robot"), **options,
+                robot_name=options.pop("robot"), notify=note, **options,
             )  # fmt: skip
     finally:
         robot.close()
@@ -171,6 +183,8 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         for line in p.warnings:
             warn(f"{p.label}, {line}")
     wrote(report.files)
+    if report.restart is not None:
+        warn(report.restart)
     if json_out:
         click.echo(report.to_json(), nl=False)
         return

@@ -32,7 +32,7 @@ import math
 import os
 import tempfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -52,14 +52,15 @@ from umbmark.autocal.record import (
     pass_folder,
     record_pass,
 )
+from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, write_state
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
-from umbmark.core.jsontext import JsonText
+from umbmark.jobs.selfcal_report import PassResult, SelfCalReport
 from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DriveParams, Robot
 
 if TYPE_CHECKING:
-    from umbmark.jobs.calibrate import CalibrationReport
+    pass
 
 __all__ = ["MAX_SELFCAL_PASSES", "PassResult", "SelfCalReport", "default_folder", "selfcal"]
 
@@ -70,145 +71,6 @@ MAX_SELFCAL_RUNS = 20
 
 #: Live progress: (pass label, run number, direction, what) for a terminal.
 Progress = Callable[[str, int, Direction | None, str], None]
-
-
-@dataclass(frozen=True)
-class PassResult:
-    """One UMBmark pass of the self-calibration.
-
-    Attributes
-    ----------
-    label : str
-        ``pass 1``, ``pass 2``, ..., ``verification``.
-    folder : Path or None
-        Its run log (None: not kept, the self-calibration was given no ``out``).
-    report : CalibrationReport
-        Its calibration (composed with the parameters active during it).
-    params : DriveParams
-        The parameters the controller ran with during the pass.
-    applied : ApplyResult or None
-        What applying its correction did (None: not applied).
-    warnings : tuple of str
-        Runs whose odometry did not end where it was sent (the benchmark assumes the
-        robot follows the square by its odometry).
-    """
-
-    label: str
-    folder: Path | None
-    report: CalibrationReport
-    params: DriveParams
-    applied: ApplyResult | None = None
-    warnings: tuple[str, ...] = ()
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready (metres, radians)."""
-        estimate = self.report.estimate
-        return {
-            "label": self.label,
-            "folder": None if self.folder is None else str(self.folder),
-            "e_max_syst": self.report.e_max_syst,
-            "E_d": estimate.E_d,
-            "E_b": estimate.E_b,
-            "verdict": self.report.verdict.words,
-            "active": _multipliers(self.params),
-            "applied": None if self.applied is None else self.applied.active,
-            "apply_method": None if self.applied is None else self.applied.method,
-            "apply_message": None if self.applied is None else self.applied.message,
-            "warnings": list(self.warnings),
-        }
-
-
-@dataclass(frozen=True)
-class SelfCalReport(JsonText):
-    """What a self-calibration did and found.
-
-    Attributes
-    ----------
-    robot : str
-        The robot's name.
-    side_length : float
-        The square's side [m].
-    measurement : str
-        ``lidar``, ``ranges``, ``truth`` or ``tape``.
-    coarse : CoarseTurning or None
-        The coarse turning check (None: not made).
-    coarse_applied : ApplyResult or None
-    passes : tuple of PassResult
-        The UMBmark passes, the verification last.
-    final : DriveParams
-        The parameters the controller holds at the end, as it reports them.
-    holds : Holds
-        What the controller holds: the pass whose correction (the last applied) and the
-        multipliers of ``final``; the terminal, the JSON, ``overlay.yaml`` and the HTML
-        page all say this one thing.
-    fix_errors : array, shape (k, 3), or None
-        Each fix's error against the truth (a virtual robot): ``x, y`` [m], heading [rad].
-    checks : tuple of str
-        What the checks before moving found.
-    files : tuple of Path
-        Files written.
-    """
-
-    robot: str
-    side_length: float
-    measurement: str
-    coarse: CoarseTurning | None
-    coarse_applied: ApplyResult | None
-    passes: tuple[PassResult, ...]
-    final: DriveParams
-    holds: Holds
-    fix_errors: np.ndarray | None = None
-    checks: tuple[str, ...] = ()
-    files: tuple[Path, ...] = field(default=(), compare=False)
-
-    @property
-    def e_max_syst_before(self) -> float | None:
-        """E_max,syst of the first pass [m]."""
-        return self.passes[0].report.e_max_syst if self.passes else None
-
-    @property
-    def e_max_syst_after(self) -> float | None:
-        """E_max,syst of the last pass (the verification, if driven) [m]; None when only
-        one pass was driven (nothing after a correction)."""
-        return self.passes[-1].report.e_max_syst if len(self.passes) > 1 else None
-
-    def measurement_errors(self) -> tuple[float, float] | None:
-        """RMS position [m] and heading [rad] error of the fixes against the truth."""
-        if self.fix_errors is None or self.fix_errors.size == 0:
-            return None
-        e = self.fix_errors
-        position = float(np.sqrt(np.mean(e[:, 0] ** 2 + e[:, 1] ** 2)))
-        return position, float(np.sqrt(np.mean(e[:, 2] ** 2)))
-
-    def to_dict(self) -> dict[str, Any]:
-        """What ``umbmark selfcal --json`` prints (metres, radians)."""
-        measurement: dict[str, Any] = {"method": self.measurement}
-        errors = self.measurement_errors()
-        if errors is not None:
-            measurement["rms_position_error"] = errors[0]
-            measurement["rms_heading_error"] = errors[1]
-            measurement["fixes"] = int(self.fix_errors.shape[0])  # type: ignore[union-attr]
-        return {
-            "robot": self.robot,
-            "side_length": self.side_length,
-            "checks": list(self.checks),
-            "coarse": None if self.coarse is None else self.coarse.to_dict(),
-            "passes": [p.to_dict() for p in self.passes],
-            "e_max_syst_before": self.e_max_syst_before,
-            "e_max_syst_after": self.e_max_syst_after,
-            "applied": self.holds.multipliers(),
-            "holds": self.holds.to_dict(),
-            "measurement": measurement,
-            "files": [str(f) for f in self.files],
-        }
-
-
-def _multipliers(params: DriveParams) -> dict[str, float]:
-    return {
-        "wheel_separation_multiplier": params.wheel_separation_multiplier,
-        "left_wheel_radius_multiplier": params.left_wheel_radius_multiplier,
-        "right_wheel_radius_multiplier": params.right_wheel_radius_multiplier,
-    }
 
 
 def _check_counts(side_length: float, runs: int, max_passes: int) -> None:
@@ -239,6 +101,8 @@ def selfcal(
     tape_marks: Sequence[float] | None = None,
     coarse: bool = True,
     force: bool = False,
+    resume: str | os.PathLike[str] | None = None,
+    notify: Callable[[str], None] | None = None,
 ) -> SelfCalReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
     corner, applied and verified (module documentation).
@@ -282,6 +146,12 @@ def selfcal(
         Check first that the robot turns as its odometry believes (lidar or truth).
     force : bool
         Replace an earlier self-calibration in ``out`` and a ``report`` file that exists.
+    resume : path, optional
+        The folder of a self-calibration stopped for a controller restart: go on with its
+        settings (the ones given here are not used), once the controller holds the
+        parameters it stopped on (:mod:`umbmark.autocal.resume`).
+    notify : callable, optional
+        Lines for a person, as they happen (the robot cannot take parameters live, ...).
 
     Raises
     ------
@@ -290,6 +160,12 @@ def selfcal(
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
     """
+    state = None
+    if resume is not None:
+        state = read_state(Path(resume))
+        s = state.settings
+        side_length, runs, measure = s["side_length"], s["runs"], s["measure"]
+        max_passes, verify, out, coarse = s["max_passes"], s["verify"], resume, False
     _check_counts(side_length, runs, max_passes)
     if measure not in MEASURE_METHODS:
         raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
@@ -300,17 +176,45 @@ def selfcal(
     name = robot_name or robot.name
     folder = None if out is None else Path(out)
     page = None if report is None else Path(report)
-    _check_outputs(folder, page, force)  # before anything moves
+    can_apply = getattr(robot, "can_apply", None)
+    restart_note = can_apply() if callable(can_apply) and method != "none" else None
+    if restart_note is not None and folder is None:
+        raise InputError(
+            f"{restart_note}: the routine stops for that restart and resumes from its folder; "
+            "give out=DIR"
+        )
+    prior: list[PassResult] = []
+    if state is not None and folder is not None:
+        problem = pending_problem(robot.drive_params(), state.pending)
+        if problem is not None:
+            raise InputError(f"{problem} ({folder / 'overlay.yaml'})")
+        prior = _resumed(folder, state)
+    else:
+        _check_outputs(folder, page, force)  # before anything moves
     kept = contextlib.nullcontext(str(folder))
     with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
         drive = _Passes(
             robot, how, Path(logs), side_length, runs, limits, name, progress,
             record_as=robot_name, history=history,
         )  # fmt: skip
-        found = _calibrate(drive, method, verify, max_passes, coarse, folder if force else None)
+        found = _calibrate(
+            drive, method, verify, max_passes, coarse,
+            folder if force and state is None else None,
+            _Restart(restart_note, notify, prior),
+        )  # fmt: skip
         final = robot.drive_params()
         holds = _holds(found.passes, final)
         files = _outputs(found.passes, holds, folder, page, force)
+        restart = None
+        if found.pending is not None and folder is not None:
+            restart, more = _stop_for_restart(
+                robot,
+                folder,
+                found.passes,
+                found.pending,
+                locals_settings(side_length, runs, measure, max_passes, verify),
+            )
+            files.extend(more)
     passes = found.passes if folder is not None else [replace(p, folder=None) for p in found.passes]
     errors = [
         (
@@ -333,6 +237,7 @@ def selfcal(
         fix_errors=np.asarray(errors, dtype=np.float64).reshape(-1, 3) if errors else None,
         checks=tuple(found.checks),
         files=tuple(files),
+        restart=restart,
     )
 
 
@@ -364,14 +269,27 @@ def _check_outputs(folder: Path | None, page: Path | None, force: bool) -> None:
 
 
 @dataclass(frozen=True)
+class _Restart:
+    """A robot that takes new parameters only on a controller restart: the note said
+    before moving (``None`` where it takes them live), where to say it, and the passes a
+    resumed self-calibration drove before the restart."""
+
+    note: str | None
+    notify: Callable[[str], None] | None
+    prior: list[PassResult]
+
+
+@dataclass(frozen=True)
 class _Found:
-    """What driving the passes gave."""
+    """What driving the passes gave; ``pending``: parameters that wait for a controller
+    restart (the routine stopped for it)."""
 
     checks: list[str]
     home: Home
     coarse: CoarseTurning | None
     coarse_applied: ApplyResult | None
     passes: list[PassResult]
+    pending: DriveParams | None = None
 
 
 def _calibrate(
@@ -381,55 +299,129 @@ def _calibrate(
     max_passes: int,
     coarse: bool,
     replacing: Path | None,
+    restart: _Restart,
 ) -> _Found:
     """The checks, the coarse turning check, the passes and the verification; a zero
     velocity at the end and on any error. ``replacing``: the folder whose earlier
-    self-calibration is removed once the checks before moving have passed."""
+    self-calibration is removed once the checks before moving have passed. A pass whose
+    parameters wait for a controller restart ends the passes (none is driven on
+    parameters that were not applied)."""
     robot, how, limits, progress = drive.robot, drive.how, drive.limits, drive.progress
+    passes = list(restart.prior)
     try:
         checks = preflight(robot, how, drive.side, limits)
+        if restart.note is not None:
+            checks.append(restart.note)
+            if restart.notify is not None:
+                restart.notify(restart.note)
         odom = settle(robot, limits).pose
         first = take_fix(robot, how)
         home = Home(first.pose, first, odom)
         home.fixes.append((first, corner_truth(robot, how)))
         if replacing is not None:
             clear_selfcal(replacing, remove=True)
-        coarse_check, coarse_applied = None, None
+        coarse_check, coarse_applied, pending = None, None, None
         if coarse and method != "none" and how.method in ("lidar", "truth"):
             if progress is not None:
                 progress("coarse", 0, None, "turning check")
             coarse_check = coarse_turning(robot, how, limits)
             if coarse_check.needed:
                 params = robot.drive_params()
-                coarse_applied = robot.apply(
-                    replace(
-                        params,
-                        wheel_separation_multiplier=params.wheel_separation_multiplier
-                        * coarse_check.ratio,
-                    ),
-                    method,
+                coarse_params = replace(
+                    params,
+                    wheel_separation_multiplier=params.wheel_separation_multiplier
+                    * coarse_check.ratio,
                 )
+                coarse_applied = robot.apply(coarse_params, method)
+                if not coarse_applied.active and restart.note is not None:
+                    pending = coarse_params
             # where it stands now, by a fix without a prior (the turns moved its odometry)
             home.odometry = settle(robot, limits).pose
             home.fix = take_fix(robot, how)
-        passes: list[PassResult] = []
-        for k in range(1, max_passes + 1):
-            result = _apply(robot, drive(f"pass {k}", home), method)
+        start_at = len(passes) + 1
+        if passes:  # resumed: a further pass only where the last one's rule says so
+            bench = passes[-1].report.benchmark
+            if bench is None or not bench.second_pass_recommended:
+                start_at = max_passes + 1
+        for k in range(start_at, max_passes + 1):
+            if pending is not None:
+                break
+            result, new = _apply(robot, drive(f"pass {k}", home), method)
             drive.mark_applied(result)
             home.reanchor(robot)
             passes.append(result)
             bench = result.report.benchmark
             if result.applied is None or not result.applied.active:
+                if restart.note is not None and result.applied is not None:
+                    pending = new
                 break
             if bench is None or not bench.second_pass_recommended:
                 break
-        if verify and passes and passes[-1].applied is not None and passes[-1].applied.active:
+        last = passes[-1].applied if passes else None
+        if verify and pending is None and last is not None and last.active:
             passes.append(drive("verification", home))
     except BaseException:
         robot.send_velocity(0.0, 0.0)
         raise
     robot.send_velocity(0.0, 0.0)
-    return _Found(checks, home, coarse_check, coarse_applied, passes)
+    return _Found(checks, home, coarse_check, coarse_applied, passes, pending)
+
+
+def locals_settings(
+    side_length: float, runs: int, measure: str, max_passes: int, verify: bool
+) -> dict[str, Any]:
+    """The test's settings a resumed self-calibration goes on with."""
+    return {
+        "side_length": side_length, "runs": runs, "measure": measure,
+        "max_passes": max_passes, "verify": verify,
+    }  # fmt: skip
+
+
+def _stop_for_restart(
+    robot: Robot,
+    folder: Path,
+    passes: list[PassResult],
+    pending: DriveParams,
+    settings: dict[str, Any],
+) -> tuple[str, list[Path]]:
+    """Write the overlay of the pending parameters and the state; what to do next."""
+    from umbmark.robot.ros_common import restart_commands, write_params
+
+    controller = getattr(getattr(robot, "options", None), "controller", "/diff_drive_controller")
+    overlay = folder / "restart-overlay.yaml"
+    write_params(overlay, pending, controller, ros2=True)
+    path = write_state(
+        folder,
+        SelfCalState(
+            settings,
+            tuple(
+                (p.label, str(p.folder.relative_to(folder)), p.params)
+                for p in passes
+                if p.folder is not None
+            ),
+            pending,
+        ),
+    )
+    text = (
+        f"stopped for a controller restart: {restart_commands(controller, pending, str(overlay))}"
+        f"; then: umbmark selfcal --resume {folder} (with the same robot options)"
+    )
+    return text, [overlay, path]
+
+
+def _resumed(folder: Path, state: SelfCalState) -> list[PassResult]:
+    """The passes a stopped self-calibration drove, their parameters now applied."""
+    from umbmark.jobs.calibrate import calibrate
+
+    out = []
+    for label, where, params in state.passes:
+        report = calibrate(folder / where)
+        out.append(PassResult(label, folder / where, report, params))
+    if out:
+        out[-1] = replace(
+            out[-1], applied=ApplyResult("yaml", True, "applied by the controller's restart")
+        )
+    return out
 
 
 @dataclass(frozen=True)
@@ -491,11 +483,11 @@ def _strays(measured: list[MeasuredRun], limits: DriveLimits) -> tuple[str, ...]
     return tuple(out)
 
 
-def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
+def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> tuple[PassResult, DriveParams]:
     """Apply the pass's correction, composed with its active parameters, unless the
-    verdict says not to or ``method`` is ``none``."""
+    verdict says not to or ``method`` is ``none``; the corrected parameters."""
     if method == "none" or not result.report.verdict.applies:
-        return result
+        return result, result.params
     calibration = result.report.calibration
     new = replace(
         result.params,
@@ -503,7 +495,7 @@ def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> PassResult:
         left_wheel_radius_multiplier=calibration.new_c_left,
         right_wheel_radius_multiplier=calibration.new_c_right,
     )
-    return replace(result, applied=robot.apply(new, method))
+    return replace(result, applied=robot.apply(new, method)), new
 
 
 def _holds(passes: list[PassResult], final: DriveParams) -> Holds:

@@ -39,6 +39,7 @@ from umbmark.robot.base import (
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
     RosOptions,
+    default_topics,
     held_problem,
     master_problem,
     multipliers,
@@ -160,6 +161,7 @@ class Ros1Robot(RosRobot):
         from sensor_msgs.msg import Range
 
         self._rospy = rospy
+        options = default_topics(options, ros2=False)
         timeout = options.timeout
         if not (0.0 < timeout < math.inf):
             raise InputError(f"timeout {timeout!r} s: give a positive time")
@@ -239,20 +241,42 @@ class Ros1Robot(RosRobot):
         """
         rospy, ns = self._rospy, self.options.controller.rstrip("/")
         values: dict[str, float] = {}
+        urdf = None
         for name, fallback in (
             ("wheel_separation", self.options.wheel_separation),
             ("wheel_radius", self.options.wheel_radius),
         ):
             value = rospy.get_param(f"{ns}/{name}", fallback)
-            if value is None:
-                raise InputError(
-                    f"the parameter server has no {ns}/{name} (the controller takes it from "
-                    "the URDF): set it, or give it in the options"
-                )
+            if value is None:  # as the controller does: from the URDF
+                urdf = urdf or self._urdf_geometry(ns)
+                value = urdf[0] if name == "wheel_separation" else urdf[1]
             values[name] = float(value)
         for name in MULTIPLIERS:
             values[name] = float(rospy.get_param(f"{ns}/{name}", 1.0))
         return DriveParams(**values)
+
+    def _urdf_geometry(self, ns: str) -> tuple[float, float]:
+        """The wheel separation and radius from the ``robot_description`` parameter, with
+        the controller's ``left_wheel``/``right_wheel`` joints, as the controller takes
+        them (ros_controllers' ``getWheelParametersFromURDF``)."""
+        from umbmark.robot.urdf import urdf_geometry
+
+        rospy = self._rospy
+        text = rospy.get_param("robot_description", None)
+        names = []
+        for side in ("left_wheel", "right_wheel"):
+            joints = rospy.get_param(f"{ns}/{side}", [])
+            names.append((joints,) if isinstance(joints, str) else tuple(joints or ()))
+        geometry = None
+        if isinstance(text, str):
+            geometry = urdf_geometry(text, self.options.base_frame, names[0], names[1])
+        if geometry is None:
+            where = "no robot_description" if not isinstance(text, str) else "its URDF has not"
+            raise InputError(
+                f"the parameter server has no {ns}/wheel_separation or wheel_radius, and "
+                f"{where} the wheels ({ns}/left_wheel, right_wheel): set them"
+            )
+        return geometry
 
     def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
         """Reconfigure the controller (multipliers within 0.5 to 1.5), or write its

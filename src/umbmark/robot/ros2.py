@@ -1,34 +1,43 @@
 """A ROS 2 robot behind the :class:`~umbmark.robot.base.Robot` interface, through rclpy.
 
-**Never run.** rclpy cannot be installed on the machines this was written on, so this
-adapter has not been run against any ROS 2 system, not even once. It is kept thin on
-purpose: the latest messages, the velocity out, the mountings, waiting and sleeping are
-:class:`umbmark.robot.ros_robot.RosRobot`'s, every conversion, the apply plan and the
-parameter file :mod:`umbmark.robot.ros_common`'s, unit-tested and exercised through the
-ROS 1 adapter (:mod:`umbmark.robot.ros1`, tested against a real ROS 1 master). What is
-specific to ROS 2 here (rclpy's node, executor, QoS, services) follows rclpy's and
-ros2_control's documented APIs but is untested: try it on a robot that stands on blocks
-first.
+Tested against a ROS 2 graph (``tests/test_ros2.py``: rclpy and the messages from the
+package index, a node with ros2_controllers' ``diff_drive_controller`` interfaces, 8x sim
+time). What it needs is rclpy and the message packages (``pip install ".[ros2]"``);
+not ``tf2_ros``, ``tf2_msgs`` nor ``controller_manager_msgs``.
 
-- Velocity out: ``geometry_msgs/msg/Twist`` on ``options.cmd_vel``.
+- Topics default from the controller: ``<controller>/cmd_vel``, ``<controller>/odom``.
+- Velocity out: the type the controller subscribes, taken from the graph —
+  ``geometry_msgs/msg/TwistStamped`` (Jazzy and later), stamped with the node's clock (sim
+  time when ``/clock`` runs, so the controller never finds it stale), or
+  ``geometry_msgs/msg/Twist`` (Humble's unstamped topic).
 - In: ``nav_msgs/msg/Odometry``, ``sensor_msgs/msg/LaserScan`` (sensor-data QoS), three
-  ``sensor_msgs/msg/Range``, a ground-truth ``geometry_msgs/msg/PoseStamped``; mountings
-  from TF (``tf2_ros.Buffer``).
-- Time: the node's clock; with ``/clock`` published the node uses sim time
-  (``use_sim_time``), and :meth:`Ros2Robot.wait` sleeps on it.
-- Parameters: ros2_controllers' diff_drive_controller reads its multipliers when it is
-  configured, so they are applied by writing the overlay YAML (``options.params_file``,
-  ``ros__parameters``) and, with ``options.reload``, reloading the controller through the
-  controller manager's services as ros2_control's spawner does: ``switch_controller``
-  (deactivate), ``unload_controller``, the manager's ``<controller>.params_file``
-  parameter, ``load_controller``, ``configure_controller``, ``switch_controller``
-  (activate). Without ``reload`` the result says the controller must be restarted.
+  ``sensor_msgs/msg/Range``, a ground-truth ``geometry_msgs/msg/PoseStamped``, the URDF on
+  ``/robot_description`` (transient local, as robot_state_publisher latches it).
+- Mountings: ``options.laser_mount`` (``--laser-mount``) where given, else from the URDF
+  (:func:`umbmark.robot.urdf.urdf_mount`).
+- Geometry: the controller's ``wheel_separation`` and ``wheel_radius`` (its
+  ``get_parameters`` service), else the URDF's wheels, else the options.
+- Time: one single-threaded executor spun in a thread of its own (joined on close). With
+  ``/clock`` published when connecting, ROS time is the latest ``/clock`` (sim time, read
+  in its callback, which then wakes the drive loop: no race with rclpy's time source), and
+  :meth:`Ros2Robot.wait` sleeps on it.
+  rclpy's signal handlers are off: Ctrl-C reaches the routine, which sends a zero velocity
+  before the context goes.
+- Applying: Jazzy's and Kilted's controller reads its multipliers only when it is
+  configured. Without ``controller_manager_msgs`` nothing here can configure it, so
+  :meth:`Ros2Robot.apply` writes ``options.params_file`` (when given) and says the
+  controller must be restarted on the new values (:func:`restart_commands`); the routine
+  stops there and ``umbmark selfcal --resume DIR`` continues after the restart. Where
+  ``controller_manager_msgs`` is importable and ``options.reload`` is set, the controller is
+  reloaded through the controller manager's services (``_reload``: not run here, no wheel
+  of those messages exists).
 - Safety: a zero velocity on :meth:`close` and before any error raised once connected.
 """
 
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import math
 import os
 import threading
@@ -36,34 +45,36 @@ import time
 from typing import Any
 
 from umbmark.core.errors import InputError
-from umbmark.robot.base import (
-    ApplyMethod,
-    ApplyResult,
-    DriveParams,
-)
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
+    Latest,
+    Mount,
     RosOptions,
+    default_topics,
     plan_apply,
+    restart_commands,
     write_params,
 )
 from umbmark.robot.ros_robot import RosRobot
+from umbmark.robot.urdf import urdf_geometry, urdf_mount
 
 __all__ = ["Ros2Robot"]
 
 #: The controller manager's node (ros2_control's default).
 CONTROLLER_MANAGER = "/controller_manager"
+#: The velocity types a diff_drive_controller subscribes.
+STAMPED, UNSTAMPED = "geometry_msgs/msg/TwistStamped", "geometry_msgs/msg/Twist"
 
 
 class Ros2Robot(RosRobot):
     """The robot behind a ROS 2 graph (``ROS_DOMAIN_ID``), driven through rclpy.
-    Never run (module documentation).
 
     Raises
     ------
     InputError
-        rclpy is missing, nobody subscribes the velocity topic, or the odometry is silent
-        for ``options.timeout`` (one line each).
+        rclpy is missing, nobody subscribes the velocity topic (or with another type than
+        a twist), or the odometry is silent for ``options.timeout`` (one line each).
     """
 
     name = "ROS 2 robot"
@@ -71,57 +82,109 @@ class Ros2Robot(RosRobot):
     def __init__(self, options: RosOptions) -> None:
         try:
             import rclpy
-            from rclpy.executors import MultiThreadedExecutor
+            from rclpy.context import Context
+            from rclpy.executors import SingleThreadedExecutor
+            from rclpy.signals import SignalHandlerOptions
         except ImportError as exc:
             raise InputError(
-                f"--ros2 needs rclpy ({exc}): source your ROS 2 setup (/opt/ros/DISTRO)"
+                f"--ros2 needs rclpy ({exc}): python -m pip install '.[ros2]' in umbmark's "
+                "checkout, or source your ROS 2 setup (/opt/ros/DISTRO)"
             ) from None
-        from geometry_msgs.msg import PoseStamped, Twist
+        options = default_topics(options, ros2=True)
+        if not (0.0 < options.timeout < math.inf):
+            raise InputError(f"timeout {options.timeout!r} s: give a positive time")
+        self._closed = False
+        self._context = Context()
+        rclpy.init(context=self._context, signal_handler_options=SignalHandlerOptions.NO)
+        self._node = rclpy.create_node("umbmark_selfcal", context=self._context)
+        self._executor = SingleThreadedExecutor(context=self._context)
+        self._executor.add_node(self._node)
+        self._running = True
+        self._spin = threading.Thread(target=self._spin_loop, name="umbmark-ros2", daemon=True)
+        self._spin.start()
+        self._ticks = threading.Condition()
+        self._description: Latest[str] = Latest()
+        try:
+            self._connect(options)
+        except BaseException:
+            self.close()
+            raise
+
+    def _spin_loop(self) -> None:
+        """The executor's thread: spins until :meth:`close` (or the context goes)."""
+        with contextlib.suppress(Exception):  # the context shut under it: end quietly
+            while self._running and self._context.ok():
+                self._executor.spin_once(timeout_sec=0.05)
+
+    def _connect(self, options: RosOptions) -> None:
+        from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
         from nav_msgs.msg import Odometry
-        from rclpy.qos import qos_profile_sensor_data
+        from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
         from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import LaserScan as ScanMsg
         from sensor_msgs.msg import Range
+        from std_msgs.msg import String
 
-        if not (0.0 < options.timeout < math.inf):
-            raise InputError(f"timeout {options.timeout!r} s: give a positive time")
-        if not rclpy.ok():
-            rclpy.init()
-        node = self._node = rclpy.create_node("umbmark_selfcal")
-        self._ticks = threading.Condition()
-        self._start(options, Twist, node.create_publisher(Twist, options.cmd_vel, 10))
+        node = self._node
+        kind = self._velocity_type(options)
+        self._stamped = kind == STAMPED
+        twist = TwistStamped if self._stamped else Twist
+        self._use_sim = False  # sim time: decided below, once the robot's node is seen
+        self._sim_time: float | None = None
+        self._start(options, twist, node.create_publisher(twist, options.cmd_vel, 10))
         node.create_subscription(Odometry, options.odom, self._on_odom, 10)
         node.create_subscription(Clock, "/clock", self._on_clock, 10)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        node.create_subscription(
+            String, "/robot_description", lambda m: self._description.put(m.data), latched
+        )
         if options.scan:
             node.create_subscription(ScanMsg, options.scan, self._scan.put, qos_profile_sensor_data)
         for topic, latest in zip(options.ranges, self._ranges, strict=True):
             node.create_subscription(Range, topic, latest.put, qos_profile_sensor_data)
         if options.truth:
             node.create_subscription(PoseStamped, options.truth, self._on_truth, 10)
-        import tf2_ros
+        self._wait_connected(self._cmd.get_subscription_count, kind, "nav_msgs/msg/Odometry")
+        # the odometry came: the robot's node is discovered, and with it its /clock
+        self._use_sim = node.count_publishers("/clock") > 0
+        deadline = time.monotonic() + options.timeout
+        with self._ticks:
+            while self._use_sim and self._sim_time is None:
+                if time.monotonic() > deadline:
+                    raise InputError(
+                        f"/clock is published but said nothing in {options.timeout:g} s"
+                    )
+                self._ticks.wait(0.01)
 
-        self._tf = tf2_ros.Buffer()
-        self._tf_listener = tf2_ros.TransformListener(self._tf, node)
-        self._executor = MultiThreadedExecutor()
-        self._executor.add_node(node)
-        self._spin = threading.Thread(target=self._executor.spin, daemon=True)
-        self._spin.start()
-        try:
-            self._wait_connected(
-                self._cmd.get_subscription_count,
-                "geometry_msgs/msg/Twist",
-                "nav_msgs/msg/Odometry",
-            )
-        except BaseException:
-            self.close()
-            raise
+    def _velocity_type(self, options: RosOptions) -> str:
+        """The twist type the velocity topic's subscriber takes, from the graph (the
+        controller's: a TwistStamped subscriber wins over a Twist one)."""
+        timeout = options.timeout
+        deadline = time.monotonic() + timeout
+        while True:
+            infos = self._node.get_subscriptions_info_by_topic(options.cmd_vel)
+            kinds = {info.topic_type for info in infos}
+            if kinds:
+                break
+            if time.monotonic() > deadline:
+                raise InputError(
+                    f"nobody subscribes {options.cmd_vel} after {timeout:g} s: is the robot's "
+                    "controller running, on this ROS_DOMAIN_ID? (--controller, --cmd-vel)"
+                )
+            time.sleep(0.05)
+        for kind in (STAMPED, UNSTAMPED):
+            if kind in kinds:
+                return kind
+        raise InputError(
+            f"{options.cmd_vel} is subscribed as {', '.join(sorted(kinds))}, not a "
+            "geometry_msgs Twist or TwistStamped (--cmd-vel)"
+        )
 
     def _on_clock(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
-        from rclpy.parameter import Parameter
-
-        if not self._node.get_parameter("use_sim_time").value:
-            self._node.set_parameters([Parameter("use_sim_time", Parameter.Type.BOOL, True)])
+        """Sim time: kept here, then the waiting drive loop is woken (rclpy's own time
+        source would update the node's clock in another callback, maybe after ours)."""
         with self._ticks:
+            self._sim_time = float(msg.clock.sec) + 1e-9 * float(msg.clock.nanosec)
             self._ticks.notify_all()
 
     def _on_odom(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
@@ -129,13 +192,37 @@ class Ros2Robot(RosRobot):
         with self._ticks:
             self._ticks.notify_all()
 
-    def _lookup(self, base: str, frame: str) -> Any:  # noqa: ANN401 (a TransformStamped)
-        from rclpy.duration import Duration
-        from rclpy.time import Time
+    def _velocity(self, linear: float, angular: float) -> Any:  # noqa: ANN401 (a message)
+        msg = self._twist()
+        twist = msg.twist if self._stamped else msg
+        twist.linear.x, twist.angular.z = linear, angular
+        if self._stamped:  # on the controller's clock: never stale, never zero
+            nanoseconds = round(self.now() * 1e9)
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(nanoseconds, 1_000_000_000)
+        return msg
 
-        return self._tf.lookup_transform(
-            base, frame, Time(), timeout=Duration(seconds=self.options.timeout)
-        )
+    def _mount(self, frame: str) -> Mount:
+        """The sensor frame's mounting: ``--laser-mount`` for the laser, else the URDF."""
+        mount = self._mounts.get(frame)
+        if mount is not None:
+            return mount
+        scan = self._scan.get()
+        given = self.options.laser_mount
+        if given is not None and scan is not None and scan.header.frame_id == frame:
+            mount = Mount(given)
+        else:
+            text = self._description.wait(self.options.timeout)
+            found = None if text is None else urdf_mount(text, self.options.base_frame, frame)
+            if found is None:
+                self._stop()
+                where = "no URDF on /robot_description" if text is None else "not in the URDF"
+                raise InputError(
+                    f"no mounting of {frame!r} in {self.options.base_frame} ({where}): give "
+                    "--laser-mount x,y,yaw (metres, degrees)"
+                )
+            mount = found
+        self._mounts[frame] = mount
+        return mount
 
     def _clock(self) -> threading.Condition:
         return self._ticks
@@ -143,11 +230,15 @@ class Ros2Robot(RosRobot):
     # --- the Robot interface --------------------------------------------------------
 
     def now(self) -> float:
-        """The node's clock [s] (sim time once ``/clock`` is published)."""
+        """ROS time [s]: the latest ``/clock`` where it was published when connecting (sim
+        time), else the system clock."""
+        if self._use_sim and self._sim_time is not None:
+            return self._sim_time
         return float(self._node.get_clock().now().nanoseconds) * 1e-9
 
     def drive_params(self) -> DriveParams:
-        """The controller's parameters, by its ``get_parameters`` service."""
+        """The controller's parameters (its ``get_parameters`` service); the wheel
+        separation and radius, where it has none, from the URDF or the options."""
         from rcl_interfaces.srv import GetParameters
 
         names = ["wheel_separation", "wheel_radius", *MULTIPLIERS]
@@ -156,51 +247,74 @@ class Ros2Robot(RosRobot):
         ns = self.options.controller.rstrip("/")
         answer = self._call(GetParameters, f"{ns}/get_parameters", request)
         got = {n: _double(v) for n, v in zip(names, answer.values, strict=False)}
-        fallback = {
-            "wheel_separation": self.options.wheel_separation,
-            "wheel_radius": self.options.wheel_radius,
-        }
-        values: dict[str, float] = {}
-        for name in names:
-            value = got.get(name)
-            if value is None:
-                value = fallback.get(name, 1.0)
-            if value is None:
-                raise InputError(f"{ns} has no parameter {name}: give it in the options")
-            values[name] = value
+        values = {name: got.get(name) or 0.0 for name in names}
+        if not (values["wheel_separation"] > 0.0 and values["wheel_radius"] > 0.0):
+            text = self._description.wait(min(1.0, self.options.timeout))
+            geometry = None if text is None else urdf_geometry(text, self.options.base_frame)
+            sep, radius = geometry or (self.options.wheel_separation, self.options.wheel_radius)
+            if sep is None or radius is None:
+                self._stop()
+                raise InputError(
+                    f"{ns} has no wheel_separation and wheel_radius, nor has the URDF on "
+                    "/robot_description two wheels: is --controller the diff_drive_controller?"
+                )
+            values["wheel_separation"] = values["wheel_separation"] or sep
+            values["wheel_radius"] = values["wheel_radius"] or radius
+        for name in MULTIPLIERS:
+            values[name] = values[name] or 1.0
         return DriveParams(**values)
 
+    def can_apply(self) -> str | None:
+        """Why the controller cannot take new parameters while the routine runs (None:
+        it can): said before the robot moves."""
+        if self.options.reload and importlib.util.find_spec("controller_manager_msgs"):
+            return None
+        return (
+            "the controller reads its multipliers only when it is configured, and "
+            "controller_manager_msgs is not installed here: the routine stops after the "
+            "first pass for a controller restart, and umbmark selfcal --resume DIR goes on"
+        )
+
     def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
-        """Write the overlay YAML and, with ``options.reload``, reload the controller."""
+        """Write the parameter file (when given) and, where the controller manager's
+        messages are importable and ``options.reload`` is set, reload the controller;
+        else say how to restart it on the new values."""
         plan = plan_apply(params, "yaml" if method == "reconfigure" else method)
         if plan.method == "none":
             return ApplyResult("none", False, plan.reason)
         path = self.options.params_file
-        if path is None:
-            return ApplyResult(
-                "none", False, "ROS 2: give --params-file (the controller reads its multipliers "
-                "when configured, from that file): not applied"
-            )  # fmt: skip
-        notes = write_params(path, params, self.options.controller, ros2=True)
+        notes = [] if path is None else write_params(path, params, self.options.controller,
+                                                      ros2=True)  # fmt: skip
         extra = "".join(f"; {n}" for n in notes)
-        if not self.options.reload:
+        wrote = "" if path is None else f"wrote {os.fspath(path)}; "
+        if self.can_apply() is None and path is not None:
+            self._reload(os.path.abspath(path))
             return ApplyResult(
-                "yaml", False, f"wrote {os.fspath(path)}: restart the controller on it (or use "
-                f"--reload){extra}", file=os.fspath(path),
-            )  # fmt: skip
-        self._reload(os.path.abspath(path))
+                "yaml", True, f"{wrote}reloaded the controller{extra}", file=os.fspath(path)
+            )
         return ApplyResult(
-            "yaml", True, f"wrote {os.fspath(path)} and reloaded the controller{extra}",
-            file=os.fspath(path),
-        )  # fmt: skip
+            "yaml",
+            False,
+            f"{wrote}restart the controller on them: "
+            f"{restart_commands(self.options.controller, params, path)}{extra}",
+            file=None if path is None else os.fspath(path),
+        )
 
     def close(self) -> None:
-        """A zero velocity, then the node and its executor go."""
-        self._stop()
-        time.sleep(0.05)
+        """A zero velocity, then the executor's thread is joined and the node goes."""
+        if self._closed:
+            return
+        self._closed = True
+        if hasattr(self, "_cmd"):
+            self._stop()
+            time.sleep(0.05)
+        self._running = False
+        self._spin.join(2.0)
         with contextlib.suppress(Exception):
             self._executor.shutdown(timeout_sec=1.0)
             self._node.destroy_node()
+        with contextlib.suppress(Exception):
+            self._context.try_shutdown()
 
     # --- services -----------------------------------------------------------------------
 
@@ -210,20 +324,21 @@ class Ros2Robot(RosRobot):
         try:
             if not client.wait_for_service(timeout_sec=timeout):
                 self._stop()
-                raise InputError(f"no service {service} after {timeout:g} s")
+                raise InputError(f"no service {service} after {timeout:g} s (--controller)")
             future = client.call_async(request)
             deadline = time.monotonic() + timeout
             while not future.done():
                 if time.monotonic() > deadline:
                     self._stop()
                     raise InputError(f"{service} did not answer in {timeout:g} s")
-                time.sleep(0.01)
+                time.sleep(0.005)
             return future.result()
         finally:
             self._node.destroy_client(client)
 
     def _reload(self, path: str) -> None:
-        """Reload the controller on ``path``, as ros2_control's spawner loads one."""
+        """Reload the controller on ``path``, as ros2_control's spawner loads one. Not run
+        here (no controller_manager_msgs wheel exists)."""
         from controller_manager_msgs.srv import (
             ConfigureController,
             LoadController,

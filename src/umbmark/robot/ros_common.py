@@ -42,13 +42,16 @@ __all__ = [
     "Mount",
     "RosOptions",
     "controller_keys",
+    "default_topics",
     "held_problem",
+    "laser_mount",
     "master_problem",
     "mount_from_transform",
     "multipliers",
     "plan_apply",
     "planar_pose",
     "range_reading",
+    "restart_commands",
     "scan_from_message",
     "stamp_seconds",
     "wait_on_clock",
@@ -74,8 +77,9 @@ class RosOptions:
     Attributes
     ----------
     cmd_vel, odom : str
-        The velocity command topic (``geometry_msgs/Twist``) and the odometry topic
-        (``nav_msgs/Odometry``).
+        The velocity command topic (``geometry_msgs/Twist``, or ``TwistStamped`` where the
+        controller takes that) and the odometry topic (``nav_msgs/Odometry``); empty: the
+        default (:func:`default_topics`).
     scan : str or None
         The laser scan topic (``sensor_msgs/LaserScan``); its mounting comes from TF.
     ranges : tuple of str
@@ -98,10 +102,12 @@ class RosOptions:
         parameter file.
     timeout : float
         How long to wait for the first message of each topic and for services [s].
+    laser_mount : Pose2D or None
+        The laser's mounting in the base frame, where neither TF nor the URDF gives it.
     """
 
-    cmd_vel: str = "/cmd_vel"
-    odom: str = "/odom"
+    cmd_vel: str = ""
+    odom: str = ""
     scan: str | None = "/scan"
     ranges: tuple[str, ...] = ()
     truth: str | None = None
@@ -112,6 +118,34 @@ class RosOptions:
     wheel_radius: float | None = None
     reload: bool = False
     timeout: float = 5.0
+    laser_mount: Pose2D | None = None
+
+
+def default_topics(options: RosOptions, *, ros2: bool) -> RosOptions:
+    """``options`` with its empty topics filled in: ROS 2's diff_drive_controller has its
+    topics in its namespace (``<controller>/cmd_vel``, ``<controller>/odom``); on ROS 1
+    they are usually remapped to ``/cmd_vel`` and ``/odom``."""
+    from dataclasses import replace
+
+    ns = "/" + "/".join(controller_keys(options.controller)) if ros2 else ""
+    return replace(
+        options,
+        cmd_vel=options.cmd_vel or f"{ns}/cmd_vel",
+        odom=options.odom or f"{ns}/odom",
+    )
+
+
+def laser_mount(text: str) -> Pose2D:
+    """``--laser-mount x,y,yaw`` (metres, metres, degrees) as a pose in the base frame."""
+    try:
+        x, y, yaw = (float(v) for v in text.split(","))
+    except ValueError:
+        raise InputError(
+            f"--laser-mount {text[:60]!r}: give x,y,yaw (metres, metres, degrees)"
+        ) from None
+    if not all(math.isfinite(v) and abs(v) < 100.0 for v in (x, y)) or not math.isfinite(yaw):
+        raise InputError(f"--laser-mount {text[:60]!r}: give finite x, y within 100 m")
+    return Pose2D(x, y, math.radians(yaw))
 
 
 # --- messages -----------------------------------------------------------------------------
@@ -483,3 +517,18 @@ def write_params(
     block.update(values)
     atomic_write_text(target, parameter_document(data, comments))
     return notes
+
+
+def restart_commands(controller: str, params: DriveParams, overlay: str | None) -> str:
+    """How a person restarts a ROS 2 diff_drive_controller on new multipliers (it reads
+    them only when configured): the overlay as a further parameter file of its spawner
+    or launch file (later files override), or the three values in the launch file."""
+    name = controller_keys(controller)[-1]
+    values = ", ".join(f"{k}: {v:.6g}" for k, v in multipliers(params).items())
+    if overlay is None:
+        return f"set {values} in {name}'s parameters (the launch file's YAML) and restart it"
+    return (
+        f"add {overlay} after {name}'s parameter file and restart it (ros2 run "
+        f"controller_manager spawner {name} --param-file YOUR_FILE --param-file {overlay}; "
+        f"or in the launch file); it holds {values}"
+    )

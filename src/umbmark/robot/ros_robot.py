@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, SafetyError
 from umbmark.robot.base import LaserScan, RangeReading, Stamped
 from umbmark.robot.ros_common import (
     Latest,
@@ -83,7 +83,8 @@ class RosRobot:
     def _wait_connected(
         self, subscribers: Callable[[], int], twist_type: str, odom_type: str
     ) -> None:
-        """Wait for a subscriber of the velocity topic and the first odometry."""
+        """Wait for a subscriber of the velocity topic and the first odometry; from then on
+        :meth:`send_velocity` checks that the subscriber stays."""
         timeout = self.options.timeout
         deadline = time.monotonic() + timeout
         while subscribers() == 0:
@@ -98,6 +99,7 @@ class RosRobot:
                 f"no {odom_type} on {self.options.odom} in {timeout:g} s: "
                 "is the controller publishing it? (--odom-topic)"
             )
+        self._subscribers = subscribers
 
     def _mount(self, frame: str) -> Mount:
         """The sensor frame's mounting in the base frame, from TF (looked up once)."""
@@ -133,9 +135,14 @@ class RosRobot:
         if not (math.isfinite(linear) and math.isfinite(angular)):
             self._stop()
             raise InputError(f"velocity ({linear!r}, {angular!r}) is not finite")
-        msg = self._twist()
-        msg.linear.x, msg.angular.z = float(linear), float(angular)
-        self._cmd.publish(msg)
+        subscribers = getattr(self, "_subscribers", None)
+        if subscribers is not None and (linear or angular) and subscribers() == 0:
+            self._stop()
+            raise SafetyError(
+                f"nobody subscribes {self.options.cmd_vel} any more: the controller stopped "
+                "or is restarting"
+            )
+        self._cmd.publish(self._velocity(float(linear), float(angular)))
 
     def odometry(self) -> Stamped | None:
         """The latest odometry pose, stamped with its header's time."""
@@ -159,7 +166,13 @@ class RosRobot:
         """The latest ground-truth pose (None: no truth topic, or no message yet)."""
         return self._truth.get()
 
+    def _velocity(self, linear: float, angular: float) -> Any:  # noqa: ANN401 (a message)
+        """The velocity message: a ``Twist`` (a ROS 2 subclass may stamp it)."""
+        msg = self._twist()
+        msg.linear.x, msg.angular.z = linear, angular
+        return msg
+
     def _stop(self) -> None:
         """A zero velocity, whatever state ROS is in."""
         with contextlib.suppress(Exception):  # stopping must not raise
-            self._cmd.publish(self._twist())
+            self._cmd.publish(self._velocity(0.0, 0.0))

@@ -1,0 +1,306 @@
+"""A ROS 2 node simulating a differential-drive robot behind ros2_controllers'
+``diff_drive_controller``, with :class:`umbmark.robot.virtual.VirtualRobot` underneath (for
+tests/test_ros2.py and benchmarks/bench_ros2.py). Run it with the ROS 2 wheels' Python
+(``.venv-ros2``); it prints ``ready`` on stdout once everything is up.
+
+The controller's interfaces as ros2_controllers has them (``diff_drive_controller.cpp``,
+``odometry.cpp``, ``diff_drive_controller_parameter.yaml``; Jazzy and Kilted):
+
+- the node is the controller's, ``/diff_drive_controller`` (``--controller``): it subscribes
+  ``~/cmd_vel`` as ``geometry_msgs/TwistStamped`` (``--unstamped``: ``geometry_msgs/Twist``,
+  Humble with ``use_stamped_vel: false``). A zero stamp is taken as "now"; a message whose
+  stamp is older than ``cmd_vel_timeout`` (0.5 s) when it comes is ignored; at each update a
+  command older than the timeout brakes (zero velocity);
+- it publishes ``~/odom`` (``nav_msgs/Odometry``, ``odom`` -> ``base_link``) every update;
+  ``/tf`` too where ``tf2_msgs`` is importable (no wheel of it exists);
+- its parameters ``wheel_separation``, ``wheel_radius``, ``wheel_separation_multiplier``,
+  ``left_wheel_radius_multiplier``, ``right_wheel_radius_multiplier``, ``cmd_vel_timeout``
+  are declared from ``--params-file`` (a ros2_control YAML, ``ros__parameters``; several
+  may be given, later ones override) and, as on Jazzy and Kilted, read only when the
+  controller is configured: ``set_parameters`` succeeds and changes nothing the odometry
+  uses until the controller is configured again (a restart of this node; the odometry then
+  starts from zero, as the controller's ``reset()`` does);
+- ``/clock`` (``rosgraph_msgs/Clock``) runs ``--rate`` times faster than real time, one
+  controller period (20 ms) at a time, from 1000 s;
+- ``/robot_description`` (``std_msgs/String``, transient local, as robot_state_publisher
+  publishes it): a URDF with ``base_link``, the two wheel joints (``wheel_separation``
+  apart, cylinders of ``wheel_radius``) and the laser joint (``--laser-x`` ahead,
+  ``--upside-down``: rolled by 180 degrees, its beams then published in reverse order);
+- ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``, sensor-data QoS) every
+  ``--scan-every`` periods; ``/ground_truth`` (``geometry_msgs/PoseStamped``, the true pose).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import threading
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import rclpy
+import yaml
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
+from rclpy.signals import SignalHandlerOptions
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import LaserScan
+from std_msgs.msg import String
+
+from umbmark.robot.base import DriveParams, Pose2D
+from umbmark.robot.virtual import VirtualRobot
+from umbmark.robot.world import Lidar, corner_world
+
+#: ROS time at the simulation's start [s].
+T0 = 1000.0
+#: The parameters the controller reads when configured, and their defaults here.
+DEFAULTS = {
+    "wheel_separation": 0.34,
+    "wheel_radius": 0.075,
+    "wheel_separation_multiplier": 1.0,
+    "left_wheel_radius_multiplier": 1.0,
+    "right_wheel_radius_multiplier": 1.0,
+    "cmd_vel_timeout": 0.5,
+}
+
+
+def _stamp(t: float) -> tuple[int, int]:
+    ns = round((T0 + t) * 1e9)
+    return ns // 1_000_000_000, ns % 1_000_000_000
+
+
+def _quaternion(yaw: float) -> tuple[float, float, float, float]:
+    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+
+
+def read_params(files: list[str], controller: str) -> dict[str, float]:
+    """The controller's parameters from ros2_control YAML files (later files override)."""
+    values = dict(DEFAULTS)
+    name = controller.strip("/").split("/")[-1]
+    for path in files:
+        data = yaml.safe_load(Path(path).read_text()) or {}
+        block = (data.get(name) or {}).get("ros__parameters") or {}
+        for key in DEFAULTS:
+            if key in block:
+                values[key] = float(block[key])
+    return values
+
+
+def urdf(separation: float, radius: float, laser_x: float, upside_down: bool) -> str:
+    """The robot's description: base_link, two wheels, the laser."""
+    roll = math.pi if upside_down else 0.0
+
+    def wheel(side: str, y: float) -> str:
+        return f"""
+  <link name="{side}_wheel"><collision><geometry>
+    <cylinder radius="{radius}" length="0.04"/></geometry></collision></link>
+  <joint name="{side}_wheel_joint" type="continuous">
+    <parent link="base_link"/><child link="{side}_wheel"/>
+    <origin xyz="0 {y} {radius}" rpy="-1.5707963267948966 0 0"/><axis xyz="0 0 1"/>
+  </joint>"""
+
+    return f"""<?xml version="1.0"?>
+<robot name="sim_robot">
+  <link name="base_link"/>{wheel("left", separation / 2)}{wheel("right", -separation / 2)}
+  <link name="laser"/>
+  <joint name="laser_joint" type="fixed">
+    <parent link="base_link"/><child link="laser"/>
+    <origin xyz="{laser_x} 0 0.2" rpy="{roll} 0 0"/>
+  </joint>
+</robot>
+"""
+
+
+class SimNode:
+    def __init__(self, args: argparse.Namespace) -> None:
+        name = args.controller.strip("/").split("/")[-1]
+        self.node = node = rclpy.create_node(name)
+        configured = read_params(args.params_file, args.controller)
+        for key, value in configured.items():  # set_parameters changes these, not the robot
+            node.declare_parameter(key, value)
+        self.timeout = configured["cmd_vel_timeout"]
+        world = corner_world()
+        self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
+        self.robot = VirtualRobot(
+            E_d=args.E_d, E_b=args.E_b, slip=args.slip, seed=args.seed,
+            world=replace(world, lidar=self.lidar), command_timeout=60.0,
+            params=DriveParams(**{k: v for k, v in configured.items() if k != "cmd_vel_timeout"}),
+        )  # fmt: skip
+        self.upside_down = args.upside_down
+        self.rate, self.scan_every = args.rate, args.scan_every
+        self.lock = threading.Lock()
+        self.command = (0.0, 0.0)
+        self.command_time = -math.inf  # sim time of the command's stamp
+        self.clock = node.create_publisher(Clock, "/clock", 10)
+        self.odom = node.create_publisher(Odometry, "~/odom", 10)
+        self.scan = node.create_publisher(LaserScan, "/scan", qos_profile_sensor_data)
+        self.truth = node.create_publisher(PoseStamped, "/ground_truth", 10)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.description = node.create_publisher(String, "/robot_description", latched)
+        self.description.publish(
+            String(
+                data=urdf(
+                    configured["wheel_separation"], configured["wheel_radius"], args.laser_x,
+                    args.upside_down,
+                )
+            )
+        )  # fmt: skip
+        try:
+            from tf2_msgs.msg import TFMessage
+
+            self.tf = node.create_publisher(TFMessage, "/tf", 10)
+        except ImportError:
+            self.tf = None
+        if args.unstamped:
+            node.create_subscription(Twist, "~/cmd_vel", self._on_twist, 10)
+        else:
+            node.create_subscription(TwistStamped, "~/cmd_vel", self._on_stamped, 10)
+
+    def _sim_now(self) -> float:
+        return self.robot.now()
+
+    def _on_twist(self, msg: Twist) -> None:
+        with self.lock:  # Humble's unstamped topic: stamped on arrival
+            self.command = (msg.linear.x, msg.angular.z)
+            self.command_time = self._sim_now()
+
+    def _on_stamped(self, msg: TwistStamped) -> None:
+        with self.lock:
+            now = self._sim_now()
+            stamp = msg.header.stamp
+            t = now if stamp.sec == 0 and stamp.nanosec == 0 else (
+                stamp.sec + 1e-9 * stamp.nanosec - T0
+            )  # fmt: skip
+            if self.timeout != 0.0 and now - t >= self.timeout:
+                return  # "Ignoring the received message ... older than the current time"
+            self.command = (msg.twist.linear.x, msg.twist.angular.z)
+            self.command_time = t
+
+    def _step(self, step: int) -> None:
+        robot = self.robot
+        age = robot.now() - self.command_time
+        if self.timeout != 0.0 and age > self.timeout:
+            robot.send_velocity(0.0, 0.0)  # "Velocity command timed out. Braking."
+        else:
+            robot.send_velocity(*self.command)
+        robot.wait(robot.period)
+        self._publish(step)
+
+    def _publish(self, step: int) -> None:
+        robot = self.robot
+        sec, nanosec = _stamp(robot.now())
+        clock = Clock()
+        clock.clock.sec, clock.clock.nanosec = sec, nanosec
+        self.clock.publish(clock)
+        pose = robot.odometry().pose
+        msg = Odometry()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        msg.header.frame_id, msg.child_frame_id = "odom", "base_link"
+        p = msg.pose.pose
+        p.position.x, p.position.y = pose.x, pose.y
+        q = p.orientation
+        q.x, q.y, q.z, q.w = _quaternion(pose.theta)
+        self.odom.publish(msg)
+        if self.tf is not None:
+            self._publish_tf(msg)
+        if step % self.scan_every == 0:
+            self._publish_sensors(sec, nanosec)
+
+    def _publish_tf(self, odom: Odometry) -> None:
+        from geometry_msgs.msg import TransformStamped
+        from tf2_msgs.msg import TFMessage
+
+        tf = TransformStamped()
+        tf.header = odom.header
+        tf.child_frame_id = "base_link"
+        tf.transform.translation.x = odom.pose.pose.position.x
+        tf.transform.translation.y = odom.pose.pose.position.y
+        tf.transform.rotation = odom.pose.pose.orientation
+        self.tf.publish(TFMessage(transforms=[tf]))
+
+    def _publish_sensors(self, sec: int, nanosec: int) -> None:
+        robot = self.robot
+        scan = robot.scan()
+        if scan is not None:
+            msg = LaserScan()
+            msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+            msg.header.frame_id = "laser"
+            ranges, angle_min = scan.ranges, scan.angle_min
+            if self.upside_down:  # its beams run clockwise seen from above
+                angle_min = -(scan.angle_min + scan.angle_increment * (ranges.size - 1))
+                ranges = ranges[::-1]
+            msg.angle_min, msg.angle_increment = angle_min, scan.angle_increment
+            msg.angle_max = angle_min + scan.angle_increment * (ranges.size - 1)
+            msg.range_min, msg.range_max = scan.range_min, scan.range_max
+            msg.ranges = [float(r) for r in ranges]
+            self.scan.publish(msg)
+        true = robot.true_pose
+        truth = PoseStamped()
+        truth.header.stamp.sec, truth.header.stamp.nanosec = sec, nanosec
+        truth.header.frame_id = "world"
+        truth.pose.position.x, truth.pose.position.y = true.x, true.y
+        o = truth.pose.orientation
+        o.x, o.y, o.z, o.w = _quaternion(true.theta)
+        self.truth.publish(truth)
+
+    def run(self, stop: threading.Event) -> None:
+        period = self.robot.period
+        wall_step = period / self.rate
+        with self.lock:
+            self._publish(0)
+        print("ready", flush=True)
+        step, start = 0, time.monotonic()
+        while not stop.is_set() and rclpy.ok():
+            step += 1
+            with self.lock:
+                try:
+                    self._step(step)
+                except Exception:
+                    if not rclpy.ok():  # Ctrl-C shut the context down under the loop
+                        return
+                    raise
+            delay = start + step * wall_step - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            elif delay < -0.5:  # fell behind (a busy machine): do not race to catch up
+                start = time.monotonic() - step * wall_step
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rate", type=float, default=8.0, help="times faster than real time")
+    parser.add_argument("--scan-every", type=int, default=5, help="periods between scans")
+    parser.add_argument("--controller", default="/diff_drive_controller")
+    parser.add_argument("--params-file", action="append", default=[])
+    parser.add_argument("--unstamped", action="store_true", help="Humble: geometry_msgs/Twist")
+    parser.add_argument("--E-d", dest="E_d", type=float, default=1.004)
+    parser.add_argument("--E-b", dest="E_b", type=float, default=0.97)
+    parser.add_argument("--slip", type=float, default=0.0004)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--laser-x", type=float, default=0.1)
+    parser.add_argument("--upside-down", action="store_true")
+    args = parser.parse_args()
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # SIGINT: KeyboardInterrupt
+    sim = SimNode(args)
+    executor = SingleThreadedExecutor()
+    executor.add_node(sim.node)
+    stop = threading.Event()
+    runner = threading.Thread(target=sim.run, args=(stop,), daemon=True)
+    runner.start()
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        stop.set()
+        runner.join(2.0)
+        executor.shutdown(timeout_sec=1.0)
+        sim.node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()
