@@ -189,6 +189,7 @@ def selfcal(
         if problem is not None:
             raise InputError(f"{problem} ({folder / 'overlay.yaml'})")
         prior = _resumed(folder, state)
+        _check_outputs(None, page, force)  # the folder's own page and overlay are replaced
     else:
         _check_outputs(folder, page, force)  # before anything moves
     kept = contextlib.nullcontext(str(folder))
@@ -204,7 +205,7 @@ def selfcal(
         )  # fmt: skip
         final = robot.drive_params()
         holds = _holds(found.passes, final)
-        files = _outputs(found.passes, holds, folder, page, force)
+        files = _outputs(found.passes, holds, folder, page, force or state is not None)
         restart = None
         if found.pending is not None and folder is not None:
             restart, more = _stop_for_restart(
@@ -529,7 +530,7 @@ def _outputs(
         written.append(page)
     if holds.held is not None and folder is not None:
         overlay = folder / OVERLAY_FILE
-        passes[holds.held - 1].report.write(yaml=overlay)
+        passes[holds.held - 1].report.write(yaml=overlay, force=force)
         written.append(overlay)
     return written
 
