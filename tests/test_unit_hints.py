@@ -191,7 +191,7 @@ def test_robots_within_ten_percent_are_all_taken_and_recovered(tmp_path):
     for k in range(24):
         E_d, E_b = 1 + rng.uniform(-0.05, 0.05), 1 + rng.uniform(-0.1, 0.1)
         sim = umbmark.simulate(E_d=E_d, E_b=E_b, seed=k)
-        sim.write(output=path)
+        sim.write(output=path, force=True)  # the same file, one robot after another
         beyond += max(math.hypot(*run.return_error) for run in sim.runs) > 4.0
         report = umbmark.calibrate(path, side_length=4, wheelbase=0.34)
         assert _unit_notes(report) == []
