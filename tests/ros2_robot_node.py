@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import signal
 import threading
 import time
 from dataclasses import replace
@@ -283,7 +284,10 @@ def main() -> None:
     parser.add_argument("--laser-x", type=float, default=0.1)
     parser.add_argument("--upside-down", action="store_true")
     args = parser.parse_args()
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # SIGINT: KeyboardInterrupt
+    # SIGINT is KeyboardInterrupt even where the node was started with it ignored (a
+    # background job of a shell), so that closing it takes no 10 s time-out
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     sim = SimNode(args)
     executor = SingleThreadedExecutor()
     executor.add_node(sim.node)
@@ -291,7 +295,8 @@ def main() -> None:
     runner = threading.Thread(target=sim.run, args=(stop,), daemon=True)
     runner.start()
     try:
-        executor.spin()
+        while rclpy.ok():  # woken every 0.1 s, so that SIGINT is seen at once
+            executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
