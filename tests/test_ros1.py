@@ -310,6 +310,7 @@ def test_unknown_odometry_topic_is_one_line(graph: RosGraph, tmp_path: Path) -> 
     assert "/nope" in lines[0]
 
 
+@pytest.mark.slow
 def test_geometry_only_in_the_urdf(tmp_path: Path) -> None:
     """A controller with no wheel_separation or wheel_radius on the parameter server takes
     them from the URDF (robot_description, its left_wheel/right_wheel joints): so does the

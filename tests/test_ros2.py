@@ -317,6 +317,7 @@ def test_humble_unstamped_twist_is_found_on_the_graph(tmp_path: Path) -> None:
     assert 0.1 * seen["sim"] <= seen["travel"] <= 0.2 * (seen["sim"] + 0.5)
 
 
+@pytest.mark.slow
 def test_no_controller_is_one_line(tmp_path: Path) -> None:
     """Nobody on the domain: one line naming the velocity topic, exit 2, no traceback."""
     env = ros2_env(tmp_path)

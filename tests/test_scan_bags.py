@@ -69,6 +69,7 @@ def test_a_rolling_sweep_keeps_its_timing(tmp_path: Path) -> None:
     assert read_scan_bag(bag, "/scan").time_increment == pytest.approx(0.1 / 360, rel=1e-6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("upside_down", [False, True])
 def test_intervals_from_a_bag_match_the_true_laser_motion(
     drive, tmp_path: Path, upside_down: bool
