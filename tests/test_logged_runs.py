@@ -293,3 +293,22 @@ def test_motion_capture_is_no_reproduced_odometry(session):
         assert found is not None
         assert found.heading_rms > 1e4 * EXACT * found.turned
         assert not found.exact
+
+
+def test_a_fit_with_negative_radii_is_no_robots_odometry():
+    """A reference matched exactly by a degenerate fit (radii of opposite signs, a negative
+    wheelbase: what a selfcal run log's few shared samples once gave, 10.9 and -18.8 mm,
+    -260 mm) is no controller's odometry and is not refused; the same residuals with a
+    robot's geometry are."""
+    from umbmark.runs.reproduced import Reproduction
+
+    exact = {"heading_rms": 3e-15, "position_rms": 6e-6, "turned": 6.5, "driven": 0.2}
+    degenerate = Reproduction(**exact, r_left=0.010877, r_right=-0.018795, wheelbase=-0.26,
+                              samples=40)  # fmt: skip
+    lopsided = Reproduction(**exact, r_left=0.03, r_right=0.075, wheelbase=0.34, samples=40)
+    robot = Reproduction(**exact, r_left=0.075, r_right=0.0751, wheelbase=0.34, samples=40)
+    assert not degenerate.physical
+    assert not degenerate.exact
+    assert not lopsided.exact  # radii 2.5 times apart: no controller's wheels
+    assert robot.physical
+    assert robot.exact

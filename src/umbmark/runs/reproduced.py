@@ -62,6 +62,8 @@ EXACT = 1e-9
 CLOSE = 1e-5
 #: Fewer samples stamped at the same instant than this: not judged.
 MIN_SAMPLES = 20
+#: Most ratio of the two fitted wheel radii that is a robot's (either way).
+RADIUS_RATIO = 2.0
 #: Two stamps this close [s] are the same instant (a float's rounding of epoch seconds).
 SAME_INSTANT = 1e-6
 
@@ -95,11 +97,22 @@ class Reproduction:
     samples: int
 
     @property
+    def physical(self) -> bool:
+        """The fitted geometry is a robot's: positive radii and wheelbase, the two radii
+        within a factor of :data:`RADIUS_RATIO` (a degenerate fit to few or uninformative
+        samples can match them exactly with negative ones)."""
+        positive = min(self.r_left, self.r_right, self.wheelbase) > 0.0
+        return positive and 1.0 / RADIUS_RATIO <= self.r_left / self.r_right <= RADIUS_RATIO
+
+    @property
     def exact(self) -> bool:
-        """The heading is rounding, the path close (see the module)."""
-        return self.heading_rms <= EXACT * max(
-            self.turned, 1.0
-        ) and self.position_rms <= CLOSE * max(self.driven, 1.0)
+        """The heading is rounding, the path close (see the module), by a robot's
+        geometry (:attr:`physical`)."""
+        return (
+            self.physical
+            and self.heading_rms <= EXACT * max(self.turned, 1.0)
+            and self.position_rms <= CLOSE * max(self.driven, 1.0)
+        )
 
 
 def _same_instant(log: RunLog, truth_time: FloatArray) -> NDArray[np.bool_]:
