@@ -53,6 +53,7 @@ __all__ = [
     "check_calibration",
     "check_same_robot",
     "choose_active",
+    "read_each",
     "read_runs",
 ]
 
@@ -141,6 +142,33 @@ def read_runs(
     InputError
         For bad options, a bad source, or sources that disagree.
     """
+    read = read_each(
+        sources,
+        options,
+        wheelbase=wheelbase,
+        side_length=side_length,
+        override_verdict=override_verdict,
+    )
+    return read[0] if len(read) == 1 else pool_runs(read)
+
+
+def read_each(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    *,
+    wheelbase: float | None = None,
+    side_length: float | None = None,
+    override_verdict: bool = False,
+) -> list[Runs]:
+    """Each source's runs read on its own, with the odometry parameters the options say
+    (:func:`read_runs` before pooling; the held-out validation holds them out one by one).
+
+    Raises
+    ------
+    InputError
+        For bad options, a bad source, or a result file of another robot as
+        ``current_params`` (without ``override_verdict``).
+    """
     if not sources:
         raise InputError("no source given: name a runs table, run log, OptiOdom session or bag")
     if options.scan_topic is not None:
@@ -164,9 +192,7 @@ def read_runs(
                         one.sources[0],
                         (one.nominal.wheelbase, one.nominal.wheel_diameter),
                     )
-    if len(read) == 1:
-        return read[0]
-    return pool_runs(read)
+    return read
 
 
 def _read_one(

@@ -15,7 +15,7 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark.calibration.active import read_runs
+from umbmark.calibration.active import read_each
 from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
 from umbmark.calibration.report import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
@@ -24,7 +24,7 @@ from umbmark.core.errors import InputError, python_api
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.options import ReadOptions, SourceOptions
-from umbmark.runs.read import RunSource, is_intervals, source_name
+from umbmark.runs.read import RunSource, is_intervals, pool_runs, source_name
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -130,6 +130,10 @@ class CalibrationReport(CalibrationResult):
             report=report,
             force=force,
         )
+        return self._write(plan, time, override_verdict=override_verdict)
+
+    def _write(self, plan: OutputPlan, time: TumTime, *, override_verdict: bool) -> list[Path]:
+        """Write what ``plan`` (checked) names."""
         if plan.plot is not None and self.benchmark is None:
             raise InputError(
                 "--plot needs runs in both directions (cw and ccw)", source=self.source
@@ -281,7 +285,7 @@ def calibrate(
     read_options = ReadOptions.of(options)
     from umbmark.outputs.tum import check_tum_time
 
-    check_tum_time(tum_time)
+    time = check_tum_time(tum_time)
     if method is not None and method not in CHOICES:
         raise InputError(f"--method {method!r}: use one of {', '.join(NAMES)} or {AUTO}")
     fitting = names(trajectories=True)
@@ -291,8 +295,8 @@ def calibrate(
             f"{method or DEFAULT.name}"
         )
     sources = (source, *more_sources)
-    _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
-          plot=plot, tum=tum, report=report, force=force)  # fmt: skip
+    plan = _plan([source_name(s) for s in sources], output=output, yaml=yaml,
+                 ros1_yaml=ros1_yaml, plot=plot, tum=tum, report=report, force=force)  # fmt: skip
     note, nominal_best = None, False
     if read_options.scan_topic is not None:
         result = _calibrate_scans(sources, read_options, method, wheelbase, side_length)
@@ -301,7 +305,7 @@ def calibrate(
     else:
         method = method or DEFAULT.name
         result, note, nominal_best = _calibrate_runs(
-            sources, read_options, method, wheelbase, side_length, options,
+            sources, read_options, method, wheelbase, side_length,
             override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
         )  # fmt: skip
     result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
@@ -312,15 +316,12 @@ def calibrate(
         store.check_identity(robot, active.wheelbase, active.wheel_diameter)
         if composed is not None:
             result = replace(result, notes=(*result.notes, composed))
-    files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
     result = replace(result, forced=override_verdict)
     if result.overlay_withheld:  # the verdict says what to do instead
+        files = {"yaml": plan.yaml, "ros1_yaml": plan.ros1_yaml}
         result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
-        files = dict.fromkeys(files)
-    result.write(
-        output=output, plot=plot, tum=tum, tum_time=tum_time, report=report, force=force,
-        yaml=files["yaml"], ros1_yaml=files["ros1_yaml"],
-    )  # fmt: skip
+        plan = replace(plan, yaml=None, ros1_yaml=None)
+    result._write(plan, time, override_verdict=override_verdict)
     if store is not None and robot is not None:
         inputs = [n for n in map(source_name, sources) if n != "runs"]
         id = store.record(robot, _history_entry(result), inputs)
@@ -390,7 +391,6 @@ def _calibrate_runs(
     method: str,
     wheelbase: float | None,
     side_length: float | None,
-    options: SourceOptions,
     *,
     override_verdict: bool,
     fit_truth_offset: bool,
@@ -403,13 +403,14 @@ def _calibrate_runs(
 
         if any(is_table(s, read_options) for s in sources):
             raise InputError("--side-length is required: the side of the square path, in metres")
-    read = read_runs(
+    each = read_each(
         sources,
         read_options,
         wheelbase=wheelbase,
         side_length=side_length,
         override_verdict=override_verdict,
     )
+    read = each[0] if len(each) == 1 else pool_runs(each)
     if any(run.kind == "square" for run in read.runs):
         active = read.active
         check_square_geometry(
@@ -417,11 +418,9 @@ def _calibrate_runs(
         )
     chosen, note, nominal_best = method, None, False
     if method == AUTO:
-        from umbmark.jobs.auto import auto_method
+        from umbmark.calibration.auto import auto_method
 
-        chosen, note, nominal_best = auto_method(
-            sources, read, side_length, wheelbase, options, override_verdict=override_verdict
-        )
+        chosen, note, nominal_best = auto_method(each, read)
     result = CalibrationReport.of(calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset))
     if chosen in names(trajectories=True) and len(read.parts) > 1:
         disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
