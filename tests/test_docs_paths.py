@@ -6,7 +6,7 @@ docstrings:
 - a path in backticks (``estimators/registry.py``, ``sources/bag/``, ``tools/x.py``),
   resolved against ``src/umbmark/`` and the repository;
 - a dotted name in backticks (in docstrings, only in ``:mod:``, ``:func:``, ``:class:``
-  roles), such as ``umbmark.runs.read`` or ``calibration.active.read_runs``, resolved as a
+  roles), such as ``umbmark.runs.read`` or ``runs.active.read_runs``, resolved as a
   module or a name defined at a module's top level (by parsing, not importing);
 - in the map of ``docs/architecture.md`` ("Module by module"), each bare name in the
   bullet of a layer: a module or folder of that layer, or a name one of its modules

@@ -1,11 +1,14 @@
 """The way one command takes through the package: each module it enters, in order.
 
-Runs an ``umbmark`` command in this process with a profile hook that notes every Python
-call into a module of ``umbmark``. Consecutive calls within one module are one visit; the
-tool prints the visits in order (module, then the functions called there, first few) and
-two counts: how many distinct modules the command passes through, and how many times it
-returns to a module it had left (the zig-zags of issue 24). Import-time code (module
-bodies) is left out: it is the facade loading, not the command's way.
+Runs an ``umbmark`` command in this process with a profile hook that notes each call from
+one layer of the package into another (``jobs.calibrate`` calling ``runs.active``; a
+call within a layer, ``estimators.exact`` calling ``estimators.solve``, is part of the
+same step). Consecutive calls into one module are one visit. The tool prints the visits in
+order (module, then the functions called there, first few) and two counts: how many
+distinct modules the command passes through, and how many times it returns to a module it
+had left (the zig-zags of issue 24). Import-time code (module and class bodies) and
+generators resuming are left out: they are the facade loading and data streaming, not
+the command's way.
 
 Run: python tools/trace_path.py calibrate src/umbmark/data/labmate_runs_mm.csv --units mm
      python tools/trace_path.py --summary calibrate ...   (the counts only)
@@ -41,6 +44,7 @@ class Visit:
 class Trace:
     visits: list[Visit] = field(default_factory=list)
     skip: tuple[str, ...] = ()
+    every_call: bool = False
 
     def hook(self, frame: FrameType, event: str, _arg: Any) -> None:  # noqa: ANN401
         if event != "call":
@@ -56,6 +60,10 @@ class Trace:
         short = module.removeprefix("umbmark.")
         if short.split(".")[0] in self.skip:
             return
+        caller = frame.f_back
+        before = "" if caller is None else caller.f_globals.get("__name__", "")
+        if not self.every_call and _layer(before) == _layer(module):
+            return  # within one layer: one step of the way, not a new one
         if self.visits and self.visits[-1].module == short:
             last = self.visits[-1]
             if name not in last.functions:
@@ -72,6 +80,12 @@ class Trace:
                 count += 1
             seen.add(visit.module)
         return count
+
+
+def _layer(module: str) -> str:
+    """``umbmark.runs.read`` -> ``runs``; outside umbmark, the empty string."""
+    parts = module.split(".")
+    return parts[1] if parts[0] == "umbmark" and len(parts) > 1 else ""
 
 
 def _importing(frame: FrameType) -> bool:
@@ -93,6 +107,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--summary", action="store_true", help="print the counts only")
     parser.add_argument("--skip", default="", help="layers to leave out, comma-separated")
+    parser.add_argument(
+        "--every-call",
+        action="store_true",
+        help="count calls within a layer too (by default a step is a call into another layer)",
+    )
     parser.add_argument("command", nargs=argparse.REMAINDER, help="umbmark's arguments")
     args = parser.parse_args(argv)
     if not args.command:
@@ -100,7 +119,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     from umbmark.cli.main import main as umbmark_main
 
-    trace = Trace(skip=tuple(s for s in args.skip.split(",") if s))
+    trace = Trace(skip=tuple(s for s in args.skip.split(",") if s), every_call=args.every_call)
     sink = io.StringIO()
     status: int | str | None = 0
     sys.setprofile(trace.hook)

@@ -30,7 +30,7 @@ def auto_method(each: Sequence[Runs], read: Runs) -> tuple[str, str, bool]:
     calibration is then made with the default, and its verdict is "do not apply").
 
     ``each`` are the sources read one by one, ``read`` the same pooled
-    (:func:`umbmark.calibration.active.read_each`, :func:`~umbmark.runs.read.pool_runs`).
+    (:func:`umbmark.runs.active.read_each`, :func:`~umbmark.runs.read.pool_runs`).
     """
     default = DEFAULT.name
     if read.params is None or any(run.log is None for run in read.runs):

@@ -44,7 +44,7 @@ def validate_read(
     Parameters
     ----------
     read : sequence of Runs
-        Each source read on its own (:func:`umbmark.calibration.active.read_each`), with
+        Each source read on its own (:func:`umbmark.runs.active.read_each`), with
         recorded wheel data (``params`` set).
     candidates : sequence of str
         ``"nominal"`` and names of estimators of runs (default: all of :data:`CANDIDATES`).

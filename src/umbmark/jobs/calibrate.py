@@ -15,16 +15,17 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark.calibration.active import read_each
 from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
 from umbmark.calibration.report import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError, python_api
+from umbmark.estimators.plausibility import judge_table
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
 from umbmark.outputs.files import OutputPlan
+from umbmark.runs.active import read_each
 from umbmark.runs.options import ReadOptions, SourceOptions
-from umbmark.runs.read import RunSource, is_intervals, pool_runs, source_name
+from umbmark.runs.read import RunSource, is_intervals, is_runs, pool_runs, source_name
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -403,13 +404,22 @@ def _calibrate_runs(
 
         if any(is_table(s, read_options) for s in sources):
             raise InputError("--side-length is required: the side of the square path, in metres")
-    each = read_each(
-        sources,
-        read_options,
-        wheelbase=wheelbase,
-        side_length=side_length,
-        override_verdict=override_verdict,
-    )
+    each = [
+        judge_table(one, read_options.unit, read_options.angle_unit, side_length)
+        if not is_runs(source) and one.formats == ("table",)
+        else one
+        for source, one in zip(
+            sources,
+            read_each(
+                sources,
+                read_options,
+                wheelbase=wheelbase,
+                side_length=side_length,
+                override_verdict=override_verdict,
+            ),
+            strict=True,
+        )
+    ]
     read = each[0] if len(each) == 1 else pool_runs(each)
     if any(run.kind == "square" for run in read.runs):
         active = read.active

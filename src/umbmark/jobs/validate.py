@@ -22,10 +22,10 @@ import os
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
-from umbmark.calibration.active import read_each
 from umbmark.calibration.heldout import CANDIDATES, validate_read
 from umbmark.calibration.validation import ValidationReport
 from umbmark.core.errors import InputError
+from umbmark.runs.active import read_each
 from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import is_table, source_name
 

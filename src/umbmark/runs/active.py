@@ -1,5 +1,5 @@
 """The odometry parameters active while the runs were driven, resolved for each source,
-and the runs read with them (:func:`read_runs`); checks of a calibration against them.
+and the runs read with them (:func:`read_each`, :func:`read_runs`).
 
 Parameters come from three places, later ones winning: the source itself (a run log's
 ``metadata.yaml``, an OptiOdom session's metadata, a runs table's ``# umbmark-active:``
@@ -7,10 +7,7 @@ line; a bag says nothing), a parameter file (``current_params``: a ros2_control 
 YAML, or a previous result), and the keywords. The wheel factors and separation
 multiplier a source records as active are used only where no ``current_...`` keyword or
 file is given (with a note); given ones that differ from them are warned of. Messages
-about a parameter name where it came from (an option, or a file's field). A runs table's
-end points are judged as a robot driving the square makes them
-(:mod:`umbmark.estimators.plausibility`: units, swapped columns, errors beyond the square
-test).
+about a parameter name where it came from (an option, or a file's field).
 
 Every keyword is an option of ``umbmark calibrate`` and ``umbmark replay`` with the same
 name and meaning (``--current-c-l`` is ``current_c_l``); lengths in metres. Messages name
@@ -21,15 +18,12 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
-from dataclasses import replace
+from collections.abc import Sequence
 from pathlib import Path
 
-from umbmark.calibration.compose import Calibration
-from umbmark.core.bounds import Origin, geometry_origins
+from umbmark.core.bounds import Origin
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info
-from umbmark.estimators.plausibility import check_columns, unit_hints
 from umbmark.options.spec import SIDE_LENGTH, WHEELBASE
 from umbmark.runs.options import SAME_ROBOT_TOLERANCE, ReadOptions
 from umbmark.runs.read import (
@@ -50,41 +44,11 @@ from umbmark.sources.params.reader import (
 from umbmark.sources.runs_table.reader import RecordedActive
 
 __all__ = [
-    "check_calibration",
     "check_same_robot",
     "choose_active",
     "read_each",
     "read_runs",
 ]
-
-
-def check_calibration(
-    calibration: Calibration, origins: Mapping[str, Origin] | None = None
-) -> None:
-    """Refuse a calibration whose new factors are not positive finite numbers.
-
-    Raises
-    ------
-    InputError
-        Naming the first such factor: the runs and the parameters (named as ``origins``
-        says where they came from, see :func:`check_square_geometry`) contradict each other.
-    """
-    active = calibration.active
-    b_from, side_from, m_from, _ = geometry_origins(origins, active.separation_multiplier)
-    named = [side_from.named(), b_from.named(), *([m_from.named()] if m_from else [])]
-    for name, value in (
-        ("E_d", calibration.estimate.E_d),
-        ("E_b", calibration.estimate.E_b),
-        ("c_L", calibration.new_c_left),
-        ("c_R", calibration.new_c_right),
-        ("wheel_separation_multiplier", calibration.new_separation_multiplier),
-        ("wheelbase", calibration.wheelbase_corrected),
-    ):
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(
-                f"the runs give {name} = {value:.6g}, which no robot can have: check "
-                f"{', '.join(named)} and the runs' units and directions"
-            )
 
 
 def check_same_robot(
@@ -202,21 +166,11 @@ def _read_one(
     wheelbase: float | None,
     side_length: float | None,
 ) -> Runs:
-    """One source read with the active parameters resolved for it; a runs table's end
-    points judged (:mod:`umbmark.estimators.plausibility`)."""
+    """One source read with the active parameters resolved for it."""
     path, kind = source_format(source, options)
     recorded = None if path is None else recorded_active(path, kind)
     chosen = choose_active(options, file, wheelbase, recorded, note_wheelbase=kind == "table")
-    read = read_source(source, kind, options, file, chosen, side_length, recorded)
-    if path is not None and kind == "table":
-        name, runs = read.sources[0], list(read.runs)
-        b = read.active.effective_wheelbase
-        hints = [
-            *check_columns(runs, side_length, name),
-            *unit_hints(runs, options.unit, options.angle_unit, side_length, b, name),
-        ]
-        read = replace(read, notes=(*read.notes, *hints))
-    return read
+    return read_source(source, kind, options, file, chosen, side_length, recorded)
 
 
 #: Given and recorded active parameters closer than this (relative) agree.
