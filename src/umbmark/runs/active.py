@@ -214,64 +214,88 @@ def choose_active(
     if recorded is None:
         return Chosen(given[0][0], given[1][0], given[2][0], user_b, diameter, (), origins)
 
-    def shown(value: float, unit: str = "") -> str:
-        return f"{value:.6g}{unit}"
+    if all(value is None for value, _ in given):
+        return _recorded_wins(recorded, user_b, b_flag, diameter, origins, note_wheelbase)
+    return _given_wins(recorded, given, user_b, b_flag, diameter, origins)
 
+
+def _shown(value: float, unit: str = "") -> str:
+    return f"{value:.6g}{unit}"
+
+
+def _recorded_wins(
+    recorded: RecordedActive,
+    user_b: float | None,
+    b_flag: str,
+    diameter: float | None,
+    origins: dict[str, Origin],
+    note_wheelbase: bool,
+) -> Chosen:
+    """Nothing said what was active: what the source records was (with a note)."""
     where, notes = recorded.where, list[str]()
     recorded_b = recorded.wheelbase
-    if all(value is None for value, _ in given):
-        # Nothing said what was active: what the source records was.
-        used = [
-            f"{label} = {shown(value)}"
-            for label, value in (
-                ("c_L", recorded.c_left),
-                ("c_R", recorded.c_right),
-                ("wheel_separation_multiplier", recorded.separation_multiplier),
-            )
-            if value != 1.0
-        ]
-        if user_b is None and recorded_b is not None and note_wheelbase:
-            used.append(f"wheelbase = {shown(recorded_b, ' m')}")
-        if used:
-            notes.append(
-                info(
-                    f"active parameters from {where}: {', '.join(used)} (the correction is "
-                    "composed with them; give --current-params or --current-c-l, --current-c-r, "
-                    "--current-separation-multiplier to override)"
-                )
-            )
-        if (
-            user_b is not None
-            and recorded_b is not None
-            and not math.isclose(user_b, recorded_b, rel_tol=_SAME_ACTIVE)
-        ):
-            notes.append(
-                f"{b_flag} gives wheelbase = {shown(user_b, ' m')}, but {where} records "
-                f"wheelbase = {shown(recorded_b, ' m')} (times wheel_separation_multiplier "
-                f"{shown(recorded.separation_multiplier)}) as active during the runs; "
-                f"using {shown(user_b, ' m')} times the recorded multiplier"
-            )
-        if recorded_b is not None:
-            origins.setdefault("wheelbase", recorded.origin("wheelbase"))
-        origins["separation_multiplier"] = recorded.origin("wheel_separation_multiplier")
-        return Chosen(
-            recorded.c_left,
-            recorded.c_right,
-            recorded.separation_multiplier,
-            user_b if user_b is not None else recorded_b,
-            diameter,
-            tuple(notes),
-            origins,
+    used = [
+        f"{label} = {_shown(value)}"
+        for label, value in (
+            ("c_L", recorded.c_left),
+            ("c_R", recorded.c_right),
+            ("wheel_separation_multiplier", recorded.separation_multiplier),
         )
+        if value != 1.0
+    ]
+    if user_b is None and recorded_b is not None and note_wheelbase:
+        used.append(f"wheelbase = {_shown(recorded_b, ' m')}")
+    if used:
+        notes.append(
+            info(
+                f"active parameters from {where}: {', '.join(used)} (the correction is "
+                "composed with them; give --current-params or --current-c-l, --current-c-r, "
+                "--current-separation-multiplier to override)"
+            )
+        )
+    if (
+        user_b is not None
+        and recorded_b is not None
+        and not math.isclose(user_b, recorded_b, rel_tol=_SAME_ACTIVE)
+    ):
+        notes.append(
+            f"{b_flag} gives wheelbase = {_shown(user_b, ' m')}, but {where} records "
+            f"wheelbase = {_shown(recorded_b, ' m')} (times wheel_separation_multiplier "
+            f"{_shown(recorded.separation_multiplier)}) as active during the runs; "
+            f"using {_shown(user_b, ' m')} times the recorded multiplier"
+        )
+    if recorded_b is not None:
+        origins.setdefault("wheelbase", recorded.origin("wheelbase"))
+    origins["separation_multiplier"] = recorded.origin("wheel_separation_multiplier")
+    return Chosen(
+        recorded.c_left,
+        recorded.c_right,
+        recorded.separation_multiplier,
+        user_b if user_b is not None else recorded_b,
+        diameter,
+        tuple(notes),
+        origins,
+    )
 
-    # Something was given: it wins; say where it contradicts the record.
+
+def _given_wins(
+    recorded: RecordedActive,
+    given: Sequence[tuple[float | None, str]],
+    user_b: float | None,
+    b_flag: str,
+    diameter: float | None,
+    origins: dict[str, Origin],
+) -> Chosen:
+    """Something was given: it wins; the notes say where it contradicts the record."""
+    where, notes = recorded.where, list[str]()
+    recorded_b = recorded.wheelbase
     for (value, flag), label, record in zip(
         given[:2], ("c_L", "c_R"), (recorded.c_left, recorded.c_right), strict=True
     ):
         if value is not None and not math.isclose(value, record, rel_tol=_SAME_ACTIVE):
             notes.append(
-                f"{flag} gives {label} = {shown(value)}, but {where} records {label} = "
-                f"{shown(record)} as active during the runs; using {shown(value)}"
+                f"{flag} gives {label} = {_shown(value)}, but {where} records {label} = "
+                f"{_shown(record)} as active during the runs; using {_shown(value)}"
             )
     separation = given[2][0]
     configured = user_b
@@ -289,10 +313,10 @@ def choose_active(
             )
             notes.append(
                 f"the odometry's wheelbase from {flags or 'the options'} is "
-                f"{shown(used_b, ' m')}, but {where} records {shown(record_b, ' m')} "
-                f"(wheelbase {shown(recorded_b, ' m')} times wheel_separation_multiplier "
-                f"{shown(recorded.separation_multiplier)}) as active during the runs; "
-                f"using {shown(used_b, ' m')}"
+                f"{_shown(used_b, ' m')}, but {where} records {_shown(record_b, ' m')} "
+                f"(wheelbase {_shown(recorded_b, ' m')} times wheel_separation_multiplier "
+                f"{_shown(recorded.separation_multiplier)}) as active during the runs; "
+                f"using {_shown(used_b, ' m')}"
             )
     if user_b is None and recorded_b is not None:
         origins["wheelbase"] = recorded.origin("wheelbase")
