@@ -40,15 +40,23 @@ JOINTS = ("--left-joint", "left_wheel_joint", "--right-joint", "right_wheel_join
 NOMINAL = ("--wheelbase", str(B_NOMINAL), "--wheel-diameter", str(D_NOMINAL))
 
 
-def _bag(folder: Path, pattern=None, *, scans: bool = True) -> Path:  # type: ignore[no-untyped-def]
+def _bag(  # type: ignore[no-untyped-def]
+    folder: Path, pattern=None, *, scans: bool = True, storage=None, upside_down=False
+) -> Path:
+    """The simulated drive as a bag: ROS 1, or ROS 2 of ``storage`` (sqlite3, mcap); with
+    ``upside_down`` the scanner turned over about its x axis (its sweeps mirrored, and the
+    mounting on /tf_static with a roll of pi)."""
     radii = (TRUE_DIAMETERS[0] / 2, TRUE_DIAMETERS[1] / 2)
     drive = simulate(pattern, radii=radii, wheelbase=TRUE_WHEELBASE, laser=LASER) if pattern \
         else simulate(radii=radii, wheelbase=TRUE_WHEELBASE, laser=LASER)  # fmt: skip
     poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
-    target = bag_target(folder / "drive.bag")
+    target = bag_target(folder / ("drive" if storage else "drive.bag"), storage)
     if not scans:
         return write_bag(target, drive.wheels, poses, poses)
-    return write_bag(target, drive.wheels, poses, poses, scans=drive.scans, laser_pose=STATED)
+    sweeps = drive.scans
+    if upside_down:
+        sweeps = dataclasses.replace(sweeps, ranges=mirrored(sweeps.ranges), upside_down=True)
+    return write_bag(target, drive.wheels, poses, poses, scans=sweeps, laser_pose=STATED)
 
 
 @pytest.fixture(scope="module")
@@ -107,6 +115,19 @@ def test_the_library_pipeline_is_the_jobs(bag: Path, result: umbmark.Calibration
     ours, theirs = direct.to_dict(), result.to_dict()
     for key in ("laser_pose", "laser_pose_standard_errors", "wheelbase", "motion_intervals"):
         assert ours[key] == theirs[key]
+
+
+@pytest.mark.parametrize(("storage", "upside_down"), [("sqlite3", False), ("mcap", True)])
+def test_ros2_bags_recover_the_truth(tmp_path: Path, storage: str, upside_down: bool) -> None:
+    # the same drive in a ROS 2 bag (sweeps at irregular rates, with NaN and inf ranges);
+    # turned over, the scanner's sweeps are mirrored and /tf_static says so: the mounting
+    # found is of the frame turned right side up, which has the same position and yaw
+    bag = _bag(tmp_path, storage=storage, upside_down=upside_down)
+    report = umbmark.calibrate(
+        bag, scan_topic="/scan", wheelbase=B_NOMINAL, wheel_diameter=D_NOMINAL
+    )
+    _check_truth(report.to_dict())
+    assert report.to_dict()["apply"]["level"] == "apply"
 
 
 def test_the_mounting_read_from_tf_static(bag: Path) -> None:
