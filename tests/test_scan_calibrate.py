@@ -17,6 +17,7 @@ from umbmark.calibration.scan import calibrate_scan_bags
 from umbmark.core.errors import InputError
 from umbmark.model.recording import PoseSeries
 from umbmark.robot.base import Pose2D
+from umbmark.robot.world import room_world
 from umbmark.runs.options import ReadOptions
 from umbmark.sources.bag.scans import scan_mounting
 from umbmark.sources.bag.writer import bag_target, write_bag
@@ -237,3 +238,44 @@ def test_the_mounting_read_from_a_robot_description() -> None:
     assert described.mountings["base_scan"] == pytest.approx((-0.032, 0.01, 0.2), abs=1e-12)
     assert described.mountings["base_link"] == pytest.approx((0.0, 0.0, 0.0))  # 1 cm up only
     assert "wheel_left_link" not in described.mountings  # on a turning joint: no mounting
+
+
+def test_a_turtlebot3_as_its_bags_are(tmp_path: Path) -> None:
+    # TurtleBot3 Burger's published geometry (wheelbase 160 mm, wheels 66 mm, the LDS-01
+    # at x = -32 mm in its URDF) with errors; its scanner as the LDS-01 reports: 360 beams
+    # at 5 Hz, each sweep measured over its 0.2 s period while the robot moves, 0.12 to
+    # 3.5 m, 1.5 cm noise; the wheels at 30 Hz; a ROS 2 MCAP bag
+    b_nominal, d_nominal = 0.160, 0.066
+    e_d, e_b, e_s = 1.004, 1.03, 0.99
+    f_left = 2 * e_s / (1 + e_d)
+    radii = (f_left * d_nominal / 2, e_d * f_left * d_nominal / 2)
+    world = room_world()
+    assert world.lidar is not None
+    lds = dataclasses.replace(world.lidar, range_min=0.12, range_max=3.5, sigma=0.015)
+    pattern = (
+        (3.0, 0.0, 1.2), (3.0, 0.0, -1.2), (4.0, 0.2, 0.0), (4.0, -0.2, 0.0),
+        (5.0, 0.15, 0.6), (5.0, -0.15, 0.6), (3.0, 0.0, -1.5),
+    )  # fmt: skip
+    laser = Pose2D(-0.032, 0.0, 0.0)
+    drive = simulate(
+        pattern, world=dataclasses.replace(world, lidar=lds), beams=360, scan_rate=5.0, jitter=0.2,
+        wheel_rate=30.0, sweep_time=0.2, radii=radii, wheelbase=e_b * b_nominal, laser=laser,
+    )  # fmt: skip
+    poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
+    bag = write_bag(
+        bag_target(tmp_path / "tb3", "mcap"), drive.wheels, poses, poses, scans=drive.scans,
+        laser_pose=(laser.x, laser.y, laser.theta),
+    )  # fmt: skip
+    report = umbmark.calibrate(
+        bag, scan_topic="/scan", wheelbase=b_nominal, wheel_diameter=d_nominal
+    )
+    data = report.to_dict()
+    se = data["standard_errors"]
+    for key, truth in (("E_d", e_d), ("E_b", e_b), ("E_s", e_s)):
+        _within(data[key], truth, se[key], key)
+    _within(data["wheelbase"], e_b * b_nominal, data["wheelbase_standard_error"], "wheelbase")
+    for k, truth in enumerate((laser.x, laser.y, laser.theta)):
+        _within(data["laser_pose"][k], truth, data["laser_pose_standard_errors"][k], "laser")
+    assert se["E_d"] < 1e-3
+    assert max(data["laser_pose_standard_errors"][:2]) < 0.003  # [m]
+    assert any("44 motion intervals matched of 44" in note for note in report.notes)
