@@ -103,6 +103,7 @@ def test_odd_beam_counts_span_both_ends(tmp_path: Path) -> None:
         ("FLASER 4 1 2 3 4 0 0 0 0 0 0 2.0 host 1", r"row 2: FLASER: the scanner changed"),
         ("ODOM 0 0 0 host", r"row 2: ODOM has 5 fields, not 10"),
         ("FLASER 3 1 2 3 0 0 0 0 0 0 0 host 1", r"row 2: FLASER: time 0 s is not a time"),
+        ("ODOM 0 0 0 0 0 0 1e12 host 1", r"row 2: ODOM: time 1e\+12 s is not a time"),
     ],
 )
 def test_bad_lines_are_one_line_naming_the_row(tmp_path: Path, line: str, message: str) -> None:

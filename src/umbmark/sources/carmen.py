@@ -177,7 +177,13 @@ def _odom(fields: list[str], path: str, row: int) -> tuple[FloatArray, float]:
         raise InputError(f"ODOM has {len(fields)} fields, not 10", source=path, row=row)
     values = _numbers(fields[1:8], path, row, "ODOM")
     _pose_tail(values[:3], path, row, "ODOM")
+    _check_time(float(values[6]), path, row, "ODOM")
     return values[:3], float(values[6])
+
+
+def _check_time(stamp: float, path: str, row: int, kind: str) -> None:
+    if not 0.0 < abs(stamp) < _MAX_TIME:
+        raise InputError(f"{kind}: time {stamp:g} s is not a time", source=path, row=row)
 
 
 def _relative(laser: FloatArray, robot: FloatArray) -> FloatArray:
@@ -258,8 +264,7 @@ def read_carmen(
             raise InputError(
                 f"more than {max_scans:,} sweeps: cut the log (max_scans)", source=where
             )
-        if not 0.0 < abs(stamp) < _MAX_TIME:
-            raise InputError(f"{kind}: time {stamp:g} s is not a time", source=where, row=row)
+        _check_time(stamp, where, row, kind)
         ranges = np.where((ranges >= this.max_range) | (ranges <= 0.0), np.inf, ranges)
         times.append(stamp)
         sweeps.append(ranges)
