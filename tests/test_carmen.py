@@ -85,12 +85,19 @@ def test_robotlaser1_lines_and_the_odometry_they_carry(tmp_path: Path) -> None:
     assert log.stated_mounting is None
 
 
-def test_odd_beam_counts_span_both_ends(tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("beams", "degrees"),
+    [(181, 1.0), (360, 0.5), (361, 0.5), (400, 0.25), (401, 0.25), (91, 2.0), (100, 180 / 99)],
+)
+def test_flaser_beams_are_as_carmen_guesses_them(
+    tmp_path: Path, beams: int, degrees: float
+) -> None:
+    # CARMEN's carmen_laser_guess_angle_increment: a SICK's counts, else 180 degrees over n - 1
     path = tmp_path / "log.clf"
-    path.write_text("".join(_flaser([1.0] * 181, (0, 0, 0), (0, 0, 0), t) + "\n" for t in (1, 2)))
+    path.write_text("".join(_flaser([1.0] * beams, (0, 0, 0), (0, 0, 0), t) + "\n" for t in (1, 2)))
     scans = read_carmen(path).scans
-    assert scans.angle_increment == pytest.approx(math.pi / 180)
-    assert scans.angle_min + 180 * scans.angle_increment == pytest.approx(math.pi / 2)
+    assert scans.angle_increment == pytest.approx(math.radians(degrees))
+    assert scans.angle_min == pytest.approx(-math.pi / 2)
 
 
 @pytest.mark.parametrize(

@@ -12,10 +12,11 @@ Lines read (every other kind -- ``PARAM``, ``SYNC``, ``RLASER``, ``VERTEX_SE2``,
     ODOM x y theta tv rv accel ipc_time host logger_time
 
 - **Times**: ``ipc_time`` [s]. Sweeps are sorted by it, a repeated stamp keeps the first.
-- **The sweeps**: ``FLASER`` is the front laser: ``n`` beams over 180 degrees from -90
-  degrees (1 degree apart for 180 beams, ``pi / (n - 1)`` for an odd count such as 181 or
-  361, whose beams include both ends); its maximum range is not in the line, and ranges
-  of at least ``flaser_max_range`` (80 m) are no return. ``ROBOTLASER1`` states its
+- **The sweeps**: ``FLASER`` is the front laser: ``n`` beams from -90 degrees, as CARMEN
+  guesses a SICK's (``carmen_laser_guess_angle_increment``): 1 degree apart for 180 or
+  181 beams, 0.5 degree for 360 or 361, 0.25 degree for 400 or 401, else 180 degrees over
+  ``n - 1`` steps; its maximum range is not in the line, and ranges of at least
+  ``flaser_max_range`` (80 m, CARMEN's) are no return. ``ROBOTLASER1`` states its
   start angle, resolution and maximum range. Ranges at or beyond the maximum, and
   non-positive ones, become inf (no return). One log holds one scanner: the beams'
   count, angles and maximum range may not change.
@@ -58,6 +59,11 @@ MAX_SCANS = 100_000
 MAX_BEAMS = 16_384
 #: ``FLASER`` ranges of at least this [m] are no return (the line states no maximum).
 FLASER_MAX_RANGE = 80.0
+#: CARMEN's angle between FLASER beams [rad] for a SICK's beam counts (else pi / (n - 1)).
+_FLASER_INCREMENT = {
+    n: math.pi / steps for pair, steps in (((180, 181), 180), ((360, 361), 360), ((400, 401), 720))
+    for n in pair
+}  # fmt: skip
 #: Longest line [characters]: 16 384 beams of up to 10 characters.
 _MAX_LINE = 200_000
 #: Largest coordinate [m] and time [s] a line may hold.
@@ -135,8 +141,7 @@ def _flaser(
     ranges = _numbers(fields[2 : 2 + n], path, row, "FLASER's ranges")
     tail = _numbers(fields[2 + n : 9 + n], path, row, "FLASER's poses and time")
     _pose_tail(tail[:6], path, row, "FLASER")
-    increment = math.pi / (n - 1) if n % 2 else math.pi / n
-    scanner = _Scanner(-math.pi / 2, increment, max_range)
+    scanner = _Scanner(-math.pi / 2, _FLASER_INCREMENT.get(n, math.pi / (n - 1)), max_range)
     return scanner, ranges, tail[0:3], tail[3:6], float(tail[6])
 
 
