@@ -67,6 +67,14 @@ def test_flaser_and_odom_lines(tmp_path: Path) -> None:
     assert log.stated_mounting == pytest.approx((0.2, 0.0, 0.0), abs=1e-5)  # %g: 6 digits
 
 
+def test_a_corrected_log_states_no_mounting(tmp_path: Path) -> None:
+    # the laser poses of a corrected log drift from the odometry (here by 2 cm a sweep)
+    lines = [_flaser([1.0] * 180, (0.02 * k, 0, 0), (0, 0, 0), k + 1.0) for k in range(3)]
+    path = tmp_path / "corrected.gfs.log"
+    path.write_text("\n".join(lines) + "\n")
+    assert read_carmen(path).stated_mounting is None
+
+
 def test_robotlaser1_lines_and_the_odometry_they_carry(tmp_path: Path) -> None:
     path = tmp_path / "graph.g2o"
     lines = [

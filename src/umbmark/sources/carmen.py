@@ -28,7 +28,9 @@ Lines read (every other kind -- ``PARAM``, ``SYNC``, ``RLASER``, ``VERTEX_SE2``,
   (the odometry's own scale and turning, and the laser's mounting).
 - **The stated mounting**: the laser's pose relative to the robot's on the laser lines
   (``x y theta`` against ``odom_*``, or ``laser_*`` against ``robot_*``), the median over
-  the log; ``None`` where the two are the same (most logs state no mounting).
+  the log; ``None`` where the two are the same (most logs state no mounting), or where
+  they drift apart by more than 1 cm or 0.01 rad (a corrected log, whose laser poses are
+  a SLAM's).
 """
 
 from __future__ import annotations
@@ -66,6 +68,8 @@ _FLASER_INCREMENT = {
 }  # fmt: skip
 #: Longest line [characters]: 16 384 beams of up to 10 characters.
 _MAX_LINE = 200_000
+#: Largest spread [m, rad] of the laser's pose on the robot for the log to state a mounting.
+_MOUNTING_SPREAD = 0.01
 #: Largest coordinate [m] and time [s] a line may hold.
 _MAX_COORDINATE = 1e6
 _MAX_TIME = 1e11
@@ -286,9 +290,13 @@ def read_carmen(
         odom_t, odom_arr = scan_times, robot_arr
     if odom_t.size < 2:
         raise InputError("fewer than 2 odometry poses", source=where)
-    stated = np.median(_relative(laser_arr, robot_arr), axis=0)
+    relative = _relative(laser_arr, robot_arr)
+    stated = np.median(relative, axis=0)
+    spread = np.max(np.abs(relative - stated), axis=0)
     mounting: tuple[float, float, float] | None = None
-    if not np.allclose(stated, 0.0, atol=1e-6):
+    # a corrected log's laser poses (SLAM's) drift from its odometry: no mounting stated
+    steady = spread[0] <= _MOUNTING_SPREAD and spread[1] <= _MOUNTING_SPREAD
+    if steady and spread[2] <= _MOUNTING_SPREAD and not np.allclose(stated, 0.0, atol=1e-6):
         mounting = (float(stated[0]), float(stated[1]), float(stated[2]))
     scans = ScanSeries(
         times=scan_times,
