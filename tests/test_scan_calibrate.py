@@ -9,6 +9,7 @@ import dataclasses
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import umbmark
@@ -243,15 +244,18 @@ def test_the_mounting_read_from_a_robot_description() -> None:
 def test_a_turtlebot3_as_its_bags_are(tmp_path: Path) -> None:
     # TurtleBot3 Burger's published geometry (wheelbase 160 mm, wheels 66 mm, the LDS-01
     # at x = -32 mm in its URDF) with errors; its scanner as the LDS-01 reports: 360 beams
-    # at 5 Hz, each sweep measured over its 0.2 s period while the robot moves, 0.12 to
-    # 3.5 m, 1.5 cm noise; the wheels at 30 Hz; a ROS 2 MCAP bag
+    # at 5 Hz from angle 0 round to 2 pi, each sweep measured over its 0.2 s period while
+    # the robot moves, 0.12 to 3.5 m, 1.5 cm noise, 0.0 where a beam saw nothing; the
+    # wheels at 30 Hz; a ROS 2 MCAP bag
     b_nominal, d_nominal = 0.160, 0.066
     e_d, e_b, e_s = 1.004, 1.03, 0.99
     f_left = 2 * e_s / (1 + e_d)
     radii = (f_left * d_nominal / 2, e_d * f_left * d_nominal / 2)
     world = room_world()
     assert world.lidar is not None
-    lds = dataclasses.replace(world.lidar, range_min=0.12, range_max=3.5, sigma=0.015)
+    lds = dataclasses.replace(
+        world.lidar, angle_min=0.0, range_min=0.12, range_max=3.5, sigma=0.015
+    )
     pattern = (
         (3.0, 0.0, 1.2), (3.0, 0.0, -1.2), (4.0, 0.2, 0.0), (4.0, -0.2, 0.0),
         (5.0, 0.15, 0.6), (5.0, -0.15, 0.6), (3.0, 0.0, -1.5),
@@ -262,8 +266,11 @@ def test_a_turtlebot3_as_its_bags_are(tmp_path: Path) -> None:
         wheel_rate=30.0, sweep_time=0.2, radii=radii, wheelbase=e_b * b_nominal, laser=laser,
     )  # fmt: skip
     poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
+    ranges = drive.scans.ranges
+    assert (~np.isfinite(ranges)).mean() > 0.05  # beyond 3.5 m, and dropouts
+    zeros = dataclasses.replace(drive.scans, ranges=np.where(np.isfinite(ranges), ranges, 0.0))
     bag = write_bag(
-        bag_target(tmp_path / "tb3", "mcap"), drive.wheels, poses, poses, scans=drive.scans,
+        bag_target(tmp_path / "tb3", "mcap"), drive.wheels, poses, poses, scans=zeros,
         laser_pose=(laser.x, laser.y, laser.theta),
     )  # fmt: skip
     report = umbmark.calibrate(
