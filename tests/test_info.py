@@ -540,3 +540,26 @@ def test_every_option_is_a_keyword_of_the_library_function():
     for param in cli.commands["info"].params:
         if param.name != "json_out":
             assert param.name in keywords, param.name
+
+
+def test_a_ros1_bag_whose_index_is_damaged_is_one_line(tmp_path: Path) -> None:
+    # a real bag whose index record counts one message more than it holds: rosbags stops
+    # on an internal assertion with no text, which alone would tell the user nothing
+    store = get_typestore(Stores.ROS1_NOETIC)
+    path = tmp_path / "damaged.bag"
+    with Writer1(path) as writer:
+        conn = writer.add_connection("/n", "std_msgs/msg/Int32", typestore=store)
+        for k in range(3):
+            message = store.types["std_msgs/msg/Int32"](data=k)
+            writer.write(conn, 10**9 * (k + 1), store.serialize_ros1(message, conn.msgtype))
+    data = bytearray(path.read_bytes())
+    op = data.find(b"op=\x04")  # the index data record's header
+    count = data.find(b"count=", op - 60, op + 60) + len(b"count=")
+    assert op > 0
+    assert data[count] == 3
+    data[count] = 4
+    path.write_bytes(bytes(data))
+    line = cli_error("info", str(path))
+    assert line.startswith(f"umbmark: error: {path}: cannot read the bag: AssertionError: its")
+    assert "a damaged index" in line
+    assert "rosbag reindex" in line

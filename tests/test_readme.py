@@ -432,7 +432,7 @@ def _cli_options() -> set[str]:
 OTHER_PROGRAMS = {
     "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--check", "--ref",
     "--align_origin", "--once", "--list", "--filter", "--jobs", "--keep", "--data", "--strict",
-    "--auto", "--accuracy", "--side", "--loso", "--single",
+    "--auto", "--accuracy", "--side", "--loso", "--single", "--max-interval",
 }  # fmt: skip
 
 

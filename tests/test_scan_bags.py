@@ -52,8 +52,10 @@ def test_scans_round_trip(drive, tmp_path: Path, fmt: str) -> None:  # type: ign
     assert np.ptp(np.diff(read.times)) > 0.04  # irregular rate, as simulated
     expected = mirrored(scans.ranges) if fmt == "mcap" else scans.ranges
     np.testing.assert_array_equal(read.ranges, expected.astype(np.float32).astype(np.float64))
-    # NaN (dropouts) and inf (beyond 12 m: the door) survive
+    # NaN (dropouts) and inf (beyond 12 m: the door) survive, where they were
     assert np.isnan(read.ranges).any()
+    assert np.isinf(read.ranges).any()
+    np.testing.assert_array_equal(np.isinf(read.ranges), np.isinf(expected))
     assert read.angle_min == pytest.approx(-math.pi)
     assert read.angle_increment == pytest.approx(2 * math.pi / 360)
     assert (read.range_min, read.range_max) == pytest.approx((0.05, 12.0))

@@ -9,6 +9,7 @@ import dataclasses
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import umbmark
@@ -17,6 +18,7 @@ from umbmark.calibration.scan import calibrate_scan_bags
 from umbmark.core.errors import InputError
 from umbmark.model.recording import PoseSeries
 from umbmark.robot.base import Pose2D
+from umbmark.robot.world import room_world
 from umbmark.runs.options import ReadOptions
 from umbmark.sources.bag.scans import scan_mounting
 from umbmark.sources.bag.writer import bag_target, write_bag
@@ -40,15 +42,23 @@ JOINTS = ("--left-joint", "left_wheel_joint", "--right-joint", "right_wheel_join
 NOMINAL = ("--wheelbase", str(B_NOMINAL), "--wheel-diameter", str(D_NOMINAL))
 
 
-def _bag(folder: Path, pattern=None, *, scans: bool = True) -> Path:  # type: ignore[no-untyped-def]
+def _bag(  # type: ignore[no-untyped-def]
+    folder: Path, pattern=None, *, scans: bool = True, storage=None, upside_down=False
+) -> Path:
+    """The simulated drive as a bag: ROS 1, or ROS 2 of ``storage`` (sqlite3, mcap); with
+    ``upside_down`` the scanner turned over about its x axis (its sweeps mirrored, and the
+    mounting on /tf_static with a roll of pi)."""
     radii = (TRUE_DIAMETERS[0] / 2, TRUE_DIAMETERS[1] / 2)
     drive = simulate(pattern, radii=radii, wheelbase=TRUE_WHEELBASE, laser=LASER) if pattern \
         else simulate(radii=radii, wheelbase=TRUE_WHEELBASE, laser=LASER)  # fmt: skip
     poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
-    target = bag_target(folder / "drive.bag")
+    target = bag_target(folder / ("drive" if storage else "drive.bag"), storage)
     if not scans:
         return write_bag(target, drive.wheels, poses, poses)
-    return write_bag(target, drive.wheels, poses, poses, scans=drive.scans, laser_pose=STATED)
+    sweeps = drive.scans
+    if upside_down:
+        sweeps = dataclasses.replace(sweeps, ranges=mirrored(sweeps.ranges), upside_down=True)
+    return write_bag(target, drive.wheels, poses, poses, scans=sweeps, laser_pose=STATED)
 
 
 @pytest.fixture(scope="module")
@@ -107,6 +117,19 @@ def test_the_library_pipeline_is_the_jobs(bag: Path, result: umbmark.Calibration
     ours, theirs = direct.to_dict(), result.to_dict()
     for key in ("laser_pose", "laser_pose_standard_errors", "wheelbase", "motion_intervals"):
         assert ours[key] == theirs[key]
+
+
+@pytest.mark.parametrize(("storage", "upside_down"), [("sqlite3", False), ("mcap", True)])
+def test_ros2_bags_recover_the_truth(tmp_path: Path, storage: str, upside_down: bool) -> None:
+    # the same drive in a ROS 2 bag (sweeps at irregular rates, with NaN and inf ranges);
+    # turned over, the scanner's sweeps are mirrored and /tf_static says so: the mounting
+    # found is of the frame turned right side up, which has the same position and yaw
+    bag = _bag(tmp_path, storage=storage, upside_down=upside_down)
+    report = umbmark.calibrate(
+        bag, scan_topic="/scan", wheelbase=B_NOMINAL, wheel_diameter=D_NOMINAL
+    )
+    _check_truth(report.to_dict())
+    assert report.to_dict()["apply"]["level"] == "apply"
 
 
 def test_the_mounting_read_from_tf_static(bag: Path) -> None:
@@ -216,3 +239,50 @@ def test_the_mounting_read_from_a_robot_description() -> None:
     assert described.mountings["base_scan"] == pytest.approx((-0.032, 0.01, 0.2), abs=1e-12)
     assert described.mountings["base_link"] == pytest.approx((0.0, 0.0, 0.0))  # 1 cm up only
     assert "wheel_left_link" not in described.mountings  # on a turning joint: no mounting
+
+
+def test_a_turtlebot3_as_its_bags_are(tmp_path: Path) -> None:
+    # TurtleBot3 Burger's published geometry (wheelbase 160 mm, wheels 66 mm, the LDS-01
+    # at x = -32 mm in its URDF) with errors; its scanner as the LDS-01 reports: 360 beams
+    # at 5 Hz from angle 0 round to 2 pi, each sweep measured over its 0.2 s period while
+    # the robot moves, 0.12 to 3.5 m, 1.5 cm noise, 0.0 where a beam saw nothing; the
+    # wheels at 30 Hz; a ROS 2 MCAP bag
+    b_nominal, d_nominal = 0.160, 0.066
+    e_d, e_b, e_s = 1.004, 1.03, 0.99
+    f_left = 2 * e_s / (1 + e_d)
+    radii = (f_left * d_nominal / 2, e_d * f_left * d_nominal / 2)
+    world = room_world()
+    assert world.lidar is not None
+    lds = dataclasses.replace(
+        world.lidar, angle_min=0.0, range_min=0.12, range_max=3.5, sigma=0.015
+    )
+    pattern = (
+        (3.0, 0.0, 1.2), (3.0, 0.0, -1.2), (4.0, 0.2, 0.0), (4.0, -0.2, 0.0),
+        (5.0, 0.15, 0.6), (5.0, -0.15, 0.6), (3.0, 0.0, -1.5),
+    )  # fmt: skip
+    laser = Pose2D(-0.032, 0.0, 0.0)
+    drive = simulate(
+        pattern, world=dataclasses.replace(world, lidar=lds), beams=360, scan_rate=5.0, jitter=0.2,
+        wheel_rate=30.0, sweep_time=0.2, radii=radii, wheelbase=e_b * b_nominal, laser=laser,
+    )  # fmt: skip
+    poses = PoseSeries(time=drive.pose_times, poses=drive.poses)
+    ranges = drive.scans.ranges
+    assert (~np.isfinite(ranges)).mean() > 0.05  # beyond 3.5 m, and dropouts
+    zeros = dataclasses.replace(drive.scans, ranges=np.where(np.isfinite(ranges), ranges, 0.0))
+    bag = write_bag(
+        bag_target(tmp_path / "tb3", "mcap"), drive.wheels, poses, poses, scans=zeros,
+        laser_pose=(laser.x, laser.y, laser.theta),
+    )  # fmt: skip
+    report = umbmark.calibrate(
+        bag, scan_topic="/scan", wheelbase=b_nominal, wheel_diameter=d_nominal
+    )
+    data = report.to_dict()
+    se = data["standard_errors"]
+    for key, truth in (("E_d", e_d), ("E_b", e_b), ("E_s", e_s)):
+        _within(data[key], truth, se[key], key)
+    _within(data["wheelbase"], e_b * b_nominal, data["wheelbase_standard_error"], "wheelbase")
+    for k, truth in enumerate((laser.x, laser.y, laser.theta)):
+        _within(data["laser_pose"][k], truth, data["laser_pose_standard_errors"][k], "laser")
+    assert se["E_d"] < 1e-3
+    assert max(data["laser_pose_standard_errors"][:2]) < 0.003  # [m]
+    assert any("44 motion intervals matched of 44" in note for note in report.notes)

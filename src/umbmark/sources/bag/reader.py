@@ -135,6 +135,8 @@ def open_bag(path: Path, src: str) -> Iterator[AnyReader]:
         reader.open()
     except Exception as err:  # rosbags, sqlite, mcap, yaml, decompression: all bad input
         problem = f"cannot read the bag: {one_line(err)}"
+        if isinstance(err, AssertionError):  # rosbags' checks of a ROS 1 bag's records
+            problem += ": its records' counts or lengths are inconsistent, a damaged index"
         if location.suffix == ".bag" and "index" in problem.lower():
             problem += " (a recording that was cut short needs `rosbag reindex` first)"
         raise InputError(problem, source=src) from None
