@@ -79,8 +79,7 @@ def test_reported_factors_are_positive_and_finite(runs_csv: Path) -> None:
 
 def test_negative_factors_are_refused_not_reported(tmp_path: Path) -> None:
     """Runs whose return errors ask for a negative wheel (E_d <= 0) are refused."""
-    from umbmark.calibration.active import check_calibration
-    from umbmark.calibration.compose import Calibration
+    from umbmark.calibration.compose import Calibration, check_calibration
     from umbmark.model.active import ActiveParams
 
     class Estimate:

@@ -90,7 +90,7 @@ def test_reading_the_registry_imports_no_numpy():
 
 
 def test_validate_help_names_every_estimator_it_compares():
-    from umbmark.jobs.validate import CANDIDATES
+    from umbmark.calibration.heldout import CANDIDATES
 
     text = " ".join(CliRunner().invoke(cli, ["validate", "--help"]).output.split())
     listed = text.split("[default: all: ")[1].split("]")[0]

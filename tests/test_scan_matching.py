@@ -195,9 +195,9 @@ def test_intervals_with_values_that_are_not_numbers_are_refused():
 
 
 def test_runs_methods_and_intervals_do_not_mix():
+    from umbmark.calibration.heldout import CANDIDATES
     from umbmark.estimators.dispatch import estimate_runs
     from umbmark.estimators.registry import INTERVALS, RUNS
-    from umbmark.jobs.validate import CANDIDATES
 
     assert not set(INTERVALS) & set(CANDIDATES)  # validate and auto compare runs' methods
     assert not set(INTERVALS) & set(RUNS)

@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 
 import umbmark
-from umbmark.calibration.active import read_runs
 from umbmark.estimators.motions import motion_coverage
+from umbmark.runs.active import read_runs
 from umbmark.runs.options import ReadOptions
 
 CIRCLES_2506 = [f"circular/25062020{s}" for s in ("2104", "2119", "2236", "2251", "2317", "2345")]

@@ -19,13 +19,17 @@ parameters active during it, they give the robot's own again.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
+from umbmark.core.bounds import Origin, geometry_origins
+from umbmark.core.errors import InputError
 from umbmark.estimators.base import ErrorEstimate
 from umbmark.model.active import ActiveParams
 from umbmark.model.systematic import correction_factors
 
-__all__ = ["Calibration"]
+__all__ = ["Calibration", "check_calibration"]
 
 
 @dataclass(frozen=True)
@@ -85,3 +89,32 @@ class Calibration:
         """Corrected effective right wheel diameter ``c_R,new D_n`` [m], if ``D_n`` is known."""
         d = self.active.wheel_diameter
         return None if d is None else self.new_c_right * d
+
+
+def check_calibration(
+    calibration: Calibration, origins: Mapping[str, Origin] | None = None
+) -> None:
+    """Refuse a calibration whose new factors are not positive finite numbers.
+
+    Raises
+    ------
+    InputError
+        Naming the first such factor: the runs and the parameters (named as ``origins``
+        says where they came from, see :func:`check_square_geometry`) contradict each other.
+    """
+    active = calibration.active
+    b_from, side_from, m_from, _ = geometry_origins(origins, active.separation_multiplier)
+    named = [side_from.named(), b_from.named(), *([m_from.named()] if m_from else [])]
+    for name, value in (
+        ("E_d", calibration.estimate.E_d),
+        ("E_b", calibration.estimate.E_b),
+        ("c_L", calibration.new_c_left),
+        ("c_R", calibration.new_c_right),
+        ("wheel_separation_multiplier", calibration.new_separation_multiplier),
+        ("wheelbase", calibration.wheelbase_corrected),
+    ):
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(
+                f"the runs give {name} = {value:.6g}, which no robot can have: check "
+                f"{', '.join(named)} and the runs' units and directions"
+            )

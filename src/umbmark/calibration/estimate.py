@@ -1,7 +1,7 @@
 """The estimation step of a calibration: runs as read, one estimator, a result.
 
 :func:`calibrate_runs` runs the estimator a method names on runs already read
-(:func:`umbmark.calibration.active.read_runs`), through
+(:func:`umbmark.runs.active.read_runs`), through
 :func:`umbmark.estimators.dispatch.estimate_runs`, and returns the
 :class:`~umbmark.calibration.report.CalibrationResult`; :func:`umbmark.calibrate` and the
 held-out validation (:func:`umbmark.validate`) share it.
@@ -11,8 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from umbmark.calibration.active import check_calibration
-from umbmark.calibration.compose import Calibration
+from umbmark.calibration.compose import Calibration, check_calibration
 from umbmark.calibration.report import CalibrationResult
 from umbmark.core.messages import split_messages
 from umbmark.estimators.dispatch import estimate_runs

@@ -17,8 +17,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
-from umbmark.calibration.active import check_calibration, choose_active
-from umbmark.calibration.compose import Calibration
+from umbmark.calibration.compose import Calibration, check_calibration
 from umbmark.calibration.report import CalibrationResult
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info, split_messages
@@ -28,6 +27,7 @@ from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.options.spec import WHEELBASE
+from umbmark.runs.active import choose_active
 from umbmark.runs.options import ReadOptions
 from umbmark.runs.read import Chosen, bag_options, check_invertible, parameter_file
 from umbmark.sources.params.reader import ControllerParams

@@ -1,6 +1,6 @@
 """What a held-out validation found (:class:`ValidationReport`): each candidate's mean
 end-position error on runs it never saw, fold by fold, and the recommendation
-(:func:`umbmark.jobs.validate.validate` computes it). :attr:`ValidationReport.coverage`
+(:func:`umbmark.calibration.heldout.validate_read` computes it). :attr:`ValidationReport.coverage`
 states which kinds of motion were held out (:mod:`umbmark.estimators.motions`).
 """
 

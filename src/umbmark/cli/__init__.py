@@ -1,1 +1,2 @@
-"""The ``umbmark`` command: a thin layer that wires sources, estimators and outputs."""
+"""The ``umbmark`` command: one module per command, each parsing its options, calling the
+library function of the same name and rendering the report (``docs/architecture.md``)."""

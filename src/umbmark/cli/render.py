@@ -76,11 +76,7 @@ def render_calibration(
     console.print(Text(verdict.line(), style=style[verdict.level]))
     for line in summarize(list(report.associations)):
         console.print(line)
-    bench, cal = report.benchmark, report.calibration
-    est, active = cal.estimate, cal.active
-    se = est.standard_errors
-
-    sensor = report.sensor
+    bench, sensor = report.benchmark, report.sensor
     if sensor is not None:
         console.print(
             Text.assemble(
@@ -102,6 +98,29 @@ def render_calibration(
     else:
         _render_benchmark(report, bench, console)
 
+    _render_errors(report, console)
+    _render_correction(report, console)
+
+    if overlay and report.overlay_withheld:
+        console.print(
+            Text(
+                "No ros2_control overlay: the verdict is do not apply (--override-verdict "
+                "prints and writes it).",
+                style="bold",
+            )
+        )
+    elif overlay:
+        console.print(
+            Text("ros2_control overlay (paste it, or write it with --yaml FILE):", style="bold")
+        )
+        # Plain text, no box: it must copy and paste as it is.
+        console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
+
+
+def _render_errors(report: CalibrationReport, console: Console) -> None:
+    """The systematic errors' table, and their 95 % intervals."""
+    est, sensor = report.calibration.estimate, report.sensor
+    se = est.standard_errors
     name = method_label(est.method)
     entry = find(est.method)
     if entry is not None and entry.turn_rate and "spot_wheelbase" not in est.components:
@@ -134,6 +153,11 @@ def render_calibration(
     if intervals:
         console.print("95 % intervals: " + ", ".join(intervals))
 
+
+def _render_correction(report: CalibrationReport, console: Console) -> None:
+    """The correction's table: active, this pass, new."""
+    cal = report.calibration
+    est, active = cal.estimate, cal.active
     correction = table(
         "Correction, composed with the values active during the runs",
         ["", "active", "this pass", "new"],
@@ -183,21 +207,6 @@ def render_calibration(
             f"{cal.wheel_diameter_right * _MM:.3f}",
         )
     console.print(correction)
-
-    if overlay and report.overlay_withheld:
-        console.print(
-            Text(
-                "No ros2_control overlay: the verdict is do not apply (--override-verdict "
-                "prints and writes it).",
-                style="bold",
-            )
-        )
-    elif overlay:
-        console.print(
-            Text("ros2_control overlay (paste it, or write it with --yaml FILE):", style="bold")
-        )
-        # Plain text, no box: it must copy and paste as it is.
-        console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
 
 
 def _sensor_rows(errors: Table, comp: Mapping[str, float], se: Mapping[str, float]) -> None:

@@ -32,8 +32,8 @@ import contextlib
 import math
 import statistics
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -41,7 +41,10 @@ from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError
 from umbmark.model.runs import EndPose, Run
 
-__all__ = ["UNITS", "check_columns", "unit_hints"]
+if TYPE_CHECKING:
+    from umbmark.runs.read import Runs
+
+__all__ = ["UNITS", "check_columns", "judge_table", "unit_hints"]
 
 #: Length units a table may be in, in metres.
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
@@ -438,3 +441,16 @@ def _mixed_unit_rows(squares: Sequence[Run], unit: str) -> list[str]:
                     )
                     break
     return hints
+
+
+def judge_table(read: Runs, unit: str, angle_unit: str, side: float | None) -> Runs:
+    """A runs table as read, judged as a robot driving the square makes it: refused where
+    its columns look swapped (:func:`check_columns`), with warnings where its numbers look
+    like other units than it says (:func:`unit_hints`) added to its notes."""
+    name, runs = read.sources[0], list(read.runs)
+    wheelbase = read.active.effective_wheelbase
+    hints = [
+        *check_columns(runs, side, name),
+        *unit_hints(runs, unit, angle_unit, side, wheelbase, name),
+    ]
+    return replace(read, notes=(*read.notes, *hints))

@@ -202,33 +202,7 @@ def trajectory_estimate(
         "fit_truth_offset": fit_truth_offset,
     }
     single = fit_trajectories(logs, active, model="diff", **options)
-    side = side_length or 1.0
-    v0 = np.array([single.r_left, single.r_right, single.wheelbase])
-    values = _relative_errors(v0, active, side)
-    # First-order propagation through central differences.
-    grad = np.empty((values.size, 3))
-    for j in range(3):
-        step = np.zeros(3)
-        step[j] = 1e-6 * v0[j]
-        plus = _relative_errors(v0 + step, active, side)
-        minus = _relative_errors(v0 - step, active, side)
-        grad[:, j] = (plus - minus) / (2.0 * step[j])
-    variance = np.einsum("ij,jk,ik->i", grad, single.covariance[:3, :3], grad)
-    spread = np.sqrt(np.clip(variance, 0.0, None))
-    se = dict(zip(("E_d", "E_b", "E_s", "alpha", "beta"), spread, strict=True))
-    components: dict[str, float] = {
-        "r_left": single.r_left,
-        "r_right": single.r_right,
-        "wheelbase": single.wheelbase,
-        "time_offset": single.time_offset,
-        "rms_position": single.rms_position,
-        "rms_heading": single.rms_heading,
-        "runs": float(single.runs),
-        "samples": float(single.samples),
-    }
-    standard_errors: dict[str, float] = {k: float(v) for k, v in se.items()}
-    for key in ("r_left", "r_right", "wheelbase", "time_offset"):
-        standard_errors[key] = single.standard_errors[key]
+    values, components, standard_errors = _single_set(single, active, side_length or 1.0)
     if fit_truth_offset:
         components.update(
             truth_offset_x=single.truth_offset_x, truth_offset_y=single.truth_offset_y
@@ -274,6 +248,40 @@ def trajectory_estimate(
         warnings=() if problem is None else (f"{problem}; {SCRUB_FALLBACK}; {advice}",),
     )
     return estimate, fit
+
+
+def _single_set(
+    single: TrajectoryFit, active: WheelParams, side: float
+) -> tuple[FloatArray, dict[str, float], dict[str, float]]:
+    """The single set's errors relative to ``active`` (``E_d, E_b, E_s, alpha, beta``), its
+    components, and their standard errors (first-order propagation through central
+    differences)."""
+    v0 = np.array([single.r_left, single.r_right, single.wheelbase])
+    values = _relative_errors(v0, active, side)
+    grad = np.empty((values.size, 3))
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = 1e-6 * v0[j]
+        plus = _relative_errors(v0 + step, active, side)
+        minus = _relative_errors(v0 - step, active, side)
+        grad[:, j] = (plus - minus) / (2.0 * step[j])
+    variance = np.einsum("ij,jk,ik->i", grad, single.covariance[:3, :3], grad)
+    spread = np.sqrt(np.clip(variance, 0.0, None))
+    se = dict(zip(("E_d", "E_b", "E_s", "alpha", "beta"), spread, strict=True))
+    components: dict[str, float] = {
+        "r_left": single.r_left,
+        "r_right": single.r_right,
+        "wheelbase": single.wheelbase,
+        "time_offset": single.time_offset,
+        "rms_position": single.rms_position,
+        "rms_heading": single.rms_heading,
+        "runs": float(single.runs),
+        "samples": float(single.samples),
+    }
+    standard_errors: dict[str, float] = {k: float(v) for k, v in se.items()}
+    for key in ("r_left", "r_right", "wheelbase", "time_offset"):
+        standard_errors[key] = single.standard_errors[key]
+    return values, components, standard_errors
 
 
 def disagreement_warnings(

@@ -365,14 +365,7 @@ def fit_trajectories(
         arcs or no turns on the spot, or a turn-rate term the fit does not pin), or the
         fitted truth offset reaches its bound.
     """
-    if model not in MODELS:
-        raise ValueError(f"unknown trajectory model {model!r}; use diff or scrub")
-    if start_pose not in START_POSES:
-        raise ValueError(f"unknown start pose {start_pose!r}; use fitted or truth")
-    if not (0.0 < max_time_offset < math.inf):
-        raise ValueError(f"max time offset must be > 0 s, got {max_time_offset!r}")
-    if not (0.0 < max_truth_offset < math.inf):
-        raise ValueError(f"max truth offset must be > 0 m, got {max_truth_offset!r}")
+    _check_settings(model, start_pose, max_time_offset, max_truth_offset)
     if model == "scrub" and check_coverage:
         unidentified = motion_coverage(logs, start).scrub_problem()
         if unidentified is not None:
@@ -380,21 +373,8 @@ def fit_trajectories(
     data = prepare(logs)
     if fit_truth_offset:
         _check_turning(data)
-    r0 = 0.5 * start.wheel_diameter
     b0 = start.wheelbase
-    names = ["r_left", "r_right", "wheelbase"]
-    scale = [r0, r0, b0]
-    x0 = [start.c_left, start.c_right, 1.0]
-    if model == "scrub":
-        names.append("spot_wheelbase")
-        scale.append(b0)
-        x0.append((start.spot_wheelbase or b0) / b0)
-    if fit_time_offset:
-        names.append("time_offset")
-        x0.append(0.0)
-    if fit_truth_offset:
-        names += ["truth_offset_x", "truth_offset_y"]
-        x0 += [0.0, 0.0]
+    names, scale, x0 = _unknowns(start, model, fit_time_offset, fit_truth_offset)
     problem = Problem(
         data,
         model,
@@ -419,14 +399,7 @@ def fit_trajectories(
     if fit_truth_offset:  # before the check of the Jacobian, which a bound flattens
         _check_truth_offset_inside(truth_offset, max_truth_offset)
     _check_pinned(fit.jac, names)
-    cluster, clusters = _clusters(data)
-    cov_x = _cluster_covariance(fit.jac, fit.residuals, np.repeat(cluster, 3), clusters)
-    _, slopes = problem.physical(fit.x)
-    cov = cov_x * np.outer(slopes, slopes)
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    standard_errors = {name: float(v) for name, v in zip(names, se, strict=True)}
-    for name in ("time_offset", "truth_offset_x", "truth_offset_y"):
-        standard_errors.setdefault(name, 0.0)
+    cov, standard_errors, clusters = _uncertainty(problem, fit, data, names)
     r_left, r_right, b, b_spot, delta = problem.unpack(fit.x)
     _check_physical(
         {"r_left": r_left, "r_right": r_right, "wheelbase": b, "spot_wheelbase": b_spot},
@@ -460,3 +433,54 @@ def fit_trajectories(
     if loose is not None:
         raise ValueError(f"{loose}: {SCRUB_MORE}")
     return result
+
+
+def _check_settings(
+    model: str, start_pose: str, max_time_offset: float, max_truth_offset: float
+) -> None:
+    if model not in MODELS:
+        raise ValueError(f"unknown trajectory model {model!r}; use diff or scrub")
+    if start_pose not in START_POSES:
+        raise ValueError(f"unknown start pose {start_pose!r}; use fitted or truth")
+    if not (0.0 < max_time_offset < math.inf):
+        raise ValueError(f"max time offset must be > 0 s, got {max_time_offset!r}")
+    if not (0.0 < max_truth_offset < math.inf):
+        raise ValueError(f"max truth offset must be > 0 m, got {max_truth_offset!r}")
+
+
+def _unknowns(
+    start: WheelParams, model: str, fit_time_offset: bool, fit_truth_offset: bool
+) -> tuple[list[str], list[float], list[float]]:
+    """The fit's unknowns: their names, the scales of the physical ones, the start."""
+    r0 = 0.5 * start.wheel_diameter
+    b0 = start.wheelbase
+    names = ["r_left", "r_right", "wheelbase"]
+    scale = [r0, r0, b0]
+    x0 = [start.c_left, start.c_right, 1.0]
+    if model == "scrub":
+        names.append("spot_wheelbase")
+        scale.append(b0)
+        x0.append((start.spot_wheelbase or b0) / b0)
+    if fit_time_offset:
+        names.append("time_offset")
+        x0.append(0.0)
+    if fit_truth_offset:
+        names += ["truth_offset_x", "truth_offset_y"]
+        x0 += [0.0, 0.0]
+    return names, scale, x0
+
+
+def _uncertainty(
+    problem: Problem, fit: _Solution, data: RunsData, names: Sequence[str]
+) -> tuple[FloatArray, dict[str, float], int]:
+    """The covariance of the physical unknowns (clustered by run), their standard errors
+    (zero for offsets not fitted), and the number of clusters."""
+    cluster, clusters = _clusters(data)
+    cov_x = _cluster_covariance(fit.jac, fit.residuals, np.repeat(cluster, 3), clusters)
+    _, slopes = problem.physical(fit.x)
+    cov = cov_x * np.outer(slopes, slopes)
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    standard_errors = {name: float(v) for name, v in zip(names, se, strict=True)}
+    for name in ("time_offset", "truth_offset_x", "truth_offset_y"):
+        standard_errors.setdefault(name, 0.0)
+    return cov, standard_errors, clusters

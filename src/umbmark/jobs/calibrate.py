@@ -15,22 +15,24 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark.calibration.active import read_runs
 from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
 from umbmark.calibration.report import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError, python_api
+from umbmark.estimators.plausibility import judge_table
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
 from umbmark.outputs.files import OutputPlan
+from umbmark.runs.active import read_each
 from umbmark.runs.options import ReadOptions, SourceOptions
-from umbmark.runs.read import RunSource, is_intervals, source_name
+from umbmark.runs.read import RunSource, is_intervals, is_runs, pool_runs, source_name
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from typing_extensions import Unpack
 
     from umbmark.outputs.tum import TumTime
+    from umbmark.store.history import History
     from umbmark.store.records import NewCalibration
 
 __all__ = ["CalibrationReport", "calibrate"]
@@ -130,6 +132,10 @@ class CalibrationReport(CalibrationResult):
             report=report,
             force=force,
         )
+        return self._write(plan, time, override_verdict=override_verdict)
+
+    def _write(self, plan: OutputPlan, time: TumTime, *, override_verdict: bool) -> list[Path]:
+        """Write what ``plan`` (checked) names."""
         if plan.plot is not None and self.benchmark is None:
             raise InputError(
                 "--plot needs runs in both directions (cw and ccw)", source=self.source
@@ -214,16 +220,11 @@ def calibrate(
         Wheelbase ``b`` the odometry used during the runs [m] (ros2_control
         ``wheel_separation``); required for runs tables unless ``current_params`` has it.
     method : str, optional
-        Estimator (``docs/estimators.md``); default ``exact``, or ``scan-matching`` for
-        tuple files and with ``scan_topic``. Square tests: ``paper`` (Eqs. 4.20-4.27 as
-        printed), ``exact`` (the default: the exact square geometry inverted), ``heading``
-        (final headings, Jung & Chung 2011), ``endpose`` (maximum likelihood on every
-        run's end pose). Recorded runs of any shape: ``endpoints`` (least squares on where
-        they end), ``trajectory`` (on whole trajectories; finds ``E_s`` too),
-        ``trajectory-scrub`` (with a turn-dependent wheelbase). ``auto``: the one that
-        predicts held-out recorded runs best (:func:`umbmark.validate`; runs tables take
-        the default). Motion intervals (tuple files, or a bag with ``scan_topic``):
-        ``scan-matching`` (the wheels and the laser's mounting, Censi et al. 2013).
+        An estimator's name in :mod:`umbmark.estimators.registry` (``docs/estimators.md``
+        says what each needs and finds), or ``auto``: the one that predicts held-out
+        recorded runs best (:mod:`umbmark.calibration.auto`; runs tables take the
+        default). Default: ``exact``, or ``scan-matching`` for motion intervals (tuple
+        files, or a bag with ``scan_topic``).
     fit_truth_offset : bool
         ``trajectory`` and ``trajectory-scrub`` only: fit where the ground truth's tracked
         point (a motion-capture marker) sits in the robot frame, the components
@@ -279,9 +280,60 @@ def calibrate(
         store = History(history)
         options, composed = compose_last_applied(store, robot, options)
     read_options = ReadOptions.of(options)
-    from umbmark.outputs.tum import check_tum_time
+    time = _tum_time(tum_time)
+    _check_method(method, fit_truth_offset)
+    sources = (source, *more_sources)
+    plan = _plan([source_name(s) for s in sources], output=output, yaml=yaml,
+                 ros1_yaml=ros1_yaml, plot=plot, tum=tum, report=report, force=force)  # fmt: skip
+    result = _calibrate(
+        sources, read_options, method, wheelbase, side_length,
+        override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
+    )  # fmt: skip
+    result = replace(result, robot=robot, command=command)
+    if store is not None and robot is not None:
+        result = _same_robot(result, store, robot, composed)
+    result = replace(result, forced=override_verdict)
+    if result.overlay_withheld:  # the verdict says what to do instead
+        files = {"yaml": plan.yaml, "ros1_yaml": plan.ros1_yaml}
+        result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
+        plan = replace(plan, yaml=None, ros1_yaml=None)
+    result._write(plan, time, override_verdict=override_verdict)
+    if store is not None and robot is not None:
+        result = _recorded(result, store, robot, sources, override_verdict)
+    return result
 
-    check_tum_time(tum_time)
+
+def _same_robot(
+    result: CalibrationReport, store: History, robot: str, composed: str | None
+) -> CalibrationReport:
+    """Refuse a result of another robot than the history's ``robot``; note what was
+    composed from its last applied calibration."""
+    active = result.calibration.active
+    store.check_identity(robot, active.wheelbase, active.wheel_diameter)
+    return result if composed is None else replace(result, notes=(*result.notes, composed))
+
+
+def _recorded(
+    result: CalibrationReport,
+    store: History,
+    robot: str,
+    sources: Sequence[RunSource],
+    override_verdict: bool,
+) -> CalibrationReport:
+    """The result, recorded in the history, with the line saying so."""
+    inputs = [n for n in map(source_name, sources) if n != "runs"]
+    id = store.record(robot, _history_entry(result), inputs)
+    said = store.recorded_line(robot, id, result.verdict, overridden=override_verdict)
+    return replace(result, recorded=said)
+
+
+def _tum_time(tum_time: str) -> TumTime:
+    from umbmark.outputs.tum import check_tum_time  # off start-up
+
+    return check_tum_time(tum_time)
+
+
+def _check_method(method: str | None, fit_truth_offset: bool) -> None:
     if method is not None and method not in CHOICES:
         raise InputError(f"--method {method!r}: use one of {', '.join(NAMES)} or {AUTO}")
     fitting = names(trajectories=True)
@@ -290,43 +342,30 @@ def calibrate(
             f"--fit-truth-offset needs --method {' or '.join(fitting)}, not "
             f"{method or DEFAULT.name}"
         )
-    sources = (source, *more_sources)
-    _plan([source_name(s) for s in sources], output=output, yaml=yaml, ros1_yaml=ros1_yaml,
-          plot=plot, tum=tum, report=report, force=force)  # fmt: skip
-    note, nominal_best = None, False
+
+
+def _calibrate(
+    sources: Sequence[RunSource],
+    read_options: ReadOptions,
+    method: str | None,
+    wheelbase: float | None,
+    side_length: float | None,
+    *,
+    override_verdict: bool,
+    fit_truth_offset: bool,
+) -> CalibrationReport:
+    """The calibration of the sources by what they hold: a bag's scans, motion intervals,
+    or runs (with the note of ``auto``'s choice)."""
     if read_options.scan_topic is not None:
-        result = _calibrate_scans(sources, read_options, method, wheelbase, side_length)
-    elif any(is_intervals(s, read_options) for s in sources) or method in INTERVALS:
-        result = _calibrate_intervals(sources, read_options, method or AUTO, wheelbase, side_length)
-    else:
-        method = method or DEFAULT.name
-        result, note, nominal_best = _calibrate_runs(
-            sources, read_options, method, wheelbase, side_length, options,
-            override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
-        )  # fmt: skip
-    result = replace(result, robot=robot, command=command, nominal_best=nominal_best)
-    if note is not None:
-        result = replace(result, notes=(*result.notes, note))
-    if store is not None and robot is not None:
-        active = result.calibration.active
-        store.check_identity(robot, active.wheelbase, active.wheel_diameter)
-        if composed is not None:
-            result = replace(result, notes=(*result.notes, composed))
-    files = {"yaml": yaml, "ros1_yaml": ros1_yaml}
-    result = replace(result, forced=override_verdict)
-    if result.overlay_withheld:  # the verdict says what to do instead
-        result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
-        files = dict.fromkeys(files)
-    result.write(
-        output=output, plot=plot, tum=tum, tum_time=tum_time, report=report, force=force,
-        yaml=files["yaml"], ros1_yaml=files["ros1_yaml"],
+        return _calibrate_scans(sources, read_options, method, wheelbase, side_length)
+    if any(is_intervals(s, read_options) for s in sources) or method in INTERVALS:
+        return _calibrate_intervals(sources, read_options, method or AUTO, wheelbase, side_length)
+    result, note, nominal_best = _calibrate_runs(
+        sources, read_options, method or DEFAULT.name, wheelbase, side_length,
+        override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
     )  # fmt: skip
-    if store is not None and robot is not None:
-        inputs = [n for n in map(source_name, sources) if n != "runs"]
-        id = store.record(robot, _history_entry(result), inputs)
-        said = store.recorded_line(robot, id, result.verdict, overridden=override_verdict)
-        result = replace(result, recorded=said)
-    return result
+    result = replace(result, nominal_best=nominal_best)
+    return result if note is None else replace(result, notes=(*result.notes, note))
 
 
 def _calibrate_intervals(
@@ -390,7 +429,6 @@ def _calibrate_runs(
     method: str,
     wheelbase: float | None,
     side_length: float | None,
-    options: SourceOptions,
     *,
     override_verdict: bool,
     fit_truth_offset: bool,
@@ -403,13 +441,23 @@ def _calibrate_runs(
 
         if any(is_table(s, read_options) for s in sources):
             raise InputError("--side-length is required: the side of the square path, in metres")
-    read = read_runs(
-        sources,
-        read_options,
-        wheelbase=wheelbase,
-        side_length=side_length,
-        override_verdict=override_verdict,
-    )
+    each = [
+        judge_table(one, read_options.unit, read_options.angle_unit, side_length)
+        if not is_runs(source) and one.formats == ("table",)
+        else one
+        for source, one in zip(
+            sources,
+            read_each(
+                sources,
+                read_options,
+                wheelbase=wheelbase,
+                side_length=side_length,
+                override_verdict=override_verdict,
+            ),
+            strict=True,
+        )
+    ]
+    read = each[0] if len(each) == 1 else pool_runs(each)
     if any(run.kind == "square" for run in read.runs):
         active = read.active
         check_square_geometry(
@@ -417,11 +465,9 @@ def _calibrate_runs(
         )
     chosen, note, nominal_best = method, None, False
     if method == AUTO:
-        from umbmark.jobs.auto import auto_method
+        from umbmark.calibration.auto import auto_method
 
-        chosen, note, nominal_best = auto_method(
-            sources, read, side_length, wheelbase, options, override_verdict=override_verdict
-        )
+        chosen, note, nominal_best = auto_method(each, read)
     result = CalibrationReport.of(calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset))
     if chosen in names(trajectories=True) and len(read.parts) > 1:
         disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)

@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from umbmark.calibration.active import check_same_robot, read_runs
 from umbmark.calibration.report import (
     Calibrated,
     calibrated_name,
@@ -32,6 +31,7 @@ from umbmark.model.kinematics import IntegrationMethod, WheelParams
 from umbmark.model.recording import RunLog
 from umbmark.model.runs import Run, end_errors
 from umbmark.outputs.files import OutputPlan
+from umbmark.runs.active import check_same_robot, read_runs
 from umbmark.runs.association import Association
 from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import PathLike, is_table, source_name

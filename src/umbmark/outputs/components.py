@@ -1,7 +1,7 @@
 """What the figures of an estimate mean, for people.
 
 An estimator reports figures of its own besides ``alpha``, ``beta``, ``E_d``, ``E_b``
-(:attr:`umbmark.estimators.ErrorEstimate.components`, SI units: metres, radians,
+(:attr:`umbmark.estimators.base.ErrorEstimate.components`, SI units: metres, radians,
 seconds). :data:`COMPONENTS` names each one for people: a label, the unit it is shown in
 (lengths in mm, angles in deg, times in ms) and what it means. The terminal and the HTML
 page show them from here; the JSON keeps the SI values.

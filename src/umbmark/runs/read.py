@@ -4,7 +4,7 @@ into runs, integrated with the odometry parameters active during them; several s
 pooled into one set of runs.
 
 Which parameters were active (the options, a parameter file, what the source records) is
-resolved by :mod:`umbmark.calibration.active`, which reads the sources through here.
+resolved by :mod:`umbmark.runs.active`, which reads the sources through here.
 Messages name the options as the command line spells them.
 """
 
@@ -149,7 +149,7 @@ class Runs:
 @dataclass(frozen=True)
 class Chosen:
     """The active parameters as given or recorded (None: neither), and notes saying so
-    (resolved by :func:`umbmark.calibration.active.choose_active`)."""
+    (resolved by :func:`umbmark.runs.active.choose_active`)."""
 
     c_left: float | None
     c_right: float | None

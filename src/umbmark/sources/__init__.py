@@ -1,13 +1,7 @@
-"""Everything that turns input into runs.
-
-- :mod:`~umbmark.sources.text`: reading text files (every text reader starts here).
-- Formats: :mod:`~umbmark.sources.runs_table.reader` (end points typed in),
-  :mod:`~umbmark.sources.runlog.reader`, :mod:`~umbmark.sources.optiodom`,
-  :mod:`~umbmark.sources.bag` (recordings), :mod:`~umbmark.sources.params.reader` (controller
-  parameter files and previous results).
-- Recordings to runs: :mod:`~umbmark.runs.association` (time matching),
-  :mod:`~umbmark.runs.segmentation` (finding runs), :mod:`~umbmark.runs.logged`.
-- :mod:`~umbmark.runs.load`: one entry point that detects the format and reads it.
-
-Nothing here knows of estimators.
+"""The formats, reader beside writer: runs tables, run logs, OptiOdom sessions, tuple
+files, controller parameter files and umbmark results, and ROS bags
+(:mod:`~umbmark.sources.bag`).
+Every text reader starts at :mod:`~umbmark.sources.text`. Turning recordings into runs is
+:mod:`umbmark.runs`, the layer above; nothing here knows of estimators
+(``docs/architecture.md``).
 """

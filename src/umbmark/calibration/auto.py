@@ -1,6 +1,8 @@
 """``calibrate --method auto``: the estimator that predicts held-out recorded runs best.
 
-:func:`umbmark.validate` ranks the estimators by their held-out end error. The richer
+The held-out validation (:func:`umbmark.calibration.heldout.validate_read`) ranks the
+estimators by their held-out end error, on the sources as the calibration read them (each
+is read once). The richer
 estimators of a turn-rate term (``trajectory-scrub``) are taken only where the recordings
 identify it (:mod:`umbmark.estimators.motions`), in the pool and with every source held
 out: held-out runs that one cannot be calibrated for say nothing of it, and a pool
@@ -13,32 +15,23 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from umbmark.calibration.heldout import validate_read
 from umbmark.core.messages import info
 from umbmark.estimators.motions import motion_coverage
 from umbmark.estimators.registry import AUTO, DEFAULT, names
-from umbmark.runs.options import SourceOptions
-from umbmark.runs.read import Runs, RunSource
+from umbmark.runs.read import Runs
 
 __all__ = ["auto_method"]
 
 
-def auto_method(
-    sources: Sequence[RunSource],
-    read: Runs,
-    side_length: float | None,
-    wheelbase: float | None,
-    options: SourceOptions,
-    *,
-    override_verdict: bool = False,
-) -> tuple[str, str, bool]:
+def auto_method(each: Sequence[Runs], read: Runs) -> tuple[str, str, bool]:
     """The estimator that predicts held-out recorded runs best, a note saying so, and
     whether the nominal parameters predicted them better than every estimator (the
     calibration is then made with the default, and its verdict is "do not apply").
 
-    ``override_verdict`` is the caller's: the validation reads the sources as the calibration does.
+    ``each`` are the sources read one by one, ``read`` the same pooled
+    (:func:`umbmark.runs.active.read_each`, :func:`~umbmark.runs.read.pool_runs`).
     """
-    from umbmark.jobs.validate import validate
-
     default = DEFAULT.name
     if read.params is None or any(run.log is None for run in read.runs):
         said = (
@@ -46,13 +39,7 @@ def auto_method(
             f"calibrated with the default, {default}"
         )
         return default, info(said), False
-    checked = validate(
-        *(Path(str(s)) for s in sources),
-        side_length=side_length,
-        wheelbase=wheelbase,
-        override_verdict=override_verdict,
-        **options,
-    )
+    checked = validate_read(each)
     ranking = checked.ranking
     logs = [run.log for run in read.runs if run.log is not None]
     problem = motion_coverage(logs, read.params).scrub_problem()

@@ -1,5 +1,5 @@
 """The odometry parameters active while the runs were driven, resolved for each source,
-and the runs read with them (:func:`read_runs`); checks of a calibration against them.
+and the runs read with them (:func:`read_each`, :func:`read_runs`).
 
 Parameters come from three places, later ones winning: the source itself (a run log's
 ``metadata.yaml``, an OptiOdom session's metadata, a runs table's ``# umbmark-active:``
@@ -7,10 +7,7 @@ line; a bag says nothing), a parameter file (``current_params``: a ros2_control 
 YAML, or a previous result), and the keywords. The wheel factors and separation
 multiplier a source records as active are used only where no ``current_...`` keyword or
 file is given (with a note); given ones that differ from them are warned of. Messages
-about a parameter name where it came from (an option, or a file's field). A runs table's
-end points are judged as a robot driving the square makes them
-(:mod:`umbmark.estimators.plausibility`: units, swapped columns, errors beyond the square
-test).
+about a parameter name where it came from (an option, or a file's field).
 
 Every keyword is an option of ``umbmark calibrate`` and ``umbmark replay`` with the same
 name and meaning (``--current-c-l`` is ``current_c_l``); lengths in metres. Messages name
@@ -21,15 +18,12 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
-from dataclasses import replace
+from collections.abc import Sequence
 from pathlib import Path
 
-from umbmark.calibration.compose import Calibration
-from umbmark.core.bounds import Origin, geometry_origins
+from umbmark.core.bounds import Origin
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info
-from umbmark.estimators.plausibility import check_columns, unit_hints
 from umbmark.options.spec import SIDE_LENGTH, WHEELBASE
 from umbmark.runs.options import SAME_ROBOT_TOLERANCE, ReadOptions
 from umbmark.runs.read import (
@@ -50,40 +44,11 @@ from umbmark.sources.params.reader import (
 from umbmark.sources.runs_table.reader import RecordedActive
 
 __all__ = [
-    "check_calibration",
     "check_same_robot",
     "choose_active",
+    "read_each",
     "read_runs",
 ]
-
-
-def check_calibration(
-    calibration: Calibration, origins: Mapping[str, Origin] | None = None
-) -> None:
-    """Refuse a calibration whose new factors are not positive finite numbers.
-
-    Raises
-    ------
-    InputError
-        Naming the first such factor: the runs and the parameters (named as ``origins``
-        says where they came from, see :func:`check_square_geometry`) contradict each other.
-    """
-    active = calibration.active
-    b_from, side_from, m_from, _ = geometry_origins(origins, active.separation_multiplier)
-    named = [side_from.named(), b_from.named(), *([m_from.named()] if m_from else [])]
-    for name, value in (
-        ("E_d", calibration.estimate.E_d),
-        ("E_b", calibration.estimate.E_b),
-        ("c_L", calibration.new_c_left),
-        ("c_R", calibration.new_c_right),
-        ("wheel_separation_multiplier", calibration.new_separation_multiplier),
-        ("wheelbase", calibration.wheelbase_corrected),
-    ):
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(
-                f"the runs give {name} = {value:.6g}, which no robot can have: check "
-                f"{', '.join(named)} and the runs' units and directions"
-            )
 
 
 def check_same_robot(
@@ -141,6 +106,33 @@ def read_runs(
     InputError
         For bad options, a bad source, or sources that disagree.
     """
+    read = read_each(
+        sources,
+        options,
+        wheelbase=wheelbase,
+        side_length=side_length,
+        override_verdict=override_verdict,
+    )
+    return read[0] if len(read) == 1 else pool_runs(read)
+
+
+def read_each(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    *,
+    wheelbase: float | None = None,
+    side_length: float | None = None,
+    override_verdict: bool = False,
+) -> list[Runs]:
+    """Each source's runs read on its own, with the odometry parameters the options say
+    (:func:`read_runs` before pooling; the held-out validation holds them out one by one).
+
+    Raises
+    ------
+    InputError
+        For bad options, a bad source, or a result file of another robot as
+        ``current_params`` (without ``override_verdict``).
+    """
     if not sources:
         raise InputError("no source given: name a runs table, run log, OptiOdom session or bag")
     if options.scan_topic is not None:
@@ -164,9 +156,7 @@ def read_runs(
                         one.sources[0],
                         (one.nominal.wheelbase, one.nominal.wheel_diameter),
                     )
-    if len(read) == 1:
-        return read[0]
-    return pool_runs(read)
+    return read
 
 
 def _read_one(
@@ -176,21 +166,11 @@ def _read_one(
     wheelbase: float | None,
     side_length: float | None,
 ) -> Runs:
-    """One source read with the active parameters resolved for it; a runs table's end
-    points judged (:mod:`umbmark.estimators.plausibility`)."""
+    """One source read with the active parameters resolved for it."""
     path, kind = source_format(source, options)
     recorded = None if path is None else recorded_active(path, kind)
     chosen = choose_active(options, file, wheelbase, recorded, note_wheelbase=kind == "table")
-    read = read_source(source, kind, options, file, chosen, side_length, recorded)
-    if path is not None and kind == "table":
-        name, runs = read.sources[0], list(read.runs)
-        b = read.active.effective_wheelbase
-        hints = [
-            *check_columns(runs, side_length, name),
-            *unit_hints(runs, options.unit, options.angle_unit, side_length, b, name),
-        ]
-        read = replace(read, notes=(*read.notes, *hints))
-    return read
+    return read_source(source, kind, options, file, chosen, side_length, recorded)
 
 
 #: Given and recorded active parameters closer than this (relative) agree.
@@ -234,64 +214,88 @@ def choose_active(
     if recorded is None:
         return Chosen(given[0][0], given[1][0], given[2][0], user_b, diameter, (), origins)
 
-    def shown(value: float, unit: str = "") -> str:
-        return f"{value:.6g}{unit}"
+    if all(value is None for value, _ in given):
+        return _recorded_wins(recorded, user_b, b_flag, diameter, origins, note_wheelbase)
+    return _given_wins(recorded, given, user_b, b_flag, diameter, origins)
 
+
+def _shown(value: float, unit: str = "") -> str:
+    return f"{value:.6g}{unit}"
+
+
+def _recorded_wins(
+    recorded: RecordedActive,
+    user_b: float | None,
+    b_flag: str,
+    diameter: float | None,
+    origins: dict[str, Origin],
+    note_wheelbase: bool,
+) -> Chosen:
+    """Nothing said what was active: what the source records was (with a note)."""
     where, notes = recorded.where, list[str]()
     recorded_b = recorded.wheelbase
-    if all(value is None for value, _ in given):
-        # Nothing said what was active: what the source records was.
-        used = [
-            f"{label} = {shown(value)}"
-            for label, value in (
-                ("c_L", recorded.c_left),
-                ("c_R", recorded.c_right),
-                ("wheel_separation_multiplier", recorded.separation_multiplier),
-            )
-            if value != 1.0
-        ]
-        if user_b is None and recorded_b is not None and note_wheelbase:
-            used.append(f"wheelbase = {shown(recorded_b, ' m')}")
-        if used:
-            notes.append(
-                info(
-                    f"active parameters from {where}: {', '.join(used)} (the correction is "
-                    "composed with them; give --current-params or --current-c-l, --current-c-r, "
-                    "--current-separation-multiplier to override)"
-                )
-            )
-        if (
-            user_b is not None
-            and recorded_b is not None
-            and not math.isclose(user_b, recorded_b, rel_tol=_SAME_ACTIVE)
-        ):
-            notes.append(
-                f"{b_flag} gives wheelbase = {shown(user_b, ' m')}, but {where} records "
-                f"wheelbase = {shown(recorded_b, ' m')} (times wheel_separation_multiplier "
-                f"{shown(recorded.separation_multiplier)}) as active during the runs; "
-                f"using {shown(user_b, ' m')} times the recorded multiplier"
-            )
-        if recorded_b is not None:
-            origins.setdefault("wheelbase", recorded.origin("wheelbase"))
-        origins["separation_multiplier"] = recorded.origin("wheel_separation_multiplier")
-        return Chosen(
-            recorded.c_left,
-            recorded.c_right,
-            recorded.separation_multiplier,
-            user_b if user_b is not None else recorded_b,
-            diameter,
-            tuple(notes),
-            origins,
+    used = [
+        f"{label} = {_shown(value)}"
+        for label, value in (
+            ("c_L", recorded.c_left),
+            ("c_R", recorded.c_right),
+            ("wheel_separation_multiplier", recorded.separation_multiplier),
         )
+        if value != 1.0
+    ]
+    if user_b is None and recorded_b is not None and note_wheelbase:
+        used.append(f"wheelbase = {_shown(recorded_b, ' m')}")
+    if used:
+        notes.append(
+            info(
+                f"active parameters from {where}: {', '.join(used)} (the correction is "
+                "composed with them; give --current-params or --current-c-l, --current-c-r, "
+                "--current-separation-multiplier to override)"
+            )
+        )
+    if (
+        user_b is not None
+        and recorded_b is not None
+        and not math.isclose(user_b, recorded_b, rel_tol=_SAME_ACTIVE)
+    ):
+        notes.append(
+            f"{b_flag} gives wheelbase = {_shown(user_b, ' m')}, but {where} records "
+            f"wheelbase = {_shown(recorded_b, ' m')} (times wheel_separation_multiplier "
+            f"{_shown(recorded.separation_multiplier)}) as active during the runs; "
+            f"using {_shown(user_b, ' m')} times the recorded multiplier"
+        )
+    if recorded_b is not None:
+        origins.setdefault("wheelbase", recorded.origin("wheelbase"))
+    origins["separation_multiplier"] = recorded.origin("wheel_separation_multiplier")
+    return Chosen(
+        recorded.c_left,
+        recorded.c_right,
+        recorded.separation_multiplier,
+        user_b if user_b is not None else recorded_b,
+        diameter,
+        tuple(notes),
+        origins,
+    )
 
-    # Something was given: it wins; say where it contradicts the record.
+
+def _given_wins(
+    recorded: RecordedActive,
+    given: Sequence[tuple[float | None, str]],
+    user_b: float | None,
+    b_flag: str,
+    diameter: float | None,
+    origins: dict[str, Origin],
+) -> Chosen:
+    """Something was given: it wins; the notes say where it contradicts the record."""
+    where, notes = recorded.where, list[str]()
+    recorded_b = recorded.wheelbase
     for (value, flag), label, record in zip(
         given[:2], ("c_L", "c_R"), (recorded.c_left, recorded.c_right), strict=True
     ):
         if value is not None and not math.isclose(value, record, rel_tol=_SAME_ACTIVE):
             notes.append(
-                f"{flag} gives {label} = {shown(value)}, but {where} records {label} = "
-                f"{shown(record)} as active during the runs; using {shown(value)}"
+                f"{flag} gives {label} = {_shown(value)}, but {where} records {label} = "
+                f"{_shown(record)} as active during the runs; using {_shown(value)}"
             )
     separation = given[2][0]
     configured = user_b
@@ -309,10 +313,10 @@ def choose_active(
             )
             notes.append(
                 f"the odometry's wheelbase from {flags or 'the options'} is "
-                f"{shown(used_b, ' m')}, but {where} records {shown(record_b, ' m')} "
-                f"(wheelbase {shown(recorded_b, ' m')} times wheel_separation_multiplier "
-                f"{shown(recorded.separation_multiplier)}) as active during the runs; "
-                f"using {shown(used_b, ' m')}"
+                f"{_shown(used_b, ' m')}, but {where} records {_shown(record_b, ' m')} "
+                f"(wheelbase {_shown(recorded_b, ' m')} times wheel_separation_multiplier "
+                f"{_shown(recorded.separation_multiplier)}) as active during the runs; "
+                f"using {_shown(used_b, ' m')}"
             )
     if user_b is None and recorded_b is not None:
         origins["wheelbase"] = recorded.origin("wheelbase")
