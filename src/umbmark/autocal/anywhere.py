@@ -67,6 +67,11 @@ __all__ = [
 
 #: How far from its start the pattern takes the robot's centre, at most [m].
 PATTERN_REACH = 0.75
+#: Standing still, the scene must fix the laser's motion this many times more firmly than
+#: a match needs (:attr:`umbmark.scans.icp.MatchSettings.min_constraint`): an ordinary
+#: room gives over 10 times, a corridor longer than the laser's range about 1 time, and
+#: driving sees less than standing.
+SCENE_MARGIN = 2.5
 
 
 @dataclass(frozen=True)
@@ -237,7 +242,7 @@ def check_scene(robot: Robot, limits: DriveLimits | None = None) -> LaserScan:
     sweeps taken standing still do not match as a scene with structure (open space, a
     corridor): the routine needs walls or furniture in view in more than one direction.
     The first sweep."""
-    from umbmark.scans.icp import match
+    from umbmark.scans.icp import DEFAULT_SETTINGS, match
     from umbmark.scans.points import prepare, series_points
 
     limits = limits or DriveLimits()
@@ -256,13 +261,16 @@ def check_scene(robot: Robot, limits: DriveLimits | None = None) -> LaserScan:
     a = prepare(series_points(series, 0, None))
     b = prepare(series_points(series, len(series) - 1, None))
     result = match(a, b, None)
-    if not result.ok:
+    status = result.status
+    if result.ok and result.constraint < SCENE_MARGIN * DEFAULT_SETTINGS.min_constraint:
+        status = "corridor"  # barely fixed standing still: not while driving
+    if status != "ok":
         what = {
             "open space": "the laser sees too little structure around the robot (open "
             "space: too few returns on walls or furniture)",
             "corridor": "the laser sees walls in one direction only (a corridor): motion "
             "along them cannot be measured",
-        }.get(result.status, f"two sweeps taken standing still do not match ({result.status})")
+        }.get(status, f"two sweeps taken standing still do not match ({status})")
         raise InputError(
             f"{what}; the anywhere routine needs walls or furniture in view in more than "
             "one direction within the laser's range: move the robot, or use --routine "
