@@ -67,6 +67,11 @@ __all__ = [
 
 #: How far from its start the pattern takes the robot's centre, at most [m].
 PATTERN_REACH = 0.75
+#: The shortest motion interval [s]: 1 s at 0.2 m/s or 0.8 rad/s moves the laser enough
+#: that a match's error (a millimetre, a few hundredths of a degree) is small beside the
+#: motion; halving it doubles the intervals and loses precision on the virtual robot
+#: (E_d 2.4e-4 against 1.5e-4 rms over 8 seeds, ``benchmarks/bench_selfcal_anywhere.py``).
+INTERVAL = 1.0
 #: Standing still, the scene must fix the laser's motion this many times more firmly than
 #: a match needs (:attr:`umbmark.scans.icp.MatchSettings.min_constraint`): an ordinary
 #: room gives over 10 times, a corridor longer than the laser's range about 1 time, and
@@ -398,7 +403,8 @@ def pattern_intervals(recording: Recording) -> IntervalReport:
         p.wheelbase,
         laser_pose=(m.x, m.y, m.theta),
     )
-    report = match_intervals(recording.scans, recording.wheels, IntervalOptions(guess=guess))
+    options = IntervalOptions(min_interval=INTERVAL, max_interval=2.0 * INTERVAL, guess=guess)
+    report = match_intervals(recording.scans, recording.wheels, options)
     if len(report.intervals) < 6:
         left = ", ".join(f"{n} {why}" for why, n in sorted(report.left_out.items())) or "none"
         raise InputError(

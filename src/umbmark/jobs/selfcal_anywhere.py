@@ -160,7 +160,7 @@ def selfcal_anywhere(
     progress: Progress | None = None,
     limits: DriveLimits | None = None,
     force: bool = False,
-    repeats: int = 3,
+    repeats: int = 4,
 ) -> AnywhereReport:
     """Calibrate ``robot`` anywhere (the module's documentation); the options as
     :func:`umbmark.selfcal`'s (``apply`` as a method). ``repeats``: how often the pattern
