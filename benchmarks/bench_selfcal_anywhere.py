@@ -41,9 +41,7 @@ def main() -> None:
     walls = []
     worst = [0.0] * 5
     for seed in range(1, args.seeds + 1):
-        robot = VirtualRobot(
-            *ERRORS, slip=0.0004, seed=seed, world=room_world(), laser_pose=LASER
-        )
+        robot = VirtualRobot(*ERRORS, slip=0.0004, seed=seed, world=room_world(), laser_pose=LASER)
         start = time.perf_counter()
         report = selfcal(robot, routine="anywhere")
         wall = time.perf_counter() - start
@@ -73,8 +71,10 @@ def main() -> None:
         start = time.perf_counter()
         selfcal(robot, out=Path(folder) / "out")
         umb = time.perf_counter() - start
-    print(f"UMBmark routine: robot {robot.now():.0f} s, wall {umb:.2f} s; "
-          f"anywhere is {umb / anywhere:.1f}x faster in wall time")
+    print(
+        f"UMBmark routine: robot {robot.now():.0f} s, wall {umb:.2f} s; "
+        f"anywhere is {umb / anywhere:.1f}x faster in wall time"
+    )
 
 
 if __name__ == "__main__":

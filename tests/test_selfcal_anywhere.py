@@ -76,14 +76,16 @@ def test_recovers_the_wheels_and_the_lasers_mounting(calibrated) -> None:  # typ
 
 def test_applies_the_truth_and_verifies(calibrated) -> None:  # type: ignore[no-untyped-def]
     robot, report, _ = calibrated
-    assert report.applied is not None and report.applied.active
+    assert report.applied is not None
+    assert report.applied.active
     # what the controller now holds against the robot's truth (wheels [m])
     p = robot.drive_params()
     truth = robot.truth
     left = 2.0 * p.wheel_radius * p.left_wheel_radius_multiplier
     right = 2.0 * p.wheel_radius * p.right_wheel_radius_multiplier
     assert abs(right / left - truth.diameter_right / truth.diameter_left) < TOL_E_D
-    assert abs(0.5 * (left + right) / (0.5 * (truth.diameter_left + truth.diameter_right)) - 1) < TOL_E_S
+    mean = 0.5 * (truth.diameter_left + truth.diameter_right)
+    assert abs(0.5 * (left + right) / mean - 1.0) < TOL_E_S
     assert abs(p.wheelbase / truth.wheelbase - 1.0) < TOL_E_B
     # the verification drove the pattern again: what is left is within the tolerances
     after = report.to_dict()["after"]
@@ -100,7 +102,8 @@ def test_history_overlay_and_files(calibrated) -> None:  # type: ignore[no-untyp
     _, report, history = calibrated
     records = umbmark.history("rover", history=history).calibrations
     assert [r.method for r in records] == ["scan-matching", "scan-matching"]
-    assert records[0].applied and not records[1].applied
+    assert records[0].applied
+    assert not records[1].applied
     names = sorted(f.name for f in report.files)
     assert names == ["intervals.tuple", "intervals.tuple", "overlay.yaml"]
     overlay = next(f for f in report.files if f.name == "overlay.yaml").read_text()
@@ -128,7 +131,8 @@ def test_refused_without_a_laser() -> None:
 def test_refused_in_open_space() -> None:
     robot = _robot(world=World.build())  # nothing within the laser's range
     message = api_error(umbmark.selfcal, robot, routine="anywhere")
-    assert "open space" in message and "walls or furniture" in message
+    assert "open space" in message
+    assert "walls or furniture" in message
     _stood_still(robot)
 
 
@@ -145,14 +149,16 @@ def test_nothing_applied_with_apply_none() -> None:
     before = robot.drive_params()
     report = umbmark.selfcal(robot, routine="anywhere", apply="none")
     assert isinstance(report, AnywhereReport)
-    assert report.applied is None and report.verification is None
+    assert report.applied is None
+    assert report.verification is None
     assert robot.drive_params() == before
     assert report.files == ()
 
 
 def test_a_bad_routine_is_refused() -> None:
     message = api_error(umbmark.selfcal, _robot(), routine="square")
-    assert "'square'" in message and "umbmark, anywhere" in message
+    assert "'square'" in message
+    assert "umbmark, anywhere" in message
 
 
 @pytest.mark.slow
@@ -163,7 +169,8 @@ def test_cli_end_to_end(tmp_path) -> None:  # type: ignore[no-untyped-def]
     assert proc.returncode == 0, proc.stderr
     data = json.loads(proc.stdout)
     # the command's virtual robot: its defaults (E_d 1.004, E_b 0.97) and ROOM_LASER
-    assert data["routine"] == "anywhere" and data["method"] == "scan-matching"
+    assert data["routine"] == "anywhere"
+    assert data["method"] == "scan-matching"
     assert abs(data["E_d"] - 1.004) < TOL_E_D
     assert abs(data["E_b"] - 0.97) < TOL_E_B
     assert abs(data["E_s"] - 1.01) < TOL_E_S
@@ -176,7 +183,7 @@ def test_cli_end_to_end(tmp_path) -> None:  # type: ignore[no-untyped-def]
     text = run_cli("selfcal", "--sim", "--routine", "anywhere", "--out", str(tmp_path / "o2"))
     assert text.returncode == 0, text.stderr
     for words in ("laser position, forward", "laser yaw", "left wheel diameter", "E_s",
-                  "Applied (reconfigure)", "before", "after", "Verification"):  # fmt: skip
+                  "Applied (reconfigure)", "before", "after", "verification"):  # fmt: skip
         assert words in text.stdout
 
 
@@ -198,5 +205,6 @@ def test_agrees_with_the_umbmark_routine(tmp_path) -> None:  # type: ignore[no-u
     for name in ("E_d", "E_b"):
         low_a, high_a = a.interval(name)  # type: ignore[misc]
         low_b, high_b = b.interval(name)  # type: ignore[misc]
-        assert low_a <= high_b and low_b <= high_a, (name, (low_a, high_a), (low_b, high_b))
+        overlap = low_a <= high_b and low_b <= high_a
+        assert overlap, (name, (low_a, high_a), (low_b, high_b))
     assert np.isfinite(b.E_s)

@@ -139,8 +139,10 @@ def _expected_time(moves: tuple[Move, ...], limits: DriveLimits) -> float:
             total += abs(m.amount) / limits.turn_rate + limits.turn_rate / limits.turn_acceleration
         else:
             length = abs(m.amount) * (m.radius if m.kind == "arc" else 1.0)
-            speed = limits.speed if m.kind == "straight" else min(
-                limits.speed, limits.turn_rate * m.radius
+            speed = (
+                limits.speed
+                if m.kind == "straight"
+                else min(limits.speed, limits.turn_rate * m.radius)
             )
             total += length / speed + speed / limits.acceleration
     return total
@@ -288,7 +290,8 @@ def _series(scans: list[LaserScan], source: str = "") -> ScanSeries:
     """Sweeps of one laser as a :class:`ScanSeries` (the same beams and mounting; a
     repeated stamp is dropped)."""
     first = scans[0]
-    times, ranges = [], []
+    times: list[float] = []
+    ranges: list[np.ndarray] = []
     for s in scans:
         if s.ranges.shape != first.ranges.shape or s.angle_min != first.angle_min:
             raise InputError("the laser's sweeps changed their beams during the routine")

@@ -37,8 +37,8 @@ from umbmark.robot.base import LaserScan, Pose2D, Robot, Stamped
 
 __all__ = [
     "DriveLimits",
-    "Driver",
     "DrivenRun",
+    "Driver",
     "SafetyError",
     "drive_square",
     "move_to",

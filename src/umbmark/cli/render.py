@@ -448,9 +448,8 @@ def render_anywhere(report: AnywhereReport, screen: Console) -> None:
     render_calibration(first.report, screen, overlay=False)
     applied = first.applied
     if applied is None:
-        screen.print("Not applied: " + (
-            "the verdict is do not apply" if not first.report.verdict.applies else "--apply none"
-        ) + ".")
+        why = "--apply none" if first.report.verdict.applies else "the verdict is do not apply"
+        screen.print(f"Not applied: {why}.")
     else:
         screen.print(f"Applied ({applied.method}): {applied.message}.", markup=False)
     verification = report.verification
@@ -469,7 +468,9 @@ def render_anywhere(report: AnywhereReport, screen: Console) -> None:
             b, a = before[key], after[key]
             row(grid, what, "-" if b is None else f"{b:.6f}", "-" if a is None else f"{a:.6f}")
         screen.print(grid)
-        screen.print(f"Verification verdict: {verification.report.verdict.words}.")
+        screen.print(
+            f"The verification's own verdict (not applied): {verification.report.verdict.words}."
+        )
     elif applied is not None and applied.active:
         screen.print("The correction was applied but not verified (--no-verify).")
     final = report.final
