@@ -450,8 +450,10 @@ def render_anywhere(report: AnywhereReport, screen: Console) -> None:
     if applied is None:
         why = "--apply none" if first.report.verdict.applies else "the verdict is do not apply"
         screen.print(f"Not applied: {why}.")
-    else:
+    elif applied.active:
         screen.print(f"Applied ({applied.method}): {applied.message}.", markup=False)
+    else:
+        screen.print(f"Not applied yet: {applied.message}.", markup=False)
     verification = report.verification
     if verification is not None:
         grid = table(

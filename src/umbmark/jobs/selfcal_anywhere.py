@@ -12,7 +12,9 @@ pattern again.
    estimator and the parameters active during the drive (the verdict, the history entry
    under ``robot_name``);
 4. applied (``robot.apply``) unless its verdict is "do not apply" or ``apply`` is
-   ``none``; the history marks it applied, ``out/overlay.yaml`` holds it;
+   ``none``; the history marks it applied, ``out/overlay.yaml`` holds it (also where the
+   controller takes it only on a restart: a ROS 2 controller without the controller
+   manager's messages; the report's apply message says how);
 5. with ``verify`` and the result applied: the pattern again, calibrated the same way
    (``out/verification``): what is left after the correction.
 """
@@ -201,7 +203,7 @@ def selfcal_anywhere(
     passes = [p for p in (first, verification) if p is not None]
     if folder is not None:
         files += [p.folder / INTERVALS_FILE for p in passes if p.folder is not None]
-        if first.applied is not None and first.applied.active:
+        if first.applied is not None:  # applied, or waiting for a controller restart
             overlay = folder / OVERLAY_FILE
             first.report.write(yaml=overlay, force=force)
             files.append(overlay)
