@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,7 +16,7 @@ import umbmark
 from umbmark.autocal.anywhere import PATTERN, PATTERN_REACH
 from umbmark.jobs.selfcal_anywhere import AnywhereReport
 from umbmark.robot.virtual import VirtualRobot
-from umbmark.robot.world import ROOM_LASER, World, room_world
+from umbmark.robot.world import ROOM_LASER, World, box, legs, room_world
 
 from helpers import api_error, run_cli
 
@@ -142,6 +143,35 @@ def test_refused_in_a_corridor() -> None:
     message = api_error(umbmark.selfcal, robot, routine="anywhere")
     assert "corridor" in message
     _stood_still(robot)
+
+
+def test_refused_with_something_on_the_patterns_floor() -> None:
+    room = room_world()
+    cluttered = World.build(
+        np.vstack([room.segments, box(0.8, 0.3, 0.3, 0.3)]), room.circles
+    )  # a box whose near side is 0.65 m ahead, 0.15 m left: inside the 0.75 m + 0.3 m reach
+    robot = _robot(world=cluttered)
+    message = api_error(umbmark.selfcal, robot, routine="anywhere")
+    assert message.startswith("something stands within the pattern's floor at x = 0.6")
+    _stood_still(robot)
+
+
+def test_an_obstacle_that_appears_stops_the_robot() -> None:
+    """A person steps in front of the robot while it drives forward: a safety stop, a
+    zero velocity last."""
+    from umbmark.autocal.drive import SafetyError
+
+    robot = _robot()
+    people = np.vstack([robot.world.circles, legs(0.75, -0.04)])  # ahead of the 0.6 m straight
+
+    def step_in(label: str, k: int, direction: None, what: str) -> None:
+        if what.startswith("straight +0.60"):
+            robot.world = replace(robot.world, circles=people)
+
+    with pytest.raises(SafetyError, match="an obstacle"):
+        umbmark.selfcal(robot, routine="anywhere", progress=step_in)
+    assert robot.commands[-1][1:] == (0.0, 0.0)
+    assert robot.true_pose.x < 0.6
 
 
 def test_nothing_applied_with_apply_none() -> None:

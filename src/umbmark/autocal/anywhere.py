@@ -245,10 +245,10 @@ class Recording:
 
 
 def check_scene(robot: Robot, limits: DriveLimits | None = None) -> LaserScan:
-    """Refuse, before anything moves, a robot without a laser, or a scene where two
-    sweeps taken standing still do not match as a scene with structure (open space, a
-    corridor): the routine needs walls or furniture in view in more than one direction.
-    The first sweep."""
+    """Refuse, before anything moves, a robot without a laser, a scene where two sweeps
+    taken standing still do not match as a scene with structure (open space, a corridor:
+    the routine needs walls or furniture in view in more than one direction), or
+    something on the pattern's floor. The first sweep."""
     from umbmark.scans.icp import DEFAULT_SETTINGS, match
     from umbmark.scans.points import prepare, series_points
 
@@ -283,7 +283,30 @@ def check_scene(robot: Robot, limits: DriveLimits | None = None) -> LaserScan:
             "one direction within the laser's range: move the robot, or use --routine "
             "umbmark with a corner"
         )
+    _free_floor(first)
     return first
+
+
+def _free_floor(scan: LaserScan) -> None:
+    """Refuse a return of the laser on the pattern's floor: within :data:`PATTERN_REACH`
+    plus the robot's body (:data:`umbmark.autocal.preflight.ROBOT_RADIUS`) of its centre."""
+    from umbmark.autocal.preflight import ROBOT_RADIUS
+
+    ranges = np.asarray(scan.ranges, dtype=np.float64)
+    ok = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
+    angles = scan.angles()[ok] + scan.mount.theta
+    x = scan.mount.x + ranges[ok] * np.cos(angles)
+    y = scan.mount.y + ranges[ok] * np.sin(angles)
+    reach = PATTERN_REACH + ROBOT_RADIUS
+    near = np.hypot(x, y) < reach
+    if near.any():
+        k = int(np.argmin(np.hypot(x[near], y[near])))
+        raise InputError(
+            f"something stands within the pattern's floor at x = {float(x[near][k]):.2f} m, "
+            f"y = {float(y[near][k]):.2f} m of the robot ({int(near.sum())} laser returns "
+            f"within {reach:.2f} m of its centre): clear the floor, or place the robot where "
+            f"{2 * reach:.1f} x {2 * reach:.1f} m around it are free"
+        )
 
 
 def _series(scans: list[LaserScan], source: str = "") -> ScanSeries:
