@@ -52,6 +52,7 @@ def calibrated(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-unt
     return robot, report, history
 
 
+@pytest.mark.slow
 def test_recovers_the_wheels_and_the_lasers_mounting(calibrated) -> None:  # type: ignore[no-untyped-def]
     _, report, _ = calibrated
     assert isinstance(report, AnywhereReport)
@@ -75,6 +76,7 @@ def test_recovers_the_wheels_and_the_lasers_mounting(calibrated) -> None:  # typ
         assert key in data
 
 
+@pytest.mark.slow
 def test_applies_the_truth_and_verifies(calibrated) -> None:  # type: ignore[no-untyped-def]
     robot, report, _ = calibrated
     assert report.applied is not None
@@ -99,6 +101,7 @@ def test_applies_the_truth_and_verifies(calibrated) -> None:  # type: ignore[no-
     assert robot.commands[-1][1:] == (0.0, 0.0)
 
 
+@pytest.mark.slow
 def test_history_overlay_and_files(calibrated) -> None:  # type: ignore[no-untyped-def]
     _, report, history = calibrated
     records = umbmark.history("rover", history=history).calibrations
@@ -174,11 +177,40 @@ def test_an_obstacle_that_appears_stops_the_robot() -> None:
     assert robot.true_pose.x < 0.6
 
 
+class _OdometryOnly(VirtualRobot):
+    """The virtual robot as a ROS robot is: no wheel angles, only the odometry."""
+
+    wheel_angles = None
+
+
+@pytest.mark.slow
+def test_wheels_from_the_odometry_alone() -> None:
+    """Without the wheels' angles, the odometry turned back into wheel rotation gives the
+    same truth."""
+    robot = _OdometryOnly(E_D, E_B, E_S, slip=0.0004, seed=3, world=room_world(),
+                          laser_pose=LASER)  # fmt: skip
+    report = umbmark.selfcal(robot, routine="anywhere", apply="none")
+    assert isinstance(report, AnywhereReport)
+    est = report.calibration.report.estimate
+    assert abs(est.E_d - E_D) < TOL_E_D
+    assert abs(est.E_b - E_B) < TOL_E_B
+    assert est.E_s is not None
+    assert abs(est.E_s - E_S) < TOL_E_S
+
+
 def test_nothing_applied_with_apply_none() -> None:
     robot = _robot(seed=2)
     before = robot.drive_params()
     report = umbmark.selfcal(robot, routine="anywhere", apply="none")
     assert isinstance(report, AnywhereReport)
+    est = report.calibration.report.estimate  # the quick loop's check of the promise
+    assert abs(est.E_d - E_D) < TOL_E_D
+    assert abs(est.E_b - E_B) < TOL_E_B
+    assert est.E_s is not None
+    assert abs(est.E_s - E_S) < TOL_E_S
+    x, y, yaw = report.to_dict()["laser_pose"]
+    assert math.hypot(x - LASER[0], y - LASER[1]) < TOL_POSITION
+    assert abs(yaw - LASER[2]) < TOL_YAW
     assert report.applied is None
     assert report.verification is None
     assert robot.drive_params() == before

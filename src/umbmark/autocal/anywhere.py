@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -40,7 +40,6 @@ from umbmark.autocal.drive import DriveLimits, Driver
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry
-from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.model.scans import ScanSeries
 from umbmark.robot.base import (
@@ -62,6 +61,7 @@ __all__ = [
     "Recording",
     "check_scene",
     "drive_pattern",
+    "intervals_note",
     "pattern_intervals",
 ]
 
@@ -241,7 +241,6 @@ class Recording:
     mount: Pose2D
     start: Stamped
     end: Stamped
-    notes: tuple[str, ...] = field(default=())
 
 
 def check_scene(robot: Robot, limits: DriveLimits | None = None) -> LaserScan:
@@ -447,8 +446,3 @@ def intervals_note(report: IntervalReport) -> str:
     return f"{len(report.intervals)} motion intervals matched of {report.tried}" + (
         f" (left out: {left})" if left else ""
     )
-
-
-def concatenated(parts: list[MotionIntervals]) -> MotionIntervals:
-    """Several recordings' intervals, pooled."""
-    return parts[0] if len(parts) == 1 else MotionIntervals.concatenate(parts)
