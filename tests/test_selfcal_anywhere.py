@@ -115,6 +115,22 @@ def test_history_overlay_and_files(calibrated) -> None:  # type: ignore[no-untyp
     assert f"{final.wheel_separation_multiplier:.6f}"[:6] in overlay
 
 
+def test_the_virtual_lasers_sweeps_come_from_its_mounting() -> None:
+    """The beam along the laser's own x axis (at 0 rad, beam 360 of 720 from -pi) meets
+    the room's wall ahead (x = 5 m) at (5 - x_L) / cos(yaw) from the laser: nothing
+    stands on that line (the pillar is at y 1.35..1.85 m, the table below y -1.2 m)."""
+    robot = _robot(seed=4)
+    scan = robot.scan()
+    assert scan is not None
+    assert (scan.mount.x, scan.mount.y, scan.mount.theta) == LASER
+    beam = round((0.0 - scan.angle_min) / scan.angle_increment)
+    expected = (5.0 - LASER[0]) / math.cos(LASER[2])
+    ahead = scan.ranges[beam - 2 : beam + 3]
+    assert np.nanmedian(ahead) == pytest.approx(expected, abs=0.03)  # 1 cm noise
+    with pytest.raises(umbmark.InputError, match="laser_pose"):
+        _robot(laser_pose=(0.1, 0.0, math.nan))
+
+
 def test_the_pattern_needs_two_by_two_metres() -> None:
     # every move ends where the pattern's reach allows, by its geometry alone
     straights = [abs(m.amount) for m in PATTERN if m.kind == "straight"]
