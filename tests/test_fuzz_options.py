@@ -361,6 +361,7 @@ def commands(folder: Path) -> dict[str, Command]:
                 number_opt("-L", real(0.8, 1.2), "--side-length"),
                 number_opt("-n", whole(2, 3), "--runs"),
                 choice_opt("--measure", "lidar", "ranges", "truth", "sonar"),
+                choice_opt("--routine", "umbmark", "anywhere", "corner"),
                 choice_opt("--apply", "reconfigure", "yaml", "none", "always"),
                 number_opt("--max-passes", whole(1, 2)),
                 number_opt("--speed", real(0.15, 0.5)),

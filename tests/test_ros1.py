@@ -184,6 +184,34 @@ def test_selfcal_end_to_end_over_ros1(tmp_path: Path) -> None:
     assert applied["wheel_separation_multiplier"] == pytest.approx(0.97, abs=0.005)
 
 
+@pytest.mark.slow
+def test_selfcal_anywhere_over_ros1(tmp_path: Path) -> None:
+    """``umbmark selfcal --ros1 --routine anywhere`` against a fresh robot (E_d 1.004, E_b
+    0.97, E_s 1, its laser 0.1 m ahead of the centre, in the corner's room): the wheels
+    from /odom turned back into wheel rotation, the sweeps from /scan, the mounting from
+    TF; the robot's truth recovered within the routine's promise, and what the
+    reconfigure server holds is what the report applied."""
+    g = RosGraph(tmp_path)
+    try:
+        done = _umbmark(g.env, "selfcal", "--ros1", "--routine", "anywhere", "--no-verify",
+                        "--out", str(tmp_path / "out"), "--json", timeout=400.0)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout)
+        held = _probe(g, "held")
+    finally:
+        g.close()
+    assert report["routine"] == "anywhere"
+    assert abs(report["E_d"] - 1.004) < 5e-4
+    assert abs(report["E_b"] - 0.97) < 0.002
+    assert abs(report["E_s"] - 1.0) < 0.002
+    x, y, yaw = report["laser_pose"]
+    assert math.hypot(x - LASER_X, y) < 0.005
+    assert abs(yaw) < math.radians(0.5)
+    assert report["applied"] is True
+    for name, value in report["final"].items():
+        assert held[name] == pytest.approx(value, rel=1e-9)
+
+
 # --- a shared master and robot -----------------------------------------------------------
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import os
 import select
 import signal
@@ -180,6 +181,38 @@ def test_selfcal_end_to_end_over_ros2_with_a_controller_restart(tmp_path: Path) 
     ratio = held["right_wheel_radius_multiplier"] / held["left_wheel_radius_multiplier"]
     assert ratio == pytest.approx(E_D, abs=0.001)
     assert (out / "overlay.yaml").exists()
+
+
+@pytest.mark.slow
+def test_selfcal_anywhere_over_ros2(tmp_path: Path) -> None:
+    """``umbmark selfcal --ros2 --routine anywhere`` against the node (E_d 1.004, E_b
+    0.97, E_s 1, its laser 0.1 m ahead of the centre in the URDF) at 8x sim time: the
+    wheels from the odometry, the sweeps from /scan; the truth recovered within the
+    routine's promise. Without controller_manager_msgs the controller takes the result
+    only on a restart: nothing is verified, the overlay holds the result, and the apply
+    message says how to restart."""
+    env = ros2_env(tmp_path)
+    out = tmp_path / "out"
+    node = Robot2(env)
+    try:
+        done = _umbmark(env, "selfcal", "--ros2", "--routine", "anywhere", "--out", str(out),
+                        "--json", timeout=400.0)  # fmt: skip
+    finally:
+        node.close()
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout)
+    assert report["routine"] == "anywhere"
+    assert abs(report["E_d"] - E_D) < 5e-4
+    assert abs(report["E_b"] - E_B) < 0.002
+    assert abs(report["E_s"] - 1.0) < 0.002
+    x, y, yaw = report["laser_pose"]
+    assert math.hypot(x - LASER_X, y) < 0.005
+    assert abs(yaw) < math.radians(0.5)
+    assert report["applied"] is False
+    assert "restart the controller" in report["apply_message"]
+    assert report["verification"] is None
+    overlay = (out / "overlay.yaml").read_text()
+    assert f"{report['new']['wheel_separation_multiplier']:.6f}"[:7] in overlay
 
 
 # --- a shared node ------------------------------------------------------------------------

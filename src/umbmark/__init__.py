@@ -62,6 +62,7 @@ _EXPORTS = {
     # the robot calibrates itself (the paper's Sec. 6)
     "selfcal": "umbmark.jobs.selfcal",
     "SelfCalReport": "umbmark.jobs.selfcal",
+    "AnywhereReport": "umbmark.jobs.selfcal_anywhere",
     "VirtualRobot": "umbmark.robot.virtual",
     "Robot": "umbmark.robot.base",
     "connect": "umbmark.robot.connect",
@@ -84,6 +85,7 @@ _EXPORTS = {
 
 __all__ = [
     "ActiveParams",
+    "AnywhereReport",
     "Benchmark",
     "Calibration",
     "CalibrationReport",
@@ -150,6 +152,7 @@ if TYPE_CHECKING:
     from umbmark.jobs.report import PassesReport, report
     from umbmark.jobs.reproduce import reproduce_fig4, reproduce_table1
     from umbmark.jobs.selfcal import SelfCalReport, selfcal
+    from umbmark.jobs.selfcal_anywhere import AnywhereReport
     from umbmark.jobs.simulate import SimulationReport, simulate
     from umbmark.jobs.study import StudyReport, study
     from umbmark.jobs.validate import validate

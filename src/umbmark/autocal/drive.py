@@ -38,6 +38,7 @@ from umbmark.robot.base import LaserScan, Pose2D, Robot, Stamped
 __all__ = [
     "DriveLimits",
     "DrivenRun",
+    "Driver",
     "SafetyError",
     "drive_square",
     "move_to",
@@ -265,9 +266,9 @@ class _Driver:
                 f"{dt:.2f} s: was the controller restarted (its odometry reset)?",
             )
 
-    def check_ahead(self, forward: bool) -> None:
-        """Stop for a scan return within the obstacle distance in the direction of travel,
-        and for a laser gone silent."""
+    def check_ahead(self, forward: bool, backward: bool = False) -> None:
+        """Stop for a scan return within the obstacle distance in the direction of travel
+        (ahead, or behind when driving ``backward``), and for a laser gone silent."""
         scan = self.robot.scan()
         if scan is None or not forward:
             return
@@ -278,11 +279,12 @@ class _Driver:
                 f"scan stale ({age:.2f} s old, limit {self.limits.stale_scan:g} s): the laser "
                 "went silent, and nothing watches for obstacles",
             )
-        distance = obstacle_ahead(scan, self.limits.obstacle_half_angle)
+        distance = obstacle_ahead(scan, self.limits.obstacle_half_angle, backward)
         if distance < self.limits.obstacle_distance:
+            where = "behind" if backward else "ahead"
             raise stop_safely(
                 self.robot,
-                f"an obstacle {distance:.2f} m ahead (limit {self.limits.obstacle_distance:g} m)",
+                f"an obstacle {distance:.2f} m {where} (limit {self.limits.obstacle_distance:g} m)",
             )
 
     def command(self, linear: float, angular: float) -> None:
@@ -292,35 +294,61 @@ class _Driver:
 
     # --- segments -----------------------------------------------------------------------
 
-    def leg(self, start: Pose2D, length: float | None = None) -> None:
-        """Drive ``length`` [default: the side] metres along ``start``'s heading, on the
-        line, and stop."""
+    def leg(self, start: Pose2D, length: float | None = None, backward: bool = False) -> None:
+        """Drive ``length`` [default: the side] metres along ``start``'s heading (or
+        ``backward``, against it), on the line, and stop."""
         length = self.side if length is None else length
         lim, dt = self.limits, self.limits.period
+        sign = -1.0 if backward else 1.0
         cos_h, sin_h = math.cos(start.theta), math.sin(start.theta)
         scan_every = max(1, round(lim.obstacle_period / dt))
         k = 0
         while True:
             pose = self.read()
             dx, dy = pose.x - start.x, pose.y - start.y
-            along = dx * cos_h + dy * sin_h
+            along = sign * (dx * cos_h + dy * sin_h)
             cross = -dx * sin_h + dy * cos_h
             remaining = length - along
             if remaining <= lim.position_tolerance:
                 break
             if k % scan_every == 0:
-                self.check_ahead(True)
+                self.check_ahead(True, backward)
             k += 1
             brake = math.sqrt(2.0 * lim.acceleration * remaining)
             close = remaining / max(dt, lim.closing_time)
             goal = min(lim.speed, brake, close)
             goal = max(goal, min(lim.creep_speed, close))
             step = lim.acceleration * dt
-            linear = min(max(goal, self.linear - step), self.linear + step)
+            current = abs(self.linear)  # the speed, forward or backward
+            linear = min(max(goal, current - step), current + step)
             heading_error = float(wrap_angle(start.theta - pose.theta))
-            angular = lim.heading_gain * heading_error - lim.cross_track_gain * cross
+            angular = lim.heading_gain * heading_error - sign * lim.cross_track_gain * cross
             angular = min(max(angular, -lim.turn_rate), lim.turn_rate)
-            self.command(linear, angular)
+            self.command(sign * linear, angular)
+        self.command(0.0, 0.0)
+
+    def arc(self, heading: float, radius: float, backward: bool = False) -> None:
+        """Drive forward (or ``backward``) on a circle of ``radius`` [m] until the odometry
+        heading is ``heading`` (its sign of turn: towards it), and stop."""
+        lim, dt = self.limits, self.limits.period
+        sign = -1.0 if backward else 1.0
+        scan_every = max(1, round(lim.obstacle_period / dt))
+        k = 0
+        while True:
+            error = float(wrap_angle(heading - self.read().theta))
+            remaining = abs(error) * radius  # along the arc [m]
+            if abs(error) <= lim.heading_tolerance:
+                break
+            if k % scan_every == 0:
+                self.check_ahead(True, backward)
+            k += 1
+            brake = math.sqrt(2.0 * lim.acceleration * remaining)
+            close = remaining / max(dt, lim.closing_time)
+            goal = min(lim.speed, lim.turn_rate * radius, brake, close)
+            goal = max(goal, min(lim.creep_speed, close))
+            step = lim.acceleration * dt
+            speed = min(max(goal, abs(self.linear) - step), abs(self.linear) + step)
+            self.command(sign * speed, math.copysign(speed / radius, error))
         self.command(0.0, 0.0)
 
     def turn(self, heading: float) -> None:
@@ -375,9 +403,15 @@ class _Driver:
         return odom
 
 
-def obstacle_ahead(scan: LaserScan, half_angle: float) -> float:
-    """The nearest return [m] within ``half_angle`` of the robot's forward direction (from
-    the robot's centre, the laser's mounting taken into account); inf if none."""
+#: The control loop with its safety checks, for moves other than the square (the
+#: self-calibration anywhere: :mod:`umbmark.autocal.anywhere`).
+Driver = _Driver
+
+
+def obstacle_ahead(scan: LaserScan, half_angle: float, backward: bool = False) -> float:
+    """The nearest return [m] within ``half_angle`` of the robot's forward direction (or
+    its backward one) from the robot's centre, the laser's mounting taken into account;
+    inf if none."""
     ranges = np.asarray(scan.ranges, dtype=np.float64)
     ok = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
     if not ok.any():
@@ -386,6 +420,7 @@ def obstacle_ahead(scan: LaserScan, half_angle: float) -> float:
     r = ranges[ok]
     x = scan.mount.x + r * np.cos(angles)
     y = scan.mount.y + r * np.sin(angles)
+    x = -x if backward else x
     ahead = (x > 0.0) & (np.abs(np.arctan2(y, x)) <= half_angle)
     return float(np.min(np.hypot(x[ahead], y[ahead]))) if ahead.any() else math.inf
 

@@ -21,6 +21,7 @@ from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
 if TYPE_CHECKING:
     from umbmark.jobs.selfcal import SelfCalReport
+    from umbmark.jobs.selfcal_anywhere import AnywhereReport
 
 __all__ = ["column", "print_table", "render_calibration", "row", "table"]
 
@@ -442,3 +443,53 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
     for p in report.passes:
         if p.applied is not None and not p.applied.active:
             screen.print(f"{p.label}: {p.applied.message}")
+
+
+def render_anywhere(report: AnywhereReport, screen: Console) -> None:
+    """What ``umbmark selfcal --routine anywhere`` prints: the calibration (wheels, E_d,
+    E_b, E_s, the laser's mounting, with standard errors), what was applied, and the
+    verification's errors before and after."""
+    first = report.calibration
+    screen.print(
+        f"Self-calibration anywhere of {report.robot}: {first.matched} while driving the "
+        "pattern (turns on the spot both ways, straights forward and back, arcs)."
+    )
+    render_calibration(first.report, screen, overlay=False)
+    applied = first.applied
+    if applied is None:
+        why = "--apply none" if first.report.verdict.applies else "the verdict is do not apply"
+        screen.print(f"Not applied: {why}.")
+    elif applied.active:
+        screen.print(f"Applied ({applied.method}): {applied.message}.", markup=False)
+    else:
+        screen.print(f"Not applied yet: {applied.message}.", markup=False)
+    verification = report.verification
+    if verification is not None:
+        grid = table(
+            "Verification: the pattern driven again on the new parameters",
+            ["", "before", "after"],
+            left={""},
+        )
+        before, after = first.errors(), verification.errors()
+        for key, what in (
+            ("E_d", "E_d = D_R / D_L"),
+            ("E_b", "E_b = b_actual / b_used"),
+            ("E_s", "E_s = D_avg / D_used"),
+        ):
+            b, a = before[key], after[key]
+            row(grid, what, "-" if b is None else f"{b:.6f}", "-" if a is None else f"{a:.6f}")
+        screen.print(grid)
+        screen.print(
+            f"The verification's own verdict (not applied): {verification.report.verdict.words}."
+        )
+    elif applied is not None and applied.active:
+        screen.print("The correction was applied but not verified (--no-verify).")
+    final = report.final
+    screen.print(
+        f"The controller holds: wheel_separation_multiplier "
+        f"{final.wheel_separation_multiplier:.6f}, left_wheel_radius_multiplier "
+        f"{final.left_wheel_radius_multiplier:.6f}, right_wheel_radius_multiplier "
+        f"{final.right_wheel_radius_multiplier:.6f}.",
+        markup=False,
+        highlight=False,
+    )

@@ -7,9 +7,9 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import Command, apply, force_option, option
+from umbmark.cli.options import Command, apply, force_option, option, spec_option
 from umbmark.core.errors import InputError
-from umbmark.options.spec import OUTPUTS, TEST
+from umbmark.options.spec import OUTPUTS, ROUTINE, TEST
 
 __all__ = ["selfcal"]
 
@@ -25,7 +25,9 @@ DRIVING = "Driving"
 @apply(
     [
         option("--sim", "backend", flag_value="sim", section=ROBOT,
-               help="The virtual robot (its errors: --sim-E-d, --sim-E-b, --sim-E-s, --sim-slip)."),
+               help="The virtual robot (its errors: --sim-E-d, --sim-E-b, --sim-E-s, --sim-slip); "
+               "with --routine anywhere in an 8 x 6 m room, its laser 120 mm ahead, 40 mm "
+               "right of its centre, turned 4 deg."),
         option("--ros1", "backend", flag_value="ros1", section=ROBOT,
                help="A ROS 1 robot (rospy; ROS_MASTER_URI)."),
         option("--ros2", "backend", flag_value="ros2", section=ROBOT,
@@ -44,6 +46,7 @@ DRIVING = "Driving"
                show_default=True, help="With --sim: the virtual robot's wheel slip [m^0.5]."),
         option("--seed", section=ROBOT, type=click.IntRange(0, 2**63 - 1), default=1,
                show_default=True, help="Seed of the virtual robot's slip and sensor noise."),
+        spec_option(ROUTINE),
         option("--side-length", "-L", section=TEST, type=float, default=4.0, show_default=True,
                help="Side of the square [m] (0.5 to 20)."),
         option("--runs", "-n", section=TEST, type=int, default=5, show_default=True,
@@ -117,7 +120,7 @@ DRIVING = "Driving"
     ]
 )  # fmt: skip
 def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
-    """The robot calibrates itself (the paper's Sec. 6).
+    """The robot calibrates itself (the paper's Sec. 6; --routine anywhere: without a corner).
 
     Placed at its start in view of an L-shaped corner, the robot checks what it needs,
     checks that it turns as its odometry believes, drives UMBmark (5 cw, then 5 ccw runs,
@@ -125,12 +128,18 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     where it stopped against the corner, calibrates, applies the correction to its
     controller, repeats while the paper's 3 x SEM rule says another pass is worth it, and
     verifies. A zero velocity is sent on any error, on Ctrl-C and on every safety stop.
+
+    With --routine anywhere the robot needs no corner and about 2 x 2 m of floor: it
+    drives turns on the spot both ways, straights forward and back and arcs, calibrates
+    its wheels, E_s and its laser's mounting against the laser's own motion (scan
+    matching), applies the result and drives the pattern again to verify.
     """
     from umbmark.cli.common import console, note, status_line, warn, wrote
-    from umbmark.cli.render import render_selfcal
+    from umbmark.cli.render import render_anywhere, render_selfcal
     from umbmark.core.errors import InputError
     from umbmark.jobs.selfcal import default_folder
     from umbmark.jobs.selfcal import selfcal as run_selfcal
+    from umbmark.jobs.selfcal_anywhere import AnywhereReport
     from umbmark.outputs.files import fresh_folder
     from umbmark.robot.connect import connect
     from umbmark.robot.ros_common import RosOptions, laser_mount
@@ -159,7 +168,8 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         acceleration=options.pop("acceleration"),
         turn_rate=options.pop("turn_rate"),
     )
-    robot = connect(backend, ros=ros, **sim)  # type: ignore[arg-type]
+    anywhere = options["routine"] == "anywhere"
+    robot = connect(backend, ros=ros, room=anywhere, **sim)  # type: ignore[arg-type]
     if options["out"] is None:  # the command's own folder; a new one beside an earlier run's
         options["out"] = fresh_folder(default_folder(options["robot"] or robot.name))
     ask = _ask_person if options["measure"] == "tape" else None
@@ -168,7 +178,8 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         with status_line("self-calibration") as show:
 
             def progress(label: str, k: int, direction: object, what: str) -> None:
-                run = f", run {k} {getattr(direction, 'value', '')}" if k else ""
+                step = "move" if direction is None else "run"  # the anywhere pattern's moves
+                run = f", {step} {k} {getattr(direction, 'value', '')}".rstrip() if k else ""
                 show(f"{label}{run}: {what}")
 
             report = run_selfcal(
@@ -179,6 +190,13 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         robot.close()
     for line in report.checks:
         note(line)
+    if isinstance(report, AnywhereReport):
+        wrote(report.files)
+        if json_out:
+            click.echo(report.to_json(), nl=False)
+        else:
+            render_anywhere(report, console())
+        return
     for p in report.passes:
         for line in p.warnings:
             warn(f"{p.label}, {line}")

@@ -56,7 +56,9 @@ from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, wr
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
+from umbmark.jobs.selfcal_anywhere import AnywhereReport, selfcal_anywhere
 from umbmark.jobs.selfcal_report import PassResult, SelfCalReport
+from umbmark.options.spec import ROUTINE
 from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DriveParams, Robot
 
 if TYPE_CHECKING:
@@ -103,7 +105,8 @@ def selfcal(
     force: bool = False,
     resume: str | os.PathLike[str] | None = None,
     notify: Callable[[str], None] | None = None,
-) -> SelfCalReport:
+    routine: str = "umbmark",
+) -> SelfCalReport | AnywhereReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
     corner, applied and verified (module documentation).
 
@@ -152,6 +155,8 @@ def selfcal(
         parameters it stopped on (:mod:`umbmark.autocal.resume`).
     notify : callable, optional
         Lines for a person, as they happen (the robot cannot take parameters live, ...).
+    routine : {"umbmark", "anywhere"}
+        ``anywhere``: :func:`umbmark.jobs.selfcal_anywhere.selfcal_anywhere` (no corner).
 
     Raises
     ------
@@ -160,6 +165,12 @@ def selfcal(
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
     """
+    ROUTINE.check(routine)
+    if routine == "anywhere":
+        return selfcal_anywhere(
+            robot, apply=_apply_method(apply), verify=verify, robot_name=robot_name,
+            history=history, out=out, progress=progress, limits=limits, force=force,
+        )  # fmt: skip
     state = None
     if resume is not None:
         state = read_state(Path(resume))

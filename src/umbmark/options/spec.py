@@ -37,6 +37,7 @@ __all__ = [
     "PARAMETERS",
     "READ",
     "READ_OPTIONS",
+    "ROUTINE",
     "SIDE_LENGTH",
     "TABLE",
     "TEST",
@@ -262,6 +263,21 @@ OVERRIDE_VERDICT = Spec(
     "Override a refusal that protects the robot's parameters (never needed to replace "
     "files: that is --force).",
     kind="flag",
+)
+
+#: ``--routine`` of ``selfcal`` (``routine=`` of :func:`umbmark.selfcal`): what the robot
+#: drives to calibrate itself.
+ROUTINE = Spec(
+    "routine",
+    ("--routine",),
+    TEST,
+    "umbmark: the paper's squares, measured at an L-shaped corner (needs 4 x 4 m and the "
+    "corner); anywhere: a short pattern of turns, straights and arcs on about 2 x 2 m, "
+    "calibrated against the laser's own motion (needs a laser and walls or furniture in "
+    "view; also gives E_s and the laser's mounting).",
+    kind="choice",
+    default="umbmark",
+    choices=("umbmark", "anywhere"),
 )
 
 # --- how to read a source (calibrate, replay, report, validate) -----------------------

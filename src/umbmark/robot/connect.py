@@ -23,12 +23,16 @@ def connect(
     slip: float = 0.0004,
     seed: int | None = None,
     ros: RosOptions | None = None,
+    room: bool = False,
 ) -> Robot:
     """The robot to calibrate.
 
     ``sim``: a :class:`~umbmark.robot.virtual.VirtualRobot` (LabMate-sized, 4 m squares'
     room) with errors ``E_d``, ``E_b``, ``E_s`` and wheel slip ``slip`` [m^(1/2)];
-    ``ros1`` / ``ros2``: the robot behind the topics and controller of ``ros``.
+    ``ros1`` / ``ros2``: the robot behind the topics and controller of ``ros``. ``room``:
+    the virtual robot stands in an ordinary room (:func:`umbmark.robot.world.room_world`)
+    with its laser off its centre (:data:`umbmark.robot.world.ROOM_LASER`), for the
+    routine that calibrates anywhere; else at the corner of the UMBmark routine.
 
     Raises
     ------
@@ -46,6 +50,12 @@ def connect(
                 )
         if not (0.0 <= slip <= MAX_SLIP):
             raise InputError(f"--sim-slip {slip!r} m^0.5: give 0 to {MAX_SLIP:g}")
+        if room:
+            from umbmark.robot.world import ROOM_LASER, room_world
+
+            laser = (ROOM_LASER.x, ROOM_LASER.y, ROOM_LASER.theta)
+            return VirtualRobot(E_d, E_b, E_s, slip=slip, seed=seed, world=room_world(),
+                                laser_pose=laser)  # fmt: skip
         return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed)
     if backend == "ros1":
         from umbmark.robot.ros1 import Ros1Robot

@@ -86,6 +86,11 @@ class VirtualRobot:
         The controller's parameters at the start (default: nominal, multipliers 1).
     command_timeout : float
         A velocity command older than this [s] stops the wheels.
+    laser_pose : (float, float, float), optional
+        The laser's true mounting ``x, y, yaw`` [m, m, rad] in the base frame: the scans
+        are cast from there (default: the world's laser as it is; a world without one gets
+        the standard laser, :data:`umbmark.robot.world.DEFAULT_LIDAR`). The scans report
+        this mounting, as TF would.
     """
 
     name = "virtual robot"
@@ -106,6 +111,7 @@ class VirtualRobot:
         world: World | None = None,
         params: DriveParams | None = None,
         command_timeout: float = 0.5,
+        laser_pose: tuple[float, float, float] | None = None,
     ) -> None:
         _check_arguments(E_d, E_b, E_s, wheelbase, wheel_diameter, slip, command_timeout)
         nominal = WheelParams(
@@ -124,6 +130,8 @@ class VirtualRobot:
             from umbmark.robot.world import corner_world
 
             world = corner_world()
+        if laser_pose is not None:
+            world = _with_laser(world, laser_pose)
         self.world = world
         self._rng = np.random.default_rng(seed)
         self._params = params or DriveParams(wheelbase, 0.5 * wheel_diameter)
@@ -175,6 +183,12 @@ class VirtualRobot:
     def ground_truth(self) -> Stamped | None:
         """The true pose in the world's frame (as motion capture would give it)."""
         return self.world.truth(self._pose, self._time, self._rng)
+
+    def wheel_angles(self) -> tuple[float, float, float]:
+        """The wheels' encoder angles now: ``time`` [s], left, right [rad] (whole pulses;
+        what a ``joint_states`` message of its controller would say)."""
+        step = 2.0 * math.pi / self._pulses
+        return self._time, self._counts[0] * step, self._counts[1] * step
 
     def drive_params(self) -> DriveParams:
         """The parameters the controller runs with now."""
@@ -267,6 +281,18 @@ class VirtualRobot:
         x, y, theta = self._odom
         self._odom = list(_arc(x, y, theta, moved_left, moved_right, separation))
         self._odom_time = self._time
+
+
+def _with_laser(world: World, pose: tuple[float, float, float]) -> World:
+    """``world`` with its laser (the standard one where it has none) mounted at ``pose``."""
+    from umbmark.robot.world import DEFAULT_LIDAR
+
+    values = tuple(float(v) for v in pose)
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise InputError(f"laser_pose={pose!r}: give x, y [m] and yaw [rad]")
+    if math.hypot(values[0], values[1]) > 2.0:
+        raise InputError(f"laser_pose={pose!r}: the laser must sit within 2 m of the axle centre")
+    return replace(world, lidar=replace(world.lidar or DEFAULT_LIDAR, mount=Pose2D(*values)))
 
 
 def _arc(

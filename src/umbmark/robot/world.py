@@ -25,6 +25,7 @@ from umbmark.robot.base import LaserScan, Pose2D, RangeReading, Stamped
 __all__ = [
     "CORNER_SENSORS",
     "DEFAULT_LIDAR",
+    "ROOM_LASER",
     "LCorner",
     "Lidar",
     "MotionCapture",
@@ -403,6 +404,11 @@ def corner_world(clutter: bool = True) -> World:
         sonars=CORNER_SENSORS,
         mocap=MotionCapture(),
     )
+
+
+#: Where the virtual robot of ``umbmark selfcal --sim --routine anywhere`` carries its
+#: laser: 120 mm ahead of the axle centre, 40 mm to the right, turned 4 degrees left.
+ROOM_LASER = Pose2D(0.12, -0.04, math.radians(4.0))
 
 
 def room_world(clutter: bool = True) -> World:

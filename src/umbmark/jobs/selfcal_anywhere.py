@@ -1,0 +1,302 @@
+"""The self-calibration anywhere (``umbmark selfcal --routine anywhere``): the robot drives
+a short excitation pattern on about 2 x 2 m of floor, calibrates its wheels and its
+laser's mounting from the laser's own motion (:mod:`umbmark.autocal.anywhere`), applies
+the result through the same paths as the UMBmark routine, and verifies by driving the
+pattern again.
+
+1. checks before anything moves: the odometry settles, the robot has a laser, and the
+   laser sees a scene with structure (no open space, no corridor);
+2. the pattern, ``repeats`` times in a row, recorded (wheels and sweeps);
+3. its motion intervals, written as a tuple file in ``out/pass-1`` (or a temporary folder
+   without ``out``), calibrated by :func:`umbmark.calibrate` with the scan-matching
+   estimator and the parameters active during the drive (the verdict, the history entry
+   under ``robot_name``);
+4. applied (``robot.apply``) unless its verdict is "do not apply" or ``apply`` is
+   ``none``; the history marks it applied, ``out/overlay.yaml`` holds it (also where the
+   controller takes it only on a restart: a ROS 2 controller without the controller
+   manager's messages; the report's apply message says how);
+5. with ``verify`` and the result applied: the pattern again, calibrated the same way
+   (``out/verification``): what is left after the correction.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from umbmark.autocal.anywhere import (
+    PATTERN,
+    check_scene,
+    drive_pattern,
+    intervals_note,
+    pattern_intervals,
+)
+from umbmark.autocal.drive import DriveLimits, settle
+from umbmark.autocal.record import OVERLAY_FILE, pass_folder
+from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+
+if TYPE_CHECKING:
+    from umbmark.jobs.calibrate import CalibrationReport
+
+__all__ = ["AnywherePass", "AnywhereReport", "selfcal_anywhere"]
+
+#: The file of a pass's motion intervals (``docs/formats.md``: tuple files).
+INTERVALS_FILE = "intervals.tuple"
+#: Most repeats of the pattern in one pass.
+MAX_REPEATS = 10
+
+#: Live progress: (pass label, move number, None, what), as the UMBmark routine's.
+Progress = Callable[[str, int, None, str], None]
+
+
+@dataclass(frozen=True)
+class AnywherePass:
+    """One drive of the pattern and its calibration.
+
+    Attributes
+    ----------
+    label : str
+        ``pass 1`` or ``verification``.
+    folder : Path or None
+        Where its intervals were written (None: not kept).
+    report : CalibrationReport
+        Its calibration (scan-matching, composed with ``params``).
+    params : DriveParams
+        The parameters the controller ran with during the drive.
+    matched : str
+        The intervals matched and left out, for people.
+    applied : ApplyResult or None
+        What applying its correction did (None: not applied).
+    """
+
+    label: str
+    folder: Path | None
+    report: CalibrationReport
+    params: DriveParams
+    matched: str
+    applied: ApplyResult | None = None
+
+    def errors(self) -> dict[str, float | None]:
+        """``E_d``, ``E_b``, ``E_s`` against the parameters active during the drive."""
+        est = self.report.estimate
+        return {"E_d": est.E_d, "E_b": est.E_b, "E_s": est.E_s}
+
+
+@dataclass(frozen=True)
+class AnywhereReport(JsonText):
+    """What the self-calibration anywhere did and found.
+
+    Attributes
+    ----------
+    robot : str
+    calibration : AnywherePass
+        The pass whose result was applied (or not).
+    verification : AnywherePass or None
+        The pattern driven again on the applied parameters (None: not driven).
+    final : DriveParams
+        The parameters the controller holds at the end, as it reports them.
+    checks : tuple of str
+        What the checks before moving found.
+    files : tuple of Path
+        Files written.
+    """
+
+    robot: str
+    calibration: AnywherePass
+    verification: AnywherePass | None
+    final: DriveParams
+    checks: tuple[str, ...] = ()
+    files: tuple[Path, ...] = field(default=(), compare=False)
+
+    @property
+    def applied(self) -> ApplyResult | None:
+        """What applying the calibration did (None: not applied)."""
+        return self.calibration.applied
+
+    def to_dict(self) -> dict[str, Any]:
+        """What ``umbmark selfcal --routine anywhere --json`` prints (metres, radians): the
+        calibration's fields as ``umbmark calibrate --scan-topic --json`` gives them, and
+        the routine's own."""
+        out = self.calibration.report.to_dict()
+        applied = self.applied
+        out.update(
+            {
+                "routine": "anywhere",
+                "robot": self.robot,
+                "checks": list(self.checks),
+                "intervals_matched": self.calibration.matched,
+                "applied": None if applied is None else applied.active,
+                "apply_method": None if applied is None else applied.method,
+                "apply_message": None if applied is None else applied.message,
+                "before": self.calibration.errors(),
+                "after": None if self.verification is None else self.verification.errors(),
+                "verification": None
+                if self.verification is None
+                else self.verification.report.to_dict(),
+                "final": {
+                    "wheel_separation_multiplier": self.final.wheel_separation_multiplier,
+                    "left_wheel_radius_multiplier": self.final.left_wheel_radius_multiplier,
+                    "right_wheel_radius_multiplier": self.final.right_wheel_radius_multiplier,
+                },
+                "files": [str(f) for f in self.files],
+            }
+        )
+        return out
+
+
+def selfcal_anywhere(
+    robot: Robot,
+    *,
+    apply: ApplyMethod = "reconfigure",
+    verify: bool = True,
+    robot_name: str | None = None,
+    history: str | os.PathLike[str] | None = None,
+    out: str | os.PathLike[str] | None = None,
+    progress: Progress | None = None,
+    limits: DriveLimits | None = None,
+    force: bool = False,
+    repeats: int = 4,
+) -> AnywhereReport:
+    """Calibrate ``robot`` anywhere (the module's documentation); the options as
+    :func:`umbmark.selfcal`'s (``apply`` as a method). ``repeats``: how often the pattern
+    is driven in a row for one calibration (1 to :data:`MAX_REPEATS`).
+
+    Raises
+    ------
+    InputError
+        No laser, a scene without structure, too few intervals matched, bad options.
+    umbmark.core.errors.SafetyError
+        The robot was stopped for safety (a zero velocity was the last command).
+    """
+    if not (1 <= repeats <= MAX_REPEATS):
+        raise InputError(f"repeats {repeats!r}: give 1 to {MAX_REPEATS}")
+    limits = limits or DriveLimits()
+    folder = None if out is None else Path(out)
+    _check_folder(folder, force)
+    name = robot_name or robot.name
+    kept = contextlib.nullcontext(str(folder))
+    try:
+        settle(robot, limits)
+        check_scene(robot, limits)
+        checks = ("the laser sees a scene with structure: scan matching can measure motion",)
+        with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
+            drive = _Pass(robot, Path(logs), limits, progress, repeats, robot_name, history, force)
+            first = drive("pass 1")
+            first = _apply(robot, first, apply)
+            if first.applied is not None and first.applied.active and robot_name is not None:
+                _mark_applied(robot_name, history)
+            verification = None
+            if verify and first.applied is not None and first.applied.active:
+                verification = drive("verification")
+    except BaseException:
+        robot.send_velocity(0.0, 0.0)
+        raise
+    robot.send_velocity(0.0, 0.0)
+    files: list[Path] = []
+    passes = [p for p in (first, verification) if p is not None]
+    if folder is not None:
+        files += [p.folder / INTERVALS_FILE for p in passes if p.folder is not None]
+        if first.applied is not None:  # applied, or waiting for a controller restart
+            overlay = folder / OVERLAY_FILE
+            first.report.write(yaml=overlay, force=force)
+            files.append(overlay)
+    else:
+        first = replace(first, folder=None)
+        verification = None if verification is None else replace(verification, folder=None)
+    return AnywhereReport(
+        robot=name,
+        calibration=first,
+        verification=verification,
+        final=robot.drive_params(),
+        checks=checks,
+        files=tuple(files),
+    )
+
+
+def _check_folder(folder: Path | None, force: bool) -> None:
+    """Refuse, before anything moves, an output folder that cannot be made, or one that
+    holds files (without ``force``)."""
+    if folder is None:
+        return
+    from umbmark.outputs.files import OutputPlan
+
+    OutputPlan.of(logs=folder, force=True)
+    if not force and folder.is_dir() and any(folder.iterdir()):
+        raise InputError(
+            "holds files: choose a new or empty folder, leave --out out (umbmark selfcal "
+            "then makes selfcal-ROBOT-2, ...), or pass --force to write into it",
+            source=folder,
+            python="holds files: choose a new or empty folder, or pass force=True",
+        )
+
+
+@dataclass(frozen=True)
+class _Pass:
+    """Drives the pattern, writes its intervals, calibrates them."""
+
+    robot: Robot
+    folder: Path
+    limits: DriveLimits
+    progress: Progress | None
+    repeats: int
+    record_as: str | None
+    history: str | os.PathLike[str] | None
+    force: bool
+
+    def __call__(self, label: str) -> AnywherePass:
+        from umbmark.jobs.calibrate import calibrate
+        from umbmark.sources.tuples import write_tuples
+
+        def said(k: int, what: str) -> None:
+            if self.progress is not None:
+                self.progress(label, k, None, what)
+
+        recording = drive_pattern(self.robot, self.limits, said, PATTERN * self.repeats)
+        matched = pattern_intervals(recording)
+        where = pass_folder(self.folder, label)
+        where.mkdir(parents=True, exist_ok=True)
+        path = write_tuples(where / INTERVALS_FILE, matched.intervals, force=self.force)
+        p = recording.params
+        report = calibrate(
+            path,
+            method="scan-matching",
+            wheelbase=p.wheel_separation,
+            wheel_diameter=2.0 * p.wheel_radius,
+            current_c_l=p.left_wheel_radius_multiplier,
+            current_c_r=p.right_wheel_radius_multiplier,
+            current_separation_multiplier=p.wheel_separation_multiplier,
+            robot=self.record_as,
+            history=self.history,
+        )
+        return AnywherePass(label, where, report, p, intervals_note(matched))
+
+
+def _apply(robot: Robot, result: AnywherePass, method: ApplyMethod) -> AnywherePass:
+    """Apply the pass's correction, composed with its active parameters, unless the
+    verdict says not to or ``method`` is ``none`` (as the UMBmark routine does)."""
+    if method == "none" or not result.report.verdict.applies:
+        return result
+    cal = result.report.calibration
+    new = replace(
+        result.params,
+        wheel_separation_multiplier=cal.new_separation_multiplier,
+        left_wheel_radius_multiplier=cal.new_c_left,
+        right_wheel_radius_multiplier=cal.new_c_right,
+    )
+    return replace(result, applied=robot.apply(new, method))
+
+
+def _mark_applied(robot: str, history: str | os.PathLike[str] | None) -> None:
+    """Mark the robot's last calibration (the pass just applied) applied in the history."""
+    from umbmark.store.history import History
+
+    store = History(history)
+    (last,) = store.calibrations(robot)[-1:]
+    store.mark_applied(robot, last.id)
