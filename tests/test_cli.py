@@ -7,7 +7,6 @@ fail with one line.
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import os
@@ -22,7 +21,6 @@ import pytest
 
 import umbmark
 from umbmark.cli.main import cli
-from umbmark.runs.options import SourceOptions
 
 from helpers import OPTIODOM, cli_error, cli_json, linear_cgs, run_cli, runs_around
 
@@ -278,10 +276,11 @@ def _commands() -> list[tuple[str, click.Command, object]]:
 
 @pytest.mark.parametrize(("name", "command", "function"), _commands(), ids=lambda v: str(v)[:12])
 def test_every_option_is_a_keyword_of_the_library_function(name, command, function):
-    signature = inspect.signature(function)
-    keywords = set(signature.parameters)
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in signature.parameters.values()):
-        keywords |= set(SourceOptions.__annotations__)
+    from umbmark.core.errors import keywords_of
+
+    taken = keywords_of(function)  # **options of a TypedDict or a dataclass's fields too
+    assert taken is not None, f"{name}: the library function takes any keyword"
+    keywords = set(taken)
     for param in command.params:
         if param.name in _RENDERING or (name, param.name) in _CONVERTED:
             continue

@@ -20,6 +20,7 @@ from umbmark.jobs import reproduce, simulate, study
 from umbmark.jobs.calibrate import calibrate
 from umbmark.jobs.validate import validate
 from umbmark.options import spec as read_options
+from umbmark.sim import setup
 
 from helpers import api_error, cli_error, run_cli
 
@@ -121,7 +122,7 @@ def test_a_run_longer_than_two_million_periods_is_refused() -> None:
 
 def test_all_runs_together_are_bounded() -> None:
     per_run = _periods(4, 0.2, 1e-4)  # 8.53e5: allowed for one run, not for 2000
-    assert per_run < simulate.MAX_SAMPLES_PER_RUN
+    assert per_run < setup.MAX_SAMPLES_PER_RUN
     line = api_error(umbmark.simulate, runs=1000, dt=1e-4)
     assert f"2000 runs of about {per_run:.3g} sampling periods each are more than 1e+09" in line
 

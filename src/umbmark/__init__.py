@@ -57,6 +57,7 @@ _EXPORTS = {
     "ReplayReport": "umbmark.jobs.replay",
     "InfoReport": "umbmark.jobs.info",
     "SimulationReport": "umbmark.jobs.simulate",
+    "SimSetup": "umbmark.sim.setup",
     "DemoReport": "umbmark.jobs.demo",
     "SourceOptions": "umbmark.runs.options",
     # the robot calibrates itself (the paper's Sec. 6)
@@ -103,6 +104,7 @@ __all__ = [
     "Robot",
     "Run",
     "SelfCalReport",
+    "SimSetup",
     "SimulationReport",
     "SourceOptions",
     "SquareTest",
@@ -163,6 +165,7 @@ if TYPE_CHECKING:
     from umbmark.robot.connect import connect
     from umbmark.robot.virtual import VirtualRobot
     from umbmark.runs.options import SourceOptions
+    from umbmark.sim.setup import SimSetup
     from umbmark.sources.runs_table.reader import read_runs_table
     from umbmark.store.history import History
 

@@ -14,6 +14,7 @@ not take as Python does, naming the close one (``did you mean unit=?``).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import re
@@ -236,14 +237,21 @@ def _keyword(
 
 
 def keywords_of(fn: Callable[..., object]) -> dict[str, Keyword] | None:
-    """The keywords ``fn`` takes (those of a ``**options: Unpack[TypedDict]`` too), or
+    """The keywords ``fn`` takes (those of a ``**options: Unpack[TypedDict]`` too, and the
+    fields of the dataclass ``fn.__keyword_fields__`` names for its ``**changes``), or
     None when it takes any."""
     import inspect
 
     namespace = getattr(inspect.unwrap(fn), "__globals__", {})
     out: dict[str, Keyword] = {}
     for p in inspect.signature(fn).parameters.values():
-        if p.kind is p.VAR_KEYWORD:
+        fields_of = getattr(inspect.unwrap(fn), "__keyword_fields__", None)
+        if p.kind is p.VAR_KEYWORD and fields_of is not None:  # a dataclass's fields
+            module = inspect.getmodule(fields_of)
+            space = vars(module) if module is not None else namespace
+            for f in dataclasses.fields(fields_of):
+                out[f.name] = _keyword(f.name, f.type, f.default, space)
+        elif p.kind is p.VAR_KEYWORD:
             text = p.annotation if isinstance(p.annotation, str) else ""
             inner = re.fullmatch(r"Unpack\[(\w+)\]", text)
             typed = namespace.get(inner[1]) if inner else None
