@@ -239,6 +239,20 @@ def test_a_bad_routine_is_refused() -> None:
     assert "umbmark, anywhere" in message
 
 
+def test_the_square_routines_options_are_refused_not_ignored(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    robot = _robot()
+    message = api_error(umbmark.selfcal, robot, routine="anywhere", side_length=3.0, runs=3)
+    assert message.startswith("side_length, runs: the square routine's options")
+    _stood_still(robot)
+    proc = run_cli("selfcal", "--sim", "--routine", "anywhere", "--measure", "truth", cwd=tmp_path)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        "umbmark: error: --measure: the square routine's option; --routine anywhere drives "
+        "its own pattern and takes none of them"
+    ]
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.slow
 def test_cli_end_to_end(tmp_path) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "out"

@@ -167,6 +167,11 @@ def selfcal(
     """
     ROUTINE.check(routine)
     if routine == "anywhere":
+        _square_only(
+            side_length=side_length != 4.0, runs=runs != 5, measure=measure != "lidar",
+            max_passes=max_passes != 3, report=report is not None, resume=resume is not None,
+            tape_marks=tape_marks is not None,
+        )  # fmt: skip
         return selfcal_anywhere(
             robot, apply=_apply_method(apply), verify=verify, robot_name=robot_name,
             history=history, out=out, progress=progress, limits=limits, force=force,
@@ -251,6 +256,17 @@ def selfcal(
         files=tuple(files),
         restart=restart,
     )
+
+
+def _square_only(**given: bool) -> None:
+    """Refuse the square routine's options with ``--routine anywhere``: none says anything
+    to it, and a user who gave one expects it to count."""
+    named = [f"--{name.replace('_', '-')}" for name, on in given.items() if on]
+    if named:
+        raise InputError(
+            f"{', '.join(named)}: the square routine's option{'s' if len(named) > 1 else ''}; "
+            "--routine anywhere drives its own pattern and takes none of them"
+        )
 
 
 def default_folder(robot: str) -> Path:
