@@ -19,7 +19,7 @@ import numpy as np
 from umbmark.core.conventions import Direction
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
-from umbmark.sim.robot import LABMATE, VirtualRobot
+from umbmark.sim.robot import LABMATE, SimRobot
 
 from _timing import best_of
 
@@ -32,7 +32,7 @@ def main() -> None:
     parser.add_argument("--runs", type=int, nargs="+", default=[10, 100, 1000, 4000])
     parser.add_argument("--loop-runs", type=int, default=4)
     args = parser.parse_args()
-    robot = VirtualRobot.with_errors(LABMATE, E_d=1.00084, E_b=336.17 / 340.0)
+    robot = SimRobot.with_errors(LABMATE, E_d=1.00084, E_b=336.17 / 340.0)
     path = square(4.0)
 
     loop_dirs = [Direction.CW, Direction.CCW] * (args.loop_runs // 2)

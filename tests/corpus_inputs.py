@@ -92,10 +92,10 @@ def simulated_session(directions: Sequence[str] = ("cw", "cw", "ccw", "ccw")) ->
     from umbmark.model.kinematics import WheelParams
     from umbmark.sim.engine import simulate
     from umbmark.sim.paths import square
-    from umbmark.sim.robot import VirtualRobot
+    from umbmark.sim.robot import SimRobot
 
     odo = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-    robot = VirtualRobot.with_errors(odo, E_d=1.002, E_b=1.01)
+    robot = SimRobot.with_errors(odo, E_d=1.002, E_b=1.01)
     dirs = [Direction(d) for d in directions]
     result = simulate(robot, square(1.0), dirs, None, np.random.default_rng(0), record=True)
     trace = result.trace

@@ -20,7 +20,7 @@ from umbmark.core.conventions import Direction
 from umbmark.model.kinematics import WheelParams
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
-from umbmark.sim.robot import ControlConfig, VirtualRobot
+from umbmark.sim.robot import ControlConfig, SimRobot
 
 #: A TurtleBot3 Burger: wheel radius 33 mm, separation 160 mm.
 TB3 = WheelParams(wheelbase=0.160, wheel_diameter=0.066, encoder_resolution=4096, gear_ratio=1)
@@ -57,7 +57,7 @@ class Session:
 
 
 def squares(
-    robot: VirtualRobot,
+    robot: SimRobot,
     directions: Sequence[str],
     *,
     side: float = 1.0,

@@ -11,7 +11,7 @@ import math
 
 from umbmark.core.conventions import Direction
 from umbmark.sim.paths import Path
-from umbmark.sim.robot import ControlConfig, VirtualRobot
+from umbmark.sim.robot import ControlConfig, SimRobot
 
 __all__ = ["simulate_run_loop"]
 
@@ -26,7 +26,7 @@ def _chord(ds: float, dth: float, theta: float, method: str) -> tuple[float, flo
 
 
 def simulate_run_loop(
-    robot: VirtualRobot,
+    robot: SimRobot,
     path: Path,
     direction: Direction,
     control: ControlConfig | None = None,

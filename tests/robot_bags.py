@@ -43,7 +43,7 @@ from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from umbmark.model.kinematics import WheelParams
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 
 from helpers import simulated_session
 
@@ -310,7 +310,7 @@ def drive(
     side: float = 1.0,
 ) -> Drive:
     """Squares driven by a robot with errors ``E_d``, ``E_b``, rests between them."""
-    robot = VirtualRobot.with_errors(nominal, E_d=E_d, E_b=E_b)
+    robot = SimRobot.with_errors(nominal, E_d=E_d, E_b=E_b)
     time, counts, truth, _ = simulated_session(robot, list(directions), side=side, rest=2.0)
     angles = counts * nominal.radians_per_pulse
     return Drive(time, angles, truth, nominal, E_d, E_b)

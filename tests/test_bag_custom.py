@@ -20,7 +20,7 @@ import pytest
 
 import umbmark
 from umbmark.model.kinematics import WheelParams
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 
 from helpers import api_error, run_cli, simulated_session
 
@@ -358,7 +358,7 @@ def test_malformed_field_options_are_refused_before_reading(tmp_path):
 
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
 ROBOT_E_D, ROBOT_E_B = 1.002, 1.01
-ROBOT = VirtualRobot.with_errors(ODO, E_d=ROBOT_E_D, E_b=ROBOT_E_B)
+ROBOT = SimRobot.with_errors(ODO, E_d=ROBOT_E_D, E_b=ROBOT_E_B)
 COUNTS_PER_REV = 2000 * 20
 
 

@@ -16,7 +16,7 @@ import pytest
 
 import umbmark
 from umbmark.model.kinematics import WheelParams
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 
 from helpers import api_error, cli_error, simulated_session
 
@@ -27,7 +27,7 @@ from rosbags.rosbag2.enums import StoragePlugin  # noqa: E402
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
 
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-ROBOT = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
+ROBOT = SimRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
 T0 = 1_750_000_000
 BAG = {"wheelbase": 0.34, "wheel_diameter": 0.15, "side_length": 1.0, "truth_topic": "/mocap/pose"}
 BAG_ARGS = ["-b", "0.34", "--wheel-diameter", "0.15", "-L", "1", "--truth-topic", "/mocap/pose"]

@@ -30,7 +30,7 @@ import umbmark
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry, WheelParams
 from umbmark.model.recording import PoseSeries
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 from umbmark.sources.bag.wheels.odometry import wheels_from_odometry
 
 from helpers import api_error, cli_error, cli_json, simulated_session
@@ -43,7 +43,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=4096, gear_ratio=1)
 E_D, E_B = 1.003, 1.012
-ROBOT = VirtualRobot.with_errors(ODO, E_d=E_D, E_b=E_B)
+ROBOT = SimRobot.with_errors(ODO, E_d=E_D, E_b=E_B)
 T0 = 1_760_000_000
 SIDE = 1.0
 

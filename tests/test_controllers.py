@@ -121,12 +121,12 @@ def test_skid_steer_multiplier_is_calibrated_on_top_of_its_large_value(tmp_path)
     models that with wheel_separation_multiplier. Track 0.5 m, multiplier 1.6 active (0.8 m
     effective), true effective wheelbase 0.85 m: the new multiplier is 1.6 * 0.85 / 0.8."""
     from umbmark.model.kinematics import WheelParams
-    from umbmark.sim.robot import VirtualRobot
+    from umbmark.sim.robot import SimRobot
 
     from helpers import session_log, simulated_session
 
     active = WheelParams(wheelbase=0.8, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-    robot = VirtualRobot.with_errors(active, E_d=1.002, E_b=0.85 / 0.8)
+    robot = SimRobot.with_errors(active, E_d=1.002, E_b=0.85 / 0.8)
     session = simulated_session(robot, ["cw", "cw", "ccw", "ccw"], side=2.0, rest=2.0)
     log = session_log(tmp_path / "skid", session, session[2], wheelbase=0.8, side=2.0)
     params = _file(

@@ -139,12 +139,12 @@ def test_tracked_point_off_the_axle_adds_rotated_offset_to_return_errors(tmp_pat
     dtheta the run's true heading change; --truth-offset d takes it away."""
     import umbmark
     from umbmark.model.kinematics import WheelParams
-    from umbmark.sim.robot import VirtualRobot
+    from umbmark.sim.robot import SimRobot
 
     from helpers import session_log, simulated_session
 
     odo = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-    robot = VirtualRobot.with_errors(odo, E_d=1.004, E_b=1.02)
+    robot = SimRobot.with_errors(odo, E_d=1.004, E_b=1.02)
     session = simulated_session(robot, ["cw", "cw", "ccw", "ccw"], side=1.0, rest=2.0)
     axle = session[2]
     d = (0.25, -0.08)

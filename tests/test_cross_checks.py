@@ -109,11 +109,11 @@ def logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """Two run logs of one simulated session: with the robot's nominal wheelbase (0.34 m)
     and as if another robot's (0.5 m); and a result computed on the first."""
     from umbmark.model.kinematics import WheelParams
-    from umbmark.sim.robot import VirtualRobot
+    from umbmark.sim.robot import SimRobot
 
     base = tmp_path_factory.mktemp("logs")
     odo = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-    robot = VirtualRobot.with_errors(odo, E_d=1.004, E_b=1.02)
+    robot = SimRobot.with_errors(odo, E_d=1.004, E_b=1.02)
     session = simulated_session(robot, ["cw", "cw", "ccw", "ccw"], side=1.0, rest=2.0)
     ours = session_log(base / "ours", session, session[2], wheelbase=0.34)
     other = session_log(base / "other", session, session[2], wheelbase=0.5)

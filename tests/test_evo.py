@@ -26,14 +26,14 @@ import pytest
 
 import umbmark
 from umbmark.model.kinematics import WheelParams
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 
 from helpers import api_error, run_cli, simulated_session
 
 pytestmark = pytest.mark.slow
 
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-ROBOT = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
+ROBOT = SimRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
 T0 = 1_750_000_000  # epoch seconds of the bag's first stamp
 BAG = {"wheelbase": 0.34, "wheel_diameter": 0.15, "truth_topic": "/mocap/pose"}
 POSE = "geometry_msgs/msg/PoseStamped"

@@ -22,7 +22,7 @@ from driven import EVERY, TB3, controller_odometry, squares, write_session_bag
 from umbmark.model.kinematics import OdometryGeometry
 from umbmark.runs.load import LoadOptions, load_runs
 from umbmark.runs.logged import check_motion
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 from umbmark.sources.bag.options import BagOptions
 from umbmark.sources.runlog.reader import LogMetadata
 from umbmark.sources.runlog.writer import write_log_csv, write_metadata
@@ -31,7 +31,7 @@ pytest.importorskip("rosbags")
 
 from test_bag import T0
 
-ROBOT = VirtualRobot.with_errors(TB3, E_d=1.002, E_b=1.01)
+ROBOT = SimRobot.with_errors(TB3, E_d=1.002, E_b=1.01)
 DIRS = ["cw", "cw", "ccw", "ccw", "ccw"]
 GAP = 1.76  # [s] of /odom messages dropped, as in the bag that asked for this
 

@@ -18,14 +18,14 @@ from umbmark.model.recording import PoseSeries, Recording, WheelSeries
 from umbmark.model.runs import end_errors
 from umbmark.runs.logged import runs_from_recordings
 from umbmark.runs.segmentation import split_by_rests, split_by_windows
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 from umbmark.sources.runlog.reader import LogMetadata, read_runlog
 from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
 from helpers import simulated_session
 
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-ROBOT = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
+ROBOT = SimRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
 DIRS = ["cw", "cw", "ccw", "ccw"]
 
 

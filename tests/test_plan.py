@@ -15,7 +15,7 @@ from umbmark.estimators.base import SquareTest
 from umbmark.estimators.exact import exact_components
 from umbmark.model.kinematics import WheelParams
 from umbmark.sim.experiments import umbmark_trials
-from umbmark.sim.robot import NoiseModel, VirtualRobot
+from umbmark.sim.robot import NoiseModel, SimRobot
 
 from helpers import api_error, cli_error, cli_json, linear_cgs, runs_around
 
@@ -158,7 +158,7 @@ def _monte_carlo(
     E_b = 1.0 + rng.uniform(-E_b_spread, E_b_spread, trials)
     noise = NoiseModel(slip=SLIP)
     robots = [
-        VirtualRobot.with_errors(odometry, E_d=d, E_b=b, noise=noise)
+        SimRobot.with_errors(odometry, E_d=d, E_b=b, noise=noise)
         for d, b in zip(E_d, E_b, strict=True)
     ]
     test = SquareTest(side, wheelbase)

@@ -13,7 +13,7 @@ import pytest
 import umbmark
 from umbmark.model.kinematics import WheelParams
 from umbmark.runs.load import LoadOptions, load_runs
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 
 from helpers import api_error, cli_error, session_log, simulated_session
 
@@ -25,7 +25,7 @@ needs_data = pytest.mark.skipif(not SQUARE.is_dir(), reason="no OptiOdom data be
 @pytest.fixture(scope="module")
 def session():  # type: ignore[no-untyped-def]
     odo = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-    robot = VirtualRobot.with_errors(odo, E_d=1.004, E_b=1.02)
+    robot = SimRobot.with_errors(odo, E_d=1.004, E_b=1.02)
     return simulated_session(robot, ["cw", "cw", "ccw", "ccw"], side=1.0, rest=2.0)
 
 

@@ -18,7 +18,7 @@ from driven import TB3, squares, write_session_bag
 from umbmark.model.recording import PoseSeries, Recording, WheelSeries
 from umbmark.runs.logged import runs_from_recordings
 from umbmark.runs.segmentation import split_by_rests
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 from umbmark.sources.runlog.reader import LogMetadata
 from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 
@@ -30,7 +30,7 @@ from test_bag import LEFT, RIGHT, T0
 
 #: Large errors, as a simulated robot driven by timed commands has: the squares end 0.3
 #: to 0.5 m from where they started, and the robot is put back.
-SLOPPY = VirtualRobot.with_errors(TB3, E_d=1.005, E_b=1.1)
+SLOPPY = SimRobot.with_errors(TB3, E_d=1.005, E_b=1.1)
 DIRS = ["cw", "cw", "ccw", "ccw"]
 REST = 2.0
 
@@ -91,7 +91,7 @@ def test_creep_and_twitches_in_the_pauses_are_rests(creep, twitch, rest):
     # of a rest) and drift, or the left one twitches by 0.2 rad in 0.15 s in the middle
     # of a 1.8 s pause (leaving two stops shorter than the 1 s of a rest), or both.
     session = squares(
-        VirtualRobot.with_errors(TB3, E_d=1.002, E_b=1.01),
+        SimRobot.with_errors(TB3, E_d=1.002, E_b=1.01),
         DIRS,
         side=1.0,
         rest=rest,
@@ -115,7 +115,7 @@ def _recording(session, every: int = 3) -> Recording:
 def test_two_squares_with_only_a_short_stop_between_are_two_runs():
     # 0.4 s between the two squares: a stop, not a rest (1 s); one run would turn 4 pi.
     session = squares(
-        VirtualRobot.with_errors(TB3, E_d=1.002, E_b=1.01),
+        SimRobot.with_errors(TB3, E_d=1.002, E_b=1.01),
         ["cw", "cw", "ccw", "ccw"],
         side=1.0,
         pauses=[REST, 0.4, REST, 0.4, REST],
@@ -211,7 +211,7 @@ def test_a_reset_farther_than_a_corrupt_jump_splits_the_runs(tmp_path):
 
 
 def test_the_json_gives_each_runs_start_and_end_on_the_recordings_clock(tmp_path):
-    session = squares(VirtualRobot.with_errors(TB3, E_d=1.002, E_b=1.01), DIRS, rest=REST)
+    session = squares(SimRobot.with_errors(TB3, E_d=1.002, E_b=1.01), DIRS, rest=REST)
     folder = tmp_path / "log"
     folder.mkdir()
     write_metadata(
@@ -239,7 +239,7 @@ def test_a_simulators_world_reset_between_squares_splits_them(tmp_path, pause):
     return error (8 to 9 cm), under the 0.1 m a stop's reset needs. Before: one run of
     four squares (their turns cancel: cw, cw, ccw, ccw). Now the jumps, which the wheels
     standing still cannot explain, end the runs."""
-    robot = VirtualRobot.with_errors(TB3, E_d=1.002, E_b=1.01)
+    robot = SimRobot.with_errors(TB3, E_d=1.002, E_b=1.01)
     pauses = [REST, pause, pause, pause, REST]
     session = squares(robot, ["cw", "cw", "ccw", "ccw"], side=1.0, pauses=pauses, reset=True)
     jumps = [math.hypot(e[0], e[1]) for e in session.ends]

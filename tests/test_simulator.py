@@ -18,7 +18,7 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.sim.engine import simulate
 from umbmark.sim.experiments import calibrate_robot, umbmark_trials
 from umbmark.sim.paths import spot_turn, square, straight_line
-from umbmark.sim.robot import ControlConfig, NoiseModel, VirtualRobot
+from umbmark.sim.robot import ControlConfig, NoiseModel, SimRobot
 
 from helpers import turtle_square
 from reference_sim import simulate_run_loop
@@ -31,7 +31,7 @@ CW, CCW = Direction.CW, Direction.CCW
 
 
 def test_true_diameters_from_errors_by_hand():
-    robot = VirtualRobot.with_errors(FINE, E_d=1.01, E_b=1.02, E_s=0.99)
+    robot = SimRobot.with_errors(FINE, E_d=1.01, E_b=1.02, E_s=0.99)
     d_avg = 0.99 * 0.15
     assert robot.diameter_left == pytest.approx(2 * d_avg / 2.01)
     assert robot.diameter_right == pytest.approx(2 * d_avg * 1.01 / 2.01)
@@ -46,7 +46,7 @@ def test_closed_loop_square_matches_the_turtle_walk():
     # beta = (2L / b_true)(E_d - 1)/(E_d + 1); the turns pivot about a point
     # (b_true/2)(E_d - 1)/(E_d + 1) to the left (Sec. 2.3).
     E_d, E_b = 1.002, 1.01
-    robot = VirtualRobot.with_errors(FINE, E_d=E_d, E_b=E_b)
+    robot = SimRobot.with_errors(FINE, E_d=E_d, E_b=E_b)
     b_true = 0.34 * E_b
     alpha = 90.0 * (1 - 1 / E_b)
     beta = math.degrees(2 * L / b_true * (E_d - 1) / (E_d + 1))
@@ -64,7 +64,7 @@ def test_closed_loop_square_matches_the_turtle_walk():
 
 
 def test_vectorized_simulator_equals_the_plain_loop():
-    robot = VirtualRobot.with_errors(FINE, E_d=0.998, E_b=1.03)
+    robot = SimRobot.with_errors(FINE, E_d=0.998, E_b=1.03)
     result = simulate(robot, square(2.0), [CW, CCW], FAST)
     for i, d in enumerate((CW, CCW)):
         true_end, odo_end, samples = simulate_run_loop(robot, square(2.0), d, FAST)
@@ -80,7 +80,7 @@ def test_a_run_alone_ends_as_in_a_large_batch():
     draw = np.random.default_rng(2).uniform
     errors = draw([0.99, 0.96, 0.995, 0.995, 0.33], [1.01, 1.04, 1.005, 1.005, 0.35], (48, 5))
     robots = [
-        VirtualRobot.with_errors(FINE, E_d=e_d, E_b=e_b).calibrated(c_l, c_r, b)
+        SimRobot.with_errors(FINE, E_d=e_d, E_b=e_b).calibrated(c_l, c_r, b)
         for e_d, e_b, c_l, c_r, b in errors
     ]
     directions = [CW, CCW] * 24
@@ -97,7 +97,7 @@ def test_a_run_alone_ends_as_in_a_large_batch():
 
 def test_a_finished_run_stands_still_while_the_others_drive():
     # A wider odometry wheelbase turns slower: the first robot finishes first.
-    fleet = [VirtualRobot.with_errors(FINE), VirtualRobot.with_errors(FINE).calibrated(1, 1, 0.36)]
+    fleet = [SimRobot.with_errors(FINE), SimRobot.with_errors(FINE).calibrated(1, 1, 0.36)]
     result = simulate(fleet, square(0.5), [CCW, CW], FAST, record=True)
     trace = result.trace
     assert trace is not None
@@ -112,8 +112,8 @@ def test_a_finished_run_stands_still_while_the_others_drive():
 def test_noise_is_drawn_for_every_run_in_every_period(noise):
     # Seeded results repeat: each period draws for every run, finished or not, in the
     # caller's order: the left wheels' slip (and bumps), then the right wheels'.
-    noisy = VirtualRobot.with_errors(FINE, noise=noise)
-    quiet = VirtualRobot.with_errors(FINE, E_d=1.01).calibrated(1.0, 1.0, 0.35)
+    noisy = SimRobot.with_errors(FINE, noise=noise)
+    quiet = SimRobot.with_errors(FINE, E_d=1.01).calibrated(1.0, 1.0, 0.35)
     rng = np.random.default_rng(4)
     result = simulate([noisy, quiet, noisy], square(1.0), [CW, CCW, CW], FAST, rng)
     assert len(set(result.samples_used.tolist())) == 2
@@ -131,7 +131,7 @@ def test_seeded_noisy_runs_repeat():
     # simulated when the engine was written: every draw goes to the same run and wheel.
     noise = NoiseModel(slip=0.001, bump_rate=1.0, bump_size=0.001)
     robots = [
-        VirtualRobot.with_errors(FINE, E_d=1 + 0.002 * k, E_b=1 - 0.01 * k, noise=noise).calibrated(
+        SimRobot.with_errors(FINE, E_d=1 + 0.002 * k, E_b=1 - 0.01 * k, noise=noise).calibrated(
             1 - 0.001 * k, 1 + 0.001 * k, 0.34 + 0.002 * k
         )
         for k in range(6)
@@ -171,7 +171,7 @@ def test_on_the_spot_turn_section_2_3(E_d, E_s):
     # tau = tau_n D_avg / D_n (Eq. 2.13), and the centre circles a point
     # (b/2)(E_d - 1)/(E_d + 1) to its left: it moves by (d sin tau, d (1 - cos tau)).
     tau_n = math.pi / 2
-    robot = VirtualRobot.with_errors(FINE, E_d=E_d, E_s=E_s)
+    robot = SimRobot.with_errors(FINE, E_d=E_d, E_s=E_s)
     result = simulate(robot, spot_turn(tau_n), [CCW])
     odometry_turn = result.odometry_end[0, 2]
     assert odometry_turn == pytest.approx(tau_n, abs=1e-3)
@@ -186,7 +186,7 @@ def test_on_the_spot_turn_section_2_3(E_d, E_s):
 
 
 def test_straight_line_shows_the_scale_error():
-    robot = VirtualRobot.with_errors(FINE, E_s=1.015)
+    robot = SimRobot.with_errors(FINE, E_s=1.015)
     result = simulate(robot, straight_line(5.0), [CCW])
     assert result.true_end[0, 0] / result.odometry_end[0, 0] == pytest.approx(1.015, rel=1e-6)
     assert result.odometry_end[0, 0] == pytest.approx(5.0, abs=1e-3)
@@ -199,7 +199,7 @@ def test_straight_line_shows_the_scale_error():
 def test_repeated_paper_correction_converges_to_the_truth(errors):
     # Noise-free, each pass of the paper's correction is applied on top of the last one
     # (Sec. 5); the odometry's wheel ratio and wheelbase must converge to the true ones.
-    robots = [VirtualRobot.with_errors(FINE, E_d=e_d, E_b=e_b) for e_d, e_b in errors]
+    robots = [SimRobot.with_errors(FINE, E_d=e_d, E_b=e_b) for e_d, e_b in errors]
     for _ in range(8):
         trials = umbmark_trials(robots, L, runs_per_direction=2, control=FAST)
         robots = [calibrate_robot(trial, L)[1] for trial in trials]
@@ -214,8 +214,8 @@ def test_repeated_paper_correction_converges_to_the_truth(errors):
 def test_cw_and_ccw_are_mirror_images(E_d, E_b):
     # Mirroring the world swaps the wheels: a cw run of a robot with E_d is the mirror
     # image of a ccw run of the robot with 1 / E_d.
-    robot = VirtualRobot.with_errors(FINE, E_d=E_d, E_b=E_b)
-    mirror = VirtualRobot.with_errors(FINE, E_d=1 / E_d, E_b=E_b)
+    robot = SimRobot.with_errors(FINE, E_d=E_d, E_b=E_b)
+    mirror = SimRobot.with_errors(FINE, E_d=1 / E_d, E_b=E_b)
     result = simulate([robot, mirror], square(2.0), [CW, CCW], FAST)
     x, y, th = result.true_end[0]
     np.testing.assert_allclose(result.true_end[1], [x, -y, -th], atol=2e-4)
@@ -226,7 +226,7 @@ def test_cw_and_ccw_are_mirror_images(E_d, E_b):
 def test_wheelbase_error_alone_makes_only_type_a_errors(E_b):
     # Heading errors: cw 4 alpha + 4 beta, ccw -4 alpha + 4 beta (exact). Type A only:
     # beta = 0, and alpha = (pi/2)(1 - 1/E_b).
-    result = simulate(VirtualRobot.with_errors(FINE, E_b=E_b), square(2.0), [CW, CCW], FAST)
+    result = simulate(SimRobot.with_errors(FINE, E_b=E_b), square(2.0), [CW, CCW], FAST)
     eps = result.true_end[:, 2] - result.odometry_end[:, 2]
     assert (eps[0] + eps[1]) / 8 == pytest.approx(0.0, abs=2e-5)
     assert (eps[0] - eps[1]) / 8 == pytest.approx(math.pi / 2 * (1 - 1 / E_b), abs=2e-5)
@@ -235,7 +235,7 @@ def test_wheelbase_error_alone_makes_only_type_a_errors(E_b):
 @settings(max_examples=4, deadline=None)
 @given(st.floats(0.98, 1.02))
 def test_diameter_ratio_alone_makes_only_type_b_errors(E_d):
-    result = simulate(VirtualRobot.with_errors(FINE, E_d=E_d), square(2.0), [CW, CCW], FAST)
+    result = simulate(SimRobot.with_errors(FINE, E_d=E_d), square(2.0), [CW, CCW], FAST)
     eps = result.true_end[:, 2] - result.odometry_end[:, 2]
     beta = 2 * 2.0 / 0.34 * (E_d - 1) / (E_d + 1)
     assert (eps[0] - eps[1]) / 8 == pytest.approx(0.0, abs=2e-5)
@@ -246,7 +246,7 @@ def test_slip_variance_grows_with_distance_as_specified():
     # Each wheel's floor travel errs by N(0, slip^2 * travel); the centre's distance is
     # their mean, so its standard deviation over a line of length D is slip sqrt(D / 2).
     slip, length = 0.002, 3.0
-    robot = VirtualRobot.with_errors(FINE, noise=NoiseModel(slip=slip))
+    robot = SimRobot.with_errors(FINE, noise=NoiseModel(slip=slip))
     result = simulate(robot, straight_line(length), [CCW] * 400, FAST, np.random.default_rng(7))
     along = result.true_end[:, 0] - result.odometry_end[:, 0]
     expected = slip * math.sqrt(length / 2)
@@ -258,7 +258,7 @@ def test_bumps_make_the_wheels_turn_more_than_they_travel():
     # Bumps at rate lam per metre of wheel travel, each costing s of floor travel: over a
     # line of length D the centre falls short by lam D s on average.
     lam, size, length = 2.0, 0.003, 3.0
-    robot = VirtualRobot.with_errors(FINE, noise=NoiseModel(bump_rate=lam, bump_size=size))
+    robot = SimRobot.with_errors(FINE, noise=NoiseModel(bump_rate=lam, bump_size=size))
     result = simulate(robot, straight_line(length), [CCW] * 300, FAST, np.random.default_rng(3))
     short = result.odometry_end[:, 0] - result.true_end[:, 0]
     # Bumps per wheel are Poisson(lam D): the shortfall's sd is s sqrt(lam D / 2).
@@ -270,14 +270,14 @@ def test_paper_noise_gives_the_papers_spread():
     # Sec. 5: about 25 mm standard deviation per cluster on a 4 x 4 m square.
     from umbmark.sim.reproduce import PAPER_NOISE
 
-    robot = VirtualRobot.with_errors(FINE, noise=PAPER_NOISE)
+    robot = SimRobot.with_errors(FINE, noise=PAPER_NOISE)
     trials = umbmark_trials([robot] * 8, L, control=FAST, rng=np.random.default_rng(5))
     sigmas = [c.sigma for t in trials for c in t.benchmark.clusters]
     assert 0.018 < float(np.sqrt(np.mean(np.square(sigmas)))) < 0.032
 
 
 def test_noisy_robot_needs_a_generator_and_runs_need_robots():
-    robot = VirtualRobot.with_errors(FINE, noise=NoiseModel(slip=0.001))
+    robot = SimRobot.with_errors(FINE, noise=NoiseModel(slip=0.001))
     with pytest.raises(ValueError, match="random generator"):
         simulate(robot, square(1.0), [CW])
     with pytest.raises(ValueError, match="2 robots for 1 runs"):
@@ -287,9 +287,7 @@ def test_noisy_robot_needs_a_generator_and_runs_need_robots():
 
 
 def test_trace_records_every_sample():
-    result = simulate(
-        VirtualRobot.with_errors(FINE), straight_line(0.5), [CCW, CCW], FAST, record=True
-    )
+    result = simulate(SimRobot.with_errors(FINE), straight_line(0.5), [CCW, CCW], FAST, record=True)
     trace = result.trace
     assert trace is not None
     n = result.samples + 1

@@ -31,12 +31,12 @@ from umbmark.model.kinematics import (
 )
 from umbmark.model.recording import PoseSeries, Recording, RunLog, WheelSeries
 from umbmark.runs.logged import runs_from_recordings
-from umbmark.sim.robot import NoiseModel, VirtualRobot
+from umbmark.sim.robot import NoiseModel, SimRobot
 
 from helpers import cli_error, simulated_session
 
 ODO = WheelParams(wheelbase=0.34, wheel_diameter=0.15, encoder_resolution=2000, gear_ratio=20)
-ROBOT = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
+ROBOT = SimRobot.with_errors(ODO, E_d=1.002, E_b=1.01)
 
 # --- the scrub model in the odometry -----------------------------------------------------
 
@@ -405,7 +405,7 @@ def _marker_poses(poses: np.ndarray, offset: tuple[float, float]) -> np.ndarray:
     )
 
 
-def _axle_and_marker_runs(robot: VirtualRobot, seed: int = 0):
+def _axle_and_marker_runs(robot: SimRobot, seed: int = 0):
     """One simulated session (2 cw + 2 ccw runs around 1 m squares) cut into runs twice:
     with the axle centre's ground truth and with the marker's."""
     t, counts, poses, _ = simulated_session(robot, ["cw", "cw", "ccw", "ccw"], side=1.0, seed=seed)
@@ -473,7 +473,7 @@ def test_offset_on_noisy_runs_is_honest():
     """With slip: axle truth gives an offset of zero within its standard error and the
     errors of the plain fit; the marker's truth gives the marker's offset and the same
     errors. Four runs: the 95 % interval is +- t_3 = 3.18 standard errors."""
-    noisy = VirtualRobot.with_errors(ODO, E_d=1.002, E_b=1.01, noise=NoiseModel(slip=0.0004))
+    noisy = SimRobot.with_errors(ODO, E_d=1.002, E_b=1.01, noise=NoiseModel(slip=0.0004))
     axle, marker = _axle_and_marker_runs(noisy, seed=2)
     limit = t_quantile(0.975, 3)
     plain, _ = trajectory_estimate([r.log for r in axle], ODO, 1.0)

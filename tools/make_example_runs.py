@@ -16,14 +16,14 @@ import numpy as np
 from umbmark.core.atomic import atomic_write_text
 from umbmark.sim.experiments import umbmark_trials
 from umbmark.sim.reproduce import FIG11_E_B, FIG11_E_D, PAPER_NOISE
-from umbmark.sim.robot import LABMATE, VirtualRobot
+from umbmark.sim.robot import LABMATE, SimRobot
 
 SEED = 1996
 TARGET = Path(__file__).resolve().parents[1] / "src" / "umbmark" / "data" / "labmate_runs_mm.csv"
 
 
 def main() -> None:
-    robot = VirtualRobot.with_errors(LABMATE, E_d=FIG11_E_D, E_b=FIG11_E_B, noise=PAPER_NOISE)
+    robot = SimRobot.with_errors(LABMATE, E_d=FIG11_E_D, E_b=FIG11_E_B, noise=PAPER_NOISE)
     (trial,) = umbmark_trials([robot], 4.0, rng=np.random.default_rng(SEED))
     lines = [
         "# UMBmark example: 5 cw and 5 ccw runs around a 4 x 4 m square, lengths in mm.",

@@ -26,7 +26,7 @@ from umbmark.estimators.base import SquareTest
 from umbmark.estimators.exact import exact_components
 from umbmark.model.kinematics import WheelParams
 from umbmark.sim.experiments import umbmark_trials
-from umbmark.sim.robot import NoiseModel, VirtualRobot
+from umbmark.sim.robot import NoiseModel, SimRobot
 
 SLIP = 0.0004
 RUNS = 5
@@ -44,7 +44,7 @@ def cell(side: float, wheelbase: float, count: int, seed: int) -> str:
     E_d = 1 + rng.uniform(-0.02, 0.02, count)
     E_b = 1 + rng.uniform(-0.05, 0.05, count)
     robots = [
-        VirtualRobot.with_errors(odometry, E_d=d, E_b=e, noise=NoiseModel(slip=SLIP))
+        SimRobot.with_errors(odometry, E_d=d, E_b=e, noise=NoiseModel(slip=SLIP))
         for d, e in zip(E_d, E_b, strict=True)
     ]
     test = SquareTest(side, wheelbase)

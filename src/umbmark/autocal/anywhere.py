@@ -57,8 +57,8 @@ from umbmark.scans.intervals import IntervalOptions, IntervalReport, OdometryGue
 __all__ = [
     "PATTERN",
     "Move",
+    "PatternRecording",
     "Recorder",
-    "Recording",
     "check_scene",
     "drive_pattern",
     "intervals_note",
@@ -219,7 +219,7 @@ class Recorder:
 
 
 @dataclass(frozen=True)
-class Recording:
+class PatternRecording:
     """What one drive of the pattern recorded.
 
     Attributes
@@ -337,7 +337,7 @@ def drive_pattern(
     limits: DriveLimits | None = None,
     progress: Callable[[int, str], None] | None = None,
     moves: tuple[Move, ...] = PATTERN,
-) -> Recording:
+) -> PatternRecording:
     """Drive ``moves`` by the odometry from where the robot stands (the safety stops of
     :mod:`umbmark.autocal.drive`: stale odometry or scans, obstacles in the direction of
     travel, the odometry farther than :data:`PATTERN_REACH` plus ``margin`` from the
@@ -379,7 +379,9 @@ def drive_pattern(
     return _recording(recorder, params, start, end)
 
 
-def _recording(recorder: Recorder, params: DriveParams, start: Stamped, end: Stamped) -> Recording:
+def _recording(
+    recorder: Recorder, params: DriveParams, start: Stamped, end: Stamped
+) -> PatternRecording:
     """The recorder's samples as scans and wheels."""
     if len(recorder.scans) < 10:
         raise InputError(
@@ -401,7 +403,7 @@ def _recording(recorder: Recorder, params: DriveParams, start: Stamped, end: Sta
         )
         series = PoseSeries(time=o[:, 0], poses=o[:, 1:])
         wheels = wheels_from_odometry(series, geometry, "the odometry", name).wheels
-    return Recording(
+    return PatternRecording(
         scans=_series(recorder.scans, f"{name}'s laser"),
         wheels=wheels,
         params=params,
@@ -411,7 +413,7 @@ def _recording(recorder: Recorder, params: DriveParams, start: Stamped, end: Sta
     )
 
 
-def pattern_intervals(recording: Recording) -> IntervalReport:
+def pattern_intervals(recording: PatternRecording) -> IntervalReport:
     """The recording's motion intervals, scan matched from the nominal geometry and the
     stated mounting (:func:`umbmark.scans.intervals.match_intervals`).
 

@@ -19,12 +19,12 @@ from umbmark.calibration.heldout import validate_read
 from umbmark.core.messages import info
 from umbmark.estimators.motions import motion_coverage
 from umbmark.estimators.registry import AUTO, DEFAULT, names
-from umbmark.runs.read import Runs
+from umbmark.runs.read import SourceRuns
 
 __all__ = ["auto_method"]
 
 
-def auto_method(each: Sequence[Runs], read: Runs) -> tuple[str, str, bool]:
+def auto_method(each: Sequence[SourceRuns], read: SourceRuns) -> tuple[str, str, bool]:
     """The estimator that predicts held-out recorded runs best, a note saying so, and
     whether the nominal parameters predicted them better than every estimator (the
     calibration is then made with the default, and its verdict is "do not apply").

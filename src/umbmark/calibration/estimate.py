@@ -15,12 +15,14 @@ from umbmark.calibration.compose import Calibration, check_calibration
 from umbmark.calibration.report import CalibrationResult
 from umbmark.core.messages import split_messages
 from umbmark.estimators.dispatch import estimate_runs
-from umbmark.runs.read import Runs
+from umbmark.runs.read import SourceRuns
 
 __all__ = ["calibrate_runs", "sessions_disagree"]
 
 
-def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -> CalibrationResult:
+def calibrate_runs(
+    read: SourceRuns, method: str, *, fit_truth_offset: bool = False
+) -> CalibrationResult:
     """The calibration of runs already read, by ``method``.
 
     Raises
@@ -57,7 +59,7 @@ def calibrate_runs(read: Runs, method: str, *, fit_truth_offset: bool = False) -
     )
 
 
-def sessions_disagree(parts: Sequence[Runs], *, fit_truth_offset: bool = False) -> list[str]:
+def sessions_disagree(parts: Sequence[SourceRuns], *, fit_truth_offset: bool = False) -> list[str]:
     """Warnings where the sources, fitted one by one, want different wheels."""
     from umbmark.estimators.trajectory import source_disagreement
 

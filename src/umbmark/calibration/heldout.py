@@ -26,7 +26,7 @@ from umbmark.estimators.motions import SCRUB_FALLBACK, MotionCoverage, motion_co
 from umbmark.estimators.registry import RUNS, names
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run, end_errors
-from umbmark.runs.read import Runs, pool_runs
+from umbmark.runs.read import SourceRuns, pool_runs
 
 __all__ = ["CANDIDATES", "validate_read"]
 
@@ -35,7 +35,7 @@ CANDIDATES = ("nominal", *RUNS)
 
 
 def validate_read(
-    read: Sequence[Runs],
+    read: Sequence[SourceRuns],
     candidates: Sequence[str] = CANDIDATES,
     progress: Callable[[float], None] | None = None,
 ) -> ValidationReport:
@@ -110,12 +110,12 @@ def _refusals(folds: Sequence[Fold]) -> list[str]:
     ]
 
 
-def _coverage(runs: Runs) -> MotionCoverage:
+def _coverage(runs: SourceRuns) -> MotionCoverage:
     assert runs.params is not None
     return motion_coverage([run.log for run in runs.runs if run.log is not None], runs.params)
 
 
-def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> Fold:
+def _fold(name: str, held: SourceRuns, training: SourceRuns, candidates: Sequence[str]) -> Fold:
     assert held.params is not None
     trained_on = _coverage(training)
     errors: dict[str, float | None] = {}
@@ -146,7 +146,7 @@ def _fold(name: str, held: Runs, training: Runs, candidates: Sequence[str]) -> F
 
 
 def _calibrated(
-    training: Runs, candidate: str, nominal: WheelParams
+    training: SourceRuns, candidate: str, nominal: WheelParams
 ) -> tuple[WheelParams | None, str | None]:
     """The held-out source's parameters after calibrating on ``training`` (None: the
     candidate cannot calibrate on it), and why a scrub fit gave one wheelbase (None: it

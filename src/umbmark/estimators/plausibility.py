@@ -42,7 +42,7 @@ from umbmark.core.errors import InputError
 from umbmark.model.runs import EndPose, Run
 
 if TYPE_CHECKING:
-    from umbmark.runs.read import Runs
+    from umbmark.runs.read import SourceRuns
 
 __all__ = ["UNITS", "check_columns", "judge_table", "unit_hints"]
 
@@ -443,7 +443,7 @@ def _mixed_unit_rows(squares: Sequence[Run], unit: str) -> list[str]:
     return hints
 
 
-def judge_table(read: Runs, unit: str, angle_unit: str, side: float | None) -> Runs:
+def judge_table(read: SourceRuns, unit: str, angle_unit: str, side: float | None) -> SourceRuns:
     """A runs table as read, judged as a robot driving the square makes it: refused where
     its columns look swapped (:func:`check_columns`), with warnings where its numbers look
     like other units than it says (:func:`unit_hints`) added to its notes."""

@@ -26,7 +26,7 @@ from umbmark.estimators.registry import DEFAULT, SQUARE
 from umbmark.jobs.calibrate import CalibrationReport
 from umbmark.jobs.simulate import MAX_RUNS, SEED_RANGE
 from umbmark.sim.experiments import Trial
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -49,7 +49,7 @@ class DemoReport(JsonText):
 
     Attributes
     ----------
-    robot : VirtualRobot
+    robot : SimRobot
         The uncalibrated robot (true errors ``robot.E_d``, :attr:`true_E_b`).
     before, after : Trial
         The bi-directional square tests before and after the correction.
@@ -60,7 +60,7 @@ class DemoReport(JsonText):
         What was written (empty without a folder).
     """
 
-    robot: VirtualRobot
+    robot: SimRobot
     before: Trial
     after: Trial
     report: CalibrationReport
@@ -189,7 +189,7 @@ def demo(
     def stage(start: float) -> Callable[[float], None] | None:
         return None if progress is None else (lambda f: progress(start + 0.5 * f))
 
-    robot = VirtualRobot.with_errors(LABMATE, E_d=FIG11_E_D, E_b=FIG11_E_B, noise=PAPER_NOISE)
+    robot = SimRobot.with_errors(LABMATE, E_d=FIG11_E_D, E_b=FIG11_E_B, noise=PAPER_NOISE)
     rng = np.random.default_rng(seed)
     (before,) = umbmark_trials([robot], SIDE, runs, rng=rng, progress=stage(0.0))
     calibration, calibrated = calibrate_robot(before, SIDE, method)

@@ -56,7 +56,7 @@ from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, wr
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
-from umbmark.jobs.selfcal_anywhere import AnywhereReport, selfcal_anywhere
+from umbmark.jobs.selfcal_anywhere import AnywhereReport, selfcal_anywhere, square_only
 from umbmark.jobs.selfcal_report import PassResult, SelfCalReport
 from umbmark.options.spec import ROUTINE
 from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DriveParams, Robot
@@ -167,7 +167,7 @@ def selfcal(
     """
     ROUTINE.check(routine)
     if routine == "anywhere":
-        _square_only(
+        square_only(
             side_length=side_length != 4.0, runs=runs != 5, measure=measure != "lidar",
             max_passes=max_passes != 3, report=report is not None, resume=resume is not None,
             tape_marks=tape_marks is not None,
@@ -256,17 +256,6 @@ def selfcal(
         files=tuple(files),
         restart=restart,
     )
-
-
-def _square_only(**given: bool) -> None:
-    """Refuse the square routine's options with ``--routine anywhere``: none says anything
-    to it, and a user who gave one expects it to count."""
-    named = [f"--{name.replace('_', '-')}" for name, on in given.items() if on]
-    if named:
-        raise InputError(
-            f"{', '.join(named)}: the square routine's option{'s' if len(named) > 1 else ''}; "
-            "--routine anywhere drives its own pattern and takes none of them"
-        )
 
 
 def default_folder(robot: str) -> Path:

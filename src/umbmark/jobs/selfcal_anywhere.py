@@ -45,7 +45,7 @@ from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
 if TYPE_CHECKING:
     from umbmark.jobs.calibrate import CalibrationReport
 
-__all__ = ["AnywherePass", "AnywhereReport", "selfcal_anywhere"]
+__all__ = ["AnywherePass", "AnywhereReport", "selfcal_anywhere", "square_only"]
 
 #: The file of a pass's motion intervals (``docs/formats.md``: tuple files).
 INTERVALS_FILE = "intervals.tuple"
@@ -300,3 +300,14 @@ def _mark_applied(robot: str, history: str | os.PathLike[str] | None) -> None:
     store = History(history)
     (last,) = store.calibrations(robot)[-1:]
     store.mark_applied(robot, last.id)
+
+
+def square_only(**given: bool) -> None:
+    """Refuse the square routine's options with ``--routine anywhere``: none says anything
+    to it, and a user who gave one expects it to count."""
+    named = [f"--{name.replace('_', '-')}" for name, on in given.items() if on]
+    if named:
+        raise InputError(
+            f"{', '.join(named)}: the square routine's option{'s' if len(named) > 1 else ''}; "
+            "--routine anywhere drives its own pattern and takes none of them"
+        )

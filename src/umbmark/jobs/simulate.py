@@ -26,7 +26,7 @@ from umbmark.model.recording import RunLog
 from umbmark.model.runs import Run
 from umbmark.outputs.files import OutputPlan
 from umbmark.sim.result import SimResult
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 from umbmark.sim.setup import DIRECTIONS, MAX_RUNS, PATHS, SEED_RANGE, SimSetup
 
 if TYPE_CHECKING:
@@ -52,7 +52,7 @@ class SimulationReport(JsonText):
 
     Attributes
     ----------
-    robot : VirtualRobot
+    robot : SimRobot
         The robot: its true geometry, its odometry parameters, its noise.
     path : {"square", "straight", "turn"}
         The kind of path.
@@ -71,7 +71,7 @@ class SimulationReport(JsonText):
         ``wheel_separation_multiplier``, recorded with the active parameters in the files.
     """
 
-    robot: VirtualRobot
+    robot: SimRobot
     path: str
     path_name: str
     side_length: float
@@ -291,7 +291,7 @@ def simulate(
     from umbmark.sim.engine import simulate as run_simulation
 
     odometry = chosen.odometry
-    robot = VirtualRobot.with_errors(
+    robot = SimRobot.with_errors(
         odometry, E_d=chosen.E_d, E_b=chosen.E_b, E_s=chosen.E_s, noise=chosen.noise
     )
     if params is not None:

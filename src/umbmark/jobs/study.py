@@ -46,7 +46,7 @@ from umbmark.jobs.simulate import SEED_RANGE
 if TYPE_CHECKING:
     from umbmark.benchmark.returns import Benchmark
     from umbmark.sim.experiments import Trial
-    from umbmark.sim.robot import VirtualRobot
+    from umbmark.sim.robot import SimRobot
 
 __all__ = ["Cell", "CellResult", "StudyReport", "study"]
 
@@ -344,7 +344,7 @@ def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
     """Every trial of a chunk, every method: three tests each, simulated in batches."""
     from umbmark.model.kinematics import WheelParams
     from umbmark.sim.experiments import calibrate_robot, umbmark_trials
-    from umbmark.sim.robot import NoiseModel, VirtualRobot
+    from umbmark.sim.robot import NoiseModel, SimRobot
 
     rng = np.random.default_rng(chunk.seed)
     cell = chunk.cell
@@ -358,17 +358,15 @@ def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
     E_b = 1.0 + rng.uniform(-chunk.E_b_spread, chunk.E_b_spread, chunk.trials)
     noise = NoiseModel(slip=cell.slip)
     robots = [
-        VirtualRobot.with_errors(odometry, E_d=d, E_b=b, noise=noise)
+        SimRobot.with_errors(odometry, E_d=d, E_b=b, noise=noise)
         for d, b in zip(E_d, E_b, strict=True)
     ]
-    quiet = [
-        VirtualRobot.with_errors(odometry, E_d=d, E_b=b) for d, b in zip(E_d, E_b, strict=True)
-    ]
+    quiet = [SimRobot.with_errors(odometry, E_d=d, E_b=b) for d, b in zip(E_d, E_b, strict=True)]
     L, n = cell.side_length, cell.runs
     before = umbmark_trials(robots, L, n, rng=rng)
     noise_free = umbmark_trials(quiet, L, n)
 
-    def calibrate(trial: Trial, method: str) -> tuple[Any, VirtualRobot] | None:
+    def calibrate(trial: Trial, method: str) -> tuple[Any, SimRobot] | None:
         if method == TRUTH:
             return _truth(trial)
         try:
@@ -415,7 +413,7 @@ def _run_chunk(chunk: _Chunk) -> list[_Outcome]:
     return outcomes
 
 
-def _truth(trial: Trial) -> tuple[Calibration, VirtualRobot]:
+def _truth(trial: Trial) -> tuple[Calibration, SimRobot]:
     """The robot calibrated with its true parameters: the ceiling any estimator can reach."""
     from umbmark.estimators.base import ErrorEstimate
     from umbmark.model.active import ActiveParams

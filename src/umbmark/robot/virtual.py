@@ -8,7 +8,7 @@ Each control period (``period``, 20 ms by default: a 50 Hz ``diff_drive_controll
    {left,right}_wheel_radius_multiplier``), as diff_drive_controller's inverse kinematics;
    a command older than ``command_timeout`` is a stop (its ``cmd_vel_timeout``);
 2. the true wheels (diameters ``D_L``, ``D_R`` from ``E_d`` and ``E_s``, wheelbase
-   ``E_b b``: :meth:`umbmark.sim.robot.VirtualRobot.with_errors`, the batch simulator's
+   ``E_b b``: :meth:`umbmark.sim.robot.SimRobot.with_errors`, the batch simulator's
    definitions) roll that far over the floor, less the slip of the simulator's noise model
    (Gaussian, standard deviation ``slip * sqrt(travel)``), and move the robot along the
    arc they describe;
@@ -44,7 +44,7 @@ from umbmark.robot.base import (
     Stamped,
 )
 from umbmark.sim.robot import NoiseModel
-from umbmark.sim.robot import VirtualRobot as RobotTruth
+from umbmark.sim.robot import SimRobot as RobotTruth
 
 if TYPE_CHECKING:
     from umbmark.robot.world import World

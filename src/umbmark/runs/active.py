@@ -28,8 +28,8 @@ from umbmark.options.spec import SIDE_LENGTH, WHEELBASE
 from umbmark.runs.options import SAME_ROBOT_TOLERANCE, ReadOptions
 from umbmark.runs.read import (
     Chosen,
-    Runs,
     RunSource,
+    SourceRuns,
     parameter_file,
     pool_runs,
     read_source,
@@ -93,7 +93,7 @@ def read_runs(
     wheelbase: float | None = None,
     side_length: float | None = None,
     override_verdict: bool = False,
-) -> Runs:
+) -> SourceRuns:
     """Read the runs of every source, with the odometry parameters the options say.
 
     Several sources must agree on the square's side and on the parameters that were
@@ -123,7 +123,7 @@ def read_each(
     wheelbase: float | None = None,
     side_length: float | None = None,
     override_verdict: bool = False,
-) -> list[Runs]:
+) -> list[SourceRuns]:
     """Each source's runs read on its own, with the odometry parameters the options say
     (:func:`read_runs` before pooling; the held-out validation holds them out one by one).
 
@@ -165,7 +165,7 @@ def _read_one(
     file: ControllerParams,
     wheelbase: float | None,
     side_length: float | None,
-) -> Runs:
+) -> SourceRuns:
     """One source read with the active parameters resolved for it."""
     path, kind = source_format(source, options)
     recorded = None if path is None else recorded_active(path, kind)

@@ -36,7 +36,7 @@ __all__ = [
     "Chosen",
     "PathLike",
     "RunSource",
-    "Runs",
+    "SourceRuns",
     "bag_options",
     "check_invertible",
     "is_runs",
@@ -58,7 +58,7 @@ PathLike = str | os.PathLike[str]
 
 
 @dataclass(frozen=True)
-class Runs:
+class SourceRuns:
     """Runs read from one or more sources, and the parameters active while they were driven.
 
     Attributes
@@ -83,7 +83,7 @@ class Runs:
         What was found and left out, for people.
     sides : tuple of (float or None)
         The side [m] each source knows.
-    parts : tuple of Runs
+    parts : tuple of SourceRuns
         Pooled from several sources: each source's runs as read (empty for one source).
     nominal : WheelParams or None
         A logged source's own nominal parameters, before any option or file overrides.
@@ -102,7 +102,7 @@ class Runs:
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = field(default=())
     sides: tuple[float | None, ...] = ()
-    parts: tuple[Runs, ...] = field(default=(), repr=False, compare=False)
+    parts: tuple[SourceRuns, ...] = field(default=(), repr=False, compare=False)
     nominal: WheelParams | None = field(default=None, repr=False, compare=False)
     origins: Mapping[str, Origin] = field(default_factory=dict, repr=False, compare=False)
 
@@ -247,7 +247,7 @@ def read_source(
     chosen: Chosen,
     side_length: float | None,
     recorded: RecordedActive | None,
-) -> Runs:
+) -> SourceRuns:
     """The runs of one source of format ``kind`` (see :func:`source_format`), read with
     the active parameters ``chosen`` for it (what ``recorded`` says the source recorded
     as active; ``file``, the parameter file or the default controller).
@@ -302,7 +302,7 @@ def read_source(
             separation_multiplier=separation,
             wheel_diameter=diameter,
         )
-        return Runs(
+        return SourceRuns(
             sources=(name,),
             formats=(loaded.format,),
             runs=tuple(loaded.runs),
@@ -339,7 +339,7 @@ def read_source(
     nominal = base
     if recorded is not None and recorded.wheelbase is not None:
         nominal = replace(base, wheelbase=recorded.wheelbase)
-    return Runs(
+    return SourceRuns(
         sources=(name,),
         formats=(loaded.format,),
         runs=tuple(runs),
@@ -464,7 +464,7 @@ def _first(value: float | None, fallback: float) -> float:
     return fallback if value is None else value
 
 
-def pool_runs(read: Sequence[Runs]) -> Runs:
+def pool_runs(read: Sequence[SourceRuns]) -> SourceRuns:
     """One set of runs from several sources.
 
     Runs tables must have been driven with the same parameters (their return errors are
@@ -509,7 +509,7 @@ def pool_runs(read: Sequence[Runs]) -> Runs:
         for r in read
         for run in r.runs
     )
-    return Runs(
+    return SourceRuns(
         sources=tuple(s for r in read for s in r.sources),
         formats=tuple(f for r in read for f in r.formats),
         runs=runs,

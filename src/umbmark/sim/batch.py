@@ -19,7 +19,7 @@ from umbmark.sim.kernels import (
 from umbmark.sim.layout import N_ROWS, REFS, ROW, RUN, SEGMENT, Work
 from umbmark.sim.paths import Path
 from umbmark.sim.result import SimResult, Trace
-from umbmark.sim.robot import ControlConfig, VirtualRobot
+from umbmark.sim.robot import ControlConfig, SimRobot
 
 __all__ = ["Batch"]
 
@@ -27,8 +27,8 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
-def _robot_arrays(robots: Sequence[VirtualRobot]) -> dict[str, FloatArray]:
-    def col(fn: Callable[[VirtualRobot], float]) -> FloatArray:
+def _robot_arrays(robots: Sequence[SimRobot]) -> dict[str, FloatArray]:
+    def col(fn: Callable[[SimRobot], float]) -> FloatArray:
         return np.array([fn(r) for r in robots], dtype=np.float64)
 
     return {
@@ -55,7 +55,7 @@ class Batch:
 
     def __init__(
         self,
-        fleet: Sequence[VirtualRobot],
+        fleet: Sequence[SimRobot],
         path: Path,
         directions: Sequence[Direction],
         control: ControlConfig,

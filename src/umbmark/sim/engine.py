@@ -49,13 +49,13 @@ from umbmark.core.conventions import Direction
 from umbmark.sim.batch import Batch
 from umbmark.sim.paths import Path
 from umbmark.sim.result import SimResult
-from umbmark.sim.robot import ControlConfig, VirtualRobot
+from umbmark.sim.robot import ControlConfig, SimRobot
 
 __all__ = ["simulate"]
 
 
 def simulate(
-    robots: VirtualRobot | Sequence[VirtualRobot],
+    robots: SimRobot | Sequence[SimRobot],
     path: Path,
     directions: Sequence[Direction],
     control: ControlConfig | None = None,
@@ -68,7 +68,7 @@ def simulate(
 
     Parameters
     ----------
-    robots : VirtualRobot or sequence of VirtualRobot
+    robots : SimRobot or sequence of SimRobot
         One robot for every run, or one per run (length R).
     path : Path
         The path, written for ccw travel; cw runs mirror its turns.
@@ -89,7 +89,7 @@ def simulate(
     n_runs = len(directions)
     if n_runs == 0:
         raise ValueError("no runs to simulate")
-    fleet = [robots] * n_runs if isinstance(robots, VirtualRobot) else list(robots)
+    fleet = [robots] * n_runs if isinstance(robots, SimRobot) else list(robots)
     if len(fleet) != n_runs:
         raise ValueError(f"{len(fleet)} robots for {n_runs} runs")
     batch = Batch(fleet, path, directions, control)

@@ -20,7 +20,7 @@ from umbmark.model.active import ActiveParams
 from umbmark.model.runs import Run
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
-from umbmark.sim.robot import ControlConfig, VirtualRobot
+from umbmark.sim.robot import ControlConfig, SimRobot
 
 __all__ = ["Trial", "calibrate_robot", "umbmark_trials"]
 
@@ -29,7 +29,7 @@ __all__ = ["Trial", "calibrate_robot", "umbmark_trials"]
 class Trial:
     """One bi-directional square test of one robot."""
 
-    robot: VirtualRobot
+    robot: SimRobot
     runs: list[Run]
 
     @property
@@ -39,7 +39,7 @@ class Trial:
 
 
 def umbmark_trials(
-    robots: Sequence[VirtualRobot],
+    robots: Sequence[SimRobot],
     side_length: float,
     runs_per_direction: int = 5,
     control: ControlConfig | None = None,
@@ -67,7 +67,7 @@ def umbmark_trials(
 
 def calibrate_robot(
     trial: Trial, side_length: float, method: Method = PAPER.name
-) -> tuple[Calibration, VirtualRobot]:
+) -> tuple[Calibration, SimRobot]:
     """Calibrate a virtual robot from its test, as a user would a real one.
 
     Returns the calibration and the robot with its odometry parameters replaced by the

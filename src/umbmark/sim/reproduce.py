@@ -33,7 +33,7 @@ from umbmark.sim.engine import simulate
 from umbmark.sim.experiments import Trial, calibrate_robot, umbmark_trials
 from umbmark.sim.paths import square
 from umbmark.sim.result import Trace
-from umbmark.sim.robot import LABMATE, ControlConfig, NoiseModel, VirtualRobot
+from umbmark.sim.robot import LABMATE, ControlConfig, NoiseModel, SimRobot
 
 __all__ = [
     "FIG11_E_B",
@@ -68,9 +68,9 @@ class TableExperiment:
     shares_before_with: int | None = None
     E_s: float = 1.0
 
-    def robot(self, noise: NoiseModel) -> VirtualRobot:
+    def robot(self, noise: NoiseModel) -> SimRobot:
         """The virtual robot of this experiment."""
-        return VirtualRobot.with_errors(LABMATE, self.E_d, self.E_b, self.E_s, noise)
+        return SimRobot.with_errors(LABMATE, self.E_d, self.E_b, self.E_s, noise)
 
 
 def _E_b_for(before_mm: float, E_d: float = FIG11_E_D) -> float:
@@ -224,7 +224,7 @@ def table1(
             strict=True,
         )
     )
-    first: dict[tuple[int, int], tuple[float, float, VirtualRobot]] = {}
+    first: dict[tuple[int, int], tuple[float, float, SimRobot]] = {}
     for (n, s), trial in before.items():
         cal, robot = calibrate_robot(trial, SIDE)
         first[(n, s)] = (cal.estimate.E_d, cal.estimate.E_b, robot)
@@ -306,7 +306,7 @@ class Fig4Stage:
 class Fig4Result:
     """The uni-directional trap (Figs. 3-5), noise-free."""
 
-    robot: VirtualRobot
+    robot: SimRobot
     stages: tuple[Fig4Stage, ...]
     tuned_traces: tuple[Trace, Trace]
 
@@ -326,10 +326,10 @@ def fig4(
     b = LABMATE.wheelbase
     beta = math.radians(leg_bend_deg)
     k = beta * b / (2.0 * SIDE)
-    robot = VirtualRobot.with_errors(LABMATE, E_d=(1 + k) / (1 - k), E_b=1.0)
+    robot = SimRobot.with_errors(LABMATE, E_d=(1 + k) / (1 - k), E_b=1.0)
     path = square(SIDE)
 
-    def both(r: VirtualRobot) -> tuple[np.ndarray, np.ndarray]:
+    def both(r: SimRobot) -> tuple[np.ndarray, np.ndarray]:
         res = simulate(r, path, [Direction.CW, Direction.CCW], control)
         err = res.true_end[:, :2] - res.odometry_end[:, :2]
         return err[0], err[1]

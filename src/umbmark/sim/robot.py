@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, replace
 from umbmark.core.validation import check_positive, require_positive
 from umbmark.model.kinematics import IntegrationMethod, WheelParams
 
-__all__ = ["LABMATE", "ControlConfig", "NoiseModel", "VirtualRobot"]
+__all__ = ["LABMATE", "ControlConfig", "NoiseModel", "SimRobot"]
 
 
 @dataclass(frozen=True)
@@ -79,7 +79,7 @@ class ControlConfig:
 
 
 @dataclass(frozen=True)
-class VirtualRobot:
+class SimRobot:
     """A robot whose true geometry is known.
 
     Attributes
@@ -111,7 +111,7 @@ class VirtualRobot:
         E_b: float = 1.0,
         E_s: float = 1.0,
         noise: NoiseModel | None = None,
-    ) -> VirtualRobot:
+    ) -> SimRobot:
         """A robot whose truth differs from ``odometry``'s nominal values by these errors.
 
         ``E_d = D_R / D_L`` (Eq. 2.3), ``E_b = b_actual / b`` (Eq. 2.4) and
@@ -139,7 +139,7 @@ class VirtualRobot:
         """True average diameter over the nominal one, ``D_avg / D_n``."""
         return 0.5 * (self.diameter_left + self.diameter_right) / self.odometry.wheel_diameter
 
-    def calibrated(self, c_left: float, c_right: float, wheelbase: float) -> VirtualRobot:
+    def calibrated(self, c_left: float, c_right: float, wheelbase: float) -> SimRobot:
         """The same robot with new odometry parameters (its truth unchanged)."""
         return replace(
             self,

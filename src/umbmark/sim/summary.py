@@ -6,12 +6,12 @@ import numpy as np
 
 from umbmark.benchmark.returns import umbmark_benchmark
 from umbmark.sim.result import SimResult
-from umbmark.sim.robot import VirtualRobot
+from umbmark.sim.robot import SimRobot
 
 __all__ = ["describe_simulation", "odometry_errors", "true_errors"]
 
 
-def true_errors(robot: VirtualRobot, nominal_wheelbase: float) -> dict[str, float]:
+def true_errors(robot: SimRobot, nominal_wheelbase: float) -> dict[str, float]:
     """The robot's errors relative to the nominal wheels (``D_n``, ``b``): its truth.
 
     ``E_d = D_R / D_L``, ``E_b = b_actual / b`` and ``E_s = D_avg / D_n`` (Eqs. 2.3,
@@ -24,7 +24,7 @@ def true_errors(robot: VirtualRobot, nominal_wheelbase: float) -> dict[str, floa
     }
 
 
-def odometry_errors(robot: VirtualRobot) -> dict[str, float]:
+def odometry_errors(robot: SimRobot) -> dict[str, float]:
     """The robot's errors relative to the parameters its odometry uses (``c_L D_n``,
     ``c_R D_n``, its wheelbase): what a calibration of its runs measures, with those
     parameters active. Without corrections (``c_L = c_R = 1``, the nominal wheelbase)
@@ -38,7 +38,7 @@ def odometry_errors(robot: VirtualRobot) -> dict[str, float]:
 
 
 def describe_simulation(
-    robot: VirtualRobot, result: SimResult, path_name: str, kind: str, nominal_wheelbase: float
+    robot: SimRobot, result: SimResult, path_name: str, kind: str, nominal_wheelbase: float
 ) -> dict[str, object]:
     """JSON-ready facts of a simulation: the truth (:func:`true_errors`, relative to the
     nominal wheels; ``odometry_E_*``: :func:`odometry_errors`, relative to the parameters
