@@ -25,6 +25,7 @@ __all__ = ["Batch"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
 
 
 def _robot_arrays(robots: Sequence[SimRobot]) -> dict[str, FloatArray]:
@@ -102,48 +103,9 @@ class Batch:
         expected = path.length / control.speed + turns / float(omega_max.min())
         self.max_steps = int(4 * expected / dt) + 2000
 
-        # Bounds on one period's motion: |v| <= speed (it never overshoots its goals),
-        # |omega| <= omega_max (a cap) and one count of quantization per wheel give the
-        # odometry's largest move along a leg and in heading, and the largest heading
-        # changes (as h = dtheta/2) of both poses.
-        e_l = odo_l * wheel_rad_l * counts_per_rad  # odometry metres per (m/s) commanded
-        e_r = odo_r * wheel_rad_r * counts_per_rad
-        k_l = wheel_rad_l * (0.5 * p["D_L"])  # floor metres per (m/s) commanded
-        k_r = wheel_rad_r * (0.5 * p["D_R"])
-        v_top = control.speed * (1.0 + 1e-9)
-        w_top = omega_max * half_b
-        pulses = (odo_l + odo_r) * (1.0 + 1e-6)
-        odo_travel = 0.5 * (v_top * (e_r + e_l) + w_top * np.abs(e_r - e_l) + pulses)
-        odo_turn = (v_top * np.abs(e_r - e_l) + w_top * (e_r + e_l) + pulses) / p["b_odo"]
-        bumps = np.where(p["bump_rate"] * p["bump_size"] > 0, p["bump_size"], 0.0)
-        floor_turn = (v_top * np.abs(k_r - k_l) + w_top * (k_r + k_l) + 2.0 * bumps) / p["b_true"]
-        self.leg_step = 1.01 * float(odo_travel.max())
-        self.turn_step = 1.01 * float(odo_turn.max())
-        # sin(h)/h must be checked for its series form every period unless the bounds
-        # keep |h| below the limit (slip has no bound).
-        self.arc_odometry = control.method == "arc"
-        h_top = 0.5 * max(
-            float(floor_turn.max()), float(odo_turn.max()) if self.arc_odometry else 0.0
-        )
-        self.check_sinc = self.slip or 1.01 * h_top >= SINC_SERIES_LIMIT
+        self._step_bounds(p, odo_l, odo_r, wheel_rad_l, wheel_rad_r, counts_per_rad, omega_max)
 
-        # One lookup table of every segment's references, ccw columns first, then cw:
-        # start x, start y, cos and sin of the start heading, amount, heading at start and
-        # end (the rows of "refs").
-        segments = path.segments
-        self.n_seg = len(segments)
-        self.table = np.concatenate(
-            [
-                np.column_stack(
-                    [st, np.cos(hd[:, 0]), np.sin(hd[:, 0]), [s.amount for s in segments], hd]
-                )
-                for st, hd in (path.references(+1), path.references(-1))
-            ]
-        ).T.copy()
-        straight = np.array([s.kind == "straight" for s in segments])
-        self.seg_straight = straight
-        # Block of a run by its segment index: 0 leg, 1 turn, 2 finished (index n_seg).
-        self.seg_block = np.append(np.where(straight, 0, 1), 2).astype(np.int64)
+        straight = self._segment_table(path)
 
         M = np.zeros((N_ROWS, n_runs))
         first = np.array([0 if d is Direction.CCW else self.n_seg for d in directions])
@@ -177,6 +139,65 @@ class Batch:
         self.true_end = np.zeros((n_runs, 3))
         self.odometry_end = np.zeros((n_runs, 3))
         self.work: Work | None = None
+
+    def _step_bounds(
+        self,
+        p: dict[str, FloatArray],
+        odo_l: FloatArray,
+        odo_r: FloatArray,
+        wheel_rad_l: FloatArray,
+        wheel_rad_r: FloatArray,
+        counts_per_rad: FloatArray,
+        omega_max: FloatArray,
+    ) -> None:
+        """The largest move of one period, along a leg and in heading, for the cruise
+        shortcuts (``leg_step``, ``turn_step``), and whether sin(h)/h needs its check."""
+        half_b = 0.5 * p["b_odo"]
+        # Bounds on one period's motion: |v| <= speed (it never overshoots its goals),
+        # |omega| <= omega_max (a cap) and one count of quantization per wheel give the
+        # odometry's largest move along a leg and in heading, and the largest heading
+        # changes (as h = dtheta/2) of both poses.
+        e_l = odo_l * wheel_rad_l * counts_per_rad  # odometry metres per (m/s) commanded
+        e_r = odo_r * wheel_rad_r * counts_per_rad
+        k_l = wheel_rad_l * (0.5 * p["D_L"])  # floor metres per (m/s) commanded
+        k_r = wheel_rad_r * (0.5 * p["D_R"])
+        v_top = self.control.speed * (1.0 + 1e-9)
+        w_top = omega_max * half_b
+        pulses = (odo_l + odo_r) * (1.0 + 1e-6)
+        odo_travel = 0.5 * (v_top * (e_r + e_l) + w_top * np.abs(e_r - e_l) + pulses)
+        odo_turn = (v_top * np.abs(e_r - e_l) + w_top * (e_r + e_l) + pulses) / p["b_odo"]
+        bumps = np.where(p["bump_rate"] * p["bump_size"] > 0, p["bump_size"], 0.0)
+        floor_turn = (v_top * np.abs(k_r - k_l) + w_top * (k_r + k_l) + 2.0 * bumps) / p["b_true"]
+        self.leg_step = 1.01 * float(odo_travel.max())
+        self.turn_step = 1.01 * float(odo_turn.max())
+        # sin(h)/h must be checked for its series form every period unless the bounds
+        # keep |h| below the limit (slip has no bound).
+        self.arc_odometry = self.control.method == "arc"
+        h_top = 0.5 * max(
+            float(floor_turn.max()), float(odo_turn.max()) if self.arc_odometry else 0.0
+        )
+        self.check_sinc = self.slip or 1.01 * h_top >= SINC_SERIES_LIMIT
+
+    def _segment_table(self, path: Path) -> BoolArray:
+        """The segments' references, as one lookup table; which segments are legs."""
+        # One lookup table of every segment's references, ccw columns first, then cw:
+        # start x, start y, cos and sin of the start heading, amount, heading at start and
+        # end (the rows of "refs").
+        segments = path.segments
+        self.n_seg = len(segments)
+        self.table = np.concatenate(
+            [
+                np.column_stack(
+                    [st, np.cos(hd[:, 0]), np.sin(hd[:, 0]), [s.amount for s in segments], hd]
+                )
+                for st, hd in (path.references(+1), path.references(-1))
+            ]
+        ).T.copy()
+        straight = np.array([s.kind == "straight" for s in segments])
+        self.seg_straight = straight
+        # Block of a run by its segment index: 0 leg, 1 turn, 2 finished (index n_seg).
+        self.seg_block = np.append(np.where(straight, 0, 1), 2).astype(np.int64)
+        return straight
 
     def run(
         self,
