@@ -245,40 +245,64 @@ class Batch:
         """Simulate periods until a run reaches the end of its segment; return the count.
 
         The numbered comments are the model's steps (:mod:`umbmark.sim.engine`). The loop
-        runs once per sampling period: every view it uses is made before it (a view costs
-        as much as a small numpy operation), and every operation writes into existing
-        arrays.
+        runs once per sampling period, two calls: the controller (:meth:`_controller`) and
+        the robot moving (:meth:`_mover`). Every view they use is made before the loop (a
+        view costs as much as a small numpy operation) and held by the two closures, and
+        every operation writes into existing arrays.
         """
+        width = self.M.shape[1]
+        if self.work is None or self.work.width != width:
+            self.work = Work.make(width, self.n_runs, self.control)
+        control = self._controller(self.work)
+        move, flip = self._mover(self.work, rng)
+        max_steps = self.max_steps
+        while True:
+            if step >= max_steps:
+                raise RuntimeError(f"simulation did not finish within {max_steps} samples")
+            done = control()
+            move()
+            step += 1
+            if trace is not None:
+                self.counts_flip = flip[0]
+                trace.append(self._snapshot())
+            if done is not None:
+                break
+            if progress is not None and step % 200 == 0:
+                progress((self.n_runs - self.n_active) / self.n_runs)
+
+        self.counts_flip = flip[0]
+        self._advance(done, step - 1)
+        if trace is None and self.n_active and width - self.n_active >= max(1, width // 8):
+            self._park(self.n_active)
+        if progress is not None and step % 200 == 0:
+            progress((self.n_runs - self.n_active) / self.n_runs)
+        return step
+
+    def _controller(self, work: Work) -> Callable[[], IntArray | None]:
+        """Step 1 of one period, in the odometry frame: on a leg, follow the line from the
+        leg's start corner and stop at its end; in a turn, rotate on the spot until the
+        heading reaches the target; the speeds ramp towards the goals and are capped. The
+        closure returns the columns of the runs that reached their target (their speeds
+        set to zero), or None."""
         add, subtract, multiply, divide = np.add, np.subtract, np.multiply, np.divide
         maximum, minimum, negative = np.maximum, np.minimum, np.negative
-        sqrt, sign, absolute, floor, cos, sin = np.sqrt, np.sign, np.abs, np.floor, np.cos, np.sin
-        less_equal, lowest, highest = np.less_equal, np.minimum.reduce, np.maximum.reduce
+        sqrt, sign, absolute = np.sqrt, np.sign, np.abs
+        less_equal, lowest = np.less_equal, np.minimum.reduce
         c = self.control
         dt, cruise_speed, creep_speed = c.dt, c.speed, c.creep_speed
         leg_half, leg_hh, leg_a2 = self.leg_half, self.leg_hh, self.leg_a2
         leg_cruise, leg_step, turn_step = self.leg_cruise, self.leg_step, self.turn_step
         stop_distance_max, stop_angle_max = self.stop_distance_max, self.stop_angle_max
-        check_sinc, max_steps = self.check_sinc, self.max_steps
 
         M = self.M
-        width = M.shape[1]
         n_legs, n_active = self.n_legs, self.n_active
         legs, turns = slice(0, n_legs), slice(n_legs, n_active)
         R = ROW
-        pose = M[R["pose"]].reshape(3, 2, width)
-        xy, theta = pose[:2], pose[2]  # (x, y) and theta, each of (true, odometry)
+        pose = M[R["pose"]].reshape(3, 2, M.shape[1])
         x_odo, y_odo, th_odo = pose[0, 1], pose[1, 1], pose[2, 1]
-        phi = M[R["phi"]]
-        flip = self.counts_flip
-        both_counts = M[R["counts"]].reshape(2, 2, width)
-        counts, counts_next = both_counts[flip], both_counts[1 - flip]
         speed, goal = M[R["speed"]], M[R["goal"]]
-        v, w = speed
         limit, neg_limit = M[R["limit"]], M[R["neg_limit"]]
         ramp, neg_ramp = M[R["ramp"]], M[R["neg_ramp"]]
-        half_b, wheel_rad = M[R["half_b"]][0], M[R["wheel_rad"]]
-        travel_per = M[R["travel_per"]].reshape(2, 2, width)
-        counts_per_rad, wheelbase = M[R["counts_per_rad"]], M[R["wheelbase"]]
         # The blocks' views (1-D: contiguous).
         start_x, start_y, cos_h, sin_h, amount, h0, _ = (r[legs] for r in M[REFS])
         x_leg, y_leg, th_leg = x_odo[legs], y_odo[legs], th_odo[legs]
@@ -291,53 +315,18 @@ class Batch:
         turn_half, turn_hh, turn_a2, omega_creep = (r[turns] for r in M[R["turn_brake"]])
         stop_turn = M[R["stop_angle"]][0, turns]
         turn_cruise = M[R["turn_cruise"]][0, turns]
-
-        if self.work is None or self.work.width != width:
-            self.work = Work.make(width, self.n_runs, self.control)
-        work = self.work
-        heading_share, ones, halves = work.constants
         heading_gain, cross_track_gain = (a[legs] for a in work.gains)
         dx, dy, t1, t2, rem, rest, brake = (a[legs] for a in work.leg)
         err, abs_err, t3, brake_turn = (a[turns] for a in work.turn)
         done_leg, done_turn = work.done[0, legs], work.done[1, turns]
-        d_speed, w_arm = work.d_speed, work.w_arm
-        wheel, travel = work.wheel, work.travel  # rotations, counts; floor, odometry
-        d_phi, d_counts = wheel
-        d_phi_l, d_phi_r = d_phi
-        (floor_l, floor_r), (odo_l, odo_r) = travel
-        ds, d_theta, half, chord, heading = work.sums  # each (true, odometry)
-        ds_true, ds_odo = ds
-        dth_true, dth_odo = d_theta
-        cs = work.cs
-        cos_rows, sin_rows = cs
-        # Rows of h whose sin(h)/h takes the arc rule (the true pose; the odometry's unless
-        # it integrates otherwise, its factor then staying 1/2).
-        n_arc = 2 if self.arc_odometry else 1
-        h, h_abs, half_sinc = half[:n_arc], chord[:n_arc], work.half_sinc
-        series = half_sinc_series(
-            h,
-            work.h2[:n_arc],
-            work.terms[:, :n_arc],
-            ones[:n_arc],
-            halves[:n_arc],
-            half_sinc[:n_arc],
-        )
-        noise: Callable[[], None] | None = None
-        if self.noisy:
-            assert rng is not None
-            order = M[RUN].astype(np.int64)
-            noise = floor_noise(travel[0], M[R["noise"]], order, rng, self.slip, self.bumps, work)
-
+        d_speed = work.d_speed
         # For so many more periods the cruise goals hold (on legs, in turns).
         leg_left = turn_left = 0
         leg_cruising = turn_cruising = False
-        while True:
-            if step >= max_steps:
-                raise RuntimeError(f"simulation did not finish within {max_steps} samples")
-            event = False
 
-            # 1. Controller, in the odometry frame. On a leg: follow the line from the
-            # leg's start corner, stop at its end.
+        def control() -> IntArray | None:
+            nonlocal leg_left, turn_left, leg_cruising, turn_cruising
+            event = False
             if n_legs:
                 subtract(x_leg, start_x, dx)
                 subtract(y_leg, start_y, dy)
@@ -380,7 +369,6 @@ class Batch:
                 multiply(t1, heading_gain, t1)
                 multiply(t2, cross_track_gain, t2)
                 subtract(t1, t2, w_goal_leg)
-            # In a turn: rotate on the spot until the heading reaches the target.
             if n_active > n_legs:
                 if turn_left:
                     turn_left -= 1
@@ -421,14 +409,72 @@ class Batch:
             add(speed, d_speed, speed)
             maximum(speed, neg_limit, out=speed)
             minimum(speed, limit, out=speed)
-            if event:
-                done = np.concatenate(
-                    [np.flatnonzero(done_leg), n_legs + np.flatnonzero(done_turn)]
-                )
-                done_leg.fill(False)
-                done_turn.fill(False)
-                speed[:, done] = 0.0
+            if not event:
+                return None
+            done = np.concatenate([np.flatnonzero(done_leg), n_legs + np.flatnonzero(done_turn)])
+            done_leg.fill(False)
+            done_turn.fill(False)
+            speed[:, done] = 0.0
+            return done
 
+        return control
+
+    def _mover(
+        self, work: Work, rng: np.random.Generator | None
+    ) -> tuple[Callable[[], None], list[int]]:
+        """Steps 2 to 4 of one period: the wheels turn as the robot's own model says, the
+        encoders count whole pulses, each wheel moves over the floor by its true diameter
+        (less slip and bumps) while the odometry sees the counts, and both poses advance
+        along the arcs. Returns the closure, and which count buffer holds the counts
+        (a list it keeps current)."""
+        add, subtract, multiply, divide = np.add, np.subtract, np.multiply, np.divide
+        absolute, floor, cos, sin = np.abs, np.floor, np.cos, np.sin
+        highest = np.maximum.reduce
+        check_sinc = self.check_sinc
+        M = self.M
+        width = M.shape[1]
+        R = ROW
+        pose = M[R["pose"]].reshape(3, 2, width)
+        xy, theta = pose[:2], pose[2]  # (x, y) and theta, each of (true, odometry)
+        phi = M[R["phi"]]
+        flip = [self.counts_flip]
+        both_counts = M[R["counts"]].reshape(2, 2, width)
+        counts, counts_next = both_counts[flip[0]], both_counts[1 - flip[0]]
+        v, w = M[R["speed"]]
+        half_b, wheel_rad = M[R["half_b"]][0], M[R["wheel_rad"]]
+        travel_per = M[R["travel_per"]].reshape(2, 2, width)
+        counts_per_rad, wheelbase = M[R["counts_per_rad"]], M[R["wheelbase"]]
+        heading_share, ones, halves = work.constants
+        w_arm = work.w_arm
+        wheel, travel = work.wheel, work.travel  # rotations, counts; floor, odometry
+        d_phi, d_counts = wheel
+        d_phi_l, d_phi_r = d_phi
+        (floor_l, floor_r), (odo_l, odo_r) = travel
+        ds, d_theta, half, chord, heading = work.sums  # each (true, odometry)
+        ds_true, ds_odo = ds
+        dth_true, dth_odo = d_theta
+        cs = work.cs
+        cos_rows, sin_rows = cs
+        # Rows of h whose sin(h)/h takes the arc rule (the true pose; the odometry's unless
+        # it integrates otherwise, its factor then staying 1/2).
+        n_arc = 2 if self.arc_odometry else 1
+        h, h_abs, half_sinc = half[:n_arc], chord[:n_arc], work.half_sinc
+        series = half_sinc_series(
+            h,
+            work.h2[:n_arc],
+            work.terms[:, :n_arc],
+            ones[:n_arc],
+            halves[:n_arc],
+            half_sinc[:n_arc],
+        )
+        noise: Callable[[], None] | None = None
+        if self.noisy:
+            assert rng is not None
+            order = M[RUN].astype(np.int64)
+            noise = floor_noise(travel[0], M[R["noise"]], order, rng, self.slip, self.bumps, work)
+
+        def move() -> None:
+            nonlocal counts, counts_next
             # 2. Wheels turn as the robot's own model says they should.
             multiply(w, half_b, w_arm)
             subtract(v, w_arm, d_phi_l)
@@ -440,7 +486,7 @@ class Batch:
             floor(counts_next, counts_next)
             subtract(counts_next, counts, d_counts)
             counts, counts_next = counts_next, counts
-            flip = 1 - flip
+            flip[0] = 1 - flip[0]
             # 3. and 4. Each wheel moves over the floor by its true diameter, less slip
             # and bumps; the odometry sees the counts by the robot's own parameters.
             multiply(wheel, travel_per, travel)
@@ -471,22 +517,7 @@ class Batch:
             add(xy, cs, xy)
             add(theta, d_theta, theta)
 
-            step += 1
-            if trace is not None:
-                self.counts_flip = flip
-                trace.append(self._snapshot())
-            if event:
-                break
-            if progress is not None and step % 200 == 0:
-                progress((self.n_runs - self.n_active) / self.n_runs)
-
-        self.counts_flip = flip
-        self._advance(done, step - 1)
-        if trace is None and self.n_active and width - self.n_active >= max(1, width // 8):
-            self._park(self.n_active)
-        if progress is not None and step % 200 == 0:
-            progress((self.n_runs - self.n_active) / self.n_runs)
-        return step
+        return move, flip
 
     def _advance(self, columns: IntArray, step: int) -> None:
         """The runs in ``columns`` reached the end of their segment in period ``step``."""
