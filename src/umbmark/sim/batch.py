@@ -286,13 +286,12 @@ class Batch:
         set to zero), or None."""
         add, subtract, multiply, divide = np.add, np.subtract, np.multiply, np.divide
         maximum, minimum, negative = np.maximum, np.minimum, np.negative
-        sqrt, sign, absolute = np.sqrt, np.sign, np.abs
-        less_equal, lowest = np.less_equal, np.minimum.reduce
+        sqrt, less_equal, lowest = np.sqrt, np.less_equal, np.minimum.reduce
         c = self.control
         dt, cruise_speed, creep_speed = c.dt, c.speed, c.creep_speed
         leg_half, leg_hh, leg_a2 = self.leg_half, self.leg_hh, self.leg_a2
-        leg_cruise, leg_step, turn_step = self.leg_cruise, self.leg_step, self.turn_step
-        stop_distance_max, stop_angle_max = self.stop_distance_max, self.stop_angle_max
+        leg_cruise, leg_step = self.leg_cruise, self.leg_step
+        stop_distance_max = self.stop_distance_max
 
         M = self.M
         n_legs, n_active = self.n_legs, self.n_active
@@ -309,23 +308,17 @@ class Batch:
         v_goal, w_goal_leg = goal[0, legs], goal[1, legs]
         v_cap, v_cap_neg = limit[0, legs], neg_limit[0, legs]
         stop_leg = M[R["stop_distance"]][0, legs]
-        th_turn, h1_turn = th_odo[turns], M[REFS][6, turns]
-        w_goal_turn, w_cap, w_cap_neg = goal[1, turns], limit[1, turns], neg_limit[1, turns]
-        omega_max = M[R["omega_max"]][0, turns]
-        turn_half, turn_hh, turn_a2, omega_creep = (r[turns] for r in M[R["turn_brake"]])
-        stop_turn = M[R["stop_angle"]][0, turns]
-        turn_cruise = M[R["turn_cruise"]][0, turns]
         heading_gain, cross_track_gain = (a[legs] for a in work.gains)
         dx, dy, t1, t2, rem, rest, brake = (a[legs] for a in work.leg)
-        err, abs_err, t3, brake_turn = (a[turns] for a in work.turn)
         done_leg, done_turn = work.done[0, legs], work.done[1, turns]
         d_speed = work.d_speed
-        # For so many more periods the cruise goals hold (on legs, in turns).
-        leg_left = turn_left = 0
-        leg_cruising = turn_cruising = False
+        turn = self._turn_controller(work)
+        # For so many more periods the cruise goals hold on the legs.
+        leg_left = 0
+        leg_cruising = False
 
         def control() -> IntArray | None:
-            nonlocal leg_left, turn_left, leg_cruising, turn_cruising
+            nonlocal leg_left, leg_cruising
             event = False
             if n_legs:
                 subtract(x_leg, start_x, dx)
@@ -370,38 +363,7 @@ class Batch:
                 multiply(t2, cross_track_gain, t2)
                 subtract(t1, t2, w_goal_leg)
             if n_active > n_legs:
-                if turn_left:
-                    turn_left -= 1
-                else:
-                    subtract(h1_turn, th_turn, err)
-                    absolute(err, abs_err)
-                    subtract(abs_err, turn_cruise, t3)
-                    margin = float(lowest(t3))
-                    if margin >= 0.0:  # the largest rate, no cap, no stop
-                        turn_left = max(int(margin / turn_step) - 1, 0)
-                        if not turn_cruising:
-                            sign(err, w_goal_turn)
-                            multiply(w_goal_turn, omega_max, w_goal_turn)
-                            w_cap[:] = omega_max
-                            negative(omega_max, w_cap_neg)
-                            turn_cruising = True
-                    else:
-                        turn_cruising = False
-                        multiply(turn_a2, abs_err, brake_turn)
-                        add(turn_hh, brake_turn, brake_turn)
-                        sqrt(brake_turn, brake_turn)
-                        subtract(brake_turn, turn_half, brake_turn)
-                        maximum(brake_turn, omega_creep, out=brake_turn)
-                        minimum(brake_turn, omega_max, out=brake_turn)
-                        divide(abs_err, dt, t3)
-                        minimum(brake_turn, t3, out=brake_turn)
-                        sign(err, err)
-                        multiply(err, brake_turn, w_goal_turn)
-                        minimum(omega_max, t3, out=w_cap)  # the caps of both clips
-                        negative(w_cap, w_cap_neg)
-                        if float(lowest(abs_err)) <= stop_angle_max:
-                            less_equal(abs_err, stop_turn, done_turn)
-                            event = bool(done_turn.any()) or event
+                event = turn() or event
             # Speeds ramp towards the goals and are capped; a run at its target stops.
             subtract(goal, speed, d_speed)
             maximum(d_speed, neg_ramp, out=d_speed)
@@ -418,6 +380,70 @@ class Batch:
             return done
 
         return control
+
+    def _turn_controller(self, work: Work) -> Callable[[], bool]:
+        """Step 1 in the turns: rotate on the spot until the heading reaches the target,
+        braking in time. The closure returns whether a run reached its target."""
+        add, subtract, multiply, divide = np.add, np.subtract, np.multiply, np.divide
+        maximum, minimum, negative = np.maximum, np.minimum, np.negative
+        sqrt, sign, absolute = np.sqrt, np.sign, np.abs
+        less_equal, lowest = np.less_equal, np.minimum.reduce
+        dt, turn_step, stop_angle_max = self.control.dt, self.turn_step, self.stop_angle_max
+        M = self.M
+        turns = slice(self.n_legs, self.n_active)
+        R = ROW
+        th_turn = M[R["pose"]].reshape(3, 2, M.shape[1])[2, 1][turns]
+        h1_turn = M[REFS][6, turns]
+        goal, limit, neg_limit = M[R["goal"]], M[R["limit"]], M[R["neg_limit"]]
+        w_goal_turn, w_cap, w_cap_neg = goal[1, turns], limit[1, turns], neg_limit[1, turns]
+        omega_max = M[R["omega_max"]][0, turns]
+        turn_half, turn_hh, turn_a2, omega_creep = (r[turns] for r in M[R["turn_brake"]])
+        stop_turn = M[R["stop_angle"]][0, turns]
+        turn_cruise = M[R["turn_cruise"]][0, turns]
+        err, abs_err, t3, brake_turn = (a[turns] for a in work.turn)
+        done_turn = work.done[1, turns]
+        # For so many more periods the cruise goals hold in the turns.
+        turn_left = 0
+        turn_cruising = False
+
+        def turn() -> bool:
+            nonlocal turn_left, turn_cruising
+            event = False
+            if turn_left:
+                turn_left -= 1
+            else:
+                subtract(h1_turn, th_turn, err)
+                absolute(err, abs_err)
+                subtract(abs_err, turn_cruise, t3)
+                margin = float(lowest(t3))
+                if margin >= 0.0:  # the largest rate, no cap, no stop
+                    turn_left = max(int(margin / turn_step) - 1, 0)
+                    if not turn_cruising:
+                        sign(err, w_goal_turn)
+                        multiply(w_goal_turn, omega_max, w_goal_turn)
+                        w_cap[:] = omega_max
+                        negative(omega_max, w_cap_neg)
+                        turn_cruising = True
+                else:
+                    turn_cruising = False
+                    multiply(turn_a2, abs_err, brake_turn)
+                    add(turn_hh, brake_turn, brake_turn)
+                    sqrt(brake_turn, brake_turn)
+                    subtract(brake_turn, turn_half, brake_turn)
+                    maximum(brake_turn, omega_creep, out=brake_turn)
+                    minimum(brake_turn, omega_max, out=brake_turn)
+                    divide(abs_err, dt, t3)
+                    minimum(brake_turn, t3, out=brake_turn)
+                    sign(err, err)
+                    multiply(err, brake_turn, w_goal_turn)
+                    minimum(omega_max, t3, out=w_cap)  # the caps of both clips
+                    negative(w_cap, w_cap_neg)
+                    if float(lowest(abs_err)) <= stop_angle_max:
+                        less_equal(abs_err, stop_turn, done_turn)
+                        event = bool(done_turn.any())
+            return event
+
+        return turn
 
     def _mover(
         self, work: Work, rng: np.random.Generator | None
