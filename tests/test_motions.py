@@ -437,6 +437,7 @@ def test_real_auto_does_not_pick_the_scrub_model_for_straights_and_spot_turns():
 
 @pytest.mark.slow
 @real
+@pytest.mark.skipif(not SQUARE2.is_dir(), reason="../shared/data is not here")
 def test_real_validate_on_squares_says_nothing_about_arcs():
     report = umbmark.validate(SQUARE, SQUARE2, methods=["trajectory", "trajectory-scrub"])
     assert report.coverage.endswith("the figures say nothing about arcs")

@@ -26,7 +26,9 @@ SQUARE = OPTIODOM / "square" / "230620202042"
 SQUARE2 = OPTIODOM / "square" / "231220200029"
 CIRCLE = OPTIODOM / "circular" / "250620202104"
 
-pytestmark = pytest.mark.skipif(not SQUARE.is_dir(), reason="../shared/data is not here")
+pytestmark = pytest.mark.skipif(not SQUARE.is_dir(), reason="no OptiOdom data")
+#: The second square session is only in the shared data (the package ships the first).
+needs_second = pytest.mark.skipif(not SQUARE2.is_dir(), reason="../shared/data is not here")
 
 
 def test_session_metadata_and_runs_are_read_as_published():
@@ -153,6 +155,7 @@ def test_a_broken_session_gives_one_line(tmp_path):
     assert "has no *_metadata.csv: not an OptiOdom session" in err
 
 
+@needs_second
 def test_second_session_longer_square():
     data = umbmark.calibrate(SQUARE2).to_dict()
     assert data["side_length"] == 1.7
@@ -161,6 +164,7 @@ def test_second_session_longer_square():
 
 
 @pytest.mark.slow
+@needs_second
 def test_sessions_pool_for_the_trajectory_fit_but_not_across_squares():
     pooled = umbmark.calibrate(SQUARE, CIRCLE, method="trajectory")
     assert len(pooled.runs) == 12

@@ -15,11 +15,10 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.runs.load import LoadOptions, load_runs
 from umbmark.sim.robot import SimRobot
 
-from helpers import api_error, cli_error, session_log, simulated_session
+from helpers import OPTIODOM, api_error, cli_error, session_log, simulated_session
 
-SESSION = Path(__file__).resolve().parents[2] / "shared" / "data" / "optiodom" / "square"
-SQUARE = SESSION / "230620202042"
-needs_data = pytest.mark.skipif(not SQUARE.is_dir(), reason="no OptiOdom data beside the repo")
+SQUARE = OPTIODOM / "square" / "230620202042"  # the shared copy, or the bundled one
+needs_data = pytest.mark.skipif(not SQUARE.is_dir(), reason="no OptiOdom data")
 
 
 @pytest.fixture(scope="module")
@@ -143,7 +142,7 @@ def test_optiodom_overflowing_wheel_angles(tmp_path: Path) -> None:
 
 @needs_data
 def test_real_sessions_calibrate_without_new_warnings() -> None:
-    for folder in sorted(p for p in SESSION.parent.glob("*/*") if p.is_dir()):
+    for folder in sorted(p for p in OPTIODOM.glob("*/*") if p.is_dir()):
         loaded = _load(folder)
         assert loaded.notes == [], folder  # type: ignore[attr-defined]
     report = umbmark.calibrate(SQUARE)

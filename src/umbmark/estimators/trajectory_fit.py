@@ -386,15 +386,7 @@ def fit_trajectories(
         fit_truth_offset,
         max_truth_offset,
     )
-    # First pass: a heading error weighs like a position error of dtheta * b.
-    rough = (1.0, 1.0 / b0)
-    first = _solve(problem, np.array(x0), rough)
-    err = problem.errors(first.x, rough)
-    sigma = (
-        max(float(np.sqrt(np.mean(err[:, :2] ** 2))), 1e-12),
-        max(float(np.sqrt(np.mean(err[:, 2] ** 2))), 1e-12),
-    )
-    fit = _solve(problem, first.x, sigma)
+    fit, sigma = _two_passes(problem, np.array(x0), b0)
     truth_offset = problem.truth_offset(fit.x)
     if fit_truth_offset:  # before the check of the Jacobian, which a bound flattens
         _check_truth_offset_inside(truth_offset, max_truth_offset)
@@ -484,3 +476,19 @@ def _uncertainty(
     for name in ("time_offset", "truth_offset_x", "truth_offset_y"):
         standard_errors.setdefault(name, 0.0)
     return cov, standard_errors, clusters
+
+
+def _two_passes(
+    problem: Problem, x0: FloatArray, b0: float
+) -> tuple[_Solution, tuple[float, float]]:
+    """The fit, weighted by the scatter of a first pass's position and heading errors (in
+    which a heading error weighs like a position error of ``dtheta * b``), and those
+    scales."""
+    rough = (1.0, 1.0 / b0)
+    first = _solve(problem, x0, rough)
+    err = problem.errors(first.x, rough)
+    sigma = (
+        max(float(np.sqrt(np.mean(err[:, :2] ** 2))), 1e-12),
+        max(float(np.sqrt(np.mean(err[:, 2] ** 2))), 1e-12),
+    )
+    return _solve(problem, first.x, sigma), sigma

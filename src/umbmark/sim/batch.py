@@ -25,6 +25,7 @@ __all__ = ["Batch"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
 
 
 def _robot_arrays(robots: Sequence[SimRobot]) -> dict[str, FloatArray]:
@@ -102,48 +103,9 @@ class Batch:
         expected = path.length / control.speed + turns / float(omega_max.min())
         self.max_steps = int(4 * expected / dt) + 2000
 
-        # Bounds on one period's motion: |v| <= speed (it never overshoots its goals),
-        # |omega| <= omega_max (a cap) and one count of quantization per wheel give the
-        # odometry's largest move along a leg and in heading, and the largest heading
-        # changes (as h = dtheta/2) of both poses.
-        e_l = odo_l * wheel_rad_l * counts_per_rad  # odometry metres per (m/s) commanded
-        e_r = odo_r * wheel_rad_r * counts_per_rad
-        k_l = wheel_rad_l * (0.5 * p["D_L"])  # floor metres per (m/s) commanded
-        k_r = wheel_rad_r * (0.5 * p["D_R"])
-        v_top = control.speed * (1.0 + 1e-9)
-        w_top = omega_max * half_b
-        pulses = (odo_l + odo_r) * (1.0 + 1e-6)
-        odo_travel = 0.5 * (v_top * (e_r + e_l) + w_top * np.abs(e_r - e_l) + pulses)
-        odo_turn = (v_top * np.abs(e_r - e_l) + w_top * (e_r + e_l) + pulses) / p["b_odo"]
-        bumps = np.where(p["bump_rate"] * p["bump_size"] > 0, p["bump_size"], 0.0)
-        floor_turn = (v_top * np.abs(k_r - k_l) + w_top * (k_r + k_l) + 2.0 * bumps) / p["b_true"]
-        self.leg_step = 1.01 * float(odo_travel.max())
-        self.turn_step = 1.01 * float(odo_turn.max())
-        # sin(h)/h must be checked for its series form every period unless the bounds
-        # keep |h| below the limit (slip has no bound).
-        self.arc_odometry = control.method == "arc"
-        h_top = 0.5 * max(
-            float(floor_turn.max()), float(odo_turn.max()) if self.arc_odometry else 0.0
-        )
-        self.check_sinc = self.slip or 1.01 * h_top >= SINC_SERIES_LIMIT
+        self._step_bounds(p, odo_l, odo_r, wheel_rad_l, wheel_rad_r, counts_per_rad, omega_max)
 
-        # One lookup table of every segment's references, ccw columns first, then cw:
-        # start x, start y, cos and sin of the start heading, amount, heading at start and
-        # end (the rows of "refs").
-        segments = path.segments
-        self.n_seg = len(segments)
-        self.table = np.concatenate(
-            [
-                np.column_stack(
-                    [st, np.cos(hd[:, 0]), np.sin(hd[:, 0]), [s.amount for s in segments], hd]
-                )
-                for st, hd in (path.references(+1), path.references(-1))
-            ]
-        ).T.copy()
-        straight = np.array([s.kind == "straight" for s in segments])
-        self.seg_straight = straight
-        # Block of a run by its segment index: 0 leg, 1 turn, 2 finished (index n_seg).
-        self.seg_block = np.append(np.where(straight, 0, 1), 2).astype(np.int64)
+        straight = self._segment_table(path)
 
         M = np.zeros((N_ROWS, n_runs))
         first = np.array([0 if d is Direction.CCW else self.n_seg for d in directions])
@@ -177,6 +139,65 @@ class Batch:
         self.true_end = np.zeros((n_runs, 3))
         self.odometry_end = np.zeros((n_runs, 3))
         self.work: Work | None = None
+
+    def _step_bounds(
+        self,
+        p: dict[str, FloatArray],
+        odo_l: FloatArray,
+        odo_r: FloatArray,
+        wheel_rad_l: FloatArray,
+        wheel_rad_r: FloatArray,
+        counts_per_rad: FloatArray,
+        omega_max: FloatArray,
+    ) -> None:
+        """The largest move of one period, along a leg and in heading, for the cruise
+        shortcuts (``leg_step``, ``turn_step``), and whether sin(h)/h needs its check."""
+        half_b = 0.5 * p["b_odo"]
+        # Bounds on one period's motion: |v| <= speed (it never overshoots its goals),
+        # |omega| <= omega_max (a cap) and one count of quantization per wheel give the
+        # odometry's largest move along a leg and in heading, and the largest heading
+        # changes (as h = dtheta/2) of both poses.
+        e_l = odo_l * wheel_rad_l * counts_per_rad  # odometry metres per (m/s) commanded
+        e_r = odo_r * wheel_rad_r * counts_per_rad
+        k_l = wheel_rad_l * (0.5 * p["D_L"])  # floor metres per (m/s) commanded
+        k_r = wheel_rad_r * (0.5 * p["D_R"])
+        v_top = self.control.speed * (1.0 + 1e-9)
+        w_top = omega_max * half_b
+        pulses = (odo_l + odo_r) * (1.0 + 1e-6)
+        odo_travel = 0.5 * (v_top * (e_r + e_l) + w_top * np.abs(e_r - e_l) + pulses)
+        odo_turn = (v_top * np.abs(e_r - e_l) + w_top * (e_r + e_l) + pulses) / p["b_odo"]
+        bumps = np.where(p["bump_rate"] * p["bump_size"] > 0, p["bump_size"], 0.0)
+        floor_turn = (v_top * np.abs(k_r - k_l) + w_top * (k_r + k_l) + 2.0 * bumps) / p["b_true"]
+        self.leg_step = 1.01 * float(odo_travel.max())
+        self.turn_step = 1.01 * float(odo_turn.max())
+        # sin(h)/h must be checked for its series form every period unless the bounds
+        # keep |h| below the limit (slip has no bound).
+        self.arc_odometry = self.control.method == "arc"
+        h_top = 0.5 * max(
+            float(floor_turn.max()), float(odo_turn.max()) if self.arc_odometry else 0.0
+        )
+        self.check_sinc = self.slip or 1.01 * h_top >= SINC_SERIES_LIMIT
+
+    def _segment_table(self, path: Path) -> BoolArray:
+        """The segments' references, as one lookup table; which segments are legs."""
+        # One lookup table of every segment's references, ccw columns first, then cw:
+        # start x, start y, cos and sin of the start heading, amount, heading at start and
+        # end (the rows of "refs").
+        segments = path.segments
+        self.n_seg = len(segments)
+        self.table = np.concatenate(
+            [
+                np.column_stack(
+                    [st, np.cos(hd[:, 0]), np.sin(hd[:, 0]), [s.amount for s in segments], hd]
+                )
+                for st, hd in (path.references(+1), path.references(-1))
+            ]
+        ).T.copy()
+        straight = np.array([s.kind == "straight" for s in segments])
+        self.seg_straight = straight
+        # Block of a run by its segment index: 0 leg, 1 turn, 2 finished (index n_seg).
+        self.seg_block = np.append(np.where(straight, 0, 1), 2).astype(np.int64)
+        return straight
 
     def run(
         self,
@@ -224,99 +245,81 @@ class Batch:
         """Simulate periods until a run reaches the end of its segment; return the count.
 
         The numbered comments are the model's steps (:mod:`umbmark.sim.engine`). The loop
-        runs once per sampling period: every view it uses is made before it (a view costs
-        as much as a small numpy operation), and every operation writes into existing
-        arrays.
+        runs once per sampling period, two calls: the controller (:meth:`_controller`) and
+        the robot moving (:meth:`_mover`). Every view they use is made before the loop (a
+        view costs as much as a small numpy operation) and held by the two closures, and
+        every operation writes into existing arrays.
         """
+        width = self.M.shape[1]
+        if self.work is None or self.work.width != width:
+            self.work = Work.make(width, self.n_runs, self.control)
+        control = self._controller(self.work)
+        move, flip = self._mover(self.work, rng)
+        max_steps = self.max_steps
+        while True:
+            if step >= max_steps:
+                raise RuntimeError(f"simulation did not finish within {max_steps} samples")
+            done = control()
+            move()
+            step += 1
+            if trace is not None:
+                self.counts_flip = flip[0]
+                trace.append(self._snapshot())
+            if done is not None:
+                break
+            if progress is not None and step % 200 == 0:
+                progress((self.n_runs - self.n_active) / self.n_runs)
+
+        self.counts_flip = flip[0]
+        self._advance(done, step - 1)
+        if trace is None and self.n_active and width - self.n_active >= max(1, width // 8):
+            self._park(self.n_active)
+        if progress is not None and step % 200 == 0:
+            progress((self.n_runs - self.n_active) / self.n_runs)
+        return step
+
+    def _controller(self, work: Work) -> Callable[[], IntArray | None]:
+        """Step 1 of one period, in the odometry frame: on a leg, follow the line from the
+        leg's start corner and stop at its end; in a turn, rotate on the spot until the
+        heading reaches the target; the speeds ramp towards the goals and are capped. The
+        closure returns the columns of the runs that reached their target (their speeds
+        set to zero), or None."""
         add, subtract, multiply, divide = np.add, np.subtract, np.multiply, np.divide
         maximum, minimum, negative = np.maximum, np.minimum, np.negative
-        sqrt, sign, absolute, floor, cos, sin = np.sqrt, np.sign, np.abs, np.floor, np.cos, np.sin
-        less_equal, lowest, highest = np.less_equal, np.minimum.reduce, np.maximum.reduce
+        sqrt, less_equal, lowest = np.sqrt, np.less_equal, np.minimum.reduce
         c = self.control
         dt, cruise_speed, creep_speed = c.dt, c.speed, c.creep_speed
         leg_half, leg_hh, leg_a2 = self.leg_half, self.leg_hh, self.leg_a2
-        leg_cruise, leg_step, turn_step = self.leg_cruise, self.leg_step, self.turn_step
-        stop_distance_max, stop_angle_max = self.stop_distance_max, self.stop_angle_max
-        check_sinc, max_steps = self.check_sinc, self.max_steps
+        leg_cruise, leg_step = self.leg_cruise, self.leg_step
+        stop_distance_max = self.stop_distance_max
 
         M = self.M
-        width = M.shape[1]
         n_legs, n_active = self.n_legs, self.n_active
         legs, turns = slice(0, n_legs), slice(n_legs, n_active)
         R = ROW
-        pose = M[R["pose"]].reshape(3, 2, width)
-        xy, theta = pose[:2], pose[2]  # (x, y) and theta, each of (true, odometry)
+        pose = M[R["pose"]].reshape(3, 2, M.shape[1])
         x_odo, y_odo, th_odo = pose[0, 1], pose[1, 1], pose[2, 1]
-        phi = M[R["phi"]]
-        flip = self.counts_flip
-        both_counts = M[R["counts"]].reshape(2, 2, width)
-        counts, counts_next = both_counts[flip], both_counts[1 - flip]
         speed, goal = M[R["speed"]], M[R["goal"]]
-        v, w = speed
         limit, neg_limit = M[R["limit"]], M[R["neg_limit"]]
         ramp, neg_ramp = M[R["ramp"]], M[R["neg_ramp"]]
-        half_b, wheel_rad = M[R["half_b"]][0], M[R["wheel_rad"]]
-        travel_per = M[R["travel_per"]].reshape(2, 2, width)
-        counts_per_rad, wheelbase = M[R["counts_per_rad"]], M[R["wheelbase"]]
         # The blocks' views (1-D: contiguous).
         start_x, start_y, cos_h, sin_h, amount, h0, _ = (r[legs] for r in M[REFS])
         x_leg, y_leg, th_leg = x_odo[legs], y_odo[legs], th_odo[legs]
         v_goal, w_goal_leg = goal[0, legs], goal[1, legs]
         v_cap, v_cap_neg = limit[0, legs], neg_limit[0, legs]
         stop_leg = M[R["stop_distance"]][0, legs]
-        th_turn, h1_turn = th_odo[turns], M[REFS][6, turns]
-        w_goal_turn, w_cap, w_cap_neg = goal[1, turns], limit[1, turns], neg_limit[1, turns]
-        omega_max = M[R["omega_max"]][0, turns]
-        turn_half, turn_hh, turn_a2, omega_creep = (r[turns] for r in M[R["turn_brake"]])
-        stop_turn = M[R["stop_angle"]][0, turns]
-        turn_cruise = M[R["turn_cruise"]][0, turns]
-
-        if self.work is None or self.work.width != width:
-            self.work = Work.make(width, self.n_runs, self.control)
-        work = self.work
-        heading_share, ones, halves = work.constants
         heading_gain, cross_track_gain = (a[legs] for a in work.gains)
         dx, dy, t1, t2, rem, rest, brake = (a[legs] for a in work.leg)
-        err, abs_err, t3, brake_turn = (a[turns] for a in work.turn)
         done_leg, done_turn = work.done[0, legs], work.done[1, turns]
-        d_speed, w_arm = work.d_speed, work.w_arm
-        wheel, travel = work.wheel, work.travel  # rotations, counts; floor, odometry
-        d_phi, d_counts = wheel
-        d_phi_l, d_phi_r = d_phi
-        (floor_l, floor_r), (odo_l, odo_r) = travel
-        ds, d_theta, half, chord, heading = work.sums  # each (true, odometry)
-        ds_true, ds_odo = ds
-        dth_true, dth_odo = d_theta
-        cs = work.cs
-        cos_rows, sin_rows = cs
-        # Rows of h whose sin(h)/h takes the arc rule (the true pose; the odometry's unless
-        # it integrates otherwise, its factor then staying 1/2).
-        n_arc = 2 if self.arc_odometry else 1
-        h, h_abs, half_sinc = half[:n_arc], chord[:n_arc], work.half_sinc
-        series = half_sinc_series(
-            h,
-            work.h2[:n_arc],
-            work.terms[:, :n_arc],
-            ones[:n_arc],
-            halves[:n_arc],
-            half_sinc[:n_arc],
-        )
-        noise: Callable[[], None] | None = None
-        if self.noisy:
-            assert rng is not None
-            order = M[RUN].astype(np.int64)
-            noise = floor_noise(travel[0], M[R["noise"]], order, rng, self.slip, self.bumps, work)
+        d_speed = work.d_speed
+        turn = self._turn_controller(work)
+        # For so many more periods the cruise goals hold on the legs.
+        leg_left = 0
+        leg_cruising = False
 
-        # For so many more periods the cruise goals hold (on legs, in turns).
-        leg_left = turn_left = 0
-        leg_cruising = turn_cruising = False
-        while True:
-            if step >= max_steps:
-                raise RuntimeError(f"simulation did not finish within {max_steps} samples")
+        def control() -> IntArray | None:
+            nonlocal leg_left, leg_cruising
             event = False
-
-            # 1. Controller, in the odometry frame. On a leg: follow the line from the
-            # leg's start corner, stop at its end.
             if n_legs:
                 subtract(x_leg, start_x, dx)
                 subtract(y_leg, start_y, dy)
@@ -359,40 +362,8 @@ class Batch:
                 multiply(t1, heading_gain, t1)
                 multiply(t2, cross_track_gain, t2)
                 subtract(t1, t2, w_goal_leg)
-            # In a turn: rotate on the spot until the heading reaches the target.
             if n_active > n_legs:
-                if turn_left:
-                    turn_left -= 1
-                else:
-                    subtract(h1_turn, th_turn, err)
-                    absolute(err, abs_err)
-                    subtract(abs_err, turn_cruise, t3)
-                    margin = float(lowest(t3))
-                    if margin >= 0.0:  # the largest rate, no cap, no stop
-                        turn_left = max(int(margin / turn_step) - 1, 0)
-                        if not turn_cruising:
-                            sign(err, w_goal_turn)
-                            multiply(w_goal_turn, omega_max, w_goal_turn)
-                            w_cap[:] = omega_max
-                            negative(omega_max, w_cap_neg)
-                            turn_cruising = True
-                    else:
-                        turn_cruising = False
-                        multiply(turn_a2, abs_err, brake_turn)
-                        add(turn_hh, brake_turn, brake_turn)
-                        sqrt(brake_turn, brake_turn)
-                        subtract(brake_turn, turn_half, brake_turn)
-                        maximum(brake_turn, omega_creep, out=brake_turn)
-                        minimum(brake_turn, omega_max, out=brake_turn)
-                        divide(abs_err, dt, t3)
-                        minimum(brake_turn, t3, out=brake_turn)
-                        sign(err, err)
-                        multiply(err, brake_turn, w_goal_turn)
-                        minimum(omega_max, t3, out=w_cap)  # the caps of both clips
-                        negative(w_cap, w_cap_neg)
-                        if float(lowest(abs_err)) <= stop_angle_max:
-                            less_equal(abs_err, stop_turn, done_turn)
-                            event = bool(done_turn.any()) or event
+                event = turn() or event
             # Speeds ramp towards the goals and are capped; a run at its target stops.
             subtract(goal, speed, d_speed)
             maximum(d_speed, neg_ramp, out=d_speed)
@@ -400,14 +371,136 @@ class Batch:
             add(speed, d_speed, speed)
             maximum(speed, neg_limit, out=speed)
             minimum(speed, limit, out=speed)
-            if event:
-                done = np.concatenate(
-                    [np.flatnonzero(done_leg), n_legs + np.flatnonzero(done_turn)]
-                )
-                done_leg.fill(False)
-                done_turn.fill(False)
-                speed[:, done] = 0.0
+            if not event:
+                return None
+            done = np.concatenate([np.flatnonzero(done_leg), n_legs + np.flatnonzero(done_turn)])
+            done_leg.fill(False)
+            done_turn.fill(False)
+            speed[:, done] = 0.0
+            return done
 
+        return control
+
+    def _turn_controller(self, work: Work) -> Callable[[], bool]:
+        """Step 1 in the turns: rotate on the spot until the heading reaches the target,
+        braking in time. The closure returns whether a run reached its target."""
+        add, subtract, multiply, divide = np.add, np.subtract, np.multiply, np.divide
+        maximum, minimum, negative = np.maximum, np.minimum, np.negative
+        sqrt, sign, absolute = np.sqrt, np.sign, np.abs
+        less_equal, lowest = np.less_equal, np.minimum.reduce
+        dt, turn_step, stop_angle_max = self.control.dt, self.turn_step, self.stop_angle_max
+        M = self.M
+        turns = slice(self.n_legs, self.n_active)
+        R = ROW
+        th_turn = M[R["pose"]].reshape(3, 2, M.shape[1])[2, 1][turns]
+        h1_turn = M[REFS][6, turns]
+        goal, limit, neg_limit = M[R["goal"]], M[R["limit"]], M[R["neg_limit"]]
+        w_goal_turn, w_cap, w_cap_neg = goal[1, turns], limit[1, turns], neg_limit[1, turns]
+        omega_max = M[R["omega_max"]][0, turns]
+        turn_half, turn_hh, turn_a2, omega_creep = (r[turns] for r in M[R["turn_brake"]])
+        stop_turn = M[R["stop_angle"]][0, turns]
+        turn_cruise = M[R["turn_cruise"]][0, turns]
+        err, abs_err, t3, brake_turn = (a[turns] for a in work.turn)
+        done_turn = work.done[1, turns]
+        # For so many more periods the cruise goals hold in the turns.
+        turn_left = 0
+        turn_cruising = False
+
+        def turn() -> bool:
+            nonlocal turn_left, turn_cruising
+            event = False
+            if turn_left:
+                turn_left -= 1
+            else:
+                subtract(h1_turn, th_turn, err)
+                absolute(err, abs_err)
+                subtract(abs_err, turn_cruise, t3)
+                margin = float(lowest(t3))
+                if margin >= 0.0:  # the largest rate, no cap, no stop
+                    turn_left = max(int(margin / turn_step) - 1, 0)
+                    if not turn_cruising:
+                        sign(err, w_goal_turn)
+                        multiply(w_goal_turn, omega_max, w_goal_turn)
+                        w_cap[:] = omega_max
+                        negative(omega_max, w_cap_neg)
+                        turn_cruising = True
+                else:
+                    turn_cruising = False
+                    multiply(turn_a2, abs_err, brake_turn)
+                    add(turn_hh, brake_turn, brake_turn)
+                    sqrt(brake_turn, brake_turn)
+                    subtract(brake_turn, turn_half, brake_turn)
+                    maximum(brake_turn, omega_creep, out=brake_turn)
+                    minimum(brake_turn, omega_max, out=brake_turn)
+                    divide(abs_err, dt, t3)
+                    minimum(brake_turn, t3, out=brake_turn)
+                    sign(err, err)
+                    multiply(err, brake_turn, w_goal_turn)
+                    minimum(omega_max, t3, out=w_cap)  # the caps of both clips
+                    negative(w_cap, w_cap_neg)
+                    if float(lowest(abs_err)) <= stop_angle_max:
+                        less_equal(abs_err, stop_turn, done_turn)
+                        event = bool(done_turn.any())
+            return event
+
+        return turn
+
+    def _mover(
+        self, work: Work, rng: np.random.Generator | None
+    ) -> tuple[Callable[[], None], list[int]]:
+        """Steps 2 to 4 of one period: the wheels turn as the robot's own model says, the
+        encoders count whole pulses, each wheel moves over the floor by its true diameter
+        (less slip and bumps) while the odometry sees the counts, and both poses advance
+        along the arcs. Returns the closure, and which count buffer holds the counts
+        (a list it keeps current)."""
+        add, subtract, multiply, divide = np.add, np.subtract, np.multiply, np.divide
+        absolute, floor, cos, sin = np.abs, np.floor, np.cos, np.sin
+        highest = np.maximum.reduce
+        check_sinc = self.check_sinc
+        M = self.M
+        width = M.shape[1]
+        R = ROW
+        pose = M[R["pose"]].reshape(3, 2, width)
+        xy, theta = pose[:2], pose[2]  # (x, y) and theta, each of (true, odometry)
+        phi = M[R["phi"]]
+        flip = [self.counts_flip]
+        both_counts = M[R["counts"]].reshape(2, 2, width)
+        counts, counts_next = both_counts[flip[0]], both_counts[1 - flip[0]]
+        v, w = M[R["speed"]]
+        half_b, wheel_rad = M[R["half_b"]][0], M[R["wheel_rad"]]
+        travel_per = M[R["travel_per"]].reshape(2, 2, width)
+        counts_per_rad, wheelbase = M[R["counts_per_rad"]], M[R["wheelbase"]]
+        heading_share, ones, halves = work.constants
+        w_arm = work.w_arm
+        wheel, travel = work.wheel, work.travel  # rotations, counts; floor, odometry
+        d_phi, d_counts = wheel
+        d_phi_l, d_phi_r = d_phi
+        (floor_l, floor_r), (odo_l, odo_r) = travel
+        ds, d_theta, half, chord, heading = work.sums  # each (true, odometry)
+        ds_true, ds_odo = ds
+        dth_true, dth_odo = d_theta
+        cs = work.cs
+        cos_rows, sin_rows = cs
+        # Rows of h whose sin(h)/h takes the arc rule (the true pose; the odometry's unless
+        # it integrates otherwise, its factor then staying 1/2).
+        n_arc = 2 if self.arc_odometry else 1
+        h, h_abs, half_sinc = half[:n_arc], chord[:n_arc], work.half_sinc
+        series = half_sinc_series(
+            h,
+            work.h2[:n_arc],
+            work.terms[:, :n_arc],
+            ones[:n_arc],
+            halves[:n_arc],
+            half_sinc[:n_arc],
+        )
+        noise: Callable[[], None] | None = None
+        if self.noisy:
+            assert rng is not None
+            order = M[RUN].astype(np.int64)
+            noise = floor_noise(travel[0], M[R["noise"]], order, rng, self.slip, self.bumps, work)
+
+        def move() -> None:
+            nonlocal counts, counts_next
             # 2. Wheels turn as the robot's own model says they should.
             multiply(w, half_b, w_arm)
             subtract(v, w_arm, d_phi_l)
@@ -419,7 +512,7 @@ class Batch:
             floor(counts_next, counts_next)
             subtract(counts_next, counts, d_counts)
             counts, counts_next = counts_next, counts
-            flip = 1 - flip
+            flip[0] = 1 - flip[0]
             # 3. and 4. Each wheel moves over the floor by its true diameter, less slip
             # and bumps; the odometry sees the counts by the robot's own parameters.
             multiply(wheel, travel_per, travel)
@@ -450,22 +543,7 @@ class Batch:
             add(xy, cs, xy)
             add(theta, d_theta, theta)
 
-            step += 1
-            if trace is not None:
-                self.counts_flip = flip
-                trace.append(self._snapshot())
-            if event:
-                break
-            if progress is not None and step % 200 == 0:
-                progress((self.n_runs - self.n_active) / self.n_runs)
-
-        self.counts_flip = flip
-        self._advance(done, step - 1)
-        if trace is None and self.n_active and width - self.n_active >= max(1, width // 8):
-            self._park(self.n_active)
-        if progress is not None and step % 200 == 0:
-            progress((self.n_runs - self.n_active) / self.n_runs)
-        return step
+        return move, flip
 
     def _advance(self, columns: IntArray, step: int) -> None:
         """The runs in ``columns`` reached the end of their segment in period ``step``."""
