@@ -14,7 +14,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
-from umbmark.calibration.report import CalibrationResult
+from umbmark.calibration.result import CalibrationResult
 from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError
 from umbmark.estimators.plausibility import judge_table

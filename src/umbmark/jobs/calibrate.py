@@ -1,8 +1,8 @@
 """The calibration job: runs in, UMBmark figures, error estimate and correction out.
 
 :func:`calibrate` is what ``umbmark calibrate`` does; :class:`CalibrationReport` is
-everything it found (:class:`umbmark.calibration.report.CalibrationResult`: its
-:meth:`~umbmark.calibration.report.CalibrationResult.to_dict` is exactly what ``umbmark
+everything it found (:class:`umbmark.calibration.result.CalibrationResult`: its
+:meth:`~umbmark.calibration.result.CalibrationResult.to_dict` is exactly what ``umbmark
 calibrate --json`` prints) and the files it writes with ``--yaml``, ``--ros1-yaml``,
 ``--plot``, ``--tum`` and ``--report``.
 """
@@ -15,7 +15,7 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark.calibration.report import CalibrationResult
+from umbmark.calibration.result import CalibrationResult
 from umbmark.calibration.sources import calibrate_sources
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
@@ -36,7 +36,7 @@ __all__ = ["CalibrationReport", "calibrate"]
 
 @dataclass(frozen=True, repr=False)
 class CalibrationReport(CalibrationResult):
-    """Everything a calibration found (:class:`~umbmark.calibration.report.CalibrationResult`),
+    """Everything a calibration found (:class:`~umbmark.calibration.result.CalibrationResult`),
     and the files it writes: the figure, the HTML page and :meth:`write`."""
 
     @classmethod

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from umbmark.calibration.passes import Passes, predict_after
-from umbmark.calibration.report import CalibrationResult
+from umbmark.calibration.result import CalibrationResult
 from umbmark.calibration.sources import calibrate_sources
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
