@@ -3,7 +3,7 @@
 :func:`calibrate_runs` runs the estimator a method names on runs already read
 (:func:`umbmark.runs.active.read_runs`), through
 :func:`umbmark.estimators.dispatch.estimate_runs`, and returns the
-:class:`~umbmark.calibration.report.CalibrationResult`; :func:`umbmark.calibrate` and the
+:class:`~umbmark.calibration.result.CalibrationResult`; :func:`umbmark.calibrate` and the
 held-out validation (:func:`umbmark.validate`) share it.
 """
 
@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from umbmark.calibration.compose import Calibration, check_calibration
-from umbmark.calibration.report import CalibrationResult
+from umbmark.calibration.result import CalibrationResult
 from umbmark.core.messages import split_messages
 from umbmark.estimators.dispatch import estimate_runs
 from umbmark.runs.read import SourceRuns

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
-from umbmark.calibration.report import CalibrationResult
+from umbmark.calibration.result import CalibrationResult
 from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
 from umbmark.model.kinematics import WheelParams

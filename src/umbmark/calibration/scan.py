@@ -3,7 +3,7 @@
 :func:`calibrate_intervals` runs an estimator of motion intervals (``needs="intervals"``
 in :mod:`umbmark.estimators.registry`: the scan-matching calibration of Censi et al.
 2013) on tuple files or intervals in memory, with the parameters active while they were
-driven, and returns the same :class:`~umbmark.calibration.report.CalibrationResult` as a
+driven, and returns the same :class:`~umbmark.calibration.result.CalibrationResult` as a
 calibration from runs: ``E_d``, ``E_b``, ``E_s``, the verdict, the overlay; and the
 sensor's mounting (:attr:`CalibrationResult.sensor`). :func:`calibrate_scan_bags` does
 the same from bags: the laser's sweeps and the wheels read, matched into intervals, and
@@ -18,7 +18,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from umbmark.calibration.compose import Calibration, check_calibration
-from umbmark.calibration.report import CalibrationResult
+from umbmark.calibration.result import CalibrationResult
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info, split_messages
 from umbmark.estimators.base import SquareTest

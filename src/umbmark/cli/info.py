@@ -15,7 +15,7 @@ if TYPE_CHECKING:
 
     from umbmark.jobs.info import InfoReport, LoggedInfo
     from umbmark.sources.bag.info.candidates import Candidate
-    from umbmark.sources.bag.info.report import BagInfo
+    from umbmark.sources.bag.info.summary import BagInfo
 
 __all__ = ["info"]
 

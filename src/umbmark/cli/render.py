@@ -14,7 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from umbmark.benchmark.returns import Benchmark, sem_verdict
-from umbmark.calibration.report import ABSOLUTE_FIGURES
+from umbmark.calibration.result import ABSOLUTE_FIGURES
 from umbmark.estimators.registry import LOGGED, find, method_label
 from umbmark.jobs.calibrate import CalibrationReport
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown

@@ -1,8 +1,8 @@
 """The calibration job: runs in, UMBmark figures, error estimate and correction out.
 
 :func:`calibrate` is what ``umbmark calibrate`` does; :class:`CalibrationReport` is
-everything it found (:class:`umbmark.calibration.report.CalibrationResult`: its
-:meth:`~umbmark.calibration.report.CalibrationResult.to_dict` is exactly what ``umbmark
+everything it found (:class:`umbmark.calibration.result.CalibrationResult`: its
+:meth:`~umbmark.calibration.result.CalibrationResult.to_dict` is exactly what ``umbmark
 calibrate --json`` prints) and the files it writes with ``--yaml``, ``--ros1-yaml``,
 ``--plot``, ``--tum`` and ``--report``.
 """
@@ -15,17 +15,13 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
-from umbmark.calibration.report import CalibrationResult
+from umbmark.calibration.result import CalibrationResult
+from umbmark.calibration.sources import calibrate_sources
 from umbmark.core.atomic import atomic_write_text
-from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError, python_api
-from umbmark.estimators.plausibility import judge_table
-from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
 from umbmark.outputs.files import OutputPlan
-from umbmark.runs.active import read_each
 from umbmark.runs.options import ReadOptions, SourceOptions
-from umbmark.runs.read import RunSource, is_intervals, is_runs, pool_runs, source_name
+from umbmark.runs.read import RunSource, source_name
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -40,7 +36,7 @@ __all__ = ["CalibrationReport", "calibrate"]
 
 @dataclass(frozen=True, repr=False)
 class CalibrationReport(CalibrationResult):
-    """Everything a calibration found (:class:`~umbmark.calibration.report.CalibrationResult`),
+    """Everything a calibration found (:class:`~umbmark.calibration.result.CalibrationResult`),
     and the files it writes: the figure, the HTML page and :meth:`write`."""
 
     @classmethod
@@ -281,18 +277,16 @@ def calibrate(
         options, composed = compose_last_applied(store, robot, options)
     read_options = ReadOptions.of(options)
     time = _tum_time(tum_time)
-    _check_method(method, fit_truth_offset)
     sources = (source, *more_sources)
     plan = _plan([source_name(s) for s in sources], output=output, yaml=yaml,
                  ros1_yaml=ros1_yaml, plot=plot, tum=tum, report=report, force=force)  # fmt: skip
-    result = _calibrate(
-        sources, read_options, method, wheelbase, side_length,
+    found = calibrate_sources(
+        sources, read_options, method=method, wheelbase=wheelbase, side_length=side_length,
         override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
     )  # fmt: skip
-    result = replace(result, robot=robot, command=command)
+    result = replace(CalibrationReport.of(found), robot=robot, command=command)
     if store is not None and robot is not None:
         result = _same_robot(result, store, robot, composed)
-    result = replace(result, forced=override_verdict)
     if result.overlay_withheld:  # the verdict says what to do instead
         files = {"yaml": plan.yaml, "ros1_yaml": plan.ros1_yaml}
         result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
@@ -331,148 +325,6 @@ def _tum_time(tum_time: str) -> TumTime:
     from umbmark.outputs.tum import check_tum_time  # off start-up
 
     return check_tum_time(tum_time)
-
-
-def _check_method(method: str | None, fit_truth_offset: bool) -> None:
-    if method is not None and method not in CHOICES:
-        raise InputError(f"--method {method!r}: use one of {', '.join(NAMES)} or {AUTO}")
-    fitting = names(trajectories=True)
-    if fit_truth_offset and method not in fitting:
-        raise InputError(
-            f"--fit-truth-offset needs --method {' or '.join(fitting)}, not "
-            f"{method or DEFAULT.name}"
-        )
-
-
-def _calibrate(
-    sources: Sequence[RunSource],
-    read_options: ReadOptions,
-    method: str | None,
-    wheelbase: float | None,
-    side_length: float | None,
-    *,
-    override_verdict: bool,
-    fit_truth_offset: bool,
-) -> CalibrationReport:
-    """The calibration of the sources by what they hold: a bag's scans, motion intervals,
-    or runs (with the note of ``auto``'s choice)."""
-    if read_options.scan_topic is not None:
-        return _calibrate_scans(sources, read_options, method, wheelbase, side_length)
-    if any(is_intervals(s, read_options) for s in sources) or method in INTERVALS:
-        return _calibrate_intervals(sources, read_options, method or AUTO, wheelbase, side_length)
-    result, note, nominal_best = _calibrate_runs(
-        sources, read_options, method or DEFAULT.name, wheelbase, side_length,
-        override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
-    )  # fmt: skip
-    result = replace(result, nominal_best=nominal_best)
-    return result if note is None else replace(result, notes=(*result.notes, note))
-
-
-def _calibrate_intervals(
-    sources: Sequence[RunSource],
-    options: ReadOptions,
-    method: str,
-    wheelbase: float | None,
-    side_length: float | None,
-) -> CalibrationReport:
-    """A calibration of tuple files by an estimator of motion intervals (``auto`` takes
-    the first)."""
-    from umbmark.calibration.scan import calibrate_intervals
-
-    if method not in (*INTERVALS, AUTO):
-        raise InputError(
-            f"motion intervals (tuple files) are calibrated by --method {' or '.join(INTERVALS)}, "
-            f"not {method}"
-        )
-    if not all(is_intervals(s, options) for s in sources):
-        raise InputError(
-            f"--method {method} calibrates motion intervals (tuple files; docs/formats.md), "
-            "not runs"
-        )
-    chosen = INTERVALS[0] if method == AUTO else method
-    paths = [Path(source_name(s)) for s in sources]
-    result = calibrate_intervals(
-        paths, options, chosen, wheelbase=wheelbase, side_length=side_length
-    )
-    return CalibrationReport.of(result)
-
-
-def _calibrate_scans(
-    sources: Sequence[RunSource],
-    options: ReadOptions,
-    method: str | None,
-    wheelbase: float | None,
-    side_length: float | None,
-) -> CalibrationReport:
-    """A calibration of bags' wheels against their laser's scan matching (``--scan-topic``)."""
-    from umbmark.calibration.scan import calibrate_scan_bags
-    from umbmark.runs.read import is_runs
-
-    if method is not None and method not in (*INTERVALS, AUTO):
-        raise InputError(
-            f"--scan-topic calibrates by --method {' or '.join(INTERVALS)} (the default with "
-            f"it), not {method}"
-        )
-    if any(is_runs(s) for s in sources):
-        raise InputError("--scan-topic reads bags, not runs in memory")
-    chosen = INTERVALS[0] if method in (None, AUTO) else method
-    paths = [Path(source_name(s)) for s in sources]
-    result = calibrate_scan_bags(
-        paths, options, chosen, wheelbase=wheelbase, side_length=side_length
-    )
-    return CalibrationReport.of(result)
-
-
-def _calibrate_runs(
-    sources: Sequence[RunSource],
-    read_options: ReadOptions,
-    method: str,
-    wheelbase: float | None,
-    side_length: float | None,
-    *,
-    override_verdict: bool,
-    fit_truth_offset: bool,
-) -> tuple[CalibrationReport, str | None, bool]:
-    """A calibration of runs: the result, a note on the method chosen, and whether
-    ``auto`` found the nominal parameters best."""
-    entry = find(method)
-    if side_length is None and entry is not None and entry.side_required:
-        from umbmark.runs.read import is_table
-
-        if any(is_table(s, read_options) for s in sources):
-            raise InputError("--side-length is required: the side of the square path, in metres")
-    each = [
-        judge_table(one, read_options.unit, read_options.angle_unit, side_length)
-        if not is_runs(source) and one.formats == ("table",)
-        else one
-        for source, one in zip(
-            sources,
-            read_each(
-                sources,
-                read_options,
-                wheelbase=wheelbase,
-                side_length=side_length,
-                override_verdict=override_verdict,
-            ),
-            strict=True,
-        )
-    ]
-    read = each[0] if len(each) == 1 else pool_runs(each)
-    if any(run.kind == "square" for run in read.runs):
-        active = read.active
-        check_square_geometry(
-            read.side_length, active.effective_wheelbase, read.origins, active.separation_multiplier
-        )
-    chosen, note, nominal_best = method, None, False
-    if method == AUTO:
-        from umbmark.calibration.auto import auto_method
-
-        chosen, note, nominal_best = auto_method(each, read)
-    result = CalibrationReport.of(calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset))
-    if chosen in names(trajectories=True) and len(read.parts) > 1:
-        disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
-        result = replace(result, input_warnings=(*result.input_warnings, *disagree))
-    return result, note, nominal_best
 
 
 def _history_entry(result: CalibrationResult) -> NewCalibration:

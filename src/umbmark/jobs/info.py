@@ -4,7 +4,7 @@
 count, rate and duration, the joints of the joint-state topics and which of them move,
 the transforms and their chains, the candidates for the wheels, the controller's
 odometry and the ground truth, and the options they suggest
-(:mod:`umbmark.sources.bag.info.report`). For a run log or an OptiOdom session: its files, runs,
+(:mod:`umbmark.sources.bag.info.summary`). For a run log or an OptiOdom session: its files, runs,
 duration and wheel parameters. A runs table has nothing to look into and is refused.
 """
 
@@ -22,7 +22,7 @@ from umbmark.model.recording import Recording
 from umbmark.runs.load import FORMATS, detect_format
 
 if TYPE_CHECKING:
-    from umbmark.sources.bag.info.report import BagInfo
+    from umbmark.sources.bag.info.summary import BagInfo
 
 __all__ = ["FileInfo", "InfoReport", "LoggedInfo", "info"]
 
@@ -125,7 +125,7 @@ class InfoReport(JsonText):
         ``bag``, ``log`` or ``optiodom``.
     bag : BagInfo or None
         For a bag: topics, joints, transforms, candidates
-        (:class:`umbmark.sources.bag.info.report.BagInfo`).
+        (:class:`umbmark.sources.bag.info.summary.BagInfo`).
     logged : LoggedInfo or None
         For a run log or an OptiOdom session.
     """
@@ -223,7 +223,7 @@ def info(
         run-log folder (or one CSV of it) or an OptiOdom session folder.
     max_messages : int, optional
         Bags: messages deserialized per topic at most (default
-        :data:`umbmark.sources.bag.info.report.DEFAULT_MAX_MESSAGES`, at most
+        :data:`umbmark.sources.bag.info.summary.DEFAULT_MAX_MESSAGES`, at most
         :data:`MAX_MESSAGES`); a topic with more is sampled in stretches spread over its
         time span.
     format : {"auto", "bag", "log", "optiodom"}
@@ -272,7 +272,7 @@ def info(
             source=name,
         )
     if kind == "bag":
-        from umbmark.sources.bag.info.report import DEFAULT_MAX_MESSAGES, bag_info
+        from umbmark.sources.bag.info.summary import DEFAULT_MAX_MESSAGES, bag_info
 
         limit = DEFAULT_MAX_MESSAGES if max_messages is None else max_messages
         return InfoReport(source=name, format="bag", bag=bag_info(name, max_messages=limit))

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from umbmark.calibration.report import (
+from umbmark.calibration.result import (
     Calibrated,
     calibrated_name,
     calibrated_nominal,

@@ -17,12 +17,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from umbmark.calibration.passes import Passes, predict_after
+from umbmark.calibration.result import CalibrationResult
+from umbmark.calibration.sources import calibrate_sources
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, python_api
 from umbmark.core.messages import info
 from umbmark.estimators.registry import DEFAULT
-from umbmark.jobs.calibrate import CalibrationReport, calibrate
-from umbmark.runs.options import SourceOptions
+from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import RunSource, source_name
 
 if TYPE_CHECKING:
@@ -165,7 +166,7 @@ def report(
     current = options.get("current_params")
     if output is not None:
         check_output(output, [*names, *([] if current is None else [str(current)])], force=force)
-    passes: list[CalibrationReport] = []
+    passes: list[CalibrationResult] = []
     pass_options: SourceOptions = options
     for k, (one, name) in enumerate(zip(sources, names, strict=True), 1):
         note = None
@@ -180,14 +181,14 @@ def report(
                 f"(c_L {before.new_c_left:.6f}, c_R {before.new_c_right:.6f}, "
                 f"wheel_separation_multiplier {before.new_separation_multiplier:.6f})"
             )
-        result = calibrate(
-            one,
+        result = calibrate_sources(
+            [one],
+            ReadOptions.of(pass_options),
             side_length=side_length,
             wheelbase=wheelbase,
             method=method,
             fit_truth_offset=fit_truth_offset,
             override_verdict=override_verdict,
-            **pass_options,
         )
         if result.benchmark is None:
             raise InputError(
@@ -218,9 +219,14 @@ def _validate(
     wheelbase: float | None,
     options: SourceOptions,
 ) -> ValidationReport:
-    """:func:`umbmark.validate` of one pass's source (a path of recorded runs)."""
-    from umbmark.jobs.validate import validate as run_validation
+    """The held-out validation of one pass's source (a path of recorded runs), as
+    :func:`umbmark.validate` makes it."""
+    from umbmark.calibration.heldout import validate_read
+    from umbmark.runs.active import read_each
 
     if not isinstance(source, (str, os.PathLike)):
         raise InputError("--validate replays recorded runs: give the pass as a file or folder")
-    return run_validation(source, side_length=side_length, wheelbase=wheelbase, **options)
+    read = read_each(
+        [source], ReadOptions.of(options), wheelbase=wheelbase, side_length=side_length
+    )
+    return validate_read(read)

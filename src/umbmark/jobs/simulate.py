@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from umbmark.calibration.report import Calibrated, calibrated_params
+from umbmark.calibration.result import Calibrated, calibrated_params
 from umbmark.core.errors import InputError, python_api, unexpected_keyword
 from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__

@@ -24,7 +24,7 @@ from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 if TYPE_CHECKING:
     from umbmark.benchmark.returns import Benchmark
     from umbmark.calibration.passes import Passes
-    from umbmark.calibration.report import CalibrationResult
+    from umbmark.calibration.result import CalibrationResult
     from umbmark.calibration.validation import ValidationReport
     from umbmark.estimators.base import ErrorEstimate
 
@@ -355,7 +355,7 @@ def _estimate(one: CalibrationResult) -> str:
 def _absolute_rows(est: ErrorEstimate) -> list[list[str]]:
     """The rows of the absolute figures an estimate carries, in their units shown."""
     rows = []
-    from umbmark.calibration.report import ABSOLUTE_FIGURES
+    from umbmark.calibration.result import ABSOLUTE_FIGURES
 
     for name in ABSOLUTE_FIGURES:
         if name not in est.components or name not in est.standard_errors:

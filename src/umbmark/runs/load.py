@@ -323,7 +323,7 @@ def _read_bag(
 
     bag = options.bag or BagOptions()
     if bag.truth_topic is None and bag.tf_parent is None and bag.tf_child is None:
-        from umbmark.sources.bag.info.report import truth_candidates
+        from umbmark.sources.bag.info.summary import truth_candidates
         from umbmark.sources.bag.reader import listing
 
         candidates, independent = truth_candidates(source)

@@ -1,10 +1,10 @@
 """Looking into a bag's topics, within bounds: what ``umbmark info`` reports
-(:mod:`umbmark.sources.bag.info.report`).
+(:mod:`umbmark.sources.bag.info.summary`).
 
 :func:`inspect_topics` finds each topic's first and last receive times and deserializes
 at most ``max_messages`` of the messages whose content matters, spread over
 :data:`CHUNKS` stretches of the topic's time span (see the docstring of
-:mod:`umbmark.sources.bag.info.report`). What they show is kept per topic (:class:`Content`):
+:mod:`umbmark.sources.bag.info.summary`). What they show is kept per topic (:class:`Content`):
 the joints' ranges and speeds, the transforms' ranges and intervals, the ranges of
 positions and counters, the models of Gazebo's model states, the scatter of GNSS fixes,
 and the intervals between consecutive messages read (within a stretch), from which the

@@ -1,0 +1,188 @@
+"""A calibration of sources: read them with the parameters that were active, estimate,
+compose; what they hold decides how (a bag's scans with ``scan_topic``, motion intervals,
+or runs, ``--method auto`` choosing among the estimators).
+
+:func:`calibrate_sources` is what ``umbmark calibrate`` computes before it writes files or
+records the history (:func:`umbmark.jobs.calibrate.calibrate`); ``umbmark report`` and the
+self-calibration calibrate their passes with it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+
+from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
+from umbmark.calibration.result import CalibrationResult
+from umbmark.core.bounds import check_square_geometry
+from umbmark.core.errors import InputError
+from umbmark.estimators.plausibility import judge_table
+from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
+from umbmark.runs.active import read_each
+from umbmark.runs.options import ReadOptions
+from umbmark.runs.read import RunSource, is_intervals, is_runs, pool_runs, source_name
+
+__all__ = ["calibrate_sources"]
+
+
+def calibrate_sources(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    *,
+    method: str | None = None,
+    wheelbase: float | None = None,
+    side_length: float | None = None,
+    override_verdict: bool = False,
+    fit_truth_offset: bool = False,
+) -> CalibrationResult:
+    """The calibration of ``sources`` (the keywords as :func:`umbmark.calibrate`'s).
+
+    Raises
+    ------
+    InputError
+        Bad options, a bad source, sources that disagree, a method that cannot
+        calibrate what they hold.
+    """
+    _check_method(method, fit_truth_offset)
+    result = _calibrate(
+        sources, options, method, wheelbase, side_length,
+        override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
+    )  # fmt: skip
+    return replace(result, forced=override_verdict)
+
+
+def _check_method(method: str | None, fit_truth_offset: bool) -> None:
+    if method is not None and method not in CHOICES:
+        raise InputError(f"--method {method!r}: use one of {', '.join(NAMES)} or {AUTO}")
+    fitting = names(trajectories=True)
+    if fit_truth_offset and method not in fitting:
+        raise InputError(
+            f"--fit-truth-offset needs --method {' or '.join(fitting)}, not "
+            f"{method or DEFAULT.name}"
+        )
+
+
+def _calibrate(
+    sources: Sequence[RunSource],
+    read_options: ReadOptions,
+    method: str | None,
+    wheelbase: float | None,
+    side_length: float | None,
+    *,
+    override_verdict: bool,
+    fit_truth_offset: bool,
+) -> CalibrationResult:
+    """The calibration of the sources by what they hold: a bag's scans, motion intervals,
+    or runs (with the note of ``auto``'s choice)."""
+    if read_options.scan_topic is not None:
+        return _calibrate_scans(sources, read_options, method, wheelbase, side_length)
+    if any(is_intervals(s, read_options) for s in sources) or method in INTERVALS:
+        return _calibrate_intervals(sources, read_options, method or AUTO, wheelbase, side_length)
+    result, note, nominal_best = _calibrate_runs(
+        sources, read_options, method or DEFAULT.name, wheelbase, side_length,
+        override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
+    )  # fmt: skip
+    result = replace(result, nominal_best=nominal_best)
+    return result if note is None else replace(result, notes=(*result.notes, note))
+
+
+def _calibrate_intervals(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    method: str,
+    wheelbase: float | None,
+    side_length: float | None,
+) -> CalibrationResult:
+    """A calibration of tuple files by an estimator of motion intervals (``auto`` takes
+    the first)."""
+    from umbmark.calibration.scan import calibrate_intervals
+
+    if method not in (*INTERVALS, AUTO):
+        raise InputError(
+            f"motion intervals (tuple files) are calibrated by --method {' or '.join(INTERVALS)}, "
+            f"not {method}"
+        )
+    if not all(is_intervals(s, options) for s in sources):
+        raise InputError(
+            f"--method {method} calibrates motion intervals (tuple files; docs/formats.md), "
+            "not runs"
+        )
+    chosen = INTERVALS[0] if method == AUTO else method
+    paths = [Path(source_name(s)) for s in sources]
+    return calibrate_intervals(paths, options, chosen, wheelbase=wheelbase, side_length=side_length)
+
+
+def _calibrate_scans(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    method: str | None,
+    wheelbase: float | None,
+    side_length: float | None,
+) -> CalibrationResult:
+    """A calibration of bags' wheels against their laser's scan matching (``--scan-topic``)."""
+    from umbmark.calibration.scan import calibrate_scan_bags
+    from umbmark.runs.read import is_runs
+
+    if method is not None and method not in (*INTERVALS, AUTO):
+        raise InputError(
+            f"--scan-topic calibrates by --method {' or '.join(INTERVALS)} (the default with "
+            f"it), not {method}"
+        )
+    if any(is_runs(s) for s in sources):
+        raise InputError("--scan-topic reads bags, not runs in memory")
+    chosen = INTERVALS[0] if method in (None, AUTO) else method
+    paths = [Path(source_name(s)) for s in sources]
+    return calibrate_scan_bags(paths, options, chosen, wheelbase=wheelbase, side_length=side_length)
+
+
+def _calibrate_runs(
+    sources: Sequence[RunSource],
+    read_options: ReadOptions,
+    method: str,
+    wheelbase: float | None,
+    side_length: float | None,
+    *,
+    override_verdict: bool,
+    fit_truth_offset: bool,
+) -> tuple[CalibrationResult, str | None, bool]:
+    """A calibration of runs: the result, a note on the method chosen, and whether
+    ``auto`` found the nominal parameters best."""
+    entry = find(method)
+    if side_length is None and entry is not None and entry.side_required:
+        from umbmark.runs.read import is_table
+
+        if any(is_table(s, read_options) for s in sources):
+            raise InputError("--side-length is required: the side of the square path, in metres")
+    each = [
+        judge_table(one, read_options.unit, read_options.angle_unit, side_length)
+        if not is_runs(source) and one.formats == ("table",)
+        else one
+        for source, one in zip(
+            sources,
+            read_each(
+                sources,
+                read_options,
+                wheelbase=wheelbase,
+                side_length=side_length,
+                override_verdict=override_verdict,
+            ),
+            strict=True,
+        )
+    ]
+    read = each[0] if len(each) == 1 else pool_runs(each)
+    if any(run.kind == "square" for run in read.runs):
+        active = read.active
+        check_square_geometry(
+            read.side_length, active.effective_wheelbase, read.origins, active.separation_multiplier
+        )
+    chosen, note, nominal_best = method, None, False
+    if method == AUTO:
+        from umbmark.calibration.auto import auto_method
+
+        chosen, note, nominal_best = auto_method(each, read)
+    result = calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
+    if chosen in names(trajectories=True) and len(read.parts) > 1:
+        disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
+        result = replace(result, input_warnings=(*result.input_warnings, *disagree))
+    return result, note, nominal_best
