@@ -1,3 +1,4 @@
+# ruff: noqa: E501
 """Build the ROS 2 interface packages that have no wheel into the ROS 2 Python environment.
 
 ``umbmark selfcal --ros2 --reload`` talks to the controller manager, and the laser's mounting
@@ -45,33 +46,264 @@ BUILD_REQUIREMENTS = [
     "catkin-pkg>=1.0",
 ]
 
-# fmt: off
+# The interface files, verbatim (lines as long as upstream's).
 CONTROLLER_MANAGER_MSGS: dict[str, str] = {
-    'msg/ChainConnection.msg': 'string name        # name of controller exporting reference_interfaces\nstring[] reference_interfaces        # list of reference exported by controller\n',
-    'msg/ControllerManagerActivity.msg': '# This message is used to provide the activity within the controller manager regarding the change in state of controllers and hardware interfaces\n\n# The header is used to provide timestamp information\nstd_msgs/Header header\n\n# The current state of the controllers\nNamedLifecycleState[] controllers\n\n# The current state of the hardware components\nNamedLifecycleState[] hardware_components\n',
-    'msg/ControllerState.msg': "string name        # controller name\nstring state        # controller state: unconfigured, inactive, active, or finalized\nstring type        # the controller class name, e.g. joint_trajectory_controller/JointTrajectoryController\nbool is_async       # true, if controller runs asynchronously. false, if controller runs synchronously\nuint16 update_rate        # update rate of the controller in Hz\nstring[] claimed_interfaces        # command interfaces currently owned by controller\nstring[] required_command_interfaces        # command interfaces required by controller\nstring[] required_state_interfaces        # state interfaces required by controller\nbool is_chainable        # specifies whether or not controller can export references for a controller chain\nbool is_chained        # specifies whether or not controller's exported references are claimed by another controller\nstring[] exported_state_interfaces        # state interfaces to be exported (only applicable if is_chainable is true)\nstring[] reference_interfaces        # references to be exported (only applicable if is_chainable is true)\nChainConnection[] chain_connections        # specifies list of controllers and their exported references that the controller is chained to\n",
-    'msg/HardwareComponentState.msg': 'string name # Name of the hardware component\nstring type # Type of the hardware component\nbool is_async # If the hardware component is running asynchronously\nuint16 rw_rate # read/write rate of the hardware component in Hz\nstring plugin_name # The name of the plugin that is used to load the hardware component\nlifecycle_msgs/State state # State of the hardware component\nHardwareInterface[] command_interfaces # Command interfaces of the hardware component\nHardwareInterface[] state_interfaces # State interfaces of the hardware component\n',
-    'msg/HardwareInterface.msg': 'string name\nstring data_type\nbool is_available\nbool is_claimed\n',
-    'msg/NamedLifecycleState.msg': '# This message is used to provide information about the lifecycle state of the controller or the hardware components\n\n# The name of the controller or hardware interface\nstring name\n\n# The current lifecycle state of the controller or hardware components\nlifecycle_msgs/State state\n',
-    'srv/CleanupController.srv': '# The CleanupController service allows you to cleanup a single controller\n# from controller_manager\n\n# To cleanup a controller, specify the "name" of the controller.\n# The return value "ok" indicates if the controller was successfully\n# cleaned up or not\n\nstring name\n---\nbool ok\n',
-    'srv/ConfigureController.srv': '# The ConfigureController service allows you to configure a single controller\n# inside controller_manager\n\n# To configure a controller, specify the "name" of the controller.\n# The return value "ok" indicates if the controller was successfully\n# configured or not.\n\nstring name\n---\nbool ok\n',
-    'srv/ListControllerTypes.srv': '# The ListControllers service returns a list of controller types that are known\n# to the controller manager plugin mechanism.\n\n---\nstring[] types\nstring[] base_classes\n',
-    'srv/ListControllers.srv': '# The ListControllers service returns a list of controller names/states/types of the\n# controllers that are loaded inside the controller_manager.\n\n---\ncontroller_manager_msgs/ControllerState[] controller\n',
-    'srv/ListHardwareComponents.srv': '# The ListHardwareComponents service returns a list of hardware HardwareComponentsState.\n# This will convey name, component_type, state and type of the components\n# that are loaded inside the resource_manager.\n\n---\nHardwareComponentState[] component\n',
-    'srv/ListHardwareInterfaces.srv': '\n---\nHardwareInterface[] command_interfaces\nHardwareInterface[] state_interfaces\n',
-    'srv/LoadController.srv': '# The LoadController service allows you to load a single controller\n# inside controller_manager\n\n# To load a controller, specify the "name" of the controller.\n# The return value "ok" indicates if the controller was successfully\n# constructed and initialized or not.\n\nstring name\n---\nbool ok\n',
-    'srv/ReloadControllerLibraries.srv': '# The ReloadControllerLibraries service will reload all controllers that are available in\n# the system as plugins\n\n# Reloading libraries only works if there are no controllers loaded. If there\n# are still some controllers loaded, the reloading will fail.\n# If this bool is set to true, all loaded controllers will get\n# killed automatically, and the reloading can succeed.\nbool force_kill\n---\nbool ok\n',
-    'srv/SetHardwareComponentState.srv': '# The SetHardwareComponentState service allows to control life-cycle of a single hardware component.\n# Supported states are defined in the design document of LifecycleNodes available at:\n# https://design.ros2.org/articles/node_lifecycle.html\n# To control life-cycle of a hardware component, specify its "name" and "target_state".\n# Target state may be defined by "id" using a constant from `lifecycle_msgs/msg/State` or a label\n# using definitions from `hardware_interface/types/lifecycle_state_names.hpp` file.\n# The return value "ok" indicates if the component has successfully changed its state to "target_state".\n# The return value "state" returns current state of the hardware component.\n\nstring name\nlifecycle_msgs/State target_state\n---\nbool ok\nlifecycle_msgs/State state\n',
-    'srv/SwitchController.srv': '# The SwitchController service allows you to deactivate a number of controllers\n# and activate a number of controllers, all in one single timestep of the\n# controller manager\'s control loop.\n\n# To switch controllers, specify\n#  * the list of controller names to activate,\n#  * the list of controller names to deactivate, and\n#  * the strictness (STRICT, BEST_EFFORT, AUTO, or FORCE_AUTO)\n#    * STRICT means that switching will fail if anything goes wrong (an invalid\n#      controller name, a controller that failed to activate, etc.).\n#    * BEST_EFFORT:\n#      Transitions are only triggered if the controller is not yet in the target state.\n#      If it is already in the target state, no error occurs.\n#      Returns \'false\' if all controllers of \'activate_controllers\' or \'deactivate_controllers\' are not yet loaded or configured,\n#      or the pending transitions of all existing controllers of \'activate_controllers\'\n#      or \'deactivate_controllers\' fail.\n#      Returns \'true\' otherwise.\n#    * AUTO means that the controller manager will automatically resolve the controller\n#      chain in order to activate and/or deactivate the specified controllers.\n#      This is useful in complex systems when you want all dependent controllers to start\n#      within the same update iteration.\n#    * FORCE_AUTO means that the controller manager will take all necessary steps to activate\n#      the specified controllers without requiring you to explicitly list the controllers\n#      to be deactivated. This is useful when the controller being activated depends on\n#      another unknown controller that is currently running. The controller manager will\n#      deactivate any controllers that block the activation of the requested controller,\n#      following the mutually exclusive joint interface switching principle. For example,\n#      to activate a controller that uses a joint\'s position interface, the controller manager\n#      will automatically deactivate any controllers that use conflicting interfaces for\n#      the same joint.\n#  * activate the controllers as soon as their hardware dependencies are ready, will\n#    wait for all interfaces to be ready otherwise\n#  * the timeout before aborting pending controllers. Zero for infinite\n\n# The return value "ok" indicates if the controllers were switched\n# successfully or not. The meaning of success depends on the\n# specified strictness.\n# The return value "message" provides some human-readable information.\n\n\nstring[] activate_controllers\nstring[] deactivate_controllers\nint32 strictness\nint32 BEST_EFFORT=1\nint32 STRICT=2\nint32 AUTO=3\nint32 FORCE_AUTO=4\nbool activate_asap\nbuiltin_interfaces/Duration timeout\n---\nbool ok\nstring message\n',
-    'srv/UnloadController.srv': '# The UnloadController service allows you to unload a single controller\n# from controller_manager\n\n# To unload a controller, specify the "name" of the controller.\n# The return value "ok" indicates if the controller was successfully\n# unloaded or not\n\nstring name\n---\nbool ok\n',
+    "msg/ChainConnection.msg": """\
+string name        # name of controller exporting reference_interfaces
+string[] reference_interfaces        # list of reference exported by controller
+""",
+    "msg/ControllerManagerActivity.msg": """\
+# This message is used to provide the activity within the controller manager regarding the change in state of controllers and hardware interfaces
+
+# The header is used to provide timestamp information
+std_msgs/Header header
+
+# The current state of the controllers
+NamedLifecycleState[] controllers
+
+# The current state of the hardware components
+NamedLifecycleState[] hardware_components
+""",
+    "msg/ControllerState.msg": """\
+string name        # controller name
+string state        # controller state: unconfigured, inactive, active, or finalized
+string type        # the controller class name, e.g. joint_trajectory_controller/JointTrajectoryController
+bool is_async       # true, if controller runs asynchronously. false, if controller runs synchronously
+uint16 update_rate        # update rate of the controller in Hz
+string[] claimed_interfaces        # command interfaces currently owned by controller
+string[] required_command_interfaces        # command interfaces required by controller
+string[] required_state_interfaces        # state interfaces required by controller
+bool is_chainable        # specifies whether or not controller can export references for a controller chain
+bool is_chained        # specifies whether or not controller's exported references are claimed by another controller
+string[] exported_state_interfaces        # state interfaces to be exported (only applicable if is_chainable is true)
+string[] reference_interfaces        # references to be exported (only applicable if is_chainable is true)
+ChainConnection[] chain_connections        # specifies list of controllers and their exported references that the controller is chained to
+""",
+    "msg/HardwareComponentState.msg": """\
+string name # Name of the hardware component
+string type # Type of the hardware component
+bool is_async # If the hardware component is running asynchronously
+uint16 rw_rate # read/write rate of the hardware component in Hz
+string plugin_name # The name of the plugin that is used to load the hardware component
+lifecycle_msgs/State state # State of the hardware component
+HardwareInterface[] command_interfaces # Command interfaces of the hardware component
+HardwareInterface[] state_interfaces # State interfaces of the hardware component
+""",
+    "msg/HardwareInterface.msg": """\
+string name
+string data_type
+bool is_available
+bool is_claimed
+""",
+    "msg/NamedLifecycleState.msg": """\
+# This message is used to provide information about the lifecycle state of the controller or the hardware components
+
+# The name of the controller or hardware interface
+string name
+
+# The current lifecycle state of the controller or hardware components
+lifecycle_msgs/State state
+""",
+    "srv/CleanupController.srv": """\
+# The CleanupController service allows you to cleanup a single controller
+# from controller_manager
+
+# To cleanup a controller, specify the "name" of the controller.
+# The return value "ok" indicates if the controller was successfully
+# cleaned up or not
+
+string name
+---
+bool ok
+""",
+    "srv/ConfigureController.srv": """\
+# The ConfigureController service allows you to configure a single controller
+# inside controller_manager
+
+# To configure a controller, specify the "name" of the controller.
+# The return value "ok" indicates if the controller was successfully
+# configured or not.
+
+string name
+---
+bool ok
+""",
+    "srv/ListControllerTypes.srv": """\
+# The ListControllers service returns a list of controller types that are known
+# to the controller manager plugin mechanism.
+
+---
+string[] types
+string[] base_classes
+""",
+    "srv/ListControllers.srv": """\
+# The ListControllers service returns a list of controller names/states/types of the
+# controllers that are loaded inside the controller_manager.
+
+---
+controller_manager_msgs/ControllerState[] controller
+""",
+    "srv/ListHardwareComponents.srv": """\
+# The ListHardwareComponents service returns a list of hardware HardwareComponentsState.
+# This will convey name, component_type, state and type of the components
+# that are loaded inside the resource_manager.
+
+---
+HardwareComponentState[] component
+""",
+    "srv/ListHardwareInterfaces.srv": """\
+
+---
+HardwareInterface[] command_interfaces
+HardwareInterface[] state_interfaces
+""",
+    "srv/LoadController.srv": """\
+# The LoadController service allows you to load a single controller
+# inside controller_manager
+
+# To load a controller, specify the "name" of the controller.
+# The return value "ok" indicates if the controller was successfully
+# constructed and initialized or not.
+
+string name
+---
+bool ok
+""",
+    "srv/ReloadControllerLibraries.srv": """\
+# The ReloadControllerLibraries service will reload all controllers that are available in
+# the system as plugins
+
+# Reloading libraries only works if there are no controllers loaded. If there
+# are still some controllers loaded, the reloading will fail.
+# If this bool is set to true, all loaded controllers will get
+# killed automatically, and the reloading can succeed.
+bool force_kill
+---
+bool ok
+""",
+    "srv/SetHardwareComponentState.srv": """\
+# The SetHardwareComponentState service allows to control life-cycle of a single hardware component.
+# Supported states are defined in the design document of LifecycleNodes available at:
+# https://design.ros2.org/articles/node_lifecycle.html
+# To control life-cycle of a hardware component, specify its "name" and "target_state".
+# Target state may be defined by "id" using a constant from `lifecycle_msgs/msg/State` or a label
+# using definitions from `hardware_interface/types/lifecycle_state_names.hpp` file.
+# The return value "ok" indicates if the component has successfully changed its state to "target_state".
+# The return value "state" returns current state of the hardware component.
+
+string name
+lifecycle_msgs/State target_state
+---
+bool ok
+lifecycle_msgs/State state
+""",
+    "srv/SwitchController.srv": """\
+# The SwitchController service allows you to deactivate a number of controllers
+# and activate a number of controllers, all in one single timestep of the
+# controller manager's control loop.
+
+# To switch controllers, specify
+#  * the list of controller names to activate,
+#  * the list of controller names to deactivate, and
+#  * the strictness (STRICT, BEST_EFFORT, AUTO, or FORCE_AUTO)
+#    * STRICT means that switching will fail if anything goes wrong (an invalid
+#      controller name, a controller that failed to activate, etc.).
+#    * BEST_EFFORT:
+#      Transitions are only triggered if the controller is not yet in the target state.
+#      If it is already in the target state, no error occurs.
+#      Returns 'false' if all controllers of 'activate_controllers' or 'deactivate_controllers' are not yet loaded or configured,
+#      or the pending transitions of all existing controllers of 'activate_controllers'
+#      or 'deactivate_controllers' fail.
+#      Returns 'true' otherwise.
+#    * AUTO means that the controller manager will automatically resolve the controller
+#      chain in order to activate and/or deactivate the specified controllers.
+#      This is useful in complex systems when you want all dependent controllers to start
+#      within the same update iteration.
+#    * FORCE_AUTO means that the controller manager will take all necessary steps to activate
+#      the specified controllers without requiring you to explicitly list the controllers
+#      to be deactivated. This is useful when the controller being activated depends on
+#      another unknown controller that is currently running. The controller manager will
+#      deactivate any controllers that block the activation of the requested controller,
+#      following the mutually exclusive joint interface switching principle. For example,
+#      to activate a controller that uses a joint's position interface, the controller manager
+#      will automatically deactivate any controllers that use conflicting interfaces for
+#      the same joint.
+#  * activate the controllers as soon as their hardware dependencies are ready, will
+#    wait for all interfaces to be ready otherwise
+#  * the timeout before aborting pending controllers. Zero for infinite
+
+# The return value "ok" indicates if the controllers were switched
+# successfully or not. The meaning of success depends on the
+# specified strictness.
+# The return value "message" provides some human-readable information.
+
+
+string[] activate_controllers
+string[] deactivate_controllers
+int32 strictness
+int32 BEST_EFFORT=1
+int32 STRICT=2
+int32 AUTO=3
+int32 FORCE_AUTO=4
+bool activate_asap
+builtin_interfaces/Duration timeout
+---
+bool ok
+string message
+""",
+    "srv/UnloadController.srv": """\
+# The UnloadController service allows you to unload a single controller
+# from controller_manager
+
+# To unload a controller, specify the "name" of the controller.
+# The return value "ok" indicates if the controller was successfully
+# unloaded or not
+
+string name
+---
+bool ok
+""",
 }
 TF2_MSGS: dict[str, str] = {
-    'msg/TF2Error.msg': 'uint8 NO_ERROR = 0\nuint8 LOOKUP_ERROR = 1\nuint8 CONNECTIVITY_ERROR = 2\nuint8 EXTRAPOLATION_ERROR = 3\nuint8 INVALID_ARGUMENT_ERROR = 4\nuint8 TIMEOUT_ERROR = 5\nuint8 TRANSFORM_ERROR = 6\n\nuint8 error\nstring error_string\n',
-    'msg/TFMessage.msg': 'geometry_msgs/TransformStamped[] transforms\n',
-    'srv/FrameGraph.srv': '---\nstring frame_yaml\n',
-    'action/LookupTransform.action': '#Simple API\nstring target_frame\nstring source_frame\nbuiltin_interfaces/Time source_time\nbuiltin_interfaces/Duration timeout\n\n#Advanced API\nbuiltin_interfaces/Time target_time\nstring fixed_frame\n\n#Whether or not to use the advanced API\nbool advanced\n\n---\ngeometry_msgs/TransformStamped transform\ntf2_msgs/TF2Error error\n---\n',
+    "msg/TF2Error.msg": """\
+uint8 NO_ERROR = 0
+uint8 LOOKUP_ERROR = 1
+uint8 CONNECTIVITY_ERROR = 2
+uint8 EXTRAPOLATION_ERROR = 3
+uint8 INVALID_ARGUMENT_ERROR = 4
+uint8 TIMEOUT_ERROR = 5
+uint8 TRANSFORM_ERROR = 6
+
+uint8 error
+string error_string
+""",
+    "msg/TFMessage.msg": """\
+geometry_msgs/TransformStamped[] transforms
+""",
+    "srv/FrameGraph.srv": """\
+---
+string frame_yaml
+""",
+    "action/LookupTransform.action": """\
+#Simple API
+string target_frame
+string source_frame
+builtin_interfaces/Time source_time
+builtin_interfaces/Duration timeout
+
+#Advanced API
+builtin_interfaces/Time target_time
+string fixed_frame
+
+#Whether or not to use the advanced API
+bool advanced
+
+---
+geometry_msgs/TransformStamped transform
+tf2_msgs/TF2Error error
+---
+""",
 }
-# fmt: on
 
 
 #: name -> (version, dependencies, interface files)
@@ -129,7 +361,7 @@ ament_package()
 def importable(name: str) -> bool:
     """Whether a fresh interpreter of this environment imports the package."""
     code = f"import {name}.msg" if name != "controller_manager_msgs" else f"import {name}.srv"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, check=False)
     return done.returncode == 0
 
 
@@ -175,7 +407,7 @@ def build(name: str, work: Path, jobs: int) -> None:
         ["cmake", "--install", str(bld)],
     ]  # fmt: skip
     for cmd in run:
-        done = subprocess.run(cmd, env=env, capture_output=True, text=True)
+        done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
         if done.returncode != 0:
             tail = "\n".join((done.stdout + done.stderr).splitlines()[-40:])
             sys.exit(f"{name}: `{' '.join(cmd[:2])}` failed:\n{tail}")
@@ -194,7 +426,7 @@ def main() -> int:
         if shutil.which(tool) is None:
             sys.exit(f"{tool} is not on PATH: it is needed to build {', '.join(todo)}")
     pip = [sys.executable, "-m", "pip", "install", "-q", *BUILD_REQUIREMENTS]
-    if subprocess.run(pip).returncode != 0:
+    if subprocess.run(pip, check=False).returncode != 0:
         sys.exit("could not install the interface generators: " + " ".join(BUILD_REQUIREMENTS))
     with tempfile.TemporaryDirectory(prefix="umbmark-ros2-interfaces-") as tmp:
         for name in todo:
