@@ -6,6 +6,7 @@ Run it with the ROS 2 wheels' Python (``.venv-ros2``) and the node's ROS_DOMAIN_
   parameters, the velocity type found on the graph;
 - ``drive SECONDS``: the 50 Hz drive loop (a velocity each period of sim time) at 0.2 m/s
   for SECONDS of sim time: loops per sim second and per wall second, the odometry's travel;
+- ``plan [--reload]``: what ``can_apply`` and ``apply_note`` say (which way applying goes);
 - ``watch``: subscribes the velocity topic (TwistStamped) and prints ``moving`` at the first
   non-zero command; when stdin closes, the last command and two true poses 0.3 s apart.
 """
@@ -116,6 +117,14 @@ def watch() -> dict[str, object]:
     return out
 
 
+def plan(reload: bool) -> dict[str, object]:
+    robot = Ros2Robot(RosOptions(timeout=10.0, reload=reload))
+    try:
+        return {"can_apply": robot.can_apply(), "note": robot.apply_note()}
+    finally:
+        robot.close()
+
+
 def main() -> None:
     what = sys.argv[1]
     if what == "read":
@@ -124,6 +133,8 @@ def main() -> None:
         out = drive(float(sys.argv[2]))
     elif what == "watch":
         out = watch()
+    elif what == "plan":
+        out = plan("--reload" in sys.argv[2:])
     else:
         raise SystemExit(f"unknown probe {what!r}")
     print(json.dumps(out), flush=True)

@@ -201,7 +201,7 @@ class Manager:
         node.create_service(UnloadController, "~/unload_controller", self._unload)
         sim.executor.add_node(node)
 
-    def _list(self, request: object, response: Any) -> Any:  # noqa: ANN401
+    def _list(self, request: object, response: Any) -> Any:
         from controller_manager_msgs.msg import ControllerState
 
         with self.sim.lock:
@@ -215,7 +215,7 @@ class Manager:
                 ]  # fmt: skip
         return response
 
-    def _switch(self, request: Any, response: Any) -> Any:  # noqa: ANN401
+    def _switch(self, request: Any, response: Any) -> Any:
         sim = self.sim
         with sim.lock:
             sim.calls.append(
@@ -239,10 +239,11 @@ class Manager:
                     return response
                 c.command, c.command_time = (0.0, 0.0), -math.inf
                 c.state = "active"
+                sim.reactivated = True
             response.ok, response.message = True, ""
         return response
 
-    def _configure(self, request: Any, response: Any) -> Any:  # noqa: ANN401
+    def _configure(self, request: Any, response: Any) -> Any:
         sim = self.sim
         with sim.lock:
             sim.calls.append(f"configure {request.name}")
@@ -255,7 +256,7 @@ class Manager:
             response.ok = sim._configure()
         return response
 
-    def _load(self, request: Any, response: Any) -> Any:  # noqa: ANN401
+    def _load(self, request: Any, response: Any) -> Any:
         sim = self.sim
         with sim.lock:
             sim.calls.append(f"load {request.name}")
@@ -268,7 +269,7 @@ class Manager:
             response.ok = True
         return response
 
-    def _unload(self, request: Any, response: Any) -> Any:  # noqa: ANN401
+    def _unload(self, request: Any, response: Any) -> Any:
         sim = self.sim
         with sim.lock:
             sim.calls.append(f"unload {request.name}")
@@ -305,6 +306,9 @@ class SimNode:
         self.lock = threading.Lock()
         #: What the controller manager was asked, in order (printed at the end).
         self.calls: list[str] = []
+        #: The odometry's first pose after each activation through the manager.
+        self.restarts: list[list[float]] = []
+        self.reactivated = False
         self.clock = node.create_publisher(Clock, "/clock", 10)
         self.scan = node.create_publisher(LaserScan, "/scan", qos_profile_sensor_data)
         self.truth = node.create_publisher(PoseStamped, "/ground_truth", 10)
@@ -375,6 +379,7 @@ class SimNode:
             "declared": None if controller is None else controller.values(),
             "state": None if controller is None else controller.state,
             "calls": self.calls,
+            "restarts": self.restarts,
             "params_file": self.files,
         }
 
@@ -408,6 +413,9 @@ class SimNode:
             q = p.orientation
             q.x, q.y, q.z, q.w = _quaternion(pose.theta)
             controller.odom.publish(msg)
+            if self.reactivated:  # the first update after a reload: where it starts
+                self.reactivated = False
+                self.restarts.append([pose.x, pose.y, pose.theta])
             if self.tf is not None:
                 self._publish_tf(msg)
         if step % self.scan_every == 0:
