@@ -146,7 +146,7 @@ def reload(robot: Ros2Robot, way: Literal["configure", "load"], params: DrivePar
     wrong = [
         f"{key} {getattr(held, key):.9g} (asked {value:.9g})"
         for key, value in multipliers(params).items()
-        if not math.isclose(getattr(held, key), value, rel_tol=1e-9)
+        if not math.isclose(getattr(held, key), value, rel_tol=1e-8)
     ]
     if wrong:
         raise _stopped(robot, f"after the reload {node} holds {', '.join(wrong)}")
