@@ -30,14 +30,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal, Protocol
 
 from umbmark.core.errors import InputError, SafetyError
 from umbmark.robot.base import DriveParams
-from umbmark.robot.ros_common import MULTIPLIERS, multipliers
-
-if TYPE_CHECKING:
-    from umbmark.robot.ros2 import Ros2Robot
+from umbmark.robot.ros_common import MULTIPLIERS, RosOptions, multipliers
 
 __all__ = ["RESTART", "ReloadPlan", "controller_names", "plan_reload", "reload"]
 
@@ -48,6 +45,23 @@ RESTART = (
 )
 #: The type of a parameter file list on the manager (Jazzy and later; Humble: one string).
 STRING, STRING_ARRAY = 4, 9
+
+
+class Ros2Robot(Protocol):
+    """What this module needs of :class:`umbmark.robot.ros2.Ros2Robot`."""
+
+    @property
+    def options(self) -> RosOptions: ...
+
+    def call(self, kind: Any, service: str, request: Any) -> Any: ...  # noqa: ANN401
+
+    def send_velocity(self, linear: float, angular: float) -> None: ...
+
+    def now(self) -> float: ...
+
+    def wait_back(self, since: float) -> None: ...
+
+    def drive_params(self) -> DriveParams: ...
 
 
 @dataclass(frozen=True)
