@@ -6,20 +6,39 @@ tests/test_ros2.py and benchmarks/bench_ros2.py). Run it with the ROS 2 wheels' 
 The controller's interfaces as ros2_controllers has them (``diff_drive_controller.cpp``,
 ``odometry.cpp``, ``diff_drive_controller_parameter.yaml``; Jazzy and Kilted):
 
-- the node is the controller's, ``/diff_drive_controller`` (``--controller``): it subscribes
+- the controller is a node of its own, ``/diff_drive_controller`` (``--controller``); the
+  clock, laser, truth and URDF are published by ``/sim_robot``. The controller subscribes
   ``~/cmd_vel`` as ``geometry_msgs/TwistStamped`` (``--unstamped``: ``geometry_msgs/Twist``,
   Humble with ``use_stamped_vel: false``). A zero stamp is taken as "now"; a message whose
   stamp is older than ``cmd_vel_timeout`` (0.5 s) when it comes is ignored; at each update a
   command older than the timeout brakes (zero velocity);
 - it publishes ``~/odom`` (``nav_msgs/Odometry``, ``odom`` -> ``base_link``) every update;
-  ``/tf`` too where ``tf2_msgs`` is importable (no wheel of it exists);
+  ``/tf`` too where ``tf2_msgs`` is importable;
 - its parameters ``wheel_separation``, ``wheel_radius``, ``wheel_separation_multiplier``,
   ``left_wheel_radius_multiplier``, ``right_wheel_radius_multiplier``, ``cmd_vel_timeout``
   are declared from ``--params-file`` (a ros2_control YAML, ``ros__parameters``; several
-  may be given, later ones override) and, as on Jazzy and Kilted, read only when the
-  controller is configured: ``set_parameters`` succeeds and changes nothing the odometry
-  uses until the controller is configured again (a restart of this node; the odometry then
-  starts from zero, as the controller's ``reset()`` does);
+  may be given, later ones override) and read only when the controller is configured
+  (``on_configure``): on Humble, Jazzy and Kilted ``set_parameters`` succeeds and changes
+  nothing until then; ``--distro rolling``: the multipliers are read-only (set_parameters
+  refused; only the parameter files a load reads set them);
+- a configure resets the odometry's pose to zero; its first update afterwards moves it
+  by the wheels' rotation times the radius change (Humble to Kilted with position
+  feedback: ``odometry.cpp`` keeps the last wheel positions in metres at the old radii),
+  and a controller just loaded by the wheels' whole travel (its remembered positions are
+  zero; the hardware's are not) (``VirtualRobot.configure_controller``). It publishes
+  ``~/odom`` and takes commands only while active (``on_deactivate`` halts the wheels);
+- where ``controller_manager_msgs`` is importable (``tools/build_ros2_interfaces.py``), a
+  controller manager, ``/controller_manager``, with ``~/list_controllers``,
+  ``~/switch_controller``, ``~/configure_controller``, ``~/load_controller`` and
+  ``~/unload_controller`` under controller_manager.cpp's rules (Kilted): configure only
+  an unconfigured or inactive controller (an inactive one is cleaned up first), unload
+  only one not active (its node destroyed), load only one not loaded (its node created
+  on the files of the manager's ``NAME.params_file``, a string array as the spawner sets
+  it), switch (STRICT) to activate only an inactive one and deactivate only an active
+  one. ``--fail-configure``: every configure through the manager fails (``on_configure``
+  returned FAILURE: the controller stays unconfigured). At its end the node prints
+  ``final {json}``: the parameters its controller runs on, its node's parameters, its
+  state, the manager's calls in order, the odometry's first pose after each activation;
 - ``/clock`` (``rosgraph_msgs/Clock``) runs ``--rate`` times faster than real time, one
   controller period (20 ms) at a time, from 1000 s;
 - ``/robot_description`` (``std_msgs/String``, transient local, as robot_state_publisher

@@ -16,6 +16,7 @@ manager took), never from the code under test.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import threading
 from pathlib import Path
@@ -39,11 +40,11 @@ MULTIPLIERS = (
     "right_wheel_radius_multiplier",
 )
 
-pytestmark = pytest.mark.skipif(
-    subprocess.run([str(PYTHON), "-c", "import controller_manager_msgs.srv"],
-                   capture_output=True, check=False).returncode != 0,
-    reason="no controller_manager_msgs in .venv-ros2: python tools/build_ros2_interfaces.py",
-)  # fmt: skip
+if not any((PYTHON.parents[1] / "lib").glob("python3*/site-packages/controller_manager_msgs/srv")):
+    why = "no controller_manager_msgs in .venv-ros2: python tools/build_ros2_interfaces.py"
+    if os.environ.get("CI") == "true":
+        pytest.fail(f"{why} (the test command runs it)", pytrace=False)
+    pytest.skip(why, allow_module_level=True)
 
 
 class Node(Robot2):
