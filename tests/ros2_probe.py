@@ -23,6 +23,13 @@ from umbmark.robot.ros2 import Ros2Robot
 from umbmark.robot.ros_common import RosOptions
 
 
+def msg_frame(robot: Ros2Robot) -> str:
+    """The frame of the latest scan message."""
+    msg = robot._scan.get()
+    assert msg is not None
+    return str(msg.header.frame_id)
+
+
 def read() -> dict[str, object]:
     robot = Ros2Robot(RosOptions(timeout=10.0))
     try:
@@ -45,6 +52,7 @@ def read() -> dict[str, object]:
             "odom_time": odom.time,
             "scan_time": scan.time,
             "mount": [scan.mount.x, scan.mount.y, scan.mount.theta],
+            "upside_down": robot._mount(msg_frame(robot)).upside_down,
             "stamped": robot._stamped,
             "params": [params.wheel_separation, params.wheel_radius],
         }

@@ -44,7 +44,9 @@ The controller's interfaces as ros2_controllers has them (``diff_drive_controlle
 - ``/robot_description`` (``std_msgs/String``, transient local, as robot_state_publisher
   publishes it): a URDF with ``base_link``, the two wheel joints (``wheel_separation``
   apart, cylinders of ``wheel_radius``) and the laser joint (``--laser-x`` ahead,
-  ``--upside-down``: rolled by 180 degrees, its beams then published in reverse order);
+  ``--upside-down``: rolled by 180 degrees, its beams then published in reverse order;
+  ``--laser-only-in-tf``: left out); where ``tf2_msgs`` is importable, the laser's
+  mounting on ``/tf_static`` too (``base_link`` -> ``laser_mount`` -> ``laser``);
 - ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``, sensor-data QoS) every
   ``--scan-every`` periods; ``/ground_truth`` (``geometry_msgs/PoseStamped``, the true pose).
 """
@@ -112,8 +114,10 @@ def read_params(files: list[str], controller: str) -> dict[str, float]:
     return values
 
 
-def urdf(separation: float, radius: float, laser_x: float, upside_down: bool) -> str:
-    """The robot's description: base_link, two wheels, the laser."""
+def urdf(
+    separation: float, radius: float, laser_x: float, upside_down: bool, laser: bool = True
+) -> str:
+    """The robot's description: base_link, two wheels, the laser (``laser``: in it)."""
     roll = math.pi if upside_down else 0.0
 
     def wheel(side: str, y: float) -> str:
@@ -125,14 +129,16 @@ def urdf(separation: float, radius: float, laser_x: float, upside_down: bool) ->
     <origin xyz="0 {y} {radius}" rpy="-1.5707963267948966 0 0"/><axis xyz="0 0 1"/>
   </joint>"""
 
-    return f"""<?xml version="1.0"?>
-<robot name="sim_robot">
-  <link name="base_link"/>{wheel("left", separation / 2)}{wheel("right", -separation / 2)}
+    mounted = f"""
   <link name="laser"/>
   <joint name="laser_joint" type="fixed">
     <parent link="base_link"/><child link="laser"/>
     <origin xyz="{laser_x} 0 0.2" rpy="{roll} 0 0"/>
-  </joint>
+  </joint>"""
+    wheels = wheel("left", separation / 2) + wheel("right", -separation / 2)
+    return f"""<?xml version="1.0"?>
+<robot name="sim_robot">
+  <link name="base_link"/>{wheels}{mounted if laser else ""}
 </robot>
 """
 
@@ -337,7 +343,7 @@ class SimNode:
             String(
                 data=urdf(
                     configured["wheel_separation"], configured["wheel_radius"], args.laser_x,
-                    args.upside_down,
+                    args.upside_down, laser=not args.laser_only_in_tf,
                 )
             )
         )  # fmt: skip
@@ -345,6 +351,8 @@ class SimNode:
             from tf2_msgs.msg import TFMessage
 
             self.tf = node.create_publisher(TFMessage, "/tf", 10)
+            self.tf_static = node.create_publisher(TFMessage, "/tf_static", latched)
+            self.tf_static.publish(TFMessage(transforms=self._static_transforms()))
         except ImportError:
             self.tf = None
         self.controller: Controller | None = None
@@ -357,6 +365,26 @@ class SimNode:
             self.manager = None
         else:
             self.manager = Manager(self)
+
+    def _static_transforms(self) -> list[Any]:
+        """The laser's mounting as robot_state_publisher puts it on /tf_static, through a
+        frame between: base_link -> laser_mount (ahead, up) -> laser (rolled over when
+        upside down)."""
+        from geometry_msgs.msg import TransformStamped
+
+        out = []
+        for parent, child, x, z, roll in (
+            ("base_link", "laser_mount", self.args.laser_x, 0.2, 0.0),
+            ("laser_mount", "laser", 0.0, 0.0, math.pi if self.upside_down else 0.0),
+        ):
+            tf = TransformStamped()
+            tf.header.stamp.sec, tf.header.stamp.nanosec = _stamp(0.0)
+            tf.header.frame_id, tf.child_frame_id = parent, child
+            tf.transform.translation.x, tf.transform.translation.z = x, z
+            r = tf.transform.rotation
+            r.x, r.y, r.z, r.w = math.sin(roll / 2), 0.0, 0.0, math.cos(roll / 2)
+            out.append(tf)
+        return out
 
     # --- the controller's lifecycle, as controller_manager.cpp runs it ---------------------
 
@@ -513,6 +541,10 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--laser-x", type=float, default=0.1)
     parser.add_argument("--upside-down", action="store_true")
+    parser.add_argument(
+        "--laser-only-in-tf", action="store_true",
+        help="the URDF has no laser: only /tf_static mounts it (needs tf2_msgs)",
+    )  # fmt: skip
     parser.add_argument(
         "--distro", choices=("kilted", "rolling"), default="kilted",
         help="kilted (Humble and Jazzy alike here): the multipliers can be set and are read "

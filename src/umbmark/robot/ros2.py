@@ -14,7 +14,9 @@ install ".[ros2]"``); ``controller_manager_msgs`` for ``--reload`` (no wheel:
 - In: ``nav_msgs/msg/Odometry``, ``sensor_msgs/msg/LaserScan`` (sensor-data QoS), three
   ``sensor_msgs/msg/Range``, a ground-truth ``geometry_msgs/msg/PoseStamped``, the URDF on
   ``/robot_description`` (transient local, as robot_state_publisher latches it).
-- Mountings: ``options.laser_mount`` (``--laser-mount``) where given, else from the URDF
+- Mountings: ``options.laser_mount`` (``--laser-mount``) where given, else from
+  ``/tf_static`` where ``tf2_msgs`` is importable (the static transforms chained without a
+  tf2 buffer: :func:`umbmark.robot.urdf.static_mount`), else from the URDF
   (:func:`umbmark.robot.urdf.urdf_mount`).
 - Geometry: the controller's ``wheel_separation`` and ``wheel_radius`` (its
   ``get_parameters`` service), else the URDF's wheels, else the options.
@@ -59,7 +61,7 @@ from umbmark.robot.ros_common import (
     write_params,
 )
 from umbmark.robot.ros_robot import RosRobot
-from umbmark.robot.urdf import urdf_geometry, urdf_mount
+from umbmark.robot.urdf import static_mount, urdf_geometry, urdf_mount
 
 __all__ = ["Ros2Robot"]
 
@@ -139,6 +141,12 @@ class Ros2Robot(RosRobot):
         node.create_subscription(
             String, "/robot_description", lambda m: self._description.put(m.data), latched
         )
+        self._static: dict[str, tuple[str, tuple[float, ...], tuple[float, ...]]] = {}
+        if importlib.util.find_spec("tf2_msgs") is not None:
+            from tf2_msgs.msg import TFMessage
+
+            static = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+            node.create_subscription(TFMessage, "/tf_static", self._on_static, static)
         if options.scan:
             node.create_subscription(ScanMsg, options.scan, self._scan.put, qos_profile_sensor_data)
         for topic, latest in zip(options.ranges, self._ranges, strict=True):
@@ -181,6 +189,31 @@ class Ros2Robot(RosRobot):
             "geometry_msgs Twist or TwistStamped (--cmd-vel)"
         )
 
+    def _on_static(self, msg: Any) -> None:  # noqa: ANN401 (a tf2_msgs TFMessage)
+        """Keep each static transform: child frame -> parent, translation, rotation."""
+        edges = {}
+        for tf in msg.transforms:
+            t, q = tf.transform.translation, tf.transform.rotation
+            edges[tf.child_frame_id.lstrip("/")] = (
+                tf.header.frame_id.lstrip("/"), (t.x, t.y, t.z), (q.x, q.y, q.z, q.w),
+            )  # fmt: skip
+        with self._ticks:
+            self._static = {**self._static, **edges}
+
+    def _static_mount(self, frame: str) -> Mount | None:
+        """The frame's mounting through ``/tf_static`` (waiting up to a second for it to
+        come; None: no ``tf2_msgs`` here, or no such chain)."""
+        if importlib.util.find_spec("tf2_msgs") is None:
+            return None
+        deadline = time.monotonic() + min(1.0, self.options.timeout)
+        while True:
+            with self._ticks:
+                edges = self._static
+            found = static_mount(edges, self.options.base_frame, frame)
+            if found is not None or time.monotonic() > deadline:
+                return found
+            time.sleep(0.02)
+
     def _on_clock(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
         """Sim time: kept here, then the waiting drive loop is woken (rclpy's own time
         source would update the node's clock in another callback, maybe after ours)."""
@@ -203,7 +236,8 @@ class Ros2Robot(RosRobot):
         return msg
 
     def _mount(self, frame: str) -> Mount:
-        """The sensor frame's mounting: ``--laser-mount`` for the laser, else the URDF."""
+        """The sensor frame's mounting: ``--laser-mount`` for the laser, else
+        ``/tf_static``, else the URDF."""
         mount = self._mounts.get(frame)
         if mount is not None:
             return mount
@@ -211,6 +245,8 @@ class Ros2Robot(RosRobot):
         given = self.options.laser_mount
         if given is not None and scan is not None and scan.header.frame_id == frame:
             mount = Mount(given)
+        elif (found := self._static_mount(frame)) is not None:
+            mount = found
         else:
             text = self._description.wait(self.options.timeout)
             found = None if text is None else urdf_mount(text, self.options.base_frame, frame)
