@@ -253,7 +253,8 @@ def _switch(robot: Ros2Robot, cm: str, name: str, *, activate: bool) -> None:
     answer = robot.call(SwitchController, f"{cm}/switch_controller", request)
     if not answer.ok:
         verb = "activate" if activate else "deactivate"
-        detail = f" ({answer.message})" if answer.message else ""
+        message = getattr(answer, "message", "")  # Humble's answer has none
+        detail = f" ({message})" if message else ""
         raise _stopped(robot, f"{cm} refused to {verb} {name}{detail}")
 
 
