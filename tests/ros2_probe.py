@@ -6,6 +6,7 @@ Run it with the ROS 2 wheels' Python (``.venv-ros2``) and the node's ROS_DOMAIN_
   parameters, the velocity type found on the graph;
 - ``drive SECONDS``: the 50 Hz drive loop (a velocity each period of sim time) at 0.2 m/s
   for SECONDS of sim time: loops per sim second and per wall second, the odometry's travel;
+- ``plan [--reload]``: what ``can_apply`` and ``apply_note`` say (which way applying goes);
 - ``watch``: subscribes the velocity topic (TwistStamped) and prints ``moving`` at the first
   non-zero command; when stdin closes, the last command and two true poses 0.3 s apart.
 """
@@ -20,6 +21,13 @@ import time
 
 from umbmark.robot.ros2 import Ros2Robot
 from umbmark.robot.ros_common import RosOptions
+
+
+def msg_frame(robot: Ros2Robot) -> str:
+    """The frame of the latest scan message."""
+    msg = robot._scan.get()
+    assert msg is not None
+    return str(msg.header.frame_id)
 
 
 def read() -> dict[str, object]:
@@ -44,6 +52,7 @@ def read() -> dict[str, object]:
             "odom_time": odom.time,
             "scan_time": scan.time,
             "mount": [scan.mount.x, scan.mount.y, scan.mount.theta],
+            "upside_down": robot._mount(msg_frame(robot)).upside_down,
             "stamped": robot._stamped,
             "params": [params.wheel_separation, params.wheel_radius],
         }
@@ -116,6 +125,14 @@ def watch() -> dict[str, object]:
     return out
 
 
+def plan(reload: bool) -> dict[str, object]:
+    robot = Ros2Robot(RosOptions(timeout=10.0, reload=reload))
+    try:
+        return {"can_apply": robot.can_apply(), "note": robot.apply_note()}
+    finally:
+        robot.close()
+
+
 def main() -> None:
     what = sys.argv[1]
     if what == "read":
@@ -124,6 +141,8 @@ def main() -> None:
         out = drive(float(sys.argv[2]))
     elif what == "watch":
         out = watch()
+    elif what == "plan":
+        out = plan("--reload" in sys.argv[2:])
     else:
         raise SystemExit(f"unknown probe {what!r}")
     print(json.dumps(out), flush=True)

@@ -6,26 +6,47 @@ tests/test_ros2.py and benchmarks/bench_ros2.py). Run it with the ROS 2 wheels' 
 The controller's interfaces as ros2_controllers has them (``diff_drive_controller.cpp``,
 ``odometry.cpp``, ``diff_drive_controller_parameter.yaml``; Jazzy and Kilted):
 
-- the node is the controller's, ``/diff_drive_controller`` (``--controller``): it subscribes
+- the controller is a node of its own, ``/diff_drive_controller`` (``--controller``); the
+  clock, laser, truth and URDF are published by ``/sim_robot``. The controller subscribes
   ``~/cmd_vel`` as ``geometry_msgs/TwistStamped`` (``--unstamped``: ``geometry_msgs/Twist``,
   Humble with ``use_stamped_vel: false``). A zero stamp is taken as "now"; a message whose
   stamp is older than ``cmd_vel_timeout`` (0.5 s) when it comes is ignored; at each update a
   command older than the timeout brakes (zero velocity);
 - it publishes ``~/odom`` (``nav_msgs/Odometry``, ``odom`` -> ``base_link``) every update;
-  ``/tf`` too where ``tf2_msgs`` is importable (no wheel of it exists);
+  ``/tf`` too where ``tf2_msgs`` is importable;
 - its parameters ``wheel_separation``, ``wheel_radius``, ``wheel_separation_multiplier``,
   ``left_wheel_radius_multiplier``, ``right_wheel_radius_multiplier``, ``cmd_vel_timeout``
   are declared from ``--params-file`` (a ros2_control YAML, ``ros__parameters``; several
-  may be given, later ones override) and, as on Jazzy and Kilted, read only when the
-  controller is configured: ``set_parameters`` succeeds and changes nothing the odometry
-  uses until the controller is configured again (a restart of this node; the odometry then
-  starts from zero, as the controller's ``reset()`` does);
+  may be given, later ones override) and read only when the controller is configured
+  (``on_configure``): on Humble, Jazzy and Kilted ``set_parameters`` succeeds and changes
+  nothing until then; ``--distro rolling``: the multipliers are read-only (set_parameters
+  refused; only the parameter files a load reads set them);
+- a configure resets the odometry's pose to zero; its first update afterwards moves it
+  by the wheels' rotation times the radius change (Humble to Kilted with position
+  feedback: ``odometry.cpp`` keeps the last wheel positions in metres at the old radii),
+  and a controller just loaded by the wheels' whole travel (its remembered positions are
+  zero; the hardware's are not) (``VirtualRobot.configure_controller``). It publishes
+  ``~/odom`` and takes commands only while active (``on_deactivate`` halts the wheels);
+- where ``controller_manager_msgs`` is importable (``tools/build_ros2_interfaces.py``), a
+  controller manager, ``/controller_manager``, with ``~/list_controllers``,
+  ``~/switch_controller``, ``~/configure_controller``, ``~/load_controller`` and
+  ``~/unload_controller`` under controller_manager.cpp's rules (Kilted): configure only
+  an unconfigured or inactive controller (an inactive one is cleaned up first), unload
+  only one not active (its node destroyed), load only one not loaded (its node created
+  on the files of the manager's ``NAME.params_file``, a string array as the spawner sets
+  it), switch (STRICT) to activate only an inactive one and deactivate only an active
+  one. ``--fail-configure``: every configure through the manager fails (``on_configure``
+  returned FAILURE: the controller stays unconfigured). At its end the node prints
+  ``final {json}``: the parameters its controller runs on, its node's parameters, its
+  state, the manager's calls in order, the odometry's first pose after each activation;
 - ``/clock`` (``rosgraph_msgs/Clock``) runs ``--rate`` times faster than real time, one
   controller period (20 ms) at a time, from 1000 s;
 - ``/robot_description`` (``std_msgs/String``, transient local, as robot_state_publisher
   publishes it): a URDF with ``base_link``, the two wheel joints (``wheel_separation``
   apart, cylinders of ``wheel_radius``) and the laser joint (``--laser-x`` ahead,
-  ``--upside-down``: rolled by 180 degrees, its beams then published in reverse order);
+  ``--upside-down``: rolled by 180 degrees, its beams then published in reverse order;
+  ``--laser-only-in-tf``: left out); where ``tf2_msgs`` is importable, the laser's
+  mounting on ``/tf_static`` too (``base_link`` -> ``laser_mount`` -> ``laser``);
 - ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``, sensor-data QoS) every
   ``--scan-every`` periods; ``/ground_truth`` (``geometry_msgs/PoseStamped``, the true pose).
 """
@@ -33,17 +54,20 @@ The controller's interfaces as ros2_controllers has them (``diff_drive_controlle
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import signal
 import threading
 import time
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import rclpy
 import yaml
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from rclpy.signals import SignalHandlerOptions
@@ -90,8 +114,10 @@ def read_params(files: list[str], controller: str) -> dict[str, float]:
     return values
 
 
-def urdf(separation: float, radius: float, laser_x: float, upside_down: bool) -> str:
-    """The robot's description: base_link, two wheels, the laser."""
+def urdf(
+    separation: float, radius: float, laser_x: float, upside_down: bool, laser: bool = True
+) -> str:
+    """The robot's description: base_link, two wheels, the laser (``laser``: in it)."""
     roll = math.pi if upside_down else 0.0
 
     def wheel(side: str, y: float) -> str:
@@ -103,26 +129,196 @@ def urdf(separation: float, radius: float, laser_x: float, upside_down: bool) ->
     <origin xyz="0 {y} {radius}" rpy="-1.5707963267948966 0 0"/><axis xyz="0 0 1"/>
   </joint>"""
 
-    return f"""<?xml version="1.0"?>
-<robot name="sim_robot">
-  <link name="base_link"/>{wheel("left", separation / 2)}{wheel("right", -separation / 2)}
+    mounted = f"""
   <link name="laser"/>
   <joint name="laser_joint" type="fixed">
     <parent link="base_link"/><child link="laser"/>
     <origin xyz="{laser_x} 0 0.2" rpy="{roll} 0 0"/>
-  </joint>
+  </joint>"""
+    wheels = wheel("left", separation / 2) + wheel("right", -separation / 2)
+    return f"""<?xml version="1.0"?>
+<robot name="sim_robot">
+  <link name="base_link"/>{wheels}{mounted if laser else ""}
 </robot>
 """
 
 
+class Controller:
+    """The diff_drive_controller's node: its parameters (declared from the parameter files;
+    Rolling: the multipliers read-only), ``~/cmd_vel`` and ``~/odom``; its lifecycle state."""
+
+    def __init__(self, sim: SimNode, values: dict[str, float]) -> None:
+        self.sim = sim
+        self.node = node = rclpy.create_node(sim.name)
+        read_only = sim.args.distro == "rolling"
+        for key, value in values.items():  # set_parameters changes these, not the robot
+            locked = read_only and key.endswith("_multiplier")
+            node.declare_parameter(key, value, ParameterDescriptor(read_only=locked))
+        self.state = "unconfigured"
+        self.timeout = values["cmd_vel_timeout"]
+        self.command = (0.0, 0.0)
+        self.command_time = -math.inf  # sim time of the command's stamp
+        self.odom = node.create_publisher(Odometry, "~/odom", 10)
+        if sim.args.unstamped:
+            node.create_subscription(Twist, "~/cmd_vel", self._on_twist, 10)
+        else:
+            node.create_subscription(TwistStamped, "~/cmd_vel", self._on_stamped, 10)
+
+    def values(self) -> dict[str, float]:
+        """The node's parameters now (what on_configure reads)."""
+        return {k: float(self.node.get_parameter(k).value) for k in DEFAULTS}
+
+    def _on_twist(self, msg: Twist) -> None:
+        with self.sim.lock:  # Humble's unstamped topic: stamped on arrival
+            if self.state != "active":
+                return  # subscriber_is_active_ is false
+            self.command = (msg.linear.x, msg.angular.z)
+            self.command_time = self.sim.robot.now()
+
+    def _on_stamped(self, msg: TwistStamped) -> None:
+        with self.sim.lock:
+            if self.state != "active":
+                return  # subscriber_is_active_ is false
+            now = self.sim.robot.now()
+            stamp = msg.header.stamp
+            t = now if stamp.sec == 0 and stamp.nanosec == 0 else (
+                stamp.sec + 1e-9 * stamp.nanosec - T0
+            )  # fmt: skip
+            if self.timeout != 0.0 and now - t >= self.timeout:
+                return  # "Ignoring the received message ... older than the current time"
+            self.command = (msg.twist.linear.x, msg.twist.angular.z)
+            self.command_time = t
+
+
+class Manager:
+    """``/controller_manager``'s services for the one controller, with
+    controller_manager.cpp's rules: configure only an unconfigured or inactive controller
+    (an inactive one is cleaned up first), unload only one that is not active, load only
+    one not loaded (its ``NAME.type`` set, its ``NAME.params_file`` read now), switch
+    (STRICT) only to activate an inactive one and deactivate an active one."""
+
+    def __init__(self, sim: SimNode) -> None:
+        from controller_manager_msgs.srv import (
+            ConfigureController,
+            ListControllers,
+            LoadController,
+            SwitchController,
+            UnloadController,
+        )
+        from rclpy.parameter import Parameter
+
+        self.sim = sim
+        self.node = node = rclpy.create_node(
+            "controller_manager", allow_undeclared_parameters=True,
+            automatically_declare_parameters_from_overrides=True,
+        )  # fmt: skip
+        name = sim.name
+        node.declare_parameter(f"{name}.type", "diff_drive_controller/DiffDriveController")
+        if sim.files:  # as the spawner sets it (--param-file)
+            node.set_parameters(
+                [Parameter(f"{name}.params_file", Parameter.Type.STRING_ARRAY, sim.files)]
+            )
+        self.switch_kind = SwitchController
+        node.create_service(ListControllers, "~/list_controllers", self._list)
+        node.create_service(SwitchController, "~/switch_controller", self._switch)
+        node.create_service(ConfigureController, "~/configure_controller", self._configure)
+        node.create_service(LoadController, "~/load_controller", self._load)
+        node.create_service(UnloadController, "~/unload_controller", self._unload)
+        sim.executor.add_node(node)
+
+    def _list(self, request: object, response: Any) -> Any:
+        from controller_manager_msgs.msg import ControllerState
+
+        with self.sim.lock:
+            c = self.sim.controller
+            if c is not None:
+                response.controller = [
+                    ControllerState(
+                        name=self.sim.name, state=c.state, update_rate=50,
+                        type=self.node.get_parameter(f"{self.sim.name}.type").value,
+                    )
+                ]  # fmt: skip
+        return response
+
+    def _switch(self, request: Any, response: Any) -> Any:
+        sim = self.sim
+        with sim.lock:
+            sim.calls.append(
+                f"switch +{','.join(request.activate_controllers)} "
+                f"-{','.join(request.deactivate_controllers)}"
+            )
+            c = sim.controller
+            strict = request.strictness == self.switch_kind.Request.STRICT
+            wanted = [*request.activate_controllers, *request.deactivate_controllers]
+            if any(n != sim.name for n in wanted) or (wanted and c is None):
+                response.ok, response.message = not strict, "controller not loaded"
+                return response
+            if c is not None and sim.name in request.deactivate_controllers:
+                if c.state != "active":
+                    response.ok, response.message = not strict, "not active"
+                    return response
+                c.state = "inactive"  # on_deactivate: halt()
+            if c is not None and sim.name in request.activate_controllers:
+                if c.state != "inactive":
+                    response.ok, response.message = not strict, f"{c.state}, not inactive"
+                    return response
+                c.command, c.command_time = (0.0, 0.0), -math.inf
+                c.state = "active"
+                sim.reactivated = True
+            response.ok, response.message = True, ""
+        return response
+
+    def _configure(self, request: Any, response: Any) -> Any:
+        sim = self.sim
+        with sim.lock:
+            sim.calls.append(f"configure {request.name}")
+            c = sim.controller
+            if c is None or request.name != sim.name or c.state == "active":
+                response.ok = False
+                return response
+            if c.state == "inactive":  # cleaned up first: on_cleanup's reset()
+                c.state = "unconfigured"
+            response.ok = sim._configure()
+        return response
+
+    def _load(self, request: Any, response: Any) -> Any:
+        sim = self.sim
+        with sim.lock:
+            sim.calls.append(f"load {request.name}")
+            if request.name != sim.name or sim.controller is not None:
+                response.ok = False  # "A controller named ... was already loaded"
+                return response
+            files = self.node.get_parameter_or(f"{sim.name}.params_file", None).value
+            sim.files = [files] if isinstance(files, str) else list(files or [])
+            sim._load()
+            response.ok = True
+        return response
+
+    def _unload(self, request: Any, response: Any) -> Any:
+        sim = self.sim
+        with sim.lock:
+            sim.calls.append(f"unload {request.name}")
+            c = sim.controller
+            if c is None or request.name != sim.name or c.state == "active":
+                response.ok = False
+                return response
+            sim._unload()
+            response.ok = True
+        return response
+
+
 class SimNode:
-    def __init__(self, args: argparse.Namespace) -> None:
-        name = args.controller.strip("/").split("/")[-1]
-        self.node = node = rclpy.create_node(name)
-        configured = read_params(args.params_file, args.controller)
-        for key, value in configured.items():  # set_parameters changes these, not the robot
-            node.declare_parameter(key, value)
-        self.timeout = configured["cmd_vel_timeout"]
+    """The robot (clock, laser, truth, URDF: node ``sim_robot``), its controller (node
+    ``--controller``, loaded, configured and active at the start, as a spawner leaves it)
+    and, where controller_manager_msgs is importable, the controller manager."""
+
+    def __init__(self, args: argparse.Namespace, executor: SingleThreadedExecutor) -> None:
+        self.args, self.executor = args, executor
+        self.name = args.controller.strip("/").split("/")[-1]
+        self.files = list(args.params_file)
+        self.node = node = rclpy.create_node("sim_robot")
+        executor.add_node(node)
+        configured = read_params(self.files, args.controller)
         world = corner_world()
         self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
         self.robot = VirtualRobot(
@@ -133,10 +329,12 @@ class SimNode:
         self.upside_down = args.upside_down
         self.rate, self.scan_every = args.rate, args.scan_every
         self.lock = threading.Lock()
-        self.command = (0.0, 0.0)
-        self.command_time = -math.inf  # sim time of the command's stamp
+        #: What the controller manager was asked, in order (printed at the end).
+        self.calls: list[str] = []
+        #: The odometry's first pose after each activation through the manager.
+        self.restarts: list[list[float]] = []
+        self.reactivated = False
         self.clock = node.create_publisher(Clock, "/clock", 10)
-        self.odom = node.create_publisher(Odometry, "~/odom", 10)
         self.scan = node.create_publisher(LaserScan, "/scan", qos_profile_sensor_data)
         self.truth = node.create_publisher(PoseStamped, "/ground_truth", 10)
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -145,7 +343,7 @@ class SimNode:
             String(
                 data=urdf(
                     configured["wheel_separation"], configured["wheel_radius"], args.laser_x,
-                    args.upside_down,
+                    args.upside_down, laser=not args.laser_only_in_tf,
                 )
             )
         )  # fmt: skip
@@ -153,40 +351,95 @@ class SimNode:
             from tf2_msgs.msg import TFMessage
 
             self.tf = node.create_publisher(TFMessage, "/tf", 10)
+            self.tf_static = node.create_publisher(TFMessage, "/tf_static", latched)
+            self.tf_static.publish(TFMessage(transforms=self._static_transforms()))
         except ImportError:
             self.tf = None
-        if args.unstamped:
-            node.create_subscription(Twist, "~/cmd_vel", self._on_twist, 10)
+        self.controller: Controller | None = None
+        self._load()
+        self._configure()
+        self.controller.state = "active"  # type: ignore[union-attr]
+        try:
+            import controller_manager_msgs  # noqa: F401
+        except ImportError:
+            self.manager = None
         else:
-            node.create_subscription(TwistStamped, "~/cmd_vel", self._on_stamped, 10)
+            self.manager = Manager(self)
 
-    def _sim_now(self) -> float:
-        return self.robot.now()
+    def _static_transforms(self) -> list[Any]:
+        """The laser's mounting as robot_state_publisher puts it on /tf_static, through a
+        frame between: base_link -> laser_mount (ahead, up) -> laser (rolled over when
+        upside down)."""
+        from geometry_msgs.msg import TransformStamped
 
-    def _on_twist(self, msg: Twist) -> None:
-        with self.lock:  # Humble's unstamped topic: stamped on arrival
-            self.command = (msg.linear.x, msg.angular.z)
-            self.command_time = self._sim_now()
+        out = []
+        for parent, child, x, z, roll in (
+            ("base_link", "laser_mount", self.args.laser_x, 0.2, 0.0),
+            ("laser_mount", "laser", 0.0, 0.0, math.pi if self.upside_down else 0.0),
+        ):
+            tf = TransformStamped()
+            tf.header.stamp.sec, tf.header.stamp.nanosec = _stamp(0.0)
+            tf.header.frame_id, tf.child_frame_id = parent, child
+            tf.transform.translation.x, tf.transform.translation.z = x, z
+            r = tf.transform.rotation
+            r.x, r.y, r.z, r.w = math.sin(roll / 2), 0.0, 0.0, math.cos(roll / 2)
+            out.append(tf)
+        return out
 
-    def _on_stamped(self, msg: TwistStamped) -> None:
-        with self.lock:
-            now = self._sim_now()
-            stamp = msg.header.stamp
-            t = now if stamp.sec == 0 and stamp.nanosec == 0 else (
-                stamp.sec + 1e-9 * stamp.nanosec - T0
-            )  # fmt: skip
-            if self.timeout != 0.0 and now - t >= self.timeout:
-                return  # "Ignoring the received message ... older than the current time"
-            self.command = (msg.twist.linear.x, msg.twist.angular.z)
-            self.command_time = t
+    # --- the controller's lifecycle, as controller_manager.cpp runs it ---------------------
+
+    def _load(self) -> None:
+        """A new controller node on the parameter files (later files override)."""
+        self.controller = Controller(self, read_params(self.files, self.args.controller))
+        self.executor.add_node(self.controller.node)
+        self.loaded = True
+
+    def _configure(self) -> bool:
+        """on_configure: the parameters read now; the odometry's pose reset."""
+        controller = self.controller
+        assert controller is not None
+        if self.args.fail_configure and self.calls:  # the spawner's first configure passes
+            controller.state = "unconfigured"  # on_configure returned FAILURE
+            return False
+        values = controller.values()
+        params = DriveParams(**{k: v for k, v in values.items() if k != "cmd_vel_timeout"})
+        self.robot.configure_controller(params, loaded=self.loaded)
+        self.loaded = False
+        controller.timeout = values["cmd_vel_timeout"]
+        controller.state = "inactive"
+        return True
+
+    def _unload(self) -> None:
+        controller = self.controller
+        assert controller is not None
+        self.executor.remove_node(controller.node)
+        controller.node.destroy_node()
+        self.controller = None
+
+    def final(self) -> dict[str, object]:
+        """What the node ends with: the parameters the controller runs on (its configured
+        ones), its node's parameters, its state, the manager's calls."""
+        params = self.robot.drive_params()
+        controller = self.controller
+        return {
+            "configured": {k: getattr(params, k) for k in DEFAULTS if k != "cmd_vel_timeout"},
+            "declared": None if controller is None else controller.values(),
+            "state": None if controller is None else controller.state,
+            "calls": self.calls,
+            "restarts": self.restarts,
+            "params_file": self.files,
+        }
 
     def _step(self, step: int) -> None:
-        robot = self.robot
-        age = robot.now() - self.command_time
-        if self.timeout != 0.0 and age > self.timeout:
-            robot.send_velocity(0.0, 0.0)  # "Velocity command timed out. Braking."
+        robot, controller = self.robot, self.controller
+        if controller is None or controller.state != "active":
+            robot.send_velocity(0.0, 0.0)  # on_deactivate's halt(); nothing updates
         else:
-            robot.send_velocity(*self.command)
+            age = robot.now() - controller.command_time
+            if controller.timeout != 0.0 and age > controller.timeout:
+                robot.send_velocity(0.0, 0.0)  # "Velocity command timed out. Braking."
+            else:
+                robot.send_velocity(*controller.command)
         robot.wait(robot.period)
         self._publish(step)
 
@@ -196,17 +449,22 @@ class SimNode:
         clock = Clock()
         clock.clock.sec, clock.clock.nanosec = sec, nanosec
         self.clock.publish(clock)
-        pose = robot.odometry().pose
-        msg = Odometry()
-        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
-        msg.header.frame_id, msg.child_frame_id = "odom", "base_link"
-        p = msg.pose.pose
-        p.position.x, p.position.y = pose.x, pose.y
-        q = p.orientation
-        q.x, q.y, q.z, q.w = _quaternion(pose.theta)
-        self.odom.publish(msg)
-        if self.tf is not None:
-            self._publish_tf(msg)
+        controller = self.controller
+        if controller is not None and controller.state == "active":  # update() runs
+            pose = robot.odometry().pose
+            msg = Odometry()
+            msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+            msg.header.frame_id, msg.child_frame_id = "odom", "base_link"
+            p = msg.pose.pose
+            p.position.x, p.position.y = pose.x, pose.y
+            q = p.orientation
+            q.x, q.y, q.z, q.w = _quaternion(pose.theta)
+            controller.odom.publish(msg)
+            if self.reactivated:  # the first update after a reload: where it starts
+                self.reactivated = False
+                self.restarts.append([pose.x, pose.y, pose.theta])
+            if self.tf is not None:
+                self._publish_tf(msg)
         if step % self.scan_every == 0:
             self._publish_sensors(sec, nanosec)
 
@@ -283,14 +541,26 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--laser-x", type=float, default=0.1)
     parser.add_argument("--upside-down", action="store_true")
+    parser.add_argument(
+        "--laser-only-in-tf", action="store_true",
+        help="the URDF has no laser: only /tf_static mounts it (needs tf2_msgs)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--distro", choices=("kilted", "rolling"), default="kilted",
+        help="kilted (Humble and Jazzy alike here): the multipliers can be set and are read "
+        "on configure; rolling: they are read-only",
+    )  # fmt: skip
+    parser.add_argument(
+        "--fail-configure", action="store_true",
+        help="configure_controller fails (on_configure returns FAILURE) after the start",
+    )  # fmt: skip
     args = parser.parse_args()
     # SIGINT is KeyboardInterrupt even where the node was started with it ignored (a
     # background job of a shell), so that closing it takes no 10 s time-out
     signal.signal(signal.SIGINT, signal.default_int_handler)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    sim = SimNode(args)
     executor = SingleThreadedExecutor()
-    executor.add_node(sim.node)
+    sim = SimNode(args, executor)
     stop = threading.Event()
     runner = threading.Thread(target=sim.run, args=(stop,), daemon=True)
     runner.start()
@@ -302,8 +572,11 @@ def main() -> None:
     finally:
         stop.set()
         runner.join(2.0)
+        with sim.lock:
+            print("final " + json.dumps(sim.final()), flush=True)
         executor.shutdown(timeout_sec=1.0)
-        sim.node.destroy_node()
+        for node in executor.get_nodes():
+            node.destroy_node()
         rclpy.try_shutdown()
 
 

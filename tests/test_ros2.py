@@ -229,8 +229,9 @@ def stamped(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, str]
 
 def test_reads_sim_time_odometry_scan_and_the_urdf(stamped: dict[str, str]) -> None:
     """ROS time is the node's /clock (from 1000 s, 8x the wall clock); the odometry and
-    scan carry it; the laser's mounting comes from the URDF on /robot_description (no tf2
-    here); the velocity type is TwistStamped, found on the graph; the geometry is the
+    scan carry it; the laser's mounting comes from /tf_static where tf2_msgs is built
+    here, else from the URDF on /robot_description (both place it as the node does); the
+    velocity type is TwistStamped, found on the graph; the geometry is the
     controller's parameters."""
     seen = _probe(stamped, "read")
     assert T0 < seen["start"] < T0 + 600.0
@@ -240,6 +241,26 @@ def test_reads_sim_time_odometry_scan_and_the_urdf(stamped: dict[str, str]) -> N
     assert seen["mount"] == pytest.approx([LASER_X, 0.0, 0.0])
     assert seen["stamped"] is True
     assert seen["params"] == [0.34, 0.075]
+
+
+@pytest.mark.slow
+def test_the_laser_mount_from_tf_static(tmp_path: Path) -> None:
+    """A URDF without the laser, its mounting only on /tf_static through a frame between
+    (base_link -> laser_mount, 0.1 m ahead -> laser, rolled over): read from there, as the
+    node placed it (tf2_msgs built by tools/build_ros2_interfaces.py)."""
+    found = subprocess.run(
+        [str(PYTHON), "-c", "import tf2_msgs.msg"], capture_output=True, check=False
+    )
+    if found.returncode != 0:
+        pytest.skip("no tf2_msgs in .venv-ros2: python tools/build_ros2_interfaces.py")
+    env = ros2_env(tmp_path)
+    node = Robot2(env, "--laser-only-in-tf", "--upside-down")
+    try:
+        seen = _probe(env, "read")
+    finally:
+        node.close()
+    assert seen["mount"] == pytest.approx([LASER_X, 0.0, 0.0])
+    assert seen["upside_down"] is True
 
 
 @pytest.mark.slow

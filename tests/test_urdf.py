@@ -12,7 +12,7 @@ from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, wr
 from umbmark.core.errors import InputError
 from umbmark.robot.base import DriveParams, Pose2D
 from umbmark.robot.ros_common import RosOptions, default_topics, laser_mount, restart_commands
-from umbmark.robot.urdf import urdf_geometry, urdf_mount
+from umbmark.robot.urdf import static_mount, urdf_geometry, urdf_mount
 
 #: base_link -> chassis (0.05 m ahead, turned 90 deg) -> laser (0.1 m along the chassis'
 #: x axis, rolled 180 deg: upside down); wheels 0.2 m either side of base_link, radius 0.06.
@@ -57,6 +57,29 @@ def test_a_mounting_through_a_chain_of_joints() -> None:
     assert chassis is not None
     assert not chassis.upside_down
     assert urdf_mount(URDF, "base_link", "sonar") is None
+
+
+def test_a_mounting_through_static_transforms() -> None:
+    """/tf_static as the same chain: base_link -> chassis (0.05 m ahead, turned 90 deg:
+    quaternion (0, 0, sin 45, cos 45)) -> laser (0.1 m along the chassis, rolled 180 deg:
+    (1, 0, 0, 0)): the laser at (0.05, 0.1), pointing along +y, upside down; frames given
+    with a leading slash are the same frames; one not under base_link has no mounting."""
+    h = math.sqrt(0.5)
+    edges = {
+        "chassis": ("base_link", (0.05, 0.0, 0.1), (0.0, 0.0, h, h)),
+        "laser": ("chassis", (0.1, 0.0, 0.2), (1.0, 0.0, 0.0, 0.0)),
+        "camera": ("map", (1.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)),
+    }
+    mount = static_mount(edges, "base_link", "/laser")
+    assert mount is not None
+    assert (mount.pose.x, mount.pose.y) == pytest.approx((0.05, 0.1))
+    assert mount.pose.theta == pytest.approx(math.pi / 2)
+    assert mount.upside_down
+    chassis = static_mount(edges, "base_link", "chassis")
+    assert chassis is not None
+    assert not chassis.upside_down
+    assert static_mount(edges, "base_link", "camera") is None
+    assert static_mount(edges, "base_link", "sonar") is None
 
 
 def test_the_wheel_geometry() -> None:

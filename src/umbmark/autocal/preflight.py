@@ -86,4 +86,8 @@ def preflight(robot: Robot, how: Measure, side: float, limits: DriveLimits) -> l
         raise InputError(f"--measure {how.method}: the robot gives no {names[how.method]}")
     if how.method == "lidar":
         lines.append(free_floor(robot, side))
+    apply_note = getattr(robot, "apply_note", None)  # a ROS 2 controller manager's way
+    note = apply_note() if callable(apply_note) else None
+    if isinstance(note, str):
+        lines.append(note)
     return lines

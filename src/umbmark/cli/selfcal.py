@@ -96,7 +96,9 @@ DRIVING = "Driving"
         option("--params-file", section=ROS, type=click.Path(dir_okay=False), default=None,
                help="The YAML the controller loads (--apply yaml writes the multipliers)."),
         option("--reload", section=ROS, is_flag=True,
-               help="ROS 2: reload the controller after writing its parameter file."),
+               help="ROS 2: apply each pass through the controller manager (deactivate, "
+               "configure, activate; Rolling: unload and load with --params-file appended); "
+               "needs controller_manager_msgs."),
         option("--resume", section=OUTPUTS, type=click.Path(file_okay=False), default=None,
                metavar="DIR",
                help="Go on with the self-calibration that stopped in DIR for a controller "

@@ -1,9 +1,10 @@
 """A ROS 2 robot behind the :class:`~umbmark.robot.base.Robot` interface, through rclpy.
 
 Tested against a ROS 2 graph (``tests/test_ros2.py``: rclpy and the messages from the
-package index, a node with ros2_controllers' ``diff_drive_controller`` interfaces, 8x sim
-time). What it needs is rclpy and the message packages (``pip install ".[ros2]"``);
-not ``tf2_ros``, ``tf2_msgs`` nor ``controller_manager_msgs``.
+package index, a node with ros2_controllers' ``diff_drive_controller`` interfaces and a
+controller manager, 8x sim time). What it needs is rclpy and the message packages (``pip
+install ".[ros2]"``); ``controller_manager_msgs`` for ``--reload`` (no wheel:
+``tools/build_ros2_interfaces.py`` builds it); not ``tf2_ros``.
 
 - Topics default from the controller: ``<controller>/cmd_vel``, ``<controller>/odom``.
 - Velocity out: the type the controller subscribes, taken from the graph —
@@ -13,7 +14,9 @@ not ``tf2_ros``, ``tf2_msgs`` nor ``controller_manager_msgs``.
 - In: ``nav_msgs/msg/Odometry``, ``sensor_msgs/msg/LaserScan`` (sensor-data QoS), three
   ``sensor_msgs/msg/Range``, a ground-truth ``geometry_msgs/msg/PoseStamped``, the URDF on
   ``/robot_description`` (transient local, as robot_state_publisher latches it).
-- Mountings: ``options.laser_mount`` (``--laser-mount``) where given, else from the URDF
+- Mountings: ``options.laser_mount`` (``--laser-mount``) where given, else from
+  ``/tf_static`` where ``tf2_msgs`` is importable (the static transforms chained without a
+  tf2 buffer: :func:`umbmark.robot.urdf.static_mount`), else from the URDF
   (:func:`umbmark.robot.urdf.urdf_mount`).
 - Geometry: the controller's ``wheel_separation`` and ``wheel_radius`` (its
   ``get_parameters`` service), else the URDF's wheels, else the options.
@@ -23,14 +26,14 @@ not ``tf2_ros``, ``tf2_msgs`` nor ``controller_manager_msgs``.
   :meth:`Ros2Robot.wait` sleeps on it.
   rclpy's signal handlers are off: Ctrl-C reaches the routine, which sends a zero velocity
   before the context goes.
-- Applying: Jazzy's and Kilted's controller reads its multipliers only when it is
-  configured. Without ``controller_manager_msgs`` nothing here can configure it, so
+- Applying: the controller reads its multipliers only when it is configured. With
+  ``options.reload`` (``--reload``) and ``controller_manager_msgs`` importable, it is
+  reconfigured, or on Rolling (read-only multipliers) loaded again, through the
+  controller manager (:mod:`umbmark.robot.ros2_reload`; :meth:`Ros2Robot.can_apply` and
+  :meth:`Ros2Robot.apply_note` say which before the robot moves). Else
   :meth:`Ros2Robot.apply` writes ``options.params_file`` (when given) and says the
   controller must be restarted on the new values (:func:`restart_commands`); the routine
-  stops there and ``umbmark selfcal --resume DIR`` continues after the restart. Where
-  ``controller_manager_msgs`` is importable and ``options.reload`` is set, the controller is
-  reloaded through the controller manager's services (``_reload``: not run here, no wheel
-  of those messages exists).
+  stops there and ``umbmark selfcal --resume DIR`` continues after the restart.
 - Safety: a zero velocity on :meth:`close` and before any error raised once connected.
 """
 
@@ -44,8 +47,9 @@ import threading
 import time
 from typing import Any
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, SafetyError
 from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams
+from umbmark.robot.ros2_reload import RESTART, ReloadPlan, plan_reload, reload
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
     Latest,
@@ -57,12 +61,10 @@ from umbmark.robot.ros_common import (
     write_params,
 )
 from umbmark.robot.ros_robot import RosRobot
-from umbmark.robot.urdf import urdf_geometry, urdf_mount
+from umbmark.robot.urdf import static_mount, urdf_geometry, urdf_mount
 
 __all__ = ["Ros2Robot"]
 
-#: The controller manager's node (ros2_control's default).
-CONTROLLER_MANAGER = "/controller_manager"
 #: The velocity types a diff_drive_controller subscribes.
 STAMPED, UNSTAMPED = "geometry_msgs/msg/TwistStamped", "geometry_msgs/msg/Twist"
 
@@ -94,6 +96,7 @@ class Ros2Robot(RosRobot):
         if not (0.0 < options.timeout < math.inf):
             raise InputError(f"timeout {options.timeout!r} s: give a positive time")
         self._closed = False
+        self._reload_plan: ReloadPlan | None = None
         self._context = Context()
         rclpy.init(context=self._context, signal_handler_options=SignalHandlerOptions.NO)
         self._node = rclpy.create_node("umbmark_selfcal", context=self._context)
@@ -138,6 +141,12 @@ class Ros2Robot(RosRobot):
         node.create_subscription(
             String, "/robot_description", lambda m: self._description.put(m.data), latched
         )
+        self._static: dict[str, tuple[str, tuple[float, ...], tuple[float, ...]]] = {}
+        if importlib.util.find_spec("tf2_msgs") is not None:
+            from tf2_msgs.msg import TFMessage
+
+            static = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+            node.create_subscription(TFMessage, "/tf_static", self._on_static, static)
         if options.scan:
             node.create_subscription(ScanMsg, options.scan, self._scan.put, qos_profile_sensor_data)
         for topic, latest in zip(options.ranges, self._ranges, strict=True):
@@ -180,6 +189,31 @@ class Ros2Robot(RosRobot):
             "geometry_msgs Twist or TwistStamped (--cmd-vel)"
         )
 
+    def _on_static(self, msg: Any) -> None:  # noqa: ANN401 (a tf2_msgs TFMessage)
+        """Keep each static transform: child frame -> parent, translation, rotation."""
+        edges = {}
+        for tf in msg.transforms:
+            t, q = tf.transform.translation, tf.transform.rotation
+            edges[tf.child_frame_id.lstrip("/")] = (
+                tf.header.frame_id.lstrip("/"), (t.x, t.y, t.z), (q.x, q.y, q.z, q.w),
+            )  # fmt: skip
+        with self._ticks:
+            self._static = {**self._static, **edges}
+
+    def _static_mount(self, frame: str) -> Mount | None:
+        """The frame's mounting through ``/tf_static`` (waiting up to a second for it to
+        come; None: no ``tf2_msgs`` here, or no such chain)."""
+        if importlib.util.find_spec("tf2_msgs") is None:
+            return None
+        deadline = time.monotonic() + min(1.0, self.options.timeout)
+        while True:
+            with self._ticks:
+                edges = self._static
+            found = static_mount(edges, self.options.base_frame, frame)
+            if found is not None or time.monotonic() > deadline:
+                return found
+            time.sleep(0.02)
+
     def _on_clock(self, msg: Any) -> None:  # noqa: ANN401 (an rclpy message)
         """Sim time: kept here, then the waiting drive loop is woken (rclpy's own time
         source would update the node's clock in another callback, maybe after ours)."""
@@ -202,7 +236,8 @@ class Ros2Robot(RosRobot):
         return msg
 
     def _mount(self, frame: str) -> Mount:
-        """The sensor frame's mounting: ``--laser-mount`` for the laser, else the URDF."""
+        """The sensor frame's mounting: ``--laser-mount`` for the laser, else
+        ``/tf_static``, else the URDF."""
         mount = self._mounts.get(frame)
         if mount is not None:
             return mount
@@ -210,6 +245,8 @@ class Ros2Robot(RosRobot):
         given = self.options.laser_mount
         if given is not None and scan is not None and scan.header.frame_id == frame:
             mount = Mount(given)
+        elif (found := self._static_mount(frame)) is not None:
+            mount = found
         else:
             text = self._description.wait(self.options.timeout)
             found = None if text is None else urdf_mount(text, self.options.base_frame, frame)
@@ -245,7 +282,7 @@ class Ros2Robot(RosRobot):
         request = GetParameters.Request()
         request.names = names
         ns = self.options.controller.rstrip("/")
-        answer = self._call(GetParameters, f"{ns}/get_parameters", request)
+        answer = self.call(GetParameters, f"{ns}/get_parameters", request)
         got = {n: _double(v) for n, v in zip(names, answer.values, strict=False)}
         values = {name: got.get(name) or 0.0 for name in names}
         if not (values["wheel_separation"] > 0.0 and values["wheel_radius"] > 0.0):
@@ -266,19 +303,38 @@ class Ros2Robot(RosRobot):
 
     def can_apply(self) -> str | None:
         """Why the controller cannot take new parameters while the routine runs (None:
-        it can): said before the robot moves."""
-        if self.options.reload and importlib.util.find_spec("controller_manager_msgs"):
-            return None
-        return (
-            "the controller reads its multipliers only when it is configured, and "
-            "controller_manager_msgs is not installed here: the routine stops after the "
-            "first pass for a controller restart, and umbmark selfcal --resume DIR goes on"
-        )
+        it can, through the controller manager): said before the robot moves."""
+        plan = self._plan()
+        return None if plan.way is not None else plan.line
+
+    def apply_note(self) -> str | None:
+        """Which way applying goes (a line for the checks before moving), where it can."""
+        plan = self._plan()
+        return plan.line if plan.way is not None else None
+
+    def _plan(self) -> ReloadPlan:
+        if self._reload_plan is None:
+            if not self.options.reload:
+                self._reload_plan = ReloadPlan(
+                    None,
+                    "the controller reads its multipliers only when it is configured, and "
+                    f"--reload was not given: {RESTART}",
+                )
+            elif importlib.util.find_spec("controller_manager_msgs") is None:
+                self._reload_plan = ReloadPlan(
+                    None,
+                    "--reload needs controller_manager_msgs, not installed here (no ROS "
+                    "installation: python tools/build_ros2_interfaces.py builds it into this "
+                    f"Python); {RESTART}",
+                )
+            else:
+                self._reload_plan = plan_reload(self)
+        return self._reload_plan
 
     def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
-        """Write the parameter file (when given) and, where the controller manager's
-        messages are importable and ``options.reload`` is set, reload the controller;
-        else say how to restart it on the new values."""
+        """Write the parameter file (when given) and, where the plan found before moving
+        allows, reload the controller through the controller manager; else say how to
+        restart it on the new values."""
         plan = plan_apply(params, "yaml" if method == "reconfigure" else method)
         if plan.method == "none":
             return ApplyResult("none", False, plan.reason)
@@ -287,18 +343,35 @@ class Ros2Robot(RosRobot):
                                                       ros2=True)  # fmt: skip
         extra = "".join(f"; {n}" for n in notes)
         wrote = "" if path is None else f"wrote {os.fspath(path)}; "
-        if self.can_apply() is None and path is not None:
-            self._reload(os.path.abspath(path))
-            return ApplyResult(
-                "yaml", True, f"{wrote}reloaded the controller{extra}", file=os.fspath(path)
-            )
+        file = None if path is None else os.fspath(path)
+        way = self._plan().way
+        if way is not None:
+            done = reload(self, way, params)
+            return ApplyResult("yaml", True, f"{wrote}{done}{extra}", file=file)
         return ApplyResult(
             "yaml",
             False,
             f"{wrote}restart the controller on them: "
             f"{restart_commands(self.options.controller, params, path)}{extra}",
-            file=None if path is None else os.fspath(path),
+            file=file,
         )
+
+    def wait_back(self, since: float) -> None:
+        """After a reload: wait until the velocity topic is subscribed again and an
+        odometry stamped after ``since`` came (the controller updates again)."""
+        timeout = self.options.timeout
+        deadline = time.monotonic() + timeout
+        while True:
+            odom = self._odom.get()
+            if self._cmd.get_subscription_count() > 0 and odom is not None and odom.time > since:
+                return
+            if time.monotonic() > deadline:
+                self._stop()
+                raise SafetyError(
+                    f"the controller was activated again but {self.options.odom} said nothing "
+                    f"new in {timeout:g} s: the robot stands"
+                )
+            time.sleep(0.01)
 
     def close(self) -> None:
         """A zero velocity, then the executor's thread is joined and the node goes."""
@@ -318,7 +391,8 @@ class Ros2Robot(RosRobot):
 
     # --- services -----------------------------------------------------------------------
 
-    def _call(self, kind: Any, service: str, request: Any) -> Any:  # noqa: ANN401
+    def call(self, kind: Any, service: str, request: Any) -> Any:  # noqa: ANN401
+        """Call a service (waiting ``options.timeout`` for it and for its answer)."""
         timeout = self.options.timeout
         client = self._node.create_client(kind, service)
         try:
@@ -335,49 +409,6 @@ class Ros2Robot(RosRobot):
             return future.result()
         finally:
             self._node.destroy_client(client)
-
-    def _reload(self, path: str) -> None:
-        """Reload the controller on ``path``, as ros2_control's spawner loads one. Not run
-        here (no controller_manager_msgs wheel exists)."""
-        from controller_manager_msgs.srv import (
-            ConfigureController,
-            LoadController,
-            SwitchController,
-            UnloadController,
-        )
-        from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
-        from rcl_interfaces.srv import SetParameters
-
-        name = self.options.controller.strip("/").split("/")[-1]
-        cm = CONTROLLER_MANAGER
-
-        def switch(activate: list[str], deactivate: list[str]) -> None:
-            request = SwitchController.Request()
-            request.activate_controllers, request.deactivate_controllers = activate, deactivate
-            request.strictness = SwitchController.Request.STRICT
-            if not self._call(SwitchController, f"{cm}/switch_controller", request).ok:
-                raise InputError(f"{cm} refused to switch {name}")
-
-        def named(kind: Any, service: str) -> None:  # noqa: ANN401
-            request = kind.Request()
-            request.name = name
-            if not self._call(kind, f"{cm}/{service}", request).ok:
-                raise InputError(f"{cm}/{service} refused {name}")
-
-        self._stop()
-        switch([], [name])
-        named(UnloadController, "unload_controller")
-        request = SetParameters.Request()
-        value = ParameterValue(type=ParameterType.PARAMETER_STRING_ARRAY, string_array_value=[path])
-        request.parameters = [Parameter(name=f"{name}.params_file", value=value)]
-        result = self._call(SetParameters, f"{cm}/set_parameters", request).results[0]
-        if not result.successful:  # ROS 2 before Jazzy: one file, a string
-            value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=path)
-            request.parameters = [Parameter(name=f"{name}.params_file", value=value)]
-            self._call(SetParameters, f"{cm}/set_parameters", request)
-        named(LoadController, "load_controller")
-        named(ConfigureController, "configure_controller")
-        switch([name], [])
 
 
 def _double(value: Any) -> float | None:  # noqa: ANN401 (rcl_interfaces/ParameterValue)

@@ -98,8 +98,9 @@ class RosOptions:
     wheel_separation, wheel_radius : float or None
         The controller's nominal geometry [m], where its parameters cannot be read.
     reload : bool
-        ROS 2: reload the controller through the controller manager after writing its
-        parameter file.
+        ROS 2: apply new multipliers through the controller manager (set them, deactivate,
+        configure, activate; where they are read-only, unload and load the controller with
+        ``params_file`` appended to its parameter files): :mod:`umbmark.robot.ros2_reload`.
     timeout : float
         How long to wait for the first message of each topic and for services [s].
     laser_mount : Pose2D or None

@@ -1,12 +1,13 @@
 """A robot's description (URDF) read without ROS: where its sensors are mounted and its
 wheels' geometry, as a ROS 2 robot publishes it on ``/robot_description`` and a ROS 1 robot
 keeps it in the ``robot_description`` parameter (for robots without tf2 at hand, and
-controllers that take their geometry from it)."""
+controllers that take their geometry from it); and a mounting through static transforms
+(``/tf_static`` without a tf2 buffer)."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -15,7 +16,7 @@ from umbmark.core.errors import InputError
 from umbmark.robot.base import Pose2D
 from umbmark.robot.ros_common import Mount
 
-__all__ = ["MAX_URDF", "urdf_geometry", "urdf_mount"]
+__all__ = ["MAX_URDF", "static_mount", "urdf_geometry", "urdf_mount"]
 
 #: The longest robot description read [characters].
 MAX_URDF = 10_000_000
@@ -91,9 +92,43 @@ def urdf_mount(text: str, base: str, frame: str) -> Mount | None:
     found = _in_base(joints, base, frame)
     if found is None:
         return None
-    t, r = found
+    return _mount(*found)
+
+
+def _mount(t: np.ndarray, r: np.ndarray) -> Mount:
+    """The planar mounting of a frame at ``t`` (3,) turned by ``r`` (3, 3) in the base:
+    where its x axis points, and whether its z axis points down."""
     yaw = math.atan2(float(r[1, 0]), float(r[0, 0]))
     return Mount(Pose2D(float(t[0]), float(t[1]), yaw), upside_down=bool(r[2, 2] < 0.0))
+
+
+def static_mount(
+    edges: Mapping[str, tuple[str, Sequence[float], Sequence[float]]], base: str, frame: str
+) -> Mount | None:
+    """A sensor frame's mounting in ``base`` through static transforms, as ``/tf_static``
+    holds them: ``edges`` maps each child frame to its parent, translation ``(x, y, z)``
+    [m] and rotation quaternion ``(x, y, z, w)`` (None: ``frame`` does not hang under
+    ``base`` by them)."""
+    joints = {
+        child: (parent, np.asarray(t, dtype=np.float64), _quaternion_matrix(q))
+        for child, (parent, t, q) in edges.items()
+    }
+    found = _in_base(joints, base.lstrip("/"), frame.lstrip("/"))
+    return None if found is None else _mount(*found)
+
+
+def _quaternion_matrix(q: Sequence[float]) -> np.ndarray:
+    """The rotation (3, 3) of a quaternion ``(x, y, z, w)`` (normalized here)."""
+    x, y, z, w = (float(v) for v in q)
+    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
+    x, y, z, w = x / n, y / n, z / n, w / n
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def urdf_geometry(

@@ -200,20 +200,27 @@ class VirtualRobot:
         (the odometry starts again at zero), ``none`` leaves them."""
         if method == "none":
             return ApplyResult("none", False, "parameters not applied (apply: none)")
-        for name in (
-            "wheel_separation_multiplier",
-            "left_wheel_radius_multiplier",
-            "right_wheel_radius_multiplier",
-        ):
-            value = getattr(params, name)
-            if not (0.0 < value < math.inf):
-                raise InputError(f"{name} {value!r} is not a positive number")
+        _check_multipliers(params)
         self._params = replace(params)
         if method == "yaml":
             self._odom = [0.0, 0.0, 0.0]
             self._old = self._wheel_positions()
             return ApplyResult("yaml", True, "controller restarted with the new parameters")
         return ApplyResult("reconfigure", True, "parameters reconfigured")
+
+    def configure_controller(self, params: DriveParams, *, loaded: bool) -> None:
+        """ros2_control's diff_drive_controller configured on ``params`` (its
+        ``on_configure``: the new radii and separation, ``reset()`` sets the odometry's pose
+        to zero). Its odometry keeps the wheel positions of its last update, in metres at
+        the old radii (Humble to Kilted, position feedback): its first update then moves it
+        by the wheels' whole rotation times the radius change. ``loaded``: a controller
+        just loaded remembers zero, and its first update moves it by the wheels' whole
+        travel (the hardware's positions are not reset with it)."""
+        _check_multipliers(params)
+        self._params = replace(params)
+        self._odom = [0.0, 0.0, 0.0]
+        if loaded:
+            self._old = [0.0, 0.0]
 
     def close(self) -> None:
         """Stop: a zero velocity."""
@@ -312,6 +319,18 @@ def _arc(
         y - radius * (math.cos(after) - math.cos(theta)),
         after,
     )
+
+
+def _check_multipliers(params: DriveParams) -> None:
+    """Refuse multipliers that are not positive numbers."""
+    for name in (
+        "wheel_separation_multiplier",
+        "left_wheel_radius_multiplier",
+        "right_wheel_radius_multiplier",
+    ):
+        value = getattr(params, name)
+        if not (0.0 < value < math.inf):
+            raise InputError(f"{name} {value!r} is not a positive number")
 
 
 def _check_arguments(
