@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.robot.base import Pose2D
@@ -43,7 +43,6 @@ __all__ = [
     "relative_motion",
 ]
 
-FloatArray = NDArray[np.float64]
 
 Method = Literal["lidar", "ranges", "ground_truth", "tape"]
 Cause = Literal[

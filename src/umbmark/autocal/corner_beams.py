@@ -18,11 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.robot.base import Pose2D
 
 __all__ = ["Beams", "CornerEstimate", "fit_corner_ranges", "wall_angle"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

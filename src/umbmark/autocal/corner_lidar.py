@@ -40,8 +40,6 @@ from umbmark.robot.base import LaserScan, Pose2D
 
 __all__ = ["LidarCorner", "find_corner", "fix_from_scans"]
 
-FloatArray = NDArray[np.float64]
-
 
 @dataclass(frozen=True)
 class LidarCorner:

@@ -23,11 +23,11 @@ from numpy.typing import NDArray
 
 from umbmark.autocal.corner import line_direction
 from umbmark.autocal.corner_beams import Beams
+from umbmark.core.arrays import FloatArray
 from umbmark.robot.base import LaserScan
 
 __all__ = ["Piece", "pieces", "scan_beams", "scan_points"]
 
-FloatArray = NDArray[np.float64]
 IndexArray = NDArray[np.intp]
 
 

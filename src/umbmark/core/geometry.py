@@ -12,11 +12,11 @@ import math
 from typing import TypeVar, cast
 
 import numpy as np
-from numpy.typing import NDArray
+
+from umbmark.core.arrays import FloatArray
 
 __all__ = ["compose", "invert", "quaternion_yaw", "relative_positions", "to_start_frame"]
 
-FloatArray = NDArray[np.float64]
 _T = TypeVar("_T", float, FloatArray)
 
 

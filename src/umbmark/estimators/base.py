@@ -7,9 +7,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from umbmark.benchmark.returns import Benchmark
+from umbmark.core.arrays import FloatArray
 from umbmark.core.validation import check_positive
 
 __all__ = [
@@ -20,8 +20,6 @@ __all__ = [
     "propagate_blocks",
     "welch_dof",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

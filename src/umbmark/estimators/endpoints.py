@@ -28,7 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from umbmark.estimators.base import ErrorEstimate, FloatArray
+from umbmark.core.arrays import FloatArray
+from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.registry import ENDPOINTS
 from umbmark.estimators.solve import gauss_newton
 from umbmark.model.kinematics import WheelParams

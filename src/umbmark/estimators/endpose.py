@@ -37,9 +37,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.benchmark.returns import Benchmark
+from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import Direction
 from umbmark.core.stats import f_cdf
-from umbmark.estimators.base import ErrorEstimate, FloatArray, SquareTest, welch_dof
+from umbmark.estimators.base import ErrorEstimate, SquareTest, welch_dof
 from umbmark.estimators.exact import exact_components
 from umbmark.estimators.registry import ENDPOSE
 from umbmark.estimators.solve import gauss_newton, jacobian

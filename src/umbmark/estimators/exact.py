@@ -21,14 +21,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from umbmark.benchmark.returns import Benchmark
+from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import Direction
-from umbmark.estimators.base import (
-    ErrorEstimate,
-    FloatArray,
-    SquareTest,
-    cg_blocks,
-    propagate_blocks,
-)
+from umbmark.estimators.base import ErrorEstimate, SquareTest, cg_blocks, propagate_blocks
 from umbmark.estimators.formulas import paper_components
 from umbmark.estimators.registry import EXACT
 from umbmark.estimators.solve import gauss_newton, jacobian

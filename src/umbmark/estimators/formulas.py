@@ -10,7 +10,8 @@ The printed forms multiply by ``180 / pi`` to give degrees; here angles stay in 
 
 from __future__ import annotations
 
-from umbmark.estimators.base import FloatArray, SquareTest
+from umbmark.core.arrays import FloatArray
+from umbmark.estimators.base import SquareTest
 from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta
 
 __all__ = ["paper_components"]

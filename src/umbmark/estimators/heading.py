@@ -18,8 +18,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from umbmark.benchmark.returns import Benchmark
+from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import Direction
-from umbmark.estimators.base import ErrorEstimate, FloatArray, SquareTest, propagate_blocks
+from umbmark.estimators.base import ErrorEstimate, SquareTest, propagate_blocks
 from umbmark.estimators.endpose import heading_errors
 from umbmark.estimators.registry import HEADING
 from umbmark.model.runs import Run

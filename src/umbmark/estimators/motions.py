@@ -56,6 +56,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.messages import join_names
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
@@ -73,7 +74,6 @@ __all__ = [
     "term_problem",
 ]
 
-FloatArray = NDArray[np.float64]
 MotionKind = Literal["straight", "arc", "spot"]
 #: The kinds of motion, and how messages name them.
 KINDS: dict[MotionKind, str] = {

@@ -22,11 +22,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+
+from umbmark.core.arrays import FloatArray
 
 __all__ = ["MAX_CONDITION", "Excitation", "excitation", "wheel_condition"]
 
-FloatArray = NDArray[np.float64]
 
 #: The largest condition number of the first step's normal matrix accepted (the
 #: reference implementation's default ``max_cond_number``).

@@ -42,8 +42,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.errors import InputError
 from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.registry import SCAN_MATCHING
@@ -61,8 +61,6 @@ __all__ = [
     "solve_intervals",
 ]
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 #: The six parameters, in the order of :attr:`ScanCalibration.covariance`.
 PARAMETERS = ("radius_left", "radius_right", "wheelbase", "laser_x", "laser_y", "laser_yaw")

@@ -13,11 +13,11 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from numpy.typing import NDArray
+
+from umbmark.core.arrays import FloatArray
 
 __all__ = ["JACOBIAN_STEP", "gauss_newton", "jacobian"]
 
-FloatArray = NDArray[np.float64]
 #: Gauss-Newton iterations at most.
 MAX_ITERATIONS = 60
 #: Step of the central differences of the Jacobian (parameters of order one or

@@ -96,6 +96,7 @@ from typing import Any
 
 import numpy as np
 
+from umbmark.core.arrays import FloatArray
 from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.motions import (
     SCRUB_ADVICE,
@@ -105,7 +106,7 @@ from umbmark.estimators.motions import (
 )
 from umbmark.estimators.registry import TRAJECTORY, TRAJECTORY_SCRUB
 from umbmark.estimators.trajectory_fit import TrajectoryFit, fit_trajectories, scrub_term_problem
-from umbmark.estimators.trajectory_model import MODELS, FloatArray, StartPose, TrajectoryModel
+from umbmark.estimators.trajectory_model import MODELS, StartPose, TrajectoryModel
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 from umbmark.model.systematic import alpha_from_E_b, beta_from_E_d

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from umbmark.core.arrays import FloatArray
 from umbmark.estimators.motions import (
     SCRUB_ADVICE,
     SCRUB_MORE,
@@ -25,8 +26,7 @@ from umbmark.estimators.trajectory_model import (
     DEFAULT_MAX_TRUTH_OFFSET,
     MODELS,
     START_POSES,
-    FloatArray,
-    IntArray,
+    IndexArray,
     Problem,
     RunsData,
     StartPose,
@@ -199,7 +199,7 @@ def _solve(problem: Problem, x0: FloatArray, sigma: tuple[float, float]) -> _Sol
     )
 
 
-def _clusters(data: RunsData) -> tuple[IntArray, int]:
+def _clusters(data: RunsData) -> tuple[IndexArray, int]:
     """The cluster of every compared sample, shape (s,), and the number of clusters: the
     runs, or the two halves of a single run."""
     if data.runs >= 2:
@@ -209,7 +209,7 @@ def _clusters(data: RunsData) -> tuple[IntArray, int]:
 
 
 def _cluster_covariance(
-    jac: FloatArray, res: FloatArray, cluster: IntArray, clusters: int
+    jac: FloatArray, res: FloatArray, cluster: IndexArray, clusters: int
 ) -> FloatArray:
     """Cluster-robust covariance (CR3, one-step jackknife) of the solver's ``x``.
 

@@ -18,6 +18,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.model.kinematics import chord_step, turning_share
 from umbmark.model.recording import RunLog
 
@@ -34,8 +35,7 @@ __all__ = [
     "prepare",
 ]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.intp]
+IndexArray = NDArray[np.intp]  # indices
 
 TrajectoryModel = Literal["diff", "scrub"]
 MODELS: tuple[TrajectoryModel, ...] = ("diff", "scrub")
@@ -66,17 +66,17 @@ class RunsData:
     """
 
     dphi: FloatArray  # (m, 2) wheel rotation into each pose [rad]; 0 at a run's first
-    run_start: IntArray  # (G,) first pose of each run
-    run_length: IntArray  # (G,) poses of each run
-    sample: IntArray  # (s,) compared poses
-    sample_run: IntArray  # (s,) run of each, 0 .. G-1
+    run_start: IndexArray  # (G,) first pose of each run
+    run_length: IndexArray  # (G,) poses of each run
+    sample: IndexArray  # (s,) compared poses
+    sample_run: IndexArray  # (s,) run of each, 0 .. G-1
     sample_time: FloatArray  # (s,) [s]
-    anchor: IntArray  # (G,) each run's first compared pose
+    anchor: IndexArray  # (G,) each run's first compared pose
     anchor_time: FloatArray  # (G,) [s]
     truth_time: FloatArray  # (q,) matched ground-truth samples [s]
     truth: FloatArray  # (q, 3) [m, m, rad]
     truth_slope: FloatArray  # (q, 3) their time derivatives (Hermite tangents)
-    truth_ends: IntArray  # (G, 2) index of each run's first and last in truth_time
+    truth_ends: IndexArray  # (G, 2) index of each run's first and last in truth_time
 
     @property
     def runs(self) -> int:
@@ -92,7 +92,7 @@ def _tangents(t: FloatArray, v: FloatArray) -> FloatArray:
     return slope
 
 
-def _thinned(count: int) -> IntArray:
+def _thinned(count: int) -> IndexArray:
     """Indices of at most :data:`MAX_COMPARED_PER_RUN` of ``count`` samples, evenly
     spread, the first and the last among them (all of them when there are few)."""
     if count <= MAX_COMPARED_PER_RUN:
@@ -160,7 +160,7 @@ def prepare(logs: Sequence[RunLog]) -> RunsData:
     )
 
 
-def _truth_at(data: RunsData, times: FloatArray, run: IntArray) -> FloatArray:
+def _truth_at(data: RunsData, times: FloatArray, run: IndexArray) -> FloatArray:
     """Ground truth of runs ``run`` (s,) at ``times`` (s,), shape (s, 3).
 
     A cubic Hermite spline through the run's matched samples, continued beyond its first
@@ -236,7 +236,7 @@ def _compose(frames: FloatArray, local: FloatArray) -> FloatArray:
 
 
 def _align(
-    truth: FloatArray, odo: FloatArray, run: IntArray, runs: int, sigma: tuple[float, float]
+    truth: FloatArray, odo: FloatArray, run: IndexArray, runs: int, sigma: tuple[float, float]
 ) -> FloatArray:
     """Each run's start pose, shape (G, 3), that lays ``odo`` (s, 3) best onto ``truth``.
 

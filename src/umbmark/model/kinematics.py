@@ -39,8 +39,9 @@ from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.core.validation import check_positive, require_positive
 
@@ -59,8 +60,6 @@ __all__ = [
 
 IntegrationMethod = Literal["arc", "segment", "midpoint"]
 INTEGRATION_METHODS: tuple[IntegrationMethod, ...] = ("arc", "segment", "midpoint")
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -17,11 +17,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+
+from umbmark.core.arrays import FloatArray
 
 __all__ = ["MotionIntervals"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

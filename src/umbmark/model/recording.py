@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.model.kinematics import IntegrationMethod, WheelParams, integrate_odometry
 from umbmark.options.spec import READ
 
@@ -30,8 +31,6 @@ __all__ = [
     "gap_mask",
 ]
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 #: Longest stretch [s] without ground truth across which poses are interpolated (the
 #: default of ``--max-gap``; :mod:`umbmark.runs.association`).

@@ -10,11 +10,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+
+from umbmark.core.arrays import FloatArray
 
 __all__ = ["ScanSeries"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

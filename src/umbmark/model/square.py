@@ -16,13 +16,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import Direction
 
 __all__ = ["icr_offset", "square_end_pose", "square_run_end"]
-
-FloatArray = NDArray[np.float64]
 
 
 def icr_offset(E_d: ArrayLike, wheelbase: ArrayLike) -> FloatArray:

@@ -16,7 +16,9 @@ Correction (Sec. 4.2)
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from umbmark.core.arrays import FloatArray
 
 __all__ = [
     "E_b_from_alpha",
@@ -27,7 +29,6 @@ __all__ = [
     "correction_factors",
 ]
 
-FloatArray = NDArray[np.float64]
 HALF_PI = 0.5 * np.pi
 
 

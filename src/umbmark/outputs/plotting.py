@@ -16,9 +16,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
 from umbmark.benchmark.returns import Benchmark
+from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.atomic import atomic_path
 from umbmark.core.conventions import Direction
 from umbmark.model.kinematics import WheelParams
@@ -53,8 +53,6 @@ _MM = 1000.0
 _PANEL_TITLE_WIDTH = 60
 #: The legend of what the passes measured (relative to their active parameters).
 _PASS_LABEL = "measured by the pass (relative to its active parameters)"
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 
 def draw_clusters(

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 from typing import Literal, Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import NDArray
+
+from umbmark.core.arrays import FloatArray
 
 __all__ = [
     "APPLY_METHODS",
@@ -25,8 +26,6 @@ __all__ = [
     "Robot",
     "Stamped",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

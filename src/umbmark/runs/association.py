@@ -16,14 +16,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.model.recording import DEFAULT_MAX_GAP, PoseSeries, WheelSeries
 
 __all__ = ["Association", "associate", "summarize"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

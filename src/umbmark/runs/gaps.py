@@ -31,8 +31,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import gap_mask
 
@@ -46,7 +46,6 @@ __all__ = [
     "find_gaps",
 ]
 
-FloatArray = NDArray[np.float64]
 
 #: Longest gap bridged when the wheels turned across it [s].
 MAX_BRIDGE = 2.0

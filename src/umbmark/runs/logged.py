@@ -15,6 +15,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError
 from umbmark.core.geometry import relative_positions, to_start_frame
@@ -41,7 +42,6 @@ __all__ = [
     "runs_from_recordings",
 ]
 
-FloatArray = NDArray[np.float64]
 SplitMode = Literal["rests", "none", "windows"]
 
 #: A wheel turning by more than this in one sample is a corrupt sample, not motion [rad].

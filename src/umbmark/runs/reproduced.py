@@ -45,6 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import INTEGRATION_METHODS, WheelParams
 from umbmark.model.recording import Recording, RunLog
@@ -52,7 +53,6 @@ from umbmark.sources.bag.truth.independence import REFERENCES
 
 __all__ = ["CLOSE", "EXACT", "MIN_SAMPLES", "Reproduction", "check_not_reproduced", "reproduction"]
 
-FloatArray = NDArray[np.float64]
 
 #: A heading residual under this share of the angle turned [rad/rad] is rounding: the
 #: heading was computed from the wheel angles ...

@@ -37,7 +37,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+
+from umbmark.core.arrays import BoolArray, FloatArray
 
 __all__ = [
     "CREEP_WINDOW",
@@ -55,8 +56,6 @@ __all__ = [
     "stops",
 ]
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 #: Wheel speeds are also averaged over this long a window [s] to tell creep from motion.
 CREEP_WINDOW = 0.5

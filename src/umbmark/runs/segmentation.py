@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.runs.rests import TWITCH_ANGLE, Reset, find_resets, stops
 
@@ -51,7 +52,6 @@ __all__ = [
     "trim_to_motion",
 ]
 
-FloatArray = NDArray[np.float64]
 
 #: A run ended by a reset of the ground truth, or by the last rest of the recording, needs
 #: to turn this much [rad] less than ``min_turn``: nothing else ends a run there, and a

@@ -38,13 +38,12 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.scans.points import PreparedScan
 
 __all__ = ["Match", "MatchSettings", "Status", "match"]
 
-FloatArray = NDArray[np.float64]
 
 Status = Literal["ok", "corridor", "open space", "not converged"]
 

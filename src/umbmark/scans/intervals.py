@@ -44,8 +44,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.model.recording import WheelSeries
 from umbmark.model.scans import ScanSeries
@@ -61,8 +61,6 @@ __all__ = [
     "jacobian",
     "match_intervals",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -16,14 +16,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from umbmark.core.arrays import FloatArray
 from umbmark.model.scans import ScanSeries
 
 __all__ = ["PreparedScan", "prepare", "scan_points", "series_points"]
-
-FloatArray = NDArray[np.float64]
 
 
 def scan_points(

@@ -7,8 +7,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import BoolArray, FloatArray, IntArray
 from umbmark.core.conventions import Direction
 from umbmark.sim.kernels import (
     SINC_SERIES_LIMIT,
@@ -22,10 +22,6 @@ from umbmark.sim.result import SimResult, Trace
 from umbmark.sim.robot import ControlConfig, SimRobot
 
 __all__ = ["Batch"]
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 
 
 def _robot_arrays(robots: Sequence[SimRobot]) -> dict[str, FloatArray]:

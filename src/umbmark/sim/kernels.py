@@ -6,8 +6,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray, IntArray
 from umbmark.sim.layout import Work
 
 __all__ = [
@@ -18,8 +18,6 @@ __all__ = [
     "half_sinc_series",
 ]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 #: ``chord_step`` takes sin(h)/h in its series form when every ``|h|`` is below this.
 SINC_SERIES_LIMIT = 0.01

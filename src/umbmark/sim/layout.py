@@ -7,14 +7,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.sim.robot import ControlConfig
 
 __all__ = ["N_ROWS", "REFS", "ROW", "ROWS", "RUN", "SEGMENT", "Work"]
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 #: The rows of the run matrix: a name and how many rows it takes, in order.
 ROWS: tuple[tuple[str, int], ...] = (

@@ -4,16 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-from numpy.typing import NDArray
-
+from umbmark.core.arrays import FloatArray, IntArray
 from umbmark.core.conventions import Direction
 from umbmark.model.runs import EndPose, Run
 
 __all__ = ["SimResult", "Trace"]
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 
 @dataclass(frozen=True)

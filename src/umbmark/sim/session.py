@@ -26,14 +26,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.sim.result import SimResult
 
 __all__ = ["REST", "START_IN_WORLD", "SimulatedSession", "continuous_session"]
 
-FloatArray = NDArray[np.float64]
 
 #: Rest before the first run, between runs and after the last [s].
 REST = 2.0

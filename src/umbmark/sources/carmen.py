@@ -41,8 +41,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry, wheel_travel_from_poses
 from umbmark.model.recording import PoseSeries, WheelSeries
@@ -53,7 +53,6 @@ __all__ = [
     "FLASER_MAX_RANGE", "MAX_BEAMS", "MAX_SCANS", "CarmenLog", "odometry_wheels", "read_carmen",
 ]  # fmt: skip
 
-FloatArray = NDArray[np.float64]
 
 #: The most sweeps read from one log (an hour at 25 Hz is 90 000).
 MAX_SCANS = 100_000

@@ -83,6 +83,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray, IntArray
 from umbmark.sources.bag.msgtypes import JOINT_STATE, ODOMETRY, TICK_TYPES, TRUTH_TYPES
 
 __all__ = [
@@ -96,8 +97,6 @@ __all__ = [
     "fast_layout",
 ]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 POSITION = 0
 """Kind of sample: the values are positions (joint angles, poses, counts)."""

@@ -13,8 +13,8 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray, IntArray
 from umbmark.core.errors import InputError
 from umbmark.core.geometry import quaternion_yaw
 from umbmark.model.recording import PoseSeries
@@ -28,9 +28,6 @@ if TYPE_CHECKING:
 
 __all__ = ["clean", "on_left_times", "pose_values", "read_topic", "seconds", "stamp", "time_ns"]
 __all__ += ["truth_series"]
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 
 def read_topic(

@@ -34,8 +34,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.msgtypes import STRING, String
@@ -54,7 +54,6 @@ __all__ = [
     "read_description",
 ]
 
-FloatArray = NDArray[np.float64]
 
 #: Longest robot description read [characters] (a full robot with meshes named, not
 #: embedded, is tens of kilobytes).

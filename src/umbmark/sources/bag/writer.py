@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.atomic import fsync
 from umbmark.core.errors import InputError
 from umbmark.model.recording import PoseSeries, WheelSeries
@@ -71,7 +72,6 @@ START_EPOCH = 1_704_067_200
 #: Samples written between two progress reports.
 _REPORT_EVERY = 2000
 
-FloatArray = NDArray[np.float64]
 _Make = Callable[[int, int], "_Msg"]  # (sample index, stamp [ns]) -> message object
 
 TF_DEFINITION = "geometry_msgs/TransformStamped[] transforms"

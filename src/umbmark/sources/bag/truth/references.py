@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info
 from umbmark.model.recording import PoseSeries
@@ -64,7 +64,6 @@ __all__ = [
     "register_model_states",
 ]
 
-FloatArray = NDArray[np.float64]
 
 #: ``gazebo_msgs/msg/ModelStates`` (gazebo_ros_pkgs, ROS 1 and ROS 2 alike).
 MODEL_STATES_MSG = """\

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.core.geometry import compose, invert, quaternion_yaw
 from umbmark.sources.bag import reader as bag_reader
@@ -29,7 +29,6 @@ if TYPE_CHECKING:
 
 __all__ = ["MAX_TRANSFORMS", "Edge", "chain_poses", "chain_steps", "read_edges"]
 
-FloatArray = NDArray[np.float64]
 #: Transform messages read at most: about a day of 100 Hz TF with ten frames.
 MAX_TRANSFORMS = 50_000_000
 

@@ -12,8 +12,8 @@ import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray, IntArray
 from umbmark.core.errors import InputError
 from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import custom
@@ -29,9 +29,6 @@ if TYPE_CHECKING:
     from umbmark.sources.bag.options import BagOptions
 
 __all__ = ["read_fields", "read_ticks", "unwrap"]
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 
 def _read_counts(

@@ -50,7 +50,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry, wheel_travel_from_poses
@@ -58,7 +57,6 @@ from umbmark.model.recording import PoseSeries, WheelSeries, gap_mask
 
 __all__ = ["MAX_LATERAL_SHARE", "MAX_STEP_TURN", "OdometryInversion", "wheels_from_odometry"]
 
-FloatArray = NDArray[np.float64]
 
 #: Largest turn [rad] between two odometry messages (99th percentile) that is inverted.
 MAX_STEP_TURN = 0.35

@@ -24,8 +24,8 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray, IntArray
 from umbmark.core.errors import InputError
 from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import reader as bag_reader
@@ -37,8 +37,6 @@ if TYPE_CHECKING:
 
 __all__ = ["MAX_STEP", "read_wheel_transforms", "turns_about_y"]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 #: Largest turn [rad] of a wheel between two of its transforms that can be followed.
 MAX_STEP = 0.5 * math.pi
