@@ -46,6 +46,10 @@ __all__ = [
 ]
 
 
+#: The values ``--obstacle-margin`` may take [m].
+OBSTACLE_MARGIN_RANGE = (0.05, 2.0)
+
+
 @dataclass(frozen=True)
 class DriveLimits:
     """How the square is driven, and the safety limits (SI units).
@@ -80,12 +84,20 @@ class DriveLimits:
         The odometry moving between two readings by more than this [m] beyond what the
         speed allows (or by more than ten times this in radians beyond the turn rate)
         stops the robot: a controller restarted under it (its odometry reset).
-    obstacle_distance, obstacle_half_angle : float
-        A scan return closer than this [m] ahead (within this half angle [rad] of the
-        direction of travel) stops the robot.
+    obstacle_margin, stop_latency, obstacle_half_angle : float
+        A scan return ahead (within ``obstacle_half_angle`` [rad] of the direction of
+        travel) nearer than the stop distance at the speed ``v`` driven
+        (:meth:`stop_distance`: ``v^2 / (2 acceleration) + v stop_latency +
+        obstacle_margin``) stops the robot. ``obstacle_margin`` [m] is what is left
+        between the robot's centre and the obstacle once stopped; ``stop_latency`` [s]
+        covers the look-ahead period, the scan's age and the zero velocity's way to the
+        wheels.
     obstacle_period : float
-        The scan ahead is looked at this often [s] on the legs (at 0.2 m/s the robot
-        drives 5 cm in 0.25 s and stops within 7 cm at 0.3 m/s^2: well inside 0.3 m).
+        The scan ahead is looked at this often [s] on the legs.
+    clock_jump : float
+        The robot's clock (sim time where ``/clock`` runs) going backwards, or forward by
+        more than this [s] between two control steps, stops the robot (a restarted or
+        stalled simulation, a clock stepped under a running robot).
     closing_time : float
         Closing in, the speed (turn rate) is at most the remaining distance (angle) over
         this [s]: an approach with this time constant, which a command arriving a few
@@ -116,9 +128,11 @@ class DriveLimits:
     stale_odometry: float = 0.5
     stale_scan: float = 1.0
     odometry_jump: float = 0.05
-    obstacle_distance: float = 0.3
+    obstacle_margin: float = 0.3
+    stop_latency: float = 0.4
     obstacle_half_angle: float = math.radians(30.0)
     obstacle_period: float = 0.25
+    clock_jump: float = 5.0
     margin: float = 0.5
     time_factor: float = 2.0
     closing_time: float = 0.2
@@ -134,6 +148,9 @@ class DriveLimits:
             "time_factor": (1.2, 10.0),
             "settle_limit": (1.0, 600.0),
             "closing_time": (0.001, 2.0),
+            "obstacle_margin": OBSTACLE_MARGIN_RANGE,
+            "stop_latency": (0.0, 2.0),
+            "clock_jump": (0.05, 60.0),
         }
         for name, (low, high) in bounds.items():
             value = getattr(self, name)
@@ -141,6 +158,13 @@ class DriveLimits:
                 raise InputError(
                     f"--{name.replace('_', '-')} {value!r} is outside {low:g} to {high:g}"
                 )
+
+    def stop_distance(self, speed: float) -> float:
+        """How near [m] an obstacle ahead may come at ``speed`` [m/s] before the robot is
+        stopped: the braking distance at the acceleration limit, the way driven during
+        the latency, and the margin: ``v^2 / (2 a) + v t_latency + margin``."""
+        v = abs(speed)
+        return v * v / (2.0 * self.acceleration) + v * self.stop_latency + self.obstacle_margin
 
     def expected_time(self, side: float) -> float:
         """A run's time without stops or settling [s]: four legs and four turns, each an
@@ -210,6 +234,7 @@ class _Driver:
         self.origin = Pose2D()
         #: For moves other than the square: how far from ``origin`` the odometry may go.
         self.radius: float | None = None
+        self.clock: float | None = None  # the robot's clock at the last reading
 
     # --- reading, with the safety checks ------------------------------------------------
 
@@ -218,6 +243,7 @@ class _Driver:
         odom = self.robot.odometry()
         now = self.robot.now()
         limits = self.limits
+        self._check_clock(now)
         if odom is None or now - odom.time > limits.stale_odometry:
             age = "none" if odom is None else f"{now - odom.time:.2f} s old"
             raise stop_safely(
@@ -246,6 +272,37 @@ class _Driver:
                 f"more than {m:g} m (at x = {local.x:.3f} m, y = {local.y:.3f} m of its frame)",
             )
         return pose
+
+    def _check_clock(self, now: float) -> None:
+        """Stop when the robot's clock went backwards, or forward by more than the bound,
+        since the last reading (one control step)."""
+        last, self.clock = self.clock, now
+        if last is None:
+            return
+        if now < last:
+            raise stop_safely(
+                self.robot,
+                f"the robot's clock went back {last - now:.3f} s (from {last:.3f} to "
+                f"{now:.3f} s): was the simulation restarted?",
+            )
+        if now - last > self.limits.clock_jump:
+            raise stop_safely(
+                self.robot,
+                f"the robot's clock jumped {now - last:.2f} s forward in one control step "
+                f"(limit {self.limits.clock_jump:g} s): a clock stepped under the robot, or "
+                "a simulation or control loop that stalled",
+            )
+
+    def check_listening(self) -> None:
+        """Stop when nobody takes the velocity commands any more (a robot that can tell:
+        a ROS publisher's subscriber count)."""
+        count = getattr(self.robot, "command_listeners", None)
+        if callable(count) and count() == 0:
+            raise stop_safely(
+                self.robot,
+                "nobody subscribes to the velocity topic any more: was the controller "
+                "stopped or restarted?",
+            )
 
     def _check_jump(
         self, last: tuple[float, float, float, float], time: float, pose: Pose2D
@@ -279,10 +336,12 @@ class _Driver:
                 "went silent, and nothing watches for obstacles",
             )
         distance = obstacle_ahead(scan, self.limits.obstacle_half_angle)
-        if distance < self.limits.obstacle_distance:
+        limit = self.limits.stop_distance(self.linear)
+        if distance < limit:
             raise stop_safely(
                 self.robot,
-                f"an obstacle {distance:.2f} m ahead (limit {self.limits.obstacle_distance:g} m)",
+                f"an obstacle {distance:.2f} m ahead (stop distance {limit:.2f} m at "
+                f"{abs(self.linear):.2f} m/s)",
             )
 
     def command(self, linear: float, angular: float) -> None:
@@ -310,6 +369,7 @@ class _Driver:
                 break
             if k % scan_every == 0:
                 self.check_ahead(True)
+                self.check_listening()
             k += 1
             brake = math.sqrt(2.0 * lim.acceleration * remaining)
             close = remaining / max(dt, lim.closing_time)
@@ -326,11 +386,15 @@ class _Driver:
     def turn(self, heading: float) -> None:
         """Turn on the spot to the odometry heading ``heading`` and stop."""
         lim, dt = self.limits, self.limits.period
+        listen_every, k = max(1, round(lim.obstacle_period / dt)), 0
         while True:
             pose = self.read()
             error = float(wrap_angle(heading - pose.theta))
             if abs(error) <= lim.heading_tolerance:
                 break
+            if k % listen_every == 0:
+                self.check_listening()
+            k += 1
             brake = math.sqrt(2.0 * lim.turn_acceleration * abs(error))
             close = abs(error) / max(dt, lim.closing_time)
             goal = min(lim.turn_rate, brake, close)

@@ -91,13 +91,15 @@ def drive_pass(
     home: Home,
     limits: DriveLimits,
     progress: PassProgress | None = None,
+    measured: Callable[[int, Direction, MeasuredRun], None] | None = None,
 ) -> list[MeasuredRun]:
     """``runs`` cw runs, then ``runs`` ccw runs (Sec. 5), each from the start and measured
     at both ends.
 
     A run's end fix is gated by a wide prior: the odometry believes the robot came back,
     so the prior is the start, and the return error may be large (up to a fifth of the
-    side and 30 degrees are taken).
+    side and 30 degrees are taken). ``measured`` is called with each run as it is
+    measured (its number in the pass, 1 to ``2 runs``).
     """
     out: list[MeasuredRun] = []
     order = [Direction.CW] * runs + [Direction.CCW] * runs
@@ -122,6 +124,8 @@ def drive_pass(
         except CornerNotFoundError as exc:
             raise _lost_at_the_end(exc, how, direction, (k - 1) % runs + 1) from None
         out.append(MeasuredRun(run, start, end))
+        if measured is not None:
+            measured(k, direction, out[-1])
     return out
 
 

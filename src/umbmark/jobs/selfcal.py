@@ -53,6 +53,7 @@ from umbmark.autocal.record import (
     record_pass,
 )
 from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, write_state
+from umbmark.autocal.watch import Progress, RunsLeft, Stopped, Watch, mark_stopped
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
@@ -68,9 +69,6 @@ __all__ = ["MAX_SELFCAL_PASSES", "PassResult", "SelfCalReport", "default_folder"
 MAX_SELFCAL_PASSES = 5
 #: Most runs per direction in a pass.
 MAX_SELFCAL_RUNS = 20
-
-#: Live progress: (pass label, run number, direction, what) for a terminal.
-Progress = Callable[[str, int, Direction | None, str], None]
 
 
 def _check_counts(side_length: float, runs: int, max_passes: int) -> None:
@@ -103,6 +101,7 @@ def selfcal(
     force: bool = False,
     resume: str | os.PathLike[str] | None = None,
     notify: Callable[[str], None] | None = None,
+    runs_left: Callable[[RunsLeft], None] | None = None,
 ) -> SelfCalReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
     corner, applied and verified (module documentation).
@@ -151,7 +150,12 @@ def selfcal(
         settings (the ones given here are not used), once the controller holds the
         parameters it stopped on (:mod:`umbmark.autocal.resume`).
     notify : callable, optional
-        Lines for a person, as they happen (the robot cannot take parameters live, ...).
+        Lines for a person, as they happen: each check before moving, the coarse check,
+        each run's return error, each pass's result (the robot cannot take parameters
+        live, ...).
+    runs_left : callable, optional
+        Called with a :class:`~umbmark.autocal.watch.RunsLeft` (runs done out of planned,
+        the time left) as each pass begins and each run ends.
 
     Raises
     ------
@@ -159,6 +163,10 @@ def selfcal(
         Bad options, or a check before moving failed (with the cause).
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
+
+    Any exception once the checks began (and ``KeyboardInterrupt``) is raised after a zero
+    velocity was sent, carrying what the controller holds and which passes are on disk
+    (:func:`umbmark.autocal.watch.stopped`).
     """
     state = None
     if resume is not None:
@@ -195,8 +203,9 @@ def selfcal(
     kept = contextlib.nullcontext(str(folder))
     with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
         drive = _Passes(
-            robot, how, Path(logs), side_length, runs, limits, name, progress,
-            record_as=robot_name, history=history,
+            robot, how, Path(logs), side_length, runs, limits, name,
+            Watch(progress, notify, runs_left, runs), record_as=robot_name, history=history,
+            kept=folder is not None,
         )  # fmt: skip
         found = _calibrate(
             drive, method, verify, max_passes, coarse,
@@ -307,10 +316,12 @@ def _calibrate(
     self-calibration is removed once the checks before moving have passed. A pass whose
     parameters wait for a controller restart ends the passes (none is driven on
     parameters that were not applied)."""
-    robot, how, limits, progress = drive.robot, drive.how, drive.limits, drive.progress
+    robot, how, limits, watch = drive.robot, drive.how, drive.limits, drive.watch
     passes = list(restart.prior)
+    moved = False
     try:
-        checks = preflight(robot, how, drive.side, limits)
+        checks = preflight(robot, how, drive.side, limits, say=watch.say)
+        moved = True
         if restart.note is not None:
             checks.append(restart.note)
             if restart.notify is not None:
@@ -323,9 +334,9 @@ def _calibrate(
             clear_selfcal(replacing, remove=True)
         coarse_check, coarse_applied, pending = None, None, None
         if coarse and method != "none" and how.method in ("lidar", "truth"):
-            if progress is not None:
-                progress("coarse", 0, None, "turning check")
+            watch.status("coarse", 0, None, "turning check")
             coarse_check = coarse_turning(robot, how, limits)
+            watch.say(coarse_check.words())
             if coarse_check.needed:
                 params = robot.drive_params()
                 coarse_params = replace(
@@ -347,7 +358,9 @@ def _calibrate(
         for k in range(start_at, max_passes + 1):
             if pending is not None:
                 break
+            watch.begin_pass(max_passes - k + 1 + int(verify))
             result, new = _apply(robot, drive(f"pass {k}", home), method)
+            watch.say(result.summary())
             drive.mark_applied(result)
             home.reanchor(robot)
             passes.append(result)
@@ -360,12 +373,25 @@ def _calibrate(
                 break
         last = passes[-1].applied if passes else None
         if verify and pending is None and last is not None and last.active:
+            watch.begin_pass(1)
             passes.append(drive("verification", home))
-    except BaseException:
+            watch.say(passes[-1].summary())
+    except BaseException as exc:
         robot.send_velocity(0.0, 0.0)
+        if moved or not isinstance(exc, InputError):
+            mark_stopped(exc, _stopped(robot, passes, drive))
         raise
     robot.send_velocity(0.0, 0.0)
     return _Found(checks, home, coarse_check, coarse_applied, passes, pending)
+
+
+def _stopped(robot: Robot, passes: list[PassResult], drive: _Passes) -> Stopped:
+    """What a routine stopped mid-way leaves: what the controller holds, the passes kept."""
+    try:
+        holds = _holds(passes, robot.drive_params()).words()
+    except Exception as exc:  # a robot gone with the stop: say so, keep the stop's cause
+        holds = f"what the controller holds could not be read ({exc})"
+    return Stopped(holds, tuple(p.label for p in passes), drive.folder if drive.kept else None)
 
 
 def locals_settings(
@@ -436,9 +462,10 @@ class _Passes:
     runs: int
     limits: DriveLimits
     name: str
-    progress: Progress | None
+    watch: Watch
     record_as: str | None = None
     history: str | os.PathLike[str] | None = None
+    kept: bool = True
 
     def __call__(self, label: str, home: Home) -> PassResult:
         from umbmark.jobs.calibrate import calibrate
@@ -446,10 +473,14 @@ class _Passes:
         params = self.robot.drive_params()
 
         def said(k: int, direction: Direction, what: str) -> None:
-            if self.progress is not None:
-                self.progress(label, k, direction, what)
+            self.watch.status(label, k, direction, what)
 
-        measured = drive_pass(self.robot, self.how, self.side, self.runs, home, self.limits, said)
+        def ran(k: int, direction: Direction, run: MeasuredRun) -> None:
+            self.watch.run_measured(label, k, direction, run.start.pose, run.end.pose)
+
+        measured = drive_pass(
+            self.robot, self.how, self.side, self.runs, home, self.limits, said, ran
+        )
         where = pass_folder(self.folder, label)
         record_pass(where, measured, params, self.side, self.how.method, self.name)
         report = calibrate(where, robot=self.record_as, history=self.history)

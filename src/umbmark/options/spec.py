@@ -27,11 +27,14 @@ from umbmark.core.errors import InputError
 
 __all__ = [
     "BAGS",
+    "CORNER_SIDE",
+    "DRIVING",
     "FORCE",
     "LOGS",
     "LONGEST_GAP",
     "LONGEST_REST",
     "MAX_TRUTH_OFFSET",
+    "OBSTACLE_MARGIN",
     "OUTPUTS",
     "OVERRIDE_VERDICT",
     "PARAMETERS",
@@ -262,6 +265,36 @@ OVERRIDE_VERDICT = Spec(
     "Override a refusal that protects the robot's parameters (never needed to replace "
     "files: that is --force).",
     kind="flag",
+)
+
+# --- the self-calibration's (selfcal) ----------------------------------------------------
+
+#: The section of ``umbmark selfcal --help`` listing how the robot drives.
+DRIVING = "Driving"
+
+#: ``--obstacle-margin`` of ``selfcal`` (``DriveLimits.obstacle_margin``; its bounds are
+#: :data:`umbmark.autocal.drive.OBSTACLE_MARGIN_RANGE`).
+OBSTACLE_MARGIN = Spec(
+    "obstacle_margin",
+    ("--obstacle-margin",),
+    DRIVING,
+    "Room left before an obstacle seen ahead [m] (0.05 to 2): the robot is stopped when "
+    "one is nearer than v^2/(2 a) + v t + this, v the speed, a the acceleration limit, "
+    "t the stop latency (0.4 s); measured from the robot's centre.",
+    kind="number",
+    default=0.3,
+    unit="m",
+)
+#: ``--corner-side`` of ``selfcal``: where the L-shaped corner stands, seen from the start.
+CORNER_SIDE = Spec(
+    "corner_side",
+    ("--corner-side",),
+    TEST,
+    "Where the L-shaped corner stands, seen from the robot at its start: behind it and to "
+    "its right, or to its left (the wall beside the start on that side).",
+    kind="choice",
+    default="right",
+    choices=("right", "left"),
 )
 
 # --- how to read a source (calibrate, replay, report, validate) -----------------------
