@@ -51,6 +51,11 @@ class RunsLeft:
         return f"{self.done} of {self.planned} runs{left}"
 
 
+def _wall() -> float:
+    """The wall clock the time left is estimated on [s]."""
+    return time.monotonic()
+
+
 def _duration(seconds: float) -> str:
     if seconds < 90.0:
         return f"{max(seconds, 0.0):.0f} s"
@@ -73,15 +78,16 @@ class Watch:
         Called with a :class:`RunsLeft` as each pass begins and each run ends.
     runs : int
         Runs per direction in a pass.
-    clock : callable
-        Wall time [s] (a person's minutes, not the robot's clock).
+    clock : callable, optional
+        Wall time [s] [default: :func:`time.monotonic`]: a person's minutes, not the
+        robot's clock.
     """
 
     progress: Progress | None = None
     notify: Callable[[str], None] | None = None
     runs_left: Callable[[RunsLeft], None] | None = None
     runs: int = 5
-    clock: Callable[[], float] = time.monotonic
+    clock: Callable[[], float] | None = None
     done: int = 0
     planned: int = 0
     _began: float | None = field(default=None, repr=False)
@@ -97,7 +103,7 @@ class Watch:
     def begin_pass(self, passes_left: int) -> None:
         """A pass begins; ``passes_left``: it and those that may follow it."""
         if self._began is None:
-            self._began = self.clock()
+            self._began = self._now()
         self.planned = self.done + 2 * self.runs * max(passes_left, 0)
         self._report()
 
@@ -120,9 +126,12 @@ class Watch:
     def left(self) -> RunsLeft:
         seconds = None
         if self._began is not None and self.done > 0:
-            per_run = (self.clock() - self._began) / self.done
+            per_run = (self._now() - self._began) / self.done
             seconds = per_run * (self.planned - self.done)
         return RunsLeft(self.done, self.planned, seconds)
+
+    def _now(self) -> float:
+        return _wall() if self.clock is None else self.clock()
 
     def _report(self) -> None:
         if self.runs_left is not None:

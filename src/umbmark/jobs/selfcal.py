@@ -321,7 +321,6 @@ def _calibrate(
     moved = False
     try:
         checks = preflight(robot, how, drive.side, limits, say=watch.say)
-        moved = True
         if restart.note is not None:
             checks.append(restart.note)
             if restart.notify is not None:
@@ -330,6 +329,7 @@ def _calibrate(
         first = take_fix(robot, how)
         home = Home(first.pose, first, odom)
         home.fixes.append((first, corner_truth(robot, how)))
+        moved = True  # the checks and the first fix passed: the robot moves from here on
         if replacing is not None:
             clear_selfcal(replacing, remove=True)
         coarse_check, coarse_applied, pending = None, None, None
@@ -360,10 +360,10 @@ def _calibrate(
                 break
             watch.begin_pass(max_passes - k + 1 + int(verify))
             result, new = _apply(robot, drive(f"pass {k}", home), method)
+            passes.append(result)
             watch.say(result.summary())
             drive.mark_applied(result)
             home.reanchor(robot)
-            passes.append(result)
             bench = result.report.benchmark
             if result.applied is None or not result.applied.active:
                 if restart.note is not None and result.applied is not None:
