@@ -9,24 +9,47 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 from umbmark.autocal.corner import CornerFix, CornerNotFoundError
 from umbmark.autocal.corner_lidar import LidarCorner, fix_from_scans
 from umbmark.autocal.corner_sensors import (
+    PAPER_FACES,
     TapeMarks,
+    Wall,
     ask_tape,
     fix_from_ground_truth,
     fix_from_ranges,
     fix_from_tape,
 )
+from umbmark.core.errors import InputError
 from umbmark.robot.base import LaserScan, Pose2D, RangeReading, Robot, Stamped
 
-__all__ = ["MEASURE_METHODS", "READINGS", "Measure", "MeasureMethod", "take_fix"]
+__all__ = [
+    "CORNER_SIDES",
+    "MEASURE_METHODS",
+    "READINGS",
+    "CornerSide",
+    "Measure",
+    "MeasureMethod",
+    "check_side",
+    "take_fix",
+]
 
 MeasureMethod = Literal["lidar", "ranges", "truth", "tape"]
 MEASURE_METHODS: tuple[MeasureMethod, ...] = ("lidar", "ranges", "truth", "tape")
+
+#: Where the L-shaped corner stands seen from the start: behind it, to its right or left.
+CornerSide = Literal["right", "left"]
+CORNER_SIDES: tuple[CornerSide, ...] = ("right", "left")
+#: The wall each range sensor (tape mark) faces, by the corner's side: the first two the
+#: wall behind the start, the third the side wall. The corner frame is right-handed with
+#: the robot inside, so the wall behind is the y wall with the corner on the right and
+#: the x wall with it on the left (:mod:`umbmark.autocal.corner`).
+FACES: dict[CornerSide, tuple[Wall, ...]] = {"right": PAPER_FACES, "left": ("x", "x", "y")}
+#: The robot's heading in the corner frame when placed square in the corner [rad].
+SQUARE: dict[CornerSide, float] = {"right": 0.0, "left": 0.5 * math.pi}
 
 #: Readings averaged at a stop (scans, range readings, motion-capture poses).
 READINGS = 5
@@ -47,12 +70,21 @@ class Measure:
         For ``tape``: shows a prompt, returns the person's answer (``input``).
     marks : TapeMarks, optional
         For ``tape``: the marks on the robot the person measures from.
+    side : {"right", "left"}
+        Where the corner stands seen from the start (behind it, to that side): which wall
+        each range sensor or tape mark faces (:data:`FACES`), and the side the first fix
+        must find it on (:func:`check_side`).
     """
 
     method: MeasureMethod = "lidar"
     readings: int = READINGS
     ask: Callable[[str], str] | None = None
     marks: TapeMarks | None = None
+    side: CornerSide = "right"
+
+    def __post_init__(self) -> None:
+        if self.side not in CORNER_SIDES:
+            raise InputError(f"--corner-side {self.side!r}: use right or left")
 
 
 def _collect(robot: Robot, read: Callable[[], object], what: str, count: int) -> list[object]:
@@ -104,6 +136,7 @@ def take_fix(
         readings = _collect(robot, robot.ranges, "range-sensor reading", n)
         return fix_from_ranges(
             [r for r in readings if isinstance(r, RangeReading)],
+            FACES[how.side],
             prior=prior,
             prior_distance=gate[0],
             prior_angle=gate[1],
@@ -113,5 +146,29 @@ def take_fix(
         return fix_from_ground_truth([p for p in poses if isinstance(p, Stamped)])
     if how.ask is None or how.marks is None:
         raise CornerNotFoundError("missing_echo", "a tape fix needs a person to ask and marks")
-    distances = ask_tape(how.ask, how.marks)
-    return fix_from_tape(distances, how.marks, prior=prior, time=robot.now())
+    marks = replace(how.marks, faces=FACES[how.side])
+    distances = ask_tape(how.ask, marks)
+    return fix_from_tape(distances, marks, prior=prior, time=robot.now(), square=SQUARE[how.side])
+
+
+def check_side(fix: CornerFix, side: CornerSide) -> None:
+    """Refuse a first fix whose corner is not behind the robot on ``side`` (the corner's
+    vertex seen from the robot: behind it, y < 0 on the right, y > 0 on the left).
+
+    Raises
+    ------
+    InputError
+        Naming where the corner was found and the option to give.
+    """
+    vertex = Pose2D().relative_to(fix.pose)  # the corner's vertex in the robot's frame
+    found: CornerSide = "left" if vertex.y > 0.0 else "right"
+    if found != side or vertex.x >= 0.0:
+        where = "behind" if vertex.x < 0.0 else "ahead of"
+        raise InputError(
+            f"the corner was found {where} the robot and to its {found} (its vertex at x = "
+            f"{vertex.x:.2f} m, y = {vertex.y:.2f} m of the robot), not behind it and to "
+            f"its {side} as --corner-side {side} says: give --corner-side {found}, or place "
+            "the robot with the corner behind it",
+            python=f"the corner was found {where} the robot and to its {found}, not behind "
+            f"it and to its {side}: give corner_side={found!r}",
+        )

@@ -14,7 +14,7 @@ import click
 
 from umbmark.cli.options import Command, apply, force_option, option, spec_option
 from umbmark.core.errors import InputError, SafetyError
-from umbmark.options.spec import DRIVING, OBSTACLE_MARGIN, OUTPUTS, TEST
+from umbmark.options.spec import CORNER_SIDE, DRIVING, OBSTACLE_MARGIN, OUTPUTS, TEST
 
 if TYPE_CHECKING:
     from umbmark.autocal.watch import Progress, RunsLeft, Stopped
@@ -63,6 +63,8 @@ ROS = "ROS robots (--ros1, --ros2)"
                help="With --measure tape: the three points on the robot (its base frame, "
                "metres) the distances are measured from; the first two to the wall behind "
                "the start, the third to the side wall [default: the virtual robot's]."),
+        spec_option(CORNER_SIDE, help=f"{CORNER_SIDE.help} With --sim, the virtual "
+                    "robot's corner stands there."),
         option("--apply", section=TEST, type=click.Choice(["reconfigure", "yaml", "none"]),
                default="reconfigure", show_default=True,
                help="How corrections reach the controller (none: one pass, nothing applied)."),
@@ -170,7 +172,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         turn_rate=options.pop("turn_rate"),
         obstacle_margin=options.pop("obstacle_margin"),
     )
-    robot = connect(backend, ros=ros, **sim)  # type: ignore[arg-type]
+    robot = connect(backend, ros=ros, corner_side=options["corner_side"], **sim)  # type: ignore[arg-type]
     if options["out"] is None:  # the command's own folder; a new one beside an earlier run's
         options["out"] = fresh_folder(default_folder(options["robot"] or robot.name))
     ask = _ask_person if options["measure"] == "tape" else None

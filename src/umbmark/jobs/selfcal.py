@@ -41,7 +41,14 @@ import numpy as np
 from umbmark.autocal.coarse import CoarseTurning, coarse_turning
 from umbmark.autocal.corner_sensors import TapeMarks
 from umbmark.autocal.drive import DriveLimits, settle
-from umbmark.autocal.measure import MEASURE_METHODS, Measure, MeasureMethod, take_fix
+from umbmark.autocal.measure import (
+    MEASURE_METHODS,
+    CornerSide,
+    Measure,
+    MeasureMethod,
+    check_side,
+    take_fix,
+)
 from umbmark.autocal.passes import Home, corner_truth, drive_pass
 from umbmark.autocal.preflight import preflight
 from umbmark.autocal.record import (
@@ -102,6 +109,7 @@ def selfcal(
     resume: str | os.PathLike[str] | None = None,
     notify: Callable[[str], None] | None = None,
     runs_left: Callable[[RunsLeft], None] | None = None,
+    corner_side: CornerSide = "right",
 ) -> SelfCalReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
     corner, applied and verified (module documentation).
@@ -153,6 +161,10 @@ def selfcal(
         Lines for a person, as they happen: each check before moving, the coarse check,
         each run's return error, each pass's result (the robot cannot take parameters
         live, ...).
+    corner_side : {"right", "left"}
+        Where the corner stands seen from the start: behind it and to its right or left
+        (which wall each range sensor or tape mark faces; the first fix must find it
+        there, else nothing moves).
     runs_left : callable, optional
         Called with a :class:`~umbmark.autocal.watch.RunsLeft` (runs done out of planned,
         the time left) as each pass begins and each run ends.
@@ -174,13 +186,14 @@ def selfcal(
         s = state.settings
         side_length, runs, measure = s["side_length"], s["runs"], s["measure"]
         max_passes, verify, out, coarse = s["max_passes"], s["verify"], resume, False
+        corner_side = s.get("corner_side", "right")
     _check_counts(side_length, runs, max_passes)
     if measure not in MEASURE_METHODS:
         raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
     method = _apply_method(apply)
     limits = limits or DriveLimits()
     marks = _tape_marks(robot, tape_marks) if measure == "tape" else None
-    how = Measure(measure, ask=ask, marks=marks)
+    how = Measure(measure, ask=ask, marks=marks, side=corner_side)
     name = robot_name or robot.name
     folder = None if out is None else Path(out)
     page = None if report is None else Path(report)
@@ -222,7 +235,10 @@ def selfcal(
                 folder,
                 found.passes,
                 found.pending,
-                locals_settings(side_length, runs, measure, max_passes, verify),
+                {
+                    **locals_settings(side_length, runs, measure, max_passes, verify),
+                    "corner_side": corner_side,
+                },
             )
             files.extend(more)
     passes = found.passes if folder is not None else [replace(p, folder=None) for p in found.passes]
@@ -327,6 +343,8 @@ def _calibrate(
                 restart.notify(restart.note)
         odom = settle(robot, limits).pose
         first = take_fix(robot, how)
+        if how.method != "truth":  # motion capture's frame is not the corner's
+            check_side(first, how.side)
         home = Home(first.pose, first, odom)
         home.fixes.append((first, corner_truth(robot, how)))
         moved = True  # the checks and the first fix passed: the robot moves from here on

@@ -23,11 +23,13 @@ def connect(
     slip: float = 0.0004,
     seed: int | None = None,
     ros: RosOptions | None = None,
+    corner_side: Literal["right", "left"] = "right",
 ) -> Robot:
     """The robot to calibrate.
 
     ``sim``: a :class:`~umbmark.robot.virtual.VirtualRobot` (LabMate-sized, 4 m squares'
-    room) with errors ``E_d``, ``E_b``, ``E_s`` and wheel slip ``slip`` [m^(1/2)];
+    room, the corner behind the start on ``corner_side``) with errors ``E_d``, ``E_b``,
+    ``E_s`` and wheel slip ``slip`` [m^(1/2)];
     ``ros1`` / ``ros2``: the robot behind the topics and controller of ``ros``.
 
     Raises
@@ -37,6 +39,7 @@ def connect(
     """
     if backend == "sim":
         from umbmark.robot.virtual import ERROR_RANGE, MAX_SLIP, VirtualRobot
+        from umbmark.robot.world import corner_world
 
         low, high = ERROR_RANGE
         for name, value in (("E_d", E_d), ("E_b", E_b), ("E_s", E_s)):
@@ -46,7 +49,8 @@ def connect(
                 )
         if not (0.0 <= slip <= MAX_SLIP):
             raise InputError(f"--sim-slip {slip!r} m^0.5: give 0 to {MAX_SLIP:g}")
-        return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed)
+        world = corner_world(side=corner_side)
+        return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed, world=world)
     if backend == "ros1":
         from umbmark.robot.ros1 import Ros1Robot
 
