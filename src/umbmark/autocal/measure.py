@@ -8,7 +8,7 @@ The robot stands still while readings are taken; several are averaged
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
 
@@ -34,6 +34,7 @@ __all__ = [
     "Measure",
     "MeasureMethod",
     "check_side",
+    "marks_for",
     "take_fix",
 ]
 
@@ -172,3 +173,30 @@ def check_side(fix: CornerFix, side: CornerSide) -> None:
             python=f"the corner was found {where} the robot and to its {found}, not behind "
             f"it and to its {side}: give corner_side={found!r}",
         )
+
+
+def marks_for(robot: Robot, given: Sequence[float] | None) -> TapeMarks:
+    """The marks a person measures from: the given ones (``--tape-marks``), else the
+    robot's own (``tape_marks()``, as the virtual robot has); refused when neither."""
+    if given is not None:
+        values = [float(v) for v in given]
+        if len(values) != 6 or not all(math.isfinite(v) and abs(v) <= 2.0 for v in values):
+            raise InputError(
+                f"--tape-marks {','.join(f'{v:g}' for v in values)}: give X1,Y1,X2,Y2,X3,Y3, "
+                "three points on the robot in its base frame, in metres (within 2 m)"
+            )
+        marks = ((values[0], values[1]), (values[2], values[3]), (values[4], values[5]))
+        if math.dist(marks[0], marks[1]) < 0.05:
+            raise InputError(
+                "--tape-marks: the first two marks (measured to the same wall) must be at "
+                "least 50 mm apart, or the heading cannot be told"
+            )
+        return TapeMarks(marks=marks)
+    own = getattr(robot, "tape_marks", None)
+    if callable(own):
+        return TapeMarks(marks=tuple((float(x), float(y)) for x, y in own()))
+    raise InputError(
+        "--measure tape needs --tape-marks: the three points on the robot the distances "
+        "are measured from (X1,Y1,X2,Y2,X3,Y3 in its base frame, metres; the first two to "
+        "the wall behind the start, the third to the side wall)"
+    )

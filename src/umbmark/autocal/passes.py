@@ -16,7 +16,15 @@ from umbmark.autocal.record import MeasuredRun
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.robot.base import Pose2D, Robot
 
-__all__ = ["HOME_ANGLE", "HOME_DISTANCE", "Home", "corner_truth", "drive_pass", "go_home"]
+__all__ = [
+    "HOME_ANGLE",
+    "HOME_DISTANCE",
+    "Home",
+    "corner_truth",
+    "drive_pass",
+    "go_home",
+    "strays",
+]
 
 #: Back at the start: within this distance [m] and angle [rad] of the first fix.
 HOME_DISTANCE = 0.02
@@ -143,3 +151,21 @@ def _lost_at_the_end(
         "sensors, which see both walls only within some 0.3 m and 10 deg of it; measure with "
         "--measure lidar (or truth), or make the errors smaller first (a smaller square, -L)",
     )
+
+
+def strays(measured: list[MeasuredRun], limits: DriveLimits) -> tuple[str, ...]:
+    """A warning for each run whose odometry ended farther from the commanded end than the
+    limits (a robot answering commands late, a controller that does not settle)."""
+    out = []
+    counted: dict[Direction, int] = {}
+    for m in measured:
+        k = counted[m.run.direction] = counted.get(m.run.direction, 0) + 1
+        distance, heading = m.run.end_error
+        if distance > limits.end_position or heading > limits.end_heading:
+            out.append(
+                f"{m.run.direction.value} run {k}: the odometry ended {distance * 1000:.1f} mm "
+                f"and {math.degrees(heading):.2f} deg from where it was sent (limits "
+                f"{limits.end_position * 1000:g} mm, {math.degrees(limits.end_heading):g} deg): "
+                "the run is not the square the benchmark assumes"
+            )
+    return tuple(out)

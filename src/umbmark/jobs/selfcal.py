@@ -28,7 +28,6 @@ What a person still does: place the robot in the corner, and calibrate the scale
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 import tempfile
 from collections.abc import Callable, Sequence
@@ -39,7 +38,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.autocal.coarse import CoarseTurning, coarse_turning
-from umbmark.autocal.corner_sensors import TapeMarks
 from umbmark.autocal.drive import DriveLimits, settle
 from umbmark.autocal.measure import (
     MEASURE_METHODS,
@@ -47,9 +45,10 @@ from umbmark.autocal.measure import (
     Measure,
     MeasureMethod,
     check_side,
+    marks_for,
     take_fix,
 )
-from umbmark.autocal.passes import Home, corner_truth, drive_pass
+from umbmark.autocal.passes import Home, corner_truth, drive_pass, strays
 from umbmark.autocal.preflight import preflight
 from umbmark.autocal.record import (
     OVERLAY_FILE,
@@ -192,7 +191,7 @@ def selfcal(
         raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
     method = _apply_method(apply)
     limits = limits or DriveLimits()
-    marks = _tape_marks(robot, tape_marks) if measure == "tape" else None
+    marks = marks_for(robot, tape_marks) if measure == "tape" else None
     how = Measure(measure, ask=ask, marks=marks, side=corner_side)
     name = robot_name or robot.name
     folder = None if out is None else Path(out)
@@ -502,7 +501,7 @@ class _Passes:
         where = pass_folder(self.folder, label)
         record_pass(where, measured, params, self.side, self.how.method, self.name)
         report = calibrate(where, robot=self.record_as, history=self.history)
-        return PassResult(label, where, report, params, warnings=_strays(measured, self.limits))
+        return PassResult(label, where, report, params, warnings=strays(measured, self.limits))
 
     def mark_applied(self, result: PassResult) -> None:
         """Mark the pass's calibration applied in the history (it was recorded last)."""
@@ -513,24 +512,6 @@ class _Passes:
         store = History(self.history)
         (last,) = store.calibrations(self.record_as)[-1:]
         store.mark_applied(self.record_as, last.id)
-
-
-def _strays(measured: list[MeasuredRun], limits: DriveLimits) -> tuple[str, ...]:
-    """A warning for each run whose odometry ended farther from the commanded end than the
-    limits (a robot answering commands late, a controller that does not settle)."""
-    out = []
-    counted: dict[Direction, int] = {}
-    for m in measured:
-        k = counted[m.run.direction] = counted.get(m.run.direction, 0) + 1
-        distance, heading = m.run.end_error
-        if distance > limits.end_position or heading > limits.end_heading:
-            out.append(
-                f"{m.run.direction.value} run {k}: the odometry ended {distance * 1000:.1f} mm "
-                f"and {math.degrees(heading):.2f} deg from where it was sent (limits "
-                f"{limits.end_position * 1000:g} mm, {math.degrees(limits.end_heading):g} deg): "
-                "the run is not the square the benchmark assumes"
-            )
-    return tuple(out)
 
 
 def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> tuple[PassResult, DriveParams]:
@@ -586,33 +567,6 @@ def _outputs(
 
 def _slug(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "-" for c in name)[:60] or "robot"
-
-
-def _tape_marks(robot: Robot, given: Sequence[float] | None) -> TapeMarks:
-    """The marks a person measures from: the given ones, else the robot's own
-    (``tape_marks()``, as the virtual robot has); refused when neither."""
-    if given is not None:
-        values = [float(v) for v in given]
-        if len(values) != 6 or not all(math.isfinite(v) and abs(v) <= 2.0 for v in values):
-            raise InputError(
-                f"--tape-marks {','.join(f'{v:g}' for v in values)}: give X1,Y1,X2,Y2,X3,Y3, "
-                "three points on the robot in its base frame, in metres (within 2 m)"
-            )
-        marks = ((values[0], values[1]), (values[2], values[3]), (values[4], values[5]))
-        if math.dist(marks[0], marks[1]) < 0.05:
-            raise InputError(
-                "--tape-marks: the first two marks (measured to the same wall) must be at "
-                "least 50 mm apart, or the heading cannot be told"
-            )
-        return TapeMarks(marks=marks)
-    own = getattr(robot, "tape_marks", None)
-    if callable(own):
-        return TapeMarks(marks=tuple((float(x), float(y)) for x, y in own()))
-    raise InputError(
-        "--measure tape needs --tape-marks: the three points on the robot the distances "
-        "are measured from (X1,Y1,X2,Y2,X3,Y3 in its base frame, metres; the first two to "
-        "the wall behind the start, the third to the side wall)"
-    )
 
 
 def _apply_method(apply: bool | ApplyMethod) -> ApplyMethod:
