@@ -5,7 +5,6 @@ faults that stop the robot (a zero velocity is the last command)."""
 
 from __future__ import annotations
 
-import math
 import os
 import re
 import signal
@@ -260,27 +259,3 @@ def test_a_small_forward_step_of_the_clock_is_no_fault():
     robot.step = 2.0  # within the 5 s bound: a busy machine's stall, not a jump
     run = drive_square(robot, 1.0, Direction.CCW)
     assert run.end_error[0] <= 0.005
-
-
-class _Unheard(VirtualRobot):
-    """Nobody subscribes to the velocity topic from ``after`` seconds on (a controller
-    stopped: the subscriber count a ROS publisher reports)."""
-
-    after = 6.0
-
-    def command_listeners(self) -> int:
-        return 0 if super().now() >= self.after else 1
-
-
-@pytest.mark.parametrize("after", [6.0, 22.0])  # on the first leg; on the first turn
-def test_a_velocity_topic_nobody_subscribes_stops_the_robot(after):
-    """The subscriber count is looked at every 0.24 s on the legs and turns (the first
-    leg of 4 m at 0.2 m/s ends at 21.1 s, the first turn lasts 2.6 s)."""
-    robot = _Unheard(seed=1)
-    robot.after = after
-    with pytest.raises(SafetyError, match="nobody subscribes to the velocity topic"):
-        drive_square(robot, 4.0, Direction.CCW)
-    _last_command_is_a_stop(robot)
-    assert after <= robot.now() <= after + 0.25
-    if after > 21.1:
-        assert abs(robot.true_pose.theta) > math.radians(5.0)  # it was turning

@@ -293,17 +293,6 @@ class _Driver:
                 "a simulation or control loop that stalled",
             )
 
-    def check_listening(self) -> None:
-        """Stop when nobody takes the velocity commands any more (a robot that can tell:
-        a ROS publisher's subscriber count)."""
-        count = getattr(self.robot, "command_listeners", None)
-        if callable(count) and count() == 0:
-            raise stop_safely(
-                self.robot,
-                "nobody subscribes to the velocity topic any more: was the controller "
-                "stopped or restarted?",
-            )
-
     def _check_jump(
         self, last: tuple[float, float, float, float], time: float, pose: Pose2D
     ) -> None:
@@ -369,7 +358,6 @@ class _Driver:
                 break
             if k % scan_every == 0:
                 self.check_ahead(True)
-                self.check_listening()
             k += 1
             brake = math.sqrt(2.0 * lim.acceleration * remaining)
             close = remaining / max(dt, lim.closing_time)
@@ -386,15 +374,11 @@ class _Driver:
     def turn(self, heading: float) -> None:
         """Turn on the spot to the odometry heading ``heading`` and stop."""
         lim, dt = self.limits, self.limits.period
-        listen_every, k = max(1, round(lim.obstacle_period / dt)), 0
         while True:
             pose = self.read()
             error = float(wrap_angle(heading - pose.theta))
             if abs(error) <= lim.heading_tolerance:
                 break
-            if k % listen_every == 0:
-                self.check_listening()
-            k += 1
             brake = math.sqrt(2.0 * lim.turn_acceleration * abs(error))
             close = abs(error) / max(dt, lim.closing_time)
             goal = min(lim.turn_rate, brake, close)

@@ -403,9 +403,21 @@ def _calibrate(
 
 
 def _stopped(robot: Robot, passes: list[PassResult], drive: _Passes) -> Stopped:
-    """What a routine stopped mid-way leaves: what the controller holds, the passes kept."""
+    """What a routine stopped mid-way leaves: what the controller holds (known from the
+    passes, asked of the controller only before the first ended), the passes kept."""
+    applied = [p for p in passes if p.applied is not None and p.applied.active]
     try:
-        holds = _holds(passes, robot.drive_params()).words()
+        if applied:  # the last applied pass's correction
+            c = applied[-1].report.calibration
+            params = replace(
+                applied[-1].params,
+                wheel_separation_multiplier=c.new_separation_multiplier,
+                left_wheel_radius_multiplier=c.new_c_left,
+                right_wheel_radius_multiplier=c.new_c_right,
+            )
+        else:
+            params = passes[-1].params if passes else robot.drive_params()
+        holds = _holds(passes, params).words()
     except Exception as exc:  # a robot gone with the stop: say so, keep the stop's cause
         holds = f"what the controller holds could not be read ({exc})"
     return Stopped(holds, tuple(p.label for p in passes), drive.folder if drive.kept else None)

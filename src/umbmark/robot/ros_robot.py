@@ -130,13 +130,6 @@ class RosRobot:
             self._stop()
             raise
 
-    def command_listeners(self) -> int | None:
-        """How many subscribe to the velocity topic now (None where it cannot be told)."""
-        count = getattr(self._cmd, "get_subscription_count", None) or getattr(
-            self._cmd, "get_num_connections", None
-        )
-        return None if count is None else int(count())
-
     def send_velocity(self, linear: float, angular: float) -> None:
         """Publish a ``geometry_msgs`` Twist: ``linear.x`` [m/s], ``angular.z`` [rad/s]."""
         if not (math.isfinite(linear) and math.isfinite(angular)):
