@@ -94,7 +94,7 @@ def preflight(
         raise InputError(f"--measure {how.method}: the robot gives no {names[how.method]}")
     if how.method == "lidar":
         lines.append(free_floor(robot, side))
-    if robot.scan() is None:
+    if how.method != "lidar" and robot.scan() is None:  # lidar: the laser was checked
         lines.append(
             "no laser: nothing watches for obstacles while the robot drives; keep the "
             "squares' floor clear and a hand on the emergency stop"
