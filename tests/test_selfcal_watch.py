@@ -59,7 +59,11 @@ def test_checks_runs_and_passes_are_said_as_they_happen_with_the_runs_left(tmp_p
     assert any("laser watches for obstacles" in line for line in lines[:4])
     coarse = next(k for k, line in enumerate(lines) if line.startswith("Coarse turning check"))
     assert coarse == len(report.checks)
-    runs = [k for k, line in enumerate(lines) if re.match(r"(pass 1|verification), c?cw run", line)]
+    runs = [
+        k
+        for k, line in enumerate(lines)
+        if re.match(r"(pass 1|verification), run [1-4] of 4 \(c?cw [12] of 2\): ended", line)
+    ]
     assert len(runs) == 8
     assert runs[0] == coarse + 1
     pass_1 = lines.index(next(line for line in lines if line.startswith("pass 1: E_max,syst")))
@@ -259,3 +263,56 @@ def test_a_small_forward_step_of_the_clock_is_no_fault():
     robot.step = 2.0  # within the 5 s bound: a busy machine's stall, not a jump
     run = drive_square(robot, 1.0, Direction.CCW)
     assert run.end_error[0] <= 0.005
+
+
+def test_a_safety_stop_mid_routine_leaves_what_the_controller_holds(tmp_path):
+    """The clock jumps 10 s at 5 s of the robot's time (the checks and the first fix are
+    done by then, the coarse check turning): a SafetyError after a zero velocity, with the
+    parameters it started with and no pass on disk."""
+    robot = _ClockJump(seed=1)
+    robot.step = 10.0
+    with pytest.raises(SafetyError, match="clock jumped") as caught:
+        selfcal(robot, side_length=1.0, runs=2, out=tmp_path)
+    _last_command_is_a_stop(robot)
+    stop = stopped(caught.value)
+    assert stop is not None
+    assert stop.passes == ()
+    assert stop.text() == (
+        "the controller holds no correction of these passes: wheel_separation_multiplier "
+        "1.000000, left_wheel_radius_multiplier 1.000000, right_wheel_radius_multiplier "
+        f"1.000000; on disk: no pass finished, nothing in {tmp_path}"
+    )
+
+
+@pytest.mark.slow
+def test_on_a_terminal_the_progress_is_one_live_line(tmp_path):
+    """``umbmark selfcal`` with its stderr on a pseudo-terminal: rich's live line shows
+    the runs done out of planned and the time left; the routine's lines scroll above it;
+    no plain ``progress:`` line."""
+    import pty
+
+    primary, secondary = pty.openpty()
+    env = {**os.environ, "COLUMNS": "160", "TERM": "xterm"}
+    command = [
+        umbmark_command(), "selfcal", "--sim", "-L", "1", "--runs", "2", "--max-passes", "1",
+        "--out", str(tmp_path / "out"),
+    ]  # fmt: skip
+    with subprocess.Popen(
+        command, stderr=secondary, stdout=subprocess.DEVNULL, env=env
+    ) as proc:  # fmt: skip
+        os.close(secondary)
+        chunks = []
+        while True:
+            try:
+                chunk = os.read(primary, 65536)
+            except OSError:  # the terminal closed with the process
+                break
+            if not chunk:
+                break
+            chunks.append(chunk)
+        assert proc.wait(timeout=120) == 0
+    os.close(primary)
+    text = b"".join(chunks).decode("utf-8", "replace")
+    assert re.search(r"[1-8] of 8 runs, about \d+ s left", text), text[-3000:]
+    assert "umbmark: pass 1, run 1 of 4 (cw 1 of 2): ended" in text
+    assert "umbmark: progress:" not in text

@@ -117,7 +117,8 @@ class Watch:
         self.planned = max(self.planned, self.done)
         number = (k - 1) % self.runs + 1
         self.say(
-            f"{label}, {direction.value} run {number} of {self.runs}: ended "
+            f"{label}, run {k} of {2 * self.runs} ({direction.value} {number} of {self.runs}): "
+            f"ended "
             f"x {rel.x * 1000:+.1f} mm, y {rel.y * 1000:+.1f} mm, "
             f"{math.degrees(float(wrap_angle(rel.theta))):+.2f} deg from its start (by the fixes)"
         )

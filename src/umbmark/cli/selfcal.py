@@ -230,7 +230,7 @@ def _watching() -> Iterator[tuple[Progress, Callable[[RunsLeft], None]]]:
         task = bar.add_task("self-calibration (Ctrl-C stops)", total=None, left="")
 
         def status(label: str, k: int, direction: object, what: str) -> None:
-            run = f", {getattr(direction, 'value', '')} run {k}" if k else ""
+            run = f", run {k} ({getattr(direction, 'value', '')})" if k else ""
             bar.update(task, description=f"{label}{run}: {what} (Ctrl-C stops)")
 
         def counted(left: RunsLeft) -> None:
