@@ -316,3 +316,22 @@ def test_on_a_terminal_the_progress_is_one_live_line(tmp_path):
     assert re.search(r"[1-8] of 8 runs, about \d+ s left", text), text[-3000:]
     assert "umbmark: pass 1, run 1 of 4 (cw 1 of 2): ended" in text
     assert "umbmark: progress:" not in text
+
+
+@pytest.mark.slow
+def test_a_fix_lost_mid_routine_is_one_line_with_what_the_controller_holds(tmp_path):
+    """Range sensors lose the corner at the end of the first ccw run of the virtual
+    LabMate's 4 m squares (tests/test_selfcal.py): exit 2, the cause and the stop in one
+    line, the same folder offered again (nothing in it)."""
+    out = tmp_path / "out"
+    proc = run_cli("selfcal", "--sim", "--measure", "ranges", "--runs", "2", "--out", str(out))
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert sum(line.startswith("umbmark: error: ") for line in lines) == 1
+    last = lines[-1]
+    assert last.startswith("umbmark: error: missing echo: ")
+    assert "(at the end of ccw run 1)" in last
+    assert "; the robot stopped; the controller holds no correction of these passes" in last
+    assert f"on disk: no pass finished, nothing in {out};" in last
+    again = f"umbmark selfcal --sim --measure ranges --runs 2 --out {out}"
+    assert last.endswith(f"to run it again from what the controller holds: {again}")
