@@ -175,8 +175,9 @@ def selfcal(
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
 
-    Any exception once the checks began (and ``KeyboardInterrupt``) is raised after a zero
-    velocity was sent, carrying what the controller holds and which passes are on disk
+    Every exception is raised after a zero velocity was sent; one raised once the checks
+    and the first fix passed (and a ``KeyboardInterrupt`` or ``SafetyError`` at any time)
+    carries what the controller holds and which passes are on disk
     (:func:`umbmark.autocal.watch.stopped`).
     """
     state = None
