@@ -17,9 +17,12 @@ commanded one closely (:data:`DriveLimits.end_position`, :data:`DriveLimits.end_
   still for :data:`DriveLimits.settle_time`) before anything is measured.
 
 Safety comes first: a zero velocity is sent on any error or interruption and before any
-:class:`SafetyError` propagates: odometry older than ``stale_odometry``, an obstacle in the
-scan ahead, the odometry leaving the square plus ``margin``, or a run taking more than
-``time_factor`` times its expected time. Knows nothing of ROS: it drives a
+:class:`SafetyError` propagates: odometry older than ``stale_odometry``, a scan older than
+``stale_scan``, an obstacle in the scan ahead nearer than the stop distance at the speed
+driven (:meth:`DriveLimits.stop_distance`), the odometry jumping (a controller restarted
+under it), the robot's clock going back or jumping forward (``clock_jump``), the odometry
+leaving the square plus ``margin``, or a run taking more than ``time_factor`` times its
+expected time. Knows nothing of ROS: it drives a
 :class:`~umbmark.robot.base.Robot`.
 """
 
