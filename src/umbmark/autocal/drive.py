@@ -36,6 +36,7 @@ import numpy as np
 
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError, SafetyError
+from umbmark.options.spec import OBSTACLE_MARGIN_RANGE, STOP_LATENCY
 from umbmark.robot.base import LaserScan, Pose2D, Robot, Stamped
 
 __all__ = [
@@ -47,10 +48,6 @@ __all__ = [
     "settle",
     "stop_safely",
 ]
-
-
-#: The values ``--obstacle-margin`` may take [m].
-OBSTACLE_MARGIN_RANGE = (0.05, 2.0)
 
 
 @dataclass(frozen=True)
@@ -132,7 +129,7 @@ class DriveLimits:
     stale_scan: float = 1.0
     odometry_jump: float = 0.05
     obstacle_margin: float = 0.3
-    stop_latency: float = 0.4
+    stop_latency: float = STOP_LATENCY
     obstacle_half_angle: float = math.radians(30.0)
     obstacle_period: float = 0.25
     clock_jump: float = 5.0

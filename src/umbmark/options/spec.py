@@ -35,12 +35,14 @@ __all__ = [
     "LONGEST_REST",
     "MAX_TRUTH_OFFSET",
     "OBSTACLE_MARGIN",
+    "OBSTACLE_MARGIN_RANGE",
     "OUTPUTS",
     "OVERRIDE_VERDICT",
     "PARAMETERS",
     "READ",
     "READ_OPTIONS",
     "SIDE_LENGTH",
+    "STOP_LATENCY",
     "TABLE",
     "TEST",
     "TUM_TIME",
@@ -272,15 +274,20 @@ OVERRIDE_VERDICT = Spec(
 #: The section of ``umbmark selfcal --help`` listing how the robot drives.
 DRIVING = "Driving"
 
-#: ``--obstacle-margin`` of ``selfcal`` (``DriveLimits.obstacle_margin``; its bounds are
-#: :data:`umbmark.autocal.drive.OBSTACLE_MARGIN_RANGE`).
+#: The values ``--obstacle-margin`` may take [m] (checked by
+#: :class:`umbmark.autocal.drive.DriveLimits`).
+OBSTACLE_MARGIN_RANGE = (0.05, 2.0)
+#: The stop latency of the obstacle stop [s] (``DriveLimits.stop_latency``'s default).
+STOP_LATENCY = 0.4
+#: ``--obstacle-margin`` of ``selfcal`` (``DriveLimits.obstacle_margin``).
 OBSTACLE_MARGIN = Spec(
     "obstacle_margin",
     ("--obstacle-margin",),
     DRIVING,
-    "Room left before an obstacle seen ahead [m] (0.05 to 2): the robot is stopped when "
-    "one is nearer than v^2/(2 a) + v t + this, v the speed, a the acceleration limit, "
-    "t the stop latency (0.4 s); measured from the robot's centre.",
+    f"Room left before an obstacle seen ahead [m] ({OBSTACLE_MARGIN_RANGE[0]:g} to "
+    f"{OBSTACLE_MARGIN_RANGE[1]:g}): the robot is stopped when one is nearer than "
+    "v^2/(2 a) + v t + this, v the speed, a the acceleration limit, t the stop latency "
+    f"({STOP_LATENCY:g} s); measured from the robot's centre.",
     kind="number",
     default=0.3,
     unit="m",
