@@ -100,3 +100,37 @@ def test_the_option_takes_right_or_left():
     proc = run_cli("selfcal", "--sim", "--corner-side", "behind")
     assert proc.returncode == 2
     assert "--corner-side" in proc.stderr
+
+
+@pytest.mark.slow
+def test_a_person_with_a_tape_in_a_corner_on_the_left(tmp_path):
+    """The person simulated by geometry, as in tests/test_selfcal.py: the distance from
+    the named mark to the named wall (the y wall along x = 0, the x wall along y = 0 of
+    the corner frame), read off the true pose and rounded to the millimetre."""
+    import re
+
+    from umbmark.robot.base import Pose2D
+
+    robot = VirtualRobot(E_d=1.001, E_b=0.995, slip=0.0004, seed=3, world=corner_world(side="left"))
+    walls: list[str] = []
+
+    def person(prompt: str) -> str:
+        found = re.search(
+            r"mark \d \(x (-?\d+) mm, y (-?\d+) mm on the robot\) to the (x|y) wall", prompt
+        )
+        assert found, prompt
+        walls.append(found[3])
+        where = robot.corner_truth()
+        assert where is not None
+        at = where.compose(Pose2D(float(found[1]) / 1000, float(found[2]) / 1000, 0.0))
+        return f"{round((at.x if found[3] == 'y' else at.y) * 1000)}"
+
+    report = selfcal(
+        robot, measure="tape", ask=person, side_length=1.0, runs=2, max_passes=1, verify=False,
+        corner_side="left", out=tmp_path / "out",
+    )  # fmt: skip
+    assert walls[:3] == ["x", "x", "y"]  # the wall behind is the x wall on the left
+    errors = report.measurement_errors()
+    assert errors is not None
+    assert errors[0] <= 0.002  # m rms: millimetre readings
+    assert math.degrees(errors[1]) <= 0.4  # deg rms
