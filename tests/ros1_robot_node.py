@@ -13,7 +13,8 @@ Run it with ``ROS_MASTER_URI`` set; it prints ``ready`` on stdout once everythin
   ``/ground_truth`` (``geometry_msgs/PoseStamped``, motion capture), ``/tf``
   (``odom -> base_link``) and ``/tf_static`` (``base_link -> laser``: the laser
   ``--laser-x`` metres ahead of the centre, ``--upside-down`` rolled by 180 degrees, its
-  beams then published in the reversed order such a laser has);
+  beams then published in the reversed order such a laser has); the corner behind the
+  start on its right, or ``--corner-side left``;
 - serves dynamic_reconfigure at ``/diff_drive_controller`` with the three multipliers of
   ros_controllers' ``DiffDriveController.cfg`` (0.5 to 1.5, the server clamps), and keeps
   ``wheel_separation``, ``wheel_radius`` and the multipliers on the parameter server;
@@ -144,7 +145,7 @@ def _quaternion(yaw: float, roll: float = 0.0) -> tuple[float, float, float, flo
 
 class SimNode:
     def __init__(self, args: argparse.Namespace) -> None:
-        world = corner_world()
+        world = corner_world(side=args.corner_side)
         self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
         world = replace(world, lidar=self.lidar)
         self.robot = VirtualRobot(
@@ -282,6 +283,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--laser-x", type=float, default=0.1)
     parser.add_argument("--upside-down", action="store_true")
+    parser.add_argument(
+        "--corner-side", choices=("right", "left"), default="right", help="the corner's side"
+    )
     parser.add_argument(
         "--urdf-geometry",
         action="store_true",

@@ -311,6 +311,12 @@ def test_ctrl_c_stops_the_robot(graph: RosGraph, tmp_path: Path) -> None:
                 p.kill()
                 p.wait()
     assert proc.returncode == 130, err
+    last = err.strip().splitlines()[-1]  # one line: what the controller holds, how to go on
+    assert last.startswith(
+        "umbmark: error: interrupted, the robot stopped (zero velocity sent); the controller "
+        "holds no correction of these passes: wheel_separation_multiplier "
+    ), last
+    assert "umbmark selfcal --ros1 --runs 2 -L 1 --max-passes 1 --out" in last
     seen = json.loads(out.strip().splitlines()[-1])
     assert seen["last"] == [0.0, 0.0]
     a, b = seen["pose_a"], seen["pose_b"]
@@ -349,6 +355,30 @@ def test_geometry_only_in_the_urdf(tmp_path: Path) -> None:
     finally:
         g.close()
     assert seen["params"][:2] == pytest.approx([0.34, 0.075])
+
+
+@pytest.mark.slow
+def test_selfcal_with_the_corner_on_the_left_and_the_geometry_in_the_urdf(tmp_path: Path) -> None:
+    """The issue's ROS 1 robot: its geometry only in the URDF, the corner behind the start
+    and to its left (``--corner-side left``): the same figures as the end-to-end test."""
+    g = RosGraph(tmp_path, "--urdf-geometry", "--corner-side", "left")
+    try:
+        done = _umbmark(g.env, "selfcal", "--ros1", "--runs", "2", "-L", "1", "--max-passes",
+                        "1", "--corner-side", "left", "--out", str(tmp_path / "out"),
+                        "--json")  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout)
+        wrong = _umbmark(g.env, "selfcal", "--ros1", "--runs", "2", "-L", "1",
+                         "--out", str(tmp_path / "wrong"))  # fmt: skip
+    finally:
+        g.close()
+    before, after = report["e_max_syst_before"], report["e_max_syst_after"]
+    assert 0.10 < before < 0.25
+    assert after < before / 5.0
+    assert report["applied"]["wheel_separation_multiplier"] == pytest.approx(0.97, abs=0.005)
+    # the default side is refused before moving, naming the side the corner is on
+    assert wrong.returncode == 2
+    assert "corner was found behind the robot and to its left" in wrong.stderr.splitlines()[-1]
 
 
 def test_no_master_is_one_line(tmp_path: Path) -> None:

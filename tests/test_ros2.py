@@ -306,6 +306,12 @@ def test_ctrl_c_stops_the_robot(stamped: dict[str, str], tmp_path: Path) -> None
                 p.kill()
                 p.communicate()
     assert proc.returncode == 130, err
+    last = err.strip().splitlines()[-1]  # one line: what the controller holds, how to go on
+    assert last.startswith(
+        "umbmark: error: interrupted, the robot stopped (zero velocity sent); the controller "
+        "holds no correction of these passes: wheel_separation_multiplier 1.000000"
+    ), last
+    assert "umbmark selfcal --ros2 --runs 2 -L 1 --max-passes 1 --out" in last
     seen = json.loads(out.strip().splitlines()[-1])
     assert seen["last"] == [0.0, 0.0]
     a, b = seen["pose_a"], seen["pose_b"]

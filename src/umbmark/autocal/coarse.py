@@ -53,6 +53,15 @@ class CoarseTurning:
     ratio: float
     needed: bool
 
+    def words(self) -> str:
+        """One sentence: how far the robot turned against its odometry, and what was done."""
+        done = "corrected" if self.needed else "within 5 %, not corrected"
+        return (
+            f"Coarse turning check: the robot turned {math.degrees(self.true_angle):.1f} deg "
+            f"while its odometry turned {math.degrees(self.odometry_angle):.1f} deg "
+            f"(ratio {self.ratio:.4f}): {done}."
+        )
+
     def to_dict(self) -> dict[str, float | bool]:
         """JSON-ready (radians)."""
         return {

@@ -269,19 +269,21 @@ def fix_from_tape(
     sigma: float = 0.001,
     prior: Pose2D | None = None,
     time: float = 0.0,
+    square: float = 0.0,
 ) -> CornerFix:
     """The robot's pose in the corner frame from three distances [m] a person measured
     from ``marks`` on the robot, square to the walls.
 
     Two headings fit two distances to one wall (the robot facing one way or its mirror);
-    the one nearer ``prior`` [default: heading 0, the robot placed square in the corner]
-    is taken. ``sigma`` is the tape's reading error [m].
+    the one nearer ``prior`` [default: the heading ``square``, the robot placed square in
+    the corner: 0 with the corner behind and to its right, pi/2 with it to its left] is
+    taken. ``sigma`` is the tape's reading error [m].
     """
     _check_faces(marks.faces, len(marks.marks), "tape marks")
     d = np.asarray(distances, dtype=np.float64)
     if d.shape != (3,) or not np.all(np.isfinite(d)) or np.any(d <= 0.0):
         raise InputError(f"three positive distances needed, got {list(distances)}")
-    hint = prior.theta if prior is not None else 0.0
+    hint = prior.theta if prior is not None else square
     pose = _tape_pose(d, marks, hint)
     if prior is not None:
         _gate(pose, prior, 0.5, math.radians(20.0))

@@ -17,9 +17,12 @@ commanded one closely (:data:`DriveLimits.end_position`, :data:`DriveLimits.end_
   still for :data:`DriveLimits.settle_time`) before anything is measured.
 
 Safety comes first: a zero velocity is sent on any error or interruption and before any
-:class:`SafetyError` propagates: odometry older than ``stale_odometry``, an obstacle in the
-scan ahead, the odometry leaving the square plus ``margin``, or a run taking more than
-``time_factor`` times its expected time. Knows nothing of ROS: it drives a
+:class:`SafetyError` propagates: odometry older than ``stale_odometry``, a scan older than
+``stale_scan``, an obstacle in the scan ahead nearer than the stop distance at the speed
+driven (:meth:`DriveLimits.stop_distance`), the odometry jumping (a controller restarted
+under it), the robot's clock going back or jumping forward (``clock_jump``), the odometry
+leaving the square plus ``margin``, or a run taking more than ``time_factor`` times its
+expected time. Knows nothing of ROS: it drives a
 :class:`~umbmark.robot.base.Robot`.
 """
 
@@ -33,6 +36,7 @@ import numpy as np
 
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError, SafetyError
+from umbmark.options.spec import OBSTACLE_MARGIN_RANGE, STOP_LATENCY
 from umbmark.robot.base import LaserScan, Pose2D, Robot, Stamped
 
 __all__ = [
@@ -81,12 +85,20 @@ class DriveLimits:
         The odometry moving between two readings by more than this [m] beyond what the
         speed allows (or by more than ten times this in radians beyond the turn rate)
         stops the robot: a controller restarted under it (its odometry reset).
-    obstacle_distance, obstacle_half_angle : float
-        A scan return closer than this [m] ahead (within this half angle [rad] of the
-        direction of travel) stops the robot.
+    obstacle_margin, stop_latency, obstacle_half_angle : float
+        A scan return ahead (within ``obstacle_half_angle`` [rad] of the direction of
+        travel) nearer than the stop distance at the speed ``v`` driven
+        (:meth:`stop_distance`: ``v^2 / (2 acceleration) + v stop_latency +
+        obstacle_margin``) stops the robot. ``obstacle_margin`` [m] is what is left
+        between the robot's centre and the obstacle once stopped; ``stop_latency`` [s]
+        covers the look-ahead period, the scan's age and the zero velocity's way to the
+        wheels.
     obstacle_period : float
-        The scan ahead is looked at this often [s] on the legs (at 0.2 m/s the robot
-        drives 5 cm in 0.25 s and stops within 7 cm at 0.3 m/s^2: well inside 0.3 m).
+        The scan ahead is looked at this often [s] on the legs.
+    clock_jump : float
+        The robot's clock (sim time where ``/clock`` runs) going backwards, or forward by
+        more than this [s] between two control steps, stops the robot (a restarted or
+        stalled simulation, a clock stepped under a running robot).
     closing_time : float
         Closing in, the speed (turn rate) is at most the remaining distance (angle) over
         this [s]: an approach with this time constant, which a command arriving a few
@@ -117,9 +129,11 @@ class DriveLimits:
     stale_odometry: float = 0.5
     stale_scan: float = 1.0
     odometry_jump: float = 0.05
-    obstacle_distance: float = 0.3
+    obstacle_margin: float = 0.3
+    stop_latency: float = STOP_LATENCY
     obstacle_half_angle: float = math.radians(30.0)
     obstacle_period: float = 0.25
+    clock_jump: float = 5.0
     margin: float = 0.5
     time_factor: float = 2.0
     closing_time: float = 0.2
@@ -135,6 +149,9 @@ class DriveLimits:
             "time_factor": (1.2, 10.0),
             "settle_limit": (1.0, 600.0),
             "closing_time": (0.001, 2.0),
+            "obstacle_margin": OBSTACLE_MARGIN_RANGE,
+            "stop_latency": (0.0, 2.0),
+            "clock_jump": (0.05, 60.0),
         }
         for name, (low, high) in bounds.items():
             value = getattr(self, name)
@@ -142,6 +159,13 @@ class DriveLimits:
                 raise InputError(
                     f"--{name.replace('_', '-')} {value!r} is outside {low:g} to {high:g}"
                 )
+
+    def stop_distance(self, speed: float) -> float:
+        """How near [m] an obstacle ahead may come at ``speed`` [m/s] before the robot is
+        stopped: the braking distance at the acceleration limit, the way driven during
+        the latency, and the margin: ``v^2 / (2 a) + v t_latency + margin``."""
+        v = abs(speed)
+        return v * v / (2.0 * self.acceleration) + v * self.stop_latency + self.obstacle_margin
 
     def expected_time(self, side: float) -> float:
         """A run's time without stops or settling [s]: four legs and four turns, each an
@@ -211,6 +235,7 @@ class _Driver:
         self.origin = Pose2D()
         #: For moves other than the square: how far from ``origin`` the odometry may go.
         self.radius: float | None = None
+        self.clock: float | None = None  # the robot's clock at the last reading
 
     # --- reading, with the safety checks ------------------------------------------------
 
@@ -219,6 +244,7 @@ class _Driver:
         odom = self.robot.odometry()
         now = self.robot.now()
         limits = self.limits
+        self._check_clock(now)
         if odom is None or now - odom.time > limits.stale_odometry:
             age = "none" if odom is None else f"{now - odom.time:.2f} s old"
             raise stop_safely(
@@ -247,6 +273,26 @@ class _Driver:
                 f"more than {m:g} m (at x = {local.x:.3f} m, y = {local.y:.3f} m of its frame)",
             )
         return pose
+
+    def _check_clock(self, now: float) -> None:
+        """Stop when the robot's clock went backwards, or forward by more than the bound,
+        since the last reading (one control step)."""
+        last, self.clock = self.clock, now
+        if last is None:
+            return
+        if now < last:
+            raise stop_safely(
+                self.robot,
+                f"the robot's clock went back {last - now:.3f} s (from {last:.3f} to "
+                f"{now:.3f} s): was the simulation restarted?",
+            )
+        if now - last > self.limits.clock_jump:
+            raise stop_safely(
+                self.robot,
+                f"the robot's clock jumped {now - last:.2f} s forward in one control step "
+                f"(limit {self.limits.clock_jump:g} s): a clock stepped under the robot, or "
+                "a simulation or control loop that stalled",
+            )
 
     def _check_jump(
         self, last: tuple[float, float, float, float], time: float, pose: Pose2D
@@ -280,11 +326,13 @@ class _Driver:
                 "went silent, and nothing watches for obstacles",
             )
         distance = obstacle_ahead(scan, self.limits.obstacle_half_angle, backward)
-        if distance < self.limits.obstacle_distance:
+        limit = self.limits.stop_distance(self.linear)
+        if distance < limit:
             where = "behind" if backward else "ahead"
             raise stop_safely(
                 self.robot,
-                f"an obstacle {distance:.2f} m {where} (limit {self.limits.obstacle_distance:g} m)",
+                f"an obstacle {distance:.2f} m {where} (stop distance {limit:.2f} m at "
+                f"{abs(self.linear):.2f} m/s)",
             )
 
     def command(self, linear: float, angular: float) -> None:

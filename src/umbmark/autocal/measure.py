@@ -8,25 +8,49 @@ The robot stands still while readings are taken; several are averaged
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from typing import Literal
 
 from umbmark.autocal.corner import CornerFix, CornerNotFoundError
 from umbmark.autocal.corner_lidar import LidarCorner, fix_from_scans
 from umbmark.autocal.corner_sensors import (
+    PAPER_FACES,
     TapeMarks,
+    Wall,
     ask_tape,
     fix_from_ground_truth,
     fix_from_ranges,
     fix_from_tape,
 )
+from umbmark.core.errors import InputError
 from umbmark.robot.base import LaserScan, Pose2D, RangeReading, Robot, Stamped
 
-__all__ = ["MEASURE_METHODS", "READINGS", "Measure", "MeasureMethod", "take_fix"]
+__all__ = [
+    "CORNER_SIDES",
+    "MEASURE_METHODS",
+    "READINGS",
+    "CornerSide",
+    "Measure",
+    "MeasureMethod",
+    "check_side",
+    "marks_for",
+    "take_fix",
+]
 
 MeasureMethod = Literal["lidar", "ranges", "truth", "tape"]
 MEASURE_METHODS: tuple[MeasureMethod, ...] = ("lidar", "ranges", "truth", "tape")
+
+#: Where the L-shaped corner stands seen from the start: behind it, to its right or left.
+CornerSide = Literal["right", "left"]
+CORNER_SIDES: tuple[CornerSide, ...] = ("right", "left")
+#: The wall each range sensor (tape mark) faces, by the corner's side: the first two the
+#: wall behind the start, the third the side wall. The corner frame is right-handed with
+#: the robot inside, so the wall behind is the y wall with the corner on the right and
+#: the x wall with it on the left (:mod:`umbmark.autocal.corner`).
+FACES: dict[CornerSide, tuple[Wall, ...]] = {"right": PAPER_FACES, "left": ("x", "x", "y")}
+#: The robot's heading in the corner frame when placed square in the corner [rad].
+SQUARE: dict[CornerSide, float] = {"right": 0.0, "left": 0.5 * math.pi}
 
 #: Readings averaged at a stop (scans, range readings, motion-capture poses).
 READINGS = 5
@@ -47,12 +71,21 @@ class Measure:
         For ``tape``: shows a prompt, returns the person's answer (``input``).
     marks : TapeMarks, optional
         For ``tape``: the marks on the robot the person measures from.
+    side : {"right", "left"}
+        Where the corner stands seen from the start (behind it, to that side): which wall
+        each range sensor or tape mark faces (:data:`FACES`), and the side the first fix
+        must find it on (:func:`check_side`).
     """
 
     method: MeasureMethod = "lidar"
     readings: int = READINGS
     ask: Callable[[str], str] | None = None
     marks: TapeMarks | None = None
+    side: CornerSide = "right"
+
+    def __post_init__(self) -> None:
+        if self.side not in CORNER_SIDES:
+            raise InputError(f"--corner-side {self.side!r}: use right or left")
 
 
 def _collect(robot: Robot, read: Callable[[], object], what: str, count: int) -> list[object]:
@@ -104,6 +137,7 @@ def take_fix(
         readings = _collect(robot, robot.ranges, "range-sensor reading", n)
         return fix_from_ranges(
             [r for r in readings if isinstance(r, RangeReading)],
+            FACES[how.side],
             prior=prior,
             prior_distance=gate[0],
             prior_angle=gate[1],
@@ -113,5 +147,56 @@ def take_fix(
         return fix_from_ground_truth([p for p in poses if isinstance(p, Stamped)])
     if how.ask is None or how.marks is None:
         raise CornerNotFoundError("missing_echo", "a tape fix needs a person to ask and marks")
-    distances = ask_tape(how.ask, how.marks)
-    return fix_from_tape(distances, how.marks, prior=prior, time=robot.now())
+    marks = replace(how.marks, faces=FACES[how.side])
+    distances = ask_tape(how.ask, marks)
+    return fix_from_tape(distances, marks, prior=prior, time=robot.now(), square=SQUARE[how.side])
+
+
+def check_side(fix: CornerFix, side: CornerSide) -> None:
+    """Refuse a first fix whose corner is not behind the robot on ``side`` (the corner's
+    vertex seen from the robot: behind it, y < 0 on the right, y > 0 on the left).
+
+    Raises
+    ------
+    InputError
+        Naming where the corner was found and the option to give.
+    """
+    vertex = Pose2D().relative_to(fix.pose)  # the corner's vertex in the robot's frame
+    found: CornerSide = "left" if vertex.y > 0.0 else "right"
+    if found != side or vertex.x >= 0.0:
+        where = "behind" if vertex.x < 0.0 else "ahead of"
+        raise InputError(
+            f"the corner was found {where} the robot and to its {found} (its vertex at x = "
+            f"{vertex.x:.2f} m, y = {vertex.y:.2f} m of the robot), not behind it and to "
+            f"its {side} as --corner-side {side} says: give --corner-side {found}, or place "
+            "the robot with the corner behind it",
+            python=f"the corner was found {where} the robot and to its {found}, not behind "
+            f"it and to its {side}: give corner_side={found!r}",
+        )
+
+
+def marks_for(robot: Robot, given: Sequence[float] | None) -> TapeMarks:
+    """The marks a person measures from: the given ones (``--tape-marks``), else the
+    robot's own (``tape_marks()``, as the virtual robot has); refused when neither."""
+    if given is not None:
+        values = [float(v) for v in given]
+        if len(values) != 6 or not all(math.isfinite(v) and abs(v) <= 2.0 for v in values):
+            raise InputError(
+                f"--tape-marks {','.join(f'{v:g}' for v in values)}: give X1,Y1,X2,Y2,X3,Y3, "
+                "three points on the robot in its base frame, in metres (within 2 m)"
+            )
+        marks = ((values[0], values[1]), (values[2], values[3]), (values[4], values[5]))
+        if math.dist(marks[0], marks[1]) < 0.05:
+            raise InputError(
+                "--tape-marks: the first two marks (measured to the same wall) must be at "
+                "least 50 mm apart, or the heading cannot be told"
+            )
+        return TapeMarks(marks=marks)
+    own = getattr(robot, "tape_marks", None)
+    if callable(own):
+        return TapeMarks(marks=tuple((float(x), float(y)) for x, y in own()))
+    raise InputError(
+        "--measure tape needs --tape-marks: the three points on the robot the distances "
+        "are measured from (X1,Y1,X2,Y2,X3,Y3 in its base frame, metres; the first two to "
+        "the wall behind the start, the third to the side wall)"
+    )

@@ -16,7 +16,15 @@ from umbmark.autocal.record import MeasuredRun
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.robot.base import Pose2D, Robot
 
-__all__ = ["HOME_ANGLE", "HOME_DISTANCE", "Home", "corner_truth", "drive_pass", "go_home"]
+__all__ = [
+    "HOME_ANGLE",
+    "HOME_DISTANCE",
+    "Home",
+    "corner_truth",
+    "drive_pass",
+    "go_home",
+    "strays",
+]
 
 #: Back at the start: within this distance [m] and angle [rad] of the first fix.
 HOME_DISTANCE = 0.02
@@ -91,13 +99,15 @@ def drive_pass(
     home: Home,
     limits: DriveLimits,
     progress: PassProgress | None = None,
+    measured: Callable[[int, Direction, MeasuredRun], None] | None = None,
 ) -> list[MeasuredRun]:
     """``runs`` cw runs, then ``runs`` ccw runs (Sec. 5), each from the start and measured
     at both ends.
 
     A run's end fix is gated by a wide prior: the odometry believes the robot came back,
     so the prior is the start, and the return error may be large (up to a fifth of the
-    side and 30 degrees are taken).
+    side and 30 degrees are taken). ``measured`` is called with each run as it is
+    measured (its number in the pass, 1 to ``2 runs``).
     """
     out: list[MeasuredRun] = []
     order = [Direction.CW] * runs + [Direction.CCW] * runs
@@ -122,6 +132,8 @@ def drive_pass(
         except CornerNotFoundError as exc:
             raise _lost_at_the_end(exc, how, direction, (k - 1) % runs + 1) from None
         out.append(MeasuredRun(run, start, end))
+        if measured is not None:
+            measured(k, direction, out[-1])
     return out
 
 
@@ -139,3 +151,21 @@ def _lost_at_the_end(
         "sensors, which see both walls only within some 0.3 m and 10 deg of it; measure with "
         "--measure lidar (or truth), or make the errors smaller first (a smaller square, -L)",
     )
+
+
+def strays(measured: list[MeasuredRun], limits: DriveLimits) -> tuple[str, ...]:
+    """A warning for each run whose odometry ended farther from the commanded end than the
+    limits (a robot answering commands late, a controller that does not settle)."""
+    out = []
+    counted: dict[Direction, int] = {}
+    for m in measured:
+        k = counted[m.run.direction] = counted.get(m.run.direction, 0) + 1
+        distance, heading = m.run.end_error
+        if distance > limits.end_position or heading > limits.end_heading:
+            out.append(
+                f"{m.run.direction.value} run {k}: the odometry ended {distance * 1000:.1f} mm "
+                f"and {math.degrees(heading):.2f} deg from where it was sent (limits "
+                f"{limits.end_position * 1000:g} mm, {math.degrees(limits.end_heading):g} deg): "
+                "the run is not the square the benchmark assumes"
+            )
+    return tuple(out)

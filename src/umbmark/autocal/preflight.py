@@ -5,6 +5,7 @@ sensor the fixes need is there, and the floor of both squares is free.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -52,15 +53,22 @@ def free_floor(robot: Robot, side: float) -> str:
     return f"the squares' path is clear as far as the laser sees ({int(ok.sum())} returns)"
 
 
-def preflight(robot: Robot, how: Measure, side: float, limits: DriveLimits) -> list[str]:
-    """Run the checks; lines saying what each found.
+def preflight(
+    robot: Robot,
+    how: Measure,
+    side: float,
+    limits: DriveLimits,
+    say: Callable[[str], None] | None = None,
+) -> list[str]:
+    """Run the checks; lines saying what each found (each also given to ``say`` as it is
+    found). Without a laser, a line says that nothing watches for obstacles.
 
     Raises
     ------
     InputError
         The first check that failed, with its cause.
     """
-    lines: list[str] = []
+    lines = _Lines(say)
     robot.send_velocity(0.0, 0.0)
     robot.wait(2 * limits.period)
     odom = robot.odometry()
@@ -90,4 +98,28 @@ def preflight(robot: Robot, how: Measure, side: float, limits: DriveLimits) -> l
     note = apply_note() if callable(apply_note) else None
     if isinstance(note, str):
         lines.append(note)
-    return lines
+    if how.method != "lidar" and robot.scan() is None:  # lidar: the laser was checked
+        lines.append(
+            "no laser: nothing watches for obstacles while the robot drives; keep the "
+            "squares' floor clear and a hand on the emergency stop"
+        )
+    else:
+        stop = limits.stop_distance(limits.speed)
+        lines.append(
+            f"the laser watches for obstacles: at {limits.speed:g} m/s the robot stops for "
+            f"one {stop:.2f} m ahead or nearer"
+        )
+    return list(lines)
+
+
+class _Lines(list[str]):
+    """The checks' lines, each said as it is added."""
+
+    def __init__(self, say: Callable[[str], None] | None) -> None:
+        super().__init__()
+        self.say = say
+
+    def append(self, line: str) -> None:
+        super().append(line)
+        if self.say is not None:
+            self.say(line)

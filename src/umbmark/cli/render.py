@@ -393,12 +393,7 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
     )
     coarse = report.coarse
     if coarse is not None:
-        done = "corrected" if coarse.needed else "within 5 %, not corrected"
-        screen.print(
-            f"Coarse turning check: the robot turned {math.degrees(coarse.true_angle):.1f} deg "
-            f"while its odometry turned {math.degrees(coarse.odometry_angle):.1f} deg "
-            f"(ratio {coarse.ratio:.4f}): {done}."
-        )
+        screen.print(coarse.words())
     grid = table(
         "UMBmark passes",
         ["pass", "E_max,syst [mm]", "E_d", "E_b", "verdict", "applied"],

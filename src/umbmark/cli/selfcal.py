@@ -3,19 +3,26 @@
 
 from __future__ import annotations
 
-from typing import Any
+import contextlib
+import shlex
+import sys
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from umbmark.cli.options import Command, apply, force_option, option, spec_option
-from umbmark.core.errors import InputError
-from umbmark.options.spec import OUTPUTS, ROUTINE, TEST
+from umbmark.core.errors import InputError, SafetyError
+from umbmark.options.spec import CORNER_SIDE, DRIVING, OBSTACLE_MARGIN, OUTPUTS, ROUTINE, TEST
+
+if TYPE_CHECKING:
+    from umbmark.autocal.watch import Progress, RunsLeft, Stopped
 
 __all__ = ["selfcal"]
 
 ROBOT = "The robot"
 ROS = "ROS robots (--ros1, --ros2)"
-DRIVING = "Driving"
 
 
 @click.command(
@@ -59,6 +66,8 @@ DRIVING = "Driving"
                help="With --measure tape: the three points on the robot (its base frame, "
                "metres) the distances are measured from; the first two to the wall behind "
                "the start, the third to the side wall [default: the virtual robot's]."),
+        spec_option(CORNER_SIDE, help=f"{CORNER_SIDE.help} With --sim, the virtual "
+                    "robot's corner stands there."),
         option("--apply", section=TEST, type=click.Choice(["reconfigure", "yaml", "none"]),
                default="reconfigure", show_default=True,
                help="How corrections reach the controller (none: one pass, nothing applied)."),
@@ -74,6 +83,7 @@ DRIVING = "Driving"
                help="Acceleration limit [m/s^2] (0.01 to 5)."),
         option("--turn-rate", section=DRIVING, type=float, default=0.8, show_default=True,
                help="Top turn rate on the spot [rad/s] (0.05 to 3)."),
+        spec_option(OBSTACLE_MARGIN),
         option("--cmd-vel", section=ROS, default="",
                help="Velocity command topic, Twist or TwistStamped as the controller takes it "
                "[default: ROS 2 CONTROLLER/cmd_vel, ROS 1 /cmd_vel]."),
@@ -129,14 +139,16 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     steering by its odometry, back to the start by the corner between runs), measures
     where it stopped against the corner, calibrates, applies the correction to its
     controller, repeats while the paper's 3 x SEM rule says another pass is worth it, and
-    verifies. A zero velocity is sent on any error, on Ctrl-C and on every safety stop.
+    verifies. A zero velocity is sent on any error, on Ctrl-C and on every safety stop,
+    then one line says what the controller holds, which passes are on disk and the
+    command that runs it again (exit status 130 after Ctrl-C, 3 after a safety stop).
 
     With --routine anywhere the robot needs no corner and about 2 x 2 m of floor: it
     drives turns on the spot both ways, straights forward and back and arcs, calibrates
     its wheels, E_s and its laser's mounting against the laser's own motion (scan
     matching), applies the result and drives the pattern again to verify.
     """
-    from umbmark.cli.common import console, note, status_line, warn, wrote
+    from umbmark.cli.common import console, note, warn, wrote
     from umbmark.cli.render import render_anywhere, render_selfcal
     from umbmark.core.errors import InputError
     from umbmark.jobs.selfcal import default_folder
@@ -169,30 +181,35 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         speed=options.pop("speed"),
         acceleration=options.pop("acceleration"),
         turn_rate=options.pop("turn_rate"),
+        obstacle_margin=options.pop("obstacle_margin"),
     )
     anywhere = options["routine"] == "anywhere"
-    robot = connect(backend, ros=ros, room=anywhere, **sim)  # type: ignore[arg-type]
+    robot = connect(
+        backend,  # type: ignore[arg-type]
+        ros=ros,
+        room=anywhere,
+        corner_side=options["corner_side"],
+        **sim,
+    )
     if options["out"] is None:  # the command's own folder; a new one beside an earlier run's
         options["out"] = fresh_folder(default_folder(options["robot"] or robot.name))
     ask = _ask_person if options["measure"] == "tape" else None
     options["tape_marks"] = _numbers(options.pop("tape_marks"))
+    folder = Path(options["out"])
     try:
-        with status_line("self-calibration") as show:
-
-            def progress(label: str, k: int, direction: object, what: str) -> None:
-                step = "move" if direction is None else "run"  # the anywhere pattern's moves
-                run = f", {step} {k} {getattr(direction, 'value', '')}".rstrip() if k else ""
-                show(f"{label}{run}: {what}")
-
+        with _watching() as (progress, runs_left):
             report = run_selfcal(
-                robot, limits=limits, progress=progress, ask=ask,
+                robot, limits=limits, progress=progress, ask=ask, runs_left=runs_left,
                 robot_name=options.pop("robot"), notify=note, **options,
             )  # fmt: skip
+    except (KeyboardInterrupt, SafetyError, InputError) as exc:
+        _stopped(exc, folder)
+        raise
     finally:
         robot.close()
-    for line in report.checks:
-        note(line)
     if isinstance(report, AnywhereReport):
+        for line in report.checks:
+            note(line)
         wrote(report.files)
         if json_out:
             click.echo(report.to_json(), nl=False)
@@ -209,6 +226,95 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         click.echo(report.to_json(), nl=False)
         return
     render_selfcal(report, console())
+
+
+@contextlib.contextmanager
+def _watching() -> Iterator[tuple[Progress, Callable[[RunsLeft], None]]]:
+    """The progress line: on a terminal, rich's live line on stderr (what the robot does
+    now, a bar of the runs done out of planned, the time left), the routine's lines
+    printed above it; elsewhere a plain line at each run's end."""
+    from rich import progress as bars
+    from rich.console import Console
+
+    from umbmark.cli.common import note
+
+    err = Console(stderr=True)
+    if not err.is_terminal:
+        said = [0]
+
+        def plain(left: RunsLeft) -> None:
+            if left.done > said[0]:
+                said[0] = left.done
+                note(f"progress: {left.text()}")
+
+        yield (lambda label, k, direction, what: None), plain
+        return
+    with bars.Progress(
+        bars.SpinnerColumn(), bars.TextColumn("{task.description}"), bars.BarColumn(),
+        bars.TextColumn("{task.fields[left]}"), bars.TimeElapsedColumn(), console=err,
+        transient=True,
+    ) as bar:  # fmt: skip
+        task = bar.add_task("self-calibration (Ctrl-C stops)", total=None, left="")
+
+        def status(label: str, k: int, direction: object, what: str) -> None:
+            step = f"run {k} ({getattr(direction, 'value', '')})" if direction else f"move {k}"
+            run = f", {step}" if k else ""  # the anywhere pattern's moves have no direction
+            bar.update(task, description=f"{label}{run}: {what} (Ctrl-C stops)")
+
+        def counted(left: RunsLeft) -> None:
+            bar.update(task, total=left.planned, completed=left.done, left=left.text())
+
+        yield status, counted
+
+
+def _stopped(exc: BaseException, folder: Path) -> None:
+    """After a stop mid-routine (the zero velocity sent): one line with its cause, what
+    the controller holds, the passes on disk and the command that runs it again; exit
+    130 after Ctrl-C, 3 after a safety stop, 2 for bad input. Nothing where the routine
+    had not begun (a refusal before moving is the usual one line)."""
+    from umbmark.autocal.watch import stopped
+    from umbmark.cli.common import EXIT_BAD_INPUT, error_line
+    from umbmark.cli.main import EXIT_ENVIRONMENT, EXIT_INTERRUPTED
+
+    stop = stopped(exc)
+    if stop is None:
+        return
+    again = _again(stop, folder)
+    if isinstance(exc, KeyboardInterrupt):
+        sys.stderr.write("\n" if sys.stderr.isatty() else "")
+        error_line(f"interrupted, the robot stopped (zero velocity sent); {stop.text()}; {again}")
+        raise click.exceptions.Exit(EXIT_INTERRUPTED) from None
+    if isinstance(exc, SafetyError):
+        error_line(f"stopped for safety: {exc}; {stop.text()}; {again}")
+        raise click.exceptions.Exit(EXIT_ENVIRONMENT) from None
+    assert isinstance(exc, InputError)
+    error_line(f"{exc.command_line()}; the robot stopped; {stop.text()}; {again}")
+    raise click.exceptions.Exit(EXIT_BAD_INPUT) from None
+
+
+def _again(stop: Stopped, folder: Path) -> str:
+    """The command that goes on: this one again (from the parameters the controller holds
+    now, which each pass composes with), its passes into a new folder beside ``folder``
+    so that none on disk is replaced; a resumed one, as it was given."""
+    from umbmark.outputs.files import fresh_folder
+
+    args = sys.argv[1:]
+    if "selfcal" not in args:  # called from Python: the options are not known here
+        return "to go on, run umbmark selfcal again with the same options"
+    given = args[args.index("selfcal") + 1 :]
+    if "--resume" in given or any(a.startswith("--resume=") for a in given):
+        return f"to go on: umbmark selfcal {shlex.join(given)}"
+    kept, skip = [], False
+    for a in given:
+        if skip:
+            skip = False
+        elif a == "--out":
+            skip = True
+        elif not a.startswith("--out=") and a != "--force":
+            kept.append(a)
+    new = fresh_folder(folder) if stop.passes else folder
+    command = shlex.join([*kept, "--out", str(new)])
+    return f"to run it again from what the controller holds: umbmark selfcal {command}"
 
 
 def _ask_person(prompt: str) -> str:

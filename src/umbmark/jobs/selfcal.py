@@ -28,7 +28,6 @@ What a person still does: place the robot in the corner, and calibrate the scale
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 import tempfile
 from collections.abc import Callable, Sequence
@@ -39,10 +38,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.autocal.coarse import CoarseTurning, coarse_turning
-from umbmark.autocal.corner_sensors import TapeMarks
 from umbmark.autocal.drive import DriveLimits, settle
-from umbmark.autocal.measure import MEASURE_METHODS, Measure, MeasureMethod, take_fix
-from umbmark.autocal.passes import Home, corner_truth, drive_pass
+from umbmark.autocal.measure import (
+    MEASURE_METHODS,
+    CornerSide,
+    Measure,
+    MeasureMethod,
+    check_side,
+    marks_for,
+    take_fix,
+)
+from umbmark.autocal.passes import Home, corner_truth, drive_pass, strays
 from umbmark.autocal.preflight import preflight
 from umbmark.autocal.record import (
     OVERLAY_FILE,
@@ -53,6 +59,7 @@ from umbmark.autocal.record import (
     record_pass,
 )
 from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, write_state
+from umbmark.autocal.watch import Progress, RunsLeft, Stopped, Watch, mark_stopped
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError
@@ -70,9 +77,6 @@ __all__ = ["MAX_SELFCAL_PASSES", "PassResult", "SelfCalReport", "default_folder"
 MAX_SELFCAL_PASSES = 5
 #: Most runs per direction in a pass.
 MAX_SELFCAL_RUNS = 20
-
-#: Live progress: (pass label, run number, direction, what) for a terminal.
-Progress = Callable[[str, int, Direction | None, str], None]
 
 
 def _check_counts(side_length: float, runs: int, max_passes: int) -> None:
@@ -105,6 +109,8 @@ def selfcal(
     force: bool = False,
     resume: str | os.PathLike[str] | None = None,
     notify: Callable[[str], None] | None = None,
+    runs_left: Callable[[RunsLeft], None] | None = None,
+    corner_side: CornerSide = "right",
     routine: str = "umbmark",
 ) -> SelfCalReport | AnywhereReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
@@ -154,7 +160,16 @@ def selfcal(
         settings (the ones given here are not used), once the controller holds the
         parameters it stopped on (:mod:`umbmark.autocal.resume`).
     notify : callable, optional
-        Lines for a person, as they happen (the robot cannot take parameters live, ...).
+        Lines for a person, as they happen: each check before moving, the coarse check,
+        each run's return error, each pass's result (the robot cannot take parameters
+        live, ...).
+    corner_side : {"right", "left"}
+        Where the corner stands seen from the start: behind it and to its right or left
+        (which wall each range sensor or tape mark faces; the first fix must find it
+        there, else nothing moves).
+    runs_left : callable, optional
+        Called with a :class:`~umbmark.autocal.watch.RunsLeft` (runs done out of planned,
+        the time left) as each pass begins and each run ends.
     routine : {"umbmark", "anywhere"}
         ``anywhere``: :func:`umbmark.jobs.selfcal_anywhere.selfcal_anywhere` (no corner).
 
@@ -164,13 +179,18 @@ def selfcal(
         Bad options, or a check before moving failed (with the cause).
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
+
+    Every exception is raised after a zero velocity was sent; one raised once the checks
+    and the first fix passed (and a ``KeyboardInterrupt`` or ``SafetyError`` at any time)
+    carries what the controller holds and which passes are on disk
+    (:func:`umbmark.autocal.watch.stopped`).
     """
     ROUTINE.check(routine)
     if routine == "anywhere":
         square_only(
             side_length=side_length != 4.0, runs=runs != 5, measure=measure != "lidar",
             max_passes=max_passes != 3, report=report is not None, resume=resume is not None,
-            tape_marks=tape_marks is not None,
+            tape_marks=tape_marks is not None, corner_side=corner_side != "right",
         )  # fmt: skip
         return selfcal_anywhere(
             robot, apply=_apply_method(apply), verify=verify, robot_name=robot_name,
@@ -182,13 +202,14 @@ def selfcal(
         s = state.settings
         side_length, runs, measure = s["side_length"], s["runs"], s["measure"]
         max_passes, verify, out, coarse = s["max_passes"], s["verify"], resume, False
+        corner_side = s.get("corner_side", "right")
     _check_counts(side_length, runs, max_passes)
     if measure not in MEASURE_METHODS:
         raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
     method = _apply_method(apply)
     limits = limits or DriveLimits()
-    marks = _tape_marks(robot, tape_marks) if measure == "tape" else None
-    how = Measure(measure, ask=ask, marks=marks)
+    marks = marks_for(robot, tape_marks) if measure == "tape" else None
+    how = Measure(measure, ask=ask, marks=marks, side=corner_side)
     name = robot_name or robot.name
     folder = None if out is None else Path(out)
     page = None if report is None else Path(report)
@@ -211,8 +232,9 @@ def selfcal(
     kept = contextlib.nullcontext(str(folder))
     with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
         drive = _Passes(
-            robot, how, Path(logs), side_length, runs, limits, name, progress,
-            record_as=robot_name, history=history,
+            robot, how, Path(logs), side_length, runs, limits, name,
+            Watch(progress, notify, runs_left, runs), record_as=robot_name, history=history,
+            kept=folder is not None,
         )  # fmt: skip
         found = _calibrate(
             drive, method, verify, max_passes, coarse,
@@ -229,7 +251,10 @@ def selfcal(
                 folder,
                 found.passes,
                 found.pending,
-                locals_settings(side_length, runs, measure, max_passes, verify),
+                {
+                    **locals_settings(side_length, runs, measure, max_passes, verify),
+                    "corner_side": corner_side,
+                },
             )
             files.extend(more)
     passes = found.passes if folder is not None else [replace(p, folder=None) for p in found.passes]
@@ -323,25 +348,29 @@ def _calibrate(
     self-calibration is removed once the checks before moving have passed. A pass whose
     parameters wait for a controller restart ends the passes (none is driven on
     parameters that were not applied)."""
-    robot, how, limits, progress = drive.robot, drive.how, drive.limits, drive.progress
+    robot, how, limits, watch = drive.robot, drive.how, drive.limits, drive.watch
     passes = list(restart.prior)
+    moved = False
     try:
-        checks = preflight(robot, how, drive.side, limits)
+        checks = preflight(robot, how, drive.side, limits, say=watch.say)
         if restart.note is not None:
             checks.append(restart.note)
             if restart.notify is not None:
                 restart.notify(restart.note)
         odom = settle(robot, limits).pose
         first = take_fix(robot, how)
+        if how.method != "truth":  # motion capture's frame is not the corner's
+            check_side(first, how.side)
         home = Home(first.pose, first, odom)
         home.fixes.append((first, corner_truth(robot, how)))
+        moved = True  # the checks and the first fix passed: the robot moves from here on
         if replacing is not None:
             clear_selfcal(replacing, remove=True)
         coarse_check, coarse_applied, pending = None, None, None
         if coarse and method != "none" and how.method in ("lidar", "truth"):
-            if progress is not None:
-                progress("coarse", 0, None, "turning check")
+            watch.status("coarse", 0, None, "turning check")
             coarse_check = coarse_turning(robot, how, limits)
+            watch.say(coarse_check.words())
             if coarse_check.needed:
                 params = robot.drive_params()
                 coarse_params = replace(
@@ -363,10 +392,12 @@ def _calibrate(
         for k in range(start_at, max_passes + 1):
             if pending is not None:
                 break
+            watch.begin_pass(max_passes - k + 1 + int(verify))
             result, new = _apply(robot, drive(f"pass {k}", home), method)
+            passes.append(result)
+            watch.say(result.summary())
             drive.mark_applied(result)
             home.reanchor(robot)
-            passes.append(result)
             bench = result.report.benchmark
             if result.applied is None or not result.applied.active:
                 if restart.note is not None and result.applied is not None:
@@ -376,12 +407,37 @@ def _calibrate(
                 break
         last = passes[-1].applied if passes else None
         if verify and pending is None and last is not None and last.active:
+            watch.begin_pass(1)
             passes.append(drive("verification", home))
-    except BaseException:
+            watch.say(passes[-1].summary())
+    except BaseException as exc:
         robot.send_velocity(0.0, 0.0)
+        if moved or not isinstance(exc, InputError):
+            mark_stopped(exc, _stopped(robot, passes, drive))
         raise
     robot.send_velocity(0.0, 0.0)
     return _Found(checks, home, coarse_check, coarse_applied, passes, pending)
+
+
+def _stopped(robot: Robot, passes: list[PassResult], drive: _Passes) -> Stopped:
+    """What a routine stopped mid-way leaves: what the controller holds (known from the
+    passes, asked of the controller only before the first ended), the passes kept."""
+    applied = [p for p in passes if p.applied is not None and p.applied.active]
+    try:
+        if applied:  # the last applied pass's correction
+            c = applied[-1].report.calibration
+            params = replace(
+                applied[-1].params,
+                wheel_separation_multiplier=c.new_separation_multiplier,
+                left_wheel_radius_multiplier=c.new_c_left,
+                right_wheel_radius_multiplier=c.new_c_right,
+            )
+        else:
+            params = passes[-1].params if passes else robot.drive_params()
+        holds = _holds(passes, params).words()
+    except Exception as exc:  # a robot gone with the stop: say so, keep the stop's cause
+        holds = f"what the controller holds could not be read ({exc})"
+    return Stopped(holds, tuple(p.label for p in passes), drive.folder if drive.kept else None)
 
 
 def locals_settings(
@@ -452,9 +508,10 @@ class _Passes:
     runs: int
     limits: DriveLimits
     name: str
-    progress: Progress | None
+    watch: Watch
     record_as: str | None = None
     history: str | os.PathLike[str] | None = None
+    kept: bool = True
 
     def __call__(self, label: str, home: Home) -> PassResult:
         from umbmark.jobs.calibrate import calibrate
@@ -462,14 +519,18 @@ class _Passes:
         params = self.robot.drive_params()
 
         def said(k: int, direction: Direction, what: str) -> None:
-            if self.progress is not None:
-                self.progress(label, k, direction, what)
+            self.watch.status(label, k, direction, what)
 
-        measured = drive_pass(self.robot, self.how, self.side, self.runs, home, self.limits, said)
+        def ran(k: int, direction: Direction, run: MeasuredRun) -> None:
+            self.watch.run_measured(label, k, direction, run.start.pose, run.end.pose)
+
+        measured = drive_pass(
+            self.robot, self.how, self.side, self.runs, home, self.limits, said, ran
+        )
         where = pass_folder(self.folder, label)
         record_pass(where, measured, params, self.side, self.how.method, self.name)
         report = calibrate(where, robot=self.record_as, history=self.history)
-        return PassResult(label, where, report, params, warnings=_strays(measured, self.limits))
+        return PassResult(label, where, report, params, warnings=strays(measured, self.limits))
 
     def mark_applied(self, result: PassResult) -> None:
         """Mark the pass's calibration applied in the history (it was recorded last)."""
@@ -480,24 +541,6 @@ class _Passes:
         store = History(self.history)
         (last,) = store.calibrations(self.record_as)[-1:]
         store.mark_applied(self.record_as, last.id)
-
-
-def _strays(measured: list[MeasuredRun], limits: DriveLimits) -> tuple[str, ...]:
-    """A warning for each run whose odometry ended farther from the commanded end than the
-    limits (a robot answering commands late, a controller that does not settle)."""
-    out = []
-    counted: dict[Direction, int] = {}
-    for m in measured:
-        k = counted[m.run.direction] = counted.get(m.run.direction, 0) + 1
-        distance, heading = m.run.end_error
-        if distance > limits.end_position or heading > limits.end_heading:
-            out.append(
-                f"{m.run.direction.value} run {k}: the odometry ended {distance * 1000:.1f} mm "
-                f"and {math.degrees(heading):.2f} deg from where it was sent (limits "
-                f"{limits.end_position * 1000:g} mm, {math.degrees(limits.end_heading):g} deg): "
-                "the run is not the square the benchmark assumes"
-            )
-    return tuple(out)
 
 
 def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> tuple[PassResult, DriveParams]:
@@ -553,33 +596,6 @@ def _outputs(
 
 def _slug(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "-" for c in name)[:60] or "robot"
-
-
-def _tape_marks(robot: Robot, given: Sequence[float] | None) -> TapeMarks:
-    """The marks a person measures from: the given ones, else the robot's own
-    (``tape_marks()``, as the virtual robot has); refused when neither."""
-    if given is not None:
-        values = [float(v) for v in given]
-        if len(values) != 6 or not all(math.isfinite(v) and abs(v) <= 2.0 for v in values):
-            raise InputError(
-                f"--tape-marks {','.join(f'{v:g}' for v in values)}: give X1,Y1,X2,Y2,X3,Y3, "
-                "three points on the robot in its base frame, in metres (within 2 m)"
-            )
-        marks = ((values[0], values[1]), (values[2], values[3]), (values[4], values[5]))
-        if math.dist(marks[0], marks[1]) < 0.05:
-            raise InputError(
-                "--tape-marks: the first two marks (measured to the same wall) must be at "
-                "least 50 mm apart, or the heading cannot be told"
-            )
-        return TapeMarks(marks=marks)
-    own = getattr(robot, "tape_marks", None)
-    if callable(own):
-        return TapeMarks(marks=tuple((float(x), float(y)) for x, y in own()))
-    raise InputError(
-        "--measure tape needs --tape-marks: the three points on the robot the distances "
-        "are measured from (X1,Y1,X2,Y2,X3,Y3 in its base frame, metres; the first two to "
-        "the wall behind the start, the third to the side wall)"
-    )
 
 
 def _apply_method(apply: bool | ApplyMethod) -> ApplyMethod:

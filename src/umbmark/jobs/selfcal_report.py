@@ -48,6 +48,21 @@ class PassResult:
     applied: ApplyResult | None = None
     warnings: tuple[str, ...] = ()
 
+    def summary(self) -> str:
+        """One line: E_max,syst, the estimate, the verdict and whether it was applied."""
+        r = self.report
+        e = "-" if r.e_max_syst is None else f"{r.e_max_syst * 1000:.1f} mm"
+        if self.applied is None:
+            applied = "not applied"
+        elif self.applied.active:
+            applied = f"applied ({self.applied.method})"
+        else:
+            applied = f"not active: {self.applied.message}"
+        return (
+            f"{self.label}: E_max,syst {e}, E_d {r.estimate.E_d:.6f}, E_b "
+            f"{r.estimate.E_b:.6f}; {r.verdict.words}; {applied}"
+        )
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (metres, radians)."""
         estimate = self.report.estimate

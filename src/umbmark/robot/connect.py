@@ -24,15 +24,17 @@ def connect(
     seed: int | None = None,
     ros: RosOptions | None = None,
     room: bool = False,
+    corner_side: Literal["right", "left"] = "right",
 ) -> Robot:
     """The robot to calibrate.
 
     ``sim``: a :class:`~umbmark.robot.virtual.VirtualRobot` (LabMate-sized, 4 m squares'
-    room) with errors ``E_d``, ``E_b``, ``E_s`` and wheel slip ``slip`` [m^(1/2)];
-    ``ros1`` / ``ros2``: the robot behind the topics and controller of ``ros``. ``room``:
-    the virtual robot stands in an ordinary room (:func:`umbmark.robot.world.room_world`)
-    with its laser off its centre (:data:`umbmark.robot.world.ROOM_LASER`), for the
-    routine that calibrates anywhere; else at the corner of the UMBmark routine.
+    room, the corner behind the start on ``corner_side``) with errors ``E_d``, ``E_b``,
+    ``E_s`` and wheel slip ``slip`` [m^(1/2)]; ``ros1`` / ``ros2``: the robot behind the
+    topics and controller of ``ros``. ``room``: the virtual robot stands in an ordinary
+    room (:func:`umbmark.robot.world.room_world`) with its laser off its centre
+    (:data:`umbmark.robot.world.ROOM_LASER`), for the routine that calibrates anywhere;
+    else at the corner of the UMBmark routine.
 
     Raises
     ------
@@ -41,6 +43,7 @@ def connect(
     """
     if backend == "sim":
         from umbmark.robot.virtual import ERROR_RANGE, MAX_SLIP, VirtualRobot
+        from umbmark.robot.world import corner_world
 
         low, high = ERROR_RANGE
         for name, value in (("E_d", E_d), ("E_b", E_b), ("E_s", E_s)):
@@ -56,7 +59,8 @@ def connect(
             laser = (ROOM_LASER.x, ROOM_LASER.y, ROOM_LASER.theta)
             return VirtualRobot(E_d, E_b, E_s, slip=slip, seed=seed, world=room_world(),
                                 laser_pose=laser)  # fmt: skip
-        return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed)
+        world = corner_world(side=corner_side)
+        return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed, world=world)
     if backend == "ros1":
         from umbmark.robot.ros1 import Ros1Robot
 

@@ -236,8 +236,13 @@ class VirtualRobot:
     def tape_marks(self) -> tuple[tuple[float, float], ...]:
         """Where a person measures from on this robot [m, base frame]: three marks at its
         back, where the paper's LabMate carried its sensors (x = -350 mm, y = +-250 mm);
-        the first two to the wall behind, the third to the side wall."""
-        return ((-0.35, 0.25), (-0.35, -0.25), (-0.35, -0.25))
+        the first two to the wall behind, the third to the side wall (on the corner's
+        side)."""
+        marks = ((-0.35, 0.25), (-0.35, -0.25), (-0.35, -0.25))
+        corner = self.world.corner
+        if corner is not None and Pose2D(*corner.vertex, 0.0).relative_to(self.world.start).y > 0:
+            return tuple((x, -y) for x, y in marks)  # the side wall on the left
+        return marks
 
     def corner_truth(self) -> Pose2D | None:
         """The true pose in the corner frame (None: the world has no corner)."""

@@ -16,10 +16,12 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.errors import InputError
 from umbmark.robot.base import LaserScan, Pose2D, RangeReading, Stamped
 
 __all__ = [
@@ -376,7 +378,7 @@ def square_path(
     return np.array([[p.x, p.y] for p in pts])
 
 
-def corner_world(clutter: bool = True) -> World:
+def corner_world(clutter: bool = True, side: Literal["right", "left"] = "right") -> World:
     """The standard world: an L-shaped corner behind and to the right of the start (vertex at
     (-1.6, -1.3) m: a 1.25 m wall along +x, 1.3 m to the right of the start, ending 0.35 m
     behind it, and a 2.8 m wall along +y 1.6 m behind the start), a far wall 6 m ahead and,
@@ -389,19 +391,35 @@ def corner_world(clutter: bool = True) -> World:
     everything (:meth:`World.clearance`), and a robot ending a run up to about 1 m from the
     start in any direction still sees both walls well from inside the corner. In the corner
     frame the start is at ``(1.6, 1.3)`` m, heading 0.
+
+    ``side="left"``: the same world mirrored across the start's heading (the corner behind
+    and to the left, vertex at (-1.6, 1.3) m, the range sensors mirrored). Its corner frame
+    is right-handed like every corner frame: x along the back wall (towards -y), y along the
+    side wall (+x); the start is at ``(1.3, 1.6)`` m, heading 90 degrees.
     """
-    corner = LCorner(vertex=(-1.6, -1.3), heading=0.0, x_length=1.25, y_length=2.8)
     walls = [np.array([[6.0, -5.5, 6.0, 5.5]])]
     circles: list[FloatArray] = []
     if clutter:
         walls.append(box(-0.75, 1.6, 0.3, 0.4))
         circles += [chair(-1.2, 2.6, 0.3), legs(-0.9, -2.4, 0.5)]
+    if side == "right":
+        corner = LCorner(vertex=(-1.6, -1.3), heading=0.0, x_length=1.25, y_length=2.8)
+        sonars = CORNER_SENSORS
+    elif side == "left":
+        corner = LCorner(vertex=(-1.6, 1.3), heading=-0.5 * math.pi, x_length=2.8, y_length=1.25)
+        sonars = RangeSensors(
+            mounts=tuple(Pose2D(m.x, -m.y, -m.theta) for m in CORNER_SENSORS.mounts)
+        )
+        walls = [w * np.array([1.0, -1.0, 1.0, -1.0]) for w in walls]
+        circles = [c * np.array([1.0, -1.0, 1.0]) for c in circles]
+    else:
+        raise InputError(f"corner side {side!r}: use right or left")
     return World.build(
         np.vstack(walls),
         np.vstack(circles) if circles else (),
         corner,
         lidar=DEFAULT_LIDAR,
-        sonars=CORNER_SENSORS,
+        sonars=sonars,
         mocap=MotionCapture(),
     )
 
