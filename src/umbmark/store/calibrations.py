@@ -9,18 +9,45 @@ calibrations through here.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import replace
 from typing import TypeVar
 
 from umbmark.calibration.result import CalibrationResult
+from umbmark.calibration.sources import calibrate_sources
+from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import RunSource, source_name
-from umbmark.store.history import History
+from umbmark.store.history import History, compose_last_applied
 from umbmark.store.records import NewCalibration
 
-__all__ = ["history_entry", "recorded", "same_robot"]
+__all__ = ["calibrate_recorded", "history_entry", "recorded", "same_robot"]
 
 Result = TypeVar("Result", bound=CalibrationResult)
+
+
+def calibrate_recorded(
+    sources: Sequence[RunSource],
+    options: SourceOptions,
+    *,
+    robot: str | None = None,
+    history: str | os.PathLike[str] | None = None,
+    method: str | None = None,
+    wheelbase: float | None = None,
+) -> CalibrationResult:
+    """The calibration of ``sources`` as ``umbmark calibrate --robot`` makes it, without
+    its files: with ``robot``, the robot's last applied calibration taken as active where
+    the options say nothing of it, a result of another robot refused, and the result
+    recorded in ``history`` (the self-calibration's passes)."""
+    if robot is None:
+        return calibrate_sources(
+            sources, ReadOptions.of(options), method=method, wheelbase=wheelbase
+        )
+    store = History(history)
+    options, composed = compose_last_applied(store, robot, options)
+    found = calibrate_sources(sources, ReadOptions.of(options), method=method, wheelbase=wheelbase)
+    found = same_robot(replace(found, robot=robot), store, robot, composed)
+    return recorded(found, store, robot, sources, False)
 
 
 def same_robot(result: Result, store: History, robot: str, composed: str | None) -> Result:
