@@ -1,5 +1,6 @@
 """The package's architecture (docs/architecture.md): imports go down the layers, no
-import cycle, small modules, jobs hold values only.
+import cycle, small modules and functions, jobs hold values only and import no other
+command's job, one definition per public class name.
 
 Every module of ``src/umbmark`` is parsed (not imported): every ``import`` statement
 counts, at module level, inside functions and under ``TYPE_CHECKING`` alike.
@@ -42,6 +43,8 @@ TOP = ("umbmark", "umbmark.__main__", "umbmark._entry")
 DATA = "umbmark.data"
 #: Most lines a module may have.
 MAX_LINES = 600
+#: Most lines a function may have (its docstring included).
+MAX_FUNCTION_LINES = 120
 
 
 def _modules(root: Path = PACKAGE) -> dict[str, Path]:
@@ -189,6 +192,46 @@ def job_classes_not_values(root: Path = PACKAGE) -> list[str]:
     return out
 
 
+def long_functions(root: Path = PACKAGE) -> list[str]:
+    """Every function or method over :data:`MAX_FUNCTION_LINES` lines."""
+    out = []
+    for name, path in _modules(root).items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                lines = (node.end_lineno or node.lineno) - node.lineno + 1
+                if lines > MAX_FUNCTION_LINES:
+                    out.append(f"{name}.{node.name} (line {node.lineno}): {lines} lines")
+    return out
+
+
+def _command(job: str) -> str:
+    """The command a module of ``jobs/`` belongs to: ``selfcal`` for ``selfcal_report``."""
+    return job.split(".")[2].split("_", maxsplit=1)[0]
+
+
+def jobs_importing_jobs(root: Path = PACKAGE) -> list[str]:
+    """Every import of one command's job by another's: jobs share library functions."""
+    modules = _modules(root)
+    out = []
+    for name, path in modules.items():
+        if not name.startswith("umbmark.jobs."):
+            continue
+        for target, line in _imports(name, path, modules):
+            if target.startswith("umbmark.jobs.") and _command(target) != _command(name):
+                out.append(f"{name} (line {line}) imports {target}")
+    return out
+
+
+def public_class_names_defined_twice(root: Path = PACKAGE) -> list[str]:
+    """Every public class name (no leading underscore) defined in more than one module."""
+    where: dict[str, list[str]] = {}
+    for name, path in _modules(root).items():
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
+                where.setdefault(node.name, []).append(name)
+    return [f"{cls}: {', '.join(mods)}" for cls, mods in sorted(where.items()) if len(mods) > 1]
+
+
 def test_imports_go_down_the_layers():
     bad = layer_violations()
     assert not bad, "imports against the layers:\n" + "\n".join(bad)
@@ -207,6 +250,21 @@ def test_no_module_over_600_lines():
 def test_jobs_hold_only_frozen_dataclasses():
     bad = job_classes_not_values()
     assert not bad, "classes in jobs/ that are not frozen dataclasses:\n" + "\n".join(bad)
+
+
+def test_no_function_over_120_lines():
+    long = long_functions()
+    assert not long, f"functions over {MAX_FUNCTION_LINES} lines:\n" + "\n".join(long)
+
+
+def test_jobs_import_no_other_commands_job():
+    bad = jobs_importing_jobs()
+    assert not bad, "jobs importing another command's job:\n" + "\n".join(bad)
+
+
+def test_one_definition_per_public_class_name():
+    twice = public_class_names_defined_twice()
+    assert not twice, "public class names defined in several modules:\n" + "\n".join(twice)
 
 
 def _package(tmp_path: Path, files: dict[str, str]) -> Path:
@@ -228,12 +286,13 @@ def test_the_checks_find_what_they_look_for(tmp_path):
             "core/low.py": "def f():\n    from umbmark.jobs.high import g\n",
             "jobs/__init__.py": "",
             "jobs/high.py": "from umbmark.core import low\n\n\nclass Machine:\n    pass\n",
-            "jobs/a.py": "from umbmark.jobs.b import x\n",
+            "jobs/a.py": "from umbmark.jobs.b import x\n\n\nclass Machine:\n    pass\n",
             "jobs/b.py": "import typing\nif typing.TYPE_CHECKING:\n    import umbmark.jobs.a\n"
             + "x = 1\n" * 601,
             "misc/__init__.py": "",
             "cli/__init__.py": "",
-            "cli/main.py": "import umbmark\nfrom umbmark import data\n",
+            "cli/main.py": "import umbmark\nfrom umbmark import data\n\n\ndef f():\n"
+            + "    pass\n" * 120,
             "data/__init__.py": "",
         },
     )
@@ -246,7 +305,16 @@ def test_the_checks_find_what_they_look_for(tmp_path):
         ["umbmark.jobs.a", "umbmark.jobs.b"],
     ]
     assert long_modules(root) == ["umbmark.jobs.b: 604 lines"]
-    assert job_classes_not_values(root) == ["umbmark.jobs.high.Machine (line 4)"]
+    assert job_classes_not_values(root) == [
+        "umbmark.jobs.a.Machine (line 4)",
+        "umbmark.jobs.high.Machine (line 4)",
+    ]
+    assert long_functions(root) == ["umbmark.cli.main.f (line 5): 121 lines"]
+    assert jobs_importing_jobs(root) == [
+        "umbmark.jobs.a (line 1) imports umbmark.jobs.b",
+        "umbmark.jobs.b (line 3) imports umbmark.jobs.a",
+    ]
+    assert public_class_names_defined_twice(root) == ["Machine: umbmark.jobs.a, umbmark.jobs.high"]
 
 
 if __name__ == "__main__":  # pragma: no cover - a listing for people

@@ -7,20 +7,25 @@ parameters, a prediction, not a measured pass.
 from __future__ import annotations
 
 import datetime as dt
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.calibration.result import CalibrationResult
+from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
+from umbmark.core.messages import info
 from umbmark.core.version import __version__
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.runs import Run
+from umbmark.runs.options import ReadOptions, SourceOptions
+from umbmark.runs.read import RunSource, source_name
 
 if TYPE_CHECKING:
     from umbmark.calibration.validation import ValidationReport
 
-__all__ = ["Holds", "Passes", "PredictedPass", "predict_after"]
+__all__ = ["Holds", "Passes", "PredictedPass", "calibrate_passes", "predict_after"]
 
 
 @dataclass(frozen=True)
@@ -208,3 +213,62 @@ class Passes(JsonText):
             "validation": None if self.validation is None else self.validation.to_dict(),
             "holds": None if self.holds is None else self.holds.to_dict(),
         }
+
+
+def calibrate_passes(
+    sources: Sequence[RunSource],
+    options: SourceOptions,
+    *,
+    side_length: float | None = None,
+    wheelbase: float | None = None,
+    method: str | None = None,
+    fit_truth_offset: bool = False,
+    override_verdict: bool = False,
+) -> tuple[list[CalibrationResult], SourceOptions]:
+    """Each pass calibrated (:func:`umbmark.calibration.sources.calibrate_sources`), in the
+    order driven: pass 1 with the parameters ``options`` say were active, pass 2 on with
+    the previous pass's new ``c_L``, ``c_R`` and ``wheel_separation_multiplier`` (a note
+    says so). Returns the passes and the options the last one was read with.
+
+    Raises
+    ------
+    InputError
+        As the calibration does; and for a pass without square runs in both directions.
+    """
+    from umbmark.calibration.sources import calibrate_sources
+
+    names = [source_name(s) for s in sources]
+    passes: list[CalibrationResult] = []
+    pass_options: SourceOptions = options
+    for k, (one, name) in enumerate(zip(sources, names, strict=True), 1):
+        note = None
+        if passes:
+            before = passes[-1].calibration
+            pass_options = options.copy()
+            pass_options["current_c_l"] = before.new_c_left
+            pass_options["current_c_r"] = before.new_c_right
+            pass_options["current_separation_multiplier"] = before.new_separation_multiplier
+            note = info(
+                f"taken as active during the runs, pass {k - 1}'s new parameters "
+                f"(c_L {before.new_c_left:.6f}, c_R {before.new_c_right:.6f}, "
+                f"wheel_separation_multiplier {before.new_separation_multiplier:.6f})"
+            )
+        result = calibrate_sources(
+            [one],
+            ReadOptions.of(pass_options),
+            side_length=side_length,
+            wheelbase=wheelbase,
+            method=method,
+            fit_truth_offset=fit_truth_offset,
+            override_verdict=override_verdict,
+        )
+        if result.benchmark is None:
+            raise InputError(
+                f"pass {k}: UMBmark needs square runs in both directions (cw and ccw), at "
+                "least two each",
+                source=name,
+            )
+        if note is not None:
+            result = replace(result, notes=(*result.notes, note))
+        passes.append(result)
+    return passes, pass_options

@@ -14,9 +14,8 @@ from rich.table import Table
 from rich.text import Text
 
 from umbmark.benchmark.returns import Benchmark, sem_verdict
-from umbmark.calibration.result import ABSOLUTE_FIGURES
+from umbmark.calibration.result import ABSOLUTE_FIGURES, CalibrationResult
 from umbmark.estimators.registry import LOGGED, find, method_label
-from umbmark.jobs.calibrate import CalibrationReport
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
 
 if TYPE_CHECKING:
@@ -28,7 +27,7 @@ __all__ = ["column", "print_table", "render_calibration", "row", "table"]
 _MM = 1000.0
 
 
-def _render_benchmark(report: CalibrationReport, bench: Benchmark, console: Console) -> None:
+def _render_benchmark(report: CalibrationResult, bench: Benchmark, console: Console) -> None:
     test = report.test
     head = Text.assemble(
         ("UMBmark ", "bold"),
@@ -66,7 +65,7 @@ def _plus_minus(value: float, se: float | None, fmt: str) -> str:
 
 
 def render_calibration(
-    report: CalibrationReport, console: Console, *, overlay: bool = True
+    report: CalibrationResult, console: Console, *, overlay: bool = True
 ) -> None:
     """Print the summary of ``report`` on ``console``: the verdict first, the overlay to
     paste last (withheld when the verdict is "do not apply", unless overridden)."""
@@ -118,7 +117,7 @@ def render_calibration(
         console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
 
 
-def _render_errors(report: CalibrationReport, console: Console) -> None:
+def _render_errors(report: CalibrationResult, console: Console) -> None:
     """The systematic errors' table, and their 95 % intervals."""
     est, sensor = report.calibration.estimate, report.sensor
     se = est.standard_errors
@@ -155,7 +154,7 @@ def _render_errors(report: CalibrationReport, console: Console) -> None:
         console.print("95 % intervals: " + ", ".join(intervals))
 
 
-def _render_correction(report: CalibrationReport, console: Console) -> None:
+def _render_correction(report: CalibrationResult, console: Console) -> None:
     """The correction's table: active, this pass, new."""
     cal = report.calibration
     est, active = cal.estimate, cal.active

@@ -28,8 +28,6 @@ if TYPE_CHECKING:
     from typing_extensions import Unpack
 
     from umbmark.outputs.tum import TumTime
-    from umbmark.store.history import History
-    from umbmark.store.records import NewCalibration
 
 __all__ = ["CalibrationReport", "calibrate"]
 
@@ -271,6 +269,7 @@ def calibrate(
     """
     store, composed = None, None
     if robot is not None:
+        from umbmark.store.calibrations import recorded, same_robot
         from umbmark.store.history import History, compose_last_applied
 
         store = History(history)
@@ -286,64 +285,18 @@ def calibrate(
     )  # fmt: skip
     result = replace(CalibrationReport.of(found), robot=robot, command=command)
     if store is not None and robot is not None:
-        result = _same_robot(result, store, robot, composed)
+        result = same_robot(result, store, robot, composed)
     if result.overlay_withheld:  # the verdict says what to do instead
         files = {"yaml": plan.yaml, "ros1_yaml": plan.ros1_yaml}
         result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
         plan = replace(plan, yaml=None, ros1_yaml=None)
     result._write(plan, time, override_verdict=override_verdict)
     if store is not None and robot is not None:
-        result = _recorded(result, store, robot, sources, override_verdict)
+        result = recorded(result, store, robot, sources, override_verdict)
     return result
-
-
-def _same_robot(
-    result: CalibrationReport, store: History, robot: str, composed: str | None
-) -> CalibrationReport:
-    """Refuse a result of another robot than the history's ``robot``; note what was
-    composed from its last applied calibration."""
-    active = result.calibration.active
-    store.check_identity(robot, active.wheelbase, active.wheel_diameter)
-    return result if composed is None else replace(result, notes=(*result.notes, composed))
-
-
-def _recorded(
-    result: CalibrationReport,
-    store: History,
-    robot: str,
-    sources: Sequence[RunSource],
-    override_verdict: bool,
-) -> CalibrationReport:
-    """The result, recorded in the history, with the line saying so."""
-    inputs = [n for n in map(source_name, sources) if n != "runs"]
-    id = store.record(robot, _history_entry(result), inputs)
-    said = store.recorded_line(robot, id, result.verdict, overridden=override_verdict)
-    return replace(result, recorded=said)
 
 
 def _tum_time(tum_time: str) -> TumTime:
     from umbmark.outputs.tum import check_tum_time  # off start-up
 
     return check_tum_time(tum_time)
-
-
-def _history_entry(result: CalibrationResult) -> NewCalibration:
-    """What the history records of a calibration."""
-    from umbmark.store.records import NewCalibration
-
-    data = result.to_dict()
-    active = result.calibration.active
-    return NewCalibration(
-        time=result.created,
-        method=data["method"],
-        E_d=data["E_d"],
-        E_b=data["E_b"],
-        E_s=data["E_s"],
-        e_max_syst=data["e_max_syst"],
-        standard_errors=data["standard_errors"],
-        active=data["active"],
-        new=data["new"],
-        verdict=data["apply"],
-        wheelbase=active.wheelbase,
-        wheel_diameter=active.wheel_diameter,
-    )

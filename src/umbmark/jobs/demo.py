@@ -17,16 +17,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.benchmark.returns import sem_verdict
+from umbmark.calibration.result import CalibrationResult
 from umbmark.core.bounds import check_int_option
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import join_names
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.registry import DEFAULT, SQUARE
-from umbmark.jobs.calibrate import CalibrationReport
-from umbmark.jobs.simulate import MAX_RUNS, SEED_RANGE
 from umbmark.sim.experiments import Trial
 from umbmark.sim.robot import SimRobot
+from umbmark.sim.setup import MAX_RUNS, SEED_RANGE
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -53,7 +53,7 @@ class DemoReport(JsonText):
         The uncalibrated robot (true errors ``robot.E_d``, :attr:`true_E_b`).
     before, after : Trial
         The bi-directional square tests before and after the correction.
-    report : CalibrationReport
+    report : CalibrationResult
         The calibration from the test before.
     seed : int
     files : dict of str to Path
@@ -63,7 +63,7 @@ class DemoReport(JsonText):
     robot: SimRobot
     before: Trial
     after: Trial
-    report: CalibrationReport
+    report: CalibrationResult
     seed: int
     files: dict[str, Path]
 
@@ -154,7 +154,7 @@ def demo(
     method : {"paper", "exact", "heading", "endpose"}
         Estimator to calibrate with.
     runs : int
-        Runs in each direction, 2 to :data:`umbmark.jobs.simulate.MAX_RUNS` (1000).
+        Runs in each direction, 2 to :data:`umbmark.sim.setup.MAX_RUNS` (1000).
     force : bool
         Replace the files of ``out`` (:data:`DEMO_FILES`) that exist.
     progress : callable, optional
@@ -196,7 +196,7 @@ def demo(
     (after,) = umbmark_trials([calibrated], SIDE, runs, rng=rng, progress=stage(0.5))
 
     files = {} if folder is None else {k: folder / v for k, v in DEMO_FILES.items()}
-    report = CalibrationReport(
+    report = CalibrationResult(
         sources=(str(files.get("runs_before", "demo runs before")),),
         format="table",
         runs=tuple(before.runs),

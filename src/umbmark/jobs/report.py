@@ -16,13 +16,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark.calibration.passes import Passes, predict_after
-from umbmark.calibration.result import CalibrationResult
-from umbmark.calibration.sources import calibrate_sources
-from umbmark.core.atomic import atomic_write_text
+from umbmark.calibration.passes import Passes, calibrate_passes, predict_after
 from umbmark.core.errors import InputError, python_api
-from umbmark.core.messages import info
 from umbmark.estimators.registry import DEFAULT
+from umbmark.outputs.passes_page import check_page_output, write_passes_page
 from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import RunSource, source_name
 
@@ -60,42 +57,7 @@ class PassesReport(Passes):
             For a name that is not .html, an input's name, a file that cannot be
             written, or one that exists (without ``force``).
         """
-        inputs = [s for p in self.passes for s in p.sources]
-        path = check_output(output, inputs, force=force)
-        atomic_write_text(path, self.html())
-        return path
-
-
-def check_output(output: str | os.PathLike[str], inputs: list[str], *, force: bool = False) -> Path:
-    """Check the page's file name (``-o``) before anything is computed.
-
-    Raises
-    ------
-    InputError
-        If it does not end in .html or .htm, is an input or lies inside an input folder,
-        cannot be written, or exists (without ``force``).
-    """
-    from umbmark.outputs.files import OutputPlan
-
-    path = Path(output)
-    target = path.resolve()
-    for name in inputs:
-        source = Path(name)
-        if not source.exists():
-            continue
-        source = source.resolve()
-        if target == source:
-            raise InputError(
-                f"-o {path} would overwrite an input ({source}); write the page elsewhere"
-            )
-        if source.is_dir() and target.is_relative_to(source):
-            raise InputError(
-                f"-o {path} is inside an input folder ({source}); write the page elsewhere"
-            )
-    if path.suffix.lower() not in _HTML:
-        raise InputError(f"-o {path}: the file name should end in .html or .htm")
-    OutputPlan.of(report=path, force=force)  # a writable folder, new unless force
-    return path
+        return write_passes_page(self, output, force=force)
 
 
 def report(
@@ -165,42 +127,18 @@ def report(
     names = [source_name(s) for s in sources]
     current = options.get("current_params")
     if output is not None:
-        check_output(output, [*names, *([] if current is None else [str(current)])], force=force)
-    passes: list[CalibrationResult] = []
-    pass_options: SourceOptions = options
-    for k, (one, name) in enumerate(zip(sources, names, strict=True), 1):
-        note = None
-        if passes:
-            before = passes[-1].calibration
-            pass_options = options.copy()
-            pass_options["current_c_l"] = before.new_c_left
-            pass_options["current_c_r"] = before.new_c_right
-            pass_options["current_separation_multiplier"] = before.new_separation_multiplier
-            note = info(
-                f"taken as active during the runs, pass {k - 1}'s new parameters "
-                f"(c_L {before.new_c_left:.6f}, c_R {before.new_c_right:.6f}, "
-                f"wheel_separation_multiplier {before.new_separation_multiplier:.6f})"
-            )
-        result = calibrate_sources(
-            [one],
-            ReadOptions.of(pass_options),
-            side_length=side_length,
-            wheelbase=wheelbase,
-            method=method,
-            fit_truth_offset=fit_truth_offset,
-            override_verdict=override_verdict,
+        check_page_output(
+            output, [*names, *([] if current is None else [str(current)])], force=force
         )
-        if result.benchmark is None:
-            raise InputError(
-                f"pass {k}: UMBmark needs square runs in both directions (cw and ccw), at "
-                "least two each",
-                source=name,
-            )
-        if note is not None:
-            from dataclasses import replace
-
-            result = replace(result, notes=(*result.notes, note))
-        passes.append(result)
+    passes, pass_options = calibrate_passes(
+        sources,
+        options,
+        side_length=side_length,
+        wheelbase=wheelbase,
+        method=method,
+        fit_truth_offset=fit_truth_offset,
+        override_verdict=override_verdict,
+    )
     predicted = predict_after(passes[0]) if len(passes) == 1 else None
     validation = None
     if validate:

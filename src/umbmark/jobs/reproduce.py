@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING, Any
 from umbmark.core.bounds import check_int_option, option_float
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
-from umbmark.jobs.simulate import SEED_RANGE
 from umbmark.outputs.files import OutputPlan
 from umbmark.sim.reproduce import Fig4Result, Table1Row
+from umbmark.sim.setup import SEED_RANGE
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

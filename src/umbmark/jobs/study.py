@@ -41,7 +41,7 @@ from umbmark.core.bounds import (
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
 from umbmark.estimators.registry import SQUARE
-from umbmark.jobs.simulate import SEED_RANGE
+from umbmark.sim.setup import SEED_RANGE
 
 if TYPE_CHECKING:
     from umbmark.benchmark.returns import Benchmark

@@ -47,7 +47,7 @@ RESTART = (
 STRING, STRING_ARRAY = 4, 9
 
 
-class Ros2Robot(Protocol):
+class ReloadTarget(Protocol):
     """What this module needs of :class:`umbmark.robot.ros2.Ros2Robot`."""
 
     @property
@@ -82,7 +82,7 @@ def controller_names(controller: str) -> tuple[str, str, str]:
     return name, node, f"{parent}/controller_manager"
 
 
-def plan_reload(robot: Ros2Robot) -> ReloadPlan:
+def plan_reload(robot: ReloadTarget) -> ReloadPlan:
     """Ask the graph which way applying goes: the manager lists the controller active,
     and its multipliers are settable (``configure``), or read-only with ``--params-file``
     given and the manager holding the controller's parameter files (``load``)."""
@@ -125,7 +125,7 @@ def plan_reload(robot: Ros2Robot) -> ReloadPlan:
     )
 
 
-def reload(robot: Ros2Robot, way: Literal["configure", "load"], params: DriveParams) -> str:
+def reload(robot: ReloadTarget, way: Literal["configure", "load"], params: DriveParams) -> str:
     """Apply the multipliers of ``params`` ``way`` (the file ``--params-file`` already
     written for ``load``); what was done. The robot is stopped first and stands until
     the controller is back.
@@ -171,7 +171,7 @@ def reload(robot: Ros2Robot, way: Literal["configure", "load"], params: DrivePar
 # --- the manager's services ---------------------------------------------------------------
 
 
-def controller_state(robot: Ros2Robot, cm: str, name: str) -> str | None:
+def controller_state(robot: ReloadTarget, cm: str, name: str) -> str | None:
     """The controller's lifecycle state as the manager lists it (None: not loaded)."""
     from controller_manager_msgs.srv import ListControllers
 
@@ -182,7 +182,7 @@ def controller_state(robot: Ros2Robot, cm: str, name: str) -> str | None:
     return None
 
 
-def parameter_files(robot: Ros2Robot, cm: str, name: str) -> list[str]:
+def parameter_files(robot: ReloadTarget, cm: str, name: str) -> list[str]:
     """The manager's ``NAME.params_file``: the files the controller is loaded with."""
     from rcl_interfaces.srv import GetParameters
 
@@ -199,7 +199,7 @@ def parameter_files(robot: Ros2Robot, cm: str, name: str) -> list[str]:
     return []
 
 
-def _read_only(robot: Ros2Robot, node: str) -> bool:
+def _read_only(robot: ReloadTarget, node: str) -> bool:
     """Whether any of the controller's multipliers is declared read-only."""
     from rcl_interfaces.srv import DescribeParameters
 
@@ -209,7 +209,7 @@ def _read_only(robot: Ros2Robot, node: str) -> bool:
     return any(d.read_only for d in answer.descriptors)
 
 
-def _set_parameters(robot: Ros2Robot, node: str, values: list[Any]) -> list[str]:
+def _set_parameters(robot: ReloadTarget, node: str, values: list[Any]) -> list[str]:
     """Set parameters (rcl_interfaces Parameter messages); the reasons of any refused."""
     from rcl_interfaces.srv import SetParameters
 
@@ -220,7 +220,7 @@ def _set_parameters(robot: Ros2Robot, node: str, values: list[Any]) -> list[str]
             if not r.successful]  # fmt: skip
 
 
-def _set_multipliers(robot: Ros2Robot, node: str, params: DriveParams) -> None:
+def _set_multipliers(robot: ReloadTarget, node: str, params: DriveParams) -> None:
     from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 
     values = [
@@ -232,7 +232,7 @@ def _set_multipliers(robot: Ros2Robot, node: str, params: DriveParams) -> None:
         raise _stopped(robot, f"{node} refused the new multipliers ({'; '.join(refused)})")
 
 
-def _set_files(robot: Ros2Robot, cm: str, name: str, files: list[str]) -> None:
+def _set_files(robot: ReloadTarget, cm: str, name: str, files: list[str]) -> None:
     from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 
     value = ParameterValue(type=ParameterType.PARAMETER_STRING_ARRAY, string_array_value=files)
@@ -241,7 +241,7 @@ def _set_files(robot: Ros2Robot, cm: str, name: str, files: list[str]) -> None:
         raise _stopped(robot, f"{cm} refused {name}.params_file ({'; '.join(refused)})")
 
 
-def _switch(robot: Ros2Robot, cm: str, name: str, *, activate: bool) -> None:
+def _switch(robot: ReloadTarget, cm: str, name: str, *, activate: bool) -> None:
     from controller_manager_msgs.srv import SwitchController
 
     request = SwitchController.Request()
@@ -258,7 +258,7 @@ def _switch(robot: Ros2Robot, cm: str, name: str, *, activate: bool) -> None:
         raise _stopped(robot, f"{cm} refused to {verb} {name}{detail}")
 
 
-def _step(robot: Ros2Robot, cm: str, name: str, service: str) -> None:
+def _step(robot: ReloadTarget, cm: str, name: str, service: str) -> None:
     """``load_controller``, ``configure_controller`` or ``unload_controller``."""
     from controller_manager_msgs import srv
 
@@ -274,7 +274,7 @@ def _step(robot: Ros2Robot, cm: str, name: str, service: str) -> None:
         raise _stopped(robot, f"{cm} failed to {verb} {name} on the new multipliers")
 
 
-def _stopped(robot: Ros2Robot, what: str) -> SafetyError:
+def _stopped(robot: ReloadTarget, what: str) -> SafetyError:
     """The robot stopped; the line says what the controller is now and that nothing
     further is driven."""
     robot.send_velocity(0.0, 0.0)
