@@ -33,7 +33,7 @@ from umbmark.autocal.corner_beams import Beams, fit_corner_ranges
 from umbmark.autocal.corner_lidar import fix_from_scans
 from umbmark.autocal.corner_pieces import scan_beams
 from umbmark.autocal.corner_sensors import fix_from_ranges
-from umbmark.robot.base import LaserScan, Pose2D
+from umbmark.robot.base import Pose2D, ScanSweep
 from umbmark.robot.world import LCorner, Lidar, RangeSensors, World, box, corner_world, legs
 
 from _timing import best_of
@@ -200,7 +200,7 @@ def main() -> None:
         diff = float(np.max(np.abs(exact[hit] - ref[hit])))
         print(f"  largest range difference, loop vs vectorized: {diff:.1e} m")
 
-    scans: list[LaserScan] = []
+    scans: list[ScanSweep] = []
     for p in poses:
         scan = world.scan(p, 0.0, rng)
         assert scan is not None

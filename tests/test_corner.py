@@ -22,14 +22,14 @@ from umbmark.autocal.corner import (
 )
 from umbmark.autocal.corner_lidar import LidarCorner, find_corner, fix_from_scans
 from umbmark.core.errors import InputError
-from umbmark.robot.base import LaserScan, Pose2D
+from umbmark.robot.base import Pose2D, ScanSweep
 from umbmark.robot.world import LCorner, Lidar, World, box, chair, corner_world, legs
 
 SCANS = 5
 START = Pose2D(1.6, 1.3, 0.0)  # the start in the standard world's corner frame
 
 
-def _scans(world: World, pose: Pose2D, rng: np.random.Generator, n: int = SCANS) -> list[LaserScan]:
+def _scans(world: World, pose: Pose2D, rng: np.random.Generator, n: int = SCANS) -> list[ScanSweep]:
     out = []
     for k in range(n):
         scan = world.scan(pose, 0.1 * k, rng)

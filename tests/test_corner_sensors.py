@@ -22,7 +22,7 @@ from umbmark.autocal.corner_sensors import (
     fix_from_tape,
 )
 from umbmark.core.errors import InputError
-from umbmark.robot.base import Pose2D, RangeReading, Stamped
+from umbmark.robot.base import Pose2D, RangeReading, StampedPose
 from umbmark.robot.world import LCorner, MotionCapture, RangeSensors, World, corner_world
 
 READINGS = 5  # range readings the routine averages while the robot stands still
@@ -249,8 +249,8 @@ def test_ground_truth_in_the_corner_frame():
 
 def test_ground_truth_averages_poses_across_the_heading_seam():
     poses = [
-        Stamped(1.0, Pose2D(1.0, 2.0, math.pi - 0.01)),
-        Stamped(2.0, Pose2D(1.2, 2.2, -math.pi + 0.03)),
+        StampedPose(1.0, Pose2D(1.0, 2.0, math.pi - 0.01)),
+        StampedPose(2.0, Pose2D(1.2, 2.2, -math.pi + 0.03)),
     ]
     fix = fix_from_ground_truth(poses)
     assert (fix.pose.x, fix.pose.y) == pytest.approx((1.1, 2.1))

@@ -12,7 +12,7 @@ import pytest
 
 from umbmark.autocal.drive import DriveLimits, drive_square
 from umbmark.core.conventions import Direction
-from umbmark.robot.base import Stamped
+from umbmark.robot.base import StampedPose
 from umbmark.robot.virtual import VirtualRobot
 
 
@@ -24,7 +24,7 @@ class LateRobot(VirtualRobot):
         super().__init__(E_d=1.004, E_b=0.97, slip=0.0, seed=1)
         self.delay, self.odom_delay = delay, odom_delay
         self.queue: deque[tuple[float, float]] = deque()
-        self.odom_queue: deque[Stamped] = deque(maxlen=odom_delay + 1)
+        self.odom_queue: deque[StampedPose] = deque(maxlen=odom_delay + 1)
 
     def send_velocity(self, linear: float, angular: float) -> None:
         self.queue.append((linear, angular))
@@ -38,7 +38,7 @@ class LateRobot(VirtualRobot):
             self._step()
             self.odom_queue.append(super().odometry())
 
-    def odometry(self) -> Stamped:
+    def odometry(self) -> StampedPose:
         return self.odom_queue[0] if self.odom_queue else super().odometry()
 
 

@@ -46,11 +46,11 @@ from umbmark.robot.base import (
     ApplyMethod,
     ApplyResult,
     DriveParams,
-    LaserScan,
     Pose2D,
     RangeReading,
     Robot,
-    Stamped,
+    ScanSweep,
+    StampedPose,
 )
 from umbmark.scans.intervals import IntervalOptions, IntervalReport, OdometryGuess, match_intervals
 
@@ -159,7 +159,7 @@ class Recorder:
         self.scan_period = scan_period
         self.odometry_samples: list[tuple[float, float, float, float]] = []
         self.wheel_samples: list[tuple[float, float, float]] = []
-        self.scans: list[LaserScan] = []
+        self.scans: list[ScanSweep] = []
         self._angles: Callable[[], tuple[float, float, float] | None] | None = getattr(
             robot, "wheel_angles", None
         )
@@ -196,16 +196,16 @@ class Recorder:
     def send_velocity(self, linear: float, angular: float) -> None:
         self.robot.send_velocity(linear, angular)
 
-    def odometry(self) -> Stamped | None:
+    def odometry(self) -> StampedPose | None:
         return self.robot.odometry()
 
-    def scan(self) -> LaserScan | None:
+    def scan(self) -> ScanSweep | None:
         return self.robot.scan()
 
     def ranges(self) -> RangeReading | None:
         return self.robot.ranges()
 
-    def ground_truth(self) -> Stamped | None:
+    def ground_truth(self) -> StampedPose | None:
         return self.robot.ground_truth()
 
     def drive_params(self) -> DriveParams:
@@ -239,11 +239,11 @@ class PatternRecording:
     wheels: WheelSeries
     params: DriveParams
     mount: Pose2D
-    start: Stamped
-    end: Stamped
+    start: StampedPose
+    end: StampedPose
 
 
-def check_scene(robot: Robot, limits: DriveLimits | None = None) -> LaserScan:
+def check_scene(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep:
     """Refuse, before anything moves, a robot without a laser, a scene where two sweeps
     taken standing still do not match as a scene with structure (open space, a corridor:
     the routine needs walls or furniture in view in more than one direction), or
@@ -286,7 +286,7 @@ def check_scene(robot: Robot, limits: DriveLimits | None = None) -> LaserScan:
     return first
 
 
-def _free_floor(scan: LaserScan) -> None:
+def _free_floor(scan: ScanSweep) -> None:
     """Refuse a return of the laser on the pattern's floor: within :data:`PATTERN_REACH`
     plus the robot's body (:data:`umbmark.autocal.preflight.ROBOT_RADIUS`) of its centre."""
     from umbmark.autocal.preflight import ROBOT_RADIUS
@@ -308,7 +308,7 @@ def _free_floor(scan: LaserScan) -> None:
         )
 
 
-def _series(scans: list[LaserScan], source: str = "") -> ScanSeries:
+def _series(scans: list[ScanSweep], source: str = "") -> ScanSeries:
     """Sweeps of one laser as a :class:`ScanSeries` (the same beams and mounting; a
     repeated stamp is dropped)."""
     first = scans[0]
@@ -380,7 +380,7 @@ def drive_pattern(
 
 
 def _recording(
-    recorder: Recorder, params: DriveParams, start: Stamped, end: Stamped
+    recorder: Recorder, params: DriveParams, start: StampedPose, end: StampedPose
 ) -> PatternRecording:
     """The recorder's samples as scans and wheels."""
     if len(recorder.scans) < 10:

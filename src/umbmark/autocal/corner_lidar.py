@@ -36,7 +36,7 @@ from umbmark.autocal.corner import CornerFit, CornerFix, CornerNotFoundError, fi
 from umbmark.autocal.corner_beams import Beams, fit_corner_ranges, wall_angle
 from umbmark.autocal.corner_pieces import Piece, pieces
 from umbmark.core.conventions import wrap_angle
-from umbmark.robot.base import LaserScan, Pose2D
+from umbmark.robot.base import Pose2D, ScanSweep
 
 __all__ = ["LidarCorner", "find_corner", "fix_from_scans"]
 
@@ -108,7 +108,7 @@ class _Found:
     time: float
 
 
-def _walls(scan: LaserScan, config: LidarCorner) -> tuple[Beams, list[Piece], list[Piece]]:
+def _walls(scan: ScanSweep, config: LidarCorner) -> tuple[Beams, list[Piece], list[Piece]]:
     """The scan's returns, its straight pieces and the walls among them."""
     valid = np.isfinite(scan.ranges) & (scan.ranges >= scan.range_min)
     count = int(np.count_nonzero(valid & (scan.ranges <= scan.range_max)))
@@ -155,7 +155,7 @@ def _describe(pose: Pose2D) -> str:
 
 
 def find_corner(
-    scan: LaserScan, prior: Pose2D | None = None, config: LidarCorner | None = None
+    scan: ScanSweep, prior: Pose2D | None = None, config: LidarCorner | None = None
 ) -> tuple[Pose2D, float, float]:
     """Find the L-shaped corner in one scan: the robot's pose in the corner frame (a
     first estimate, from this scan's wall pieces) and how far the x and y walls reach
@@ -172,7 +172,7 @@ def find_corner(
     return c.fit.pose, c.x_reach, c.y_reach
 
 
-def _find(scan: LaserScan, prior: Pose2D | None, config: LidarCorner) -> _Found:
+def _find(scan: ScanSweep, prior: Pose2D | None, config: LidarCorner) -> _Found:
     beams, all_pieces, walls = _walls(scan, config)
     found = _candidates(walls, config)
     if not found:
@@ -263,7 +263,7 @@ def _select(
 
 
 def fix_from_scans(
-    scans: Sequence[LaserScan],
+    scans: Sequence[ScanSweep],
     prior: Pose2D | None = None,
     config: LidarCorner | None = None,
 ) -> CornerFix:

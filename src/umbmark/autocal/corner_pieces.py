@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from umbmark.autocal.corner import line_direction
 from umbmark.autocal.corner_beams import Beams
 from umbmark.core.arrays import FloatArray
-from umbmark.robot.base import LaserScan
+from umbmark.robot.base import ScanSweep
 
 __all__ = ["Piece", "pieces", "scan_beams", "scan_points"]
 
@@ -59,7 +59,7 @@ class Piece:
     length: float
 
 
-def scan_beams(scan: LaserScan) -> Beams:
+def scan_beams(scan: ScanSweep) -> Beams:
     """The scan's valid returns as beams in the robot's base frame, in beam order
     (through the laser's mounting ``scan.mount``)."""
     r = np.asarray(scan.ranges, dtype=np.float64)
@@ -71,7 +71,7 @@ def scan_beams(scan: LaserScan) -> Beams:
     return Beams(origins, directions, r[ok])
 
 
-def scan_points(scan: LaserScan) -> FloatArray:
+def scan_points(scan: ScanSweep) -> FloatArray:
     """The scan's valid returns as points in the robot's base frame, shape (n, 2), in
     beam order."""
     return scan_beams(scan).points
@@ -106,7 +106,7 @@ def _join(p: Piece, q: Piece, points: FloatArray) -> Piece:
     return _piece(np.union1d(p.index, q.index), points, np.union1d(p.core, q.core))
 
 
-def _clusters(points: FloatArray, scan: LaserScan, jump: float) -> list[IndexArray]:
+def _clusters(points: FloatArray, scan: ScanSweep, jump: float) -> list[IndexArray]:
     """Runs of neighbouring returns, as indices."""
     n = len(points)
     if n < 2:
@@ -167,7 +167,7 @@ def _mergeable(p: Piece, q: Piece, split_distance: float, max_gap: float) -> boo
 
 
 def pieces(
-    scan: LaserScan, split_distance: float, jump: float, max_gap: float
+    scan: ScanSweep, split_distance: float, jump: float, max_gap: float
 ) -> tuple[Beams, list[Piece]]:
     """The scan's valid returns and its straight pieces of at least five returns."""
     beams = scan_beams(scan)

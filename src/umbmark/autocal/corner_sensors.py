@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from umbmark.autocal.corner import CornerFix, CornerNotFoundError, fit_corner
 from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError
-from umbmark.robot.base import Pose2D, RangeReading, Stamped
+from umbmark.robot.base import Pose2D, RangeReading, StampedPose
 
 __all__ = [
     "TapeMarks",
@@ -326,7 +326,7 @@ def ask_tape(
 
 
 def fix_from_ground_truth(
-    poses: Stamped | Sequence[Stamped],
+    poses: StampedPose | Sequence[StampedPose],
     *,
     corner: Pose2D | None = None,
     sigma_xy: float = 0.0005,
@@ -337,7 +337,7 @@ def fix_from_ground_truth(
     in the capture's frame) is given, else in the capture's own frame (all the routine
     needs: :func:`~umbmark.autocal.corner.relative_motion` drops the frame out).
     ``sigma_xy`` [m] and ``sigma_theta`` [rad] are the system's accuracy."""
-    stamped = [poses] if isinstance(poses, Stamped) else list(poses)
+    stamped = [poses] if isinstance(poses, StampedPose) else list(poses)
     if not stamped:
         raise CornerNotFoundError("missing_echo", "no ground-truth pose to take the fix from")
     ref = stamped[0].pose.theta

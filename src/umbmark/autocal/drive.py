@@ -36,8 +36,8 @@ import numpy as np
 
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import InputError, SafetyError
-from umbmark.options.spec import OBSTACLE_MARGIN_RANGE, STOP_LATENCY
-from umbmark.robot.base import LaserScan, Pose2D, Robot, Stamped
+from umbmark.options.selfcal import OBSTACLE_MARGIN_RANGE, STOP_LATENCY
+from umbmark.robot.base import Pose2D, Robot, ScanSweep, StampedPose
 
 __all__ = [
     "DriveLimits",
@@ -198,8 +198,8 @@ class DrivenRun:
     """
 
     direction: Direction
-    start: Stamped
-    end: Stamped
+    start: StampedPose
+    end: StampedPose
     commanded_end: Pose2D
     odometry: np.ndarray
 
@@ -417,7 +417,7 @@ class _Driver:
             self.command(0.0, math.copysign(rate, error))
         self.command(0.0, 0.0)
 
-    def settle(self) -> Stamped:
+    def settle(self) -> StampedPose:
         """Wait until the odometry has been still for ``settle_time`` and for half the
         readings that takes (a loop stalled on a busy machine reads too few to show the
         stand the run log needs); the settled pose."""
@@ -456,7 +456,7 @@ class _Driver:
 Driver = _Driver
 
 
-def obstacle_ahead(scan: LaserScan, half_angle: float, backward: bool = False) -> float:
+def obstacle_ahead(scan: ScanSweep, half_angle: float, backward: bool = False) -> float:
     """The nearest return [m] within ``half_angle`` of the robot's forward direction (or
     its backward one) from the robot's centre, the laser's mounting taken into account;
     inf if none."""
@@ -541,7 +541,7 @@ def drive_square(
     )
 
 
-def settle(robot: Robot, limits: DriveLimits | None = None) -> Stamped:
+def settle(robot: Robot, limits: DriveLimits | None = None) -> StampedPose:
     """Stop and wait until the odometry has been still for ``settle_time``."""
     limits = limits or DriveLimits()
     driver = _Driver(robot, 0.0, Direction.CCW, limits)
@@ -553,7 +553,7 @@ def settle(robot: Robot, limits: DriveLimits | None = None) -> Stamped:
         raise
 
 
-def move_to(robot: Robot, target: Pose2D, limits: DriveLimits | None = None) -> Stamped:
+def move_to(robot: Robot, target: Pose2D, limits: DriveLimits | None = None) -> StampedPose:
     """Drive by the odometry to ``target`` (a pose relative to the robot now): turn to
     face it, drive there, turn to its heading, settle. For short moves, such as back to
     the start between runs (within ``margin`` of the straight line, safety stops as for a

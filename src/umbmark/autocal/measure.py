@@ -24,7 +24,7 @@ from umbmark.autocal.corner_sensors import (
     fix_from_tape,
 )
 from umbmark.core.errors import InputError
-from umbmark.robot.base import LaserScan, Pose2D, RangeReading, Robot, Stamped
+from umbmark.robot.base import Pose2D, RangeReading, Robot, ScanSweep, StampedPose
 
 __all__ = [
     "CORNER_SIDES",
@@ -132,7 +132,7 @@ def take_fix(
     if how.method == "lidar":
         scans = _collect(robot, robot.scan, "laser scan", n)
         config = LidarCorner(prior_distance=gate[0], prior_angle=gate[1])
-        return fix_from_scans([s for s in scans if isinstance(s, LaserScan)], prior, config)
+        return fix_from_scans([s for s in scans if isinstance(s, ScanSweep)], prior, config)
     if how.method == "ranges":
         readings = _collect(robot, robot.ranges, "range-sensor reading", n)
         return fix_from_ranges(
@@ -144,7 +144,7 @@ def take_fix(
         )
     if how.method == "truth":
         poses = _collect(robot, robot.ground_truth, "ground-truth pose", n)
-        return fix_from_ground_truth([p for p in poses if isinstance(p, Stamped)])
+        return fix_from_ground_truth([p for p in poses if isinstance(p, StampedPose)])
     if how.ask is None or how.marks is None:
         raise CornerNotFoundError("missing_echo", "a tape fix needs a person to ask and marks")
     marks = replace(how.marks, faces=FACES[how.side])

@@ -14,7 +14,8 @@ import click
 
 from umbmark.cli.options import Command, apply, force_option, option, spec_option
 from umbmark.core.errors import InputError, SafetyError
-from umbmark.options.spec import CORNER_SIDE, DRIVING, OBSTACLE_MARGIN, OUTPUTS, ROUTINE, TEST
+from umbmark.options.selfcal import CORNER_SIDE, DRIVING, OBSTACLE_MARGIN, ROUTINE
+from umbmark.options.spec import OUTPUTS, TEST
 
 if TYPE_CHECKING:
     from umbmark.autocal.watch import Progress, RunsLeft, Stopped

@@ -31,7 +31,7 @@ import contextlib
 import os
 import tempfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -48,24 +48,21 @@ from umbmark.autocal.measure import (
     marks_for,
     take_fix,
 )
-from umbmark.autocal.passes import Home, corner_truth, drive_pass, strays
+from umbmark.autocal.outputs import check_outputs, write_outputs
+from umbmark.autocal.passes import Home, corner_truth
 from umbmark.autocal.preflight import preflight
 from umbmark.autocal.record import (
-    OVERLAY_FILE,
-    REPORT_FILE,
-    MeasuredRun,
     clear_selfcal,
-    pass_folder,
-    record_pass,
 )
 from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, write_state
 from umbmark.autocal.watch import Progress, RunsLeft, Stopped, Watch, mark_stopped
 from umbmark.calibration.passes import Holds
-from umbmark.core.conventions import Direction, wrap_angle
+from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.jobs.selfcal_anywhere import AnywhereReport, selfcal_anywhere, square_only
+from umbmark.jobs.selfcal_passes import PassDriver, apply_pass, holds_of, resumed_passes
 from umbmark.jobs.selfcal_report import PassResult, SelfCalReport
-from umbmark.options.spec import ROUTINE
+from umbmark.options.selfcal import ROUTINE
 from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DriveParams, Robot
 
 if TYPE_CHECKING:
@@ -79,13 +76,22 @@ MAX_SELFCAL_PASSES = 5
 MAX_SELFCAL_RUNS = 20
 
 
-def _check_counts(side_length: float, runs: int, max_passes: int) -> None:
+#: The square routine's options as not given: ``--routine anywhere`` refuses any other.
+_SQUARE_DEFAULTS: dict[str, object] = {
+    "side_length": 4.0, "runs": 5, "measure": "lidar", "max_passes": 3, "report": None,
+    "resume": None, "tape_marks": None, "corner_side": "right",
+}  # fmt: skip
+
+
+def _check_counts(side_length: float, runs: int, max_passes: int, measure: str) -> None:
     if not (0.5 <= side_length <= 20.0):
         raise InputError(f"--side-length {side_length!r} m: give 0.5 to 20 m")
     if not (2 <= runs <= MAX_SELFCAL_RUNS):
         raise InputError(f"--runs {runs!r}: give 2 to {MAX_SELFCAL_RUNS} per direction")
     if not (1 <= max_passes <= MAX_SELFCAL_PASSES):
         raise InputError(f"--max-passes {max_passes!r}: give 1 to {MAX_SELFCAL_PASSES}")
+    if measure not in MEASURE_METHODS:
+        raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
 
 
 def selfcal(
@@ -135,11 +141,9 @@ def selfcal(
     robot_name, history : optional
         Record every pass in the robot's history (SQLite) and mark the applied ones.
     out : path, optional
-        Folder for the passes' run logs, the report and the overlay; a new or empty one, or
-        (``force``) one holding an earlier self-calibration, which is replaced whole.
-        Without it nothing is written (the run logs go to a temporary folder, removed at
-        the end) and the report is the returned value; ``umbmark selfcal`` writes into
-        ``selfcal-<robot>`` (:func:`default_folder`).
+        Folder for the passes' run logs, the report and the overlay: new, empty, or
+        (``force``) an earlier self-calibration's, replaced whole. Without it nothing is
+        written (run logs in a temporary folder) [``umbmark selfcal``: :func:`default_folder`].
     report : path, optional
         The HTML page of all passes [default: ``report.html`` in ``out``; none without
         ``out``].
@@ -148,9 +152,8 @@ def selfcal(
     ask : callable, optional
         For ``tape``: shows a prompt, returns the person's answer.
     tape_marks : six floats, optional
-        For ``tape``: ``x1, y1, x2, y2, x3, y3`` [m], the marks on the robot (its base
-        frame) the distances are measured from, the first two to the wall behind the
-        start, the third to the side wall [default: the robot's ``tape_marks()``].
+        For ``tape``: ``x1, y1, x2, y2, x3, y3`` [m] on the robot, measured from (two to
+        the wall behind, one to the side wall) [default: the robot's ``tape_marks()``].
     coarse : bool
         Check first that the robot turns as its odometry believes (lidar or truth).
     force : bool
@@ -160,9 +163,8 @@ def selfcal(
         settings (the ones given here are not used), once the controller holds the
         parameters it stopped on (:mod:`umbmark.autocal.resume`).
     notify : callable, optional
-        Lines for a person, as they happen: each check before moving, the coarse check,
-        each run's return error, each pass's result (the robot cannot take parameters
-        live, ...).
+        Lines for a person, as they happen: each check, the coarse check, each run's
+        return error, each pass's result.
     corner_side : {"right", "left"}
         Where the corner stands seen from the start: behind it and to its right or left
         (which wall each range sensor or tape mark faces; the first fix must find it
@@ -179,40 +181,65 @@ def selfcal(
         Bad options, or a check before moving failed (with the cause).
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
-
-    Every exception is raised after a zero velocity was sent; one raised once the checks
-    and the first fix passed (and a ``KeyboardInterrupt`` or ``SafetyError`` at any time)
-    carries what the controller holds and which passes are on disk
-    (:func:`umbmark.autocal.watch.stopped`).
+        Every exception comes after a zero velocity; one raised once the robot moved
+        carries what the controller holds (:func:`umbmark.autocal.watch.stopped`).
     """
     ROUTINE.check(routine)
+    given = locals()
     if routine == "anywhere":
-        square_only(
-            side_length=side_length != 4.0, runs=runs != 5, measure=measure != "lidar",
-            max_passes=max_passes != 3, report=report is not None, resume=resume is not None,
-            tape_marks=tape_marks is not None, corner_side=corner_side != "right",
-        )  # fmt: skip
+        square_only(**{k: given[k] != v for k, v in _SQUARE_DEFAULTS.items()})
         return selfcal_anywhere(
             robot, apply=_apply_method(apply), verify=verify, robot_name=robot_name,
             history=history, out=out, progress=progress, limits=limits, force=force,
         )  # fmt: skip
+    return _squares(robot, _Squares(**{f.name: given[f.name] for f in fields(_Squares)}))
+
+
+@dataclass(frozen=True)
+class _Squares:
+    """The square routine's settings, as :func:`selfcal` was given them."""
+
+    side_length: float
+    runs: int
+    measure: MeasureMethod
+    apply: bool | ApplyMethod
+    verify: bool
+    max_passes: int
+    robot_name: str | None
+    history: str | os.PathLike[str] | None
+    out: str | os.PathLike[str] | None
+    report: str | os.PathLike[str] | None
+    progress: Progress | None
+    limits: DriveLimits | None
+    ask: Callable[[str], str] | None
+    tape_marks: Sequence[float] | None
+    coarse: bool
+    force: bool
+    resume: str | os.PathLike[str] | None
+    notify: Callable[[str], None] | None
+    runs_left: Callable[[RunsLeft], None] | None
+    corner_side: CornerSide
+
+
+def _squares(robot: Robot, g: _Squares) -> SelfCalReport:
+    """The UMBmark routine (:func:`selfcal`'s steps 1 to 8) with the settings given."""
     state = None
-    if resume is not None:
-        state = read_state(Path(resume))
+    if g.resume is not None:  # the settings it stopped with
+        state = read_state(Path(g.resume))
         s = state.settings
-        side_length, runs, measure = s["side_length"], s["runs"], s["measure"]
-        max_passes, verify, out, coarse = s["max_passes"], s["verify"], resume, False
-        corner_side = s.get("corner_side", "right")
-    _check_counts(side_length, runs, max_passes)
-    if measure not in MEASURE_METHODS:
-        raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
-    method = _apply_method(apply)
-    limits = limits or DriveLimits()
-    marks = marks_for(robot, tape_marks) if measure == "tape" else None
-    how = Measure(measure, ask=ask, marks=marks, side=corner_side)
-    name = robot_name or robot.name
-    folder = None if out is None else Path(out)
-    page = None if report is None else Path(report)
+        g = replace(
+            g, side_length=s["side_length"], runs=s["runs"], measure=s["measure"],
+            max_passes=s["max_passes"], verify=s["verify"], out=g.resume, coarse=False,
+            corner_side=s.get("corner_side", "right"),
+        )  # fmt: skip
+    _check_counts(g.side_length, g.runs, g.max_passes, g.measure)
+    method = _apply_method(g.apply)
+    limits = g.limits or DriveLimits()
+    marks = marks_for(robot, g.tape_marks) if g.measure == "tape" else None
+    how = Measure(g.measure, ask=g.ask, marks=marks, side=g.corner_side)
+    name = g.robot_name or robot.name
+    folder = None if g.out is None else Path(g.out)
+    page = None if g.report is None else Path(g.report)
     can_apply = getattr(robot, "can_apply", None)
     restart_note = can_apply() if callable(can_apply) and method != "none" else None
     if restart_note is not None and folder is None:
@@ -225,38 +252,52 @@ def selfcal(
         problem = pending_problem(robot.drive_params(), state.pending)
         if problem is not None:
             raise InputError(f"{problem} ({folder / 'overlay.yaml'})")
-        prior = _resumed(folder, state)
-        _check_outputs(None, page, force)  # the folder's own page and overlay are replaced
+        prior = resumed_passes(folder, state)
+        check_outputs(None, page, g.force)  # the folder's own page and overlay are replaced
     else:
-        _check_outputs(folder, page, force)  # before anything moves
+        check_outputs(folder, page, g.force)  # before anything moves
     kept = contextlib.nullcontext(str(folder))
     with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
-        drive = _Passes(
-            robot, how, Path(logs), side_length, runs, limits, name,
-            Watch(progress, notify, runs_left, runs), record_as=robot_name, history=history,
-            kept=folder is not None,
+        drive = PassDriver(
+            robot, how, Path(logs), g.side_length, g.runs, limits, name,
+            Watch(g.progress, g.notify, g.runs_left, g.runs), record_as=g.robot_name,
+            history=g.history, kept=folder is not None,
         )  # fmt: skip
         found = _calibrate(
-            drive, method, verify, max_passes, coarse,
-            folder if force and state is None else None,
-            _Restart(restart_note, notify, prior),
+            drive, method, g.verify, g.max_passes, g.coarse,
+            folder if g.force and state is None else None,
+            _Restart(restart_note, g.notify, prior),
         )  # fmt: skip
         final = robot.drive_params()
-        holds = _holds(found.passes, final)
-        files = _outputs(found.passes, holds, folder, page, force or state is not None)
+        holds = holds_of(found.passes, final)
+        files = write_outputs(
+            [p.folder for p in found.passes if p.folder is not None],
+            None if holds.held is None else found.passes[holds.held - 1].report,
+            holds, folder, page, g.force or state is not None,
+        )  # fmt: skip
         restart = None
         if found.pending is not None and folder is not None:
+            settings = locals_settings(g.side_length, g.runs, g.measure, g.max_passes, g.verify)
             restart, more = _stop_for_restart(
-                robot,
-                folder,
-                found.passes,
-                found.pending,
-                {
-                    **locals_settings(side_length, runs, measure, max_passes, verify),
-                    "corner_side": corner_side,
-                },
-            )
+                robot, folder, found.passes, found.pending,
+                {**settings, "corner_side": g.corner_side},
+            )  # fmt: skip
             files.extend(more)
+    return _report(name, g.side_length, g.measure, found, final, holds, files, restart, folder)
+
+
+def _report(
+    name: str,
+    side_length: float,
+    measure: MeasureMethod,
+    found: _Found,
+    final: DriveParams,
+    holds: Holds,
+    files: list[Path],
+    restart: str | None,
+    folder: Path | None,
+) -> SelfCalReport:
+    """What the routine found, its passes without their folders when it kept none."""
     passes = found.passes if folder is not None else [replace(p, folder=None) for p in found.passes]
     errors = [
         (
@@ -289,27 +330,6 @@ def default_folder(robot: str) -> Path:
     return Path(f"selfcal-{_slug(robot)}")
 
 
-def _check_outputs(folder: Path | None, page: Path | None, force: bool) -> None:
-    """Refuse, before the robot moves, a folder holding anything but an earlier
-    self-calibration (and, without ``force``, anything at all), or a page that exists."""
-    from umbmark.outputs.files import OutputPlan
-
-    if folder is not None:
-        OutputPlan.of(logs=folder, force=True)  # a folder, or one that can be made
-        clear_selfcal(folder, remove=False)  # nothing but an earlier self-calibration
-        if not force and folder.is_dir() and any(folder.iterdir()):
-            raise InputError(
-                "holds an earlier self-calibration: choose a new or empty folder, leave "
-                "--out out (umbmark selfcal then makes selfcal-ROBOT-2, ...), or pass "
-                "--force to replace it",
-                source=folder,
-                python="holds an earlier self-calibration: choose a new or empty folder, "
-                "or pass force=True to replace it",
-            )
-    if page is not None and (folder is None or page.parent.resolve() != folder.resolve()):
-        OutputPlan.of(report=page, force=force)
-
-
 @dataclass(frozen=True)
 class _Restart:
     """A robot that takes new parameters only on a controller restart: the note said
@@ -335,7 +355,7 @@ class _Found:
 
 
 def _calibrate(
-    drive: _Passes,
+    drive: PassDriver,
     method: ApplyMethod,
     verify: bool,
     max_passes: int,
@@ -393,7 +413,7 @@ def _calibrate(
             if pending is not None:
                 break
             watch.begin_pass(max_passes - k + 1 + int(verify))
-            result, new = _apply(robot, drive(f"pass {k}", home), method)
+            result, new = apply_pass(robot, drive(f"pass {k}", home), method)
             passes.append(result)
             watch.say(result.summary())
             drive.mark_applied(result)
@@ -419,7 +439,7 @@ def _calibrate(
     return _Found(checks, home, coarse_check, coarse_applied, passes, pending)
 
 
-def _stopped(robot: Robot, passes: list[PassResult], drive: _Passes) -> Stopped:
+def _stopped(robot: Robot, passes: list[PassResult], drive: PassDriver) -> Stopped:
     """What a routine stopped mid-way leaves: what the controller holds (known from the
     passes, asked of the controller only before the first ended), the passes kept."""
     applied = [p for p in passes if p.applied is not None and p.applied.active]
@@ -434,7 +454,7 @@ def _stopped(robot: Robot, passes: list[PassResult], drive: _Passes) -> Stopped:
             )
         else:
             params = passes[-1].params if passes else robot.drive_params()
-        holds = _holds(passes, params).words()
+        holds = holds_of(passes, params).words()
     except Exception as exc:  # a robot gone with the stop: say so, keep the stop's cause
         holds = f"what the controller holds could not be read ({exc})"
     return Stopped(holds, tuple(p.label for p in passes), drive.folder if drive.kept else None)
@@ -480,118 +500,6 @@ def _stop_for_restart(
         f"; then: umbmark selfcal --resume {folder} (with the same robot options)"
     )
     return text, [overlay, path]
-
-
-def _resumed(folder: Path, state: SelfCalState) -> list[PassResult]:
-    """The passes a stopped self-calibration drove, their parameters now applied."""
-    from umbmark.jobs.calibrate import calibrate
-
-    out = []
-    for label, where, params in state.passes:
-        report = calibrate(folder / where)
-        out.append(PassResult(label, folder / where, report, params))
-    if out:
-        out[-1] = replace(
-            out[-1], applied=ApplyResult("yaml", True, "applied by the controller's restart")
-        )
-    return out
-
-
-@dataclass(frozen=True)
-class _Passes:
-    """Drives, records and calibrates one pass at a time."""
-
-    robot: Robot
-    how: Measure
-    folder: Path
-    side: float
-    runs: int
-    limits: DriveLimits
-    name: str
-    watch: Watch
-    record_as: str | None = None
-    history: str | os.PathLike[str] | None = None
-    kept: bool = True
-
-    def __call__(self, label: str, home: Home) -> PassResult:
-        from umbmark.jobs.calibrate import calibrate
-
-        params = self.robot.drive_params()
-
-        def said(k: int, direction: Direction, what: str) -> None:
-            self.watch.status(label, k, direction, what)
-
-        def ran(k: int, direction: Direction, run: MeasuredRun) -> None:
-            self.watch.run_measured(label, k, direction, run.start.pose, run.end.pose)
-
-        measured = drive_pass(
-            self.robot, self.how, self.side, self.runs, home, self.limits, said, ran
-        )
-        where = pass_folder(self.folder, label)
-        record_pass(where, measured, params, self.side, self.how.method, self.name)
-        report = calibrate(where, robot=self.record_as, history=self.history)
-        return PassResult(label, where, report, params, warnings=strays(measured, self.limits))
-
-    def mark_applied(self, result: PassResult) -> None:
-        """Mark the pass's calibration applied in the history (it was recorded last)."""
-        if self.record_as is None or result.applied is None or not result.applied.active:
-            return
-        from umbmark.store.history import History
-
-        store = History(self.history)
-        (last,) = store.calibrations(self.record_as)[-1:]
-        store.mark_applied(self.record_as, last.id)
-
-
-def _apply(robot: Robot, result: PassResult, method: ApplyMethod) -> tuple[PassResult, DriveParams]:
-    """Apply the pass's correction, composed with its active parameters, unless the
-    verdict says not to or ``method`` is ``none``; the corrected parameters."""
-    if method == "none" or not result.report.verdict.applies:
-        return result, result.params
-    calibration = result.report.calibration
-    new = replace(
-        result.params,
-        wheel_separation_multiplier=calibration.new_separation_multiplier,
-        left_wheel_radius_multiplier=calibration.new_c_left,
-        right_wheel_radius_multiplier=calibration.new_c_right,
-    )
-    return replace(result, applied=robot.apply(new, method)), new
-
-
-def _holds(passes: list[PassResult], final: DriveParams) -> Holds:
-    """What the controller holds: the last pass applied (passes are applied in order until
-    one is not) and the multipliers the controller reports."""
-    applied = [k for k, p in enumerate(passes, 1) if p.applied is not None and p.applied.active]
-    return Holds(
-        labels=tuple(p.label for p in passes),
-        held=applied[-1] if applied else None,
-        separation_multiplier=final.wheel_separation_multiplier,
-        c_left=final.left_wheel_radius_multiplier,
-        c_right=final.right_wheel_radius_multiplier,
-    )
-
-
-def _outputs(
-    passes: list[PassResult], holds: Holds, folder: Path | None, page: Path | None, force: bool
-) -> list[Path]:
-    """The report of all passes [``folder/report.html``] and, in ``folder``, the overlay of
-    the parameters the controller holds; checked before the robot moved
-    (:func:`_check_outputs`)."""
-    from umbmark.jobs.report import report
-
-    written: list[Path] = []
-    if not passes:
-        return written
-    page = page or (None if folder is None else folder / REPORT_FILE)
-    if page is not None:
-        pages = report(*(p.folder for p in passes if p.folder is not None))
-        replace(pages, holds=holds).write(page, force=force)
-        written.append(page)
-    if holds.held is not None and folder is not None:
-        overlay = folder / OVERLAY_FILE
-        passes[holds.held - 1].report.write(yaml=overlay, force=force)
-        written.append(overlay)
-    return written
 
 
 def _slug(name: str) -> str:

@@ -43,7 +43,7 @@ from umbmark.core.jsontext import JsonText
 from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
 
 if TYPE_CHECKING:
-    from umbmark.jobs.calibrate import CalibrationReport
+    from umbmark.calibration.result import CalibrationResult
 
 __all__ = ["AnywherePass", "AnywhereReport", "selfcal_anywhere", "square_only"]
 
@@ -66,7 +66,7 @@ class AnywherePass:
         ``pass 1`` or ``verification``.
     folder : Path or None
         Where its intervals were written (None: not kept).
-    report : CalibrationReport
+    report : CalibrationResult
         Its calibration (scan-matching, composed with ``params``).
     params : DriveParams
         The parameters the controller ran with during the drive.
@@ -78,7 +78,7 @@ class AnywherePass:
 
     label: str
     folder: Path | None
-    report: CalibrationReport
+    report: CalibrationResult
     params: DriveParams
     matched: str
     applied: ApplyResult | None = None
@@ -204,9 +204,9 @@ def selfcal_anywhere(
     if folder is not None:
         files += [p.folder / INTERVALS_FILE for p in passes if p.folder is not None]
         if first.applied is not None:  # applied, or waiting for a controller restart
-            overlay = folder / OVERLAY_FILE
-            first.report.write(yaml=overlay, force=force)
-            files.append(overlay)
+            from umbmark.outputs.passes_page import write_overlay
+
+            files.append(write_overlay(first.report, folder / OVERLAY_FILE, force=force))
     else:
         first = replace(first, folder=None)
         verification = None if verification is None else replace(verification, folder=None)
@@ -251,8 +251,8 @@ class _Pass:
     force: bool
 
     def __call__(self, label: str) -> AnywherePass:
-        from umbmark.jobs.calibrate import calibrate
         from umbmark.sources.tuples import write_tuples
+        from umbmark.store.calibrations import calibrate_recorded
 
         def said(k: int, what: str) -> None:
             if self.progress is not None:
@@ -264,14 +264,16 @@ class _Pass:
         where.mkdir(parents=True, exist_ok=True)
         path = write_tuples(where / INTERVALS_FILE, matched.intervals, force=self.force)
         p = recording.params
-        report = calibrate(
-            path,
+        report = calibrate_recorded(
+            [path],
+            {
+                "wheel_diameter": 2.0 * p.wheel_radius,
+                "current_c_l": p.left_wheel_radius_multiplier,
+                "current_c_r": p.right_wheel_radius_multiplier,
+                "current_separation_multiplier": p.wheel_separation_multiplier,
+            },
             method="scan-matching",
             wheelbase=p.wheel_separation,
-            wheel_diameter=2.0 * p.wheel_radius,
-            current_c_l=p.left_wheel_radius_multiplier,
-            current_c_r=p.right_wheel_radius_multiplier,
-            current_separation_multiplier=p.wheel_separation_multiplier,
             robot=self.record_as,
             history=self.history,
         )

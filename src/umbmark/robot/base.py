@@ -20,11 +20,11 @@ __all__ = [
     "APPLY_METHODS",
     "ApplyResult",
     "DriveParams",
-    "LaserScan",
     "Pose2D",
     "RangeReading",
     "Robot",
-    "Stamped",
+    "ScanSweep",
+    "StampedPose",
 ]
 
 
@@ -56,7 +56,7 @@ class Pose2D:
 
 
 @dataclass(frozen=True)
-class Stamped:
+class StampedPose:
     """A pose at a time of the robot's clock [s]."""
 
     time: float
@@ -64,7 +64,7 @@ class Stamped:
 
 
 @dataclass(frozen=True)
-class LaserScan:
+class ScanSweep:
     """One sweep of a planar laser scanner (``sensor_msgs/LaserScan``).
 
     Attributes
@@ -176,11 +176,11 @@ class Robot(Protocol):
         """Command a body velocity: ``linear`` [m/s] forward, ``angular`` [rad/s] ccw."""
         ...
 
-    def odometry(self) -> Stamped | None:
+    def odometry(self) -> StampedPose | None:
         """The latest odometry pose (frame ``odom``)."""
         ...
 
-    def scan(self) -> LaserScan | None:
+    def scan(self) -> ScanSweep | None:
         """The latest laser scan, if the robot has a scanner."""
         ...
 
@@ -188,7 +188,7 @@ class Robot(Protocol):
         """The latest range-sensor readings, if the robot has them."""
         ...
 
-    def ground_truth(self) -> Stamped | None:
+    def ground_truth(self) -> StampedPose | None:
         """The latest ground-truth pose (motion capture), if there is one."""
         ...
 

@@ -32,7 +32,7 @@ import numpy as np
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError
 from umbmark.core.geometry import quaternion_yaw
-from umbmark.robot.base import ApplyMethod, DriveParams, LaserScan, Pose2D, RangeReading
+from umbmark.robot.base import ApplyMethod, DriveParams, Pose2D, RangeReading, ScanSweep
 
 __all__ = [
     "MULTIPLIERS",
@@ -225,7 +225,7 @@ def mount_from_transform(transform: object) -> Mount:
     return Mount(pose, upside_down=z_up < 0.0)
 
 
-def scan_from_message(msg: object, mount: Mount) -> LaserScan:
+def scan_from_message(msg: object, mount: Mount) -> ScanSweep:
     """A ``sensor_msgs/LaserScan`` as a :class:`LaserScan` with its mounting; a laser
     mounted upside down has its beams reversed, so that angles run counter-clockwise in
     the base frame again."""
@@ -235,7 +235,7 @@ def scan_from_message(msg: object, mount: Mount) -> LaserScan:
     if mount.upside_down:
         angle_min = -(angle_min + increment * (ranges.size - 1))
         ranges = ranges[::-1].copy()
-    return LaserScan(
+    return ScanSweep(
         time=stamp_seconds(msg.header.stamp),  # type: ignore[attr-defined]
         angle_min=angle_min,
         angle_increment=increment,

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from umbmark.core.errors import InputError, SafetyError
-from umbmark.robot.base import LaserScan, RangeReading, Stamped
+from umbmark.robot.base import RangeReading, ScanSweep, StampedPose
 from umbmark.robot.ros_common import (
     Latest,
     Mount,
@@ -49,9 +49,9 @@ class RosRobot:
         self.options = options
         self._twist = twist
         self._cmd = cmd
-        self._odom: Latest[Stamped] = Latest()
+        self._odom: Latest[StampedPose] = Latest()
         self._scan: Latest[Any] = Latest()
-        self._truth: Latest[Stamped] = Latest()
+        self._truth: Latest[StampedPose] = Latest()
         self._ranges: list[Latest[Any]] = [Latest() for _ in options.ranges]
         self._mounts: dict[str, Mount] = {}
 
@@ -73,10 +73,10 @@ class RosRobot:
     # --- callbacks ------------------------------------------------------------------------
 
     def _on_odom(self, msg: Any) -> None:  # noqa: ANN401 (a nav_msgs Odometry)
-        self._odom.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose.pose)))
+        self._odom.put(StampedPose(stamp_seconds(msg.header.stamp), planar_pose(msg.pose.pose)))
 
     def _on_truth(self, msg: Any) -> None:  # noqa: ANN401 (a geometry_msgs PoseStamped)
-        self._truth.put(Stamped(stamp_seconds(msg.header.stamp), planar_pose(msg.pose)))
+        self._truth.put(StampedPose(stamp_seconds(msg.header.stamp), planar_pose(msg.pose)))
 
     # --- connection -----------------------------------------------------------------------
 
@@ -144,11 +144,11 @@ class RosRobot:
             )
         self._cmd.publish(self._velocity(float(linear), float(angular)))
 
-    def odometry(self) -> Stamped | None:
+    def odometry(self) -> StampedPose | None:
         """The latest odometry pose, stamped with its header's time."""
         return self._odom.get()
 
-    def scan(self) -> LaserScan | None:
+    def scan(self) -> ScanSweep | None:
         """The latest scan with the laser's mounting from TF (None: no scan came)."""
         msg = self._scan.get()
         if msg is None:
@@ -162,7 +162,7 @@ class RosRobot:
             return None
         return range_reading(messages, [self._mount(m.header.frame_id) for m in messages])
 
-    def ground_truth(self) -> Stamped | None:
+    def ground_truth(self) -> StampedPose | None:
         """The latest ground-truth pose (None: no truth topic, or no message yet)."""
         return self._truth.get()
 

@@ -38,10 +38,10 @@ from umbmark.robot.base import (
     ApplyMethod,
     ApplyResult,
     DriveParams,
-    LaserScan,
     Pose2D,
     RangeReading,
-    Stamped,
+    ScanSweep,
+    StampedPose,
 )
 from umbmark.sim.robot import NoiseModel
 from umbmark.sim.robot import SimRobot as RobotTruth
@@ -168,11 +168,11 @@ class VirtualRobot:
         self._command = (float(linear), float(angular), self._time)
         self.commands.append((self._time, float(linear), float(angular)))
 
-    def odometry(self) -> Stamped:
+    def odometry(self) -> StampedPose:
         """The controller's odometry pose (frame ``odom``) at its last update."""
-        return Stamped(self._odom_time, Pose2D(*self._odom))
+        return StampedPose(self._odom_time, Pose2D(*self._odom))
 
-    def scan(self) -> LaserScan | None:
+    def scan(self) -> ScanSweep | None:
         """A laser scan from the true pose, if the world has a laser on the robot."""
         return self.world.scan(self._pose, self._time, self._rng)
 
@@ -180,7 +180,7 @@ class VirtualRobot:
         """The range sensors' readings from the true pose, if the robot has them."""
         return self.world.ranges(self._pose, self._time, self._rng)
 
-    def ground_truth(self) -> Stamped | None:
+    def ground_truth(self) -> StampedPose | None:
         """The true pose in the world's frame (as motion capture would give it)."""
         return self.world.truth(self._pose, self._time, self._rng)
 

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.errors import InputError
-from umbmark.robot.base import LaserScan, Pose2D, RangeReading, Stamped
+from umbmark.robot.base import Pose2D, RangeReading, ScanSweep, StampedPose
 
 __all__ = [
     "CORNER_SENSORS",
@@ -251,7 +251,7 @@ class World:
                 best = np.minimum(best, t.min(axis=1))
         return best
 
-    def scan(self, pose: Pose2D, time: float, rng: np.random.Generator) -> LaserScan | None:
+    def scan(self, pose: Pose2D, time: float, rng: np.random.Generator) -> ScanSweep | None:
         """What the laser on a robot at the true ``pose`` (world frame) reads at ``time``
         (None: the robot has no laser)."""
         lidar = self.lidar
@@ -263,7 +263,7 @@ class World:
         ranges = true + lidar.sigma * rng.standard_normal(lidar.beams)
         ranges[~np.isfinite(true) | (ranges > lidar.range_max)] = np.inf
         ranges[rng.random(lidar.beams) < lidar.dropout] = np.nan
-        return LaserScan(
+        return ScanSweep(
             time=time,
             angle_min=lidar.angle_min,
             angle_increment=lidar.increment,
@@ -286,14 +286,16 @@ class World:
         ranges[~np.isfinite(true) | (ranges > sonars.range_max)] = np.nan
         return RangeReading(time=time, ranges=ranges, mounts=sonars.mounts)
 
-    def truth(self, pose: Pose2D, time: float, rng: np.random.Generator) -> Stamped | None:
+    def truth(self, pose: Pose2D, time: float, rng: np.random.Generator) -> StampedPose | None:
         """The true ``pose`` as motion capture reports it (None: there is none)."""
         mocap = self.mocap
         if mocap is None:
             return None
         dx, dy = mocap.sigma_xy * rng.standard_normal(2)
         dtheta = mocap.sigma_theta * float(rng.standard_normal())
-        return Stamped(time, Pose2D(pose.x + float(dx), pose.y + float(dy), pose.theta + dtheta))
+        return StampedPose(
+            time, Pose2D(pose.x + float(dx), pose.y + float(dy), pose.theta + dtheta)
+        )
 
     def clearance(self, path: FloatArray) -> float:
         """The smallest distance [m] from a polyline (shape (k, 2), world frame) to any wall

@@ -1,0 +1,114 @@
+"""The self-calibration's passes: driven, recorded and calibrated one at a time
+(:class:`PassDriver`), applied (:func:`apply_pass`), what the controller holds after them
+(:func:`holds_of`), and those of a routine stopped for a controller restart
+(:func:`resumed_passes`). The routine itself is :func:`umbmark.jobs.selfcal.selfcal`."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from umbmark.autocal.drive import DriveLimits
+from umbmark.autocal.measure import Measure
+from umbmark.autocal.passes import Home, drive_pass, strays
+from umbmark.autocal.record import MeasuredRun, pass_folder, record_pass
+from umbmark.autocal.resume import SelfCalState
+from umbmark.autocal.watch import Watch
+from umbmark.calibration.passes import Holds
+from umbmark.core.conventions import Direction
+from umbmark.jobs.selfcal_report import PassResult
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+
+__all__ = ["PassDriver", "apply_pass", "holds_of", "resumed_passes"]
+
+
+def resumed_passes(folder: Path, state: SelfCalState) -> list[PassResult]:
+    """The passes a stopped self-calibration drove, their parameters now applied."""
+    from umbmark.store.calibrations import calibrate_recorded
+
+    out = []
+    for label, where, params in state.passes:
+        report = calibrate_recorded([folder / where], {})
+        out.append(PassResult(label, folder / where, report, params))
+    if out:
+        out[-1] = replace(
+            out[-1], applied=ApplyResult("yaml", True, "applied by the controller's restart")
+        )
+    return out
+
+
+@dataclass(frozen=True)
+class PassDriver:
+    """Drives, records and calibrates one pass at a time."""
+
+    robot: Robot
+    how: Measure
+    folder: Path
+    side: float
+    runs: int
+    limits: DriveLimits
+    name: str
+    watch: Watch
+    record_as: str | None = None
+    history: str | os.PathLike[str] | None = None
+    kept: bool = True
+
+    def __call__(self, label: str, home: Home) -> PassResult:
+        from umbmark.store.calibrations import calibrate_recorded
+
+        params = self.robot.drive_params()
+
+        def said(k: int, direction: Direction, what: str) -> None:
+            self.watch.status(label, k, direction, what)
+
+        def ran(k: int, direction: Direction, run: MeasuredRun) -> None:
+            self.watch.run_measured(label, k, direction, run.start.pose, run.end.pose)
+
+        measured = drive_pass(
+            self.robot, self.how, self.side, self.runs, home, self.limits, said, ran
+        )
+        where = pass_folder(self.folder, label)
+        record_pass(where, measured, params, self.side, self.how.method, self.name)
+        report = calibrate_recorded([where], {}, robot=self.record_as, history=self.history)
+        return PassResult(label, where, report, params, warnings=strays(measured, self.limits))
+
+    def mark_applied(self, result: PassResult) -> None:
+        """Mark the pass's calibration applied in the history (it was recorded last)."""
+        if self.record_as is None or result.applied is None or not result.applied.active:
+            return
+        from umbmark.store.history import History
+
+        store = History(self.history)
+        (last,) = store.calibrations(self.record_as)[-1:]
+        store.mark_applied(self.record_as, last.id)
+
+
+def apply_pass(
+    robot: Robot, result: PassResult, method: ApplyMethod
+) -> tuple[PassResult, DriveParams]:
+    """Apply the pass's correction, composed with its active parameters, unless the
+    verdict says not to or ``method`` is ``none``; the corrected parameters."""
+    if method == "none" or not result.report.verdict.applies:
+        return result, result.params
+    calibration = result.report.calibration
+    new = replace(
+        result.params,
+        wheel_separation_multiplier=calibration.new_separation_multiplier,
+        left_wheel_radius_multiplier=calibration.new_c_left,
+        right_wheel_radius_multiplier=calibration.new_c_right,
+    )
+    return replace(result, applied=robot.apply(new, method)), new
+
+
+def holds_of(passes: list[PassResult], final: DriveParams) -> Holds:
+    """What the controller holds: the last pass applied (passes are applied in order until
+    one is not) and the multipliers the controller reports."""
+    applied = [k for k, p in enumerate(passes, 1) if p.applied is not None and p.applied.active]
+    return Holds(
+        labels=tuple(p.label for p in passes),
+        held=applied[-1] if applied else None,
+        separation_multiplier=final.wheel_separation_multiplier,
+        c_left=final.left_wheel_radius_multiplier,
+        c_right=final.right_wheel_radius_multiplier,
+    )
