@@ -39,7 +39,7 @@ from geometry_msgs.msg import Pose2D as Pose2DMsg
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import ScanSweep
+from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
@@ -166,7 +166,7 @@ class SimNode:
             rospy.set_param(f"{CONTROLLER}/{name}", 1.0)
         self.clock = rospy.Publisher("/clock", Clock, queue_size=10)
         self.odom = rospy.Publisher("/odom", Odometry, queue_size=10)
-        self.scan = rospy.Publisher("/scan", ScanSweep, queue_size=2)
+        self.scan = rospy.Publisher("/scan", LaserScan, queue_size=2)
         self.truth = rospy.Publisher("/ground_truth", PoseStamped, queue_size=2)
         self.true_pose = rospy.Publisher("/sim/true_pose", Pose2DMsg, queue_size=2)
         self.tf = rospy.Publisher("/tf", TFMessage, queue_size=10)
@@ -231,7 +231,7 @@ class SimNode:
         robot = self.robot
         scan = robot.scan()
         if scan is not None:
-            msg = ScanSweep()
+            msg = LaserScan()
             msg.header.stamp, msg.header.frame_id = stamp, "laser"
             ranges = scan.ranges
             angle_min = scan.angle_min

@@ -72,7 +72,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import ScanSweep
+from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
 from umbmark.robot.base import DriveParams, Pose2D
@@ -335,7 +335,7 @@ class SimNode:
         self.restarts: list[list[float]] = []
         self.reactivated = False
         self.clock = node.create_publisher(Clock, "/clock", 10)
-        self.scan = node.create_publisher(ScanSweep, "/scan", qos_profile_sensor_data)
+        self.scan = node.create_publisher(LaserScan, "/scan", qos_profile_sensor_data)
         self.truth = node.create_publisher(PoseStamped, "/ground_truth", 10)
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.description = node.create_publisher(String, "/robot_description", latched)
@@ -484,7 +484,7 @@ class SimNode:
         robot = self.robot
         scan = robot.scan()
         if scan is not None:
-            msg = ScanSweep()
+            msg = LaserScan()
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
             msg.header.frame_id = "laser"
             ranges, angle_min = scan.ranges, scan.angle_min

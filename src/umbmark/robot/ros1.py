@@ -157,8 +157,8 @@ class Ros1Robot(RosRobot):
         rospy = _rospy()
         from geometry_msgs.msg import PoseStamped, Twist
         from nav_msgs.msg import Odometry
+        from sensor_msgs.msg import LaserScan as ScanMsg
         from sensor_msgs.msg import Range
-        from sensor_msgs.msg import ScanSweep as ScanMsg
 
         self._rospy = rospy
         options = default_topics(options, ros2=False)

@@ -124,8 +124,8 @@ class Ros2Robot(RosRobot):
         from nav_msgs.msg import Odometry
         from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
         from rosgraph_msgs.msg import Clock
+        from sensor_msgs.msg import LaserScan as ScanMsg
         from sensor_msgs.msg import Range
-        from sensor_msgs.msg import ScanSweep as ScanMsg
         from std_msgs.msg import String
 
         node = self._node

@@ -226,7 +226,7 @@ def mount_from_transform(transform: object) -> Mount:
 
 
 def scan_from_message(msg: object, mount: Mount) -> ScanSweep:
-    """A ``sensor_msgs/LaserScan`` as a :class:`LaserScan` with its mounting; a laser
+    """A ``sensor_msgs/LaserScan`` as a :class:`~umbmark.robot.base.ScanSweep` with its mounting; a laser
     mounted upside down has its beams reversed, so that angles run counter-clockwise in
     the base frame again."""
     ranges = np.asarray(msg.ranges, dtype=np.float64)  # type: ignore[attr-defined]
