@@ -226,9 +226,9 @@ def mount_from_transform(transform: object) -> Mount:
 
 
 def scan_from_message(msg: object, mount: Mount) -> ScanSweep:
-    """A ``sensor_msgs/LaserScan`` as a :class:`~umbmark.robot.base.ScanSweep` with its mounting; a laser
-    mounted upside down has its beams reversed, so that angles run counter-clockwise in
-    the base frame again."""
+    """A ``sensor_msgs/LaserScan`` as a :class:`~umbmark.robot.base.ScanSweep` with its
+    mounting; a laser mounted upside down has its beams reversed, so that angles run
+    counter-clockwise in the base frame again."""
     ranges = np.asarray(msg.ranges, dtype=np.float64)  # type: ignore[attr-defined]
     angle_min = float(msg.angle_min)  # type: ignore[attr-defined]
     increment = float(msg.angle_increment)  # type: ignore[attr-defined]
