@@ -116,6 +116,9 @@ def watch() -> dict[str, object]:
     spin = threading.Thread(target=rclpy.spin, args=(node,), daemon=True)
     spin.start()
     sys.stdin.read()  # until the test closes it
+    deadline = time.monotonic() + 10.0  # a loaded machine: the first truth may come late
+    while not truth and time.monotonic() < deadline:
+        time.sleep(0.05)
     a = list(truth[0]) if truth else None
     time.sleep(0.3)
     b = list(truth[0]) if truth else None
