@@ -56,7 +56,11 @@ told in four ways:
 verdicts ignored (its answer whenever it has one), to compare like with like on the
 pairs the checks refuse.
 
+``--field 180 --range-step 0.05`` keeps of each simulated sweep the half ahead and rounds
+its ranges to 5 cm, as the Killian log's scanner (``--beams 360``: 1 degree apart).
+
 Run: python benchmarks/bench_scan_matching.py [--pairs 200] [--beams 360 720]
+     python benchmarks/bench_scan_matching.py --beams 360 --field 180 --range-step 0.05
      python benchmarks/bench_scan_matching.py --carmen killian.g2o [--pairs 1000]
 """
 
@@ -115,6 +119,17 @@ def _points(world: World, pose: Pose2D, rng: np.random.Generator) -> np.ndarray:
     scan = world.scan(pose, 0.0, rng)
     assert scan is not None
     return scan_points(scan.ranges, scan.angles(), scan.range_min, scan.range_max)
+
+
+def resample(points: np.ndarray, field: float, step: float) -> np.ndarray:
+    """The returns within ``field`` [deg] ahead (centred on x), ranges rounded to ``step``
+    [m] (0: as they are): a sweep of the room as a narrower, coarser scanner sees it."""
+    r = np.hypot(points[:, 0], points[:, 1])
+    a = np.arctan2(points[:, 1], points[:, 0])
+    if step > 0:
+        r = np.round(r / step) * step
+    keep = np.abs(a) <= math.radians(field) / 2
+    return np.column_stack([r * np.cos(a), r * np.sin(a)])[keep]
 
 
 def plicp(ref: np.ndarray, cur: np.ndarray, guess: np.ndarray) -> np.ndarray | None:
@@ -456,6 +471,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pairs", type=int, default=200)
     parser.add_argument("--beams", type=int, nargs="+", default=[360, 720])
+    parser.add_argument("--field", type=float, default=360.0, help="simulated: [deg] ahead kept")
+    parser.add_argument(
+        "--range-step", type=float, default=0.0, help="simulated: ranges rounded [m]"
+    )
     parser.add_argument("--carmen", type=Path, help="a CARMEN log: match its real sweeps")
     parser.add_argument("--max-gap", type=float, default=4.0, help="[s] between real sweeps (4)")
     args = parser.parse_args()
@@ -488,7 +507,15 @@ def main() -> None:
     )
     for beams in args.beams:
         pairs = make_pairs(beams, args.pairs)
-        print(f"{beams} beams, {len(pairs)} pairs of the room:")
+        seen = ""
+        if args.field < 360 or args.range_step > 0:
+            field, step = args.field, args.range_step
+            pairs = [
+                (resample(ref, field, step), resample(cur, field, step), guess, true)
+                for ref, cur, guess, true in pairs
+            ]
+            seen = f", seen over {args.field:g} deg ahead, ranges in steps of {args.range_step:g} m"
+        print(f"{beams} beams, {len(pairs)} pairs of the room{seen}:")
         base = None
         for name, matcher in candidates:
             matcher(*pairs[0][:3])  # warm up (imports, first calls)
