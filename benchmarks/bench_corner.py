@@ -28,13 +28,13 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from umbmark.autocal.corner import fit_corner, to_frame
-from umbmark.autocal.corner_beams import Beams, fit_corner_ranges
-from umbmark.autocal.corner_lidar import fix_from_scans
-from umbmark.autocal.corner_pieces import scan_beams
-from umbmark.autocal.corner_sensors import fix_from_ranges
 from umbmark.robot.base import Pose2D, ScanSweep
 from umbmark.robot.world import LCorner, Lidar, RangeSensors, World, box, corner_world, legs
+from umbmark.routines.corner import fit_corner, to_frame
+from umbmark.routines.corner_beams import Beams, fit_corner_ranges
+from umbmark.routines.corner_lidar import fix_from_scans
+from umbmark.routines.corner_pieces import scan_beams
+from umbmark.routines.corner_sensors import fix_from_ranges
 
 from _timing import best_of
 

@@ -23,12 +23,12 @@ from geometry_msgs.msg import Pose2D as Pose2DMsg
 from geometry_msgs.msg import Twist
 from std_msgs.msg import String
 
-from umbmark.autocal.drive import DriveLimits, drive_square
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import SafetyError
 from umbmark.robot.base import DriveParams
 from umbmark.robot.ros1 import Ros1Robot
 from umbmark.robot.ros_common import RosOptions
+from umbmark.routines.drive import DriveLimits, drive_square
 
 
 def _true_pose() -> list[float]:

@@ -33,7 +33,7 @@ LAYERS = (
     "store",
     "outputs",
     "robot",
-    "autocal",
+    "routines",
     "jobs",
     "cli",
 )

@@ -9,7 +9,7 @@ import pytest
 
 from umbmark.benchmark.returns import Cluster, umbmark_benchmark
 from umbmark.core.conventions import Direction
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 
 
 def _run(direction: str, ex: float, ey: float) -> Run:

@@ -13,7 +13,7 @@ from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.paper import paper_estimate
 from umbmark.model.kinematics import integrate_odometry
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 
 from helpers import runs_around, turtle_square
 

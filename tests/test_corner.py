@@ -14,16 +14,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from umbmark.autocal.corner import (
+from umbmark.core.errors import InputError
+from umbmark.robot.base import Pose2D, ScanSweep
+from umbmark.robot.world import LCorner, Lidar, World, box, chair, corner_world, legs
+from umbmark.routines.corner import (
     CornerFix,
     CornerNotFoundError,
     expected_pose,
     relative_motion,
 )
-from umbmark.autocal.corner_lidar import LidarCorner, find_corner, fix_from_scans
-from umbmark.core.errors import InputError
-from umbmark.robot.base import Pose2D, ScanSweep
-from umbmark.robot.world import LCorner, Lidar, World, box, chair, corner_world, legs
+from umbmark.routines.corner_lidar import LidarCorner, find_corner, fix_from_scans
 
 SCANS = 5
 START = Pose2D(1.6, 1.3, 0.0)  # the start in the standard world's corner frame

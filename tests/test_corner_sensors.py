@@ -13,17 +13,17 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from umbmark.autocal.corner import CornerNotFoundError
-from umbmark.autocal.corner_sensors import (
+from umbmark.core.errors import InputError
+from umbmark.robot.base import Pose2D, RangeReading, StampedPose
+from umbmark.robot.world import LCorner, MotionCapture, RangeSensors, World, corner_world
+from umbmark.routines.corner import CornerNotFoundError
+from umbmark.routines.corner_sensors import (
     TapeMarks,
     ask_tape,
     fix_from_ground_truth,
     fix_from_ranges,
     fix_from_tape,
 )
-from umbmark.core.errors import InputError
-from umbmark.robot.base import Pose2D, RangeReading, StampedPose
-from umbmark.robot.world import LCorner, MotionCapture, RangeSensors, World, corner_world
 
 READINGS = 5  # range readings the routine averages while the robot stands still
 

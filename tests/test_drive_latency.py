@@ -10,10 +10,10 @@ from collections import deque
 
 import pytest
 
-from umbmark.autocal.drive import DriveLimits, drive_square
 from umbmark.core.conventions import Direction
 from umbmark.robot.base import StampedPose
 from umbmark.robot.virtual import VirtualRobot
+from umbmark.routines.drive import DriveLimits, drive_square
 
 
 class LateRobot(VirtualRobot):

@@ -17,7 +17,7 @@ from umbmark.core.conventions import Direction
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.endpose import endpose_estimate
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 from umbmark.model.square import icr_offset, square_run_end
 
 from helpers import turtle_square

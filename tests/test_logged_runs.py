@@ -15,7 +15,7 @@ from umbmark.core.errors import InputError
 from umbmark.core.geometry import to_start_frame
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import PoseSeries, Recording, WheelSeries
-from umbmark.model.runs import end_errors
+from umbmark.model.run import end_errors
 from umbmark.runs.logged import runs_from_recordings
 from umbmark.runs.segmentation import split_by_rests, split_by_windows
 from umbmark.sim.robot import SimRobot

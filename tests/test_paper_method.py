@@ -12,7 +12,7 @@ from umbmark.core.conventions import Direction
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.paper import paper_estimate
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 
 from helpers import linear_cgs, runs_around, turtle_square
 

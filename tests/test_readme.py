@@ -427,17 +427,26 @@ def _cli_options() -> set[str]:
     return found | {"--help"}  # every command's, from click's context settings
 
 
-#: Options of other programs that the pages name (pip, venv, ruff, evo, ros2, the project's
-#: tools).
+#: Options of other programs that the pages name (pip, venv, ruff, evo, ros2).
 OTHER_PROGRAMS = {
     "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--check", "--ref",
-    "--align_origin", "--once", "--list", "--filter", "--jobs", "--keep", "--data", "--strict",
-    "--auto", "--accuracy", "--side", "--loso", "--single", "--max-interval",
+    "--align_origin", "--once", "--list", "--filter", "--strict",
 }  # fmt: skip
+
+
+def _script_options() -> set[str]:
+    """The options the project's own scripts (``tools/``, ``benchmarks/``, the corpus runner)
+    declare."""
+    found: set[str] = set()
+    scripts = [*(ROOT / "tools").glob("*.py"), *(ROOT / "benchmarks").glob("*.py")]
+    for script in [*scripts, ROOT / "tests" / "corpus_runner.py"]:
+        text = script.read_text(encoding="utf-8")
+        found |= set(re.findall(r"add_argument\(\s*\"(--[a-z][a-z0-9-]*)\"", text))
+    return found
 
 
 @pytest.mark.parametrize("page", pages(), ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_option_the_pages_name_exists(page):
-    options = _cli_options() | OTHER_PROGRAMS
+    options = _cli_options() | OTHER_PROGRAMS | _script_options()
     named = set(re.findall(r"(?<![\w-])(--[A-Za-z][\w-]*[A-Za-z0-9])", page.read_text("utf-8")))
     assert named - options == set(), f"{page.name} names options no command has"

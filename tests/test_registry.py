@@ -24,7 +24,7 @@ from umbmark.core.conventions import Direction
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.registry import ESTIMATORS, NAMES, SQUARE, Method
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "umbmark"
 

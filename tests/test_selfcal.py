@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.autocal.drive import DriveLimits, drive_square
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, SafetyError
 from umbmark.jobs.selfcal import selfcal
 from umbmark.robot.base import Pose2D
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import World, box, corner_world, legs
+from umbmark.routines.drive import DriveLimits, drive_square
 
 from helpers import run_cli
 

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.autocal.anywhere import PATTERN, PATTERN_REACH
 from umbmark.jobs.selfcal_anywhere import AnywhereReport
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import ROOM_LASER, World, box, legs, room_world
+from umbmark.routines.anywhere import PATTERN, PATTERN_REACH
 
 from helpers import api_error, run_cli
 
@@ -178,7 +178,7 @@ def test_refused_with_something_on_the_patterns_floor() -> None:
 def test_an_obstacle_that_appears_stops_the_robot() -> None:
     """A person steps in front of the robot while it drives forward: a safety stop, a
     zero velocity last."""
-    from umbmark.autocal.drive import SafetyError
+    from umbmark.routines.drive import SafetyError
 
     robot = _robot()
     people = np.vstack([robot.world.circles, legs(0.75, -0.04)])  # ahead of the 0.6 m straight

@@ -7,11 +7,11 @@ import math
 
 import pytest
 
-from umbmark.autocal.measure import Measure, take_fix
 from umbmark.core.errors import InputError
 from umbmark.jobs.selfcal import selfcal
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import corner_world
+from umbmark.routines.measure import Measure, take_fix
 
 from helpers import run_cli
 
@@ -73,7 +73,7 @@ def test_a_tape_fix_in_a_corner_on_either_side(side, answers, expected):
     hand: right-handed with the robot inside (on the left: x along the wall behind)."""
     robot = VirtualRobot(seed=1, world=corner_world(side=side))
     marks = iter(answers)
-    from umbmark.autocal.corner_sensors import TapeMarks
+    from umbmark.routines.corner_sensors import TapeMarks
 
     how = Measure(
         "tape", ask=lambda prompt: next(marks), marks=TapeMarks(robot.tape_marks()), side=side

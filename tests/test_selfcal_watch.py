@@ -15,14 +15,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from umbmark.autocal.corner import CornerNotFoundError
-from umbmark.autocal.drive import DriveLimits, drive_square
-from umbmark.autocal.watch import RunsLeft, stopped
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import SafetyError
 from umbmark.jobs.selfcal import selfcal
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import World, corner_world
+from umbmark.routines.corner import CornerNotFoundError
+from umbmark.routines.drive import DriveLimits, drive_square
+from umbmark.routines.watch import RunsLeft, stopped
 
 from helpers import run_cli, umbmark_command
 
@@ -44,7 +44,7 @@ def test_checks_runs_and_passes_are_said_as_they_happen_with_the_runs_left(tmp_p
     result, the four of the verification, its result. The time left is the mean time of
     the runs so far times the runs left (the clock here: the robot's)."""
     robot = VirtualRobot(E_d=1.004, E_b=0.97, slip=0.0004, seed=4)
-    monkeypatch.setattr("umbmark.autocal.watch._wall", robot.now)
+    monkeypatch.setattr("umbmark.routines.watch._wall", robot.now)
     said: list[tuple[float, str]] = []
     counts: list[tuple[float, RunsLeft]] = []
     report = selfcal(

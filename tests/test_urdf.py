@@ -8,11 +8,11 @@ from pathlib import Path
 
 import pytest
 
-from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, write_state
 from umbmark.core.errors import InputError
 from umbmark.robot.base import DriveParams, Pose2D
 from umbmark.robot.ros_common import RosOptions, default_topics, laser_mount, restart_commands
 from umbmark.robot.urdf import static_mount, urdf_geometry, urdf_mount
+from umbmark.routines.resume import SelfCalState, pending_problem, read_state, write_state
 
 #: base_link -> chassis (0.05 m ahead, turned 90 deg) -> laser (0.1 m along the chassis'
 #: x axis, rolled 180 deg: upside down); wheels 0.2 m either side of base_link, radius 0.06.

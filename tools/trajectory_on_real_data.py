@@ -29,7 +29,7 @@ from umbmark.estimators.motions import MotionCoverage, motion_coverage
 from umbmark.estimators.trajectory_fit import TrajectoryFit, fit_trajectories
 from umbmark.estimators.trajectory_model import StartPose, TrajectoryModel
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run, end_errors
+from umbmark.model.run import Run, end_errors
 from umbmark.runs.load import LoadOptions, load_runs
 
 REPLAYED = ("square/230620202042", "square/231220200029", "circular/250620202104")

@@ -73,9 +73,9 @@ _EXPORTS = {
     "Benchmark": "umbmark.benchmark.returns",
     "Calibration": "umbmark.calibration.compose",
     "Direction": "umbmark.core.conventions",
-    "EndPose": "umbmark.model.runs",
+    "EndPose": "umbmark.model.run",
     "ErrorEstimate": "umbmark.estimators.base",
-    "Run": "umbmark.model.runs",
+    "Run": "umbmark.model.run",
     "SquareTest": "umbmark.estimators.base",
     "WheelParams": "umbmark.model.kinematics",
     "estimate_errors": "umbmark.estimators.dispatch",
@@ -160,7 +160,7 @@ if TYPE_CHECKING:
     from umbmark.jobs.validate import validate
     from umbmark.model.active import ActiveParams
     from umbmark.model.kinematics import WheelParams, integrate_odometry
-    from umbmark.model.runs import EndPose, Run
+    from umbmark.model.run import EndPose, Run
     from umbmark.robot.base import Robot
     from umbmark.robot.connect import connect
     from umbmark.robot.virtual import VirtualRobot

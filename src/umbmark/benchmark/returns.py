@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.conventions import Direction
-from umbmark.model.runs import Run, return_errors, split_by_direction
+from umbmark.model.run import Run, return_errors, split_by_direction
 
 __all__ = [
     "CLEARLY_ABOVE",

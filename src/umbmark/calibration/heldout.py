@@ -25,7 +25,7 @@ from umbmark.core.messages import info, split_messages
 from umbmark.estimators.motions import SCRUB_FALLBACK, MotionCoverage, motion_coverage
 from umbmark.estimators.registry import RUNS, names
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run, end_errors
+from umbmark.model.run import Run, end_errors
 from umbmark.runs.read import SourceRuns, pool_runs
 
 __all__ = ["CANDIDATES", "validate_read"]

@@ -18,7 +18,7 @@ from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import info
 from umbmark.core.version import __version__
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import RunSource, source_name
 

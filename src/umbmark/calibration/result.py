@@ -22,7 +22,7 @@ from umbmark.core.version import __version__
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.estimators.registry import LOGGED
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.runs.association import Association
 from umbmark.sources.params.reader import (
     CalibratedParams,

@@ -18,7 +18,7 @@ from umbmark.options.selfcal import CORNER_SIDE, DRIVING, OBSTACLE_MARGIN, ROUTI
 from umbmark.options.spec import OUTPUTS, TEST
 
 if TYPE_CHECKING:
-    from umbmark.autocal.watch import Progress, RunsLeft, Stopped
+    from umbmark.routines.watch import Progress, RunsLeft, Stopped
 
 __all__ = ["selfcal"]
 
@@ -176,7 +176,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     )
     options.pop("laser_mount")
     sim = {k: options.pop(k) for k in ("E_d", "E_b", "E_s", "slip", "seed")}
-    from umbmark.autocal.drive import DriveLimits
+    from umbmark.routines.drive import DriveLimits
 
     limits = DriveLimits(
         speed=options.pop("speed"),
@@ -273,9 +273,9 @@ def _stopped(exc: BaseException, folder: Path) -> None:
     the controller holds, the passes on disk and the command that runs it again; exit
     130 after Ctrl-C, 3 after a safety stop, 2 for bad input. Nothing where the routine
     had not begun (a refusal before moving is the usual one line)."""
-    from umbmark.autocal.watch import stopped
     from umbmark.cli.common import EXIT_BAD_INPUT, error_line
     from umbmark.cli.main import EXIT_ENVIRONMENT, EXIT_INTERRUPTED
+    from umbmark.routines.watch import stopped
 
     stop = stopped(exc)
     if stop is None:

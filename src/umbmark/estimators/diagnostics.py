@@ -37,7 +37,7 @@ from umbmark.core.messages import join_names
 from umbmark.estimators.base import ModelCheckFailure, SquareTest
 from umbmark.estimators.endpose import FLOOR, LEVEL, EndPoseFit, fit_end_poses
 from umbmark.estimators.registry import RUNS, Estimator, names
-from umbmark.model.runs import Run, split_by_direction
+from umbmark.model.run import Run, split_by_direction
 
 __all__ = [
     "MODEL_CAUSES",

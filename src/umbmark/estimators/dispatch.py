@@ -32,7 +32,7 @@ from umbmark.estimators.endpose import fit_end_poses
 from umbmark.estimators.registry import SQUARE, estimator, find
 from umbmark.estimators.scale import scale_from_straights, scale_only
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 
 if TYPE_CHECKING:
     from umbmark.estimators.trajectory_fit import TrajectoryFit

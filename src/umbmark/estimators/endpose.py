@@ -44,7 +44,7 @@ from umbmark.estimators.base import ErrorEstimate, SquareTest, welch_dof
 from umbmark.estimators.exact import exact_components
 from umbmark.estimators.registry import ENDPOSE
 from umbmark.estimators.solve import gauss_newton, jacobian
-from umbmark.model.runs import Run, split_by_direction
+from umbmark.model.run import Run, split_by_direction
 from umbmark.model.square import square_run_end
 
 __all__ = [

@@ -27,7 +27,7 @@ from umbmark.estimators.base import ErrorEstimate, SquareTest, cg_blocks, propag
 from umbmark.estimators.formulas import paper_components
 from umbmark.estimators.registry import EXACT
 from umbmark.estimators.solve import gauss_newton, jacobian
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.model.square import icr_offset, square_end_pose
 from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta_arc
 

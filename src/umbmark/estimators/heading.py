@@ -23,7 +23,7 @@ from umbmark.core.conventions import Direction
 from umbmark.estimators.base import ErrorEstimate, SquareTest, propagate_blocks
 from umbmark.estimators.endpose import heading_errors
 from umbmark.estimators.registry import HEADING
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta_arc
 
 __all__ = ["heading_components", "heading_estimate"]

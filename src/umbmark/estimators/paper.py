@@ -20,7 +20,7 @@ from umbmark.estimators.base import ErrorEstimate, SquareTest, cg_blocks, propag
 from umbmark.estimators.exact import exact_end_positions
 from umbmark.estimators.formulas import paper_components
 from umbmark.estimators.registry import PAPER
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 
 __all__ = ["SMALL_ANGLE_TOLERANCE", "exact_view", "paper_estimate", "small_angle_shortfall"]
 

@@ -39,7 +39,7 @@ import numpy as np
 
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 
 if TYPE_CHECKING:
     from umbmark.runs.read import SourceRuns

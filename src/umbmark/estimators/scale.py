@@ -18,7 +18,7 @@ import numpy as np
 
 from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.registry import STRAIGHT
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 
 __all__ = ["ScaleEstimate", "diameter_mixup", "scale_from_straights", "scale_only"]
 

@@ -29,7 +29,7 @@ from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import split_messages
 from umbmark.model.kinematics import IntegrationMethod, WheelParams
 from umbmark.model.recording import RunLog
-from umbmark.model.runs import Run, end_errors
+from umbmark.model.run import Run, end_errors
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.active import check_same_robot, read_runs
 from umbmark.runs.association import Association

@@ -7,7 +7,7 @@ is what ``umbmark selfcal --json`` prints. The steps:
 
 1. checks before anything moves: the odometry is alive, the controller answers, the corner
    is found (the first fix is the start of every run), the floor of both squares is free;
-2. a coarse turning check (:mod:`umbmark.autocal.coarse`), corrected when the robot turns
+2. a coarse turning check (:mod:`umbmark.routines.coarse`), corrected when the robot turns
    far from what its odometry believes, so that a square is possible at all;
 3. a UMBmark pass: ``runs`` cw then ``runs`` ccw runs, each from the start, recorded as a
    run log in ``out/pass-N`` (what ``umbmark calibrate``, ``report`` and ``replay`` read;
@@ -37,25 +37,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from umbmark.autocal.coarse import CoarseTurning, coarse_turning
-from umbmark.autocal.drive import DriveLimits, settle
-from umbmark.autocal.measure import (
-    MEASURE_METHODS,
-    CornerSide,
-    Measure,
-    MeasureMethod,
-    check_side,
-    marks_for,
-    take_fix,
-)
-from umbmark.autocal.outputs import check_outputs, write_outputs
-from umbmark.autocal.passes import Home, corner_truth
-from umbmark.autocal.preflight import preflight
-from umbmark.autocal.record import (
-    clear_selfcal,
-)
-from umbmark.autocal.resume import SelfCalState, pending_problem, read_state, write_state
-from umbmark.autocal.watch import Progress, RunsLeft, Stopped, Watch, mark_stopped
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError
@@ -64,6 +45,25 @@ from umbmark.jobs.selfcal_passes import PassDriver, apply_pass, holds_of, resume
 from umbmark.jobs.selfcal_report import PassResult, SelfCalReport
 from umbmark.options.selfcal import ROUTINE
 from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DriveParams, Robot
+from umbmark.routines.coarse import CoarseTurning, coarse_turning
+from umbmark.routines.drive import DriveLimits, settle
+from umbmark.routines.measure import (
+    MEASURE_METHODS,
+    CornerSide,
+    Measure,
+    MeasureMethod,
+    check_side,
+    marks_for,
+    take_fix,
+)
+from umbmark.routines.outputs import check_outputs, write_outputs
+from umbmark.routines.passes import Home, corner_truth
+from umbmark.routines.preflight import preflight
+from umbmark.routines.record import (
+    clear_selfcal,
+)
+from umbmark.routines.resume import SelfCalState, pending_problem, read_state, write_state
+from umbmark.routines.watch import Progress, RunsLeft, Stopped, Watch, mark_stopped
 
 if TYPE_CHECKING:
     pass
@@ -161,7 +161,7 @@ def selfcal(
     resume : path, optional
         The folder of a self-calibration stopped for a controller restart: go on with its
         settings (the ones given here are not used), once the controller holds the
-        parameters it stopped on (:mod:`umbmark.autocal.resume`).
+        parameters it stopped on (:mod:`umbmark.routines.resume`).
     notify : callable, optional
         Lines for a person, as they happen: each check, the coarse check, each run's
         return error, each pass's result.
@@ -170,7 +170,7 @@ def selfcal(
         (which wall each range sensor or tape mark faces; the first fix must find it
         there, else nothing moves).
     runs_left : callable, optional
-        Called with a :class:`~umbmark.autocal.watch.RunsLeft` (runs done out of planned,
+        Called with a :class:`~umbmark.routines.watch.RunsLeft` (runs done out of planned,
         the time left) as each pass begins and each run ends.
     routine : {"umbmark", "anywhere"}
         ``anywhere``: :func:`umbmark.jobs.selfcal_anywhere.selfcal_anywhere` (no corner).
@@ -182,7 +182,7 @@ def selfcal(
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
         Every exception comes after a zero velocity; one raised once the robot moved
-        carries what the controller holds (:func:`umbmark.autocal.watch.stopped`).
+        carries what the controller holds (:func:`umbmark.routines.watch.stopped`).
     """
     ROUTINE.check(routine)
     given = locals()

@@ -1,6 +1,6 @@
 """The self-calibration anywhere (``umbmark selfcal --routine anywhere``): the robot drives
 a short excitation pattern on about 2 x 2 m of floor, calibrates its wheels and its
-laser's mounting from the laser's own motion (:mod:`umbmark.autocal.anywhere`), applies
+laser's mounting from the laser's own motion (:mod:`umbmark.routines.anywhere`), applies
 the result through the same paths as the UMBmark routine, and verifies by driving the
 pattern again.
 
@@ -29,18 +29,18 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from umbmark.autocal.anywhere import (
+from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+from umbmark.routines.anywhere import (
     PATTERN,
     check_scene,
     drive_pattern,
     intervals_note,
     pattern_intervals,
 )
-from umbmark.autocal.drive import DriveLimits, settle
-from umbmark.autocal.record import OVERLAY_FILE, pass_folder
-from umbmark.core.errors import InputError
-from umbmark.core.jsontext import JsonText
-from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+from umbmark.routines.drive import DriveLimits, settle
+from umbmark.routines.record import OVERLAY_FILE, pass_folder
 
 if TYPE_CHECKING:
     from umbmark.calibration.result import CalibrationResult

@@ -9,16 +9,16 @@ import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from umbmark.autocal.drive import DriveLimits
-from umbmark.autocal.measure import Measure
-from umbmark.autocal.passes import Home, drive_pass, strays
-from umbmark.autocal.record import MeasuredRun, pass_folder, record_pass
-from umbmark.autocal.resume import SelfCalState
-from umbmark.autocal.watch import Watch
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction
 from umbmark.jobs.selfcal_report import PassResult
 from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+from umbmark.routines.drive import DriveLimits
+from umbmark.routines.measure import Measure
+from umbmark.routines.passes import Home, drive_pass, strays
+from umbmark.routines.record import MeasuredRun, pass_folder, record_pass
+from umbmark.routines.resume import SelfCalState
+from umbmark.routines.watch import Watch
 
 __all__ = ["PassDriver", "apply_pass", "holds_of", "resumed_passes"]
 

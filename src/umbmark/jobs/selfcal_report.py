@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from umbmark.autocal.coarse import CoarseTurning
 from umbmark.calibration.passes import Holds
 from umbmark.core.jsontext import JsonText
 from umbmark.robot.base import ApplyResult, DriveParams
+from umbmark.routines.coarse import CoarseTurning
 
 if TYPE_CHECKING:
     from umbmark.calibration.result import CalibrationResult

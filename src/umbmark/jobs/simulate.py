@@ -23,7 +23,7 @@ from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.outputs.files import OutputPlan
 from umbmark.sim.result import SimResult
 from umbmark.sim.robot import SimRobot

@@ -3,7 +3,7 @@
 A source reads a :class:`Recording`: the wheels' rotation over time and, usually, a
 ground-truth pose over time, each on its own clock samples. :mod:`umbmark.association`
 matches the two in time, :mod:`umbmark.segmentation` splits a recording into runs, and
-:mod:`umbmark.logged` turns each run into a :class:`umbmark.model.runs.Run` whose ``log`` is a
+:mod:`umbmark.logged` turns each run into a :class:`umbmark.model.run.Run` whose ``log`` is a
 :class:`RunLog`.
 
 Units: seconds, radians (wheel rotation and heading), metres.

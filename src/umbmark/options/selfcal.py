@@ -34,7 +34,7 @@ ROUTINE = Spec(
 DRIVING = "Driving"
 
 #: The values ``--obstacle-margin`` may take [m] (checked by
-#: :class:`umbmark.autocal.drive.DriveLimits`).
+#: :class:`umbmark.routines.drive.DriveLimits`).
 OBSTACLE_MARGIN_RANGE = (0.05, 2.0)
 #: The stop latency of the obstacle stop [s] (``DriveLimits.stop_latency``'s default).
 STOP_LATENCY = 0.4

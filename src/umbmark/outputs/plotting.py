@@ -22,7 +22,7 @@ from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.atomic import atomic_path
 from umbmark.core.conventions import Direction
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.outputs.files import FIGURE_FORMATS
 
 if TYPE_CHECKING:

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.options.spec import TUM_TIME
 
 __all__ = ["TUM_TIMES", "TumTime", "check_tum_time", "format_tum", "write_tum_runs"]

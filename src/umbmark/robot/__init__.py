@@ -2,6 +2,6 @@
 odometry, the sensors and the clock, read and apply the odometry's parameters) and its
 implementations: the virtual robot, ROS 1 (rospy) and ROS 2 (rclpy).
 
-The adapters know nothing of UMBmark; the routine (:mod:`umbmark.autocal`) knows nothing of
+The adapters know nothing of UMBmark; the routine (:mod:`umbmark.routines`) knows nothing of
 ROS.
 """

@@ -19,7 +19,7 @@ Either way the controller's odometry restarts: ``on_configure`` resets its pose 
 and with position feedback its first update moves it by the wheels' rotation times the
 radius change (Humble to Kilted keep the last wheel positions in metres at the old radii),
 or, for a controller just loaded, by the wheels' whole travel. The routine takes the
-odometry after the reload as a new origin (:meth:`umbmark.autocal.passes.Home.reanchor`);
+odometry after the reload as a new origin (:meth:`umbmark.routines.passes.Home.reanchor`);
 :func:`reload` returns once the controller is active again, its velocity topic subscribed
 and its odometry fresh, and after reading the parameters back: anything but the values
 asked, or a step the manager refuses, stops the robot (:class:`SafetyError`) and no

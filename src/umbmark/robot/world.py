@@ -2,7 +2,7 @@
 a simulated planar laser scanner and single-beam range sensors.
 
 The standard world (:func:`corner_world`) has an L-shaped corner behind and beside the
-start, where the robot measures its pose (:mod:`umbmark.autocal.corner`), out of the way
+start, where the robot measures its pose (:mod:`umbmark.routines.corner`), out of the way
 of the 4 x 4 m UMBmark squares driven from the start along +x (ccw to the left, cw to
 the right). Frames follow :mod:`umbmark.robot.base`: the world frame is the start's
 (x along the first leg, y to the left), poses are planar, metres and radians.

@@ -37,7 +37,7 @@ from umbmark.core.conventions import axle_poses
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import DEFAULT_MAX_GAP, PoseSeries, Recording
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.options.spec import READ
 
 if TYPE_CHECKING:

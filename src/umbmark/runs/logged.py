@@ -1,7 +1,7 @@
 """From recordings to runs: association, splitting, start frames, odometry end poses.
 
 Every logged source ends here, so that a run from a CSV log, an OptiOdom session or a
-ROS bag is the same :class:`umbmark.model.runs.Run` the estimators consume, with its time series
+ROS bag is the same :class:`umbmark.model.run.Run` the estimators consume, with its time series
 attached (:class:`umbmark.model.recording.RunLog`) for replay and trajectory estimation.
 """
 
@@ -22,7 +22,7 @@ from umbmark.core.geometry import relative_positions, to_start_frame
 from umbmark.core.messages import info
 from umbmark.model.kinematics import IntegrationMethod, WheelParams
 from umbmark.model.recording import DEFAULT_MAX_GAP, Recording, RunLog, gap_mask
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 from umbmark.runs.association import Association, associate
 from umbmark.runs.gaps import Gap, describe_gaps, find_gaps
 from umbmark.runs.reproduced import check_not_reproduced

@@ -21,7 +21,7 @@ from umbmark.core.errors import InputError
 from umbmark.core.messages import info
 from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.runs.load import Format, Loaded, LoadOptions, detect_format, load_runs
 from umbmark.runs.options import ReadOptions
 from umbmark.sources.params.reader import ControllerParams, read_parameter_file

@@ -17,7 +17,7 @@ from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.registry import PAPER, Method
 from umbmark.model.active import ActiveParams
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
 from umbmark.sim.robot import ControlConfig, SimRobot

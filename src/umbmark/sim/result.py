@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from umbmark.core.arrays import FloatArray, IntArray
 from umbmark.core.conventions import Direction
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 
 __all__ = ["SimResult", "Trace"]
 
@@ -60,7 +60,7 @@ class SimResult:
     trace: Trace | None = None
 
     def runs(self, label: str = "sim") -> list[Run]:
-        """The simulated runs as :class:`umbmark.model.runs.Run` values."""
+        """The simulated runs as :class:`umbmark.model.run.Run` values."""
         return [
             Run(
                 direction=d,

@@ -57,7 +57,7 @@ from pathlib import Path
 from umbmark.core.bounds import LENGTH_RANGE, MULTIPLIER_RANGE, Origin
 from umbmark.core.conventions import Direction, angle_to_rad, length_to_m
 from umbmark.core.errors import InputError
-from umbmark.model.runs import EndPose, Run
+from umbmark.model.run import EndPose, Run
 from umbmark.sources.text import iter_content_lines, iter_lines
 
 __all__ = [

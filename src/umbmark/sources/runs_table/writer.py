@@ -10,7 +10,7 @@ from pathlib import Path
 from umbmark.core.atomic import atomic_write_text
 from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
-from umbmark.model.runs import Run
+from umbmark.model.run import Run
 from umbmark.sources.runs_table.reader import ACTIVE_TAG, REQUIRED_COLUMNS
 
 __all__ = ["active_of", "format_active", "format_runs_table", "write_runs_table"]

@@ -12,9 +12,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
 
-from umbmark.autocal.corner import CornerFix, CornerNotFoundError
-from umbmark.autocal.corner_lidar import LidarCorner, fix_from_scans
-from umbmark.autocal.corner_sensors import (
+from umbmark.core.errors import InputError
+from umbmark.robot.base import Pose2D, RangeReading, Robot, ScanSweep, StampedPose
+from umbmark.routines.corner import CornerFix, CornerNotFoundError
+from umbmark.routines.corner_lidar import LidarCorner, fix_from_scans
+from umbmark.routines.corner_sensors import (
     PAPER_FACES,
     TapeMarks,
     Wall,
@@ -23,8 +25,6 @@ from umbmark.autocal.corner_sensors import (
     fix_from_ranges,
     fix_from_tape,
 )
-from umbmark.core.errors import InputError
-from umbmark.robot.base import Pose2D, RangeReading, Robot, ScanSweep, StampedPose
 
 __all__ = [
     "CORNER_SIDES",
@@ -47,7 +47,7 @@ CORNER_SIDES: tuple[CornerSide, ...] = ("right", "left")
 #: The wall each range sensor (tape mark) faces, by the corner's side: the first two the
 #: wall behind the start, the third the side wall. The corner frame is right-handed with
 #: the robot inside, so the wall behind is the y wall with the corner on the right and
-#: the x wall with it on the left (:mod:`umbmark.autocal.corner`).
+#: the x wall with it on the left (:mod:`umbmark.routines.corner`).
 FACES: dict[CornerSide, tuple[Wall, ...]] = {"right": PAPER_FACES, "left": ("x", "x", "y")}
 #: The robot's heading in the corner frame when placed square in the corner [rad].
 SQUARE: dict[CornerSide, float] = {"right": 0.0, "left": 0.5 * math.pi}

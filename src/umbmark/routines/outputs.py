@@ -8,12 +8,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from umbmark.autocal.record import OVERLAY_FILE, REPORT_FILE, clear_selfcal
 from umbmark.calibration.passes import Holds, Passes, calibrate_passes, predict_after
 from umbmark.calibration.result import CalibrationResult
 from umbmark.core.errors import InputError
 from umbmark.outputs.files import OutputPlan
 from umbmark.outputs.passes_page import write_overlay, write_passes_page
+from umbmark.routines.record import OVERLAY_FILE, REPORT_FILE, clear_selfcal
 
 __all__ = ["check_outputs", "write_outputs"]
 

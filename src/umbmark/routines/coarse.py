@@ -18,10 +18,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from umbmark.autocal.drive import DriveLimits, move_to, settle
-from umbmark.autocal.measure import Measure, take_fix
 from umbmark.core.conventions import wrap_angle
 from umbmark.robot.base import Pose2D, Robot
+from umbmark.routines.drive import DriveLimits, move_to, settle
+from umbmark.routines.measure import Measure, take_fix
 
 __all__ = ["COARSE_THRESHOLD", "CoarseTurning", "coarse_turning"]
 
@@ -80,7 +80,7 @@ def coarse_turning(robot: Robot, how: Measure, limits: DriveLimits) -> CoarseTur
 
     Raises
     ------
-    umbmark.autocal.corner.CornerNotFoundError
+    umbmark.routines.corner.CornerNotFoundError
         The corner was not found after a turn.
     ValueError
         A ratio outside 1/2 to 2.

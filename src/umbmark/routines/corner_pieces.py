@@ -1,5 +1,5 @@
 """A laser scan cut into straight pieces (split-and-merge), the walls among which the
-corner is looked for (:mod:`umbmark.autocal.corner_lidar`).
+corner is looked for (:mod:`umbmark.routines.corner_lidar`).
 
 1. The returns become beams and points in the robot's base frame through the laser's
    mounting.
@@ -21,10 +21,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from umbmark.autocal.corner import line_direction
-from umbmark.autocal.corner_beams import Beams
 from umbmark.core.arrays import FloatArray
 from umbmark.robot.base import ScanSweep
+from umbmark.routines.corner import line_direction
+from umbmark.routines.corner_beams import Beams
 
 __all__ = ["Piece", "pieces", "scan_beams", "scan_points"]
 

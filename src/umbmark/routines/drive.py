@@ -452,7 +452,7 @@ class _Driver:
 
 
 #: The control loop with its safety checks, for moves other than the square (the
-#: self-calibration anywhere: :mod:`umbmark.autocal.anywhere`).
+#: self-calibration anywhere: :mod:`umbmark.routines.anywhere`).
 Driver = _Driver
 
 

@@ -9,10 +9,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from umbmark.autocal.drive import DriveLimits
-from umbmark.autocal.measure import Measure
 from umbmark.core.errors import InputError
 from umbmark.robot.base import Robot
+from umbmark.routines.drive import DriveLimits
+from umbmark.routines.measure import Measure
 
 __all__ = ["ROBOT_RADIUS", "free_floor", "preflight"]
 

@@ -1,6 +1,6 @@
 """One UMBmark pass driven by the robot itself: before each run it returns to the start
 (by the corner fix) and takes a fix; it drives the square by its odometry, settles and
-takes a fix again. The pass is recorded as a run log (:mod:`umbmark.autocal.record`).
+takes a fix again. The pass is recorded as a run log (:mod:`umbmark.routines.record`).
 """
 
 from __future__ import annotations
@@ -9,12 +9,12 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from umbmark.autocal.corner import CornerFix, CornerNotFoundError, expected_pose
-from umbmark.autocal.drive import DriveLimits, drive_square, move_to, settle
-from umbmark.autocal.measure import Measure, take_fix
-from umbmark.autocal.record import MeasuredRun
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.robot.base import Pose2D, Robot
+from umbmark.routines.corner import CornerFix, CornerNotFoundError, expected_pose
+from umbmark.routines.drive import DriveLimits, drive_square, move_to, settle
+from umbmark.routines.measure import Measure, take_fix
+from umbmark.routines.record import MeasuredRun
 
 __all__ = [
     "HOME_ANGLE",

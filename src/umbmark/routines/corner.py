@@ -3,8 +3,8 @@ does with two of them.
 
 The paper (Sec. 5) measured where the robot really stopped with a "sonar calibrator":
 range sensors facing the two walls of an L-shaped corner. Here a fix comes from a laser
-scan (:mod:`umbmark.autocal.corner_lidar`), three range sensors, motion capture or a
-person with a tape measure (:mod:`umbmark.autocal.corner_sensors`).
+scan (:mod:`umbmark.routines.corner_lidar`), three range sensors, motion capture or a
+person with a tape measure (:mod:`umbmark.routines.corner_sensors`).
 
 The corner frame
     Origin at the corner's vertex (where the two walls' lines meet); x along the *x wall*,

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from umbmark.autocal.corner import CornerFix
-from umbmark.autocal.drive import DrivenRun
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import wheel_travel_from_poses
 from umbmark.robot.base import DriveParams
+from umbmark.routines.corner import CornerFix
+from umbmark.routines.drive import DrivenRun
 from umbmark.sources.runlog.reader import LogMetadata
 from umbmark.sources.runlog.writer import clear_run_log, write_log_csv, write_metadata
 

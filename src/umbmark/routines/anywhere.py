@@ -4,7 +4,7 @@ laser's own motion (Censi, Franchi, Marchionni and Oriolo, IEEE T-RO 2013).
 Where UMBmark needs a 4 x 4 m square of floor and an L-shaped corner, this routine
 needs about 2 x 2 m of free floor around the robot and a laser that sees some structure
 (walls, furniture) in more than one direction. The robot drives :data:`PATTERN` by its
-odometry, with the safety stops of :mod:`umbmark.autocal.drive`: turns on the spot both
+odometry, with the safety stops of :mod:`umbmark.routines.drive`: turns on the spot both
 ways, straights forward and back, arcs to the left and right forward and back, each
 ending where it began, so the robot comes back to its start. Meanwhile it records:
 
@@ -36,7 +36,6 @@ from typing import Literal
 
 import numpy as np
 
-from umbmark.autocal.drive import DriveLimits, Driver
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry
@@ -52,6 +51,7 @@ from umbmark.robot.base import (
     ScanSweep,
     StampedPose,
 )
+from umbmark.routines.drive import DriveLimits, Driver
 from umbmark.scans.intervals import IntervalOptions, IntervalReport, OdometryGuess, match_intervals
 
 __all__ = [
@@ -288,8 +288,8 @@ def check_scene(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep:
 
 def _free_floor(scan: ScanSweep) -> None:
     """Refuse a return of the laser on the pattern's floor: within :data:`PATTERN_REACH`
-    plus the robot's body (:data:`umbmark.autocal.preflight.ROBOT_RADIUS`) of its centre."""
-    from umbmark.autocal.preflight import ROBOT_RADIUS
+    plus the robot's body (:data:`umbmark.routines.preflight.ROBOT_RADIUS`) of its centre."""
+    from umbmark.routines.preflight import ROBOT_RADIUS
 
     ranges = np.asarray(scan.ranges, dtype=np.float64)
     ok = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
@@ -339,7 +339,7 @@ def drive_pattern(
     moves: tuple[Move, ...] = PATTERN,
 ) -> PatternRecording:
     """Drive ``moves`` by the odometry from where the robot stands (the safety stops of
-    :mod:`umbmark.autocal.drive`: stale odometry or scans, obstacles in the direction of
+    :mod:`umbmark.routines.drive`: stale odometry or scans, obstacles in the direction of
     travel, the odometry farther than :data:`PATTERN_REACH` plus ``margin`` from the
     start, more than ``time_factor`` times the expected time), recording the wheels and
     the sweeps. ``progress``: called with the move's number (from 1) and its text.

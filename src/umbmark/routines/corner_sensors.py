@@ -1,7 +1,7 @@
 """The robot's pose in an L-shaped corner from three range sensors (the paper's "sonar
 calibrator"), from motion capture, and from a person with a tape measure.
 
-Frames and the fix: :mod:`umbmark.autocal.corner`. Walls are named by the corner frame's
+Frames and the fix: :mod:`umbmark.routines.corner`. Walls are named by the corner frame's
 axes: the *x wall* runs along x (a sensor facing it measures the robot's y), the *y wall*
 along y.
 
@@ -30,10 +30,10 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from umbmark.autocal.corner import CornerFix, CornerNotFoundError, fit_corner
 from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.robot.base import Pose2D, RangeReading, StampedPose
+from umbmark.routines.corner import CornerFix, CornerNotFoundError, fit_corner
 
 __all__ = [
     "TapeMarks",
@@ -335,7 +335,7 @@ def fix_from_ground_truth(
     """A fix from motion capture: the tracked pose (averaged over ``poses`` taken while
     the robot stood still), in the corner frame when ``corner`` (the corner frame's pose
     in the capture's frame) is given, else in the capture's own frame (all the routine
-    needs: :func:`~umbmark.autocal.corner.relative_motion` drops the frame out).
+    needs: :func:`~umbmark.routines.corner.relative_motion` drops the frame out).
     ``sigma_xy`` [m] and ``sigma_theta`` [rad] are the system's accuracy."""
     stamped = [poses] if isinstance(poses, StampedPose) else list(poses)
     if not stamped:

@@ -32,11 +32,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from umbmark.autocal.corner import CornerFit, CornerFix, CornerNotFoundError, fit_corner, to_frame
-from umbmark.autocal.corner_beams import Beams, fit_corner_ranges, wall_angle
-from umbmark.autocal.corner_pieces import Piece, pieces
 from umbmark.core.conventions import wrap_angle
 from umbmark.robot.base import Pose2D, ScanSweep
+from umbmark.routines.corner import CornerFit, CornerFix, CornerNotFoundError, fit_corner, to_frame
+from umbmark.routines.corner_beams import Beams, fit_corner_ranges, wall_angle
+from umbmark.routines.corner_pieces import Piece, pieces
 
 __all__ = ["LidarCorner", "find_corner", "fix_from_scans"]
 
@@ -274,7 +274,7 @@ def fix_from_scans(
     off the others' median by more than 5 cm or 2 degrees, are left out (at least half
     must remain). The returns on the walls of the remaining scans are pooled and the
     walls fitted jointly as perpendicular lines, in range space
-    (:mod:`umbmark.autocal.corner_beams`); the covariance is the fit's, from its
+    (:mod:`umbmark.routines.corner_beams`); the covariance is the fit's, from its
     residuals.
 
     Raises
