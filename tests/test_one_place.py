@@ -23,7 +23,6 @@ SRC = ROOT / "src" / "umbmark"
 
 def _report_classes() -> list[type]:
     from umbmark.calibration.plan import PlanReport
-    from umbmark.jobs.calibrate import CalibrationReport
     from umbmark.jobs.demo import DemoReport
     from umbmark.jobs.history import HistoryReport
     from umbmark.jobs.info import InfoReport
@@ -32,6 +31,7 @@ def _report_classes() -> list[type]:
     from umbmark.jobs.reproduce import Fig4Report, Table1Report
     from umbmark.jobs.simulate import SimulationReport
     from umbmark.jobs.study import StudyReport
+    from umbmark.outputs.calibration import CalibrationReport
 
     return [
         CalibrationReport,

@@ -53,7 +53,7 @@ _EXPORTS = {
     "reproduce_fig4": "umbmark.jobs.reproduce",
     "example": "umbmark.jobs.example",
     "example_sessions": "umbmark.jobs.example",
-    "CalibrationReport": "umbmark.jobs.calibrate",
+    "CalibrationReport": "umbmark.outputs.calibration",
     "ReplayReport": "umbmark.jobs.replay",
     "InfoReport": "umbmark.jobs.info",
     "SimulationReport": "umbmark.jobs.simulate",
@@ -144,7 +144,7 @@ if TYPE_CHECKING:
     from umbmark.core.errors import InputError
     from umbmark.estimators.base import ErrorEstimate, SquareTest
     from umbmark.estimators.dispatch import estimate_errors
-    from umbmark.jobs.calibrate import CalibrationReport, calibrate
+    from umbmark.jobs.calibrate import calibrate
     from umbmark.jobs.demo import DemoReport, demo
     from umbmark.jobs.example import example, example_sessions
     from umbmark.jobs.history import HistoryReport, history
@@ -161,6 +161,7 @@ if TYPE_CHECKING:
     from umbmark.model.active import ActiveParams
     from umbmark.model.kinematics import WheelParams, integrate_odometry
     from umbmark.model.run import EndPose, Run
+    from umbmark.outputs.calibration import CalibrationReport
     from umbmark.robot.base import Robot
     from umbmark.robot.connect import connect
     from umbmark.robot.virtual import VirtualRobot

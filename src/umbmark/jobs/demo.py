@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.benchmark.returns import sem_verdict
-from umbmark.calibration.result import CalibrationResult
+from umbmark.outputs.calibration import CalibrationReport
 from umbmark.core.bounds import check_int_option
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
@@ -53,7 +53,7 @@ class DemoReport(JsonText):
         The uncalibrated robot (true errors ``robot.E_d``, :attr:`true_E_b`).
     before, after : Trial
         The bi-directional square tests before and after the correction.
-    report : CalibrationResult
+    report : CalibrationReport
         The calibration from the test before.
     seed : int
     files : dict of str to Path
@@ -63,7 +63,7 @@ class DemoReport(JsonText):
     robot: SimRobot
     before: Trial
     after: Trial
-    report: CalibrationResult
+    report: CalibrationReport
     seed: int
     files: dict[str, Path]
 
@@ -196,7 +196,7 @@ def demo(
     (after,) = umbmark_trials([calibrated], SIDE, runs, rng=rng, progress=stage(0.5))
 
     files = {} if folder is None else {k: folder / v for k, v in DEMO_FILES.items()}
-    report = CalibrationResult(
+    report = CalibrationReport(
         sources=(str(files.get("runs_before", "demo runs before")),),
         format="table",
         runs=tuple(before.runs),

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
+from umbmark.estimators.registry import SCAN_MATCHING
 from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
 from umbmark.routines.anywhere import (
     PATTERN,
@@ -43,7 +44,7 @@ from umbmark.routines.drive import DriveLimits, settle
 from umbmark.routines.record import OVERLAY_FILE, pass_folder
 
 if TYPE_CHECKING:
-    from umbmark.calibration.result import CalibrationResult
+    from umbmark.outputs.calibration import CalibrationReport
 
 __all__ = ["AnywherePass", "AnywhereReport", "selfcal_anywhere", "square_only"]
 
@@ -66,7 +67,7 @@ class AnywherePass:
         ``pass 1`` or ``verification``.
     folder : Path or None
         Where its intervals were written (None: not kept).
-    report : CalibrationResult
+    report : CalibrationReport
         Its calibration (scan-matching, composed with ``params``).
     params : DriveParams
         The parameters the controller ran with during the drive.
@@ -78,7 +79,7 @@ class AnywherePass:
 
     label: str
     folder: Path | None
-    report: CalibrationResult
+    report: CalibrationReport
     params: DriveParams
     matched: str
     applied: ApplyResult | None = None
@@ -251,6 +252,7 @@ class _Pass:
     force: bool
 
     def __call__(self, label: str) -> AnywherePass:
+        from umbmark.outputs.calibration import CalibrationReport
         from umbmark.sources.tuples import write_tuples
         from umbmark.store.calibrations import calibrate_recorded
 
@@ -264,7 +266,7 @@ class _Pass:
         where.mkdir(parents=True, exist_ok=True)
         path = write_tuples(where / INTERVALS_FILE, matched.intervals, force=self.force)
         p = recording.params
-        report = calibrate_recorded(
+        found = calibrate_recorded(
             [path],
             {
                 "wheel_diameter": 2.0 * p.wheel_radius,
@@ -272,11 +274,12 @@ class _Pass:
                 "current_c_r": p.right_wheel_radius_multiplier,
                 "current_separation_multiplier": p.wheel_separation_multiplier,
             },
-            method="scan-matching",
+            method=SCAN_MATCHING.name,
             wheelbase=p.wheel_separation,
             robot=self.record_as,
             history=self.history,
         )
+        report = CalibrationReport.of(found)
         return AnywherePass(label, where, report, p, intervals_note(matched))
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import Direction
 from umbmark.jobs.selfcal_report import PassResult
+from umbmark.outputs.calibration import CalibrationReport
 from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
 from umbmark.routines.drive import DriveLimits
 from umbmark.routines.measure import Measure
@@ -29,7 +30,7 @@ def resumed_passes(folder: Path, state: SelfCalState) -> list[PassResult]:
 
     out = []
     for label, where, params in state.passes:
-        report = calibrate_recorded([folder / where], {})
+        report = CalibrationReport.of(calibrate_recorded([folder / where], {}))
         out.append(PassResult(label, folder / where, report, params))
     if out:
         out[-1] = replace(
@@ -70,7 +71,8 @@ class PassDriver:
         )
         where = pass_folder(self.folder, label)
         record_pass(where, measured, params, self.side, self.how.method, self.name)
-        report = calibrate_recorded([where], {}, robot=self.record_as, history=self.history)
+        found = calibrate_recorded([where], {}, robot=self.record_as, history=self.history)
+        report = CalibrationReport.of(found)
         return PassResult(label, where, report, params, warnings=strays(measured, self.limits))
 
     def mark_applied(self, result: PassResult) -> None:

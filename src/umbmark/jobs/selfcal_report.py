@@ -15,7 +15,7 @@ from umbmark.robot.base import ApplyResult, DriveParams
 from umbmark.routines.coarse import CoarseTurning
 
 if TYPE_CHECKING:
-    from umbmark.calibration.result import CalibrationResult
+    from umbmark.outputs.calibration import CalibrationReport
 
 __all__ = ["PassResult", "SelfCalReport"]
 
@@ -30,7 +30,7 @@ class PassResult:
         ``pass 1``, ``pass 2``, ..., ``verification``.
     folder : Path or None
         Its run log (None: not kept, the self-calibration was given no ``out``).
-    report : CalibrationResult
+    report : CalibrationReport
         Its calibration (composed with the parameters active during it).
     params : DriveParams
         The parameters the controller ran with during the pass.
@@ -43,7 +43,7 @@ class PassResult:
 
     label: str
     folder: Path | None
-    report: CalibrationResult
+    report: CalibrationReport
     params: DriveParams
     applied: ApplyResult | None = None
     warnings: tuple[str, ...] = ()
