@@ -402,6 +402,7 @@ SAME_DAY = sorted((OPTIODOM / "ivanjko").glob("2506*"))
 real = pytest.mark.skipif(not SQUARE.is_dir(), reason="../shared/data is not here")
 
 
+@pytest.mark.slow
 @real
 def test_real_squares_fall_back_to_one_wheelbase_and_predict_circles_as_it_does():
     """Calibrated on the 0.75 m squares, the scrub model's arcs wheelbase came from the

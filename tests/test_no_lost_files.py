@@ -117,6 +117,7 @@ def test_simulate_o_keeps_the_hand_typed_table_and_force_replaces_it(tmp_path: P
     assert len(umbmark.calibrate(table, side_length=1.0, wheelbase=0.34).runs) == 4
 
 
+@pytest.mark.slow
 def test_simulate_logs_never_mixes_runs(tmp_path: Path) -> None:
     """A folder holding a run log: refused; --force replaces the run log whole (3 + 3 runs
     before, 2 + 2 after: calibrate reads 4, not 10); another .csv in it is never removed
@@ -179,6 +180,7 @@ def _small_selfcal(robot: VirtualRobot, **kwargs: object) -> umbmark.SelfCalRepo
     )
 
 
+@pytest.mark.slow
 def test_a_library_selfcal_writes_nothing_and_runs_twice(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -56,6 +56,7 @@ def test_directions_come_from_the_heading_not_the_file_order():
     assert data["n_cw"] == data["n_ccw"] == 3
 
 
+@pytest.mark.slow
 def test_paper_calibration_lowers_the_error_on_circles(tmp_path):
     result = tmp_path / "square.json"
     data = umbmark.calibrate(SQUARE, output=result).to_dict()

@@ -214,6 +214,7 @@ def test_wheels_from_the_odometry_alone() -> None:
     assert abs(est.E_s - E_S) < TOL_E_S
 
 
+@pytest.mark.slow
 def test_nothing_applied_with_apply_none() -> None:
     robot = _robot(seed=2)
     before = robot.drive_params()
