@@ -320,3 +320,20 @@ def test_the_checks_find_what_they_look_for(tmp_path):
 if __name__ == "__main__":  # pragma: no cover - a listing for people
     for line in [*layer_violations(), *map(str, import_cycles()), *long_modules()]:
         sys.stdout.write(line + "\n")
+
+
+def test_the_array_types_are_named_once():
+    """``FloatArray``, ``IntArray`` and ``BoolArray`` are assigned in ``core/arrays`` only."""
+    where = []
+    for name, path in _modules().items():
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            targets = node.targets if isinstance(node, ast.Assign) else []
+            for target in targets:
+                alias = getattr(target, "id", "")
+                if alias in ("FloatArray", "IntArray", "BoolArray"):
+                    where.append(f"{name}.{alias}")
+    assert sorted(where) == [
+        "umbmark.core.arrays.BoolArray",
+        "umbmark.core.arrays.FloatArray",
+        "umbmark.core.arrays.IntArray",
+    ]

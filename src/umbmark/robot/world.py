@@ -21,6 +21,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.robot.base import Pose2D, RangeReading, ScanSweep, StampedPose
 
@@ -41,7 +42,6 @@ __all__ = [
     "square_path",
 ]
 
-FloatArray = NDArray[np.float64]
 
 #: Rays start this far along the beam: a hit closer than this is the sensor itself.
 _EPS = 1e-9

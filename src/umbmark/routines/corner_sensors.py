@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.robot.base import Pose2D, RangeReading, StampedPose
@@ -43,7 +43,6 @@ __all__ = [
     "fix_from_tape",
 ]
 
-FloatArray = NDArray[np.float64]
 Wall = Literal["x", "y"]
 
 #: The paper's layout: the first two sensors (or marks) face the y wall, the third the x wall.
