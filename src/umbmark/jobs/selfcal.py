@@ -28,6 +28,7 @@ What a person still does: place the robot in the corner, and calibrate the scale
 from __future__ import annotations
 
 import contextlib
+import inspect
 import os
 import tempfile
 from collections.abc import Callable, Sequence
@@ -76,11 +77,11 @@ MAX_SELFCAL_PASSES = 5
 MAX_SELFCAL_RUNS = 20
 
 
-#: The square routine's options as not given: ``--routine anywhere`` refuses any other.
-_SQUARE_DEFAULTS: dict[str, object] = {
-    "side_length": 4.0, "runs": 5, "measure": "lidar", "max_passes": 3, "report": None,
-    "resume": None, "tape_marks": None, "corner_side": "right",
-}  # fmt: skip
+#: The square routine's own options: ``--routine anywhere`` refuses them given.
+_SQUARE_ONLY = (
+    "side_length", "runs", "measure", "max_passes", "report", "resume", "tape_marks",
+    "corner_side",
+)  # fmt: skip
 
 
 def _check_counts(side_length: float, runs: int, max_passes: int, measure: str) -> None:
@@ -187,7 +188,8 @@ def selfcal(
     ROUTINE.check(routine)
     given = locals()
     if routine == "anywhere":
-        square_only(**{k: given[k] != v for k, v in _SQUARE_DEFAULTS.items()})
+        default = inspect.signature(selfcal).parameters
+        square_only(**{k: given[k] != default[k].default for k in _SQUARE_ONLY})
         return selfcal_anywhere(
             robot, apply=_apply_method(apply), verify=verify, robot_name=robot_name,
             history=history, out=out, progress=progress, limits=limits, force=force,

@@ -205,9 +205,7 @@ def selfcal_anywhere(
     if folder is not None:
         files += [p.folder / INTERVALS_FILE for p in passes if p.folder is not None]
         if first.applied is not None:  # applied, or waiting for a controller restart
-            from umbmark.outputs.passes_page import write_overlay
-
-            files.append(write_overlay(first.report, folder / OVERLAY_FILE, force=force))
+            files += first.report.write(yaml=folder / OVERLAY_FILE, force=force)
     else:
         first = replace(first, folder=None)
         verification = None if verification is None else replace(verification, folder=None)

@@ -1,7 +1,7 @@
-"""What the self-calibration and ``umbmark report`` write of passes: the HTML page of
-UMBmark passes on one robot, its name checked before anything is computed
-(:func:`check_page_output`), then written whole (:func:`write_passes_page`); and the
-controller overlay of the pass the controller holds (:func:`write_overlay`)."""
+"""The HTML page of UMBmark passes on one robot, written to a file: its name checked
+before anything is computed (:func:`check_page_output`), then written whole
+(:func:`write_passes_page`). ``umbmark report -o`` and the self-calibration's
+``report.html`` write it."""
 
 from __future__ import annotations
 
@@ -9,12 +9,11 @@ import os
 from pathlib import Path
 
 from umbmark.calibration.passes import Passes
-from umbmark.calibration.result import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError
 from umbmark.outputs.files import OutputPlan
 
-__all__ = ["check_page_output", "write_overlay", "write_passes_page"]
+__all__ = ["check_page_output", "write_passes_page"]
 
 _HTML = (".html", ".htm")
 
@@ -68,23 +67,3 @@ def check_page_output(
         raise InputError(f"-o {path}: the file name should end in .html or .htm")
     OutputPlan.of(report=path, force=force)  # a writable folder, new unless force
     return path
-
-
-def write_overlay(
-    result: CalibrationResult, output: str | os.PathLike[str], *, force: bool = False
-) -> Path:
-    """Write the ros2_control overlay of ``result``'s new parameters to ``output``,
-    atomically; a file that exists is replaced only with ``force``.
-
-    Raises
-    ------
-    InputError
-        For an input's name, a file that cannot be written or that exists (without
-        ``force``), or a result whose verdict is "do not apply" (unless it was forced).
-    """
-    if result.overlay_withheld:
-        raise InputError(f"{output}: {result.verdict.line()}", source=result.source)
-    plan = OutputPlan.of(force=force, inputs=result.sources, yaml=output)
-    assert plan.yaml is not None
-    atomic_write_text(plan.yaml, result.overlay_yaml())
-    return plan.yaml

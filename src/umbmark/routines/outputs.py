@@ -9,10 +9,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from umbmark.calibration.passes import Holds, Passes, calibrate_passes, predict_after
-from umbmark.calibration.result import CalibrationResult
 from umbmark.core.errors import InputError
+from umbmark.outputs.calibration import CalibrationReport
 from umbmark.outputs.files import OutputPlan
-from umbmark.outputs.passes_page import write_overlay, write_passes_page
+from umbmark.outputs.passes_page import write_passes_page
 from umbmark.routines.record import OVERLAY_FILE, REPORT_FILE, clear_selfcal
 
 __all__ = ["check_outputs", "write_outputs"]
@@ -39,7 +39,7 @@ def check_outputs(folder: Path | None, page: Path | None, force: bool) -> None:
 
 def write_outputs(
     folders: Sequence[Path],
-    held: CalibrationResult | None,
+    held: CalibrationReport | None,
     holds: Holds,
     folder: Path | None,
     page: Path | None,
@@ -58,5 +58,5 @@ def write_outputs(
         pages = Passes(passes=tuple(found), predicted=predicted, holds=holds)
         written.append(write_passes_page(pages, page, force=force))
     if held is not None and folder is not None:
-        written.append(write_overlay(held, folder / OVERLAY_FILE, force=force))
+        written += held.write(yaml=folder / OVERLAY_FILE, force=force)
     return written
