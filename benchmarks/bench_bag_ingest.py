@@ -37,7 +37,7 @@ from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_typestore
 
 from umbmark.sources.bag import fastpath
-from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.bag.recording import read_bag
 
 from _timing import best_of

@@ -12,7 +12,7 @@ import sys
 import pytest
 
 import umbmark
-from umbmark.runs.options import ReadOptions, SourceOptions
+from umbmark.runs.read_options import ReadOptions, SourceOptions
 
 from helpers import ROOT
 

@@ -26,7 +26,7 @@ LAYERS = (
     "sources",
     "runs",
     "scans",
-    "benchmark",
+    "returns",
     "estimators",
     "calibration",
     "sim",

@@ -25,7 +25,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from umbmark.core.errors import InputError
 from umbmark.sources.bag import fastpath
-from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.bag.recording import bag_topics, read_bag
 
 TS2 = get_typestore(Stores.LATEST)

@@ -32,7 +32,7 @@ from rosbags.rosbag2.enums import StoragePlugin
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from umbmark.sources import progress
-from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.bag.recording import read_bag
 
 FORMATS = ["ros1", "sqlite3", "mcap"]

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.benchmark.returns import Cluster, umbmark_benchmark
 from umbmark.core.conventions import Direction
 from umbmark.model.run import EndPose, Run
+from umbmark.returns.clusters import Cluster, umbmark_benchmark
 
 
 def _run(direction: str, ex: float, ey: float) -> Run:
@@ -93,7 +93,7 @@ def _bench_of(e_max: float, sem: float):
     Two runs at ``(e_max -/+ sem, 0)``: cg (e_max, 0), radial sigma^2 = 2 sem^2 / 1, so
     SEM = sigma / sqrt(2) = sem. The cw cluster sits near the origin.
     """
-    from umbmark.benchmark.returns import Benchmark
+    from umbmark.returns.clusters import Benchmark
 
     cw = Cluster.of(Direction.CW, np.array([[-1e-4, 0.0], [1e-4, 0.0]]))
     ccw = Cluster.of(Direction.CCW, np.array([[e_max - sem, 0.0], [e_max + sem, 0.0]]))
@@ -112,7 +112,7 @@ def _bench_of(e_max: float, sem: float):
     ],
 )
 def test_the_verdict_follows_the_ratio(e_mm: float, three_sem_mm: float, standing: str) -> None:
-    from umbmark.benchmark.returns import scatter_standing, sem_verdict
+    from umbmark.returns.clusters import scatter_standing, sem_verdict
 
     bench = _bench_of(e_mm / 1000, three_sem_mm / 3000)
     assert bench.e_max_syst * 1000 == pytest.approx(e_mm)

@@ -329,7 +329,7 @@ def test_help_layout_does_not_depend_on_arguments_having_help_records():
     """click 8.5 gave arguments a help record; our sections must not move because of it."""
     import click
 
-    from umbmark.cli.options import Command, option
+    from umbmark.cli.click_options import Command, option
     from umbmark.options.spec import OUTPUTS, TEST
 
     class ArgumentWithHelp(click.Argument):  # what click >= 8.5 does

@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.benchmark.returns import umbmark_benchmark
 from umbmark.core.conventions import Direction, angle_to_rad, length_to_m, wrap_angle
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.paper import paper_estimate
 from umbmark.model.kinematics import integrate_odometry
 from umbmark.model.run import EndPose, Run
+from umbmark.returns.clusters import umbmark_benchmark
 
 from helpers import runs_around, turtle_square
 

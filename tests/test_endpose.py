@@ -12,13 +12,13 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.benchmark.returns import umbmark_benchmark
 from umbmark.core.conventions import Direction
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.endpose import endpose_estimate
 from umbmark.model.run import EndPose, Run
 from umbmark.model.square import icr_offset, square_run_end
+from umbmark.returns.clusters import umbmark_benchmark
 
 from helpers import turtle_square
 

@@ -23,7 +23,7 @@ from umbmark.model.kinematics import OdometryGeometry
 from umbmark.runs.load import LoadOptions, load_runs
 from umbmark.runs.logged import check_motion
 from umbmark.sim.robot import SimRobot
-from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.runlog.reader import LogMetadata
 from umbmark.sources.runlog.writer import write_log_csv, write_metadata
 

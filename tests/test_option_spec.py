@@ -33,8 +33,8 @@ from umbmark.options.spec import (
     Spec,
 )
 from umbmark.runs.load import FORMATS, Format
-from umbmark.runs.options import ReadOptions, SourceOptions
-from umbmark.sources.bag.options import BagOptions, check_options
+from umbmark.runs.read_options import ReadOptions, SourceOptions
+from umbmark.sources.bag.bag_options import BagOptions, check_options
 
 from helpers import api_error, cli_error
 

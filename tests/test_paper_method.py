@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from umbmark.benchmark.returns import umbmark_benchmark
 from umbmark.core.conventions import Direction
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.paper import paper_estimate
 from umbmark.model.run import EndPose, Run
+from umbmark.returns.clusters import umbmark_benchmark
 
 from helpers import linear_cgs, runs_around, turtle_square
 

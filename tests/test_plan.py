@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 import umbmark
-from umbmark.benchmark.returns import Benchmark, Cluster
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.exact import exact_components
 from umbmark.model.kinematics import WheelParams
+from umbmark.returns.clusters import Benchmark, Cluster
 from umbmark.sim.experiments import umbmark_trials
 from umbmark.sim.robot import NoiseModel, SimRobot
 

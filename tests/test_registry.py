@@ -18,13 +18,13 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from umbmark.benchmark.returns import umbmark_benchmark
 from umbmark.cli.main import cli
 from umbmark.core.conventions import Direction
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.registry import ESTIMATORS, NAMES, SQUARE, Method
 from umbmark.model.run import EndPose, Run
+from umbmark.returns.clusters import umbmark_benchmark
 
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "umbmark"
 

@@ -210,7 +210,7 @@ def test_every_option_is_a_keyword_of_umbmark_report() -> None:
     import click
 
     from umbmark.cli.main import cli
-    from umbmark.runs.options import SourceOptions
+    from umbmark.runs.read_options import SourceOptions
 
     keywords = set(inspect.signature(umbmark.report).parameters)
     keywords |= set(SourceOptions.__annotations__)

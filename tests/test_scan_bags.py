@@ -17,7 +17,7 @@ from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry
 from umbmark.model.recording import PoseSeries
 from umbmark.scans.bag import intervals_from_bag, scan_intervals_from_bag
-from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.bag.scans import read_scan_bag
 from umbmark.sources.bag.writer import START_EPOCH, bag_target, write_bag
 

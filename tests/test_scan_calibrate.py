@@ -19,7 +19,7 @@ from umbmark.core.errors import InputError
 from umbmark.model.recording import PoseSeries
 from umbmark.robot.base import Pose2D
 from umbmark.robot.world import room_world
-from umbmark.runs.options import ReadOptions
+from umbmark.runs.read_options import ReadOptions
 from umbmark.sources.bag.scans import scan_mounting
 from umbmark.sources.bag.writer import bag_target, write_bag
 

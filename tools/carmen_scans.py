@@ -34,7 +34,7 @@ import numpy as np
 from umbmark.calibration.scan import calibrate_intervals
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import OdometryGeometry
-from umbmark.runs.options import ReadOptions
+from umbmark.runs.read_options import ReadOptions
 from umbmark.scans.intervals import IntervalOptions, OdometryGuess, match_intervals
 from umbmark.sources.carmen import odometry_wheels, read_carmen
 

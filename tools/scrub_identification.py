@@ -33,7 +33,7 @@ import numpy as np
 import umbmark
 from umbmark.estimators.motions import motion_coverage
 from umbmark.runs.active import read_runs
-from umbmark.runs.options import ReadOptions
+from umbmark.runs.read_options import ReadOptions
 
 CIRCLES_2506 = [f"circular/25062020{s}" for s in ("2104", "2119", "2236", "2251", "2317", "2345")]
 SPOT_2506 = [f"ivanjko/2506202016{s}" for s in ("18", "36", "55")] + ["ivanjko/250620201738"]

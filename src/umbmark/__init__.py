@@ -59,7 +59,7 @@ _EXPORTS = {
     "SimulationReport": "umbmark.jobs.simulate",
     "SimSetup": "umbmark.sim.setup",
     "DemoReport": "umbmark.jobs.demo",
-    "SourceOptions": "umbmark.runs.options",
+    "SourceOptions": "umbmark.runs.read_options",
     # the robot calibrates itself (the paper's Sec. 6)
     "selfcal": "umbmark.jobs.selfcal",
     "SelfCalReport": "umbmark.jobs.selfcal",
@@ -70,7 +70,7 @@ _EXPORTS = {
     "InputError": "umbmark.core.errors",
     # building blocks
     "ActiveParams": "umbmark.model.active",
-    "Benchmark": "umbmark.benchmark.returns",
+    "Benchmark": "umbmark.returns.clusters",
     "Calibration": "umbmark.calibration.compose",
     "Direction": "umbmark.core.conventions",
     "EndPose": "umbmark.model.run",
@@ -81,7 +81,7 @@ _EXPORTS = {
     "estimate_errors": "umbmark.estimators.dispatch",
     "integrate_odometry": "umbmark.model.kinematics",
     "read_runs_table": "umbmark.sources.runs_table.reader",
-    "umbmark_benchmark": "umbmark.benchmark.returns",
+    "umbmark_benchmark": "umbmark.returns.clusters",
 }
 
 __all__ = [
@@ -136,7 +136,6 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
     from umbmark.calibration.compose import Calibration
     from umbmark.calibration.plan import PlanReport
     from umbmark.calibration.validation import ValidationReport
@@ -162,10 +161,11 @@ if TYPE_CHECKING:
     from umbmark.model.kinematics import WheelParams, integrate_odometry
     from umbmark.model.run import EndPose, Run
     from umbmark.outputs.calibration import CalibrationReport
+    from umbmark.returns.clusters import Benchmark, umbmark_benchmark
     from umbmark.robot.base import Robot
     from umbmark.robot.connect import connect
     from umbmark.robot.virtual import VirtualRobot
-    from umbmark.runs.options import SourceOptions
+    from umbmark.runs.read_options import SourceOptions
     from umbmark.sim.setup import SimSetup
     from umbmark.sources.runs_table.reader import read_runs_table
     from umbmark.store.history import History

@@ -11,7 +11,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
-from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.calibration.result import CalibrationResult
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
@@ -19,8 +18,9 @@ from umbmark.core.messages import info
 from umbmark.core.version import __version__
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run
-from umbmark.runs.options import ReadOptions, SourceOptions
+from umbmark.returns.clusters import Benchmark, umbmark_benchmark
 from umbmark.runs.read import RunSource, source_name
+from umbmark.runs.read_options import ReadOptions, SourceOptions
 
 if TYPE_CHECKING:
     from umbmark.calibration.validation import ValidationReport

@@ -15,7 +15,6 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeAlias
 
-from umbmark.benchmark.returns import Benchmark, Cluster, sem_verdict
 from umbmark.calibration.compose import Calibration
 from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
@@ -23,6 +22,7 @@ from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.estimators.registry import LOGGED
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run
+from umbmark.returns.clusters import Benchmark, Cluster, sem_verdict
 from umbmark.runs.association import Association
 from umbmark.sources.params.reader import (
     CalibratedParams,

@@ -28,8 +28,8 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.options.spec import WHEELBASE
 from umbmark.runs.active import choose_active
-from umbmark.runs.options import ReadOptions
 from umbmark.runs.read import Chosen, bag_options, check_invertible, parameter_file
+from umbmark.runs.read_options import ReadOptions
 from umbmark.sources.params.reader import ControllerParams
 
 __all__ = ["IntervalSource", "calibrate_intervals", "calibrate_scan_bags", "read_intervals"]

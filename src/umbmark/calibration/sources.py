@@ -20,8 +20,8 @@ from umbmark.core.errors import InputError
 from umbmark.estimators.plausibility import judge_table
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
 from umbmark.runs.active import read_each
-from umbmark.runs.options import ReadOptions
 from umbmark.runs.read import RunSource, is_intervals, is_runs, pool_runs, source_name
+from umbmark.runs.read_options import ReadOptions
 
 __all__ = ["calibrate_sources"]
 

@@ -26,7 +26,7 @@ threshold here and the reason for it:
   and ccw label swapped, when the runs fit with them swapped back). A marginal failure
   (p between :data:`MODEL_REFUSE` and the check's level) is a warning: apply with care.
 - **No error and no scatter**: ``E_max,syst`` and ``3 x SEM`` both under
-  :data:`umbmark.benchmark.returns.NO_RETURN_ERROR` (``0.0 mm`` as printed): the runs came
+  :data:`umbmark.returns.clusters.NO_RETURN_ERROR` (``0.0 mm`` as printed): the runs came
   back exactly where the odometry says, which no measured reference shows: a ground truth
   that reproduces the odometry (refused where the runs are read when it does so exactly:
   :mod:`umbmark.runs.reproduced`), or a simulation without noise. Apply with care.
@@ -51,8 +51,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from umbmark.benchmark.returns import NO_RETURN_ERROR
 from umbmark.estimators.base import ErrorEstimate, SquareTest
+from umbmark.returns.clusters import NO_RETURN_ERROR
 from umbmark.sources.bag.truth.independence import REFERENCES
 
 if TYPE_CHECKING:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from umbmark.cli.options import Command, force_option, option
+from umbmark.cli.click_options import Command, force_option, option
 from umbmark.estimators.registry import DEFAULT, SQUARE
 from umbmark.options.spec import OUTPUTS
 
@@ -50,10 +50,10 @@ def demo(json_out: bool, out: str | None, seed: int, method: str, runs: int, for
     Fig. 6 / Fig. 11 style plots into --out.
     """
     from umbmark import demo as run_demo
-    from umbmark.benchmark.returns import sem_verdict
     from umbmark.cli.common import console, progress_bar, warn, wrote
     from umbmark.cli.render import render_calibration
     from umbmark.outputs.files import fresh_folder
+    from umbmark.returns.clusters import sem_verdict
 
     with progress_bar("UMBmark before and after calibration") as progress:
         result = run_demo(

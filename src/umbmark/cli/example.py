@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from umbmark.cli.options import force_option
+from umbmark.cli.click_options import force_option
 
 __all__ = ["example"]
 

@@ -6,7 +6,7 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import (
+from umbmark.cli.click_options import (
     OTHER,
     Command,
     apply,

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from umbmark.cli.options import Command, apply, option
+from umbmark.cli.click_options import Command, apply, option
 from umbmark.options.spec import LOGS, OUTPUTS
 
 if TYPE_CHECKING:

@@ -6,7 +6,7 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import Command, apply, option
+from umbmark.cli.click_options import Command, apply, option
 from umbmark.options.spec import OUTPUTS, TEST
 
 __all__ = ["plan"]

@@ -13,10 +13,10 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from umbmark.benchmark.returns import Benchmark, sem_verdict
 from umbmark.calibration.result import ABSOLUTE_FIGURES, CalibrationResult
 from umbmark.estimators.registry import LOGGED, find, method_label
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
+from umbmark.returns.clusters import Benchmark, sem_verdict
 
 if TYPE_CHECKING:
     from umbmark.jobs.selfcal import SelfCalReport

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import (
+from umbmark.cli.click_options import (
     Command,
     apply,
     force_option,

@@ -8,12 +8,12 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from umbmark.cli.calibrate import calibrate as _calibrate_command
+from umbmark.cli.click_options import Command, apply, option, source_options
 from umbmark.cli.common import command_line
-from umbmark.cli.options import Command, apply, option, source_options
 from umbmark.options.spec import OUTPUTS
 
 if TYPE_CHECKING:
-    from umbmark.benchmark.returns import Benchmark
+    from umbmark.returns.clusters import Benchmark
 
 __all__ = ["report"]
 

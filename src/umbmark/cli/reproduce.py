@@ -6,7 +6,7 @@ import math
 
 import click
 
-from umbmark.cli.options import Command, force_option, option
+from umbmark.cli.click_options import Command, force_option, option
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["reproduce"]

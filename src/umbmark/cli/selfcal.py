@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from umbmark.cli.options import Command, apply, force_option, option, spec_option
+from umbmark.cli.click_options import Command, apply, force_option, option, spec_option
 from umbmark.core.errors import InputError, SafetyError
 from umbmark.options.selfcal import CORNER_SIDE, DRIVING, OBSTACLE_MARGIN, ROUTINE
 from umbmark.options.spec import OUTPUTS, TEST

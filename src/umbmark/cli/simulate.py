@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from umbmark.cli.options import Command, apply, force_option, option
+from umbmark.cli.click_options import Command, apply, force_option, option
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["simulate"]

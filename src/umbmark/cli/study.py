@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
-from umbmark.cli.options import Command, option
+from umbmark.cli.click_options import Command, option
 from umbmark.estimators.registry import SQUARE
 from umbmark.options.spec import OUTPUTS
 

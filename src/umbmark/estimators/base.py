@@ -8,9 +8,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark
 from umbmark.core.arrays import FloatArray
 from umbmark.core.validation import check_positive
+from umbmark.returns.clusters import Benchmark
 
 __all__ = [
     "ErrorEstimate",

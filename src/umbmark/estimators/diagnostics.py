@@ -30,7 +30,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError
 from umbmark.core.messages import join_names
@@ -38,6 +37,7 @@ from umbmark.estimators.base import ModelCheckFailure, SquareTest
 from umbmark.estimators.endpose import FLOOR, LEVEL, EndPoseFit, fit_end_poses
 from umbmark.estimators.registry import RUNS, Estimator, names
 from umbmark.model.run import Run, split_by_direction
+from umbmark.returns.clusters import Benchmark, umbmark_benchmark
 
 __all__ = [
     "MODEL_CAUSES",

@@ -24,7 +24,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.core.errors import InputError
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.estimators.diagnostics import check_model, check_reach, require_headings
@@ -33,6 +32,7 @@ from umbmark.estimators.registry import SQUARE, estimator, find
 from umbmark.estimators.scale import scale_from_straights, scale_only
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run
+from umbmark.returns.clusters import Benchmark, umbmark_benchmark
 
 if TYPE_CHECKING:
     from umbmark.estimators.trajectory_fit import TrajectoryFit

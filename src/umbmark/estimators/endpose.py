@@ -36,7 +36,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark
 from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import Direction
 from umbmark.core.stats import f_cdf
@@ -46,6 +45,7 @@ from umbmark.estimators.registry import ENDPOSE
 from umbmark.estimators.solve import gauss_newton, jacobian
 from umbmark.model.run import Run, split_by_direction
 from umbmark.model.square import square_run_end
+from umbmark.returns.clusters import Benchmark
 
 __all__ = [
     "FLOOR",

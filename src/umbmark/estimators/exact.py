@@ -20,7 +20,6 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark
 from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import Direction
 from umbmark.estimators.base import ErrorEstimate, SquareTest, cg_blocks, propagate_blocks
@@ -30,6 +29,7 @@ from umbmark.estimators.solve import gauss_newton, jacobian
 from umbmark.model.run import Run
 from umbmark.model.square import icr_offset, square_end_pose
 from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta_arc
+from umbmark.returns.clusters import Benchmark
 
 __all__ = [
     "LARGE",

@@ -17,7 +17,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark
 from umbmark.core.arrays import FloatArray
 from umbmark.core.conventions import Direction
 from umbmark.estimators.base import ErrorEstimate, SquareTest, propagate_blocks
@@ -25,6 +24,7 @@ from umbmark.estimators.endpose import heading_errors
 from umbmark.estimators.registry import HEADING
 from umbmark.model.run import Run
 from umbmark.model.systematic import E_b_from_alpha, E_d_from_beta_arc
+from umbmark.returns.clusters import Benchmark
 
 __all__ = ["heading_components", "heading_estimate"]
 

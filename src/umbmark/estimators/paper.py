@@ -15,12 +15,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from umbmark.benchmark.returns import Benchmark
 from umbmark.estimators.base import ErrorEstimate, SquareTest, cg_blocks, propagate_blocks
 from umbmark.estimators.exact import exact_end_positions
 from umbmark.estimators.formulas import paper_components
 from umbmark.estimators.registry import PAPER
 from umbmark.model.run import Run
+from umbmark.returns.clusters import Benchmark
 
 __all__ = ["SMALL_ANGLE_TOLERANCE", "exact_view", "paper_estimate", "small_angle_shortfall"]
 

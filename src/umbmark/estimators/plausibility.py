@@ -141,7 +141,7 @@ def _scaled(run: Run, factor: float) -> Run:
 def _read_as(squares: Sequence[Run], given: str, unit: str) -> _Reading | None:
     """The table's runs, written in ``given``, read as ``unit`` (None where a number
     overflows: far beyond any robot)."""
-    from umbmark.benchmark.returns import umbmark_benchmark
+    from umbmark.returns.clusters import umbmark_benchmark
 
     factor = UNITS[unit] / UNITS[given]
     try:
@@ -183,10 +183,10 @@ def _fit(reading: _Reading, side: float, wheelbase: float | None) -> Fit:
     """Whether one robot of the square's exact geometry explains the reading: ``fits``
     (the model check passes), ``misfit`` (it fails), ``fails`` (no robot ends near the
     centres), ``unknown`` (too few runs, or no wheelbase, to tell)."""
-    from umbmark.benchmark.returns import umbmark_benchmark
     from umbmark.estimators.base import SquareTest
     from umbmark.estimators.endpose import fit_end_poses
     from umbmark.estimators.exact import check_identified, exact_components
+    from umbmark.returns.clusters import umbmark_benchmark
 
     if wheelbase is None or reading.e_max is None:
         return "unknown"

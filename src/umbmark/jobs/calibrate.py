@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING
 
 from umbmark.calibration.sources import calibrate_sources
 from umbmark.outputs.calibration import CalibrationReport, plan_outputs
-from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import RunSource, source_name
+from umbmark.runs.read_options import ReadOptions, SourceOptions
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
@@ -100,7 +100,7 @@ def calibrate(
     command : str, optional
         The command line (or call) to state in the ``report`` page's provenance.
     **options
-        How to read the sources: see :class:`umbmark.runs.options.ReadOptions`
+        How to read the sources: see :class:`umbmark.runs.read_options.ReadOptions`
         (``unit="mm"``, ``current_params="controllers.yaml"``, ``truth_topic=...``).
 
     Returns

@@ -16,7 +16,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from umbmark.benchmark.returns import sem_verdict
 from umbmark.core.bounds import check_int_option
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
@@ -24,6 +23,7 @@ from umbmark.core.messages import join_names
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.registry import DEFAULT, SQUARE
 from umbmark.outputs.calibration import CalibrationReport
+from umbmark.returns.clusters import sem_verdict
 from umbmark.sim.experiments import Trial
 from umbmark.sim.robot import SimRobot
 from umbmark.sim.setup import MAX_RUNS, SEED_RANGE

@@ -33,8 +33,8 @@ from umbmark.model.run import Run, end_errors
 from umbmark.outputs.files import OutputPlan
 from umbmark.runs.active import check_same_robot, read_runs
 from umbmark.runs.association import Association
-from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import PathLike, is_table, source_name
+from umbmark.runs.read_options import ReadOptions, SourceOptions
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -275,7 +275,7 @@ def replay(
         Replay ``params`` (or take ``current_params``) even when it is a result for other
         nominal parameters (wheelbase, wheel diameter) than the source's own.
     **options
-        How to read the source: see :class:`umbmark.runs.options.ReadOptions`.
+        How to read the source: see :class:`umbmark.runs.read_options.ReadOptions`.
 
     Raises
     ------

@@ -20,8 +20,8 @@ from umbmark.calibration.passes import Passes, calibrate_passes, predict_after
 from umbmark.core.errors import InputError, python_api
 from umbmark.estimators.registry import DEFAULT
 from umbmark.outputs.passes_page import check_page_output, write_passes_page
-from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import RunSource, source_name
+from umbmark.runs.read_options import ReadOptions, SourceOptions
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
@@ -100,7 +100,7 @@ def report(
     command : str, optional
         The command line or call to state in the provenance.
     **options
-        How to read the sources (:class:`umbmark.runs.options.ReadOptions`). The
+        How to read the sources (:class:`umbmark.runs.read_options.ReadOptions`). The
         ``current_*`` parameters say what was active during pass 1; from pass 2 on, the
         previous pass's new ``c_L``, ``c_R`` and ``wheel_separation_multiplier`` are taken
         as active (they override ``current_*``; a note says so).

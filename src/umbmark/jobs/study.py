@@ -44,7 +44,7 @@ from umbmark.estimators.registry import SQUARE
 from umbmark.sim.setup import SEED_RANGE
 
 if TYPE_CHECKING:
-    from umbmark.benchmark.returns import Benchmark
+    from umbmark.returns.clusters import Benchmark
     from umbmark.sim.experiments import Trial
     from umbmark.sim.robot import SimRobot
 

@@ -26,8 +26,8 @@ from umbmark.calibration.heldout import CANDIDATES, validate_read
 from umbmark.calibration.validation import ValidationReport
 from umbmark.core.errors import InputError
 from umbmark.runs.active import read_each
-from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import is_table, source_name
+from umbmark.runs.read_options import ReadOptions, SourceOptions
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
@@ -63,7 +63,7 @@ def validate(
     progress : callable, optional
         Called with the fraction done.
     **options
-        How to read the sources (:class:`umbmark.runs.options.ReadOptions`).
+        How to read the sources (:class:`umbmark.runs.read_options.ReadOptions`).
 
     Raises
     ------

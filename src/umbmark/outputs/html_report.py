@@ -16,17 +16,17 @@ from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark.benchmark.returns import scatter_standing, sem_verdict
 from umbmark.core.digest import file_sha256
 from umbmark.core.version import __version__
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
+from umbmark.returns.clusters import scatter_standing, sem_verdict
 
 if TYPE_CHECKING:
-    from umbmark.benchmark.returns import Benchmark
     from umbmark.calibration.passes import Passes
     from umbmark.calibration.result import CalibrationResult
     from umbmark.calibration.validation import ValidationReport
     from umbmark.estimators.base import ErrorEstimate
+    from umbmark.returns.clusters import Benchmark
 
 __all__ = ["calibration_html", "pass_name", "passes_html"]
 

@@ -17,13 +17,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark
 from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.atomic import atomic_path
 from umbmark.core.conventions import Direction
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run
 from umbmark.outputs.files import FIGURE_FORMATS
+from umbmark.returns.clusters import Benchmark
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -18,8 +18,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from umbmark.benchmark.returns import Benchmark
 from umbmark.outputs.plotting import cluster_extent, draw_clusters, frame_clusters
+from umbmark.returns.clusters import Benchmark
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -25,7 +25,6 @@ from umbmark.core.bounds import Origin
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info
 from umbmark.options.spec import SIDE_LENGTH, WHEELBASE
-from umbmark.runs.options import SAME_ROBOT_TOLERANCE, ReadOptions
 from umbmark.runs.read import (
     Chosen,
     RunSource,
@@ -36,6 +35,7 @@ from umbmark.runs.read import (
     recorded_active,
     source_format,
 )
+from umbmark.runs.read_options import SAME_ROBOT_TOLERANCE, ReadOptions
 from umbmark.sources.params.reader import (
     ControllerParams,
     is_result_file,

@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from umbmark.runs.association import Association
     from umbmark.runs.logged import SplitMode
     from umbmark.runs.segmentation import SplitOptions
-    from umbmark.sources.bag.options import BagOptions
+    from umbmark.sources.bag.bag_options import BagOptions
 
 __all__ = ["FORMATS", "Format", "LoadOptions", "Loaded", "detect_format", "load_runs"]
 
@@ -318,7 +318,7 @@ def _read_bag(
     source: Path, options: LoadOptions, notes: list[str]
 ) -> tuple[list[Recording], WheelParams | None, float | None]:
     """The bag's one recording; what people should know goes to ``notes``."""
-    from umbmark.sources.bag.options import BagOptions
+    from umbmark.sources.bag.bag_options import BagOptions
     from umbmark.sources.bag.recording import read_recording
 
     bag = options.bag or BagOptions()

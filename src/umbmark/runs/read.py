@@ -23,14 +23,14 @@ from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run
 from umbmark.runs.load import Format, Loaded, LoadOptions, detect_format, load_runs
-from umbmark.runs.options import ReadOptions
+from umbmark.runs.read_options import ReadOptions
 from umbmark.sources.params.reader import ControllerParams, read_parameter_file
 from umbmark.sources.runs_table.reader import RecordedActive, read_table_active
 
 if TYPE_CHECKING:
     from umbmark.runs.association import Association
     from umbmark.runs.logged import SplitMode
-    from umbmark.sources.bag.options import BagOptions
+    from umbmark.sources.bag.bag_options import BagOptions
 
 __all__ = [
     "Chosen",
@@ -270,7 +270,7 @@ def read_source(
         given = None
         if kind == "bag":
             if configured is None or diameter is None:
-                from umbmark.sources.bag.options import BagOptions
+                from umbmark.sources.bag.bag_options import BagOptions
                 from umbmark.sources.bag.urdf import described_geometry
 
                 named = BagOptions(
@@ -419,10 +419,10 @@ def bag_options(
     options: ReadOptions, params: WheelParams | None, file: ControllerParams
 ) -> BagOptions:
     """How to read a bag's wheels (and ground truth): the reading options as
-    :class:`~umbmark.sources.bag.options.BagOptions`, the controller's odometry turned back
+    :class:`~umbmark.sources.bag.bag_options.BagOptions`, the controller's odometry turned back
     into wheel rotation with ``params`` (the parameters the odometry used)."""
     from umbmark.model.kinematics import OdometryGeometry
-    from umbmark.sources.bag.options import BagOptions
+    from umbmark.sources.bag.bag_options import BagOptions
 
     geometry = None
     if params is not None:

@@ -1,6 +1,6 @@
 """Motion intervals straight from a bag: the laser's sweeps and the wheels, read and matched.
 
-The wheels come from whatever :class:`umbmark.sources.bag.options.BagOptions` names
+The wheels come from whatever :class:`umbmark.sources.bag.bag_options.BagOptions` names
 (joint states, encoder ticks, fields of a custom type, wheel transforms, or the
 controller's odometry turned back into wheel rotation), read by
 :func:`umbmark.sources.bag.recording.read_recording` (its ground truth is not read);
@@ -23,7 +23,7 @@ from umbmark.scans.intervals import (
     OdometryGuess,
     match_intervals,
 )
-from umbmark.sources.bag.options import BagOptions
+from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.bag.recording import read_recording
 from umbmark.sources.bag.scans import MAX_SCANS, read_scan_bag, scan_mounting
 

@@ -10,7 +10,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from umbmark.benchmark.returns import Benchmark, umbmark_benchmark
 from umbmark.calibration.compose import Calibration
 from umbmark.core.conventions import Direction
 from umbmark.estimators.base import SquareTest
@@ -18,6 +17,7 @@ from umbmark.estimators.dispatch import estimate_errors
 from umbmark.estimators.registry import PAPER, Method
 from umbmark.model.active import ActiveParams
 from umbmark.model.run import Run
+from umbmark.returns.clusters import Benchmark, umbmark_benchmark
 from umbmark.sim.engine import simulate
 from umbmark.sim.paths import square
 from umbmark.sim.robot import ControlConfig, SimRobot

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from umbmark.benchmark.returns import umbmark_benchmark
+from umbmark.returns.clusters import umbmark_benchmark
 from umbmark.sim.result import SimResult
 from umbmark.sim.robot import SimRobot
 

@@ -16,8 +16,8 @@ from typing import TypeVar
 
 from umbmark.calibration.result import CalibrationResult
 from umbmark.calibration.sources import calibrate_sources
-from umbmark.runs.options import ReadOptions, SourceOptions
 from umbmark.runs.read import RunSource, source_name
+from umbmark.runs.read_options import ReadOptions, SourceOptions
 from umbmark.store.history import History, compose_last_applied
 from umbmark.store.records import NewCalibration
 

@@ -33,7 +33,7 @@ from umbmark.store.records import CalibrationRecord, NewCalibration, RobotRecord
 
 if TYPE_CHECKING:
     from umbmark.calibration.verdict import Verdict
-    from umbmark.runs.options import SourceOptions
+    from umbmark.runs.read_options import SourceOptions
 
 __all__ = [
     "DEFINITIONS",

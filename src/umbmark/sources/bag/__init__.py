@@ -9,7 +9,7 @@ Modules by concern, lowest first; a module imports only from those above it in t
    transform topics, the fields the readers use), :mod:`~umbmark.sources.bag.names`
    (what names say: left and right, ground truth, fixed frames),
    :mod:`~umbmark.sources.bag.fieldpath` (paths to a value in a message of any type).
-2. :mod:`~umbmark.sources.bag.options`: what to read (``BagOptions``) and its checks.
+2. :mod:`~umbmark.sources.bag.bag_options`: what to read (``BagOptions``) and its checks.
 3. The files: :mod:`~umbmark.sources.bag.reader` (opening bags, topics, raw messages;
    every rosbags failure one line) and :mod:`~umbmark.sources.bag.writer` (writing one).
 4. Messages to samples: :mod:`~umbmark.sources.bag.fastpath` (the byte-level decoder),

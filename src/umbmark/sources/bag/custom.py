@@ -8,7 +8,7 @@ A vendor's driver may publish its wheels in its own message, for example
     int32 right_ticks
 
 The options ``left_field`` and ``right_field`` of
-:class:`~umbmark.sources.bag.options.BagOptions` name the two values in such a message by
+:class:`~umbmark.sources.bag.bag_options.BagOptions` name the two values in such a message by
 a field path (:mod:`umbmark.sources.bag.fieldpath`): ``left_ticks``,
 ``wheels.left.position``, ``positions[0]``, ``wheels[1].angle``; :func:`resolve_field`
 checks one against the type's definition.

@@ -1,7 +1,7 @@
 """Field paths: naming a value inside a message of any type, and reading it.
 
 The options ``left_field`` and ``right_field`` of
-:class:`~umbmark.sources.bag.options.BagOptions` name two numbers of a vendor's message
+:class:`~umbmark.sources.bag.bag_options.BagOptions` name two numbers of a vendor's message
 (``my_robot_msgs/msg/WheelEncoders``) by a path: field names separated by dots, each
 optionally followed by one index, ``left_ticks``, ``wheels.left.position``,
 ``positions[0]``, ``wheels[1].angle``. :func:`parse_path` checks the syntax (the options

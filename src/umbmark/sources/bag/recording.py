@@ -6,7 +6,7 @@ sqlite3 ``.db3`` or ``.mcap`` storage; the path of the storage file or of
 (umbmark's ``ros`` extra), and returns a :class:`umbmark.model.recording.WheelSeries`
 and, if asked for, a :class:`umbmark.model.recording.PoseSeries` of ground truth.
 
-What is read is set by :class:`umbmark.sources.bag.options.BagOptions` (its module
+What is read is set by :class:`umbmark.sources.bag.bag_options.BagOptions` (its module
 says what each option reads): the wheels from one of :mod:`umbmark.sources.bag.wheels`,
 the ground truth from :mod:`umbmark.sources.bag.truth`, a ground truth that is the
 odometry the wheels come from refused (:mod:`umbmark.sources.bag.truth.independence`).
@@ -60,6 +60,7 @@ from umbmark.core.errors import InputError
 from umbmark.core.messages import info
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.bag_options import BagOptions, check_options
 from umbmark.sources.bag.msgtypes import (
     MODEL_STATES,
     POSITION_TYPES,
@@ -68,7 +69,6 @@ from umbmark.sources.bag.msgtypes import (
     TF_TOPIC,
     unstamped,
 )
-from umbmark.sources.bag.options import BagOptions, check_options
 from umbmark.sources.bag.truth import independence, references, transforms
 from umbmark.sources.bag.truth.poses import read_pose_topic
 from umbmark.sources.bag.wheels.encoders import read_fields, read_ticks

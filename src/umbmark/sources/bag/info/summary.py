@@ -44,6 +44,7 @@ from typing import Any
 from umbmark.core.errors import InputError
 from umbmark.core.messages import split_messages
 from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.bag.info.candidates import (
     Candidate,
     controller_odometry,
@@ -68,7 +69,6 @@ from umbmark.sources.bag.msgtypes import (
     TF_STATIC_TOPIC,
     TF_TOPIC,
 )
-from umbmark.sources.bag.options import BagOptions
 from umbmark.sources.bag.truth.references import ModelMotion
 from umbmark.sources.bag.urdf import RobotDescription, read_description
 

@@ -1,8 +1,8 @@
 """Wheel encoders: cumulative counts on ``std_msgs`` topics, or two fields of any message.
 
-The readers behind :class:`~umbmark.sources.bag.options.BagOptions`' ``left_ticks_topic``
+The readers behind :class:`~umbmark.sources.bag.bag_options.BagOptions`' ``left_ticks_topic``
 / ``right_ticks_topic`` (:func:`read_ticks`) and ``left_field`` / ``right_field``
-(:func:`read_fields`); the module docstring of :mod:`umbmark.sources.bag.options` says
+(:func:`read_fields`); the module docstring of :mod:`umbmark.sources.bag.bag_options` says
 what they read.
 """
 
@@ -26,7 +26,7 @@ from umbmark.sources.bag.samples import clean, on_left_times, read_topic, time_n
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-    from umbmark.sources.bag.options import BagOptions
+    from umbmark.sources.bag.bag_options import BagOptions
 
 __all__ = ["read_fields", "read_ticks", "unwrap"]
 

@@ -1,6 +1,6 @@
 """Wheel rotation from ``sensor_msgs/JointState``: the wheel joints' positions (or their
 velocities, integrated), named by the options or found in the messages
-(:mod:`umbmark.sources.bag.options` says what is read).
+(:mod:`umbmark.sources.bag.bag_options` says what is read).
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import numpy as np
 from umbmark.core.errors import InputError
 from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import reader as bag_reader
+from umbmark.sources.bag.bag_options import DEFAULT_JOINTS, BagOptions
 from umbmark.sources.bag.fastpath import POSITION, VELOCITY, Decoded, Sample, fast_layout
 from umbmark.sources.bag.msgtypes import JOINT_STATE, JointState
-from umbmark.sources.bag.options import DEFAULT_JOINTS, BagOptions
 from umbmark.sources.bag.samples import clean, read_topic, stamp, time_ns
 
 if TYPE_CHECKING:

@@ -259,7 +259,7 @@ def check_wheel_fields(
 ) -> None:
     """Refuse ``msg_dir`` without the wheel fields, malformed field paths, and the fields
     given with other wheel data (``others``: ``(flag, value)``, given when true). The one
-    check of the field options, for :class:`umbmark.runs.options.ReadOptions` and
+    check of the field options, for :class:`umbmark.runs.read_options.ReadOptions` and
     :func:`check_options` (:func:`umbmark.options.spec.check_pairs` checks that both are
     given first).
 

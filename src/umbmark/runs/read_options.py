@@ -190,7 +190,7 @@ class ReadOptions:
     def _check_wheel_fields(self) -> None:
         """The wheel-field options' one check (in the bag's options, imported only when
         they are given: a runs table's start-up does not need the bag)."""
-        from umbmark.sources.bag.options import check_wheel_fields
+        from umbmark.sources.bag.bag_options import check_wheel_fields
 
         check_wheel_fields(
             self.left_field,
