@@ -21,7 +21,7 @@ ORDER = {
     "msgtypes": 1,
     "names": 1,
     "fieldpath": 1,
-    "options": 2,
+    "bag_options": 2,
     "reader": 3,
     "writer": 3,
     "fastpath": 4,

@@ -79,7 +79,7 @@ from umbmark.core.bounds import (
     finite_float,
     in_metres,
 )
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import info, split_messages
 from umbmark.sources.text import finite, load_json
@@ -119,9 +119,9 @@ def check_scatter(scatter: float) -> None:
         Naming ``--scatter``, the range and, for a large one, the value in metres.
     """
     low, high = SCATTER_RANGE
-    value = finite_float("--scatter", scatter)
+    value = finite_float(option("scatter"), scatter)
     if value > high:
-        hint = in_metres("--scatter", value, SCATTER_RANGE)
+        hint = in_metres(option("scatter"), value, SCATTER_RANGE)
         raise InputError(
             f"--scatter {value:g} m is implausibly large: lengths are in metres (plausible: "
             f"{low:g} to {high:g} m per axis){'; ' + hint if hint else ''}"
@@ -393,7 +393,7 @@ def plan_test(
     recommended = side_length is None or runs is None
     if side_length is None:
         side_length = _recommend_side(given, floor, margin, runs, targets, notes)
-    check_length("--side-length", side_length, MAX_SIDE_LENGTH)
+    check_length(option("side_length"), side_length, MAX_SIDE_LENGTH)
     if side_length < 2.0 * wheelbase:
         raise InputError(
             f"--side-length {side_length:g} m is less than twice the wheelbase ({wheelbase:g} m)"
@@ -453,7 +453,7 @@ def _recommend_side(
     sets the runs, not the side.)"""
     if floor is None:
         raise InputError("give --side-length (to predict) or --floor (to be recommended one)")
-    check_length("--floor", floor, MAX_SIDE_LENGTH + 5.0)
+    check_length(option("floor"), floor, MAX_SIDE_LENGTH + 5.0)
     wheelbase = given.wheelbase
     largest = min(floor - margin, MAX_SIDE_LENGTH)
     if largest < 2.0 * wheelbase:

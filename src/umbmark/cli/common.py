@@ -10,15 +10,21 @@ from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import click
+
 if TYPE_CHECKING:
     from rich.console import Console
     from rich.progress import Progress, TaskID
+
+    from umbmark.core.errors import InputError
 
 __all__ = [
     "EXIT_BAD_INPUT",
     "command_line",
     "console",
     "error_line",
+    "flags_of",
+    "input_error_line",
     "note",
     "progress_bar",
     "reading_bar",
@@ -46,6 +52,24 @@ def error_line(message: str) -> None:
         half = LONGEST_LINE // 2
         text = f"{text[:half]} ... ({len(text) - 2 * half} characters left out) ... {text[-half:]}"
     sys.stderr.write(f"umbmark: error: {text}\n")
+
+
+def flags_of(command: click.Command | None) -> dict[str, str]:
+    """The flag that names each of ``command``'s options in its messages, by keyword: the
+    first long one (``--from`` for ``previous``, ``--output`` for ``output``)."""
+    if command is None:
+        return {}
+    out: dict[str, str] = {}
+    for param in command.params:
+        if isinstance(param, click.Option) and param.name:
+            long = [flag for flag in param.opts if flag.startswith("--")]
+            out[param.name] = (long or param.opts)[0]
+    return out
+
+
+def input_error_line(error: InputError, command: click.Command | None) -> str:
+    """An :class:`~umbmark.core.errors.InputError` as ``command`` names its options."""
+    return error.command_line(flags_of(command))
 
 
 def warn(message: str) -> None:

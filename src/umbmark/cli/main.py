@@ -14,7 +14,7 @@ from collections.abc import ItemsView, Iterator, KeysView, Sequence, ValuesView
 
 import click
 
-from umbmark.cli.common import EXIT_BAD_INPUT, error_line, reading_bar
+from umbmark.cli.common import EXIT_BAD_INPUT, error_line, input_error_line, reading_bar
 from umbmark.core.errors import InputError, SafetyError
 from umbmark.core.version import __version__
 
@@ -118,6 +118,21 @@ def _usage(exc: click.UsageError) -> str:
     return f"{exc.format_message()} (see {command} --help)"
 
 
+def _command(argv: Sequence[str] | None) -> click.Command | None:
+    """The command ``argv`` ran (a command of a group followed to its end), if any."""
+    command: click.Command = cli
+    for word in list(sys.argv[1:] if argv is None else argv):
+        if not isinstance(command, click.Group):
+            break
+        found = command.commands.get(word)
+        if found is None:
+            if not word.startswith("-"):
+                break
+            continue
+        command = found
+    return None if command is cli else command
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     """Entry point of the ``umbmark`` console script.
 
@@ -142,7 +157,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         error_line(f"stopped for safety: {exc}")
         sys.exit(EXIT_ENVIRONMENT)
     except InputError as exc:
-        error_line(exc.command_line())  # options named as flags (--unit mm)
+        error_line(input_error_line(exc, _command(argv)))  # options as flags (--unit mm)
         sys.exit(EXIT_BAD_INPUT)
     except (click.Abort, KeyboardInterrupt, _InterruptedError):
         # One line; on a terminal after a line break, as the ^C the terminal echoed has none.

@@ -273,7 +273,7 @@ def _stopped(exc: BaseException, folder: Path) -> None:
     the controller holds, the passes on disk and the command that runs it again; exit
     130 after Ctrl-C, 3 after a safety stop, 2 for bad input. Nothing where the routine
     had not begun (a refusal before moving is the usual one line)."""
-    from umbmark.cli.common import EXIT_BAD_INPUT, error_line
+    from umbmark.cli.common import EXIT_BAD_INPUT, error_line, input_error_line
     from umbmark.cli.main import EXIT_ENVIRONMENT, EXIT_INTERRUPTED
     from umbmark.routines.watch import stopped
 
@@ -289,7 +289,8 @@ def _stopped(exc: BaseException, folder: Path) -> None:
         error_line(f"stopped for safety: {exc}; {stop.text()}; {again}")
         raise click.exceptions.Exit(EXIT_ENVIRONMENT) from None
     assert isinstance(exc, InputError)
-    error_line(f"{exc.command_line()}; the robot stopped; {stop.text()}; {again}")
+    line = input_error_line(exc, click.get_current_context().command)
+    error_line(f"{line}; the robot stopped; {stop.text()}; {again}")
     raise click.exceptions.Exit(EXIT_BAD_INPUT) from None
 
 

@@ -3,8 +3,9 @@
 A parameter reaches umbmark as an option (``--wheelbase``), from a run log's
 ``metadata.yaml`` (``wheelbase``), an OptiOdom session's metadata (``Li``), a runs
 table's ``# umbmark-active:`` line or a parameter file: each gets the same bound, written
-here once, and the same check. Messages name the parameter as its source spells it (an
-option's flag, a file's field) and, for a file, the file (``source``). The square's
+here once, and the same check. Each check takes the parameter ``named`` as its source
+names it: an option (:func:`umbmark.core.errors.option`, shown as the command line's flag
+or the library's keyword) or a file's field, with the file (``source``). The square's
 geometry (a wheelbase below half the side) is checked here too (:func:`check_square_geometry`).
 """
 
@@ -16,7 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, given, option
 
 __all__ = [
     "ENCODER_RESOLUTION_RANGE",
@@ -62,7 +63,9 @@ class Origin:
     Attributes
     ----------
     field : str
-        The option's flag (``--wheelbase``) or the file's field (``wheelbase``, ``Li``).
+        The option (:func:`umbmark.core.errors.option`, which a message renders as the
+        flag ``--wheelbase`` or the keyword ``wheelbase``) or the file's field
+        (``wheelbase``, ``Li``).
     file : str or None
         The file that holds the field; None for an option.
     """
@@ -78,57 +81,57 @@ class Origin:
         return f"{self.field} in {self.file}"
 
 
-def option_float(flag: str, value: float, source: Source = None) -> float:
+def option_float(named: str, value: float, source: Source = None) -> float:
     """An option's (or a field's) number as a float, refusing what is no number or too
     large for one (a Python ``int`` of hundreds of digits)."""
     if isinstance(value, bool):
-        raise InputError(f"{flag} must be a number, not {value!r}", source=source)
+        raise InputError(f"{named} must be a number, not {value!r}", source=source)
     try:
         return float(value)
     except OverflowError:
         digits = len(str(abs(int(value))))
-        raise InputError(f"{flag} is far too large ({digits} digits)", source=source) from None
+        raise InputError(f"{named} is far too large ({digits} digits)", source=source) from None
     except (TypeError, ValueError):
         raise InputError(
-            f"{flag} must be a number, not {str(value)[:24]!r}", source=source
+            f"{named} must be a number, not {str(value)[:24]!r}", source=source
         ) from None
 
 
-def finite_float(flag: str, value: float, source: Source = None) -> float:
+def finite_float(named: str, value: float, source: Source = None) -> float:
     """:func:`option_float`, refusing infinity and NaN (``--wheelbase inf``) as what they
     are rather than as out of a range."""
-    number = option_float(flag, value, source)
+    number = option_float(named, value, source)
     if not math.isfinite(number):
-        raise InputError(f"{flag} must be a finite number, got {number}", source=source)
+        raise InputError(f"{named} must be a finite number, got {number}", source=source)
     return number
 
 
-def check_positive_option(flag: str, value: float, unit: str = "", source: Source = None) -> None:
+def check_positive_option(named: str, value: float, unit: str = "", source: Source = None) -> None:
     """Refuse a value that is not a positive finite number."""
-    value = finite_float(flag, value, source)
+    value = finite_float(named, value, source)
     if not value > 0:
         shown = f"{value:g} {unit}".strip()
-        raise InputError(f"{flag} must be > 0, got {shown}", source=source)
+        raise InputError(f"{named} must be > 0, got {shown}", source=source)
 
 
-def check_int_option(flag: str, value: int, low: int, high: int) -> int:
+def check_int_option(named: str, value: int, low: int, high: int) -> int:
     """An integer option within ``low`` to ``high``, or :class:`InputError` naming the
-    flag and the range (also for a ``bool``, a float and an integer of any size)."""
+    named and the range (also for a ``bool``, a float and an integer of any size)."""
     try:
         if isinstance(value, bool):
             raise TypeError
         number = operator.index(value)  # int and numpy integers; not float, not str
     except TypeError:
-        raise InputError(f"{flag} must be a whole number, not {str(value)[:24]!r}") from None
+        raise InputError(f"{named} must be a whole number, not {str(value)[:24]!r}") from None
     if not low <= number <= high:
         digits = len(str(abs(number))) if abs(number) >= 10**24 else 0
         shown = f"a number of {digits} digits" if digits else str(number)
-        raise InputError(f"{flag} must be between {low} and {high}, got {shown}")
+        raise InputError(f"{named} must be between {low} and {high}, got {shown}")
     return number
 
 
 def check_length(
-    flag: str,
+    named: str,
     value: float,
     largest: float,
     smallest: float = MIN_LENGTH,
@@ -136,54 +139,55 @@ def check_length(
 ) -> None:
     """Refuse a length [m] that is not positive, or implausibly small or large (a unit
     slip); the message names the plausible range."""
-    check_positive_option(flag, value, "m", source)
+    check_positive_option(named, value, "m", source)
     value = float(value)
     if value > largest:
         raise InputError(
-            f"{flag} {value:g} m is implausibly large: lengths are in metres "
+            f"{given(named, value, 'm')} is implausibly large: lengths are in metres "
             f"(at most {largest:g} m here; plausible: {smallest:g} to {largest:g} m)",
             source=source,
         )
     if value < smallest:
         raise InputError(
-            f"{flag} {value:g} m is implausibly small: lengths are in metres "
+            f"{given(named, value, 'm')} is implausibly small: lengths are in metres "
             f"(plausible: {smallest:g} to {largest:g} m)",
             source=source,
         )
 
 
-def in_metres(flag: str, value: float, plausible: tuple[float, float]) -> str:
+def in_metres(named: str, value: float, plausible: tuple[float, float]) -> str:
     """What a length given in millimetres or centimetres is in metres, for each of the two
     that lands within ``plausible`` [m]: ``10 mm is --scatter 0.01, 10 cm is --scatter
     0.1`` (empty when neither does)."""
     low, high = plausible
     said = [
-        f"{value:g} {unit} is {flag} {value * factor:g}"
+        f"{value:g} {unit} is {given(named, value * factor)}"
         for unit, factor in (("mm", 0.001), ("cm", 0.01))
         if low <= value * factor <= high
     ]
     return ", ".join(said)
 
 
-def check_multiplier(flag: str, value: float, source: Source = None) -> None:
+def check_multiplier(named: str, value: float, source: Source = None) -> None:
     """Refuse a wheel factor or multiplier outside :data:`MULTIPLIER_RANGE`."""
     low, high = MULTIPLIER_RANGE
-    value = finite_float(flag, value, source)
+    value = finite_float(named, value, source)
     if not (math.isfinite(value) and low <= value <= high):
         raise InputError(
-            f"{flag} {value:g} is not a plausible factor: it must be within {low:g} to {high:g}",
+            f"{given(named, value)} is not a plausible factor: it must be within {low:g} to "
+            f"{high:g}",
             source=source,
         )
 
 
 def check_range(
-    flag: str, value: float, bounds: tuple[float, float], source: Source = None
+    named: str, value: float, bounds: tuple[float, float], source: Source = None
 ) -> None:
     """Refuse a number outside ``bounds`` (inclusive) or not finite."""
     low, high = bounds
-    value = finite_float(flag, value, source)
+    value = finite_float(named, value, source)
     if not (math.isfinite(value) and low <= value <= high):
-        raise InputError(f"{flag} {value:g} is outside {low:g} to {high:g}", source=source)
+        raise InputError(f"{given(named, value)} is outside {low:g} to {high:g}", source=source)
 
 
 def check_square_geometry(
@@ -206,8 +210,9 @@ def check_square_geometry(
     b_from, side_from, m_from, source = geometry_origins(origins, multiplier)
     if b_from.file is None and side_from.file is None and m_from is None:
         raise InputError(
-            f"--wheelbase {wheelbase:g} m is not smaller than the square: it must be below "
-            f"half the side (--side-length {side_length:g} m, so b < {side_length / 2:g} m); "
+            f"{option('wheelbase', wheelbase, 'm')} is not smaller than the square: it must be "
+            f"below half the side ({option('side_length', side_length, 'm')}, so b < "
+            f"{side_length / 2:g} m); "
             "are the two swapped or in other units?"
         )
     named = b_from.named(source)
@@ -227,8 +232,8 @@ def geometry_origins(
     """Where the wheelbase, the side and (unless 1) the multiplier came from, and the one
     file they all come from (None if they come from several, or from options only)."""
     origins = origins or {}
-    b_from = origins.get("wheelbase", Origin("--wheelbase"))
-    side_from = origins.get("side_length", Origin("--side-length"))
+    b_from = origins.get("wheelbase", Origin(option("wheelbase")))
+    side_from = origins.get("side_length", Origin(option("side_length")))
     m_from = origins.get("separation_multiplier") if multiplier != 1.0 else None
     files = {o.file for o in (b_from, side_from, m_from) if o is not None and o.file}
     return b_from, side_from, m_from, files.pop() if len(files) == 1 else None

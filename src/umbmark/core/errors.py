@@ -1,15 +1,17 @@
 """The error users see: bad input, named by file (and row) and problem, read as the caller
 writes.
 
-An :class:`InputError`'s problem is written once, naming options as the command line
-spells them (``--unit mm``, ``--side-length``, ``-o``); the command prints that
-(:meth:`InputError.command_line`). Raised out of a library function called from Python
+An :class:`InputError`'s problem names the options it is about by their keyword, the
+option spec's name (:func:`option`: ``option("unit", "mm")``), never by a spelling; each
+layer renders them its own way. The command prints them as flags
+(:meth:`InputError.command_line`, with the flags of the command that ran: ``--unit mm``,
+``--side-length``, ``--from``); raised out of a library function called from Python
 (``umbmark.calibrate(...)``: the functions of the package are wrapped by
-:func:`python_api`), the same error reads as Python (:meth:`InputError.python`):
-``unit="mm"``, ``side_length``, ``output``, a flag ``force=True``, and an option the
-command takes in degrees or millimetres in the library's radians and metres
-(``turn_angle=6.28319 rad``). :func:`python_api` also refuses a keyword the function does
-not take as Python does, naming the close one (``did you mean unit=?``).
+:func:`python_api`) the same error reads as Python (:meth:`InputError.python`):
+``unit="mm"``, ``side_length``, a flag ``force=True``, and an option the command takes in
+degrees or millimetres in the library's radians and metres (``turn_angle=6.28319 rad``).
+:func:`python_api` also refuses a keyword the function does not take as Python does,
+naming the close one (``did you mean unit=?``).
 """
 
 from __future__ import annotations
@@ -25,11 +27,13 @@ from pathlib import Path
 from typing import ParamSpec, TypeVar
 
 __all__ = [
-    "FLAG_KEYWORDS",
     "InputError",
     "Keyword",
     "SafetyError",
+    "given",
     "keywords_of",
+    "option",
+    "option_names",
     "python_api",
     "unexpected_keyword",
 ]
@@ -37,23 +41,46 @@ __all__ = [
 P = ParamSpec("P")
 R = TypeVar("R")
 
-#: The command line's options whose keyword is not their name with "_" for "-" (the short
-#: ones, and ``--from``: ``from`` is Python's), by the keyword they stand for.
-FLAG_KEYWORDS = {
-    "--from": "previous",
-    "-o": "output",
-    "-L": "side_length",
-    "-b": "wheelbase",
-    "-n": "runs",
-    "-m": "method",
-    "-f": "format",
-    "-p": "params",
-    # selfcal's virtual robot: the keywords of umbmark.connect and umbmark.VirtualRobot
-    "--sim-E-d": "E_d",
-    "--sim-E-b": "E_b",
-    "--sim-E-s": "E_s",
-    "--sim-slip": "slip",
-}
+#: An option named in a problem (:func:`option`) is kept between these characters (Unicode's
+#: private use: never printed, as every rendering replaces them).
+_OPEN, _SEP, _CLOSE = "\ue000", "\ue001", "\ue002"
+_OPTION = re.compile(f"{_OPEN}([^{_SEP}]*){_SEP}([^{_SEP}]*){_SEP}([^{_CLOSE}]*){_CLOSE}")
+
+
+def option(name: str, value: object = None, unit: str = "") -> str:
+    """An option named in an :class:`InputError`'s problem, by its keyword (the option
+    spec's name: ``side_length``), with the value given as the command line takes it and
+    that value's unit. The command line reads ``--side-length 4 m``; Python
+    ``side_length=4 m`` (``--turn-angle 360 deg``: ``turn_angle=6.28319 rad``).
+
+    ``value``: a text as it is to be shown (quote it, ``repr(text)``, where the sentence
+    needs it), a float shown with ``g``, or any other number; None: the option alone.
+    """
+    if value is None:
+        text = ""
+    elif isinstance(value, str):
+        text = value
+    elif isinstance(value, float):
+        text = format(value, "g")
+    else:
+        text = str(value)
+    return f"{_OPEN}{name}{_SEP}{text}{_SEP}{unit}{_CLOSE}"
+
+
+def given(named: str, value: object, unit: str = "") -> str:
+    """``named`` with the value given: an :func:`option` alone takes it (``--wheelbase 340
+    m``, from Python ``wheelbase=340 m``); anything else (a file's field, ``Li``) is
+    followed by it (``Li 340 m``)."""
+    match = _OPTION.fullmatch(named)
+    if match is not None and not match[2]:
+        return option(match[1], value, unit or match[3])
+    value_text = option("_", value)[len(_OPEN) + 2 :].split(_SEP)[0]
+    return " ".join(part for part in (named, value_text, unit) if part)
+
+
+def option_names(text: str) -> list[str]:
+    """The keywords of the options :func:`option` named in ``text``, in order."""
+    return [match[1] for match in _OPTION.finditer(text)]
 
 
 @dataclass(frozen=True)
@@ -121,9 +148,13 @@ class InputError(ValueError):
             where = f"{where}, row {self.row}" if where else f"row {self.row}"
         return f"{where}: {problem}" if where else problem
 
-    def command_line(self) -> str:
-        """The line the command prints: options as flags (``--unit mm``)."""
-        return self._where(self.problem)
+    def command_line(self, flags: Mapping[str, str] | None = None) -> str:
+        """The line the command prints: options as flags (``--unit mm``).
+
+        ``flags``: the command's flag for each keyword (``{"previous": "--from"}``); a
+        keyword it does not name is ``--`` and the keyword with ``-`` for ``_``.
+        """
+        return self._where(_as_flags(self.problem, flags or {}))
 
     def python(self, keywords: Mapping[str, Keyword] | None = None) -> str:
         """The line as Python reads it: options as keywords (``unit="mm"``).
@@ -132,11 +163,8 @@ class InputError(ValueError):
         was raised out of one]; flags that name none of them stay as they are.
         """
         keywords = self.keywords if keywords is None else keywords
-        if self.python_problem is not None:
-            return self._where(self.python_problem)
-        if not keywords:
-            return self.command_line()
-        return self._where(_as_python(self.problem, keywords))
+        problem = self.problem if self.python_problem is None else self.python_problem
+        return self._where(_as_python(problem, keywords or {}))
 
     def __str__(self) -> str:
         return self.command_line() if self.keywords is None else self.python()
@@ -148,16 +176,8 @@ class SafetyError(RuntimeError):
     Its text says why, in one line."""
 
 
-# --- flags as keywords ------------------------------------------------------------------
+# --- options as flags, and as keywords --------------------------------------------------
 
-_FLAG = r"(?<![\w-])(?P<flag>--[A-Za-z][A-Za-z0-9]*(?:-[A-Za-z0-9]+)*|-[A-Za-z])(?![\w-])"
-#: What may follow a flag: a value (a number, a quoted text, a word or a path; a sentence's
-#: full stop is not part of it), and a unit after a number.
-_VALUE = (
-    r"(?: (?P<value>'[^']*'|\"[^\"]*\"|[\w./~+-]*[\w/~+-]))?"
-    r"(?: (?P<unit>deg|mm|cm|m|ms|s)(?![\w^/]))?"
-)
-_TOKEN = re.compile(_FLAG + _VALUE)
 _NUMBER = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?|[-+]?inf|nan")
 #: A text value that is a name, not a word of the sentence (``base_link``, ``wheel-1``).
 _NAME_LIKE = re.compile(r"[_\-/.0-9]")
@@ -165,38 +185,50 @@ _NAME_LIKE = re.compile(r"[_\-/.0-9]")
 _TO_SI = {"deg": (math.pi / 180.0, "rad"), "mm": (1e-3, "m"), "cm": (1e-2, "m")}
 
 
-def _keyword_of(flag: str) -> str:
-    """The keyword a flag stands for: ``--current-c-l`` is ``current_c_l``."""
-    return FLAG_KEYWORDS.get(flag) or flag.lstrip("-").replace("-", "_")
+def _flag(name: str, flags: Mapping[str, str]) -> str:
+    """The flag of the option ``name``: the command's, else ``--`` and the keyword."""
+    return flags.get(name) or "--" + name.replace("_", "-")
+
+
+def _as_flags(text: str, flags: Mapping[str, str]) -> str:
+    """``text`` with its options as the command line spells them (``--unit mm``)."""
+
+    def one(match: re.Match[str]) -> str:
+        name, value, unit = match.groups()
+        return " ".join(part for part in (_flag(name, flags), value, unit) if part)
+
+    return _OPTION.sub(one, text)
 
 
 def _as_python(text: str, keywords: Mapping[str, Keyword]) -> str:
-    """``text`` with its flags that name ``keywords`` written as Python keywords."""
+    """``text`` with its options that are ``keywords`` as Python spells them
+    (``unit="mm"``); the others (``--json``: the command's alone) as flags."""
 
     def one(match: re.Match[str]) -> str:
-        keyword = keywords.get(_keyword_of(match["flag"]))
-        if keyword is None:  # not an option of this function (--help, --json)
-            return match[0]
-        name, value, unit = keyword.name, match["value"], match["unit"]
-        rest = "".join(f" {part}" for part in (value, unit) if part is not None)
+        keyword = keywords.get(match[1])
+        if keyword is None:  # not an option of this function
+            return _as_flags(match[0], {})
+        name, value, unit = keyword.name, match[2] or None, match[3] or None
+        suffix = f" {unit}" if unit else ""
         if value is not None and _NUMBER.fullmatch(value):
             if unit in _TO_SI:
                 factor, unit = _TO_SI[unit]
                 value = format(float(value) * factor, ".6g")
             return f"{name}={value}" + (f" {unit}" if unit else "")
         if value is not None and value[0] in "'\"":
-            return f"{name}={value}{rest[len(value) + 1 :]}"
+            return f"{name}={value}{suffix}"
         if value is not None and value in keyword.choices:
-            return f'{name}="{value}"{rest[len(value) + 1 :]}'
+            return f'{name}="{value}"{suffix}'
         if value is not None and (
             (keyword.path and ("." in value or "/" in value))
             or value.startswith("/")  # a ROS name (a topic, a frame)
             or (keyword.text and bool(_NAME_LIKE.search(value)))
         ):
-            return f"{name}={value!r}{rest[len(value) + 1 :]}"
+            return f"{name}={value!r}{suffix}"
+        rest = "".join(f" {part}" for part in (value, unit) if part is not None)
         return (f"{name}=True" if keyword.flag else name) + rest
 
-    return _TOKEN.sub(one, text)
+    return _OPTION.sub(one, text)
 
 
 # --- the keywords of a function -----------------------------------------------------------

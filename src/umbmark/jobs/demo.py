@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.core.bounds import check_int_option
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import join_names
 from umbmark.estimators.base import SquareTest
@@ -173,8 +173,8 @@ def demo(
     from umbmark.sim.robot import LABMATE
     from umbmark.sources.runs_table.writer import write_runs_table
 
-    runs = check_int_option("--runs", runs, 2, MAX_RUNS)
-    seed = check_int_option("--seed", seed, *SEED_RANGE)
+    runs = check_int_option(option("runs"), runs, 2, MAX_RUNS)
+    seed = check_int_option(option("seed"), seed, *SEED_RANGE)
     if method not in SQUARE:
         raise InputError(f"the demo calibrates from end points: use {join_names(SQUARE, 'or')}")
     folder = None if out is None else Path(out)

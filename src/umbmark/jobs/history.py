@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from umbmark.core.errors import InputError, python_api
+from umbmark.core.errors import InputError, option, python_api
 from umbmark.core.jsontext import JsonText
 from umbmark.outputs.files import OutputPlan
 from umbmark.store.history import DEFINITIONS, CalibrationRecord, History, RobotRecord
@@ -175,7 +175,7 @@ def history(
     if applied is not None:
         from umbmark.core.bounds import check_int_option
 
-        number = check_int_option("--applied", applied, 1, 2**63 - 1)
+        number = check_int_option(option("applied"), applied, 1, 2**63 - 1)
         History(store.path).mark_applied(robot, number, override_verdict=override_verdict)
         notes = (f"calibration {applied} of {robot} marked applied",)
     calibrations = tuple(store.calibrations(robot))

@@ -21,7 +21,7 @@ from umbmark.calibration.plan import (
     read_previous_scatter,
 )
 from umbmark.core.bounds import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 
 __all__ = ["plan"]
 
@@ -102,9 +102,9 @@ def plan(
     check_scatter(scatter)
     if wheelbase is None:
         wheelbase = DEFAULT_WHEELBASE
-    check_length("--wheelbase", wheelbase, MAX_WHEELBASE)
+    check_length(option("wheelbase"), wheelbase, MAX_WHEELBASE)
     if scatter_side is not None:
-        check_length("--scatter-side", scatter_side, MAX_SIDE_LENGTH)
+        check_length(option("scatter_side"), scatter_side, MAX_SIDE_LENGTH)
     if not (math.isfinite(margin) and 0.0 <= margin <= 5.0):
         raise InputError(f"--margin {margin:g} m is outside 0 to 5 m")
     if not (math.isfinite(reading_error) and 0.0 <= reading_error <= scatter):

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from umbmark.core.bounds import check_int_option, option_float
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.outputs.files import OutputPlan
 from umbmark.sim.reproduce import Fig4Result, Table1Row
@@ -107,10 +107,10 @@ def reproduce_table1(
 
     if isinstance(seeds, bool) or not isinstance(seeds, int) or not 1 <= seeds <= MAX_SEEDS:
         raise InputError(f"--seeds must be 1 to {MAX_SEEDS}, got {str(seeds)[:24]}")
-    seed = check_int_option("--seed", seed, *SEED_RANGE)
+    seed = check_int_option(option("seed"), seed, *SEED_RANGE)
     experiments = EXPERIMENTS
     if tape_thickness is not None:
-        tape_thickness = option_float("--tape-thickness", tape_thickness)
+        tape_thickness = option_float(option("tape_thickness"), tape_thickness)
         if not 0 < tape_thickness <= MAX_TAPE_THICKNESS:
             raise InputError(
                 f"--tape-thickness {tape_thickness * 1000:g} mm: give more than 0 and at most "
@@ -144,7 +144,7 @@ def reproduce_fig4(
     """
     from umbmark.sim.reproduce import fig4
 
-    leg_bend = option_float("--leg-bend", leg_bend)
+    leg_bend = option_float(option("leg_bend"), leg_bend)
     if not (math.isfinite(leg_bend) and 0 < abs(leg_bend) <= math.radians(10)):
         raise InputError(
             f"--leg-bend {math.degrees(leg_bend):g} deg: give a bend between 0 and 10 deg"

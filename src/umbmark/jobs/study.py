@@ -38,7 +38,7 @@ from umbmark.core.bounds import (
     check_length,
     option_float,
 )
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.estimators.registry import SQUARE
 from umbmark.sim.setup import SEED_RANGE
@@ -247,23 +247,23 @@ def study(
             f"--trials {trials} in {cell_count} grid cells are {trials * cell_count} robots: "
             f"at most {MAX_ROBOTS} in all"
         )
-    seed = check_int_option("--seed", seed, *SEED_RANGE)
+    seed = check_int_option(option("seed"), seed, *SEED_RANGE)
     for name, spread in (("--E-d-spread", E_d_spread), ("--E-b-spread", E_b_spread)):
         if not 0.0 <= option_float(name, spread) <= 0.2:
             raise InputError(f"{name} {spread:g}: give 0 to 0.2")
     for given in slip:
-        value = option_float("--slip", given)
+        value = option_float(option("slip"), given)
         if not (math.isfinite(value) and 0.0 <= value <= 0.01):
             raise InputError(f"--slip {value:g}: give 0 to 0.01 m^0.5")
     for value in side_length:
-        check_length("--side-length", value, MAX_SIDE_LENGTH)
+        check_length(option("side_length"), value, MAX_SIDE_LENGTH)
     for value in wheelbase:
-        check_length("--wheelbase", value, MAX_WHEELBASE)
+        check_length(option("wheelbase"), value, MAX_WHEELBASE)
     for count in runs:
         if isinstance(count, bool) or not isinstance(count, int) or not 2 <= count <= 100:
             raise InputError(f"--runs must be 2 to 100 per direction, got {str(count)[:24]}")
     if workers is not None:
-        workers = check_int_option("--workers", workers, 1, 64)
+        workers = check_int_option(option("workers"), workers, 1, 64)
 
     cells = [Cell(*c) for c in itertools.product(slip, side_length, runs, wheelbase)]
     seeds = iter(np.random.SeedSequence(seed).spawn(len(cells) * math.ceil(trials / CHUNK)))

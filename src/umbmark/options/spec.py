@@ -1,8 +1,9 @@
 """Every option of the commands that read sources, written once: :class:`Spec`.
 
 An option's keyword is the library's (``current_c_l`` of :func:`umbmark.calibrate`), its
-first flag the command line's (``--current-c-l``); messages name it by the flag (the
-library shows the keyword, see :class:`umbmark.core.errors.InputError`). From these
+first flag the command line's (``--current-c-l``); messages name it by its keyword
+(:func:`umbmark.core.errors.option`), which the command line shows as the flag and the
+library as the keyword. From these
 entries come the click options (:func:`umbmark.cli.click_options.spec_option`), the defaults
 and checks of :class:`umbmark.runs.read_options.ReadOptions`, and the defaults of
 :class:`umbmark.sources.bag.bag_options.BagOptions`. Lengths in metres, times in seconds.
@@ -23,7 +24,7 @@ from umbmark.core.bounds import (
     check_positive_option,
     finite_float,
 )
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 
 __all__ = [
     "BAGS",
@@ -136,8 +137,13 @@ class Spec:
 
     @property
     def flag(self) -> str:
-        """The long flag, as messages name the option."""
+        """The long flag, as ``--help`` and the command line name the option."""
         return self.flags[0]
+
+    @property
+    def named(self) -> str:
+        """The option as a message names it (:func:`umbmark.core.errors.option`)."""
+        return option(self.name)
 
     def check(self, value: object, source: str | None = None) -> None:
         """Refuse a value outside the choices or the bound; None passes where it is the
@@ -151,41 +157,43 @@ class Spec:
         if value is None and self.default is None:
             return
         if self.kind == "choice":
-            check_choice(self.flag, value, self.choices, source)
+            check_choice(self.name, value, self.choices, source)
         bound = self.bound
         if bound is None:
             return
         high = math.inf if bound.high is None else bound.high
         number = cast("float", value)
         if bound.kind == "factor":
-            check_multiplier(self.flag, number, source)
+            check_multiplier(self.named, number, source)
         elif bound.kind == "length":
-            check_length(self.flag, number, high, source=source)
+            check_length(self.named, number, high, source=source)
         elif bound.kind == "positive":
-            check_positive_option(self.flag, number, self.unit, source)
+            check_positive_option(self.named, number, self.unit, source)
             if float(number) > high:
                 raise InputError(
-                    f"{self.flag} must be at most {high:g} {self.unit}, "
+                    f"{self.named} must be at most {high:g} {self.unit}, "
                     f"got {float(number):g} {self.unit}",
                     source=source,
                 )
         else:
             for given in cast("Sequence[float]", value):
-                number = finite_float(self.flag, given, source)
+                number = finite_float(self.named, given, source)
                 if not abs(number) <= high:
                     raise InputError(
-                        f"{self.flag} must be within {high:g} {self.unit} of the axle centre, "
+                        f"{self.named} must be within {high:g} {self.unit} of the axle centre, "
                         f"not {number!r}",
                         source=source,
                     )
 
 
 def check_choice(
-    flag: str, value: object, choices: tuple[str, ...], source: str | None = None
+    name: str, value: object, choices: tuple[str, ...], source: str | None = None
 ) -> None:
-    """Refuse a value that is not one of ``choices``."""
+    """Refuse a value of the option ``name`` (its keyword) that is not one of ``choices``."""
     if value not in choices:
-        raise InputError(f"{flag} {value!r}: use one of {', '.join(choices)}", source=source)
+        raise InputError(
+            f"{option(name, repr(value))}: use one of {', '.join(choices)}", source=source
+        )
 
 
 def check_pairs(values: Mapping[str, object], source: str | None = None) -> None:
@@ -196,7 +204,7 @@ def check_pairs(values: Mapping[str, object], source: str | None = None) -> None
             continue
         if (values.get(spec.name) is None) != (values.get(spec.pair) is None):
             raise InputError(
-                f"{spec.flag} and {READ[spec.pair].flag} go together: give both or neither",
+                f"{spec.named} and {READ[spec.pair].named} go together: give both or neither",
                 source=source,
             )
 

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from umbmark.core.bounds import Origin
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.messages import info
 from umbmark.options.spec import SIDE_LENGTH, WHEELBASE
 from umbmark.runs.read import (
@@ -335,11 +335,11 @@ def _given_origins(
     result = bool(params) and is_result_file(params)
     origins = {}
     if wheelbase is not None:
-        origins["wheelbase"] = Origin("--wheelbase")
+        origins["wheelbase"] = Origin(option("wheelbase"))
     elif file.wheel_separation is not None:
         origins["wheelbase"] = Origin("active.wheelbase" if result else "wheel_separation", params)
     if options.current_separation_multiplier is not None:
-        origins["separation_multiplier"] = Origin("--current-separation-multiplier")
+        origins["separation_multiplier"] = Origin(option("current_separation_multiplier"))
     elif params:
         field = "new.wheel_separation_multiplier" if result else "wheel_separation_multiplier"
         origins["separation_multiplier"] = Origin(field, params)

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Literal, cast
 
 from umbmark.core.bounds import Origin
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.messages import info
 from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
@@ -360,7 +360,7 @@ def _origins(chosen: Chosen, loaded: Loaded, side_length: float | None) -> dict[
     source's own fields (a run log's or OptiOdom session's metadata)."""
     origins = {**loaded.origins, **chosen.origins}
     if side_length is not None:
-        origins["side_length"] = Origin("--side-length")
+        origins["side_length"] = Origin(option("side_length"))
     return origins
 
 

@@ -24,7 +24,7 @@ from umbmark.core.bounds import (
     option_float,
 )
 from umbmark.core.conventions import Direction
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.kinematics import WheelParams
 from umbmark.sim.paths import Path, spot_turn, square, straight_line
 from umbmark.sim.robot import ControlConfig, NoiseModel
@@ -148,9 +148,9 @@ class SimSetup:
                 raise InputError(f"{name} {value:g} is not a plausible ratio (0.5 to 2)")
 
     def _check_robot(self) -> None:
-        check_length("--side-length", self.side_length, MAX_SIDE_LENGTH)
-        check_length("--wheelbase", self.wheelbase, MAX_WHEELBASE)
-        check_length("--wheel-diameter", self.wheel_diameter, MAX_WHEELBASE)
+        check_length(option("side_length"), self.side_length, MAX_SIDE_LENGTH)
+        check_length(option("wheelbase"), self.wheelbase, MAX_WHEELBASE)
+        check_length(option("wheel_diameter"), self.wheel_diameter, MAX_WHEELBASE)
         for name, value in (
             ("--encoder-resolution", self.encoder_resolution),
             ("--gear-ratio", self.gear_ratio),
