@@ -12,6 +12,7 @@ import sys
 import pytest
 
 import umbmark
+from umbmark.core.errors import InputError, option, option_names
 from umbmark.runs.read_options import ReadOptions, SourceOptions
 
 from helpers import ROOT
@@ -148,7 +149,7 @@ def test_the_error_keeps_both_forms() -> None:
     assert str(error) == "side_length must be > 0, got -4 m"
     assert error.args == (str(error),)
     assert error.command_line() == "--side-length must be > 0, got -4 m"
-    assert error.problem == "--side-length must be > 0, got -4 m"
+    assert option_names(error.problem) == ["side_length"]  # the option, by its keyword
     # Where the command's words are command-line syntax, the error carries Python's too.
     with pytest.raises(umbmark.InputError) as caught:
         umbmark.history(plot="trend.png")
@@ -156,28 +157,30 @@ def test_the_error_keeps_both_forms() -> None:
     assert caught.value.command_line().startswith("--plot needs the robot's NAME (umbmark")
 
 
-def test_every_flag_of_the_command_line_names_its_keyword() -> None:
-    """The flags the messages name turn into the keyword of the same option."""
+def test_every_option_reads_as_one_of_its_own_flags_on_the_command_line() -> None:
+    """An error naming an option by its keyword prints one of that option's flags, the
+    long one where it has one (``previous`` is ``--from``, ``output`` ``--output``)."""
     import click
 
+    from umbmark.cli.common import input_error_line
     from umbmark.cli.main import cli
-    from umbmark.core.errors import _keyword_of
-
-    def options(command: click.Command) -> list[click.Option]:
-        if isinstance(command, click.Group):
-            return [o for c in command.commands.values() for o in options(c)]
-        return [p for p in command.params if isinstance(p, click.Option)]
 
     checked = 0
-    for option in options(cli):
-        if option.name in ("json_out", "help"):
-            continue
-        if option.is_flag and not option.is_bool_flag:
-            continue  # a feature switch (selfcal's --sim/--ros1/--ros2 choose one value)
-        for flag in option.opts:
-            assert _keyword_of(flag) == option.name, flag
+    for command in cli.commands.values():
+        for param in command.params:
+            if not isinstance(param, click.Option) or param.name in (None, "help"):
+                continue
+            if param.is_flag and not param.is_bool_flag:
+                continue  # a switch among several (selfcal's --sim/--ros1/--ros2)
+            line = input_error_line(InputError(f"{option(param.name)} is wrong"), command)
+            flag = line.removesuffix(" is wrong")
+            assert flag in param.opts, (command.name, param.name, flag)
+            assert flag.startswith("--") or not any(o.startswith("--") for o in param.opts)
             checked += 1
     assert checked > 100
+    calibrate = cli.commands["calibrate"]
+    assert input_error_line(InputError(option("output")), calibrate) == "--output"
+    assert input_error_line(InputError(option("previous")), cli.commands["plan"]) == "--from"
 
 
 def test_every_function_knows_its_keywords() -> None:

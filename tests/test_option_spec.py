@@ -213,13 +213,16 @@ def test_the_field_checks_say_the_same_in_the_job_and_the_bag_reader(
     assert caught.value.command_line() == f"robot.bag: {line}"
 
 
-def test_short_flags_name_their_keyword_in_messages() -> None:
-    """A message naming ``-f`` reads ``format`` from Python (core's table, below the spec)."""
-    from umbmark.core.errors import FLAG_KEYWORDS
+def test_messages_name_a_spec_option_by_its_long_flag() -> None:
+    """A message about ``format`` reads ``--format`` (not ``-f``) on the command line."""
+    from umbmark.cli.common import flags_of
+    from umbmark.cli.main import cli
 
+    command = cli.commands["calibrate"]
+    flags = flags_of(command)
     for spec in (*READ_OPTIONS, WHEELBASE, SIDE_LENGTH):
-        for flag in spec.flags[1:]:
-            assert FLAG_KEYWORDS[flag] == spec.name, flag
+        assert flags[spec.name] == spec.flag, spec.name
+        assert spec.flag.startswith("--")
 
 
 @pytest.mark.parametrize(

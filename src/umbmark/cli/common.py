@@ -56,12 +56,15 @@ def error_line(message: str) -> None:
 
 def flags_of(command: click.Command | None) -> dict[str, str]:
     """The flag that names each of ``command``'s options in its messages, by keyword: the
-    first long one (``--from`` for ``previous``, ``--output`` for ``output``)."""
+    first long one (``--from`` for ``previous``, ``--output`` for ``output``). Switches
+    that share one keyword (``selfcal``'s ``--sim``, ``--ros1``, ``--ros2``) name none."""
     if command is None:
         return {}
     out: dict[str, str] = {}
     for param in command.params:
         if isinstance(param, click.Option) and param.name:
+            if param.is_flag and not param.is_bool_flag:
+                continue
             long = [flag for flag in param.opts if flag.startswith("--")]
             out[param.name] = (long or param.opts)[0]
     return out
