@@ -88,7 +88,7 @@ def spec_option(
     ``section``]; ``help`` for a command that says it in its own words."""
     attrs: dict[str, Any] = {}
     if spec.kind == "number":
-        attrs["type"] = float
+        attrs["type"] = int if spec.bound is not None and spec.bound.kind == "count" else float
     elif spec.kind == "choice":
         attrs["type"] = click.Choice(list(spec.choices))
     elif spec.kind == "file":

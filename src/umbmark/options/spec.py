@@ -12,6 +12,7 @@ and checks of :class:`umbmark.runs.read_options.ReadOptions`, and the defaults o
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, cast
@@ -76,17 +77,22 @@ class Bound:
 
     Attributes
     ----------
-    kind : {"factor", "positive", "length", "offset"}
+    kind : {"factor", "positive", "length", "offset", "give", "count"}
         ``factor``: a wheel factor or multiplier
         (:data:`umbmark.core.bounds.MULTIPLIER_RANGE`); ``positive``: above 0 and, with
         ``high``, at most ``high``; ``length``: a plausible length up to ``high`` [m];
-        ``offset``: every number within ``high`` of 0.
+        ``offset``: every number within ``high`` of 0; ``give``: a finite number from
+        ``low`` to ``high``, and ``count`` a whole one (the message says what to give:
+        ``--runs 1: give 2 to 20``).
     high : float or None
         The largest value, in the option's unit.
+    low : float or None
+        The smallest value of ``give`` and ``count``.
     """
 
-    kind: Literal["factor", "positive", "length", "offset"]
+    kind: Literal["factor", "positive", "length", "offset", "give", "count"]
     high: float | None = None
+    low: float | None = None
 
 
 @dataclass(frozen=True)
@@ -167,6 +173,8 @@ class Spec:
             check_multiplier(self.named, number, source)
         elif bound.kind == "length":
             check_length(self.named, number, high, source=source)
+        elif bound.kind in ("give", "count"):
+            self._check_give(value, bound, source)
         elif bound.kind == "positive":
             check_positive_option(self.named, number, self.unit, source)
             if float(number) > high:
@@ -184,6 +192,27 @@ class Spec:
                         f"not {number!r}",
                         source=source,
                     )
+
+    def _check_give(self, value: object, bound: Bound, source: str | None) -> None:
+        """A number (``give``) or a whole number (``count``) within ``bound``."""
+        low = -math.inf if bound.low is None else bound.low
+        high = math.inf if bound.high is None else bound.high
+        if bound.kind == "count":
+            if isinstance(value, bool) or not hasattr(value, "__index__"):
+                raise InputError(
+                    f"{self.named} must be a whole number, not {str(value)[:24]!r}", source=source
+                )
+            number: float = operator.index(cast("int", value))
+            shown = str(number)
+        else:
+            number = finite_float(self.named, cast("float", value), source)
+            shown = repr(number)
+        if not low <= number <= high:
+            unit = f" {self.unit}" if self.unit else ""
+            raise InputError(
+                f"{option(self.name, shown, self.unit)}: give {low:g} to {high:g}{unit}",
+                source=source,
+            )
 
 
 def check_choice(
