@@ -193,7 +193,7 @@ def test_reproduce_fig4_exposes_the_unidirectional_trap(tmp_path):
 
 @pytest.mark.slow
 def test_simulate_command_writes_and_prints(tmp_path):
-    """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
+    """(That ``--json`` is the library's dictionary: tests/cli/test_main.py, for every command.)"""
     runs = tmp_path / "runs.csv"
     args = ["simulate", "--E-d", "1.002", "--seed", "7", "-o", str(runs), "--runs", "2"]
     assert run_cli(*args).returncode == 0

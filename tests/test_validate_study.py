@@ -67,7 +67,7 @@ def test_method_auto_takes_the_recommendation(sessions):
 
 
 def test_validate_command_names_a_missing_source_plainly():
-    """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
+    """(That ``--json`` is the library's dictionary: tests/cli/test_main.py, for every command.)"""
     assert "needs" not in cli_error("validate", "nothing.csv")
 
 

@@ -53,7 +53,7 @@ radial spread of a cluster, ``sqrt(sum |eps - cg|^2 / (n - 1))``, has the expect
 (Sec. 5) is ``SEM = sqrt(2) sigma / sqrt(n)`` (its root mean square) and the threshold
 3 SEM.
 
-``tests/test_plan.py`` checks ``D``, ``K`` and the standard errors against the slip
+``tests/calibration/test_plan.py`` checks ``D``, ``K`` and the standard errors against the slip
 simulator of ``umbmark study`` (4 m with a 0.34 m robot; 0.75 m and 1 m squares with
 0.2 m and 0.15 m robots, the last also with a reading error): within 10 %, where the
 ``tape`` model misses by 18-28 % (``tools/plan_vs_simulation.py`` prints both side by

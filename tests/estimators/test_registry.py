@@ -26,7 +26,7 @@ from umbmark.estimators.registry import ESTIMATORS, NAMES, SQUARE, Method
 from umbmark.model.run import EndPose, Run
 from umbmark.returns.clusters import umbmark_benchmark
 
-PACKAGE = Path(__file__).resolve().parents[1] / "src" / "umbmark"
+PACKAGE = Path(__file__).resolve().parents[2] / "src" / "umbmark"
 
 
 def test_the_method_type_is_the_tables_names():
