@@ -71,6 +71,7 @@ def test_a_list_has_one_to_most_values_each_checked() -> None:
     assert _refusal(spec, []).command_line() == "--slip must list 1 to 3 values, got 0"
     assert _refusal(spec, [0.0] * 4).command_line() == "--slip must list 1 to 3 values, got 4"
     assert _refusal(spec, [0.5, 2.0]).command_line() == "--slip 2 is outside 0 to 1"
+    assert _refusal(spec, 0.5).command_line() == "--slip must list 1 to 3 values, not '0.5'"
 
 
 # --- the click options are the spec's -----------------------------------------------------

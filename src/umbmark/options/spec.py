@@ -12,7 +12,7 @@ and checks of :class:`umbmark.runs.read_options.ReadOptions`, and the defaults o
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, cast
 
@@ -168,7 +168,12 @@ class Spec:
         if value is None and self.default is None:
             return
         if self.most:
-            values = list(cast("Sequence[object]", value))
+            if isinstance(value, (str, bytes)) or not isinstance(value, Collection):
+                raise InputError(
+                    f"{self.named} must list 1 to {self.most} values, not {str(value)[:24]!r}",
+                    source=source,
+                )
+            values = list(value)
             if not 1 <= len(values) <= self.most:
                 raise InputError(
                     f"{self.named} must list 1 to {self.most} values, got {len(values)}",
