@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import Literal
 
 from umbmark.core.bounds import (
     ENCODER_RESOLUTION_RANGE,
@@ -31,8 +32,11 @@ __all__ = [
     "MAX_BUMP_RATE",
     "MAX_BUMP_SIZE",
     "MAX_GRID_VALUES",
+    "MAX_RECORDED_SAMPLES",
     "MAX_ROBOTS",
     "MAX_RUNS",
+    "MAX_SAMPLES",
+    "MAX_SAMPLES_PER_RUN",
     "MAX_SLIP",
     "MAX_TRIALS",
     "MAX_TURN",
@@ -48,6 +52,8 @@ __all__ = [
     "SPEED_RANGE",
     "STUDY",
     "STUDY_OPTIONS",
+    "DirectionChoice",
+    "PathKind",
 ]
 
 # --- the sections of --help -----------------------------------------------------------
@@ -60,14 +66,23 @@ OTHER = "Other options"
 
 # --- bounds -----------------------------------------------------------------------------
 
-PATHS = ("square", "straight", "turn")
-DIRECTIONS = ("both", "cw", "ccw")
+PathKind = Literal["square", "straight", "turn"]
+PATHS: tuple[PathKind, ...] = ("square", "straight", "turn")
+DirectionChoice = Literal["both", "cw", "ccw"]
+DIRECTIONS: tuple[DirectionChoice, ...] = ("both", "cw", "ccw")
 #: Largest on-the-spot turn [rad]: ten turns.
 MAX_TURN = 20.0 * math.pi
 #: Most runs in each direction of a simulation (and of ``demo``).
 MAX_RUNS = 1000
 #: The seeds of the random errors.
 SEED_RANGE = (0, 2**63 - 1)
+#: Most sampling periods one run may take (path length / speed / dt and the turns):
+#: the simulation's time grows with it (about 15 us a period on one core).
+MAX_SAMPLES_PER_RUN = 2_000_000
+#: Most sampling periods of all runs together (the work of the vectorized runs) ...
+MAX_SAMPLES = 1_000_000_000
+#: ... and when the time series are kept (``logs``, ``bag``, ``record``): about 130 bytes each.
+MAX_RECORDED_SAMPLES = 5_000_000
 DT_RANGE = (1e-4, 0.1)  # s
 SPEED_RANGE = (0.01, 5.0)  # m/s
 MAX_SLIP = 0.1  # standard deviation of the relative wheel slip [m^0.5]
@@ -210,8 +225,9 @@ SIMULATE_OPTIONS: tuple[Spec, ...] = (
         "runs",
         ("--runs", "-n"),
         DRIVE,
-        f"Runs in each direction (1 to {MAX_RUNS}; a run may take at most 2 million sampling "
-        "periods, all runs 1e9, with --logs 5 million).",
+        f"Runs in each direction (1 to {MAX_RUNS}; a run may take at most "
+        f"{MAX_SAMPLES_PER_RUN / 1e6:g} million sampling periods, all runs "
+        f"1e{round(math.log10(MAX_SAMPLES))}, with --logs {MAX_RECORDED_SAMPLES / 1e6:g} million).",
         kind="integer",
         default=5,
         bound=Bound("range", low=1, high=MAX_RUNS),

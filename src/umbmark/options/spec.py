@@ -12,21 +12,20 @@ and checks of :class:`umbmark.runs.read_options.ReadOptions`, and the defaults o
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, cast
 
 from umbmark.core.bounds import (
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
-    check_int_option,
     check_length,
     check_multiplier,
     check_positive_option,
-    check_range,
     finite_float,
 )
-from umbmark.core.errors import InputError, given, option
+from umbmark.core.errors import InputError, option
+from umbmark.options.checks import check_bounded, check_list
 
 __all__ = [
     "BAGS",
@@ -168,18 +167,7 @@ class Spec:
         if value is None and self.default is None:
             return
         if self.most:
-            if isinstance(value, (str, bytes)) or not isinstance(value, Collection):
-                raise InputError(
-                    f"{self.named} must list 1 to {self.most} values, not {str(value)[:24]!r}",
-                    source=source,
-                )
-            values = list(value)
-            if not 1 <= len(values) <= self.most:
-                raise InputError(
-                    f"{self.named} must list 1 to {self.most} values, got {len(values)}",
-                    source=source,
-                )
-            for one in values:
+            for one in check_list(self.named, value, self.most, source):
                 self._check_one(one, source)
             return
         self._check_one(value, source)
@@ -189,30 +177,19 @@ class Spec:
         if self.kind == "choice":
             check_choice(self.name, value, self.choices, source)
         bound = self.bound
-        if self.kind == "integer":
-            low = -math.inf if bound is None or bound.low is None else bound.low
-            high = math.inf if bound is None or bound.high is None else bound.high
-            check_int_option(self.named, cast("int", value), cast("int", low), cast("int", high))
+        if self.kind == "integer" or (bound is not None and bound.kind in ("range", "ratio")):
+            kind = "integer" if self.kind == "integer" or bound is None else bound.kind
+            limits = (None, None) if bound is None else (bound.low, bound.high)
+            check_bounded(self.named, value, kind, limits, self.unit, source)
             return
         if bound is None:
             return
         high = math.inf if bound.high is None else bound.high
-        low = -math.inf if bound.low is None else bound.low
         number = cast("float", value)
         if bound.kind == "factor":
             check_multiplier(self.named, number, source)
         elif bound.kind == "length":
             check_length(self.named, number, high, source=source)
-        elif bound.kind == "range":
-            check_range(self.named, number, (low, high), source)
-        elif bound.kind == "ratio":
-            check_positive_option(self.named, number, self.unit, source)
-            if not low < float(number) < high:
-                raise InputError(
-                    f"{given(self.named, float(number), self.unit)} is not a plausible ratio "
-                    f"({low:g} to {high:g})",
-                    source=source,
-                )
         elif bound.kind == "positive":
             check_positive_option(self.named, number, self.unit, source)
             if float(number) > high:

@@ -4,27 +4,42 @@ noise, the controller's period and speed, and the seed, checked once (:class:`Si
 ``umbmark simulate`` and :func:`umbmark.simulate` take these as keywords (the command's
 ``--turn-angle`` in degrees is ``turn_angle`` in radians here); each is an option of
 :mod:`umbmark.options.simulate` (its default and bound are there), and messages name it
-by its keyword (the command shows its flag). Also here: the bounds of the work one
-simulation may be.
+by its keyword (the command shows its flag). Also here: the checks of the work one
+simulation may be (its bounds are the options module's too).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
 
 from umbmark.core.bounds import option_float
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, option
 from umbmark.model.kinematics import WheelParams
-from umbmark.options.simulate import MAX_RUNS, MAX_TURN, SEED_RANGE, SIMULATE, SIMULATE_OPTIONS
+from umbmark.options.simulate import (
+    DIRECTIONS,
+    MAX_RECORDED_SAMPLES,
+    MAX_RUNS,
+    MAX_SAMPLES,
+    MAX_SAMPLES_PER_RUN,
+    MAX_TURN,
+    PATHS,
+    SEED_RANGE,
+    SIMULATE,
+    SIMULATE_OPTIONS,
+    DirectionChoice,
+    PathKind,
+)
 from umbmark.sim.paths import Path, spot_turn, square, straight_line
 from umbmark.sim.robot import ControlConfig, NoiseModel
 
 __all__ = [
     "DIRECTIONS",
+    "MAX_RECORDED_SAMPLES",
     "MAX_RUNS",
+    "MAX_SAMPLES",
+    "MAX_SAMPLES_PER_RUN",
     "PATHS",
     "SEED_RANGE",
     "DirectionChoice",
@@ -32,21 +47,10 @@ __all__ = [
     "SimSetup",
 ]
 
-PathKind = Literal["square", "straight", "turn"]
-PATHS: tuple[PathKind, ...] = ("square", "straight", "turn")
-DirectionChoice = Literal["both", "cw", "ccw"]
-DIRECTIONS: tuple[DirectionChoice, ...] = ("both", "cw", "ccw")
 #: The fields that are numbers, made floats when the setup is made.
 _FLOATS = ("E_d", "E_b", "E_s", "slip", "bump_rate", "bump_size", "turn_angle")
 #: The options that are fields of :class:`SimSetup` (``params`` is the job's).
 _FIELDS = tuple(spec for spec in SIMULATE_OPTIONS if spec.name != "params")
-#: Most sampling periods one run may take (path length / speed / dt and the turns):
-#: the simulation's time grows with it (about 15 us a period on one core).
-MAX_SAMPLES_PER_RUN = 2_000_000
-#: Most sampling periods of all runs together (the work of the vectorized runs) ...
-MAX_SAMPLES = 1_000_000_000
-#: ... and when the time series are kept (``logs``, ``bag``, ``record``): about 130 bytes each.
-MAX_RECORDED_SAMPLES = 5_000_000
 #: Fewest encoder counts per wheel revolution (encoder resolution x gear ratio) ...
 MIN_COUNTS_PER_REVOLUTION = 16
 #: ... and per path: fewer, and the robot stops before it starts (it stops within two
