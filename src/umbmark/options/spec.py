@@ -25,6 +25,7 @@ from umbmark.core.bounds import (
     finite_float,
 )
 from umbmark.core.errors import InputError, option
+from umbmark.options.checks import check_bounded, check_list
 
 __all__ = [
     "BAGS",
@@ -67,7 +68,7 @@ LONGEST_REST = 600.0
 #: Farthest a tracked point may sit from the axle centre [m].
 MAX_TRUTH_OFFSET = 5.0
 
-Kind = Literal["text", "number", "choice", "file", "folder", "flag"]
+Kind = Literal["text", "number", "integer", "choice", "file", "folder", "flag"]
 
 
 @dataclass(frozen=True)
@@ -76,17 +77,22 @@ class Bound:
 
     Attributes
     ----------
-    kind : {"factor", "positive", "length", "offset"}
+    kind : {"factor", "positive", "length", "offset", "range", "ratio"}
         ``factor``: a wheel factor or multiplier
         (:data:`umbmark.core.bounds.MULTIPLIER_RANGE`); ``positive``: above 0 and, with
         ``high``, at most ``high``; ``length``: a plausible length up to ``high`` [m];
-        ``offset``: every number within ``high`` of 0.
+        ``offset``: every number within ``high`` of 0; ``range``: ``low`` to ``high``,
+        both included (a whole number for an ``integer`` option); ``ratio``: above 0 and
+        strictly between ``low`` and ``high`` (a true-over-nominal ratio).
     high : float or None
         The largest value, in the option's unit.
+    low : float or None
+        The smallest value of a ``range`` or ``ratio``.
     """
 
-    kind: Literal["factor", "positive", "length", "offset"]
+    kind: Literal["factor", "positive", "length", "offset", "range", "ratio"]
     high: float | None = None
+    low: float | None = None
 
 
 @dataclass(frozen=True)
@@ -103,9 +109,9 @@ class Spec:
         The section of ``--help`` that lists it.
     help : str
         Its ``--help`` text.
-    kind : {"text", "number", "choice", "file", "folder", "flag"}
-        What it takes: a text, a number, one of ``choices``, a file or a folder; a flag
-        takes nothing (given: True).
+    kind : {"text", "number", "integer", "choice", "file", "folder", "flag"}
+        What it takes: a text, a number, a whole number, one of ``choices``, a file or a
+        folder; a flag takes nothing (given: True).
     default : object
         Its value when not given (None: not given; ``--help`` shows the others).
     choices : tuple of str
@@ -120,6 +126,9 @@ class Spec:
         How ``--help`` names its values.
     pair : str or None
         The option it goes with: both or neither (``left_field``: ``right_field``).
+    most : int
+        A list of at most this many numbers (the command line's comma-separated values:
+        the grid of ``umbmark study``), each within the bound; 0: one value.
     """
 
     name: str
@@ -134,6 +143,7 @@ class Spec:
     nargs: int = 1
     metavar: str | None = None
     pair: str | None = None
+    most: int = 0
 
     @property
     def flag(self) -> str:
@@ -156,9 +166,22 @@ class Spec:
         """
         if value is None and self.default is None:
             return
+        if self.most:
+            for one in check_list(self.named, value, self.most, source):
+                self._check_one(one, source)
+            return
+        self._check_one(value, source)
+
+    def _check_one(self, value: object, source: str | None) -> None:
+        """:meth:`check` of one value."""
         if self.kind == "choice":
             check_choice(self.name, value, self.choices, source)
         bound = self.bound
+        if self.kind == "integer" or (bound is not None and bound.kind in ("range", "ratio")):
+            kind = "integer" if self.kind == "integer" or bound is None else bound.kind
+            limits = (None, None) if bound is None else (bound.low, bound.high)
+            check_bounded(self.named, value, kind, limits, self.unit, source)
+            return
         if bound is None:
             return
         high = math.inf if bound.high is None else bound.high
@@ -176,8 +199,8 @@ class Spec:
                     source=source,
                 )
         else:
-            for given in cast("Sequence[float]", value):
-                number = finite_float(self.named, given, source)
+            for one in cast("Sequence[float]", value):
+                number = finite_float(self.named, one, source)
                 if not abs(number) <= high:
                     raise InputError(
                         f"{self.named} must be within {high:g} {self.unit} of the axle centre, "
