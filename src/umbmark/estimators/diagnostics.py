@@ -31,7 +31,7 @@ from dataclasses import replace
 import numpy as np
 
 from umbmark.core.conventions import Direction
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.messages import join_names
 from umbmark.estimators.base import ModelCheckFailure, SquareTest
 from umbmark.estimators.endpose import FLOOR, LEVEL, EndPoseFit, fit_end_poses
@@ -77,7 +77,8 @@ def _check_within_side(runs: Sequence[Run], test: SquareTest) -> None:
         raise ValueError(
             f"the return error of {run.label or 'a run'} ({error:.4g} m) is larger than the "
             f"square's side ({test.side_length:g} m), beyond the paper's small-angle "
-            f"formulas: use --method {join_names(names(reach='path'), 'or')} (the exact geometry)"
+            f"formulas: use {option('method', join_names(names(reach='path'), 'or'))} (the "
+            "exact geometry)"
         )
 
 
@@ -94,7 +95,7 @@ def _check_reachable(runs: Sequence[Run], test: SquareTest) -> None:
         raise ValueError(
             f"the return error of {run.label or 'a run'} ({error:.4g} m) is farther from the "
             f"start than the whole {4 * test.side_length:g} m path is long: are the lengths "
-            "in the right unit (--unit) and the side length right?"
+            f"in the right unit ({option('unit')}) and the side length right?"
         )
 
 
@@ -298,6 +299,6 @@ def require_headings(method: Estimator, runs: Sequence[Run], where: str | None) 
             raise InputError(
                 f"the ground truth of {run.label or 'the runs'} has positions only (a "
                 f"PointStamped or NavSatFix reference, no headings): the {method.name} method "
-                f"needs headings; use --method {serve}",
+                f"needs headings; use {option('method', serve)}",
                 source=where,
             )

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.estimators.diagnostics import check_model, check_reach, require_headings
 from umbmark.estimators.endpose import fit_end_poses
@@ -144,7 +144,8 @@ def _failed(method: str, why: str) -> str:
     """What an estimator that could not compute says: why, and what to try."""
     return (
         f"the {method} estimate could not be computed ({why}): the runs do not determine the "
-        "errors; try another --method, more runs (in both directions, with turns both "
+        f"errors; try another {option('method')}, more runs (in both directions, with turns "
+        "both "
         "ways), and check the units, the nominal wheelbase and wheel diameter and, for "
         "recorded runs, the time offset between wheels and ground truth"
     )

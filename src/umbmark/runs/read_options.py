@@ -13,7 +13,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from typing import Literal, TypedDict
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.options.spec import READ, READ_OPTIONS, check_pairs
 
 __all__ = [
@@ -185,7 +185,10 @@ class ReadOptions:
         if (self.left_field, self.right_field, self.msg_dir) != (None, None, None):
             self._check_wheel_fields()
         if self.split == "windows" and not self.windows:
-            raise InputError("--split windows needs --windows start:end[,start:end...]")
+            raise InputError(
+                f"{option('split', 'windows')} needs "
+                f"{option('windows', 'start:end[,start:end...]')}"
+            )
 
     def _check_wheel_fields(self) -> None:
         """The wheel-field options' one check (in the bag's options, imported only when
@@ -197,13 +200,13 @@ class ReadOptions:
             self.right_field,
             self.msg_dir,
             (
-                ("--left-joint", self.left_joint),
-                ("--right-joint", self.right_joint),
-                ("--left-ticks-topic", self.left_ticks_topic),
-                ("--right-ticks-topic", self.right_ticks_topic),
-                ("--odom-topic", self.odom_topic),
-                ("--odom-tf", self.odom_tf),
-                ("--left-wheel-frame", self.left_wheel_frame),
+                ("left_joint", self.left_joint),
+                ("right_joint", self.right_joint),
+                ("left_ticks_topic", self.left_ticks_topic),
+                ("right_ticks_topic", self.right_ticks_topic),
+                ("odom_topic", self.odom_topic),
+                ("odom_tf", self.odom_tf),
+                ("left_wheel_frame", self.left_wheel_frame),
             ),
         )
 
@@ -233,7 +236,8 @@ def _parse_windows(text: str) -> list[tuple[float, float]]:
             a, b = (float(v) for v in part.split(":"))
         except ValueError:
             raise InputError(
-                f"--windows {text!r}: write start:end pairs in seconds, e.g. '0:95,100:190'"
+                f"{option('windows', repr(text))}: write start:end pairs in seconds, "
+                "e.g. '0:95,100:190'"
             ) from None
         out.append((a, b))
     return out
