@@ -204,9 +204,7 @@ def bare(tmp_path_factory) -> Path:
 def test_counts_and_angles_of_a_custom_message(bags, fmt):
     angles = truth_angles(np.arange(N) * DT)
     counts = counts_of(angles)
-    wheels, truth = read_bag(
-        bags[fmt], fields("left_ticks", "right_ticks", ticks_per_rev=TPR)
-    )
+    wheels, truth = read_bag(bags[fmt], fields("left_ticks", "right_ticks", ticks_per_rev=TPR))
     np.testing.assert_allclose(wheels.time, expected_time(), rtol=0, atol=1e-9)
     np.testing.assert_allclose(wheels.angles, counts * (2 * math.pi / TPR), rtol=0, atol=1e-12)
     assert truth is None

@@ -30,7 +30,6 @@ from umbmark.sources.runs_table.reader import RecordedActive, read_table_active
 
 if TYPE_CHECKING:
     from umbmark.runs.association import Association
-    from umbmark.runs.logged import SplitMode
     from umbmark.sources.bag.bag_options import BagOptions
 
 __all__ = [
@@ -407,7 +406,7 @@ def _load_options(
         angle_unit=options.angle_unit,
         side_length=side_length,
         params=params,
-        split=cast("SplitMode", "windows" if windows else options.split),
+        split="windows" if windows else options.split,
         windows=windows,
         split_options=split_options,
         max_gap=float(options.max_gap),
