@@ -5,7 +5,7 @@ mypy needs the keywords of ``**options: Unpack[SourceOptions]`` and the fields o
 ``ReadOptions`` as classes it can read, not built at run time; so they are generated text:
 one key of ``SourceOptions`` and one field of ``ReadFields`` (the base of ``ReadOptions``)
 per spec entry, in the spec's order, typed by :func:`python_type`, defaulting to the
-spec's default, documented by its help. ``tests/test_read_fields.py`` fails when the file
+spec's default, documented by its help. ``tests/runs/test_read_fields.py`` fails when the file
 is not what this tool writes now: adding a reading option is adding a ``Spec`` and running
 
     PYTHONPATH=src python tools/gen_read_options.py          (writes the module)
@@ -36,7 +36,7 @@ _HEADER = '''"""The reading options as Python types: :class:`SourceOptions`, the
 (``Spec.py_type``, else by its kind), default and help.
 
 Generated from src/umbmark/options/spec.py by tools/gen_read_options.py; do not edit
-(tests/test_read_fields.py fails when it is not what the tool writes now).
+(tests/runs/test_read_fields.py fails when it is not what the tool writes now).
 """
 
 from __future__ import annotations

@@ -443,7 +443,7 @@ def bag_options(
         odom_geometry=geometry,
         msg_dir=Path(options.msg_dir) if options.msg_dir is not None else None,
     )
-    # Every other field is a reading option of the same name (tests/test_read_fields.py).
+    # Every other field is a reading option of the same name (tests/runs/test_read_fields.py).
     shared = {
         f.name: getattr(options, f.name)
         for f in fields(BagOptions)

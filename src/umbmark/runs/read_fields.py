@@ -6,7 +6,7 @@
 (``Spec.py_type``, else by its kind), default and help.
 
 Generated from src/umbmark/options/spec.py by tools/gen_read_options.py; do not edit
-(tests/test_read_fields.py fails when it is not what the tool writes now).
+(tests/runs/test_read_fields.py fails when it is not what the tool writes now).
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ from umbmark.runs.read_options import ReadOptions
 from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.params.reader import ControllerParams
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TOOL = ROOT / "tools" / "gen_read_options.py"
 GENERATED = ROOT / "src" / "umbmark" / "runs" / "read_fields.py"
 
