@@ -36,6 +36,7 @@ __all__ = [
     "option_names",
     "python_api",
     "unexpected_keyword",
+    "with_flags",
 ]
 
 P = ParamSpec("P")
@@ -198,6 +199,13 @@ def _as_flags(text: str, flags: Mapping[str, str]) -> str:
         return " ".join(part for part in (_flag(name, flags), value, unit) if part)
 
     return _OPTION.sub(one, text)
+
+
+def with_flags(text: str) -> str:
+    """``text`` with the options :func:`option` named as the command line's flags: for a
+    text that is no :class:`InputError`'s problem (a warning, a verdict's reason) built
+    from one that is."""
+    return _as_flags(text, {})
 
 
 def _as_python(text: str, keywords: Mapping[str, Keyword]) -> str:

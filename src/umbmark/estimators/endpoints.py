@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.core.arrays import FloatArray
+from umbmark.core.errors import option
 from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.registry import ENDPOINTS
 from umbmark.estimators.solve import gauss_newton
@@ -98,7 +99,8 @@ DIVERGED = (
     "the runs' end points do not determine the wheels: the fit diverged towards a wheel or "
     "a wheelbase less than half the nominal one, which no robot has. Check that the ground "
     "truth follows the robot (not a robot on a stand, not a tracker that lost it), the "
-    "units and the nominal wheel diameter and wheelbase; or try --method trajectory (whole "
+    "units and the nominal wheel diameter and wheelbase; or try "
+    f"{option('method', 'trajectory')} (whole "
     "trajectories), or more runs that turn both ways"
 )
 

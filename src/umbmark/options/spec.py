@@ -129,6 +129,9 @@ class Spec:
     most : int
         A list of at most this many numbers (the command line's comma-separated values:
         the grid of ``umbmark study``), each within the bound; 0: one value.
+    py_type : str
+        The library's Python type of its value, as text, where the kind does not say it
+        (``"str | Sequence[str]"``; ``tools/gen_read_options.py`` types the rest).
     """
 
     name: str
@@ -144,6 +147,7 @@ class Spec:
     metavar: str | None = None
     pair: str | None = None
     most: int = 0
+    py_type: str = ""
 
     @property
     def flag(self) -> str:
@@ -393,6 +397,7 @@ READ_OPTIONS: tuple[Spec, ...] = (
         ("--windows",),
         LOGS,
         "Runs as time windows, seconds from the recording's start: '0:95,100:190'.",
+        py_type="str | Sequence[tuple[float, float]]",
     ),
     Spec(
         "max_gap",
@@ -428,12 +433,14 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "Left wheel joint, or several separated by commas (averaged, as ros2_control does) "
         "[default: left_wheel_names of --current-params, else left_wheel_joint, else the "
         "moving joints named left].",
+        py_type="str | Sequence[str]",
     ),
     Spec(
         "right_joint",
         ("--right-joint",),
         BAGS,
         "Right wheel joint(s) [default: as for --left-joint].",
+        py_type="str | Sequence[str]",
     ),
     Spec(
         "odom_topic",
