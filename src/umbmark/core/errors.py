@@ -29,6 +29,7 @@ from typing import ParamSpec, TypeVar
 __all__ = [
     "InputError",
     "Keyword",
+    "ProblemError",
     "SafetyError",
     "given",
     "keywords_of",
@@ -169,6 +170,16 @@ class InputError(ValueError):
 
     def __str__(self) -> str:
         return self.command_line() if self.keywords is None else self.python()
+
+
+class ProblemError(ValueError):
+    """A ``ValueError`` of a computation (a fit that diverged) whose text names options
+    (:func:`option`): it reads with flags wherever it is shown as it is, and keeps the
+    names in :attr:`problem` for the :class:`InputError` a caller makes of it."""
+
+    def __init__(self, problem: str) -> None:
+        self.problem = problem
+        super().__init__(_as_flags(problem, {}))
 
 
 class SafetyError(RuntimeError):

@@ -199,8 +199,8 @@ def estimate_runs(
         raise
     except np.linalg.LinAlgError as exc:  # a ValueError: caught before the others
         raise InputError(_failed(method, f"a singular system: {exc}"), source=where) from None
-    except ValueError as exc:
-        problem = str(exc)
+    except ValueError as exc:  # a ProblemError keeps the options it names
+        problem = getattr(exc, "problem", None) or str(exc)
     mixup = _diameter_mixup(method, runs, params, wheelbase, square_side, fit_truth_offset)
     said = problem if mixup is None else f"{mixup}. Read as given: {problem}"
     raise InputError(said, source=where) from None
