@@ -1,7 +1,7 @@
 """Wheels in a custom message type: umbmark's ``read_bag`` against rosbags' deserializer.
 
 Generates one ROS 2 sqlite3 bag (default 300 000 messages) of a vendor's wheel message,
-``my_robot_msgs/msg/WheelEncoders`` (the type of ``tests/test_bag_custom.py``: a header,
+``my_robot_msgs/msg/WheelEncoders`` (the type of ``tests/sources/test_bag_custom.py``: a header,
 two int32 tick counts, a float64[] of positions, a fixed array of nested states, a
 string), registered in the writer's typestore from its ``.msg`` text, then reads the
 stamps and both wheels' positions from it two ways, in the same process:

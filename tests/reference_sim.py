@@ -1,7 +1,7 @@
 """The simulator's model as a plain per-sample Python loop, one run at a time.
 
 Slow on purpose: it is the reference that :func:`umbmark.sim.engine.simulate` is checked
-against (``tests/test_simulator.py``) and timed against (``benchmarks/bench_simulator.py``,
+against (``tests/sim/test_engine.py``) and timed against (``benchmarks/bench_simulator.py``,
 which puts ``tests/`` on its path). Noise-free robots only.
 """
 

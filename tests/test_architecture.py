@@ -337,3 +337,47 @@ def test_the_array_types_are_named_once():
         "umbmark.core.arrays.FloatArray",
         "umbmark.core.arrays.IntArray",
     ]
+
+
+TESTS = ROOT / "tests"
+
+
+def misplaced_tests(tests: Path = TESTS, package: Path = PACKAGE) -> list[str]:
+    """Test files under ``tests/<folder>/`` whose folder is no layer, or whose name
+    ``test_<module>.py`` names no module or package of that layer (``bag_custom``: the
+    layer's ``bag/custom.py``, at any depth)."""
+    out = []
+    for path in sorted(tests.glob("*/test_*.py")):
+        layer = path.parent.name
+        if layer not in LAYERS:
+            out.append(f"{path.relative_to(tests)}: {layer} is no layer")
+            continue
+        name = path.stem.removeprefix("test_")
+        names = {
+            "_".join(p.relative_to(package / layer).with_suffix("").parts)
+            for p in (package / layer).rglob("*")
+            if p.suffix == ".py" or (p.is_dir() and p.name != "__pycache__")
+        }
+        tails = {n.split("_", 1)[-1] for n in names if "_" in n} | {
+            n.rsplit("_", 1)[-1] for n in names
+        }
+        if name not in names and name not in tails:
+            out.append(f"{path.relative_to(tests)}: no module {name} in {layer}/")
+    return out
+
+
+def test_tests_of_one_module_sit_in_its_layers_folder(tmp_path):
+    """``tests/<layer>/test_<module>.py``; tests of the whole (the command line against the
+    library, the corpus, the docs) stay in ``tests/``."""
+    assert misplaced_tests() == []
+    assert len(list(TESTS.glob("*/test_*.py"))) >= 25
+    (tmp_path / "tests" / "core").mkdir(parents=True)
+    (tmp_path / "tests" / "nowhere").mkdir()
+    (tmp_path / "src" / "core").mkdir(parents=True)
+    (tmp_path / "src" / "core" / "stats.py").write_text("")
+    for name in ("core/test_stats.py", "core/test_missing.py", "nowhere/test_x.py"):
+        (tmp_path / "tests" / name).write_text("")
+    assert misplaced_tests(tmp_path / "tests", tmp_path / "src") == [
+        "core/test_missing.py: no module missing in core/",
+        "nowhere/test_x.py: nowhere is no layer",
+    ]

@@ -351,7 +351,7 @@ def test_ticks_topics_unwrap_and_interpolate(
     messages.sort(key=lambda m: m[1])
     path = write_bag(tmp_path, fmt, {"/left_ticks": typ, "/right_ticks": typ}, messages)
     options = BagOptions(
-        left_ticks_topic="/left_ticks", right_ticks_topic="/right_ticks", ticks_per_revolution=tpr
+        left_ticks_topic="/left_ticks", right_ticks_topic="/right_ticks", ticks_per_rev=tpr
     )
     calls = count_deserialize(monkeypatch)
     wheels, _ = read_bag(path, options)
@@ -383,7 +383,7 @@ def test_ticks_topics_that_do_not_overlap_are_refused(tmp_path):
     messages += [("/right_ticks", ns(1.0 + 0.02 * k), cls(data=k)) for k in range(10)]
     path = write_bag(tmp_path, "ros1", {"/left_ticks": typ, "/right_ticks": typ}, messages)
     options = BagOptions(
-        left_ticks_topic="/left_ticks", right_ticks_topic="/right_ticks", ticks_per_revolution=100
+        left_ticks_topic="/left_ticks", right_ticks_topic="/right_ticks", ticks_per_rev=100
     )
     with pytest.raises(InputError) as err:
         read_bag(path, options)
@@ -677,7 +677,7 @@ def test_topic_of_the_wrong_type(tmp_path, fmt):
                 wheel_topic="/odom",
                 left_ticks_topic="/odom",
                 right_ticks_topic="/x",
-                ticks_per_revolution=100,
+                ticks_per_rev=100,
             ),
         )
     assert_one_line(err.value, path, "/odom", "std_msgs/msg/Int32")
@@ -728,13 +728,13 @@ def test_joint_state_without_position_or_velocity(tmp_path):
     assert_one_line(err.value, path, "neither position nor velocity")
 
 
-def test_ticks_need_ticks_per_revolution(tmp_path):
+def test_ticks_need_ticks_per_rev(tmp_path):
     path, _ = wheel_bag(tmp_path, "sqlite3", n=2)
     with pytest.raises(InputError) as err:
         read_bag(path, BagOptions(left_ticks_topic="/l", right_ticks_topic="/r"))
-    assert_one_line(err.value, path, "ticks_per_revolution")
+    assert_one_line(err.value, path, "ticks_per_rev")
     with pytest.raises(InputError) as err:
-        read_bag(path, BagOptions(left_ticks_topic="/l", ticks_per_revolution=10))
+        read_bag(path, BagOptions(left_ticks_topic="/l", ticks_per_rev=10))
     assert_one_line(err.value, path, "left and right ticks topics")
 
 
@@ -775,7 +775,7 @@ def test_bad_options(tmp_path):
         (BagOptions(right_joint=LEFT), "same"),
         (BagOptions(time_source="gps"), "time source"),  # type: ignore[arg-type]
         (
-            BagOptions(left_ticks_topic="/a", right_ticks_topic="/b", ticks_per_revolution=0),
+            BagOptions(left_ticks_topic="/a", right_ticks_topic="/b", ticks_per_rev=0),
             "positive",
         ),
     ]:

@@ -145,7 +145,7 @@ def test_bag_replay_and_trajectory_fit(tmp_path, session):
 
 @pytest.mark.slow
 def test_the_command_names_the_bag_in_its_errors(tmp_path, session):
-    """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
+    """(That ``--json`` is the library's dictionary: tests/cli/test_main.py, for every command.)"""
     bag = _write(tmp_path / "session", "ros1", session)
     err = cli_error("calibrate", str(bag), *BAG_ARGS, "--left-joint", "wheel_l")
     assert err.startswith(f"umbmark: error: {bag}: ")

@@ -382,7 +382,7 @@ def test_a_bag_without_candidates(tmp_path):
 
 @pytest.mark.slow
 def test_the_command_prints_a_summary(robot):
-    """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
+    """(That ``--json`` is the library's dictionary: tests/cli/test_main.py, for every command.)"""
     proc = run_cli("info", str(robot))
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout

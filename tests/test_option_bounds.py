@@ -55,7 +55,7 @@ def logs(tmp_path_factory: pytest.TempPathFactory) -> Path:
         (umbmark.study, {"slip": [0.0] * 21}, "slip must list 1 to 20 values, got 21"),
         (umbmark.study, {"wheelbase": []}, "wheelbase must list 1 to 20 values, got 0"),
         (umbmark.study, {"workers": 0}, "workers must be between 1 and 64, got 0"),
-        (umbmark.study, {"E_d_spread": math.nan}, "E_d_spread=nan: give 0 to 0.2"),
+        (umbmark.study, {"E_d_spread": math.nan}, "E_d_spread must be a finite number, got nan"),
         (umbmark.study, {"slip": ["abc"]}, "slip must be a number, not 'abc'"),
         (umbmark.reproduce_table1, {"seeds": 1_000_000}, "seeds must be 1 to 1000, got 1000000"),
         (umbmark.reproduce_table1, {"seed": -1}, f"seed must be between 0 and {SEED_TOP}"),

@@ -102,8 +102,8 @@ def test_simulate_straight_line_and_turn_report_what_a_tape_measures():
         ({"E_b": 3}, "E_b=3 is not a plausible ratio"),
         ({"runs": 1}, "runs must be at least 2 for UMBmark"),
         ({"slip": -1}, "slip=-1 is outside 0 to 0.1"),
-        ({"seed": -1}, "seed=-1 is outside 0 to"),
-        ({"runs": 2**63}, "runs=9223372036854775808 is more than 1000"),
+        ({"seed": -1}, "seed must be between 0 and 9223372036854775807, got -1"),
+        ({"runs": 2**63}, "runs must be between 1 and 1000, got 9223372036854775808"),
         ({"dt": 1e-9}, "dt=1e-09 is outside 0.0001 to 0.1"),
         ({"speed": 1e-6}, "speed=1e-06 is outside 0.01 to 5"),
         ({"bump_size": 1e308}, "bump_size=1e+308 is outside 0 to 0.05"),
@@ -193,7 +193,7 @@ def test_reproduce_fig4_exposes_the_unidirectional_trap(tmp_path):
 
 @pytest.mark.slow
 def test_simulate_command_writes_and_prints(tmp_path):
-    """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
+    """(That ``--json`` is the library's dictionary: tests/cli/test_main.py, for every command.)"""
     runs = tmp_path / "runs.csv"
     args = ["simulate", "--E-d", "1.002", "--seed", "7", "-o", str(runs), "--runs", "2"]
     assert run_cli(*args).returncode == 0

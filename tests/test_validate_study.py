@@ -67,7 +67,7 @@ def test_method_auto_takes_the_recommendation(sessions):
 
 
 def test_validate_command_names_a_missing_source_plainly():
-    """(That ``--json`` is the library's dictionary: tests/test_cli.py, for every command.)"""
+    """(That ``--json`` is the library's dictionary: tests/cli/test_main.py, for every command.)"""
     assert "needs" not in cli_error("validate", "nothing.csv")
 
 
@@ -95,9 +95,9 @@ def test_study_reports_what_each_estimator_reaches(monkeypatch):
     ("options", "message"),
     [
         ({"methods": ["median"]}, "methods='median'"),
-        ({"trials": 0}, "trials must be 1 to"),
-        ({"runs": [1]}, "runs must be 2 to 100"),
-        ({"E_d_spread": 0.5}, "E_d_spread=0.5: give 0 to 0.2"),
+        ({"trials": 0}, "trials must be between 1 and 100000, got 0"),
+        ({"runs": [1]}, "runs must be between 2 and 100, got 1"),
+        ({"E_d_spread": 0.5}, "E_d_spread=0.5 is outside 0 to 0.2"),
     ],
 )
 def test_study_refuses_bad_options(options, message):

@@ -63,6 +63,18 @@ def test_the_names_an_error_carries():
     assert "\ue000" not in InputError(text).command_line()
 
 
+def test_a_computations_problem_reads_with_flags_and_keeps_the_names():
+    from umbmark.core.errors import ProblemError
+    from umbmark.core.messages import info, split_messages
+
+    error = ProblemError(f"the fit diverged; try {option('method', 'trajectory')}")
+    assert str(error) == "the fit diverged; try --method trajectory"
+    assert option_names(error.problem) == ["method"]
+    notes, warnings = split_messages([info(f"read {option('unit', 'mm')}"), error.problem])
+    assert notes == ("read --unit mm",)
+    assert warnings == ("the fit diverged; try --method trajectory",)
+
+
 def _known_options() -> set[str]:
     """Every keyword a command line option stands for: the commands' click options."""
     from umbmark.cli.main import cli

@@ -53,7 +53,7 @@ radial spread of a cluster, ``sqrt(sum |eps - cg|^2 / (n - 1))``, has the expect
 (Sec. 5) is ``SEM = sqrt(2) sigma / sqrt(n)`` (its root mean square) and the threshold
 3 SEM.
 
-``tests/test_plan.py`` checks ``D``, ``K`` and the standard errors against the slip
+``tests/calibration/test_plan.py`` checks ``D``, ``K`` and the standard errors against the slip
 simulator of ``umbmark study`` (4 m with a 0.34 m robot; 0.75 m and 1 m squares with
 0.2 m and 0.15 m robots, the last also with a reading error): within 10 %, where the
 ``tape`` model misses by 18-28 % (``tools/plan_vs_simulation.py`` prints both side by
@@ -116,18 +116,21 @@ def check_scatter(scatter: float) -> None:
     Raises
     ------
     InputError
-        Naming ``--scatter``, the range and, for a large one, the value in metres.
+        Naming ``scatter`` (the command's ``--scatter``), the range and, for a large one,
+        the value in metres.
     """
     low, high = SCATTER_RANGE
     value = finite_float(option("scatter"), scatter)
     if value > high:
         hint = in_metres(option("scatter"), value, SCATTER_RANGE)
         raise InputError(
-            f"--scatter {value:g} m is implausibly large: lengths are in metres (plausible: "
-            f"{low:g} to {high:g} m per axis){'; ' + hint if hint else ''}"
+            f"{option('scatter', value, 'm')} is implausibly large: lengths are in metres "
+            f"(plausible: {low:g} to {high:g} m per axis){'; ' + hint if hint else ''}"
         )
     if value < low:
-        raise InputError(f"--scatter {value:g} m is outside {low:g} to {high:g} m per axis")
+        raise InputError(
+            f"{option('scatter', value, 'm')} is outside {low:g} to {high:g} m per axis"
+        )
 
 
 #: Most runs per direction a plan recommends.
@@ -396,7 +399,8 @@ def plan_test(
     check_length(option("side_length"), side_length, MAX_SIDE_LENGTH)
     if side_length < 2.0 * wheelbase:
         raise InputError(
-            f"--side-length {side_length:g} m is less than twice the wheelbase ({wheelbase:g} m)"
+            f"{option('side_length', side_length, 'm')} is less than twice the wheelbase "
+            f"({wheelbase:g} m)"
         )
     on_square, s2 = given.at(side_length)
     if runs is None:
@@ -407,7 +411,7 @@ def plan_test(
                 f"(at most {MAX_PLAN_RUNS}): a larger square or less scatter"
             )
     if isinstance(runs, bool) or not 2 <= runs <= MAX_PLAN_RUNS:
-        raise InputError(f"--runs {runs} is outside 2 to {MAX_PLAN_RUNS}")
+        raise InputError(f"{option('runs', runs)} is outside 2 to {MAX_PLAN_RUNS}")
     figures = _figures(side_length, runs, wheelbase, on_square, s2)
     if model == "slip" and scatter_side is not None and not math.isclose(scatter_side, side_length):
         notes.append(
@@ -452,13 +456,16 @@ def _recommend_side(
     standard error to target. (``target_e_max`` is in metres on the chosen square: it
     sets the runs, not the side.)"""
     if floor is None:
-        raise InputError("give --side-length (to predict) or --floor (to be recommended one)")
+        raise InputError(
+            f"give {option('side_length')} (to predict) or {option('floor')} (to be recommended "
+            "one)"
+        )
     check_length(option("floor"), floor, MAX_SIDE_LENGTH + 5.0)
     wheelbase = given.wheelbase
     largest = min(floor - margin, MAX_SIDE_LENGTH)
     if largest < 2.0 * wheelbase:
         raise InputError(
-            f"--floor {floor:g} m leaves a {largest:.2f} m square for a {wheelbase:g} m "
+            f"{option('floor', floor, 'm')} leaves a {largest:.2f} m square for a {wheelbase:g} m "
             "wheelbase: the robot needs a side of at least twice its wheelbase"
         )
     count = math.floor((largest - 2.0 * wheelbase) / SIDE_STEP + 1e-9)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from umbmark.calibration.compose import Calibration, check_calibration
 from umbmark.calibration.result import CalibrationResult
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.messages import info, split_messages
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.registry import INTERVALS, Estimator, estimator
@@ -97,7 +97,9 @@ def calibrate_intervals(
 def _interval_estimator(method: str) -> Estimator:
     entry = estimator(method)
     if entry.needs != "intervals":
-        raise InputError(f"motion intervals are calibrated by --method {' or '.join(INTERVALS)}")
+        raise InputError(
+            f"motion intervals are calibrated by {option('method', ' or '.join(INTERVALS))}"
+        )
     return entry
 
 
@@ -115,13 +117,14 @@ def _calibrate(
     """The estimator ``entry`` on ``intervals`` with the active parameters ``chosen``."""
     if chosen.wheelbase is None:
         raise InputError(
-            "--wheelbase is required: the wheelbase the odometry used [m] (or --current-params)",
+            f"{option('wheelbase')} is required: the wheelbase the odometry used [m] (or "
+            f"{option('current_params')})",
             source=where,
         )
     if chosen.wheel_diameter is None:
         raise InputError(
-            "--wheel-diameter is required: the nominal wheel diameter D_n the odometry used "
-            "[m] (or --current-params)",
+            f"{option('wheel_diameter')} is required: the nominal wheel diameter D_n the "
+            f"odometry used [m] (or {option('current_params')})",
             source=where,
         )
     active = ActiveParams(
@@ -191,7 +194,9 @@ def calibrate_scan_bags(
     if not bags:
         raise InputError("no bag given: name the bag that holds the scans and the wheels")
     if topic is None:
-        raise InputError("--scan-topic is required: the bag's sensor_msgs/LaserScan topic")
+        raise InputError(
+            f"{option('scan_topic')} is required: the bag's sensor_msgs/LaserScan topic"
+        )
     WHEELBASE.check(wheelbase)
     file = parameter_file(options)
     chosen = choose_active(options, file, wheelbase, None)

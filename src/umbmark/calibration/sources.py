@@ -16,7 +16,7 @@ from pathlib import Path
 from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
 from umbmark.calibration.result import CalibrationResult
 from umbmark.core.bounds import check_square_geometry
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.estimators.plausibility import judge_table
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
 from umbmark.runs.active import read_each
@@ -54,11 +54,13 @@ def calibrate_sources(
 
 def _check_method(method: str | None, fit_truth_offset: bool) -> None:
     if method is not None and method not in CHOICES:
-        raise InputError(f"--method {method!r}: use one of {', '.join(NAMES)} or {AUTO}")
+        raise InputError(
+            f"{option('method', repr(method))}: use one of {', '.join(NAMES)} or {AUTO}"
+        )
     fitting = names(trajectories=True)
     if fit_truth_offset and method not in fitting:
         raise InputError(
-            f"--fit-truth-offset needs --method {' or '.join(fitting)}, not "
+            f"{option('fit_truth_offset')} needs {option('method', ' or '.join(fitting))}, not "
             f"{method or DEFAULT.name}"
         )
 
@@ -100,12 +102,13 @@ def _calibrate_intervals(
 
     if method not in (*INTERVALS, AUTO):
         raise InputError(
-            f"motion intervals (tuple files) are calibrated by --method {' or '.join(INTERVALS)}, "
-            f"not {method}"
+            "motion intervals (tuple files) are calibrated by "
+            f"{option('method', ' or '.join(INTERVALS))}, not {method}"
         )
     if not all(is_intervals(s, options) for s in sources):
         raise InputError(
-            f"--method {method} calibrates motion intervals (tuple files; docs/formats.md), "
+            f"{option('method', method)} calibrates motion intervals (tuple files; "
+            "docs/formats.md), "
             "not runs"
         )
     chosen = INTERVALS[0] if method == AUTO else method
@@ -126,11 +129,11 @@ def _calibrate_scans(
 
     if method is not None and method not in (*INTERVALS, AUTO):
         raise InputError(
-            f"--scan-topic calibrates by --method {' or '.join(INTERVALS)} (the default with "
-            f"it), not {method}"
+            f"{option('scan_topic')} calibrates by {option('method', ' or '.join(INTERVALS))} "
+            f"(the default with it), not {method}"
         )
     if any(is_runs(s) for s in sources):
-        raise InputError("--scan-topic reads bags, not runs in memory")
+        raise InputError(f"{option('scan_topic')} reads bags, not runs in memory")
     chosen = INTERVALS[0] if method in (None, AUTO) else method
     paths = [Path(source_name(s)) for s in sources]
     return calibrate_scan_bags(paths, options, chosen, wheelbase=wheelbase, side_length=side_length)
@@ -153,7 +156,9 @@ def _calibrate_runs(
         from umbmark.runs.read import is_table
 
         if any(is_table(s, read_options) for s in sources):
-            raise InputError("--side-length is required: the side of the square path, in metres")
+            raise InputError(
+                f"{option('side_length')} is required: the side of the square path, in metres"
+            )
     each = [
         judge_table(one, read_options.unit, read_options.angle_unit, side_length)
         if not is_runs(source) and one.formats == ("table",)

@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from umbmark.core.errors import with_flags
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.returns.clusters import NO_RETURN_ERROR
 from umbmark.sources.bag.truth.independence import REFERENCES
@@ -412,6 +413,7 @@ def _implausible(estimate: ErrorEstimate, diameter: float | None) -> list[_Findi
     if estimate.E_s is not None and abs(estimate.E_s - 1.0) > PLAUSIBLE_E_S:
         said = f"E_s = {estimate.E_s:.4f}: the wheels' mean diameter over the one given"
         mixup = diameter_mixup(estimate.E_s, diameter, said)
+        mixup = with_flags(mixup) if mixup is not None else None  # a reason, not an error
         found.append(
             (
                 "care",

@@ -28,6 +28,7 @@ __all__ = [
 ]
 
 F = TypeVar("F", bound=Callable[..., Any])
+T = TypeVar("T")
 
 OTHER = "Other options"
 
@@ -87,8 +88,12 @@ def spec_option(
     default (shown by ``--help``), values and help, listed under its section [or
     ``section``]; ``help`` for a command that says it in its own words."""
     attrs: dict[str, Any] = {}
-    if spec.kind == "number":
-        attrs["type"] = int if spec.bound is not None and spec.bound.kind == "count" else float
+    if spec.most:  # comma-separated numbers
+        attrs["callback"] = _list(int if spec.kind == "integer" else float)
+    elif spec.kind == "number":
+        attrs["type"] = float
+    elif spec.kind == "integer":
+        attrs["type"] = int
     elif spec.kind == "choice":
         attrs["type"] = click.Choice(list(spec.choices))
     elif spec.kind == "file":
@@ -97,9 +102,12 @@ def spec_option(
         attrs["type"] = click.Path(file_okay=False)
     elif spec.kind == "flag":
         attrs["is_flag"] = True
-    if spec.default is not None:
-        attrs["default"] = spec.default
+    if spec.most and spec.default is not None:
+        attrs["default"] = ",".join(format(value, "g") for value in spec.default)
         attrs["show_default"] = True
+    elif spec.default is not None:
+        attrs["default"] = spec.default
+        attrs["show_default"] = spec.kind != "flag"
     if spec.nargs != 1:
         attrs["nargs"] = spec.nargs
     if spec.metavar is not None:
@@ -111,6 +119,18 @@ def spec_option(
         help=spec.help if help is None else help,
         **attrs,
     )
+
+
+def _list(kind: Callable[[str], T]) -> Callable[[click.Context, click.Parameter, str], list[T]]:
+    """A click callback reading comma-separated values (a :attr:`Spec.most` option)."""
+
+    def parse(ctx: click.Context, param: click.Parameter, text: str) -> list[T]:
+        try:
+            return [kind(part) for part in text.split(",") if part.strip()]
+        except ValueError:
+            raise click.BadParameter(f"{text!r}: give comma-separated numbers") from None
+
+    return parse
 
 
 def force_option(also: str = "", *, section: str | None = None) -> Callable[[F], F]:

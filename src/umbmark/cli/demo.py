@@ -6,8 +6,9 @@ from pathlib import Path
 
 import click
 
-from umbmark.cli.click_options import Command, force_option, option
+from umbmark.cli.click_options import Command, force_option, option, spec_option
 from umbmark.estimators.registry import DEFAULT, SQUARE
+from umbmark.options.simulate import DEMO_RUNS, SEED
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["DEMO_FOLDER", "demo"]
@@ -27,8 +28,7 @@ DEMO_FOLDER = "umbmark-demo"
     f"{DEMO_FOLDER}-2, -3, ... when an earlier demo left files there].",
 )
 @force_option()
-@option("--seed", section="Options", type=int, default=1, show_default=True,
-        help="Seed of the non-systematic errors (0 to 2^63-1).")  # fmt: skip
+@spec_option(SEED, section="Options", help="Seed of the non-systematic errors (0 to 2^63-1).")
 @option(
     "--method",
     "-m",
@@ -38,8 +38,7 @@ DEMO_FOLDER = "umbmark-demo"
     show_default=True,
     help="Estimator to calibrate with.",
 )
-@option("--runs", "-n", section="Options", type=int, default=5, show_default=True,
-        help="Runs in each direction (2 to 1000).")  # fmt: skip
+@spec_option(DEMO_RUNS)
 def demo(json_out: bool, out: str | None, seed: int, method: str, runs: int, force: bool) -> None:
     """UMBmark before, calibration, UMBmark after, on a virtual LabMate (Sec. 5).
 

@@ -15,7 +15,7 @@ from collections.abc import ItemsView, Iterator, KeysView, Sequence, ValuesView
 import click
 
 from umbmark.cli.common import EXIT_BAD_INPUT, error_line, input_error_line, reading_bar
-from umbmark.core.errors import InputError, SafetyError
+from umbmark.core.errors import InputError, SafetyError, with_flags
 from umbmark.core.version import __version__
 
 __all__ = ["cli", "main"]
@@ -176,8 +176,9 @@ def main(argv: Sequence[str] | None = None) -> None:
         error_line("out of memory: the input is too large for this machine")
         sys.exit(EXIT_ENVIRONMENT)
     except Exception as exc:  # a bug of ours: still one line, never a traceback
+        first = with_flags(str(exc)).splitlines()[0] if str(exc) else ""
         error_line(
-            f"internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+            f"internal error ({type(exc).__name__}: {first})"
             "; please report it with the command that caused it"
         )
         sys.exit(EXIT_INTERNAL)

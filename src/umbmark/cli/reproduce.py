@@ -6,7 +6,8 @@ import math
 
 import click
 
-from umbmark.cli.click_options import Command, force_option, option
+from umbmark.cli.click_options import Command, force_option, option, spec_option
+from umbmark.options.simulate import SEED
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["reproduce"]
@@ -22,8 +23,7 @@ def reproduce() -> None:
 @option("--seeds", section="Options", type=int, default=10, show_default=True,
         help="Repetitions of every experiment (random seeds), 1 to 1000 (about a second "
         "each).")  # fmt: skip
-@option("--seed", section="Options", type=int, default=1, show_default=True,
-        help="Base seed (0 to 2^63-1).")  # fmt: skip
+@spec_option(SEED, section="Options", help="Base seed (0 to 2^63-1).")
 @option(
     "--tape-thickness",
     section="Options",

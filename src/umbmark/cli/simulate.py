@@ -7,73 +7,17 @@ from typing import Any
 
 import click
 
-from umbmark.cli.click_options import Command, apply, force_option, option
+from umbmark.cli.click_options import Command, apply, force_option, option, spec_option
+from umbmark.options.simulate import SIMULATE_OPTIONS
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["simulate"]
-
-ROBOT = "The robot"
-DRIVE = "What it drives"
-NOISE = "Non-systematic errors"
-
-
-def _number(*decls: str, section: str, default: float, help_text: str) -> Any:
-    return option(
-        *decls, section=section, type=float, default=default, show_default=True, help=help_text
-    )
 
 
 @click.command(cls=Command)
 @apply(
     [
-        _number("--E-d", "E_d", section=ROBOT, default=1.0,
-                help_text="True wheel-diameter ratio D_R / D_L (Eq. 2.3), with the wheels "
-                "of nominal diameter D_n (without --params' c_L, c_R)."),
-        _number("--E-b", "E_b", section=ROBOT, default=1.0,
-                help_text="True wheelbase over nominal, b_actual / b (Eq. 2.4), with b of "
-                "--wheelbase (without --params' correction)."),
-        _number("--E-s", "E_s", section=ROBOT, default=1.0,
-                help_text="True average wheel diameter over nominal, D_avg / D_n."),
-        _number("--wheelbase", "-b", section=ROBOT, default=0.34,
-                help_text="Nominal wheelbase b [m]."),
-        _number("--wheel-diameter", section=ROBOT, default=0.15,
-                help_text="Nominal wheel diameter D_n [m]."),
-        _number("--encoder-resolution", section=ROBOT, default=2000.0,
-                help_text="Encoder pulses per motor revolution."),
-        _number("--gear-ratio", section=ROBOT, default=20.0,
-                help_text="Motor revolutions per wheel revolution."),
-        option("--params", section=ROBOT, type=click.Path(dir_okay=False),
-               help="Calibration result (calibrate -o) whose c_L, c_R and wheelbase the "
-               "robot's odometry uses; --E-d, --E-b, --E-s stay the truth relative to the "
-               "nominal values (printed so), the errors left to the odometry are printed "
-               "too."),
-        option("--path", section=DRIVE, type=click.Choice(["square", "straight", "turn"]),
-               default="square", show_default=True,
-               help="square (UMBmark), straight (a leg of --side-length, to measure E_s) or "
-               "turn (on the spot, by --turn-angle)."),
-        _number("--side-length", "-L", section=DRIVE, default=4.0,
-                help_text="Side of the square [m]."),
-        option("--runs", "-n", section=DRIVE, type=int, default=5, show_default=True,
-               help="Runs in each direction (1 to 1000; a run may take at most 2 million "
-               "sampling periods, all runs 1e9, with --logs 5 million)."),
-        option("--direction", section=DRIVE, type=click.Choice(["both", "cw", "ccw"]),
-               default="both", show_default=True,
-               help="both (UMBmark), or cw / ccw only (uni-directional)."),
-        _number("--turn-angle", section=DRIVE, default=360.0,
-                help_text="Angle of --path turn [deg], ccw positive."),
-        _number("--dt", section=DRIVE, default=0.01, help_text="Sampling period [s]."),
-        _number("--speed", section=DRIVE, default=0.2, help_text="Speed on the legs [m/s]."),
-        option("--noise-free", section=NOISE, is_flag=True,
-               help="No slip and no bumps (only quantization)."),
-        _number("--slip", section=NOISE, default=0.0004,
-                help_text="Wheel slip [m^0.5]: each wheel's floor travel errs by slip x "
-                "sqrt(travel). The default gives the paper's ~25 mm spread on a 4 m square."),
-        _number("--bump-rate", section=NOISE, default=0.0,
-                help_text="Floor bumps per metre of wheel travel."),
-        _number("--bump-size", section=NOISE, default=0.002,
-                help_text="Extra wheel rotation per bump, as a length [m]."),
-        option("--seed", section=NOISE, type=int, default=1, show_default=True,
-               help="Seed of the random errors (0 to 2^63-1)."),
+        *(spec_option(spec) for spec in SIMULATE_OPTIONS),
         option("--output", "-o", section=OUTPUTS, type=click.Path(),
                help="Write the runs table (CSV, metres, radians)."),
         option("--logs", section=OUTPUTS, type=click.Path(file_okay=False),

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
 import click
 
-from umbmark.cli.click_options import Command, option
+from umbmark.cli.click_options import Command, apply, option, spec_option
 from umbmark.estimators.registry import SQUARE
+from umbmark.options.simulate import ROBOTS, STUDY_OPTIONS
 from umbmark.options.spec import OUTPUTS
 
 if TYPE_CHECKING:
@@ -17,45 +17,12 @@ if TYPE_CHECKING:
 
 __all__ = ["study"]
 
-T = TypeVar("T")
-GRID = "The grid (comma-separated values, at most 20 each)"
-ROBOTS = "The robots"
-
-
-def _list(kind: Callable[[str], T]) -> Callable[[click.Context, click.Parameter, str], list[T]]:
-    """A click callback reading comma-separated values."""
-
-    def parse(ctx: click.Context, param: click.Parameter, text: str) -> list[T]:
-        try:
-            return [kind(part) for part in text.split(",") if part.strip()]
-        except ValueError:
-            raise click.BadParameter(f"{text!r}: give comma-separated numbers") from None
-
-    return parse
-
 
 @click.command(cls=Command)
 @option("--methods", section=ROBOTS, default=",".join(("truth", *SQUARE)),
         show_default=True, help="Estimators to compare; truth: calibrated with the true "
         "parameters, the ceiling.")  # fmt: skip
-@option("--trials", section=ROBOTS, type=int, default=200, show_default=True,
-        help="Robots per grid cell (1 to 100000, and 100000 in all cells).")  # fmt: skip
-@option("--E-d-spread", "E_d_spread", section=ROBOTS, type=float, default=0.02,
-        show_default=True, help="E_d drawn uniformly from 1 +- this.")  # fmt: skip
-@option("--E-b-spread", "E_b_spread", section=ROBOTS, type=float, default=0.05,
-        show_default=True, help="E_b drawn uniformly from 1 +- this.")  # fmt: skip
-@option("--slip", section=GRID, default="0.0004", show_default=True, callback=_list(float),
-        help="Wheel slip [m^0.5] (0.0004: the paper's ~25 mm on a 4 m square).")  # fmt: skip
-@option("--side-length", "-L", section=GRID, default="4", show_default=True,
-        callback=_list(float), help="Square sides [m].")  # fmt: skip
-@option("--runs", "-n", section=GRID, default="5", show_default=True, callback=_list(int),
-        help="Runs per direction.")  # fmt: skip
-@option("--wheelbase", "-b", section=GRID, default="0.34", show_default=True,
-        callback=_list(float), help="Nominal wheelbases [m] (wheel diameter alike).")  # fmt: skip
-@option("--seed", section="Other options", type=int, default=1, show_default=True,
-        help="Seed of the whole study (0 to 2^63-1).")  # fmt: skip
-@option("--workers", section="Other options", type=int,
-        help="Processes, 1 to 64 [default: the machine's cores].")  # fmt: skip
+@apply([spec_option(spec) for spec in STUDY_OPTIONS])
 @option("--json", "json_out", section=OUTPUTS, is_flag=True, help="Print one JSON object.")
 def study(json_out: bool, methods: str, **options: Any) -> None:
     """Compare the estimators by Monte Carlo on virtual robots with known errors.

@@ -217,10 +217,10 @@ def check_square_geometry(
         )
     named = b_from.named(source)
     if m_from is not None:
-        named += f" times {m_from.named(source)} {multiplier:g}"
+        named += f" times {given(m_from.named(source), multiplier)}"
     raise InputError(
         f"the odometry's wheelbase {wheelbase:g} m ({named}) is not smaller than the square: "
-        f"it must be below half the side ({side_from.named(source)} {side_length:g} m, so "
+        f"it must be below half the side ({given(side_from.named(source), side_length, 'm')}, so "
         f"b < {side_length / 2:g} m); are the two swapped or in other units?",
         source=source,
     )

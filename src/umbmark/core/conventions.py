@@ -1,7 +1,7 @@
 """Frame, sign and unit conventions, in one place.
 
 Every module of umbmark follows these; ``docs/conventions.md`` explains them with the
-paper's equation numbers, and ``tests/test_conventions.py`` pins each one.
+paper's equation numbers, and ``tests/core/test_conventions.py`` pins each one.
 
 Frame
     The origin is the run's start pose; x points along the first leg; y points to the

@@ -29,6 +29,7 @@ from typing import ParamSpec, TypeVar
 __all__ = [
     "InputError",
     "Keyword",
+    "ProblemError",
     "SafetyError",
     "given",
     "keywords_of",
@@ -36,6 +37,7 @@ __all__ = [
     "option_names",
     "python_api",
     "unexpected_keyword",
+    "with_flags",
 ]
 
 P = ParamSpec("P")
@@ -170,6 +172,16 @@ class InputError(ValueError):
         return self.command_line() if self.keywords is None else self.python()
 
 
+class ProblemError(ValueError):
+    """A ``ValueError`` of a computation (a fit that diverged) whose text names options
+    (:func:`option`): it reads with flags wherever it is shown as it is, and keeps the
+    names in :attr:`problem` for the :class:`InputError` a caller makes of it."""
+
+    def __init__(self, problem: str) -> None:
+        self.problem = problem
+        super().__init__(_as_flags(problem, {}))
+
+
 class SafetyError(RuntimeError):
     """A robot was stopped for safety (a zero velocity was sent before this was raised):
     stale odometry, an obstacle ahead, the robot leaving its path, a move taking too long.
@@ -198,6 +210,13 @@ def _as_flags(text: str, flags: Mapping[str, str]) -> str:
         return " ".join(part for part in (_flag(name, flags), value, unit) if part)
 
     return _OPTION.sub(one, text)
+
+
+def with_flags(text: str) -> str:
+    """``text`` with the options :func:`option` named as the command line's flags: for a
+    text that is no :class:`InputError`'s problem (a warning, a verdict's reason) built
+    from one that is."""
+    return _as_flags(text, {})
 
 
 def _as_python(text: str, keywords: Mapping[str, Keyword]) -> str:

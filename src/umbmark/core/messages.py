@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
+from umbmark.core.errors import with_flags
+
 __all__ = ["Info", "info", "join_names", "split_messages"]
 
 
@@ -32,11 +34,12 @@ def info(text: str) -> Info:
 
 def split_messages(messages: Iterable[str]) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """``(notes, warnings)``: the messages marked :func:`info`, and all the others, each
-    in their order (as plain ``str``)."""
+    in their order (as plain ``str``; an option a message names with
+    :func:`umbmark.core.errors.option` as the command line's flag)."""
     notes: list[str] = []
     warnings: list[str] = []
     for message in messages:
-        (notes if isinstance(message, Info) else warnings).append(str(message))
+        (notes if isinstance(message, Info) else warnings).append(with_flags(str(message)))
     return tuple(notes), tuple(warnings)
 
 

@@ -5,7 +5,7 @@ leave eight degrees of freedom: a 95 % interval is 2.31 standard errors wide, no
 and the model checks compare a statistic with an F quantile. ``scipy.stats`` has both but
 costs half a second to import, more than a whole calibration; so they are computed here
 from the regularized incomplete beta function (a continued fraction, Numerical Recipes
-Sec. 6.4), which ``tests/test_stats.py`` checks against ``scipy.stats``.
+Sec. 6.4), which ``tests/core/test_stats.py`` checks against ``scipy.stats``.
 """
 
 from __future__ import annotations

@@ -31,7 +31,7 @@ from dataclasses import replace
 import numpy as np
 
 from umbmark.core.conventions import Direction
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.messages import join_names
 from umbmark.estimators.base import ModelCheckFailure, SquareTest
 from umbmark.estimators.endpose import FLOOR, LEVEL, EndPoseFit, fit_end_poses
@@ -41,6 +41,7 @@ from umbmark.returns.clusters import Benchmark, umbmark_benchmark
 
 __all__ = [
     "MODEL_CAUSES",
+    "ReachError",
     "check_model",
     "check_reach",
     "require_headings",
@@ -58,6 +59,12 @@ _INSIDE_SIGMA = 4.5
 _DEGREE = 180.0 / math.pi
 
 
+class ReachError(InputError):
+    """Return errors a method's geometry cannot take (:func:`check_reach`): an
+    :class:`InputError` (so a ``ValueError``) naming the option to change, which the
+    dispatch gives the source's name and any wheel-diameter mix-up it sees."""
+
+
 def _farthest(runs: Sequence[Run]) -> tuple[Run, float]:
     errors = [math.hypot(*run.return_error) for run in runs]
     k = int(np.argmax(errors))
@@ -69,15 +76,16 @@ def _check_within_side(runs: Sequence[Run], test: SquareTest) -> None:
 
     Raises
     ------
-    ValueError
+    ReachError
         Naming the run and the likely cause.
     """
     run, error = _farthest(runs)
     if error > test.side_length:
-        raise ValueError(
+        raise ReachError(
             f"the return error of {run.label or 'a run'} ({error:.4g} m) is larger than the "
             f"square's side ({test.side_length:g} m), beyond the paper's small-angle "
-            f"formulas: use --method {join_names(names(reach='path'), 'or')} (the exact geometry)"
+            f"formulas: use {option('method', join_names(names(reach='path'), 'or'))} (the "
+            "exact geometry)"
         )
 
 
@@ -86,15 +94,15 @@ def _check_reachable(runs: Sequence[Run], test: SquareTest) -> None:
 
     Raises
     ------
-    ValueError
+    ReachError
         Naming the run.
     """
     run, error = _farthest(runs)
     if error > 4.0 * test.side_length:
-        raise ValueError(
+        raise ReachError(
             f"the return error of {run.label or 'a run'} ({error:.4g} m) is farther from the "
             f"start than the whole {4 * test.side_length:g} m path is long: are the lengths "
-            "in the right unit (--unit) and the side length right?"
+            f"in the right unit ({option('unit')}) and the side length right?"
         )
 
 
@@ -272,7 +280,7 @@ def check_reach(method: Estimator, runs: Sequence[Run], test: SquareTest) -> Non
 
     Raises
     ------
-    ValueError
+    ReachError
         Naming the run and the likely cause.
     """
     if method.reach == "side":
@@ -298,6 +306,6 @@ def require_headings(method: Estimator, runs: Sequence[Run], where: str | None) 
             raise InputError(
                 f"the ground truth of {run.label or 'the runs'} has positions only (a "
                 f"PointStamped or NavSatFix reference, no headings): the {method.name} method "
-                f"needs headings; use --method {serve}",
+                f"needs headings; use {option('method', serve)}",
                 source=where,
             )

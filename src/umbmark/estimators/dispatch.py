@@ -24,9 +24,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.estimators.base import ErrorEstimate, SquareTest
-from umbmark.estimators.diagnostics import check_model, check_reach, require_headings
+from umbmark.estimators.diagnostics import ReachError, check_model, check_reach, require_headings
 from umbmark.estimators.endpose import fit_end_poses
 from umbmark.estimators.registry import SQUARE, estimator, find
 from umbmark.estimators.scale import scale_from_straights, scale_only
@@ -144,7 +144,8 @@ def _failed(method: str, why: str) -> str:
     """What an estimator that could not compute says: why, and what to try."""
     return (
         f"the {method} estimate could not be computed ({why}): the runs do not determine the "
-        "errors; try another --method, more runs (in both directions, with turns both "
+        f"errors; try another {option('method')}, more runs (in both directions, with turns "
+        "both "
         "ways), and check the units, the nominal wheelbase and wheel diameter and, for "
         "recorded runs, the time offset between wheels and ground truth"
     )
@@ -192,14 +193,17 @@ def estimate_runs(
         return _estimate(
             method, runs, wheelbase, params, side_length, square_side, fit_truth_offset, where
         )
+    except ReachError as exc:  # an InputError, taken as the ValueErrors below
+        problem = exc.problem
     except InputError:
         raise
     except np.linalg.LinAlgError as exc:  # a ValueError: caught before the others
         raise InputError(_failed(method, f"a singular system: {exc}"), source=where) from None
-    except ValueError as exc:
-        mixup = _diameter_mixup(method, runs, params, wheelbase, square_side, fit_truth_offset)
-        said = str(exc) if mixup is None else f"{mixup}. Read as given: {exc}"
-        raise InputError(said, source=where) from None
+    except ValueError as exc:  # a ProblemError keeps the options it names
+        problem = getattr(exc, "problem", None) or str(exc)
+    mixup = _diameter_mixup(method, runs, params, wheelbase, square_side, fit_truth_offset)
+    said = problem if mixup is None else f"{mixup}. Read as given: {problem}"
+    raise InputError(said, source=where) from None
 
 
 def _estimate(

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.core.arrays import FloatArray
+from umbmark.core.errors import ProblemError, option
 from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.registry import ENDPOINTS
 from umbmark.estimators.solve import gauss_newton
@@ -98,7 +99,8 @@ DIVERGED = (
     "the runs' end points do not determine the wheels: the fit diverged towards a wheel or "
     "a wheelbase less than half the nominal one, which no robot has. Check that the ground "
     "truth follows the robot (not a robot on a stand, not a tracker that lost it), the "
-    "units and the nominal wheel diameter and wheelbase; or try --method trajectory (whole "
+    "units and the nominal wheel diameter and wheelbase; or try "
+    f"{option('method', 'trajectory')} (whole "
     "trajectories), or more runs that turn both ways"
 )
 
@@ -166,7 +168,7 @@ def _fit(
     try:  # a step to a wheel or wheelbase no robot has is refused by WheelParams
         p, _, _ = gauss_newton(lambda q: misfit(q).ravel(), first)  # headings: 1 m per radian
     except ValueError:
-        raise ValueError(DIVERGED) from None
+        raise ProblemError(DIVERGED) from None
     err = misfit(p)
     rms_position = float(np.sqrt(np.mean(np.sum(err[:, :2] ** 2, axis=1) / 2.0)))
     rms_heading = float(np.sqrt(np.mean(err[:, 2] ** 2)))
@@ -179,10 +181,10 @@ def _fit(
     try:
         p, r, jac = gauss_newton(residuals, p)
     except ValueError:
-        raise ValueError(DIVERGED) from None
+        raise ProblemError(DIVERGED) from None
     values = physical(p)
     if not (np.all(np.isfinite(values)) and np.all(values > 0.5 * np.append(r0, b0))):
-        raise ValueError(DIVERGED)
+        raise ProblemError(DIVERGED)
     # Sandwich over runs: each run's three residuals are one independent block.
     n, k = len(runs), p.size
     inverse = np.linalg.pinv(jac.T @ jac)

@@ -13,7 +13,7 @@ directions (``N - 2`` degrees of freedom for ``N`` runs), with a floor of :data:
   headings): the likelihood of the centres given those variances. The full covariance is
   not used as the weight: estimated from five runs per direction it is so noisy that the
   estimate's spread grows by 10 to 15 % and its own standard errors come out 20 to 45 %
-  too small (measured on Gaussian runs; ``tests/test_endpose.py``).
+  too small (measured on Gaussian runs; ``tests/estimators/test_endpose.py``).
 - **Standard errors** by the sandwich ``A^-1 (sum_d n_d J_d^T W S W J_d) A^-1`` with the
   pooled covariance ``S``, linear in ``S`` and so unbiased; 95 % intervals from Student's
   t with ``N - 2`` degrees of freedom. They cover the truth in 93 to 97 % of simulated

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from umbmark.core.conventions import Direction
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option, with_flags
 from umbmark.model.run import EndPose, Run
 
 if TYPE_CHECKING:
@@ -264,8 +264,11 @@ def _table_unit_hints(
         if not named:
             return []
         return [
-            f"the end points and return errors reach only {1000 * given.reach:.3g} mm on a "
-            f"{side:g} m square, less than a tape measure resolves; {_choice(named, unit)}"
+            with_flags(
+                f"the end points and return errors reach only {1000 * given.reach:.3g} mm on "
+                f"a {side:g} m square, less than a tape measure resolves; "
+                f"{_choice(named, unit)}"
+            )
         ]
     worst = max(range(len(squares)), key=lambda k: math.hypot(*given.runs[k].return_error))
     label = squares[worst].label or "a run"
@@ -299,14 +302,14 @@ def _table_unit_hints(
         )
         if fit == "fails":  # the exact geometry cannot take them: refused
             raise InputError(said, source=name)
-        return [said]
+        return [with_flags(said)]
     if named:
         shown = f", E_max,syst {1000 * given.e_max:.4g} mm" if given.e_max is not None else ""
         return [
             f"the end points and return errors reach {given.reach:.4g} m, "
             f"{100 * given.reach / side:.0f} % of the {side:g} m side{shown}: a robot whose "
             f"wheelbase or wheels are far off, or a table in another unit than {unit}: "
-            f"{_choice(named, unit, question=False)}; say which with --unit"
+            f"{with_flags(_choice(named, unit, question=False))}; say which with --unit"
         ]
     if beyond and fit == "fails":
         raise InputError(_too_large(label, given, side), source=name)
@@ -317,13 +320,17 @@ def _choice(
     named: Sequence[_Reading], unit: str, *, capital: bool = False, question: bool = True
 ) -> str:
     """``read as mm, they would reach ...: are these mm, not m? (--unit mm)``, or every
-    reading named and the user asked to choose."""
+    reading named and the user asked to choose (naming the option by
+    :func:`~umbmark.core.errors.option`: a warning passes through
+    :func:`~umbmark.core.errors.with_flags`)."""
     read = "Read" if capital else "read"
     if len(named) == 1 and question:
         other = named[0].unit
         shown = named[0].shown()
-        return f"{read} as {other}, {shown}: are these {other}, not {unit}? (--unit {other})"
-    parts = [f"as {r.unit}, {r.shown()} (--unit {r.unit})" for r in named]
+        return (
+            f"{read} as {other}, {shown}: are these {other}, not {unit}? ({option('unit', other)})"
+        )
+    parts = [f"as {r.unit}, {r.shown()} ({option('unit', r.unit)})" for r in named]
     listed = f"{read} " + "; ".join(parts)
     return f"{listed}: which unit is the table in?" if question else listed
 

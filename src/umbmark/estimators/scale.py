@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from umbmark.core.errors import option
 from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.registry import STRAIGHT
 from umbmark.model.run import Run
@@ -39,12 +40,12 @@ def diameter_mixup(E_s: float, diameter: float | None, evidence: str) -> str | N
     if abs(E_s / 2.0 - 1.0) <= MIXUP_TOLERANCE:
         return (
             f"the wheel diameter given, {diameter:g} m, looks like the wheels' radius "
-            f"({evidence}): pass --wheel-diameter {2.0 * diameter:g}, twice it"
+            f"({evidence}): pass {option('wheel_diameter', 2.0 * diameter)}, twice it"
         )
     if abs(2.0 * E_s - 1.0) <= MIXUP_TOLERANCE:
         return (
             f"the wheel diameter given, {diameter:g} m, looks like twice the wheels' "
-            f"diameter ({evidence}): pass --wheel-diameter {0.5 * diameter:g}, half of it"
+            f"diameter ({evidence}): pass {option('wheel_diameter', 0.5 * diameter)}, half of it"
         )
     return None
 

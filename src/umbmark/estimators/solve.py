@@ -5,7 +5,7 @@ start at the first-order solution: damped Gauss-Newton (Levenberg-Marquardt) con
 a few steps, to the last bits for noise-free data. It is written out here rather than
 taken from ``scipy.optimize`` because the default estimators run it on every calibration,
 and importing ``scipy.optimize`` costs three times a whole calibration.
-``tests/test_paper_method.py`` checks it against ``scipy.optimize.least_squares``.
+``tests/estimators/test_paper.py`` checks it against ``scipy.optimize.least_squares``.
 """
 
 from __future__ import annotations

@@ -67,7 +67,7 @@ only by turning within runs: the fit refuses runs none of which turns by
 
 **Standard errors.** Errors accumulate along a run, so the residuals of one run are
 strongly autocorrelated and the textbook ``sigma^2 (J^T J)^-1`` is far too small (tens of
-times, see ``tests/test_trajectory.py``). Runs are independent of each other, so the
+times, see ``tests/estimators/test_trajectory.py``). Runs are independent of each other, so the
 covariance is cluster-robust with the runs as clusters, in its jackknife form (CR3):
 leaving run ``g`` out moves the solution by ``d_g = (A - A_g)^-1 s_g`` (``A = J^T J``,
 ``A_g = J_g^T J_g``, ``s_g = J_g^T r_g`` the run's score) and ``cov = (G - 1)/G sum_g d_g

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from umbmark.core.arrays import FloatArray
+from umbmark.core.errors import ProblemError, option
 from umbmark.estimators.motions import (
     SCRUB_ADVICE,
     SCRUB_MORE,
@@ -186,11 +187,12 @@ def _solve(problem: Problem, x0: FloatArray, sigma: tuple[float, float]) -> _Sol
     fit = least_squares(residuals, x0, method="lm", x_scale="jac", ftol=1e-10, xtol=1e-10)
     x = np.asarray(fit.x, dtype=np.float64)
     if not np.all(np.isfinite(x)):
-        raise ValueError(
+        raise ProblemError(
             "the trajectory fit did not converge (its wheel parameters went to numbers that "
             "are not finite): check that the ground truth follows the robot, the wheel "
             "data's units (encoder resolution, gear ratio) and the time offset between wheels "
-            "and ground truth; or try --method endpoints, or more runs that drive and turn"
+            f"and ground truth; or try {option('method', 'endpoints')}, or more runs that drive "
+            "and turn"
         )
     return _Solution(
         x=x,
@@ -291,11 +293,12 @@ def _check_turning(data: RunsData) -> None:
     """
     swing = max(float(np.ptp(data.truth[first : last + 1, 2])) for first, last in data.truth_ends)
     if not swing >= MIN_OFFSET_TURN:
-        raise ValueError(
+        raise ProblemError(
             "the recorded motion does not pin down the truth offset: no run turns by "
             f"{math.degrees(MIN_OFFSET_TURN):.0f} deg or more (the most is "
             f"{math.degrees(swing):.1f} deg), and a tracked point off the axle shows only "
-            "as the robot turns; give the offset (--truth-offset X Y) or record turns"
+            f"as the robot turns; give the offset ({option('truth_offset', 'X Y')}) or record "
+            "turns"
         )
 
 

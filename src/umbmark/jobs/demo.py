@@ -8,6 +8,7 @@ and drives them again.
 
 from __future__ import annotations
 
+import operator
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -16,17 +17,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from umbmark.core.bounds import check_int_option
 from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import join_names
 from umbmark.estimators.base import SquareTest
 from umbmark.estimators.registry import DEFAULT, SQUARE
+from umbmark.options.simulate import DEMO_RUNS, SEED
 from umbmark.outputs.calibration import CalibrationReport
 from umbmark.returns.clusters import sem_verdict
 from umbmark.sim.experiments import Trial
 from umbmark.sim.robot import SimRobot
-from umbmark.sim.setup import MAX_RUNS, SEED_RANGE
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -133,9 +133,9 @@ class DemoReport(JsonText):
 def demo(
     *,
     out: str | os.PathLike[str] | None = None,
-    seed: int = 1,
+    seed: int = SEED.default,
     method: str = DEFAULT.name,
-    runs: int = 5,
+    runs: int = DEMO_RUNS.default,
     force: bool = False,
     progress: Callable[[float], None] | None = None,
 ) -> DemoReport:
@@ -154,7 +154,7 @@ def demo(
     method : {"paper", "exact", "heading", "endpose"}
         Estimator to calibrate with.
     runs : int
-        Runs in each direction, 2 to :data:`umbmark.sim.setup.MAX_RUNS` (1000).
+        Runs in each direction, 2 to :data:`umbmark.options.simulate.MAX_RUNS` (1000).
     force : bool
         Replace the files of ``out`` (:data:`DEMO_FILES`) that exist.
     progress : callable, optional
@@ -173,10 +173,14 @@ def demo(
     from umbmark.sim.robot import LABMATE
     from umbmark.sources.runs_table.writer import write_runs_table
 
-    runs = check_int_option(option("runs"), runs, 2, MAX_RUNS)
-    seed = check_int_option(option("seed"), seed, *SEED_RANGE)
+    for spec, value in ((DEMO_RUNS, runs), (SEED, seed)):
+        spec.check(value)
+    runs, seed = operator.index(runs), operator.index(seed)
     if method not in SQUARE:
-        raise InputError(f"the demo calibrates from end points: use {join_names(SQUARE, 'or')}")
+        raise InputError(
+            f"{option('method', repr(method))}: the demo calibrates from end points: use "
+            f"{join_names(SQUARE, 'or')}"
+        )
     folder = None if out is None else Path(out)
     if folder is not None:
         from umbmark.outputs.files import check_folder_output, check_new_file

@@ -7,7 +7,7 @@ import os
 from importlib import resources
 from pathlib import Path
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 
 __all__ = ["EXAMPLE_RUNS", "REAL_SESSIONS", "example", "example_sessions"]
 
@@ -37,7 +37,7 @@ def example(
 
     if real:
         if path is None:
-            raise InputError("--real needs the folder to write the sessions into")
+            raise InputError(f"{option('real')} needs the folder to write the sessions into")
         example_sessions(path, force=force)
         return str(
             resources.files("umbmark.data").joinpath("optiodom/README.md").read_text("utf-8")

@@ -19,8 +19,9 @@ from umbmark.store.history import DEFINITIONS, CalibrationRecord, History, Robot
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-#: The command's words and the library's (the command line's syntax is no keyword).
-_PLOT_NEEDS_NAME = "--plot needs the robot's NAME (umbmark history NAME --plot FILE)"
+#: The command's words and the library's: the option renders itself, the example call
+#: (the command line's syntax, or Python's) does not, so Python keeps its own text.
+_PLOT_NEEDS_NAME = f"{option('plot')} needs the robot's NAME (umbmark history NAME --plot FILE)"
 _PLOT_NEEDS_NAME_PY = "plot needs the robot's name (umbmark.history(name, plot=file))"
 
 __all__ = ["HistoryReport", "history"]
@@ -165,7 +166,7 @@ def history(
         OutputPlan.of(force=force, inputs=[store.path], plot=plot)
     if robot is None:
         if applied is not None:
-            raise InputError("--applied needs the robot's NAME")
+            raise InputError(f"{option('applied')} needs the robot's NAME")
         return HistoryReport(path=path, robots=tuple(store.robots()))
     nominal = store.robot(robot)
     if nominal is None:

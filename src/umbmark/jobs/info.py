@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import Recording
@@ -246,14 +246,14 @@ def info(
     """
     name = os.fspath(source)
     if format not in FORMATS:
-        raise InputError(f"--format {format!r}: use one of {', '.join(FORMATS)}")
+        raise InputError(f"{option('format', repr(format))}: use one of {', '.join(FORMATS)}")
     if max_messages is not None and (
         isinstance(max_messages, bool)
         or not isinstance(max_messages, int)
         or not 1 <= max_messages <= MAX_MESSAGES
     ):
         raise InputError(
-            f"--max-messages {str(max_messages)[:24]}: must be at least 1 and at most "
+            f"{option('max_messages', str(max_messages)[:24])}: must be at least 1 and at most "
             f"{MAX_MESSAGES}"
         )
     kind = detect_format(name) if format == "auto" else format
@@ -268,7 +268,8 @@ def info(
 
         raise InputError(
             "holds motion intervals (a tuple file): umbmark info looks into ROS bags, run logs "
-            f"and OptiOdom sessions; calibrate it with --method {' or '.join(INTERVALS)}",
+            "and OptiOdom sessions; calibrate it with "
+            f"{option('method', ' or '.join(INTERVALS))}",
             source=name,
         )
     if kind == "bag":

@@ -86,11 +86,11 @@ def plan(
         For a value out of range, or a target no plan within bounds reaches.
     """
     if noise not in NOISE_MODELS:
-        raise InputError(f"--noise {noise!r}: use {' or '.join(NOISE_MODELS)}")
+        raise InputError(f"{option('noise', repr(noise))}: use {' or '.join(NOISE_MODELS)}")
     model: Noise = "slip" if noise == "slip" else "tape"
     if previous is not None:
         if scatter is not None:
-            raise InputError("give --scatter or --from, not both")
+            raise InputError(f"give {option('scatter')} or {option('previous')}, not both")
         found = read_previous_scatter(previous)
         scatter = found.scatter
         if scatter_side is None:
@@ -98,7 +98,10 @@ def plan(
         if wheelbase is None and found.wheelbase is not None:
             wheelbase = found.wheelbase
     if scatter is None:
-        raise InputError("give --scatter (per axis [m]) or --from (a calibrate --json result)")
+        raise InputError(
+            f"give {option('scatter')} (per axis [m]) or {option('previous')} (a calibrate "
+            "--json result)"
+        )
     check_scatter(scatter)
     if wheelbase is None:
         wheelbase = DEFAULT_WHEELBASE
@@ -106,17 +109,21 @@ def plan(
     if scatter_side is not None:
         check_length(option("scatter_side"), scatter_side, MAX_SIDE_LENGTH)
     if not (math.isfinite(margin) and 0.0 <= margin <= 5.0):
-        raise InputError(f"--margin {margin:g} m is outside 0 to 5 m")
+        raise InputError(f"{option('margin', margin, 'm')} is outside 0 to 5 m")
     if not (math.isfinite(reading_error) and 0.0 <= reading_error <= scatter):
         raise InputError(
-            f"--reading-error {reading_error:g} m is outside 0 to the scatter ({scatter:g} m)"
+            f"{option('reading_error', reading_error, 'm')} is outside 0 to the scatter "
+            f"({scatter:g} m)"
         )
     if reading_error > 0.0 and model == "tape":
-        raise InputError("--reading-error is part of --noise slip (under tape it is all of it)")
+        raise InputError(
+            f"{option('reading_error')} is part of {option('noise', 'slip')} (under tape it is "
+            "all of it)"
+        )
     targets = {"se_E_d": target_E_d, "se_E_b": target_E_b, "threshold": target_e_max}
-    flags = ("--target-E-d", "--target-E-b", "--target-e-max")
-    for flag, value in zip(flags, targets.values(), strict=True):
+    names = ("target_E_d", "target_E_b", "target_e_max")
+    for name, value in zip(names, targets.values(), strict=True):
         if value is not None and not (math.isfinite(value) and 0.0 < value < 1.0):
-            raise InputError(f"{flag} {value:g} is outside 0 to 1")
+            raise InputError(f"{option(name, value)} is outside 0 to 1")
     given = Scatter(scatter, scatter_side, model, wheelbase, reading_error)
     return plan_test(given, side_length, runs, floor, margin, targets)

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from umbmark.calibration.passes import Passes, calibrate_passes, predict_after
-from umbmark.core.errors import InputError, python_api
+from umbmark.core.errors import InputError, option, python_api
 from umbmark.estimators.registry import DEFAULT
 from umbmark.outputs.passes_page import check_page_output, write_passes_page
 from umbmark.runs.read import RunSource, source_name
@@ -163,7 +163,9 @@ def _validate(
     from umbmark.runs.active import read_each
 
     if not isinstance(source, (str, os.PathLike)):
-        raise InputError("--validate replays recorded runs: give the pass as a file or folder")
+        raise InputError(
+            f"{option('validate')} replays recorded runs: give the pass as a file or folder"
+        )
     read = read_each(
         [source], ReadOptions.of(options), wheelbase=wheelbase, side_length=side_length
     )

@@ -8,17 +8,18 @@ options and return reports that serialize (``reproduce table1 --json``, ``reprod
 from __future__ import annotations
 
 import math
+import operator
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from umbmark.core.bounds import check_int_option, option_float
+from umbmark.core.bounds import option_float
 from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
+from umbmark.options.simulate import SEED
 from umbmark.outputs.files import OutputPlan
 from umbmark.sim.reproduce import Fig4Result, Table1Row
-from umbmark.sim.setup import SEED_RANGE
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -84,7 +85,7 @@ class Fig4Report(JsonText):
 def reproduce_table1(
     *,
     seeds: int = 10,
-    seed: int = 1,
+    seed: int = SEED.default,
     tape_thickness: float | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> Table1Report:
@@ -106,16 +107,17 @@ def reproduce_table1(
     from umbmark.sim.reproduce import EXPERIMENTS, table1, with_tape
 
     if isinstance(seeds, bool) or not isinstance(seeds, int) or not 1 <= seeds <= MAX_SEEDS:
-        raise InputError(f"--seeds must be 1 to {MAX_SEEDS}, got {str(seeds)[:24]}")
-    seed = check_int_option(option("seed"), seed, *SEED_RANGE)
+        raise InputError(f"{option('seeds')} must be 1 to {MAX_SEEDS}, got {str(seeds)[:24]}")
+    SEED.check(seed)
+    seed = operator.index(seed)
     experiments = EXPERIMENTS
     if tape_thickness is not None:
         tape_thickness = option_float(option("tape_thickness"), tape_thickness)
         if not 0 < tape_thickness <= MAX_TAPE_THICKNESS:
             raise InputError(
-                f"--tape-thickness {tape_thickness * 1000:g} mm: give more than 0 and at most "
-                f"{MAX_TAPE_THICKNESS * 1000:g} mm (thicker tape makes return errors near the "
-                "square's side, beyond what the method corrects)"
+                f"{option('tape_thickness', tape_thickness * 1000, 'mm')}: give more than 0 and "
+                f"at most {MAX_TAPE_THICKNESS * 1000:g} mm (thicker tape makes return errors near "
+                "the square's side, beyond what the method corrects)"
             )
         experiments = with_tape(tape_thickness)
     rows = table1(seeds=seeds, seed=seed, progress=progress, experiments=experiments)
@@ -147,7 +149,7 @@ def reproduce_fig4(
     leg_bend = option_float(option("leg_bend"), leg_bend)
     if not (math.isfinite(leg_bend) and 0 < abs(leg_bend) <= math.radians(10)):
         raise InputError(
-            f"--leg-bend {math.degrees(leg_bend):g} deg: give a bend between 0 and 10 deg"
+            f"{option('leg_bend', math.degrees(leg_bend), 'deg')}: give a bend between 0 and 10 deg"
         )
     plan = OutputPlan.of(force=force, plot=plot)
     result = fig4(leg_bend_deg=math.degrees(leg_bend), progress=progress)

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.calibration.result import Calibrated, calibrated_params
-from umbmark.core.errors import InputError, python_api, unexpected_keyword
+from umbmark.core.errors import InputError, option, python_api, unexpected_keyword
 from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
 from umbmark.model.kinematics import WheelParams
@@ -167,7 +167,7 @@ class SimulationReport(JsonText):
         plan, target = _plan(self.path, output, logs, bag, bag_storage, force)
         if (plan.logs is not None or target is not None) and self.result.trace is None:
             raise InputError(
-                f"{'--logs' if plan.logs is not None else '--bag'} needs the time series: "
+                f"{option('logs' if plan.logs is not None else 'bag')} needs the time series: "
                 "simulate with record=True"
             )
         if plan.logs is not None:
@@ -356,7 +356,9 @@ def _plan(
     _check_square_outputs(path, output, bag)
     plan = OutputPlan.of(force=force, inputs=inputs, output=output, logs=logs, bag=bag)
     if bag_storage is not None and plan.bag is None:
-        raise InputError("--bag-storage says how to store --bag: give --bag too")
+        raise InputError(
+            f"{option('bag_storage')} says how to store {option('bag')}: give {option('bag')} too"
+        )
     target = None if plan.bag is None else bag_target(plan.bag, bag_storage, force=force)
     if plan.logs is not None:
         clear_run_log(plan.logs, remove=False)
@@ -368,11 +370,13 @@ def _check_square_outputs(path: str, output: object, bag: object) -> None:
     if path == "square":
         return
     if output is not None:
-        raise InputError("-o writes a runs table of square runs: use --path square")
+        raise InputError(
+            f"{option('output')} writes a runs table of square runs: use {option('path', 'square')}"
+        )
     if bag is not None:
         raise InputError(
-            "--bag writes square runs (one recording, split where the robot rests near the "
-            "start): use --path square"
+            f"{option('bag')} writes square runs (one recording, split where the robot rests "
+            f"near the start): use {option('path', 'square')}"
         )
 
 

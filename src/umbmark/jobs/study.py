@@ -22,6 +22,7 @@ from __future__ import annotations
 import itertools
 import math
 import multiprocessing
+import operator
 import os
 import signal
 from collections.abc import Callable, Sequence
@@ -31,33 +32,34 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.calibration.compose import Calibration
-from umbmark.core.bounds import (
-    MAX_SIDE_LENGTH,
-    MAX_WHEELBASE,
-    check_int_option,
-    check_length,
-    option_float,
-)
 from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.estimators.registry import SQUARE
-from umbmark.sim.setup import SEED_RANGE
+from umbmark.options.simulate import (
+    MAX_GRID_VALUES,
+    MAX_ROBOTS,
+    MAX_TRIALS,
+    STUDY,
+    STUDY_OPTIONS,
+)
 
 if TYPE_CHECKING:
     from umbmark.returns.clusters import Benchmark
     from umbmark.sim.experiments import Trial
     from umbmark.sim.robot import SimRobot
 
-__all__ = ["Cell", "CellResult", "StudyReport", "study"]
+__all__ = [
+    "MAX_GRID_VALUES",
+    "MAX_ROBOTS",
+    "MAX_TRIALS",
+    "Cell",
+    "CellResult",
+    "StudyReport",
+    "study",
+]
 
 #: Trials simulated together in one vectorized pass (and given one seed).
 CHUNK = 125
-#: Most trials a study runs per cell ...
-MAX_TRIALS = 100_000
-#: ... and in all, over every cell of the grid (each robot costs about 0.05 s per method).
-MAX_ROBOTS = 100_000
-#: Most values of one grid option (--slip, --side-length, --runs, --wheelbase).
-MAX_GRID_VALUES = 20
 #: The reference "estimator": the robot calibrated with its true parameters.
 TRUTH = "truth"
 
@@ -187,15 +189,15 @@ class _Outcome:
 def study(
     *,
     methods: Sequence[str] = SQUARE,
-    trials: int = 200,
-    E_d_spread: float = 0.02,
-    E_b_spread: float = 0.05,
-    slip: Sequence[float] = (0.0004,),
-    side_length: Sequence[float] = (4.0,),
-    runs: Sequence[int] = (5,),
-    wheelbase: Sequence[float] = (0.34,),
-    seed: int = 1,
-    workers: int | None = None,
+    trials: int = STUDY["trials"].default,
+    E_d_spread: float = STUDY["E_d_spread"].default,
+    E_b_spread: float = STUDY["E_b_spread"].default,
+    slip: Sequence[float] = STUDY["slip"].default,
+    side_length: Sequence[float] = STUDY["side_length"].default,
+    runs: Sequence[int] = STUDY["runs"].default,
+    wheelbase: Sequence[float] = STUDY["wheelbase"].default,
+    seed: int = STUDY["seed"].default,
+    workers: int | None = STUDY["workers"].default,
     progress: Callable[[float], None] | None = None,
 ) -> StudyReport:
     """Compare estimators by Monte Carlo (see the module's documentation).
@@ -228,42 +230,34 @@ def study(
     """
     for name in methods:
         if name not in (*SQUARE, TRUTH):
-            raise InputError(f"--methods {name!r}: use some of {', '.join(SQUARE)}, {TRUTH}")
+            raise InputError(
+                f"{option('methods', repr(name))}: use some of {', '.join(SQUARE)}, {TRUTH}"
+            )
     if not methods:
-        raise InputError("--methods: name at least one estimator")
-    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:
-        raise InputError(f"--trials must be 1 to {MAX_TRIALS}, got {str(trials)[:24]}")
-    for name, values in (
-        ("--slip", slip),
-        ("--side-length", side_length),
-        ("--runs", runs),
-        ("--wheelbase", wheelbase),
-    ):
-        if not 1 <= len(values) <= MAX_GRID_VALUES:
-            raise InputError(f"{name} must list 1 to {MAX_GRID_VALUES} values, got {len(values)}")
+        raise InputError(f"{option('methods')}: name at least one estimator")
+    values = {
+        "trials": trials,
+        "E_d_spread": E_d_spread,
+        "E_b_spread": E_b_spread,
+        "slip": slip,
+        "side_length": side_length,
+        "runs": runs,
+        "wheelbase": wheelbase,
+        "seed": seed,
+        "workers": workers,
+    }
+    for spec in STUDY_OPTIONS:
+        spec.check(values[spec.name])
+    trials, seed = operator.index(trials), operator.index(seed)
+    E_d_spread, E_b_spread = float(E_d_spread), float(E_b_spread)
+    slip, side_length = [float(v) for v in slip], [float(v) for v in side_length]
+    wheelbase = [float(v) for v in wheelbase]
     cell_count = len(slip) * len(side_length) * len(runs) * len(wheelbase)
     if trials * cell_count > MAX_ROBOTS:
         raise InputError(
-            f"--trials {trials} in {cell_count} grid cells are {trials * cell_count} robots: "
-            f"at most {MAX_ROBOTS} in all"
+            f"{option('trials', trials)} in {cell_count} grid cells are {trials * cell_count} "
+            f"robots: at most {MAX_ROBOTS} in all"
         )
-    seed = check_int_option(option("seed"), seed, *SEED_RANGE)
-    for name, spread in (("--E-d-spread", E_d_spread), ("--E-b-spread", E_b_spread)):
-        if not 0.0 <= option_float(name, spread) <= 0.2:
-            raise InputError(f"{name} {spread:g}: give 0 to 0.2")
-    for given in slip:
-        value = option_float(option("slip"), given)
-        if not (math.isfinite(value) and 0.0 <= value <= 0.01):
-            raise InputError(f"--slip {value:g}: give 0 to 0.01 m^0.5")
-    for value in side_length:
-        check_length(option("side_length"), value, MAX_SIDE_LENGTH)
-    for value in wheelbase:
-        check_length(option("wheelbase"), value, MAX_WHEELBASE)
-    for count in runs:
-        if isinstance(count, bool) or not isinstance(count, int) or not 2 <= count <= 100:
-            raise InputError(f"--runs must be 2 to 100 per direction, got {str(count)[:24]}")
-    if workers is not None:
-        workers = check_int_option(option("workers"), workers, 1, 64)
 
     cells = [Cell(*c) for c in itertools.product(slip, side_length, runs, wheelbase)]
     seeds = iter(np.random.SeedSequence(seed).spawn(len(cells) * math.ceil(trials / CHUNK)))

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 from umbmark.calibration.heldout import CANDIDATES, validate_read
 from umbmark.calibration.validation import ValidationReport
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.runs.active import read_each
 from umbmark.runs.read import is_table, source_name
 from umbmark.runs.read_options import ReadOptions, SourceOptions
@@ -74,7 +74,9 @@ def validate(
     chosen = tuple(CANDIDATES if methods is None else ("nominal", *methods))
     for name in chosen:
         if name not in CANDIDATES:
-            raise InputError(f"--methods {name!r}: use some of {', '.join(CANDIDATES[1:])}")
+            raise InputError(
+                f"{option('methods', repr(name))}: use some of {', '.join(CANDIDATES[1:])}"
+            )
     paths = (source, *more_sources)
     for path in paths:
         if is_table(path, read_options):

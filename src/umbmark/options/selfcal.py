@@ -99,9 +99,9 @@ RUNS = Spec(
     ("--runs", "-n"),
     TEST,
     f"Runs in each direction (2 to {MAX_SELFCAL_RUNS}).",
-    kind="number",
+    kind="integer",
     default=5,
-    bound=Bound("count", MAX_SELFCAL_RUNS, 2),
+    bound=Bound("give", MAX_SELFCAL_RUNS, 2),
 )
 #: ``--measure`` of ``selfcal``: how the fixes at the corner are taken.
 MEASURE = Spec(
@@ -142,7 +142,7 @@ MAX_PASSES = Spec(
     ("--max-passes",),
     TEST,
     f"Most UMBmark passes before the verification (1 to {MAX_SELFCAL_PASSES}).",
-    kind="number",
+    kind="integer",
     default=3,
-    bound=Bound("count", MAX_SELFCAL_PASSES, 1),
+    bound=Bound("give", MAX_SELFCAL_PASSES, 1),
 )

@@ -12,7 +12,6 @@ and checks of :class:`umbmark.runs.read_options.ReadOptions`, and the defaults o
 from __future__ import annotations
 
 import math
-import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, cast
@@ -26,6 +25,7 @@ from umbmark.core.bounds import (
     finite_float,
 )
 from umbmark.core.errors import InputError, option
+from umbmark.options.checks import check_bounded, check_give, check_list
 
 __all__ = [
     "BAGS",
@@ -68,7 +68,7 @@ LONGEST_REST = 600.0
 #: Farthest a tracked point may sit from the axle centre [m].
 MAX_TRUTH_OFFSET = 5.0
 
-Kind = Literal["text", "number", "choice", "file", "folder", "flag"]
+Kind = Literal["text", "number", "integer", "choice", "file", "folder", "flag"]
 
 
 @dataclass(frozen=True)
@@ -77,20 +77,21 @@ class Bound:
 
     Attributes
     ----------
-    kind : {"factor", "positive", "length", "offset", "give", "count"}
+    kind : {"factor", "positive", "length", "offset", "range", "ratio", "give"}
         ``factor``: a wheel factor or multiplier
         (:data:`umbmark.core.bounds.MULTIPLIER_RANGE`); ``positive``: above 0 and, with
         ``high``, at most ``high``; ``length``: a plausible length up to ``high`` [m];
-        ``offset``: every number within ``high`` of 0; ``give``: a finite number from
-        ``low`` to ``high``, and ``count`` a whole one (the message says what to give:
-        ``--runs 1: give 2 to 20``).
+        ``offset``: every number within ``high`` of 0; ``range``: ``low`` to ``high``,
+        both included (a whole number for an ``integer`` option); ``ratio``: above 0 and
+        strictly between ``low`` and ``high`` (a true-over-nominal ratio); ``give``: as
+        ``range``, the message saying what to give (``--runs 1: give 2 to 20``).
     high : float or None
         The largest value, in the option's unit.
     low : float or None
-        The smallest value of ``give`` and ``count``.
+        The smallest value of a ``range``, ``ratio`` or ``give``.
     """
 
-    kind: Literal["factor", "positive", "length", "offset", "give", "count"]
+    kind: Literal["factor", "positive", "length", "offset", "range", "ratio", "give"]
     high: float | None = None
     low: float | None = None
 
@@ -109,9 +110,9 @@ class Spec:
         The section of ``--help`` that lists it.
     help : str
         Its ``--help`` text.
-    kind : {"text", "number", "choice", "file", "folder", "flag"}
-        What it takes: a text, a number, one of ``choices``, a file or a folder; a flag
-        takes nothing (given: True).
+    kind : {"text", "number", "integer", "choice", "file", "folder", "flag"}
+        What it takes: a text, a number, a whole number, one of ``choices``, a file or a
+        folder; a flag takes nothing (given: True).
     default : object
         Its value when not given (None: not given; ``--help`` shows the others).
     choices : tuple of str
@@ -126,6 +127,12 @@ class Spec:
         How ``--help`` names its values.
     pair : str or None
         The option it goes with: both or neither (``left_field``: ``right_field``).
+    most : int
+        A list of at most this many numbers (the command line's comma-separated values:
+        the grid of ``umbmark study``), each within the bound; 0: one value.
+    py_type : str
+        The library's Python type of its value, as text, where the kind does not say it
+        (``"str | Sequence[str]"``; ``tools/gen_read_options.py`` types the rest).
     """
 
     name: str
@@ -140,6 +147,8 @@ class Spec:
     nargs: int = 1
     metavar: str | None = None
     pair: str | None = None
+    most: int = 0
+    py_type: str = ""
 
     @property
     def flag(self) -> str:
@@ -162,9 +171,26 @@ class Spec:
         """
         if value is None and self.default is None:
             return
+        if self.most:
+            for one in check_list(self.named, value, self.most, source):
+                self._check_one(one, source)
+            return
+        self._check_one(value, source)
+
+    def _check_one(self, value: object, source: str | None) -> None:
+        """:meth:`check` of one value."""
         if self.kind == "choice":
             check_choice(self.name, value, self.choices, source)
         bound = self.bound
+        if bound is not None and bound.kind == "give":
+            whole = self.kind == "integer"
+            check_give(self.named, value, whole, (bound.low, bound.high), self.unit, source)
+            return
+        if self.kind == "integer" or (bound is not None and bound.kind in ("range", "ratio")):
+            kind = "integer" if self.kind == "integer" or bound is None else bound.kind
+            limits = (None, None) if bound is None else (bound.low, bound.high)
+            check_bounded(self.named, value, kind, limits, self.unit, source)
+            return
         if bound is None:
             return
         high = math.inf if bound.high is None else bound.high
@@ -173,8 +199,6 @@ class Spec:
             check_multiplier(self.named, number, source)
         elif bound.kind == "length":
             check_length(self.named, number, high, source=source)
-        elif bound.kind in ("give", "count"):
-            self._check_give(value, bound, source)
         elif bound.kind == "positive":
             check_positive_option(self.named, number, self.unit, source)
             if float(number) > high:
@@ -184,35 +208,14 @@ class Spec:
                     source=source,
                 )
         else:
-            for given in cast("Sequence[float]", value):
-                number = finite_float(self.named, given, source)
+            for one in cast("Sequence[float]", value):
+                number = finite_float(self.named, one, source)
                 if not abs(number) <= high:
                     raise InputError(
                         f"{self.named} must be within {high:g} {self.unit} of the axle centre, "
                         f"not {number!r}",
                         source=source,
                     )
-
-    def _check_give(self, value: object, bound: Bound, source: str | None) -> None:
-        """A number (``give``) or a whole number (``count``) within ``bound``."""
-        low = -math.inf if bound.low is None else bound.low
-        high = math.inf if bound.high is None else bound.high
-        if bound.kind == "count":
-            if isinstance(value, bool) or not hasattr(value, "__index__"):
-                raise InputError(
-                    f"{self.named} must be a whole number, not {str(value)[:24]!r}", source=source
-                )
-            number: float = operator.index(cast("int", value))
-            shown = str(number)
-        else:
-            number = finite_float(self.named, cast("float", value), source)
-            shown = repr(number)
-        if not low <= number <= high:
-            unit = f" {self.unit}" if self.unit else ""
-            raise InputError(
-                f"{option(self.name, shown, self.unit)}: give {low:g} to {high:g}{unit}",
-                source=source,
-            )
 
 
 def check_choice(
@@ -399,6 +402,7 @@ READ_OPTIONS: tuple[Spec, ...] = (
         ("--windows",),
         LOGS,
         "Runs as time windows, seconds from the recording's start: '0:95,100:190'.",
+        py_type="str | Sequence[tuple[float, float]]",
     ),
     Spec(
         "max_gap",
@@ -434,12 +438,14 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "Left wheel joint, or several separated by commas (averaged, as ros2_control does) "
         "[default: left_wheel_names of --current-params, else left_wheel_joint, else the "
         "moving joints named left].",
+        py_type="str | Sequence[str]",
     ),
     Spec(
         "right_joint",
         ("--right-joint",),
         BAGS,
         "Right wheel joint(s) [default: as for --left-joint].",
+        py_type="str | Sequence[str]",
     ),
     Spec(
         "odom_topic",

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from umbmark.calibration.result import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
-from umbmark.core.errors import InputError, python_api
+from umbmark.core.errors import InputError, option, python_api
 from umbmark.outputs.files import OutputPlan
 
 if TYPE_CHECKING:
@@ -43,7 +43,7 @@ class CalibrationReport(CalibrationResult):
             Without runs in both directions.
         """
         if self.benchmark is None:
-            raise InputError("--plot needs runs in both directions (cw and ccw)")
+            raise InputError(f"{option('plot')} needs runs in both directions (cw and ccw)")
         from umbmark.outputs.plotting import cluster_figure
 
         title = "UMBmark return errors" + (f": {self.robot}" if self.robot else "")
@@ -126,18 +126,20 @@ class CalibrationReport(CalibrationResult):
         """Write what ``plan`` (checked) names."""
         if plan.plot is not None and self.benchmark is None:
             raise InputError(
-                "--plot needs runs in both directions (cw and ccw)", source=self.source
+                f"{option('plot')} needs runs in both directions (cw and ccw)", source=self.source
             )
-        asked = [f for f, p in (("--yaml", plan.yaml), ("--ros1-yaml", plan.ros1_yaml)) if p]
+        asked = [option(f) for f, p in (("yaml", plan.yaml), ("ros1_yaml", plan.ros1_yaml)) if p]
         if asked and self.overlay_withheld and not override_verdict:
             raise InputError(
-                f"{', '.join(asked)}: {self.verdict.line()} (--override-verdict writes it all "
-                "the same; --force only replaces files that exist)",
+                f"{', '.join(asked)}: {self.verdict.line()} ({option('override_verdict')} "
+                f"writes it all the same; {option('force')} only replaces files that exist)",
                 source=self.source,
             )
         calibrated = self.calibrated_params
         if plan.tum is not None and (self.params is None or calibrated is None):
-            raise InputError("--tum needs logged runs with time series", source=self.source)
+            raise InputError(
+                f"{option('tum')} needs logged runs with time series", source=self.source
+            )
         written: list[Path] = []
         if plan.output is not None:
             atomic_write_text(plan.output, self.to_json())

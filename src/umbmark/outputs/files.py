@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 
 __all__ = [
     "FIGURE_FORMATS",
@@ -31,17 +31,6 @@ FIGURE_FORMATS = (".png", ".svg", ".pdf")
 _YAML = (".yaml", ".yml")
 #: Outputs that are folders (made when missing); the others are files.
 _FOLDERS = ("tum", "logs")
-#: Option spelling of each output, for messages.
-_FLAGS = {
-    "output": "-o",
-    "yaml": "--yaml",
-    "ros1_yaml": "--ros1-yaml",
-    "plot": "--plot",
-    "tum": "--tum",
-    "logs": "--logs",
-    "report": "--report",
-    "bag": "--bag",
-}
 
 
 @dataclass(frozen=True)
@@ -84,20 +73,23 @@ class OutputPlan:
             path = getattr(plan, name)
             if path is not None and path.suffix.lower() not in _YAML:
                 raise InputError(
-                    f"{_FLAGS[name]} {path}: the file name should end in .yaml or .yml"
+                    f"{option(name, str(path))}: the file name should end in .yaml or .yml"
                 )
         if plan.plot is not None and plan.plot.suffix.lower() not in FIGURE_FORMATS:
             raise InputError(
-                f"--plot {plan.plot}: the file name should end in {', '.join(FIGURE_FORMATS)}"
+                f"{option('plot', str(plan.plot))}: the file name should end in "
+                f"{', '.join(FIGURE_FORMATS)}"
             )
         if plan.report is not None and plan.report.suffix.lower() not in (".html", ".htm"):
-            raise InputError(f"--report {plan.report}: the file name should end in .html or .htm")
+            raise InputError(
+                f"{option('report', str(plan.report))}: the file name should end in .html or .htm"
+            )
         seen: dict[Path, str] = {}
         for name, path in plan.requested():
             key = path.resolve()
             if key in seen:
                 raise InputError(
-                    f"{_FLAGS[seen[key]]} and {_FLAGS[name]} both name {path}: "
+                    f"{option(seen[key])} and {option(name)} both name {path}: "
                     "give each its own file"
                 )
             seen[key] = name
@@ -160,12 +152,12 @@ class OutputPlan:
             for source in read:
                 if target == source:
                     raise InputError(
-                        f"{_FLAGS[name]} {path} would overwrite an input ({source}); "
+                        f"{option(name, str(path))} would overwrite an input ({source}); "
                         "write the output elsewhere"
                     )
                 if source.is_dir() and target.is_relative_to(source):
                     raise InputError(
-                        f"{_FLAGS[name]} {path} is inside an input folder ({source}); "
+                        f"{option(name, str(path))} is inside an input folder ({source}); "
                         "write the output elsewhere"
                     )
 
@@ -195,7 +187,7 @@ def check_new_file(path: str | os.PathLike[str]) -> None:
         ``PATH: exists already; pass --force to replace it`` (``force=True`` from Python).
     """
     if os.path.lexists(path):
-        raise InputError("exists already; pass --force to replace it", source=Path(path))
+        raise InputError(f"exists already; pass {option('force')} to replace it", source=Path(path))
 
 
 def check_new_folder(folder: str | os.PathLike[str]) -> None:
@@ -211,7 +203,7 @@ def check_new_folder(folder: str | os.PathLike[str]) -> None:
     if path.is_dir() and any(path.iterdir()):
         raise InputError(
             "is not empty: what is written would mix with what it holds; choose a new or "
-            "empty folder, or pass --force to write into it",
+            f"empty folder, or pass {option('force')} to write into it",
             source=path,
         )
 

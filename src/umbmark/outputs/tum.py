@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.atomic import atomic_write_text
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run
 from umbmark.options.spec import TUM_TIME
@@ -39,13 +39,13 @@ def check_tum_time(time: str) -> TumTime:
     Raises
     ------
     InputError
-        Naming the option ``--tum-time`` and the choices.
+        Naming the option ``tum_time`` and the choices.
     """
     if time == "recording":
         return "recording"
     if time == "run":
         return "run"
-    raise InputError(f"--tum-time {time!r}: use recording or run")
+    raise InputError(f"{option('tum_time', repr(time))}: use recording or run")
 
 
 def format_tum(time: NDArray[np.float64], poses: NDArray[np.float64]) -> str:

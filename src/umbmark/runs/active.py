@@ -82,7 +82,7 @@ def check_same_robot(
             raise InputError(
                 f"{result} is a calibration for a nominal {name} of {their:g} m, but "
                 f"{source} has {our:g} m (more than 1 % apart): a result of another robot "
-                "or setup; give --override-verdict to use it anyway"
+                f"or setup; give {option('override_verdict')} to use it anyway"
             )
 
 
@@ -137,8 +137,8 @@ def read_each(
         raise InputError("no source given: name a runs table, run log, OptiOdom session or bag")
     if options.scan_topic is not None:
         raise InputError(
-            "--scan-topic is read by calibrate only (the wheels against the laser's scan "
-            "matching), not with runs"
+            f"{option('scan_topic')} is read by calibrate only (the wheels against the "
+            "laser's scan matching), not with runs"
         )
     WHEELBASE.check(wheelbase)
     SIDE_LENGTH.check(side_length)

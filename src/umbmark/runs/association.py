@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.core.arrays import FloatArray
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.recording import DEFAULT_MAX_GAP, PoseSeries, WheelSeries
 
 __all__ = ["Association", "associate", "summarize"]
@@ -96,7 +96,7 @@ def associate(
         raise InputError(
             f"wheel data ({wt[0]:.3f} to {wt[-1]:.3f} s) and ground truth "
             f"({gt[0]:.3f} to {gt[-1]:.3f} s) do not overlap in time; are both on the same "
-            "clock (see --time-source)?",
+            f"clock (see {option('time_source')})?",
             source=source or None,
         )
     theta = np.unwrap(truth.poses[:, 2])
@@ -120,7 +120,8 @@ def associate(
     if association.matched == 0:
         raise InputError(
             f"no wheel sample has ground truth within {max_gap:g} s (largest ground-truth "
-            f"gap {association.largest_gap:.3f} s); raise --max-gap or check the recording",
+            f"gap {association.largest_gap:.3f} s); raise {option('max_gap')} or check the "
+            "recording",
             source=source or None,
         )
     return poses, association

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Literal, cast
 
 from umbmark.core.bounds import Origin
 from umbmark.core.conventions import axle_poses
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import DEFAULT_MAX_GAP, PoseSeries, Recording
 from umbmark.model.run import Run
@@ -237,7 +237,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
     if kind == "tuples":
         raise InputError(
             "holds motion intervals (a tuple file), not runs: calibrate it with "
-            "--method scan-matching",
+            f"{option('method', 'scan-matching')}",
             source=source,
         )
     if kind == "table":
@@ -245,7 +245,8 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
 
         if options.truth_offset is not None:
             raise InputError(
-                "--truth-offset moves recorded ground truth to the axle centre; a runs table "
+                f"{option('truth_offset')} moves recorded ground truth to the axle centre; a "
+                "runs table "
                 "holds end points already: measure them at the axle centre",
                 source=source,
             )
@@ -285,8 +286,9 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         params = options.params
     if params is None:
         raise InputError(
-            "needs the wheel parameters: give --wheelbase and --wheel-diameter (or "
-            "--current-params with wheel_separation and wheel_radius)",
+            f"needs the wheel parameters: give {option('wheelbase')} and "
+            f"{option('wheel_diameter')} (or {option('current_params')} with wheel_separation "
+            "and wheel_radius)",
             source=source,
         )
     if options.side_length is not None:
@@ -336,7 +338,8 @@ def _read_bag(
             else "the bag has no pose, odometry or TF topics"
         )
         raise InputError(
-            f"no ground truth given (--truth-topic or --tf-parent/--tf-child); {named}",
+            f"no ground truth given ({option('truth_topic')} or "
+            f"{option('tf_parent')}/{option('tf_child')}); {named}",
             source=source,
         )
     read = read_recording(source, bag)
@@ -376,9 +379,9 @@ def _at_axle(recording: Recording, offset: tuple[float, float]) -> Recording:
         return recording
     if not recording.truth.headings:
         raise InputError(
-            "--truth-offset moves the ground truth along its heading, which a position-only "
-            "reference (a GNSS fix, a tracked point) does not measure: mount it over the axle "
-            "centre, or leave --truth-offset out",
+            f"{option('truth_offset')} moves the ground truth along its heading, which a "
+            "position-only reference (a GNSS fix, a tracked point) does not measure: mount it "
+            f"over the axle centre, or leave {option('truth_offset')} out",
             source=recording.name,
         )
     truth = PoseSeries(time=recording.truth.time, poses=axle_poses(recording.truth.poses, offset))

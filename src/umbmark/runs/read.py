@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal, cast
+from typing import TYPE_CHECKING, cast
 
 from umbmark.core.bounds import Origin
 from umbmark.core.errors import InputError, option
@@ -22,6 +22,7 @@ from umbmark.core.messages import info
 from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run
+from umbmark.options.spec import READ
 from umbmark.runs.load import Format, Loaded, LoadOptions, detect_format, load_runs
 from umbmark.runs.read_options import ReadOptions
 from umbmark.sources.params.reader import ControllerParams, read_parameter_file
@@ -29,7 +30,6 @@ from umbmark.sources.runs_table.reader import RecordedActive, read_table_active
 
 if TYPE_CHECKING:
     from umbmark.runs.association import Association
-    from umbmark.runs.logged import SplitMode
     from umbmark.sources.bag.bag_options import BagOptions
 
 __all__ = [
@@ -119,23 +119,26 @@ class SourceRuns:
             shown = ", ".join(f"{s:g} m" for s in sorted(known))
             raise InputError(
                 f"the sources are squares of different sides ({shown}): UMBmark compares "
-                "runs of one square; calibrate them separately or with --method trajectory"
+                "runs of one square; calibrate them separately or with "
+                f"{option('method', 'trajectory')}"
             )
         if known and None in self.sides:
             other = self.sources[self.sides.index(None)]
             raise InputError(
                 f"{other} is not a square of known side, unlike the other sources; give "
-                "--side-length if it is one, or calibrate with --method trajectory"
+                f"{option('side_length')} if it is one, or calibrate with "
+                f"{option('method', 'trajectory')}"
             )
         if self.side_length is None:
             hint = (
-                "; if the runs are not squares, calibrate with --method endpoints or "
-                "trajectory (any shape), or auto"
+                f"; if the runs are not squares, calibrate with {option('method', 'endpoints')} "
+                "or trajectory (any shape), or auto"
                 if self.params is not None
                 else ""
             )
             raise InputError(
-                f"--side-length is required: the side of the square path, in metres{hint}",
+                f"{option('side_length')} is required: the side of the square path, in "
+                f"metres{hint}",
                 source=self.sources[0] if len(self.sources) == 1 else None,
             )
         return self.side_length
@@ -368,7 +371,8 @@ def _require_wheelbase(configured: float | None) -> float:
     """The wheelbase end points were driven with, which only the options can say."""
     if configured is None:
         raise InputError(
-            "--wheelbase is required: the wheelbase the odometry used during the runs, in metres"
+            f"{option('wheelbase')} is required: the wheelbase the odometry used during the "
+            "runs, in metres"
         )
     return configured
 
@@ -402,7 +406,7 @@ def _load_options(
         angle_unit=options.angle_unit,
         side_length=side_length,
         params=params,
-        split=cast("SplitMode", "windows" if windows else options.split),
+        split="windows" if windows else options.split,
         windows=windows,
         split_options=split_options,
         max_gap=float(options.max_gap),
@@ -432,27 +436,25 @@ def bag_options(
             right_radius=params.c_right * radius,
             separation=params.wheelbase,
         )
-    return BagOptions(
-        wheel_topic=options.wheel_topic,
+    computed = BagOptions(
         left_joint=_joints(options.left_joint) or file.left_joints or None,
         right_joint=_joints(options.right_joint) or file.right_joints or None,
-        odom_topic=options.odom_topic,
         odom_tf=(options.odom_tf[0], options.odom_tf[1]) if options.odom_tf else None,
         odom_geometry=geometry,
-        left_ticks_topic=options.left_ticks_topic,
-        right_ticks_topic=options.right_ticks_topic,
-        ticks_per_revolution=options.ticks_per_rev,
-        truth_topic=options.truth_topic,
-        tf_parent=options.tf_parent,
-        tf_child=options.tf_child,
-        time_source=cast("Literal['header', 'bag']", options.time_source),
-        left_field=options.left_field,
-        right_field=options.right_field,
         msg_dir=Path(options.msg_dir) if options.msg_dir is not None else None,
-        truth_model=options.truth_model,
-        left_wheel_frame=options.left_wheel_frame,
-        right_wheel_frame=options.right_wheel_frame,
     )
+    # Every other field is a reading option of the same name (tests/runs/test_read_fields.py).
+    shared = {
+        f.name: getattr(options, f.name)
+        for f in fields(BagOptions)
+        if f.name in READ and f.name not in _COMPUTED
+    }
+    return replace(computed, **shared)
+
+
+#: The fields of :class:`BagOptions` :func:`bag_options` makes from the reading options of
+#: their name rather than copies: joints as tuples (or the controller file's), a path.
+_COMPUTED = ("left_joint", "right_joint", "odom_tf", "msg_dir")
 
 
 def _joints(value: str | Sequence[str] | None) -> str | tuple[str, ...] | None:

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from umbmark.core.atomic import atomic_write_text
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.sources.text import iter_content_lines
 
@@ -141,7 +141,7 @@ def write_tuples(
     """
     target = Path(path)
     if target.exists() and not force:
-        raise InputError("exists: pass force=True (--force) to replace it", source=target)
+        raise InputError(f"exists: pass {option('force')} to replace it", source=target)
     lines = []
     for k in range(len(intervals)):
         t = float(intervals.duration[k])

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from umbmark.core.digest import path_sha256
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.store.drift import DEFINITIONS, DRIFT_MIN_CALIBRATIONS, DRIFT_SIGMAS, drift_verdict
 from umbmark.store.records import CalibrationRecord, NewCalibration, RobotRecord
 
@@ -149,7 +149,7 @@ class History:
         if read_only:
             if not self.path.exists():
                 raise InputError(
-                    "no history here (umbmark calibrate --robot NAME records one)",
+                    f"no history here (umbmark calibrate {option('robot', 'NAME')} records one)",
                     source=self.path,
                 )
         else:
@@ -262,7 +262,7 @@ class History:
             robot's from then on).
         """
         if not robot.strip():
-            raise InputError("--robot: give a non-empty name")
+            raise InputError(f"{option('robot')}: give a non-empty name")
         ours = (calibration.wheelbase, calibration.wheel_diameter)
         hashed = [{"name": os.fspath(p), "sha256": path_sha256(Path(os.fspath(p)))} for p in inputs]
         with self._connect(write=True) as db:
@@ -338,7 +338,7 @@ class History:
             to the robot or to the calibration).
         """
         if not robot.strip():
-            raise InputError("--robot: give a non-empty name")
+            raise InputError(f"{option('robot')}: give a non-empty name")
         known = self.robot(robot)
         if known is not None:
             self._check(robot, (wheelbase, wheel_diameter), (known.wheelbase, known.wheel_diameter))
@@ -353,7 +353,7 @@ class History:
             if theirs is not None and ours is not None and not _same(theirs, ours):
                 raise InputError(
                     f"this calibration is not robot {robot}: nominal {what} "
-                    f"{ours:g} m vs {theirs:g} m (give another --robot name)",
+                    f"{ours:g} m vs {theirs:g} m (give another {option('robot')} name)",
                     source=self.path,
                 )
 
@@ -410,9 +410,9 @@ class History:
             ):
                 reasons = "; ".join(verdict.get("reasons") or [])
                 raise InputError(
-                    f"--applied {id}: calibration {id} of {robot} was judged do not apply "
-                    f"({reasons}): its parameters are not to be configured on the robot; "
-                    "--override-verdict marks it applied all the same",
+                    f"{option('applied', id)}: calibration {id} of {robot} was judged do not "
+                    f"apply ({reasons}): its parameters are not to be configured on the robot; "
+                    f"{option('override_verdict')} marks it applied all the same",
                     source=self.path,
                 )
             cursor = db.execute(
@@ -420,7 +420,8 @@ class History:
             )
             if cursor.rowcount != 1:
                 raise InputError(
-                    f"--applied {id}: robot {robot} has no calibration {id}", source=self.path
+                    f"{option('applied', id)}: robot {robot} has no calibration {id}",
+                    source=self.path,
                 )
 
     def last_applied(self, robot: str) -> CalibrationRecord | None:

@@ -12,16 +12,16 @@ Wheels, one of:
   with the trapezoid rule (angle 0 at the first sample).
 - ``left_ticks_topic`` and ``right_ticks_topic`` (``std_msgs`` ``Int16``, ``Int32``,
   ``Int64``, ``UInt16``, ``UInt32``, ``UInt64``, ``Float32`` or ``Float64``): cumulative
-  encoder counts of each wheel, with ``ticks_per_revolution`` counts per wheel
+  encoder counts of each wheel, with ``ticks_per_rev`` counts per wheel
   revolution. 16- and 32-bit counters wrap around; a jump of more than half the type's
   range between two messages is taken as a wrap and unwrapped. Angle
-  ``= counts * 2 pi / ticks_per_revolution`` (:mod:`umbmark.sources.bag.wheels.encoders`).
+  ``= counts * 2 pi / ticks_per_rev`` (:mod:`umbmark.sources.bag.wheels.encoders`).
 - ``left_field`` and ``right_field``: two numbers in the messages of ``wheel_topic``, of
   any type (a vendor's ``my_robot_msgs/msg/WheelEncoders``), named by field paths
   (``left_ticks``, ``wheels.left.position``, ``positions[0]``; at most 8 names, one
-  index each). Angles [rad]; or, with ``ticks_per_revolution``, encoder counts, where
+  index each). Angles [rad]; or, with ``ticks_per_rev``, encoder counts, where
   8-, 16- and 32-bit integer fields are unwrapped as above. An integer field without
-  ``ticks_per_revolution`` is refused. The type's definition comes from the bag (ROS 1
+  ``ticks_per_rev`` is refused. The type's definition comes from the bag (ROS 1
   bags, MCAP, sqlite3 from rosbag2 Iron on) or from ``.msg`` files in ``msg_dir``; see
   :mod:`umbmark.sources.bag.custom`, which also checks the paths against the definition
   before any message is read (a field that is not there: the message lists the fields
@@ -53,7 +53,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.kinematics import OdometryGeometry
 from umbmark.options.spec import READ, check_pairs
 from umbmark.sources.bag.fieldpath import parse_path
@@ -81,7 +81,7 @@ class BagOptions:
     left_ticks_topic, right_ticks_topic : str or None
         Instead of the joint states: ``std_msgs`` number topics with each wheel's
         cumulative encoder counts (both or neither).
-    ticks_per_revolution : float or None
+    ticks_per_rev : float or None
         Encoder counts per wheel revolution; required with the ticks topics.
     truth_topic : str or None
         Ground truth: ``geometry_msgs/PoseStamped``,
@@ -110,7 +110,7 @@ class BagOptions:
         Instead of joint states: field paths to each wheel's value in the messages of
         ``wheel_topic``, which may then have any type (``left_ticks``,
         ``wheels.left.position``, ``positions[0]``; both or neither). Angles [rad], or
-        encoder counts when ``ticks_per_revolution`` is given.
+        encoder counts when ``ticks_per_rev`` is given.
     msg_dir : Path or None
         A folder of ``.msg`` files defining ``wheel_topic``'s type, for bags that do not
         carry its definition (:mod:`umbmark.sources.bag.custom`); only with the fields.
@@ -124,7 +124,7 @@ class BagOptions:
     right_joint: str | tuple[str, ...] | None = None
     left_ticks_topic: str | None = None
     right_ticks_topic: str | None = None
-    ticks_per_revolution: float | None = None
+    ticks_per_rev: float | None = None
     truth_topic: str | None = None
     tf_parent: str | None = None
     tf_child: str | None = None
@@ -177,24 +177,24 @@ def check_options(options: BagOptions, src: str) -> None:
     if (options.left_ticks_topic is None) != (options.right_ticks_topic is None):
         fail("the left and right ticks topics go together: give both or neither")
     if options.left_ticks_topic is not None:
-        tpr = options.ticks_per_revolution
+        tpr = options.ticks_per_rev
         if tpr is None:
-            fail("reading ticks topics needs ticks_per_revolution (counts per wheel revolution)")
+            fail("reading ticks topics needs ticks_per_rev (counts per wheel revolution)")
         if options.left_ticks_topic == options.right_ticks_topic:
             fail(f"the left and right ticks topics are the same: {options.left_ticks_topic}")
-    tpr = options.ticks_per_revolution
+    tpr = options.ticks_per_rev
     if tpr is not None and not (math.isfinite(tpr) and tpr > 0):
-        fail(f"ticks_per_revolution must be a positive number, not {tpr!r}")
+        fail(f"ticks_per_rev must be a positive number, not {tpr!r}")
     check_pairs(vars(options), src)
     check_wheel_fields(
         options.left_field,
         options.right_field,
         options.msg_dir,
         (
-            ("--left-ticks-topic", options.left_ticks_topic),
-            ("--right-ticks-topic", options.right_ticks_topic),
-            ("--odom-topic", options.odom_topic),
-            ("--odom-tf", options.odom_tf),
+            ("left_ticks_topic", options.left_ticks_topic),
+            ("right_ticks_topic", options.right_ticks_topic),
+            ("odom_topic", options.odom_topic),
+            ("odom_tf", options.odom_tf),
         ),
         src,
     )
@@ -210,7 +210,10 @@ def check_options(options: BagOptions, src: str) -> None:
         ("right", options.right_joint, options.right_joints),
     ):
         if given is not None and not names:
-            fail(f"the {side} wheel joint option (--{side}-joint) names no joint: {given!r:.60}")
+            fail(
+                f"the {side} wheel joint option ({option(f'{side}_joint')}) names no joint: "
+                f"{given!r:.60}"
+            )
     left = options.left_joints or DEFAULT_JOINTS[:1]
     right = options.right_joints or DEFAULT_JOINTS[1:]
     both = set(left) & set(right)
@@ -231,11 +234,14 @@ def check_options(options: BagOptions, src: str) -> None:
         options.tf_parent is not None or options.tf_child is not None
     ):
         fail(
-            "give the ground truth as a topic (--truth-topic) or as a TF pair (--tf-parent, "
-            "--tf-child), not both"
+            f"give the ground truth as a topic ({option('truth_topic')}) or as a TF pair "
+            f"({option('tf_parent')}, {option('tf_child')}), not both"
         )
     if options.truth_model is not None and options.truth_topic is None:
-        fail("--truth-model names a model of the ground-truth topic: give --truth-topic too")
+        fail(
+            f"{option('truth_model')} names a model of the ground-truth topic: give "
+            f"{option('truth_topic')} too"
+        )
     if options.left_wheel_frame is not None:
         other = (
             "ticks topics"
@@ -258,7 +264,7 @@ def check_wheel_fields(
     source: str | None = None,
 ) -> None:
     """Refuse ``msg_dir`` without the wheel fields, malformed field paths, and the fields
-    given with other wheel data (``others``: ``(flag, value)``, given when true). The one
+    given with other wheel data (``others``: ``(keyword, value)``, given when true). The one
     check of the field options, for :class:`umbmark.runs.read_options.ReadOptions` and
     :func:`check_options` (:func:`umbmark.options.spec.check_pairs` checks that both are
     given first).
@@ -266,24 +272,25 @@ def check_wheel_fields(
     Raises
     ------
     InputError
-        One line naming the options as the command line spells them (and ``source``).
+        One line naming the options (:func:`umbmark.core.errors.option`) and ``source``.
     """
     if left_field is None or right_field is None:
         if msg_dir is not None:
             raise InputError(
-                "--msg-dir is for wheel data in a custom message type: give it with "
-                "--left-field and --right-field",
+                f"{option('msg_dir')} is for wheel data in a custom message type: give it "
+                f"with {option('left_field')} and {option('right_field')}",
                 source=source,
             )
         return
-    for flag, text in (("--left-field", left_field), ("--right-field", right_field)):
+    for name, text in (("left_field", left_field), ("right_field", right_field)):
         try:
-            parse_path(text, flag)
+            parse_path(text, option(name))
         except InputError as err:
             raise InputError(err.problem, source=source) from None
-    for flag, value in others:
+    for name, value in others:
         if value:
             raise InputError(
-                f"--left-field/--right-field read the wheels from --wheel-topic: leave out {flag}",
+                f"{option('left_field')}/{option('right_field')} read the wheels from "
+                f"{option('wheel_topic')}: leave out {option(name)}",
                 source=source,
             )

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, given, option
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.fieldpath import Step, parse_path
 from umbmark.sources.text import read_text
@@ -168,7 +168,7 @@ def resolve_field(fielddefs: FieldDefs, msgtype: str, text: str, what: str, of: 
         a number (a message, a string, a bool, an array without an index).
     """
     steps = parse_path(text, what)
-    name_it = f"{what} {text!r}" + (f" of {of}" if of else "")
+    name_it = given(what, repr(text)) + (f" of {of}" if of else "")
     fields: dict[str, tuple[int, Any]] | None = _fields_of(fielddefs, msgtype)
     where = msgtype
     node: tuple[int, Any] | None = None
@@ -358,7 +358,7 @@ def add_definitions(
     if msg_dir is None:
         raise InputError(
             f"topic {topic} has type {msgtype}{needs}, whose definition the bag does not "
-            "carry: give --msg-dir with its .msg files",
+            f"carry: give {option('msg_dir')} with its .msg files",
             source=src,
         )
     from rosbags.typesys import Stores, get_typestore
@@ -380,7 +380,8 @@ def add_definitions(
             via = "" if name == msgtype else f" (used by {msgtype})"
             raise InputError(
                 f"topic {topic} has type {msgtype}; the definition of {name}{via} is neither "
-                f"in the bag nor in --msg-dir {msg_dir} (looked for {package}/msg/{short}.msg "
+                f"in the bag nor in {option('msg_dir', str(msg_dir))} (looked for "
+                f"{package}/msg/{short}.msg "
                 f"and {package}/{short}.msg)",
                 source=src,
             )
@@ -389,7 +390,7 @@ def add_definitions(
         store.register(added)
     except Exception as err:  # rosbags' code generation or a clash with the bag's types
         raise InputError(
-            f"the definitions of {bag_reader.listing(sorted(added))} from --msg-dir "
-            f"{msg_dir} cannot be used: {bag_reader.one_line(err)}",
+            f"the definitions of {bag_reader.listing(sorted(added))} from "
+            f"{option('msg_dir', str(msg_dir))} cannot be used: {bag_reader.one_line(err)}",
             source=src,
         ) from None

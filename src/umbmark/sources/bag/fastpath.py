@@ -46,7 +46,7 @@ How it stays correct
 - The samples read through the layout and the deserialized ones are put back into the
   messages' order.
 
-``tests/test_bag_decoder.py`` proves it: with hypothesis it draws random messages of
+``tests/sources/test_bag_fastpath.py`` proves it: with hypothesis it draws random messages of
 every supported type (stamps over the whole range of their type, empty and non-ASCII
 ``frame_id``, joint-name lists with the wheel joints anywhere, empty and non-finite
 arrays, numbers over their type's full range), serializes them with rosbags as ROS 1 and

@@ -18,7 +18,7 @@ import re
 from collections.abc import Callable, Sequence
 from typing import Any, cast
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, given
 
 __all__ = ["MAX_DEPTH", "MAX_INDEX", "Step", "attribute", "getter", "parse_path", "row_getter"]
 
@@ -42,7 +42,8 @@ def parse_path(text: str, what: str = "field path") -> tuple[Step, ...]:
         Field names separated by dots, each optionally followed by one index ``[k]``,
         at most :data:`MAX_DEPTH` names, indexes at most :data:`MAX_INDEX`.
     what : str
-        How messages name the path (``"--left-field"``).
+        How messages name the path (``option("left_field")``,
+        :func:`umbmark.core.errors.option`).
 
     Raises
     ------
@@ -51,13 +52,14 @@ def parse_path(text: str, what: str = "field path") -> tuple[Step, ...]:
     """
     parts = text.strip().split(".")
     if len(parts) > MAX_DEPTH:
-        raise InputError(f"{what} {text!r} is deeper than {MAX_DEPTH} fields")
+        raise InputError(f"{given(what, repr(text))} is deeper than {MAX_DEPTH} fields")
     steps: list[Step] = []
     for part in parts:
         match = _SEGMENT.fullmatch(part.strip())
         if match is None:
             raise InputError(
-                f"{what} {text!r} is not a field path: write field names separated by dots, "
+                f"{given(what, repr(text))} is not a field path: write field names separated "
+                "by dots, "
                 "each with at most one index, e.g. left_ticks, wheels.left.position, "
                 "positions[0]"
             )
@@ -65,7 +67,9 @@ def parse_path(text: str, what: str = "field path") -> tuple[Step, ...]:
         if match.group(2) is not None:
             index = int(match.group(2))
             if index > MAX_INDEX:
-                raise InputError(f"{what} {text!r}: index {index} is larger than {MAX_INDEX}")
+                raise InputError(
+                    f"{given(what, repr(text))}: index {index} is larger than {MAX_INDEX}"
+                )
             steps.append(index)
     return tuple(steps)
 

@@ -56,7 +56,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.messages import info
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.sources.bag import reader as bag_reader
@@ -248,13 +248,13 @@ def _read_wheels(
     elif options.left_field is not None and options.right_field is not None:
         wheels = read_fields(reader, topics, options, src)
     elif options.left_ticks_topic is not None and options.right_ticks_topic is not None:
-        assert options.ticks_per_revolution is not None  # check_options
+        assert options.ticks_per_rev is not None  # check_options
         wheels = read_ticks(
             reader,
             topics,
             options.left_ticks_topic,
             options.right_ticks_topic,
-            options.ticks_per_revolution,
+            options.ticks_per_rev,
             src,
         )
     else:
@@ -293,7 +293,7 @@ def _read_truth_topic(
     msgtype = topics.get(topic)
     if options.truth_model is not None and msgtype != MODEL_STATES:
         raise InputError(
-            f"--truth-model names a model of a {MODEL_STATES} topic; {topic} "
+            f"{option('truth_model')} names a model of a {MODEL_STATES} topic; {topic} "
             + (f"has {msgtype}" if msgtype else "is not in the bag"),
             source=src,
         )

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from umbmark.core.arrays import FloatArray
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.msgtypes import STRING, String
 from umbmark.sources.bag.names import BASE_LINKS, mirrored_pairs
@@ -402,8 +402,9 @@ def described_geometry(
             else f"; its robot description gives no wheel diameter ({description.describe()})"
         )
         raise InputError(
-            "a bag needs the wheel parameters: give --wheelbase and --wheel-diameter "
-            f"(or --current-params with wheel_separation and wheel_radius){why}",
+            f"a bag needs the wheel parameters: give {option('wheelbase')} and "
+            f"{option('wheel_diameter')} (or {option('current_params')} with wheel_separation "
+            f"and wheel_radius){why}",
             source=src,
         )
     taken = [

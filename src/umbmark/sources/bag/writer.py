@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 
 from umbmark.core.arrays import FloatArray
 from umbmark.core.atomic import fsync
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.model.scans import ScanSeries
 from umbmark.sources.bag.msgtypes import (
@@ -137,19 +137,22 @@ def bag_target(
     except ImportError:
         raise missing_rosbags(str(shown), "writing") from None
     if storage is not None and storage not in BAG_STORAGES:
-        raise InputError(f"--bag-storage {storage!r}: use one of {', '.join(BAG_STORAGES)}")
+        raise InputError(
+            f"{option('bag_storage', repr(storage))}: use one of {', '.join(BAG_STORAGES)}"
+        )
     if shown.suffix == ".bag":
         if storage is not None:
             raise InputError(
-                f"--bag-storage is for ROS 2 bags (a folder); {shown} is a ROS 1 bag: "
+                f"{option('bag_storage')} is for ROS 2 bags (a folder); {shown} is a ROS 1 bag: "
                 "name a folder (without .bag) for ROS 2"
             )
         fmt: BagFormat = "ros1"
     elif shown.suffix in (".db3", ".mcap"):
         raise InputError(
             f"a ROS 2 bag is a folder: give its name without {shown.suffix} "
-            f"(--bag {shown.with_suffix('')} --bag-storage "
-            f"{'mcap' if shown.suffix == '.mcap' else 'sqlite3'}); NAME.bag writes ROS 1",
+            f"({option('bag', str(shown.with_suffix('')))} "
+            f"{option('bag_storage', 'mcap' if shown.suffix == '.mcap' else 'sqlite3')}); "
+            "NAME.bag writes ROS 1",
             source=shown,
         )
     else:
@@ -157,7 +160,7 @@ def bag_target(
     real = shown.resolve()
     if real.exists() or real.is_symlink():
         if not force:
-            raise InputError("exists already; pass --force to replace it", source=shown)
+            raise InputError(f"exists already; pass {option('force')} to replace it", source=shown)
         if fmt == "ros1" and not real.is_file():
             raise InputError("exists and is not a file; not replaced", source=shown)
         if fmt != "ros1" and not _is_ros2_bag_or_empty(real):

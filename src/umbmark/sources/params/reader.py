@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from umbmark.core.bounds import LENGTH_RANGE, MULTIPLIER_RANGE
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.kinematics import WheelParams
 from umbmark.sources.text import finite, load_json, load_yaml
 
@@ -371,7 +371,7 @@ def read_controller_params(path: str | Path, controller: str | None = None) -> C
     else:
         raise InputError(
             f"has several controllers ({', '.join(sorted(candidates))}); "
-            "name one with --controller",
+            f"name one with {option('controller')}",
             source=path,
         )
     keys, ros2, params = candidates[name]

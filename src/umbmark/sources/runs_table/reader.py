@@ -56,7 +56,7 @@ from pathlib import Path
 
 from umbmark.core.bounds import LENGTH_RANGE, MULTIPLIER_RANGE, Origin
 from umbmark.core.conventions import Direction, angle_to_rad, length_to_m
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.run import EndPose, Run
 from umbmark.sources.text import iter_content_lines, iter_lines
 
@@ -206,7 +206,7 @@ def _read_rows(
             if angle is not None and angle_unit == "rad" and abs(angle) > _MAX_PLAUSIBLE_RAD:
                 raise InputError(
                     f"{name} = {angle:g} is not a plausible heading in radians; "
-                    "are the headings in degrees? (use --angle-unit deg)",
+                    f"are the headings in degrees? (use {option('angle_unit', 'deg')})",
                     source=path,
                     row=number,
                 )

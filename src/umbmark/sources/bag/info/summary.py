@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.messages import split_messages
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.bag_options import BagOptions
@@ -462,7 +462,7 @@ def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> B
     """
     src = str(path)
     if max_messages < 1:
-        raise InputError(f"--max-messages {max_messages}: must be at least 1")
+        raise InputError(f"{option('max_messages', max_messages)}: must be at least 1")
     notes: list[str] = []
     with bag_reader.open_bag(Path(path), src) as reader:
         topics = bag_reader.topic_types(reader)

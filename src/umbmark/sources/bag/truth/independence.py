@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.geometry import relative_positions
 from umbmark.model.recording import PoseSeries
 from umbmark.sources.bag.truth.transforms import Edge, chain_steps
@@ -94,16 +94,17 @@ def check_distinct(
     """
     if truth_topic is not None and odom_topic is not None and truth_topic == odom_topic:
         raise _refuse(
-            f"the ground truth (--truth-topic {truth_topic}) is the controller's odometry the "
-            f"wheels are read from (--odom-topic {odom_topic})",
+            f"the ground truth ({option('truth_topic', truth_topic)}) is the controller's "
+            f"odometry the wheels are read from ({option('odom_topic', odom_topic)})",
             src,
         )
     if tf_truth is not None and odom_tf is not None:
         truth = {_frame(tf_truth[0]), _frame(tf_truth[1])}
         if truth == {_frame(odom_tf[0]), _frame(odom_tf[1])}:
             raise _refuse(
-                f"the ground truth (--tf-parent {tf_truth[0]} --tf-child {tf_truth[1]}) is the "
-                f"odometry's own transform (--odom-tf {odom_tf[0]} {odom_tf[1]})",
+                f"the ground truth ({option('tf_parent', tf_truth[0])} "
+                f"{option('tf_child', tf_truth[1])}) is the odometry's own transform "
+                f"({option('odom_tf', f'{odom_tf[0]} {odom_tf[1]}')})",
                 src,
                 python=f"the ground truth (tf_parent={tf_truth[0]!r}, tf_child="
                 f"{tf_truth[1]!r}) is the odometry's own transform (odom_tf={tuple(odom_tf)!r})",

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from umbmark.core.arrays import FloatArray
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.messages import info
 from umbmark.model.recording import PoseSeries
 from umbmark.sources.bag import custom
@@ -185,12 +185,13 @@ def _choose_model(
     if moving:
         raise InputError(
             f"several models of {topic} move ({bag_reader.listing(moving)}): name the robot "
-            "with --truth-model",
+            f"with {option('truth_model')}",
             source=src,
         )
     raise InputError(
         f"no model of {topic} moves more than {MOVING_DISTANCE:g} m; models present: "
-        f"{bag_reader.listing(names) if names else 'none'} (name the robot with --truth-model)",
+        f"{bag_reader.listing(names) if names else 'none'} (name the robot with "
+        f"{option('truth_model')})",
         source=src,
     )
 

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from umbmark.core.arrays import FloatArray, IntArray
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import custom
 from umbmark.sources.bag import reader as bag_reader
@@ -115,14 +115,14 @@ def read_fields(
         except InputError as err:
             raise InputError(err.problem, source=src) from None
     left, right = fields
-    tpr = options.ticks_per_revolution
+    tpr = options.ticks_per_rev
     if tpr is None:
         for field in fields:
             if field.integer:
                 raise InputError(
                     f"field {field.text} of {msgtype} is an integer ({field.base}): encoder "
-                    "counts need ticks_per_revolution (--ticks-per-rev, counts per wheel "
-                    "revolution); without it the fields are read as angles [rad]",
+                    f"counts need {option('ticks_per_rev')} (counts per wheel revolution); "
+                    "without it the fields are read as angles [rad]",
                     source=src,
                 )
     header = options.time_source == "header" and custom.has_header(fielddefs, msgtype)

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.bag_options import DEFAULT_JOINTS, BagOptions
@@ -68,7 +68,8 @@ def wheel_joints(
         return left, right
     present = bag_reader.listing(moving) if moving else "none"
     raise InputError(
-        f"which joints of {topic} are the wheels? give --left-joint and --right-joint "
+        f"which joints of {topic} are the wheels? give {option('left_joint')} and "
+        f"{option('right_joint')} "
         f"(or a controller file with left_wheel_names); joints that move: {present}",
         source=src,
     )

@@ -204,14 +204,12 @@ def bare(tmp_path_factory) -> Path:
 def test_counts_and_angles_of_a_custom_message(bags, fmt):
     angles = truth_angles(np.arange(N) * DT)
     counts = counts_of(angles)
-    wheels, truth = read_bag(
-        bags[fmt], fields("left_ticks", "right_ticks", ticks_per_revolution=TPR)
-    )
+    wheels, truth = read_bag(bags[fmt], fields("left_ticks", "right_ticks", ticks_per_rev=TPR))
     np.testing.assert_allclose(wheels.time, expected_time(), rtol=0, atol=1e-9)
     np.testing.assert_allclose(wheels.angles, counts * (2 * math.pi / TPR), rtol=0, atol=1e-12)
     assert truth is None
 
-    wheels, _ = read_bag(bags[fmt], fields("from", "right_ticks", ticks_per_revolution=TPR))
+    wheels, _ = read_bag(bags[fmt], fields("from", "right_ticks", ticks_per_rev=TPR))
     np.testing.assert_allclose(wheels.angles, counts * (2 * math.pi / TPR), rtol=0, atol=1e-12)
 
     wheels, _ = read_bag(bags[fmt], fields("positions[0]", "positions[1]"))
@@ -235,7 +233,7 @@ def test_16_bit_counters_are_unwrapped(bags):
     assert min(written) < 0 < max(written)  # the right counter did wrap
     wheels, _ = read_bag(
         bags["mcap"],
-        fields("wheels[0].counter", "wheels[1].counter", ticks_per_revolution=TPR),
+        fields("wheels[0].counter", "wheels[1].counter", ticks_per_rev=TPR),
     )
     np.testing.assert_allclose(wheels.angles, counts * (2 * math.pi / TPR), rtol=0, atol=1e-9)
 
@@ -254,7 +252,7 @@ def test_time_is_the_bag_time_without_a_header_or_when_asked(tmp_path, bags):
 
 @pytest.mark.slow
 def test_a_bag_without_definitions_needs_msg_dir(tmp_path, bare):
-    options = fields("left_ticks", "right_ticks", ticks_per_revolution=TPR)
+    options = fields("left_ticks", "right_ticks", ticks_per_rev=TPR)
     err = api_error(read_bag, bare, options)
     assert err == (
         f"{bare}: topic /wheels has type {ENCODERS}, whose definition the bag does not "
@@ -268,7 +266,7 @@ def test_a_bag_without_definitions_needs_msg_dir(tmp_path, bare):
     ]:
         write_msg_files(root, [ENCODERS, STATE], flat=flat)
         wheels, _ = read_bag(
-            bare, fields("left_ticks", "right_ticks", ticks_per_revolution=TPR, msg_dir=given)
+            bare, fields("left_ticks", "right_ticks", ticks_per_rev=TPR, msg_dir=given)
         )
         np.testing.assert_allclose(wheels.angles, expected, rtol=0, atol=1e-12)
         np.testing.assert_allclose(wheels.time, expected_time(), rtol=0, atol=1e-9)
@@ -277,7 +275,7 @@ def test_a_bag_without_definitions_needs_msg_dir(tmp_path, bare):
 @pytest.mark.slow
 def test_msg_dir_errors_name_the_type_or_the_file(tmp_path, bare):
     def error(msg_dir: Path) -> str:
-        options = fields("left_ticks", "right_ticks", ticks_per_revolution=TPR, msg_dir=msg_dir)
+        options = fields("left_ticks", "right_ticks", ticks_per_rev=TPR, msg_dir=msg_dir)
         return api_error(read_bag, bare, options)
 
     only_top = write_msg_files(tmp_path / "only_top", [ENCODERS])
@@ -298,7 +296,7 @@ def test_definitions_in_the_bag_win_over_msg_dir(tmp_path, bags):
     wrong = tmp_path / "wrong" / "my_robot_msgs" / "msg"
     wrong.mkdir(parents=True)
     (wrong / "WheelEncoders.msg").write_text("int8 left_ticks\nint8 right_ticks\n")
-    options = fields("left_ticks", "right_ticks", ticks_per_revolution=TPR, msg_dir=wrong)
+    options = fields("left_ticks", "right_ticks", ticks_per_rev=TPR, msg_dir=wrong)
     wheels, _ = read_bag(bags["sqlite3"], options)
     expected = counts_of(truth_angles(np.arange(N) * DT)) * (2 * math.pi / TPR)
     np.testing.assert_allclose(wheels.angles, expected, rtol=0, atol=1e-12)
@@ -328,7 +326,7 @@ def test_field_path_errors_list_what_is_there(bags):
     assert "left_ticks is int32, not an array" in error("left_ticks[0]")
     assert "left_ticks is int32, which has no field 'x'" in error("left_ticks.x")
     # an integer read as an angle is a mistake: counts need counts per revolution
-    assert "is an integer (int32): encoder counts need ticks_per_revolution" in error(
+    assert "is an integer (int32): encoder counts need --ticks-per-rev" in error(
         "left_ticks", "right_ticks"
     )
     # a sequence shorter than the index, found while reading
@@ -349,7 +347,7 @@ def test_malformed_field_options_are_refused_before_reading(tmp_path):
     assert "give both or neither" in err
     err = api_error(read_bag, missing, BagOptions(msg_dir=tmp_path))
     assert "--msg-dir is for wheel data in a custom message type" in err
-    both = fields("a", "b", left_ticks_topic="/l", right_ticks_topic="/r", ticks_per_revolution=1)
+    both = fields("a", "b", left_ticks_topic="/l", right_ticks_topic="/r", ticks_per_rev=1)
     err = api_error(read_bag, missing, both)
     assert "--left-field/--right-field read the wheels from --wheel-topic: leave out" in err
 
