@@ -63,6 +63,7 @@ _EXPORTS = {
     # the robot calibrates itself (the paper's Sec. 6)
     "selfcal": "umbmark.jobs.selfcal",
     "SelfCalReport": "umbmark.jobs.selfcal",
+    "SelfcalSetup": "umbmark.routines.setup",
     "AnywhereReport": "umbmark.jobs.selfcal_anywhere",
     "VirtualRobot": "umbmark.robot.virtual",
     "Robot": "umbmark.robot.base",
@@ -104,6 +105,7 @@ __all__ = [
     "Robot",
     "Run",
     "SelfCalReport",
+    "SelfcalSetup",
     "SimSetup",
     "SimulationReport",
     "SourceOptions",
@@ -165,6 +167,7 @@ if TYPE_CHECKING:
     from umbmark.robot.base import Robot
     from umbmark.robot.connect import connect
     from umbmark.robot.virtual import VirtualRobot
+    from umbmark.routines.setup import SelfcalSetup
     from umbmark.runs.read_options import SourceOptions
     from umbmark.sim.setup import SimSetup
     from umbmark.sources.runs_table.reader import read_runs_table

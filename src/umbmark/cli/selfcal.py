@@ -14,7 +14,18 @@ import click
 
 from umbmark.cli.click_options import Command, apply, force_option, option, spec_option
 from umbmark.core.errors import InputError, SafetyError
-from umbmark.options.selfcal import CORNER_SIDE, DRIVING, OBSTACLE_MARGIN, ROUTINE
+from umbmark.options.selfcal import (
+    APPLY,
+    CORNER_SIDE,
+    DRIVING,
+    MAX_PASSES,
+    MEASURE,
+    OBSTACLE_MARGIN,
+    ROUTINE,
+    RUNS,
+    SQUARE_SIDE,
+    TAPE_MARKS,
+)
 from umbmark.options.spec import OUTPUTS, TEST
 
 if TYPE_CHECKING:
@@ -55,25 +66,14 @@ ROS = "ROS robots (--ros1, --ros2)"
         option("--seed", section=ROBOT, type=click.IntRange(0, 2**63 - 1), default=1,
                show_default=True, help="Seed of the virtual robot's slip and sensor noise."),
         spec_option(ROUTINE),
-        option("--side-length", "-L", section=TEST, type=float, default=4.0, show_default=True,
-               help="Side of the square [m] (0.5 to 20)."),
-        option("--runs", "-n", section=TEST, type=int, default=5, show_default=True,
-               help="Runs in each direction (2 to 20)."),
-        option("--measure", section=TEST, type=click.Choice(["lidar", "ranges", "truth", "tape"]),
-               default="lidar", show_default=True,
-               help="How the robot's pose in the corner is measured at each stop: the laser, "
-               "three range sensors, motion capture, or a person with a tape (prompted)."),
-        option("--tape-marks", section=TEST, default=None, metavar="X1,Y1,X2,Y2,X3,Y3",
-               help="With --measure tape: the three points on the robot (its base frame, "
-               "metres) the distances are measured from; the first two to the wall behind "
-               "the start, the third to the side wall [default: the virtual robot's]."),
+        spec_option(SQUARE_SIDE),
+        spec_option(RUNS),
+        spec_option(MEASURE),
+        spec_option(TAPE_MARKS),
         spec_option(CORNER_SIDE, help=f"{CORNER_SIDE.help} With --sim, the virtual "
                     "robot's corner stands there."),
-        option("--apply", section=TEST, type=click.Choice(["reconfigure", "yaml", "none"]),
-               default="reconfigure", show_default=True,
-               help="How corrections reach the controller (none: one pass, nothing applied)."),
-        option("--max-passes", section=TEST, type=int, default=3, show_default=True,
-               help="Most UMBmark passes before the verification (1 to 5)."),
+        spec_option(APPLY),
+        spec_option(MAX_PASSES),
         option("--verify/--no-verify", section=TEST, default=True,
                help="Drive a last pass on the final parameters (--no-verify: leave it out)."),
         option("--coarse/--no-coarse", section=TEST, default=True,
@@ -154,10 +154,11 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     from umbmark.core.errors import InputError
     from umbmark.jobs.selfcal import default_folder
     from umbmark.jobs.selfcal import selfcal as run_selfcal
-    from umbmark.jobs.selfcal_anywhere import AnywhereReport
+    from umbmark.jobs.selfcal_anywhere import AnywhereReport, square_only
     from umbmark.outputs.files import fresh_folder
     from umbmark.robot.connect import connect
     from umbmark.robot.ros_common import RosOptions, laser_mount
+    from umbmark.routines.setup import SelfcalSetup
 
     if backend is None:
         raise InputError("choose the robot: --sim, --ros1 or --ros2")
@@ -197,11 +198,15 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     ask = _ask_person if options["measure"] == "tape" else None
     options["tape_marks"] = _numbers(options.pop("tape_marks"))
     folder = Path(options["out"])
+    routine = options.pop("routine")
     try:
+        if anywhere:  # before the square's options are checked: it takes none of them
+            square_only(**SelfcalSetup.square_options(None, options))
+        setup = SelfcalSetup(limits=limits, robot_name=options.pop("robot"), **options)
         with _watching() as (progress, runs_left):
             report = run_selfcal(
-                robot, limits=limits, progress=progress, ask=ask, runs_left=runs_left,
-                robot_name=options.pop("robot"), notify=note, **options,
+                robot, setup, routine=routine, progress=progress, ask=ask,
+                runs_left=runs_left, notify=note,
             )  # fmt: skip
     except (KeyboardInterrupt, SafetyError, InputError) as exc:
         _stopped(exc, folder)

@@ -28,35 +28,25 @@ What a person still does: place the robot in the corner, and calibrate the scale
 from __future__ import annotations
 
 import contextlib
-import inspect
-import os
 import tempfile
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from umbmark.calibration.passes import Holds
 from umbmark.core.conventions import wrap_angle
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, unexpected_keyword
 from umbmark.jobs.selfcal_anywhere import AnywhereReport, selfcal_anywhere, square_only
 from umbmark.jobs.selfcal_passes import PassDriver, apply_pass, holds_of, resumed_passes
 from umbmark.jobs.selfcal_report import PassResult, SelfCalReport
-from umbmark.options.selfcal import ROUTINE
-from umbmark.robot.base import APPLY_METHODS, ApplyMethod, ApplyResult, DriveParams, Robot
+from umbmark.options.selfcal import MAX_SELFCAL_PASSES, MAX_SELFCAL_RUNS, ROUTINE
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
 from umbmark.routines.coarse import CoarseTurning, coarse_turning
 from umbmark.routines.drive import DriveLimits, settle
-from umbmark.routines.measure import (
-    MEASURE_METHODS,
-    CornerSide,
-    Measure,
-    MeasureMethod,
-    check_side,
-    marks_for,
-    take_fix,
-)
+from umbmark.routines.measure import Measure, MeasureMethod, check_side, marks_for, take_fix
 from umbmark.routines.outputs import check_outputs, write_outputs
 from umbmark.routines.passes import Home, corner_truth
 from umbmark.routines.preflight import preflight
@@ -64,166 +54,108 @@ from umbmark.routines.record import (
     clear_selfcal,
 )
 from umbmark.routines.resume import SelfCalState, pending_problem, read_state, write_state
+from umbmark.routines.setup import Routine, SelfcalSetup
 from umbmark.routines.watch import Progress, RunsLeft, Stopped, Watch, mark_stopped
 
-if TYPE_CHECKING:
-    pass
-
-__all__ = ["MAX_SELFCAL_PASSES", "PassResult", "SelfCalReport", "default_folder", "selfcal"]
-
-#: Most UMBmark passes one self-calibration drives (verification not counted).
-MAX_SELFCAL_PASSES = 5
-#: Most runs per direction in a pass.
-MAX_SELFCAL_RUNS = 20
-
-
-#: The square routine's own options: ``--routine anywhere`` refuses them given.
-_SQUARE_ONLY = (
-    "side_length", "runs", "measure", "max_passes", "report", "resume", "tape_marks",
-    "corner_side",
-)  # fmt: skip
-
-
-def _check_counts(side_length: float, runs: int, max_passes: int, measure: str) -> None:
-    if not (0.5 <= side_length <= 20.0):
-        raise InputError(f"--side-length {side_length!r} m: give 0.5 to 20 m")
-    if not (2 <= runs <= MAX_SELFCAL_RUNS):
-        raise InputError(f"--runs {runs!r}: give 2 to {MAX_SELFCAL_RUNS} per direction")
-    if not (1 <= max_passes <= MAX_SELFCAL_PASSES):
-        raise InputError(f"--max-passes {max_passes!r}: give 1 to {MAX_SELFCAL_PASSES}")
-    if measure not in MEASURE_METHODS:
-        raise InputError(f"--measure {measure!r}: use one of {', '.join(MEASURE_METHODS)}")
+__all__ = [
+    "MAX_SELFCAL_PASSES",
+    "MAX_SELFCAL_RUNS",
+    "PassResult",
+    "SelfCalReport",
+    "SelfcalSetup",
+    "default_folder",
+    "selfcal",
+]
 
 
 def selfcal(
     robot: Robot,
+    setup: SelfcalSetup | None = None,
     *,
-    side_length: float = 4.0,
-    runs: int = 5,
-    measure: MeasureMethod = "lidar",
-    apply: bool | ApplyMethod = True,
-    verify: bool = True,
-    max_passes: int = 3,
-    robot_name: str | None = None,
-    history: str | os.PathLike[str] | None = None,
-    out: str | os.PathLike[str] | None = None,
-    report: str | os.PathLike[str] | None = None,
+    routine: Routine = "umbmark",
     progress: Progress | None = None,
-    limits: DriveLimits | None = None,
     ask: Callable[[str], str] | None = None,
-    tape_marks: Sequence[float] | None = None,
-    coarse: bool = True,
-    force: bool = False,
-    resume: str | os.PathLike[str] | None = None,
     notify: Callable[[str], None] | None = None,
     runs_left: Callable[[RunsLeft], None] | None = None,
-    corner_side: CornerSide = "right",
-    routine: str = "umbmark",
+    **changes: object,
 ) -> SelfCalReport | AnywhereReport:
     """Calibrate ``robot`` by itself: UMBmark driven by its odometry, measured at the
     corner, applied and verified (module documentation).
+
+    What ``umbmark selfcal`` does: the settings as a :class:`SelfcalSetup` (its fields
+    and defaults), or its fields as keywords (``umbmark.selfcal(robot, side_length=2,
+    runs=3, out="cal")``), or both (the keywords change the setup's fields).
 
     Parameters
     ----------
     robot : Robot
         Placed at the start, in view of the L-shaped corner.
-    side_length, runs : float, int
-        The square's side [m] and runs per direction (5 in the paper).
-    measure : {"lidar", "ranges", "truth", "tape"}
-        How the fixes are taken (``tape``: a person answers ``ask`` at each stop).
-    apply : bool or {"reconfigure", "yaml", "none"}
-        How corrections reach the controller: ``True`` is ``reconfigure`` (at once, as
-        dynamic_reconfigure does), ``yaml`` writes the controller's parameter file,
-        ``False`` or ``none`` applies nothing (one pass).
-    verify : bool
-        Drive a verification pass on the final parameters.
-    max_passes : int
-        Most UMBmark passes before the verification.
-    robot_name, history : optional
-        Record every pass in the robot's history (SQLite) and mark the applied ones.
-    out : path, optional
-        Folder for the passes' run logs, the report and the overlay: new, empty, or
-        (``force``) an earlier self-calibration's, replaced whole. Without it nothing is
-        written (run logs in a temporary folder) [``umbmark selfcal``: :func:`default_folder`].
-    report : path, optional
-        The HTML page of all passes [default: ``report.html`` in ``out``; none without
-        ``out``].
-    limits : DriveLimits, optional
-        Speeds, accelerations and safety limits.
+    setup : SelfcalSetup, optional
+        The test, how its results are applied and where they go
+        (:class:`umbmark.routines.setup.SelfcalSetup`) [default: its defaults].
+    routine : {"umbmark", "anywhere"}
+        ``anywhere``: :func:`umbmark.jobs.selfcal_anywhere.selfcal_anywhere` (no corner;
+        the square routine's fields, :data:`umbmark.routines.setup.SQUARE_ONLY`, refused
+        given).
+    progress : callable, optional
+        What the robot does now: ``(pass label, run, direction, what)``.
     ask : callable, optional
-        For ``tape``: shows a prompt, returns the person's answer.
-    tape_marks : six floats, optional
-        For ``tape``: ``x1, y1, x2, y2, x3, y3`` [m] on the robot, measured from (two to
-        the wall behind, one to the side wall) [default: the robot's ``tape_marks()``].
-    coarse : bool
-        Check first that the robot turns as its odometry believes (lidar or truth).
-    force : bool
-        Replace an earlier self-calibration in ``out`` and a ``report`` file that exists.
-    resume : path, optional
-        The folder of a self-calibration stopped for a controller restart: go on with its
-        settings (the ones given here are not used), once the controller holds the
-        parameters it stopped on (:mod:`umbmark.routines.resume`).
+        For ``measure="tape"``: shows a prompt, returns the person's answer.
     notify : callable, optional
         Lines for a person, as they happen: each check, the coarse check, each run's
         return error, each pass's result.
-    corner_side : {"right", "left"}
-        Where the corner stands seen from the start: behind it and to its right or left
-        (which wall each range sensor or tape mark faces; the first fix must find it
-        there, else nothing moves).
     runs_left : callable, optional
         Called with a :class:`~umbmark.routines.watch.RunsLeft` (runs done out of planned,
         the time left) as each pass begins and each run ends.
-    routine : {"umbmark", "anywhere"}
-        ``anywhere``: :func:`umbmark.jobs.selfcal_anywhere.selfcal_anywhere` (no corner).
+    **changes
+        Fields of ``setup`` to change, or of the default one (``side_length=2.0``).
 
     Raises
     ------
     InputError
         Bad options, or a check before moving failed (with the cause).
+    TypeError
+        A keyword that is no field of :class:`SelfcalSetup`, naming the close one.
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
         Every exception comes after a zero velocity; one raised once the robot moved
         carries what the controller holds (:func:`umbmark.routines.watch.stopped`).
     """
+    known = [f.name for f in fields(SelfcalSetup)]
+    for name in changes:
+        if name not in known:
+            raise unexpected_keyword("selfcal", name, [*known, *_CALLS])
     ROUTINE.check(routine)
-    given = locals()
     if routine == "anywhere":
-        default = inspect.signature(selfcal).parameters
-        square_only(**{k: given[k] != default[k].default for k in _SQUARE_ONLY})
+        square_only(**SelfcalSetup.square_options(setup, changes))
+    chosen = replace(setup or SelfcalSetup(), **changes)  # type: ignore[arg-type]
+    if routine == "anywhere":
+        g = chosen
         return selfcal_anywhere(
-            robot, apply=_apply_method(apply), verify=verify, robot_name=robot_name,
-            history=history, out=out, progress=progress, limits=limits, force=force,
+            robot, apply=g.apply_method, verify=g.verify, robot_name=g.robot_name,
+            history=g.history, out=g.out, progress=progress, limits=g.limits, force=g.force,
         )  # fmt: skip
-    return _squares(robot, _Squares(**{f.name: given[f.name] for f in fields(_Squares)}))
+    return _squares(robot, chosen, _Calls(progress, ask, notify, runs_left))
+
+
+selfcal.__keyword_fields__ = SelfcalSetup  # type: ignore[attr-defined]  # its **changes
+
+#: selfcal's keywords besides the setup's fields.
+_CALLS = ("setup", "routine", "progress", "ask", "notify", "runs_left")
 
 
 @dataclass(frozen=True)
-class _Squares:
-    """The square routine's settings, as :func:`selfcal` was given them."""
+class _Calls:
+    """What :func:`selfcal` calls as it goes: progress, a person's answers, lines for a
+    person, the runs left."""
 
-    side_length: float
-    runs: int
-    measure: MeasureMethod
-    apply: bool | ApplyMethod
-    verify: bool
-    max_passes: int
-    robot_name: str | None
-    history: str | os.PathLike[str] | None
-    out: str | os.PathLike[str] | None
-    report: str | os.PathLike[str] | None
     progress: Progress | None
-    limits: DriveLimits | None
     ask: Callable[[str], str] | None
-    tape_marks: Sequence[float] | None
-    coarse: bool
-    force: bool
-    resume: str | os.PathLike[str] | None
     notify: Callable[[str], None] | None
     runs_left: Callable[[RunsLeft], None] | None
-    corner_side: CornerSide
 
 
-def _squares(robot: Robot, g: _Squares) -> SelfCalReport:
+def _squares(robot: Robot, g: SelfcalSetup, calls: _Calls) -> SelfCalReport:
     """The UMBmark routine (:func:`selfcal`'s steps 1 to 8) with the settings given."""
     state = None
     if g.resume is not None:  # the settings it stopped with
@@ -234,11 +166,10 @@ def _squares(robot: Robot, g: _Squares) -> SelfCalReport:
             max_passes=s["max_passes"], verify=s["verify"], out=g.resume, coarse=False,
             corner_side=s.get("corner_side", "right"),
         )  # fmt: skip
-    _check_counts(g.side_length, g.runs, g.max_passes, g.measure)
-    method = _apply_method(g.apply)
+    method = g.apply_method
     limits = g.limits or DriveLimits()
     marks = marks_for(robot, g.tape_marks) if g.measure == "tape" else None
-    how = Measure(g.measure, ask=g.ask, marks=marks, side=g.corner_side)
+    how = Measure(g.measure, ask=calls.ask, marks=marks, side=g.corner_side)
     name = g.robot_name or robot.name
     folder = None if g.out is None else Path(g.out)
     page = None if g.report is None else Path(g.report)
@@ -262,13 +193,13 @@ def _squares(robot: Robot, g: _Squares) -> SelfCalReport:
     with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
         drive = PassDriver(
             robot, how, Path(logs), g.side_length, g.runs, limits, name,
-            Watch(g.progress, g.notify, g.runs_left, g.runs), record_as=g.robot_name,
+            Watch(calls.progress, calls.notify, calls.runs_left, g.runs), record_as=g.robot_name,
             history=g.history, kept=folder is not None,
         )  # fmt: skip
         found = _calibrate(
             drive, method, g.verify, g.max_passes, g.coarse,
             folder if g.force and state is None else None,
-            _Restart(restart_note, g.notify, prior),
+            _Restart(restart_note, calls.notify, prior),
         )  # fmt: skip
         final = robot.drive_params()
         holds = holds_of(found.passes, final)
@@ -506,14 +437,3 @@ def _stop_for_restart(
 
 def _slug(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "-" for c in name)[:60] or "robot"
-
-
-def _apply_method(apply: bool | ApplyMethod) -> ApplyMethod:
-    """``apply`` as a method: True is ``reconfigure``, False is ``none``."""
-    if apply is True:
-        return "reconfigure"
-    if apply is False:
-        return "none"
-    if apply not in APPLY_METHODS:
-        raise InputError(f"--apply {apply!r}: use one of {', '.join(APPLY_METHODS)}")
-    return apply

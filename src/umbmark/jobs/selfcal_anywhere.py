@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.estimators.registry import SCAN_MATCHING
 from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
@@ -229,8 +229,9 @@ def _check_folder(folder: Path | None, force: bool) -> None:
     OutputPlan.of(logs=folder, force=True)
     if not force and folder.is_dir() and any(folder.iterdir()):
         raise InputError(
-            "holds files: choose a new or empty folder, leave --out out (umbmark selfcal "
-            "then makes selfcal-ROBOT-2, ...), or pass --force to write into it",
+            f"holds files: choose a new or empty folder, leave {option('out')} out (umbmark "
+            f"selfcal then makes selfcal-ROBOT-2, ...), or pass {option('force')} to write "
+            "into it",
             source=folder,
             python="holds files: choose a new or empty folder, or pass force=True",
         )
@@ -308,9 +309,9 @@ def _mark_applied(robot: str, history: str | os.PathLike[str] | None) -> None:
 def square_only(**given: bool) -> None:
     """Refuse the square routine's options with ``--routine anywhere``: none says anything
     to it, and a user who gave one expects it to count."""
-    named = [f"--{name.replace('_', '-')}" for name, on in given.items() if on]
+    named = [option(name) for name, on in given.items() if on]
     if named:
         raise InputError(
             f"{', '.join(named)}: the square routine's option{'s' if len(named) > 1 else ''}; "
-            "--routine anywhere drives its own pattern and takes none of them"
+            f"{option('routine', 'anywhere')} drives its own pattern and takes none of them"
         )

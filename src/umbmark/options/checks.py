@@ -1,17 +1,24 @@
 """The checks of the option spec's newer kinds (:class:`~umbmark.options.spec.Spec`): a
-list of values (``most``), a closed ``range`` (of a number or a whole number) and a
-``ratio``. Each names the option as :func:`umbmark.core.errors.option` does."""
+list of values (``most``), a closed ``range`` (of a number or a whole number), a
+``ratio``, and ``give`` (a closed range whose message says what to give). Each names the
+option as :func:`umbmark.core.errors.option` does."""
 
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Collection
 from typing import cast
 
-from umbmark.core.bounds import check_int_option, check_positive_option, check_range
+from umbmark.core.bounds import (
+    check_int_option,
+    check_positive_option,
+    check_range,
+    finite_float,
+)
 from umbmark.core.errors import InputError, given
 
-__all__ = ["check_bounded", "check_list"]
+__all__ = ["check_bounded", "check_give", "check_list"]
 
 
 def check_list(named: str, value: object, most: int, source: str | None = None) -> list[object]:
@@ -52,3 +59,33 @@ def check_bounded(
                 f"({low:g} to {high:g})",
                 source=source,
             )
+
+
+def check_give(
+    named: str,
+    value: object,
+    whole: bool,
+    bounds: tuple[float | None, float | None],
+    unit: str = "",
+    source: str | None = None,
+) -> None:
+    """Refuse a finite number (a whole one with ``whole``) outside ``bounds`` (``low``,
+    ``high``, both included; None: none that side), saying what to give: ``--runs 1:
+    give 2 to 20``, ``--side-length 0.1 m: give 0.5 to 20 m``."""
+    low = -math.inf if bounds[0] is None else bounds[0]
+    high = math.inf if bounds[1] is None else bounds[1]
+    if whole:
+        if isinstance(value, bool) or not hasattr(value, "__index__"):
+            raise InputError(
+                f"{named} must be a whole number, not {str(value)[:24]!r}", source=source
+            )
+        number: float = operator.index(cast("int", value))
+        shown = str(number)
+    else:
+        number = finite_float(named, cast("float", value), source)
+        shown = repr(number)
+    if not low <= number <= high:
+        said = f" {unit}" if unit else ""
+        raise InputError(
+            f"{given(named, shown, unit)}: give {low:g} to {high:g}{said}", source=source
+        )

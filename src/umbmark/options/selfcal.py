@@ -1,18 +1,30 @@
 """The options of ``umbmark selfcal`` that the option spec holds (:class:`Spec`, each
-written once): which routine, where the corner stands, and the obstacle stop's margin
-with its bounds."""
+written once, with its check): which routine, the square test's side, runs, passes, how
+the fixes are taken and the corrections applied, where the corner stands, and the
+obstacle stop's margin with its bounds. :class:`umbmark.routines.setup.SelfcalSetup`
+takes its defaults from these and checks its values by them; ``umbmark selfcal``'s
+options are made from them."""
 
 from __future__ import annotations
 
-from umbmark.options.spec import TEST, Spec
+from umbmark.options.spec import TEST, Bound, Spec
 
 __all__ = [
+    "APPLY",
     "CORNER_SIDE",
     "DRIVING",
+    "MAX_PASSES",
+    "MAX_SELFCAL_PASSES",
+    "MAX_SELFCAL_RUNS",
+    "MEASURE",
     "OBSTACLE_MARGIN",
     "OBSTACLE_MARGIN_RANGE",
     "ROUTINE",
+    "RUNS",
+    "SQUARE_SIDE",
+    "SQUARE_SIDE_RANGE",
     "STOP_LATENCY",
+    "TAPE_MARKS",
 ]
 
 #: ``--routine`` of ``selfcal`` (``routine=`` of :func:`umbmark.selfcal`): what the robot
@@ -61,4 +73,76 @@ CORNER_SIDE = Spec(
     kind="choice",
     default="right",
     choices=("right", "left"),
+)
+
+#: The sides of a square the self-calibration drives [m].
+SQUARE_SIDE_RANGE = (0.5, 20.0)
+#: Most runs per direction in a pass.
+MAX_SELFCAL_RUNS = 20
+#: Most UMBmark passes one self-calibration drives (verification not counted).
+MAX_SELFCAL_PASSES = 5
+
+#: ``--side-length`` of ``selfcal``: the side of the squares it drives.
+SQUARE_SIDE = Spec(
+    "side_length",
+    ("--side-length", "-L"),
+    TEST,
+    f"Side of the square [m] ({SQUARE_SIDE_RANGE[0]:g} to {SQUARE_SIDE_RANGE[1]:g}).",
+    kind="number",
+    default=4.0,
+    unit="m",
+    bound=Bound("give", SQUARE_SIDE_RANGE[1], SQUARE_SIDE_RANGE[0]),
+)
+#: ``--runs`` of ``selfcal``: runs in each direction of a pass.
+RUNS = Spec(
+    "runs",
+    ("--runs", "-n"),
+    TEST,
+    f"Runs in each direction (2 to {MAX_SELFCAL_RUNS}).",
+    kind="integer",
+    default=5,
+    bound=Bound("give", MAX_SELFCAL_RUNS, 2),
+)
+#: ``--measure`` of ``selfcal``: how the fixes at the corner are taken.
+MEASURE = Spec(
+    "measure",
+    ("--measure",),
+    TEST,
+    "How the robot's pose in the corner is measured at each stop: the laser, three range "
+    "sensors, motion capture, or a person with a tape (prompted).",
+    kind="choice",
+    default="lidar",
+    choices=("lidar", "ranges", "truth", "tape"),
+)
+#: ``--tape-marks`` of ``selfcal`` (checked with the robot's own marks, by
+#: :func:`umbmark.routines.measure.marks_for`).
+TAPE_MARKS = Spec(
+    "tape_marks",
+    ("--tape-marks",),
+    TEST,
+    "With --measure tape: the three points on the robot (its base frame, metres) the "
+    "distances are measured from; the first two to the wall behind the start, the third "
+    "to the side wall [default: the virtual robot's].",
+    metavar="X1,Y1,X2,Y2,X3,Y3",
+)
+#: ``--apply`` of ``selfcal`` (the library takes True for ``reconfigure``, False for
+#: ``none`` too).
+APPLY = Spec(
+    "apply",
+    ("--apply",),
+    TEST,
+    "How corrections reach the controller (none: one pass, nothing applied).",
+    kind="choice",
+    default="reconfigure",
+    choices=("reconfigure", "yaml", "none"),
+)
+#: ``--max-passes`` of ``selfcal``.
+MAX_PASSES = Spec(
+    "max_passes",
+    ("--max-passes",),
+    TEST,
+    f"Most UMBmark passes before the verification (1 to {MAX_SELFCAL_PASSES}).",
+    kind="integer",
+    default=3,
+    bound=Bound("give", MAX_SELFCAL_PASSES, 1),
 )

@@ -25,7 +25,7 @@ from umbmark.core.bounds import (
     finite_float,
 )
 from umbmark.core.errors import InputError, option
-from umbmark.options.checks import check_bounded, check_list
+from umbmark.options.checks import check_bounded, check_give, check_list
 
 __all__ = [
     "BAGS",
@@ -77,20 +77,21 @@ class Bound:
 
     Attributes
     ----------
-    kind : {"factor", "positive", "length", "offset", "range", "ratio"}
+    kind : {"factor", "positive", "length", "offset", "range", "ratio", "give"}
         ``factor``: a wheel factor or multiplier
         (:data:`umbmark.core.bounds.MULTIPLIER_RANGE`); ``positive``: above 0 and, with
         ``high``, at most ``high``; ``length``: a plausible length up to ``high`` [m];
         ``offset``: every number within ``high`` of 0; ``range``: ``low`` to ``high``,
         both included (a whole number for an ``integer`` option); ``ratio``: above 0 and
-        strictly between ``low`` and ``high`` (a true-over-nominal ratio).
+        strictly between ``low`` and ``high`` (a true-over-nominal ratio); ``give``: as
+        ``range``, the message saying what to give (``--runs 1: give 2 to 20``).
     high : float or None
         The largest value, in the option's unit.
     low : float or None
-        The smallest value of a ``range`` or ``ratio``.
+        The smallest value of a ``range``, ``ratio`` or ``give``.
     """
 
-    kind: Literal["factor", "positive", "length", "offset", "range", "ratio"]
+    kind: Literal["factor", "positive", "length", "offset", "range", "ratio", "give"]
     high: float | None = None
     low: float | None = None
 
@@ -181,6 +182,10 @@ class Spec:
         if self.kind == "choice":
             check_choice(self.name, value, self.choices, source)
         bound = self.bound
+        if bound is not None and bound.kind == "give":
+            whole = self.kind == "integer"
+            check_give(self.named, value, whole, (bound.low, bound.high), self.unit, source)
+            return
         if self.kind == "integer" or (bound is not None and bound.kind in ("range", "ratio")):
             kind = "integer" if self.kind == "integer" or bound is None else bound.kind
             limits = (None, None) if bound is None else (bound.low, bound.high)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.robot.base import Robot
 from umbmark.robot.ros_common import RosOptions
 
@@ -48,11 +48,9 @@ def connect(
         low, high = ERROR_RANGE
         for name, value in (("E_d", E_d), ("E_b", E_b), ("E_s", E_s)):
             if not (low <= value <= high):
-                raise InputError(
-                    f"--sim-{name.replace('_', '-')} {value!r}: give {low:g} to {high:g}"
-                )
+                raise InputError(f"{option(name, repr(value))}: give {low:g} to {high:g}")
         if not (0.0 <= slip <= MAX_SLIP):
-            raise InputError(f"--sim-slip {slip!r} m^0.5: give 0 to {MAX_SLIP:g}")
+            raise InputError(f"{option('slip', repr(slip), 'm^0.5')}: give 0 to {MAX_SLIP:g}")
         if room:
             from umbmark.robot.world import ROOM_LASER, room_world
 

@@ -30,7 +30,7 @@ import time
 from types import ModuleType
 from typing import Any
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.robot.base import (
     ApplyMethod,
     ApplyResult,
@@ -313,7 +313,8 @@ class Ros1Robot(RosRobot):
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise InputError(
                 f"no dynamic_reconfigure server at {ns} ({detail}): is it a "
-                "diff_drive_controller? (--controller; or --apply yaml with --params-file)"
+                f"diff_drive_controller? ({option('controller')}; or {option('apply', 'yaml')} "
+                f"with {option('params_file')})"
             ) from None
         problem = held_problem(params, held)
         if problem is not None:

@@ -47,7 +47,7 @@ import threading
 import time
 from typing import Any
 
-from umbmark.core.errors import InputError, SafetyError
+from umbmark.core.errors import InputError, SafetyError, option
 from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams
 from umbmark.robot.ros2_reload import RESTART, ReloadPlan, plan_reload, reload
 from umbmark.robot.ros_common import (
@@ -178,7 +178,8 @@ class Ros2Robot(RosRobot):
             if time.monotonic() > deadline:
                 raise InputError(
                     f"nobody subscribes {options.cmd_vel} after {timeout:g} s: is the robot's "
-                    "controller running, on this ROS_DOMAIN_ID? (--controller, --cmd-vel)"
+                    f"controller running, on this ROS_DOMAIN_ID? ({option('controller')}, "
+                    f"{option('cmd_vel')})"
                 )
             time.sleep(0.05)
         for kind in (STAMPED, UNSTAMPED):
@@ -186,7 +187,7 @@ class Ros2Robot(RosRobot):
                 return kind
         raise InputError(
             f"{options.cmd_vel} is subscribed as {', '.join(sorted(kinds))}, not a "
-            "geometry_msgs Twist or TwistStamped (--cmd-vel)"
+            f"geometry_msgs Twist or TwistStamped ({option('cmd_vel')})"
         )
 
     def _on_static(self, msg: Any) -> None:  # noqa: ANN401 (a tf2_msgs TFMessage)
@@ -255,7 +256,7 @@ class Ros2Robot(RosRobot):
                 where = "no URDF on /robot_description" if text is None else "not in the URDF"
                 raise InputError(
                     f"no mounting of {frame!r} in {self.options.base_frame} ({where}): give "
-                    "--laser-mount x,y,yaw (metres, degrees)"
+                    f"{option('laser_mount', 'x,y,yaw')} (metres, degrees)"
                 )
             mount = found
         self._mounts[frame] = mount
@@ -293,7 +294,8 @@ class Ros2Robot(RosRobot):
                 self._stop()
                 raise InputError(
                     f"{ns} has no wheel_separation and wheel_radius, nor has the URDF on "
-                    "/robot_description two wheels: is --controller the diff_drive_controller?"
+                    f"/robot_description two wheels: is {option('controller')} the "
+                    "diff_drive_controller?"
                 )
             values["wheel_separation"] = values["wheel_separation"] or sep
             values["wheel_radius"] = values["wheel_radius"] or radius
@@ -398,7 +400,9 @@ class Ros2Robot(RosRobot):
         try:
             if not client.wait_for_service(timeout_sec=timeout):
                 self._stop()
-                raise InputError(f"no service {service} after {timeout:g} s (--controller)")
+                raise InputError(
+                    f"no service {service} after {timeout:g} s ({option('controller')})"
+                )
             future = client.call_async(request)
             deadline = time.monotonic() + timeout
             while not future.done():

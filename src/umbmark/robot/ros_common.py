@@ -30,7 +30,7 @@ from typing import Any, Generic, TypeVar
 import numpy as np
 
 from umbmark.core.atomic import atomic_write_text
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.geometry import quaternion_yaw
 from umbmark.robot.base import ApplyMethod, DriveParams, Pose2D, RangeReading, ScanSweep
 
@@ -142,10 +142,10 @@ def laser_mount(text: str) -> Pose2D:
         x, y, yaw = (float(v) for v in text.split(","))
     except ValueError:
         raise InputError(
-            f"--laser-mount {text[:60]!r}: give x,y,yaw (metres, metres, degrees)"
+            f"{option('laser_mount', repr(text[:60]))}: give x,y,yaw (metres, metres, degrees)"
         ) from None
     if not all(math.isfinite(v) and abs(v) < 100.0 for v in (x, y)) or not math.isfinite(yaw):
-        raise InputError(f"--laser-mount {text[:60]!r}: give finite x, y within 100 m")
+        raise InputError(f"{option('laser_mount', repr(text[:60]))}: give finite x, y within 100 m")
     return Pose2D(x, y, math.radians(yaw))
 
 

@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from umbmark.core.errors import InputError, SafetyError
+from umbmark.core.errors import InputError, SafetyError, option
 from umbmark.robot.base import RangeReading, ScanSweep, StampedPose
 from umbmark.robot.ros_common import (
     Latest,
@@ -91,13 +91,13 @@ class RosRobot:
             if time.monotonic() > deadline:
                 raise InputError(
                     f"nobody subscribes {self.options.cmd_vel} ({twist_type}) after "
-                    f"{timeout:g} s: is the robot's controller running? (--cmd-vel)"
+                    f"{timeout:g} s: is the robot's controller running? ({option('cmd_vel')})"
                 )
             time.sleep(0.01)
         if self._odom.wait(max(0.0, deadline - time.monotonic())) is None:
             raise InputError(
                 f"no {odom_type} on {self.options.odom} in {timeout:g} s: "
-                "is the controller publishing it? (--odom-topic)"
+                f"is the controller publishing it? ({option('odom_topic')})"
             )
         self._subscribers = subscribers
 
@@ -114,7 +114,7 @@ class RosRobot:
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise InputError(
                 f"no TF from {base} to {frame!r} in {self.options.timeout:g} s ({detail}): "
-                "publish the sensor's mounting on /tf_static (--base-frame)"
+                f"publish the sensor's mounting on /tf_static ({option('base_frame')})"
             ) from None
         mount = self._mounts[frame] = mount_from_transform(transform.transform)
         return mount

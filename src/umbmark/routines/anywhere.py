@@ -37,7 +37,7 @@ from typing import Literal
 import numpy as np
 
 from umbmark.core.conventions import Direction
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.model.kinematics import OdometryGeometry
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.model.scans import ScanSeries
@@ -259,7 +259,7 @@ def check_scene(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep:
     if first is None:
         raise InputError(
             "the robot has no laser scan: the anywhere routine matches the laser's sweeps "
-            "(give the scan topic, or use --routine umbmark with a corner)"
+            f"(give the scan topic, or use {option('routine', 'umbmark')} with a corner)"
         )
     robot.wait(limits.stale_scan / 2)
     second = robot.scan() or first
@@ -279,8 +279,8 @@ def check_scene(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep:
         }.get(status, f"two sweeps taken standing still do not match ({status})")
         raise InputError(
             f"{what}; the anywhere routine needs walls or furniture in view in more than "
-            "one direction within the laser's range: move the robot, or use --routine "
-            "umbmark with a corner"
+            "one direction within the laser's range: move the robot, or use "
+            f"{option('routine', 'umbmark')} with a corner"
         )
     _free_floor(first)
     return first

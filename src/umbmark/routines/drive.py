@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.core.conventions import Direction, wrap_angle
-from umbmark.core.errors import InputError, SafetyError
+from umbmark.core.errors import InputError, SafetyError, option
 from umbmark.options.selfcal import OBSTACLE_MARGIN_RANGE, STOP_LATENCY
 from umbmark.robot.base import Pose2D, Robot, ScanSweep, StampedPose
 
@@ -156,9 +156,7 @@ class DriveLimits:
         for name, (low, high) in bounds.items():
             value = getattr(self, name)
             if not (low <= value <= high):
-                raise InputError(
-                    f"--{name.replace('_', '-')} {value!r} is outside {low:g} to {high:g}"
-                )
+                raise InputError(f"{option(name, repr(value))} is outside {low:g} to {high:g}")
 
     def stop_distance(self, speed: float) -> float:
         """How near [m] an obstacle ahead may come at ``speed`` [m/s] before the robot is

@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.robot.base import Pose2D, RangeReading, Robot, ScanSweep, StampedPose
 from umbmark.routines.corner import CornerFix, CornerNotFoundError
 from umbmark.routines.corner_lidar import LidarCorner, fix_from_scans
@@ -85,7 +85,7 @@ class Measure:
 
     def __post_init__(self) -> None:
         if self.side not in CORNER_SIDES:
-            raise InputError(f"--corner-side {self.side!r}: use right or left")
+            raise InputError(f"{option('corner_side', repr(self.side))}: use right or left")
 
 
 def _collect(robot: Robot, read: Callable[[], object], what: str, count: int) -> list[object]:
@@ -168,10 +168,8 @@ def check_side(fix: CornerFix, side: CornerSide) -> None:
         raise InputError(
             f"the corner was found {where} the robot and to its {found} (its vertex at x = "
             f"{vertex.x:.2f} m, y = {vertex.y:.2f} m of the robot), not behind it and to "
-            f"its {side} as --corner-side {side} says: give --corner-side {found}, or place "
-            "the robot with the corner behind it",
-            python=f"the corner was found {where} the robot and to its {found}, not behind "
-            f"it and to its {side}: give corner_side={found!r}",
+            f"its {side} as {option('corner_side', side)} says: give "
+            f"{option('corner_side', found)}, or place the robot with the corner behind it"
         )
 
 
@@ -182,21 +180,23 @@ def marks_for(robot: Robot, given: Sequence[float] | None) -> TapeMarks:
         values = [float(v) for v in given]
         if len(values) != 6 or not all(math.isfinite(v) and abs(v) <= 2.0 for v in values):
             raise InputError(
-                f"--tape-marks {','.join(f'{v:g}' for v in values)}: give X1,Y1,X2,Y2,X3,Y3, "
+                f"{option('tape_marks', ','.join(f'{v:g}' for v in values))}: give "
+                "X1,Y1,X2,Y2,X3,Y3, "
                 "three points on the robot in its base frame, in metres (within 2 m)"
             )
         marks = ((values[0], values[1]), (values[2], values[3]), (values[4], values[5]))
         if math.dist(marks[0], marks[1]) < 0.05:
             raise InputError(
-                "--tape-marks: the first two marks (measured to the same wall) must be at "
-                "least 50 mm apart, or the heading cannot be told"
+                f"{option('tape_marks')}: the first two marks (measured to the same wall) must "
+                "be at least 50 mm apart, or the heading cannot be told"
             )
         return TapeMarks(marks=marks)
     own = getattr(robot, "tape_marks", None)
     if callable(own):
         return TapeMarks(marks=tuple((float(x), float(y)) for x, y in own()))
     raise InputError(
-        "--measure tape needs --tape-marks: the three points on the robot the distances "
+        f"{option('measure', 'tape')} needs {option('tape_marks')}: the three points on the "
+        "robot the distances "
         "are measured from (X1,Y1,X2,Y2,X3,Y3 in its base frame, metres; the first two to "
         "the wall behind the start, the third to the side wall)"
     )

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from umbmark.calibration.passes import Holds, Passes, calibrate_passes, predict_after
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.outputs.calibration import CalibrationReport
 from umbmark.outputs.files import OutputPlan
 from umbmark.outputs.passes_page import write_passes_page
@@ -27,8 +27,8 @@ def check_outputs(folder: Path | None, page: Path | None, force: bool) -> None:
         if not force and folder.is_dir() and any(folder.iterdir()):
             raise InputError(
                 "holds an earlier self-calibration: choose a new or empty folder, leave "
-                "--out out (umbmark selfcal then makes selfcal-ROBOT-2, ...), or pass "
-                "--force to replace it",
+                f"{option('out')} out (umbmark selfcal then makes selfcal-ROBOT-2, ...), or pass "
+                f"{option('force')} to replace it",
                 source=folder,
                 python="holds an earlier self-calibration: choose a new or empty folder, "
                 "or pass force=True to replace it",

@@ -10,6 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from umbmark.core.conventions import Direction, wrap_angle
+from umbmark.core.errors import option
 from umbmark.robot.base import Pose2D, Robot
 from umbmark.routines.corner import CornerFix, CornerNotFoundError, expected_pose
 from umbmark.routines.drive import DriveLimits, drive_square, move_to, settle
@@ -144,12 +145,13 @@ def _lost_at_the_end(
     near the start) what to do."""
     where = f"at the end of {direction.value} run {k}"
     if how.method != "ranges" or exc.cause != "missing_echo":
-        return CornerNotFoundError(exc.cause, f"{exc} ({where})")
+        return CornerNotFoundError(exc.cause, f"{exc.problem} ({where})")
     return CornerNotFoundError(
         exc.cause,
-        f"{exc} ({where}): the robot stopped too far from its start for three range "
+        f"{exc.problem} ({where}): the robot stopped too far from its start for three range "
         "sensors, which see both walls only within some 0.3 m and 10 deg of it; measure with "
-        "--measure lidar (or truth), or make the errors smaller first (a smaller square, -L)",
+        f"{option('measure', 'lidar')} (or truth), or make the errors smaller first (a smaller "
+        f"square, {option('side_length')})",
     )
 
 

@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.robot.base import Robot
 from umbmark.routines.drive import DriveLimits
 from umbmark.routines.measure import Measure
@@ -91,7 +91,7 @@ def preflight(
     read = sensor.get(how.method)
     if read is not None and read() is None:
         names = {"lidar": "laser scan", "ranges": "range readings", "truth": "ground truth"}
-        raise InputError(f"--measure {how.method}: the robot gives no {names[how.method]}")
+        raise InputError(f"{option('measure', how.method)}: the robot gives no {names[how.method]}")
     if how.method == "lidar":
         lines.append(free_floor(robot, side))
     apply_note = getattr(robot, "apply_note", None)  # a ROS 2 controller manager's way
