@@ -250,6 +250,7 @@ def test_reads_odometry_scan_and_sim_time(graph: RosGraph) -> None:
     assert seen["ahead"] == pytest.approx(6.0 - x - LASER_X, abs=0.03)
 
 
+@pytest.mark.slow
 def test_reconfigure_within_range_is_held_by_the_server(graph: RosGraph) -> None:
     """Multipliers within 0.5 to 1.5 go through dynamic_reconfigure; the server and the
     parameter server hold them."""
@@ -408,6 +409,7 @@ runpy.run_module("umbmark", run_name="__main__", alter_sys=True)
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("blocked", "named", "package"),
     [

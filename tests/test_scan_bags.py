@@ -135,6 +135,7 @@ def test_a_scanner_that_changes_its_beams_is_refused(tmp_path: Path) -> None:
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.slow
 def test_wheels_from_the_controllers_odometry(drive, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
     # the bag's /odom is the true motion; turned back into wheel rotation with radii of
     # 0.05 m and the true wheelbase, each wheel's angle is its true travel over 0.05 m

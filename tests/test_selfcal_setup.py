@@ -35,6 +35,7 @@ def _run(*args: object, **kwargs: object) -> tuple[dict[str, object], int]:
     return report.to_dict(), max(left.done for left in counted)
 
 
+@pytest.mark.slow
 def test_the_value_and_the_keywords_drive_the_same_run() -> None:
     by_keywords, runs = _run(**SHORT)
     assert runs == 4  # 2 cw and 2 ccw, one pass, nothing applied: no verification

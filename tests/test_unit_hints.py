@@ -135,6 +135,7 @@ def test_the_nearer_unit_is_not_named_where_only_the_farther_is_plausible(tmp_pa
 # --- large return errors are a robot far off, not a unit ---------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("E_d", "E_b"),
     [
