@@ -16,9 +16,10 @@ import pytest
 
 import umbmark
 from umbmark.jobs import info as info_job
-from umbmark.jobs import reproduce, simulate, study
+from umbmark.jobs import simulate, study
 from umbmark.jobs.calibrate import calibrate
 from umbmark.jobs.validate import validate
+from umbmark.options import reproduce
 from umbmark.options import spec as read_options
 from umbmark.sim import setup
 
