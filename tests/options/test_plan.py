@@ -1,21 +1,19 @@
-"""The options of plan and reproduce written once: each is a Spec of
-``umbmark.options.plan`` or ``umbmark.options.reproduce``, whence the click option (same
-flags, default, help, type and choices) and the library's check, which the command line
-and Python meet alike, each naming the option its own way. Expected lines are written by
-hand (the bounds: 2 to 100 runs, a margin of 0 to 5 m, 1 to 1000 seeds)."""
+"""The options of plan written once: each is a Spec of ``umbmark.options.plan``, whence
+the click option (same flags, default, help, type and choices) and the library's check,
+which the command line and Python meet alike, each naming the option its own way.
+Expected lines are written by hand (the bounds: 2 to 100 runs, a margin of 0 to 5 m, a
+floor of at most 105 m)."""
 
 from __future__ import annotations
+
+import inspect
 
 import click
 import pytest
 
 import umbmark
 from umbmark.cli.plan import plan as plan_command
-from umbmark.cli.reproduce import fig4 as fig4_command
-from umbmark.cli.reproduce import table1 as table1_command
 from umbmark.options.plan import PLAN, PLAN_OPTIONS
-from umbmark.options.reproduce import FIG4_OPTIONS, TABLE1_OPTIONS
-from umbmark.options.simulate import SEED
 from umbmark.options.spec import SIDE_LENGTH, WHEELBASE, Spec
 
 from helpers import api_error, cli_error
@@ -25,11 +23,8 @@ def _params(command: click.Command) -> dict[str, click.Option]:
     return {p.name: p for p in command.params if isinstance(p, click.Option) and p.name}
 
 
-@pytest.mark.parametrize(
-    ("command", "specs"),
-    [(plan_command, PLAN_OPTIONS), (table1_command, TABLE1_OPTIONS), (fig4_command, FIG4_OPTIONS)],
-)
-def test_the_click_options_are_the_specs(command: click.Command, specs: tuple[Spec, ...]) -> None:
+def _same(command: click.Command, specs: tuple[Spec, ...]) -> None:
+    """``command``'s click options are ``specs``'."""
     params = _params(command)
     for spec in specs:
         param = params[spec.name]
@@ -49,62 +44,55 @@ def test_the_click_options_are_the_specs(command: click.Command, specs: tuple[Sp
         if spec.kind == "choice":
             assert isinstance(param.type, click.Choice)
             assert tuple(param.type.choices) == spec.choices
-    # the command's own options besides the spec's: --json (and fig4's shared --force)
+    # the command's own options besides the spec's: --json (and the shared --force)
     assert set(params) - {spec.name for spec in specs} <= {"json_out", "force"}
 
 
+def test_the_click_options_are_the_specs() -> None:
+    _same(plan_command, PLAN_OPTIONS)
+
+
 def test_shared_options_are_the_shared_specs() -> None:
-    """plan's --wheelbase and --side-length are the shared ones in its words, table1's
-    --seed the simulator's: same flags, bound and default."""
+    """plan's --wheelbase and --side-length are the shared ones in its words."""
     for mine, shared in ((PLAN["wheelbase"], WHEELBASE), (PLAN["side_length"], SIDE_LENGTH)):
         assert (mine.flags, mine.bound, mine.default) == (shared.flags, shared.bound, None)
-    seed = next(spec for spec in TABLE1_OPTIONS if spec.name == "seed")
-    assert (seed.flags, seed.bound, seed.default) == (SEED.flags, SEED.bound, SEED.default)
 
 
 def test_the_library_defaults_are_the_specs() -> None:
-    import inspect
-
     defaults = {name: p.default for name, p in inspect.signature(umbmark.plan).parameters.items()}
     assert (defaults["margin"], defaults["noise"], defaults["reading_error"]) == (0.6, "slip", 0.0)
-    assert inspect.signature(umbmark.reproduce_table1).parameters["seeds"].default == 10
 
 
 @pytest.mark.parametrize(
-    ("args", "function", "kwargs", "line", "python"),
+    ("args", "kwargs", "line", "python"),
     [
-        (("plan", "--scatter", "0.01", "-L", "4", "--runs", "1"), umbmark.plan,
+        (("plan", "--scatter", "0.01", "-L", "4", "--runs", "1"),
          {"scatter": 0.01, "side_length": 4.0, "runs": 1},
          "--runs must be 2 to 100, got 1", "runs must be 2 to 100, got 1"),
-        (("plan", "--scatter", "0.01", "-L", "4", "--runs", "101"), umbmark.plan,
+        (("plan", "--scatter", "0.01", "-L", "4", "--runs", "101"),
          {"scatter": 0.01, "side_length": 4.0, "runs": 101},
          "--runs must be 2 to 100, got 101", "runs must be 2 to 100, got 101"),
         (("plan", "--scatter", "0.01", "--floor", "3", "--target-E-b", "0.01", "--margin", "7"),
-         umbmark.plan, {"scatter": 0.01, "floor": 3.0, "target_E_b": 0.01, "margin": 7.0},
+         {"scatter": 0.01, "floor": 3.0, "target_E_b": 0.01, "margin": 7.0},
          "--margin must be 0 to 5 m, got 7 m", "margin must be 0 to 5 m, got 7 m"),
         (("plan", "--scatter", "0.01", "--floor", "300", "--target-E-b", "0.01"),
-         umbmark.plan, {"scatter": 0.01, "floor": 300.0, "target_E_b": 0.01},
+         {"scatter": 0.01, "floor": 300.0, "target_E_b": 0.01},
          "--floor 300 m is implausibly large: lengths are in metres (at most 105 m here; "
          "plausible: 0.001 to 105 m)",
          "floor=300 m is implausibly large: lengths are in metres (at most 105 m here; "
          "plausible: 0.001 to 105 m)"),
-        (("reproduce", "table1", "--seeds", "0"), umbmark.reproduce_table1, {"seeds": 0},
-         "--seeds must be 1 to 1000, got 0", "seeds must be 1 to 1000, got 0"),
     ],
 )  # fmt: skip
 def test_a_bound_is_refused_alike_by_the_command_and_by_python(
-    args: tuple[str, ...], function: object, kwargs: dict[str, object], line: str, python: str
+    args: tuple[str, ...], kwargs: dict[str, object], line: str, python: str
 ) -> None:
     assert cli_error(*args) == f"umbmark: error: {line}\n"
-    assert api_error(function, **kwargs) == python
+    assert api_error(umbmark.plan, **kwargs) == python
 
 
 def test_a_whole_number_and_a_choice_are_the_specs() -> None:
     error = api_error(umbmark.plan, scatter=0.01, side_length=4.0, runs=5.5)
     assert error == "runs must be a whole number, not '5.5'"
-    assert api_error(umbmark.reproduce_table1, seeds=True) == (
-        "seeds must be a whole number, not 'True'"
-    )
     assert api_error(umbmark.plan, scatter=0.01, side_length=4.0, runs=5, noise="x") == (
         "noise='x': use one of slip, tape"
     )
