@@ -196,9 +196,9 @@ def _edited_log(log_folder, tmp_path, old, new):
         ("wheel_diameter: 0.15\n", "wheel_diameter: 340.0\n",
          "wheel_diameter 340 m is implausibly large", {"wheel_diameter": 340.0}),
         ("encoder_resolution: 2000.0\n", "encoder_resolution: 1.0e-300\n",
-         "encoder_resolution 1e-300 is outside 1 to 1e+07", None),
+         "encoder_resolution must be 1 to 1e+07, got 1e-300", None),
         ("gear_ratio: 20.0\n", "gear_ratio: 1.0e+300\n",
-         "gear_ratio 1e+300 is outside 0.001 to 10000", None),
+         "gear_ratio must be 0.001 to 10000, got 1e+300", None),
     ],
 )  # fmt: skip
 def test_metadata_gets_the_bounds_of_the_options(log_folder, tmp_path, old, new, message, option):

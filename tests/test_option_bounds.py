@@ -16,17 +16,18 @@ import pytest
 
 import umbmark
 from umbmark.jobs import info as info_job
-from umbmark.jobs import reproduce, simulate, study
+from umbmark.jobs import simulate, study
 from umbmark.jobs.calibrate import calibrate
 from umbmark.jobs.validate import validate
+from umbmark.options import reproduce
 from umbmark.options import spec as read_options
 from umbmark.sim import setup
 
 from helpers import api_error, cli_error, run_cli
 
 SEED_TOP = 2**63 - 1
-RUNS = "runs must be between 2 and 1000, got "
-SEEDS = f"seed must be between 0 and {SEED_TOP}, got "
+RUNS = "runs must be 2 to 1000, got "
+SEEDS = f"seed must be 0 to {SEED_TOP}, got "
 FACTOR = "is not a plausible factor: it must be within"
 
 
@@ -54,11 +55,11 @@ def logs(tmp_path_factory: pytest.TempPathFactory) -> Path:
          "trials=50000 in 3 grid cells are 150000 robots: at most 100000 in all"),
         (umbmark.study, {"slip": [0.0] * 21}, "slip must list 1 to 20 values, got 21"),
         (umbmark.study, {"wheelbase": []}, "wheelbase must list 1 to 20 values, got 0"),
-        (umbmark.study, {"workers": 0}, "workers must be between 1 and 64, got 0"),
+        (umbmark.study, {"workers": 0}, "workers must be 1 to 64, got 0"),
         (umbmark.study, {"E_d_spread": math.nan}, "E_d_spread must be a finite number, got nan"),
         (umbmark.study, {"slip": ["abc"]}, "slip must be a number, not 'abc'"),
         (umbmark.reproduce_table1, {"seeds": 1_000_000}, "seeds must be 1 to 1000, got 1000000"),
-        (umbmark.reproduce_table1, {"seed": -1}, f"seed must be between 0 and {SEED_TOP}"),
+        (umbmark.reproduce_table1, {"seed": -1}, f"seed must be 0 to {SEED_TOP}"),
         (umbmark.reproduce_table1, {"tape_thickness": 0.5e-3},
          "tape_thickness=0.0005 m: give more than 0 and at most 0.3 mm"),
         (umbmark.reproduce_fig4, {"leg_bend": "x"}, "leg_bend must be a number, not 'x'"),

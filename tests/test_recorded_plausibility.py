@@ -126,7 +126,7 @@ def test_optiodom_tiny_encoder_resolution(tmp_path: Path) -> None:
     folder = _optiodom(tmp_path, "enc")
     meta = folder / "230620202042_metadata.csv"
     meta.write_text(meta.read_text().replace("encRes,64", "encRes,1e-300"))
-    assert api_error(_load, folder) == f"{meta}: encRes 1e-300 is outside 1 to 1e+07"
+    assert api_error(_load, folder) == f"{meta}: encRes must be 1 to 1e+07, got 1e-300"
 
 
 @needs_data

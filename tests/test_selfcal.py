@@ -296,7 +296,7 @@ def test_a_folder_with_files_is_refused(tmp_path):
 def test_bad_options_are_refused(tmp_path, options, message):
     """Called from Python (the facade), the message names the keyword as Python spells it."""
     robot = VirtualRobot(seed=1)
-    with pytest.raises(InputError, match=rf"^{message}="):
+    with pytest.raises(InputError, match=rf"^{message} must be "):
         umbmark.selfcal(robot, out=tmp_path / "out", **options)
     assert robot.commands == []  # refused before anything moved
 

@@ -82,9 +82,9 @@ def test_a_misspelt_keyword_is_refused_naming_the_close_one(misspelt: str, meant
 @pytest.mark.parametrize(
     ("option", "value", "flags", "python"),
     [
-        ("runs", 1, ("--runs", "1"), "runs=1: give 2 to 20"),
-        ("side_length", 0.1, ("-L", "0.1"), "side_length=0.1 m: give 0.5 to 20 m"),
-        ("max_passes", 9, ("--max-passes", "9"), "max_passes=9: give 1 to 5"),
+        ("runs", 1, ("--runs", "1"), "runs must be 2 to 20, got 1"),
+        ("side_length", 0.1, ("-L", "0.1"), "side_length must be 0.5 to 20 m, got 0.1 m"),
+        ("max_passes", 9, ("--max-passes", "9"), "max_passes must be 1 to 5, got 9"),
     ],
 )
 def test_a_value_is_refused_alike_by_the_command_and_by_python(
@@ -97,11 +97,11 @@ def test_a_value_is_refused_alike_by_the_command_and_by_python(
     with pytest.raises(InputError) as caught:
         SelfcalSetup(**{option: value})  # type: ignore[arg-type]
     flag = f"--{option.replace('_', '-')}"
-    assert caught.value.command_line() == python.replace(f"{option}=", f"{flag} ")
+    assert caught.value.command_line() == flag + python.removeprefix(option)
     proc = run_cli("selfcal", "--sim", *flags, "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [
-        "umbmark: error: " + python.replace(f"{option}=", f"{flag} ")
+        "umbmark: error: " + flag + python.removeprefix(option)
     ]
     assert list(tmp_path.iterdir()) == []
 

@@ -203,7 +203,7 @@ def test_the_margin_is_an_option_within_bounds():
     assert limits.stop_distance(-0.2) == limits.stop_distance(0.2)
     proc = run_cli("selfcal", "--sim", "--obstacle-margin", "3")
     assert proc.returncode == 2
-    assert proc.stderr.strip() == "umbmark: error: --obstacle-margin 3.0 is outside 0.05 to 2"
+    assert proc.stderr.strip() == "umbmark: error: --obstacle-margin must be 0.05 to 2, got 3"
 
 
 def test_without_a_laser_the_routine_says_nothing_watches_for_obstacles(tmp_path):

@@ -95,9 +95,9 @@ def test_study_reports_what_each_estimator_reaches(monkeypatch):
     ("options", "message"),
     [
         ({"methods": ["median"]}, "methods='median'"),
-        ({"trials": 0}, "trials must be between 1 and 100000, got 0"),
-        ({"runs": [1]}, "runs must be between 2 and 100, got 1"),
-        ({"E_d_spread": 0.5}, "E_d_spread=0.5 is outside 0 to 0.2"),
+        ({"trials": 0}, "trials must be 1 to 100000, got 0"),
+        ({"runs": [1]}, "runs must be 2 to 100, got 1"),
+        ({"E_d_spread": 0.5}, "E_d_spread must be 0 to 0.2, got 0.5"),
     ],
 )
 def test_study_refuses_bad_options(options, message):

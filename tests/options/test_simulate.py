@@ -43,7 +43,7 @@ def test_a_range_includes_both_ends_and_refuses_beyond() -> None:
     spec.check(0.1)
     spec.check(0.5)
     error = _refusal(spec, 0.6)
-    assert error.command_line() == "--dt 0.6 is outside 0.1 to 0.5"
+    assert error.command_line() == "--dt must be 0.1 to 0.5 s, got 0.6 s"
     assert _refusal(spec, math.inf).command_line() == "--dt must be a finite number, got inf"
 
 
@@ -59,7 +59,7 @@ def test_an_integer_takes_whole_numbers_within_its_range() -> None:
     spec = Spec("runs", ("--runs",), "S", "h", kind="integer", bound=Bound("range", 9, 2))
     spec.check(2)
     spec.check(9)
-    assert _refusal(spec, 10).command_line() == "--runs must be between 2 and 9, got 10"
+    assert _refusal(spec, 10).command_line() == "--runs must be 2 to 9, got 10"
     assert _refusal(spec, 2.5).command_line() == "--runs must be a whole number, not '2.5'"
     assert _refusal(spec, True).command_line() == "--runs must be a whole number, not 'True'"
 
@@ -70,7 +70,7 @@ def test_a_list_has_one_to_most_values_each_checked() -> None:
     spec.check([0.0, 1.0])
     assert _refusal(spec, []).command_line() == "--slip must list 1 to 3 values, got 0"
     assert _refusal(spec, [0.0] * 4).command_line() == "--slip must list 1 to 3 values, got 4"
-    assert _refusal(spec, [0.5, 2.0]).command_line() == "--slip 2 is outside 0 to 1"
+    assert _refusal(spec, [0.5, 2.0]).command_line() == "--slip must be 0 to 1, got 2"
     assert _refusal(spec, 0.5).command_line() == "--slip must list 1 to 3 values, not '0.5'"
 
 
@@ -131,10 +131,10 @@ def test_the_library_defaults_are_the_specs() -> None:
          "--E-b 3 is not a plausible ratio (0.5 to 2)",
          "E_b=3 is not a plausible ratio (0.5 to 2)"),
         (("simulate", "--speed", "6"), {"speed": 6.0},
-         "--speed 6 is outside 0.01 to 5", "speed=6 is outside 0.01 to 5"),
+         "--speed must be 0.01 to 5 m/s, got 6 m/s", "speed must be 0.01 to 5 m/s, got 6 m/s"),
         (("simulate", "-n", "1001"), {"runs": 1001},
-         "--runs must be between 1 and 1000, got 1001",
-         "runs must be between 1 and 1000, got 1001"),
+         "--runs must be 1 to 1000, got 1001",
+         "runs must be 1 to 1000, got 1001"),
     ],
 )  # fmt: skip
 def test_a_bound_is_refused_alike_by_the_command_and_by_python(
@@ -146,7 +146,7 @@ def test_a_bound_is_refused_alike_by_the_command_and_by_python(
 
 def test_a_study_grid_value_is_refused_alike() -> None:
     line = cli_error("study", "--slip", "0.001,0.02", "--trials", "1")
-    assert line == "umbmark: error: --slip 0.02 is outside 0 to 0.01\n"
+    assert line == "umbmark: error: --slip must be 0 to 0.01, got 0.02\n"
     assert (
-        api_error(umbmark.study, slip=[0.001, 0.02], trials=1) == "slip=0.02 is outside 0 to 0.01"
+        api_error(umbmark.study, slip=[0.001, 0.02], trials=1) == "slip must be 0 to 0.01, got 0.02"
     )

@@ -70,18 +70,25 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, TypeAlias
+from typing import Any
 
 from umbmark.core.bounds import (
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
-    check_length,
     finite_float,
     in_metres,
 )
 from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import info, split_messages
+from umbmark.options.plan import (
+    DEFAULT_MARGIN,
+    DEFAULT_WHEELBASE,
+    MAX_PLAN_RUNS,
+    NOISE_MODELS,
+    PLAN,
+    Noise,
+)
 from umbmark.sources.text import finite, load_json
 
 __all__ = [
@@ -101,9 +108,6 @@ __all__ = [
 ]
 
 
-Noise: TypeAlias = Literal["slip", "tape"]
-#: The noise models of :func:`plan`, the default first.
-NOISE_MODELS: tuple[Noise, ...] = ("slip", "tape")
 #: Plausible scatter of the return errors per axis [m]: from a tape's hundredth of a
 #: millimetre to a metre (the paper's: 25 mm on a 4 m square).
 SCATTER_RANGE = (1e-5, 1.0)
@@ -133,14 +137,8 @@ def check_scatter(scatter: float) -> None:
         )
 
 
-#: Most runs per direction a plan recommends.
-MAX_PLAN_RUNS = 100
 #: Fewest runs per direction a plan recommends (the paper's five).
 MIN_PLAN_RUNS = 5
-#: Room around the square that the robot and the start area need [m].
-DEFAULT_MARGIN = 0.6
-#: Wheelbase when neither the caller nor a previous result gives one [m] (the LabMate's).
-DEFAULT_WHEELBASE = 0.34
 #: Steps between the sides a recommendation tries [m].
 SIDE_STEP = 0.05
 
@@ -396,7 +394,7 @@ def plan_test(
     recommended = side_length is None or runs is None
     if side_length is None:
         side_length = _recommend_side(given, floor, margin, runs, targets, notes)
-    check_length(option("side_length"), side_length, MAX_SIDE_LENGTH)
+    PLAN["side_length"].check(side_length)
     if side_length < 2.0 * wheelbase:
         raise InputError(
             f"{option('side_length', side_length, 'm')} is less than twice the wheelbase "
@@ -410,8 +408,7 @@ def plan_test(
                 f"the targets need {runs} runs per direction on a {side_length:.2f} m square "
                 f"(at most {MAX_PLAN_RUNS}): a larger square or less scatter"
             )
-    if isinstance(runs, bool) or not 2 <= runs <= MAX_PLAN_RUNS:
-        raise InputError(f"{option('runs', runs)} is outside 2 to {MAX_PLAN_RUNS}")
+    PLAN["runs"].check(runs)
     figures = _figures(side_length, runs, wheelbase, on_square, s2)
     if model == "slip" and scatter_side is not None and not math.isclose(scatter_side, side_length):
         notes.append(
@@ -460,7 +457,7 @@ def _recommend_side(
             f"give {option('side_length')} (to predict) or {option('floor')} (to be recommended "
             "one)"
         )
-    check_length(option("floor"), floor, MAX_SIDE_LENGTH + 5.0)
+    PLAN["floor"].check(floor)
     wheelbase = given.wheelbase
     largest = min(floor - margin, MAX_SIDE_LENGTH)
     if largest < 2.0 * wheelbase:

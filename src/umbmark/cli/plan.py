@@ -6,8 +6,9 @@ from typing import Any
 
 import click
 
-from umbmark.cli.click_options import Command, apply, option
-from umbmark.options.spec import OUTPUTS, TEST
+from umbmark.cli.click_options import Command, apply, option, spec_option
+from umbmark.options.plan import PLAN_OPTIONS
+from umbmark.options.spec import OUTPUTS
 
 __all__ = ["plan"]
 
@@ -15,37 +16,7 @@ __all__ = ["plan"]
 @click.command(cls=Command)
 @apply(
     [
-        option("--scatter", section=TEST, type=float,
-               help="Standard deviation of the return error per axis [m], as measured (a "
-               "previous calibration's spread; the paper's runs: about 0.01)."),
-        option("--from", "previous", section=TEST, type=click.Path(dir_okay=False),
-               help="A previous calibrate --json result: its scatter (std_cw, std_ccw), "
-               "the side it was measured on and its wheelbase."),
-        option("--noise", section=TEST, type=click.Choice(["slip", "tape"]), default="slip",
-               show_default=True,
-               help="slip: scatter driven by the path (x and y correlated, growing with "
-               "the side); tape: a reading error only (independent, the same on any side)."),
-        option("--scatter-side", section=TEST, type=float,
-               help="Side of the square the scatter was measured on [m] (default: the "
-               "planned side; --from: the result's)."),
-        option("--reading-error", section=TEST, type=float, default=0.0, show_default=True,
-               help="slip: the part of the scatter per axis [m] that is a reading or "
-               "placement error (independent in x and y, the same on any side)."),
-        option("--wheelbase", "-b", section=TEST, type=float,
-               help="Wheelbase [m] (default: the --from result's, else 0.34)."),
-        option("--side-length", "-L", section=TEST, type=float,
-               help="Side of the square [m]: with --runs, predict instead of recommend."),
-        option("--runs", section=TEST, type=int, help="Runs per direction."),
-        option("--floor", section=TEST, type=float,
-               help="Side of the free floor [m]: recommend the square that fits."),
-        option("--margin", section=TEST, type=float, default=0.6, show_default=True,
-               help="Room the robot and the start area need beyond the square [m]."),
-        option("--target-E-d", "target_E_d", section=TEST, type=float,
-               help="Standard error of E_d wanted."),
-        option("--target-E-b", "target_E_b", section=TEST, type=float,
-               help="Standard error of E_b wanted."),
-        option("--target-e-max", section=TEST, type=float,
-               help="E_max,syst [m] to reach: 3 x SEM must stay below it."),
+        *(spec_option(spec) for spec in PLAN_OPTIONS),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print one JSON object (metres, radians)."),
     ]

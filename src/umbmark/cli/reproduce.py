@@ -6,8 +6,8 @@ import math
 
 import click
 
-from umbmark.cli.click_options import Command, force_option, option, spec_option
-from umbmark.options.simulate import SEED
+from umbmark.cli.click_options import Command, apply, force_option, option, spec_option
+from umbmark.options.reproduce import REPRODUCE, TABLE1_OPTIONS
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["reproduce"]
@@ -20,17 +20,7 @@ def reproduce() -> None:
 
 @reproduce.command("table1", cls=Command)
 @option("--json", "json_out", section=OUTPUTS, is_flag=True, help="Print one JSON object instead.")
-@option("--seeds", section="Options", type=int, default=10, show_default=True,
-        help="Repetitions of every experiment (random seeds), 1 to 1000 (about a second "
-        "each).")  # fmt: skip
-@spec_option(SEED, section="Options", help="Base seed (0 to 2^63-1).")
-@option(
-    "--tape-thickness",
-    section="Options",
-    type=float,
-    help="Model the tape of experiments 7 and 8 by its physical thickness [mm] (for example "
-    "0.15; at most 0.3) instead of sizing it by the paper's figures before correction.",
-)
+@apply([spec_option(spec) for spec in TABLE1_OPTIONS])
 def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) -> None:
     """Table I: eight experiments, E_max,syst before and after the correction.
 
@@ -90,15 +80,9 @@ def table1(json_out: bool, seeds: int, seed: int, tape_thickness: float | None) 
     short_help="Fig. 4: the uni-directional trap of tuning the wheelbase alone.",
 )
 @option("--json", "json_out", section=OUTPUTS, is_flag=True, help="Print one JSON object instead.")
-@option(
-    "--plot",
-    section=OUTPUTS,
-    type=click.Path(),
-    help="Draw the paths of the tuned robot (Figs. 4 and 5) to a .png, .svg or .pdf file.",
-)
+@spec_option(REPRODUCE["plot"])
 @force_option()
-@option("--leg-bend", section="Options", type=float, default=1.0, show_default=True,
-        help="How much each leg bends left [deg].")  # fmt: skip
+@spec_option(REPRODUCE["leg_bend"])
 def fig4(json_out: bool, plot: str | None, leg_bend: float, force: bool) -> None:
     """Fig. 4: the uni-directional trap.
 

@@ -16,6 +16,7 @@ import operator
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 from umbmark.core.errors import InputError, given, option
 
@@ -114,20 +115,11 @@ def check_positive_option(named: str, value: float, unit: str = "", source: Sour
         raise InputError(f"{named} must be > 0, got {shown}", source=source)
 
 
-def check_int_option(named: str, value: int, low: int, high: int) -> int:
-    """An integer option within ``low`` to ``high``, or :class:`InputError` naming the
-    named and the range (also for a ``bool``, a float and an integer of any size)."""
-    try:
-        if isinstance(value, bool):
-            raise TypeError
-        number = operator.index(value)  # int and numpy integers; not float, not str
-    except TypeError:
-        raise InputError(f"{named} must be a whole number, not {str(value)[:24]!r}") from None
-    if not low <= number <= high:
-        digits = len(str(abs(number))) if abs(number) >= 10**24 else 0
-        shown = f"a number of {digits} digits" if digits else str(number)
-        raise InputError(f"{named} must be between {low} and {high}, got {shown}")
-    return number
+def check_int_option(named: str, value: int, low: int, high: int, source: Source = None) -> int:
+    """A whole-number option within ``low`` to ``high`` (both included), refused as
+    :func:`check_range` does (also a ``bool``, a float and an integer of any size); the
+    number as an ``int``."""
+    return int(check_range(named, value, (low, high), source, whole=True))
 
 
 def check_length(
@@ -181,13 +173,47 @@ def check_multiplier(named: str, value: float, source: Source = None) -> None:
 
 
 def check_range(
-    named: str, value: float, bounds: tuple[float, float], source: Source = None
-) -> None:
-    """Refuse a number outside ``bounds`` (inclusive) or not finite."""
+    named: str,
+    value: float,
+    bounds: tuple[float, float],
+    source: Source = None,
+    *,
+    unit: str = "",
+    whole: bool = False,
+) -> float:
+    """Refuse a number outside ``bounds`` (both included) or not finite, or with ``whole``
+    not a whole number; the one wording of a closed range, for options and files' fields
+    alike: ``--runs must be 2 to 20, got 1``, ``--dt must be 0.0001 to 0.1 s, got 1 s``
+    (from Python ``runs must be 2 to 20, got 1``). Returns the number (an ``int`` with
+    ``whole``)."""
     low, high = bounds
-    value = finite_float(named, value, source)
-    if not (math.isfinite(value) and low <= value <= high):
-        raise InputError(f"{given(named, value)} is outside {low:g} to {high:g}", source=source)
+    number: float
+    if whole:
+        try:
+            if isinstance(value, bool):
+                raise TypeError
+            number = operator.index(cast("int", value))  # int and numpy integers
+        except TypeError:
+            raise InputError(
+                f"{named} must be a whole number, not {str(value)[:24]!r}", source=source
+            ) from None
+        digits = len(str(abs(number))) if abs(number) >= 10**24 else 0
+        shown = f"a number of {digits} digits" if digits else str(number)
+        lowest, highest = (_whole(low), _whole(high))
+    else:
+        number = finite_float(named, value, source)
+        shown, lowest, highest = format(number, "g"), format(low, "g"), format(high, "g")
+    if not low <= number <= high:
+        said = f" {unit}" if unit else ""
+        raise InputError(
+            f"{named} must be {lowest} to {highest}{said}, got {shown}{said}", source=source
+        )
+    return number
+
+
+def _whole(bound: float) -> str:
+    """A whole number's bound as written (``9223372036854775807``, not ``9.22337e+18``)."""
+    return str(int(bound)) if math.isfinite(bound) and bound == int(bound) else format(bound, "g")
 
 
 def check_square_geometry(

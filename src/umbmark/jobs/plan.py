@@ -10,18 +10,14 @@ import math
 from pathlib import Path
 
 from umbmark.calibration.plan import (
-    DEFAULT_MARGIN,
-    DEFAULT_WHEELBASE,
-    NOISE_MODELS,
-    Noise,
     PlanReport,
     Scatter,
     check_scatter,
     plan_test,
     read_previous_scatter,
 )
-from umbmark.core.bounds import MAX_SIDE_LENGTH, MAX_WHEELBASE, check_length
 from umbmark.core.errors import InputError, option
+from umbmark.options.plan import DEFAULT_WHEELBASE, PLAN, Noise
 
 __all__ = ["plan"]
 
@@ -33,13 +29,13 @@ def plan(
     side_length: float | None = None,
     runs: int | None = None,
     floor: float | None = None,
-    margin: float = DEFAULT_MARGIN,
+    margin: float = PLAN["margin"].default,
     target_E_d: float | None = None,
     target_E_b: float | None = None,
     target_e_max: float | None = None,
-    noise: str = "slip",
+    noise: str = PLAN["noise"].default,
     scatter_side: float | None = None,
-    reading_error: float = 0.0,
+    reading_error: float = PLAN["reading_error"].default,
     previous: str | Path | None = None,
 ) -> PlanReport:
     """Plan a UMBmark test, or predict what a planned one gives.
@@ -85,8 +81,7 @@ def plan(
     InputError
         For a value out of range, or a target no plan within bounds reaches.
     """
-    if noise not in NOISE_MODELS:
-        raise InputError(f"{option('noise', repr(noise))}: use {' or '.join(NOISE_MODELS)}")
+    PLAN["noise"].check(noise)
     model: Noise = "slip" if noise == "slip" else "tape"
     if previous is not None:
         if scatter is not None:
@@ -105,11 +100,9 @@ def plan(
     check_scatter(scatter)
     if wheelbase is None:
         wheelbase = DEFAULT_WHEELBASE
-    check_length(option("wheelbase"), wheelbase, MAX_WHEELBASE)
-    if scatter_side is not None:
-        check_length(option("scatter_side"), scatter_side, MAX_SIDE_LENGTH)
-    if not (math.isfinite(margin) and 0.0 <= margin <= 5.0):
-        raise InputError(f"{option('margin', margin, 'm')} is outside 0 to 5 m")
+    PLAN["wheelbase"].check(wheelbase)
+    PLAN["scatter_side"].check(scatter_side)
+    PLAN["margin"].check(margin)
     if not (math.isfinite(reading_error) and 0.0 <= reading_error <= scatter):
         raise InputError(
             f"{option('reading_error', reading_error, 'm')} is outside 0 to the scatter "

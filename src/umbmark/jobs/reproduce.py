@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 from umbmark.core.bounds import option_float
 from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
+from umbmark.options.reproduce import MAX_LEG_BEND, MAX_TAPE_THICKNESS, REPRODUCE
 from umbmark.options.simulate import SEED
 from umbmark.outputs.files import OutputPlan
 from umbmark.sim.reproduce import Fig4Result, Table1Row
@@ -25,12 +26,6 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["Fig4Report", "Table1Report", "reproduce_fig4", "reproduce_table1"]
-
-#: Most seeds ``reproduce_table1`` runs: each costs about a second.
-MAX_SEEDS = 1000
-#: Thickest tape of ``reproduce_table1`` [m]: 0.4 mm gives return errors of 3.4 m on
-#: the 4 m square before correction.
-MAX_TAPE_THICKNESS = 0.0003
 
 
 @dataclass(frozen=True)
@@ -84,7 +79,7 @@ class Fig4Report(JsonText):
 
 def reproduce_table1(
     *,
-    seeds: int = 10,
+    seeds: int = REPRODUCE["seeds"].default,
     seed: int = SEED.default,
     tape_thickness: float | None = None,
     progress: Callable[[float], None] | None = None,
@@ -106,8 +101,8 @@ def reproduce_table1(
     """
     from umbmark.sim.reproduce import EXPERIMENTS, table1, with_tape
 
-    if isinstance(seeds, bool) or not isinstance(seeds, int) or not 1 <= seeds <= MAX_SEEDS:
-        raise InputError(f"{option('seeds')} must be 1 to {MAX_SEEDS}, got {str(seeds)[:24]}")
+    REPRODUCE["seeds"].check(seeds)
+    seeds = operator.index(seeds)
     SEED.check(seed)
     seed = operator.index(seed)
     experiments = EXPERIMENTS
@@ -126,7 +121,7 @@ def reproduce_table1(
 
 def reproduce_fig4(
     *,
-    leg_bend: float = math.radians(1.0),
+    leg_bend: float = math.radians(REPRODUCE["leg_bend"].default),
     plot: str | os.PathLike[str] | None = None,
     force: bool = False,
     progress: Callable[[float], None] | None = None,
@@ -147,9 +142,10 @@ def reproduce_fig4(
     from umbmark.sim.reproduce import fig4
 
     leg_bend = option_float(option("leg_bend"), leg_bend)
-    if not (math.isfinite(leg_bend) and 0 < abs(leg_bend) <= math.radians(10)):
+    if not (math.isfinite(leg_bend) and 0 < abs(leg_bend) <= math.radians(MAX_LEG_BEND)):
         raise InputError(
-            f"{option('leg_bend', math.degrees(leg_bend), 'deg')}: give a bend between 0 and 10 deg"
+            f"{option('leg_bend', math.degrees(leg_bend), 'deg')}: give a bend between 0 and "
+            f"{MAX_LEG_BEND:g} deg"
         )
     plan = OutputPlan.of(force=force, plot=plot)
     result = fig4(leg_bend_deg=math.degrees(leg_bend), progress=progress)

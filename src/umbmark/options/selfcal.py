@@ -91,7 +91,7 @@ SQUARE_SIDE = Spec(
     kind="number",
     default=4.0,
     unit="m",
-    bound=Bound("give", SQUARE_SIDE_RANGE[1], SQUARE_SIDE_RANGE[0]),
+    bound=Bound("range", SQUARE_SIDE_RANGE[1], SQUARE_SIDE_RANGE[0]),
 )
 #: ``--runs`` of ``selfcal``: runs in each direction of a pass.
 RUNS = Spec(
@@ -101,7 +101,7 @@ RUNS = Spec(
     f"Runs in each direction (2 to {MAX_SELFCAL_RUNS}).",
     kind="integer",
     default=5,
-    bound=Bound("give", MAX_SELFCAL_RUNS, 2),
+    bound=Bound("range", MAX_SELFCAL_RUNS, 2),
 )
 #: ``--measure`` of ``selfcal``: how the fixes at the corner are taken.
 MEASURE = Spec(
@@ -144,5 +144,5 @@ MAX_PASSES = Spec(
     f"Most UMBmark passes before the verification (1 to {MAX_SELFCAL_PASSES}).",
     kind="integer",
     default=3,
-    bound=Bound("give", MAX_SELFCAL_PASSES, 1),
+    bound=Bound("range", MAX_SELFCAL_PASSES, 1),
 )

@@ -25,7 +25,7 @@ from umbmark.core.bounds import (
     finite_float,
 )
 from umbmark.core.errors import InputError, option
-from umbmark.options.checks import check_bounded, check_give, check_list
+from umbmark.options.checks import check_bounded, check_list
 
 __all__ = [
     "BAGS",
@@ -77,21 +77,21 @@ class Bound:
 
     Attributes
     ----------
-    kind : {"factor", "positive", "length", "offset", "range", "ratio", "give"}
+    kind : {"factor", "positive", "length", "offset", "range", "ratio"}
         ``factor``: a wheel factor or multiplier
         (:data:`umbmark.core.bounds.MULTIPLIER_RANGE`); ``positive``: above 0 and, with
         ``high``, at most ``high``; ``length``: a plausible length up to ``high`` [m];
         ``offset``: every number within ``high`` of 0; ``range``: ``low`` to ``high``,
-        both included (a whole number for an ``integer`` option); ``ratio``: above 0 and
-        strictly between ``low`` and ``high`` (a true-over-nominal ratio); ``give``: as
-        ``range``, the message saying what to give (``--runs 1: give 2 to 20``).
+        both included (a whole number for an ``integer`` option), refused as ``--runs must
+        be 2 to 20, got 1`` (:func:`umbmark.core.bounds.check_range`); ``ratio``: above 0
+        and strictly between ``low`` and ``high`` (a true-over-nominal ratio).
     high : float or None
         The largest value, in the option's unit.
     low : float or None
-        The smallest value of a ``range``, ``ratio`` or ``give``.
+        The smallest value of a ``range`` or ``ratio``.
     """
 
-    kind: Literal["factor", "positive", "length", "offset", "range", "ratio", "give"]
+    kind: Literal["factor", "positive", "length", "offset", "range", "ratio"]
     high: float | None = None
     low: float | None = None
 
@@ -182,14 +182,11 @@ class Spec:
         if self.kind == "choice":
             check_choice(self.name, value, self.choices, source)
         bound = self.bound
-        if bound is not None and bound.kind == "give":
-            whole = self.kind == "integer"
-            check_give(self.named, value, whole, (bound.low, bound.high), self.unit, source)
-            return
-        if self.kind == "integer" or (bound is not None and bound.kind in ("range", "ratio")):
-            kind = "integer" if self.kind == "integer" or bound is None else bound.kind
+        whole = self.kind == "integer"
+        if whole or (bound is not None and bound.kind in ("range", "ratio")):
+            kind = "range" if bound is None else bound.kind
             limits = (None, None) if bound is None else (bound.low, bound.high)
-            check_bounded(self.named, value, kind, limits, self.unit, source)
+            check_bounded(self.named, value, kind, limits, self.unit, source, whole)
             return
         if bound is None:
             return

@@ -34,8 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from umbmark.core.bounds import check_range
 from umbmark.core.conventions import Direction, wrap_angle
-from umbmark.core.errors import InputError, SafetyError, option
+from umbmark.core.errors import SafetyError, option
 from umbmark.options.selfcal import OBSTACLE_MARGIN_RANGE, STOP_LATENCY
 from umbmark.robot.base import Pose2D, Robot, ScanSweep, StampedPose
 
@@ -154,9 +155,7 @@ class DriveLimits:
             "clock_jump": (0.05, 60.0),
         }
         for name, (low, high) in bounds.items():
-            value = getattr(self, name)
-            if not (low <= value <= high):
-                raise InputError(f"{option(name, repr(value))} is outside {low:g} to {high:g}")
+            check_range(option(name), getattr(self, name), (low, high))
 
     def stop_distance(self, speed: float) -> float:
         """How near [m] an obstacle ahead may come at ``speed`` [m/s] before the robot is
