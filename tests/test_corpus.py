@@ -194,9 +194,18 @@ def modes(tmp_path_factory) -> bool:
 CASES = {c.name: c for c in corpus_tool.corpus()}
 
 
+#: The subset's cases that take about half a second or more (bags, deep files): in the
+#: full suite only (the whole corpus runs there too).
+SLOW_SUBSET = {
+    "bag-sqlite3-positions-1e300", "bag-ros1-truncated-0.5", "bag-mcap-wheel-type-string",
+    "params-deep-flow", "log-run-counts-zero", "log-run-cell-huge", "log-meta-deep-flow",
+    "result-other-robot", "bag-sqlite3-metadata-deep", "bag-mcap-opt--tf-parent=map",
+}  # fmt: skip
+
+
 @pytest.mark.parametrize(
     "name",
-    SUBSET,
+    [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_SUBSET else n for n in SUBSET],
 )
 def test_corpus_case(name, corpus_dirs, modes):
     case = CASES[name]

@@ -148,6 +148,7 @@ def test_simulate_logs_never_mixes_runs(tmp_path: Path) -> None:
     assert _snapshot(logs) == before
 
 
+@pytest.mark.slow
 def test_a_history_read_never_creates_one(tmp_path: Path) -> None:
     """Listing, a robot's calibrations, the library: a missing history is named, exit 2,
     and neither the file nor its folder appears."""

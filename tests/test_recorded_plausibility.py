@@ -140,6 +140,7 @@ def test_optiodom_overflowing_wheel_angles(tmp_path: Path) -> None:
     assert message.endswith("are not finite numbers")
 
 
+@pytest.mark.slow
 @needs_data
 def test_real_sessions_calibrate_without_new_warnings() -> None:
     for folder in sorted(p for p in OPTIODOM.glob("*/*") if p.is_dir()):

@@ -382,6 +382,7 @@ def test_selfcal_with_the_corner_on_the_left_and_the_geometry_in_the_urdf(tmp_pa
     assert "corner was found behind the robot and to its left" in wrong.stderr.splitlines()[-1]
 
 
+@pytest.mark.slow
 def test_no_master_is_one_line(tmp_path: Path) -> None:
     env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{_free_port()}",
            "ROS_HOME": str(tmp_path)}  # fmt: skip

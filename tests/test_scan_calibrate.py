@@ -166,6 +166,7 @@ def test_the_command_gives_the_same_in_metres_and_radians(
     assert data["new"] == pytest.approx(api["new"], rel=1e-12)  # the overlay's values
 
 
+@pytest.mark.slow
 def test_info_proposes_the_scan_topic(bag: Path, tmp_path: Path) -> None:
     proposed = "--scan-topic /scan --left-joint left_wheel_joint --right-joint right_wheel_joint"
     report = umbmark.info(bag)
@@ -181,6 +182,7 @@ def test_info_proposes_the_scan_topic(bag: Path, tmp_path: Path) -> None:
     assert no_scans["laser_scans"] == []
 
 
+@pytest.mark.slow
 def test_a_bag_driven_straight_only_is_refused_with_what_to_drive(tmp_path: Path) -> None:
     straight = ((4.0, 0.25, 0.0), (4.0, -0.25, 0.0), (4.0, 0.25, 0.0), (4.0, -0.25, 0.0))
     bag = _bag(tmp_path, straight)
@@ -241,6 +243,7 @@ def test_the_mounting_read_from_a_robot_description() -> None:
     assert "wheel_left_link" not in described.mountings  # on a turning joint: no mounting
 
 
+@pytest.mark.slow
 def test_a_turtlebot3_as_its_bags_are(tmp_path: Path) -> None:
     # TurtleBot3 Burger's published geometry (wheelbase 160 mm, wheels 66 mm, the LDS-01
     # at x = -32 mm in its URDF) with errors; its scanner as the LDS-01 reports: 360 beams

@@ -66,6 +66,7 @@ def test_method_auto_takes_the_recommendation(sessions):
     assert report.notes[-1].startswith(f"method auto: {checked.recommended}, by held-out")
 
 
+@pytest.mark.slow
 def test_validate_command_names_a_missing_source_plainly():
     """(That ``--json`` is the library's dictionary: tests/cli/test_main.py, for every command.)"""
     assert "needs" not in cli_error("validate", "nothing.csv")

@@ -134,7 +134,14 @@ _AGREE: dict[str, tuple[list[str], typing.Callable[[dict[str, str]], object]]] =
 }
 
 
-@pytest.mark.parametrize("job", list(_AGREE))
+#: The agreements that take most of a second (bags, simulations): in the full suite only.
+_SLOW_AGREE = ("calibrate a bag", "info", "validate", "simulate", "replay")
+
+
+@pytest.mark.parametrize(
+    "job",
+    [pytest.param(j, marks=pytest.mark.slow) if j in _SLOW_AGREE else j for j in _AGREE],
+)
 def test_the_command_prints_the_dictionary_of_what_the_library_returns(
     job: str, recorded: dict[str, str]
 ) -> None:

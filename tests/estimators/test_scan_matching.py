@@ -288,6 +288,7 @@ def test_an_empty_tuple_file_is_refused(tmp_path):
 # --- the command ---------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_calibrate_reads_a_tuple_file(tmp_path):
     path = write_tuples(
         tmp_path / "sim.tuple", simulate(_mix(200), rng=np.random.default_rng(11), noise=NOISE)

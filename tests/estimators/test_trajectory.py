@@ -426,6 +426,7 @@ def marker_session():
     return _axle_and_marker_runs(ROBOT)[1]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("start_pose", "rel"), [("fitted", 1e-6), ("truth", 1e-5)])
 def test_fit_finds_the_tracked_point(marker_session, start_pose, rel):
     logs = [r.log for r in marker_session]
@@ -459,6 +460,7 @@ def test_truth_offset_at_its_bound_is_refused(marker_session):
                          max_truth_offset=0.1)  # fmt: skip
 
 
+@pytest.mark.slow
 def test_offset_left_alone_is_not_fitted(session):
     fit = fit_trajectories([r.log for r in session], ODO)
     assert not fit.truth_offset_fitted
