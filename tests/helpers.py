@@ -275,3 +275,39 @@ class DemoCommand:
     folder: Path
     stdout: str
     stderr: str
+
+
+def assert_click_options_are_specs(  # type: ignore[no-untyped-def]
+    command, specs, *, same_help: bool = True, besides: set[str] | None = None
+) -> None:
+    """``command``'s click options are ``specs`` (:class:`umbmark.options.spec.Spec`):
+    the same flags, default (a list's as typed, comma-separated), type and choices, and
+    with ``same_help`` the same help; with ``besides``, the command has no options but
+    these and the specs'."""
+    import click
+
+    params = {p.name: p for p in command.params if isinstance(p, click.Option) and p.name}
+    for spec in specs:
+        param = params[spec.name]
+        assert set(param.opts) == set(spec.flags), spec.name
+        if same_help:
+            assert param.help == spec.help, spec.name
+        if spec.most:  # comma-separated: the default as typed
+            assert param.default == ",".join(format(v, "g") for v in spec.default), spec.name
+        elif spec.kind == "flag":
+            pass
+        elif spec.default is None:  # not given: click's default is no value
+            assert not isinstance(param.default, (bool, int, float, str)), spec.name
+        else:
+            assert param.default == spec.default, spec.name
+        expected = {"integer": click.INT, "number": click.FLOAT}.get(spec.kind)
+        if expected is not None and not spec.most:
+            assert param.type is expected, spec.name
+        if spec.kind == "file":
+            assert isinstance(param.type, click.Path), spec.name
+            assert not param.type.dir_okay, spec.name
+        if spec.kind == "choice":
+            assert isinstance(param.type, click.Choice), spec.name
+            assert tuple(param.type.choices) == spec.choices, spec.name
+    if besides is not None:
+        assert set(params) - {spec.name for spec in specs} <= besides

@@ -8,48 +8,18 @@ from __future__ import annotations
 
 import inspect
 
-import click
 import pytest
 
 import umbmark
 from umbmark.cli.plan import plan as plan_command
 from umbmark.options.plan import PLAN, PLAN_OPTIONS
-from umbmark.options.spec import SIDE_LENGTH, WHEELBASE, Spec
+from umbmark.options.spec import SIDE_LENGTH, WHEELBASE
 
-from helpers import api_error, cli_error
-
-
-def _params(command: click.Command) -> dict[str, click.Option]:
-    return {p.name: p for p in command.params if isinstance(p, click.Option) and p.name}
-
-
-def _same(command: click.Command, specs: tuple[Spec, ...]) -> None:
-    """``command``'s click options are ``specs``'."""
-    params = _params(command)
-    for spec in specs:
-        param = params[spec.name]
-        assert set(param.opts) == set(spec.flags), spec.name
-        assert param.help == spec.help, spec.name
-        if spec.default is None:  # not given: click's default is no value
-            assert not isinstance(param.default, (bool, int, float, str)), spec.name
-        else:
-            assert param.default == spec.default, spec.name
-        if spec.kind == "integer":
-            assert param.type is click.INT, spec.name
-        if spec.kind == "number":
-            assert param.type is click.FLOAT, spec.name
-        if spec.kind == "file":
-            assert isinstance(param.type, click.Path), spec.name
-            assert not param.type.dir_okay, spec.name
-        if spec.kind == "choice":
-            assert isinstance(param.type, click.Choice)
-            assert tuple(param.type.choices) == spec.choices
-    # the command's own options besides the spec's: --json (and the shared --force)
-    assert set(params) - {spec.name for spec in specs} <= {"json_out", "force"}
+from helpers import api_error, assert_click_options_are_specs, cli_error
 
 
 def test_the_click_options_are_the_specs() -> None:
-    _same(plan_command, PLAN_OPTIONS)
+    assert_click_options_are_specs(plan_command, PLAN_OPTIONS, besides={"json_out", "force"})
 
 
 def test_shared_options_are_the_shared_specs() -> None:

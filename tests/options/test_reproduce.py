@@ -17,34 +17,14 @@ from umbmark.options.reproduce import FIG4_OPTIONS, TABLE1_OPTIONS
 from umbmark.options.simulate import SEED
 from umbmark.options.spec import Spec
 
-from helpers import api_error, cli_error
-
-
-def _params(command: click.Command) -> dict[str, click.Option]:
-    return {p.name: p for p in command.params if isinstance(p, click.Option) and p.name}
+from helpers import api_error, assert_click_options_are_specs, cli_error
 
 
 @pytest.mark.parametrize(
     ("command", "specs"), [(table1_command, TABLE1_OPTIONS), (fig4_command, FIG4_OPTIONS)]
 )
 def test_the_click_options_are_the_specs(command: click.Command, specs: tuple[Spec, ...]) -> None:
-    params = _params(command)
-    for spec in specs:
-        param = params[spec.name]
-        assert set(param.opts) == set(spec.flags), spec.name
-        assert param.help == spec.help, spec.name
-        if spec.default is None:  # not given: click's default is no value
-            assert not isinstance(param.default, (bool, int, float, str)), spec.name
-        else:
-            assert param.default == spec.default, spec.name
-        expected = {"integer": click.INT, "number": click.FLOAT}.get(spec.kind)
-        if expected is not None:
-            assert param.type is expected, spec.name
-        if spec.kind == "file":
-            assert isinstance(param.type, click.Path), spec.name
-            assert not param.type.dir_okay, spec.name
-    # the command's own options besides the spec's: --json (and the shared --force)
-    assert set(params) - {spec.name for spec in specs} <= {"json_out", "force"}
+    assert_click_options_are_specs(command, specs, besides={"json_out", "force"})
 
 
 def test_the_seed_is_the_simulators_and_the_defaults_the_specs() -> None:

@@ -58,15 +58,16 @@ def option(name: str, value: object = None, unit: str = "") -> str:
     ``value``: a text as it is to be shown (quote it, ``repr(text)``, where the sentence
     needs it), a float shown with ``g``, or any other number; None: the option alone.
     """
+    return f"{_OPEN}{name}{_SEP}{_shown(value)}{_SEP}{unit}{_CLOSE}"
+
+
+def _shown(value: object) -> str:
+    """A value as a message shows it: a text as it is, a float with ``g``; None: nothing."""
     if value is None:
-        text = ""
-    elif isinstance(value, str):
-        text = value
-    elif isinstance(value, float):
-        text = format(value, "g")
-    else:
-        text = str(value)
-    return f"{_OPEN}{name}{_SEP}{text}{_SEP}{unit}{_CLOSE}"
+        return ""
+    if isinstance(value, str):
+        return value
+    return format(value, "g") if isinstance(value, float) else str(value)
 
 
 def given(named: str, value: object, unit: str = "") -> str:
@@ -76,8 +77,7 @@ def given(named: str, value: object, unit: str = "") -> str:
     match = _OPTION.fullmatch(named)
     if match is not None and not match[2]:
         return option(match[1], value, unit or match[3])
-    value_text = option("_", value)[len(_OPEN) + 2 :].split(_SEP)[0]
-    return " ".join(part for part in (named, value_text, unit) if part)
+    return " ".join(part for part in (named, _shown(value), unit) if part)
 
 
 def option_names(text: str) -> list[str]:
@@ -179,7 +179,7 @@ class ProblemError(ValueError):
 
     def __init__(self, problem: str) -> None:
         self.problem = problem
-        super().__init__(_as_flags(problem, {}))
+        super().__init__(with_flags(problem))
 
 
 class SafetyError(RuntimeError):

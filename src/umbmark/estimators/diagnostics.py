@@ -31,7 +31,7 @@ from dataclasses import replace
 import numpy as np
 
 from umbmark.core.conventions import Direction
-from umbmark.core.errors import InputError, option
+from umbmark.core.errors import InputError, ProblemError, option
 from umbmark.core.messages import join_names
 from umbmark.estimators.base import ModelCheckFailure, SquareTest
 from umbmark.estimators.endpose import FLOOR, LEVEL, EndPoseFit, fit_end_poses
@@ -41,7 +41,6 @@ from umbmark.returns.clusters import Benchmark, umbmark_benchmark
 
 __all__ = [
     "MODEL_CAUSES",
-    "ReachError",
     "check_model",
     "check_reach",
     "require_headings",
@@ -59,12 +58,6 @@ _INSIDE_SIGMA = 4.5
 _DEGREE = 180.0 / math.pi
 
 
-class ReachError(InputError):
-    """Return errors a method's geometry cannot take (:func:`check_reach`): an
-    :class:`InputError` (so a ``ValueError``) naming the option to change, which the
-    dispatch gives the source's name and any wheel-diameter mix-up it sees."""
-
-
 def _farthest(runs: Sequence[Run]) -> tuple[Run, float]:
     errors = [math.hypot(*run.return_error) for run in runs]
     k = int(np.argmax(errors))
@@ -76,12 +69,12 @@ def _check_within_side(runs: Sequence[Run], test: SquareTest) -> None:
 
     Raises
     ------
-    ReachError
+    ProblemError
         Naming the run and the likely cause.
     """
     run, error = _farthest(runs)
     if error > test.side_length:
-        raise ReachError(
+        raise ProblemError(
             f"the return error of {run.label or 'a run'} ({error:.4g} m) is larger than the "
             f"square's side ({test.side_length:g} m), beyond the paper's small-angle "
             f"formulas: use {option('method', join_names(names(reach='path'), 'or'))} (the "
@@ -94,12 +87,12 @@ def _check_reachable(runs: Sequence[Run], test: SquareTest) -> None:
 
     Raises
     ------
-    ReachError
+    ProblemError
         Naming the run.
     """
     run, error = _farthest(runs)
     if error > 4.0 * test.side_length:
-        raise ReachError(
+        raise ProblemError(
             f"the return error of {run.label or 'a run'} ({error:.4g} m) is farther from the "
             f"start than the whole {4 * test.side_length:g} m path is long: are the lengths "
             f"in the right unit ({option('unit')}) and the side length right?"
@@ -280,7 +273,7 @@ def check_reach(method: Estimator, runs: Sequence[Run], test: SquareTest) -> Non
 
     Raises
     ------
-    ReachError
+    ProblemError
         Naming the run and the likely cause.
     """
     if method.reach == "side":

@@ -26,7 +26,7 @@ import numpy as np
 
 from umbmark.core.errors import InputError, option
 from umbmark.estimators.base import ErrorEstimate, SquareTest
-from umbmark.estimators.diagnostics import ReachError, check_model, check_reach, require_headings
+from umbmark.estimators.diagnostics import check_model, check_reach, require_headings
 from umbmark.estimators.endpose import fit_end_poses
 from umbmark.estimators.registry import SQUARE, estimator, find
 from umbmark.estimators.scale import scale_from_straights, scale_only
@@ -193,8 +193,6 @@ def estimate_runs(
         return _estimate(
             method, runs, wheelbase, params, side_length, square_side, fit_truth_offset, where
         )
-    except ReachError as exc:  # an InputError, taken as the ValueErrors below
-        problem = exc.problem
     except InputError:
         raise
     except np.linalg.LinAlgError as exc:  # a ValueError: caught before the others

@@ -177,9 +177,9 @@ def check_options(options: BagOptions, src: str) -> None:
     if (options.left_ticks_topic is None) != (options.right_ticks_topic is None):
         fail("the left and right ticks topics go together: give both or neither")
     if options.left_ticks_topic is not None:
-        tpr = options.ticks_per_rev
-        if tpr is None:
-            fail("reading ticks topics needs ticks_per_rev (counts per wheel revolution)")
+        if options.ticks_per_rev is None:
+            needs = option("ticks_per_rev")
+            fail(f"reading ticks topics needs {needs} (counts per wheel revolution)")
         if options.left_ticks_topic == options.right_ticks_topic:
             fail(f"the left and right ticks topics are the same: {options.left_ticks_topic}")
     tpr = options.ticks_per_rev
