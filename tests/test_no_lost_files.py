@@ -150,15 +150,26 @@ def test_simulate_logs_never_mixes_runs(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_a_history_read_never_creates_one(tmp_path: Path) -> None:
-    """Listing, a robot's calibrations, the library: a missing history is named, exit 2,
-    and neither the file nor its folder appears."""
+    """Listing, a robot's calibrations, the library: a missing history is named, and
+    neither the file nor its folder appears. Listing one that does not exist yet (a fresh
+    install) is no error: it says nothing is recorded yet and how to record; a robot asked
+    for is refused (exit 2) saying the same."""
     missing = tmp_path / "none.sqlite3"
     deep = tmp_path / "sub" / "h.sqlite3"
-    line = cli_error("history", "--history", str(missing))
-    assert line.startswith(f"umbmark: error: {missing}: no history here")
-    cli_error("history", "R", "--history", str(deep))
+    listed = run_cli("history", "--history", str(missing))
+    assert listed.returncode == 0, listed.stderr
+    assert f"{missing}: nothing is recorded yet" in listed.stderr
+    assert "umbmark calibrate SOURCE --robot NAME" in listed.stderr
+    line = cli_error("history", "R", "--history", str(deep))
+    assert line == (
+        f"umbmark: error: {deep}: nothing is recorded yet: umbmark calibrate SOURCE "
+        "--robot NAME (or umbmark selfcal --robot NAME) records each calibration in this file\n"
+    )
     cli_error("history", "R", "--history", str(deep), "--applied", "1")
-    assert "no history here" in api_error(umbmark.history, history=missing)
+    assert "umbmark.calibrate(source, robot=name)" in api_error(
+        umbmark.history, "R", history=missing
+    )
+    assert umbmark.history(history=missing).robots == ()
     assert sorted(tmp_path.iterdir()) == []
 
 
@@ -243,3 +254,21 @@ def test_the_readme_first_command_writes_no_tracked_file() -> None:
         asked = [git, "check-ignore", "-q", "--no-index", name]
         ignored = subprocess.run(asked, cwd=root, check=False)
         assert ignored.returncode == 0, f"{name} is not ignored by git"
+
+
+def test_history_on_a_fresh_install_says_nothing_is_recorded(tmp_path: Path) -> None:
+    """A fresh install (no $UMBMARK_HISTORY, an empty data folder): ``umbmark history``
+    exits 0 saying that nothing is recorded yet and how to record, and creates nothing."""
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "UMBMARK_HISTORY"}
+    env["XDG_DATA_HOME"] = str(tmp_path / "data")
+    proc = run_cli("history", env=env)
+    assert proc.returncode == 0, proc.stderr
+    expected = tmp_path / "data" / "umbmark" / "history.sqlite3"
+    assert f"{expected}: nothing is recorded yet" in proc.stderr
+    assert "--robot NAME" in proc.stderr
+    listed = run_cli("history", "--json", env=env)
+    assert '"robots": []' in listed.stdout
+    assert "nothing is recorded yet" in listed.stdout
+    assert sorted(tmp_path.iterdir()) == []

@@ -63,6 +63,8 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
     out = console()
     if report.robot is None:
         if not report.robots:
+            if report.notes:  # no history file yet: the note said so, and how to record
+                return
             out.print(
                 f"No robots in {report.path} yet (umbmark calibrate --robot NAME).", markup=False
             )

@@ -11,10 +11,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from umbmark.core.errors import InputError, option, python_api
+from umbmark.core.errors import InputError, option, python_api, with_flags
 from umbmark.core.jsontext import JsonText
 from umbmark.outputs.files import OutputPlan
-from umbmark.store.history import DEFINITIONS, CalibrationRecord, History, RobotRecord
+from umbmark.store.history import (
+    DEFINITIONS,
+    CalibrationRecord,
+    History,
+    RobotRecord,
+    default_history_path,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -23,6 +29,15 @@ if TYPE_CHECKING:
 #: (the command line's syntax, or Python's) does not, so Python keeps its own text.
 _PLOT_NEEDS_NAME = f"{option('plot')} needs the robot's NAME (umbmark history NAME --plot FILE)"
 _PLOT_NEEDS_NAME_PY = "plot needs the robot's name (umbmark.history(name, plot=file))"
+#: What a history that does not exist yet means, and how to record one.
+_NOTHING_YET = (
+    "nothing is recorded yet: umbmark calibrate SOURCE {robot} (or umbmark selfcal {robot}) "
+    "records each calibration in this file"
+)
+_NOTHING_YET_PY = (
+    "nothing is recorded yet: umbmark.calibrate(source, robot=name) (or umbmark.selfcal(..., "
+    "robot=name)) records each calibration in this file"
+)
 
 __all__ = ["HistoryReport", "history"]
 
@@ -62,7 +77,13 @@ class HistoryReport(JsonText):
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (metres): what ``history --json`` prints."""
         if self.robot is None:
-            return {"history": self.path, "robots": [r.to_dict() for r in self.robots]}
+            listing: dict[str, Any] = {
+                "history": self.path,
+                "robots": [r.to_dict() for r in self.robots],
+            }
+            if self.notes:
+                listing["notes"] = list(self.notes)
+            return listing
         out: dict[str, Any] = {
             "robot": self.robot,
             "history": self.path,
@@ -134,7 +155,8 @@ def history(
         The robot; None lists the robots.
     history : path, optional
         The history file (default: ``$UMBMARK_HISTORY``, else the per-user file); read
-        only: a file that does not exist is refused, never created.
+        only, never created: where it does not exist yet, the list of robots is empty with
+        a note saying how to record one, and a robot asked for is refused saying so.
     applied : int, optional
         Mark this calibration of ``robot`` as applied first (refused for a calibration
         whose verdict was "do not apply").
@@ -160,6 +182,12 @@ def history(
     """
     if plot is not None and robot is None:
         raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
+    where = Path(history) if history is not None else default_history_path()
+    if not where.exists() and not where.is_symlink():  # a read never creates the file
+        nothing = _NOTHING_YET.format(robot=option("robot", "NAME"))
+        if robot is None and applied is None:  # a fresh install: an empty list, said so
+            return HistoryReport(path=str(where), notes=(f"{where}: {with_flags(nothing)}",))
+        raise InputError(nothing, source=where, python=_NOTHING_YET_PY)
     store = History(history, read_only=True)  # a read never creates the file
     path = str(store.path)
     if plot is not None:  # the output is checked before a calibration is marked applied
