@@ -95,7 +95,7 @@ def classify(case: Case, out: Outcome, case_dir: Path | None = None) -> tuple[st
     broken_pipe = case.stdout == "head"
     if out.returncode == 1 and not broken_pipe:
         return "traceback", "exit 1"
-    if out.returncode not in (0, 1, 2, 3):
+    if out.returncode not in (0, 1, 2, 3, 4):  # 4: a result not to apply
         return "traceback", f"exit {out.returncode}"
     # ours: errors, warnings, files written and notes of what was done (``umbmark: ...``)
     stray = [line for line in err if not line.startswith("umbmark: ")]

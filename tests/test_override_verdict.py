@@ -43,8 +43,9 @@ def test_force_replaces_the_result_but_writes_no_overlay(swapped: Path, tmp_path
     result.write_text("an earlier result\n")
     proc = run_cli("calibrate", str(swapped), *ARGS, "--force", "-o", str(result),
                    "--yaml", str(overlay))  # fmt: skip
-    # The result is valid and written: exit 0; the overlay is withheld, with a warning.
-    assert proc.returncode == 0, proc.stderr
+    # The result is valid and written, the overlay withheld with a warning, and the exit
+    # status says "do not apply" (4), so that a script can tell (docs/commands.md).
+    assert proc.returncode == 4, proc.stderr
     data = json.loads(result.read_text())  # replaced: the old text is no JSON
     assert data["apply"]["level"] == "do-not-apply"
     assert not overlay.exists()

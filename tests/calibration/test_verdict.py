@@ -86,6 +86,22 @@ def test_the_interval_says_whether_the_correction_means_anything(E_b, se, level)
     assert judge(_estimate(E_b, se), TEST, Evidence()).level == level
 
 
+@pytest.mark.parametrize(("E_b", "se"), [(1.02, 0.025), (1.02, 0.012), (1.0005, 0.002)])
+def test_a_scan_matching_verdict_speaks_of_driving_not_of_squares(E_b, se):
+    """Wheels calibrated against a laser's scan matching drove no square: what narrows
+    their interval is more driving with turns, not a larger square."""
+    errors = {"E_b": se}
+    estimate = ErrorEstimate("scan-matching", 0.0, 0.0, 1.0, E_b, standard_errors=errors)
+    verdict = judge(estimate, SquareTest(1.0, B), Evidence())
+    said = " ".join((*verdict.reasons, verdict.instead or ""))
+    assert verdict.level != "apply"
+    assert "square" not in said.replace("square root", ""), said
+    assert "record more driving, with turns both ways" in said
+    # The same interval of a square test still asks for more runs or a larger square.
+    square = judge(_estimate(E_b, se), TEST, Evidence())
+    assert "a larger square" in (square.instead or "")
+
+
 def test_a_fit_that_does_not_hold_is_not_applied():
     def fit(position: float, heading: float = 0.0) -> str:
         comp = {"rms_position": position, "rms_heading": heading, "samples": 1000.0}
@@ -179,7 +195,7 @@ def test_the_example_with_cw_and_ccw_swapped_is_not_applied(tmp_path: Path):
     yaml = tmp_path / "o.yaml"
     args = ("calibrate", str(swapped), "-L", "4", "-b", "0.34", "--unit", "mm")
     proc = run_cli(*args, "--yaml", str(yaml))
-    assert proc.returncode == 0, proc.stderr
+    assert proc.returncode == 4, proc.stderr  # do not apply
     first = proc.stdout.splitlines()[0]
     assert first.startswith(
         f"Verdict: do not apply: the model check fails strongly (p = {p_value:.2g}"
@@ -225,7 +241,7 @@ def test_a_trajectory_fit_to_a_lost_truth_is_not_applied(lost_truth: Path, tmp_p
     json_out, page = tmp_path / "r.json", tmp_path / "r.html"
     args = ["calibrate", str(lost_truth), *BAG, "--method", "trajectory", *files]
     proc = run_cli(*args, "-o", str(json_out), "--report", str(page))
-    assert proc.returncode == 0, proc.stderr
+    assert proc.returncode == 4, proc.stderr  # do not apply
     # The verdict first, and no overlay to paste.
     first = proc.stdout.splitlines()[0]
     assert first.startswith("Verdict: do not apply: ")
@@ -302,7 +318,7 @@ def test_the_history_records_it_but_does_not_mark_it_applied(lost_truth: Path, t
     db = tmp_path / "h.sqlite3"
     where = ("--robot", "tb3", "--history", str(db))
     proc = run_cli("calibrate", str(lost_truth), *BAG, "--method", "trajectory", *where)
-    assert proc.returncode == 0, proc.stderr
+    assert proc.returncode == 4, proc.stderr  # do not apply
     (line,) = [x for x in proc.stderr.splitlines() if "recorded" in x]
     assert line == (
         f"umbmark: recorded as calibration 1 of robot tb3 in {db}; its verdict is do not "
@@ -365,7 +381,7 @@ def test_an_interval_that_holds_no_correction_and_its_double_is_not_applied(
 ):
     yaml = tmp_path / "o.yaml"
     proc = run_cli("calibrate", str(wide), "-L", "4", "-b", "0.34", "--yaml", str(yaml), "--json")
-    assert proc.returncode == 0, proc.stderr
+    assert proc.returncode == 4, proc.stderr  # do not apply
     data = json.loads(proc.stdout)
     low, high = data["intervals_95"]["E_b"]
     E_b = data["E_b"]
@@ -425,7 +441,7 @@ def test_auto_finding_the_nominal_parameters_best_is_not_applied(tmp_path: Path)
         folders.append(str(drive_sim.write_session(tmp_path / f"session-{seed}", logs)))
     yaml = tmp_path / "o.yaml"
     proc = run_cli("calibrate", *folders, "-L", "1.5", "--method", "auto", "--yaml", str(yaml))
-    assert proc.returncode == 0, proc.stderr
+    assert proc.returncode == 4, proc.stderr  # do not apply
     assert proc.stdout.startswith(
         "Verdict: do not apply: no estimator predicted held-out runs better than the nominal "
         "parameters"

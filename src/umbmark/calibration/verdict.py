@@ -138,6 +138,12 @@ _MORE_RUNS = (
     "record more runs (the interval narrows with the square root of their number) or, for "
     "a square test, a larger square"
 )
+#: What narrows an interval of wheels calibrated against a laser's scan matching: the
+#: driving it holds (no square is driven).
+_MORE_DRIVING = (
+    "record more driving, with turns both ways (the interval narrows with the square root "
+    "of the number of motion intervals matched)"
+)
 _CHECK_MODEL = (
     "check the nominal wheelbase and wheel diameter, the time offset between wheels and "
     "ground truth, a tracked point off the axle (--fit-truth-offset) and slip (slower "
@@ -254,6 +260,13 @@ _Finding = tuple[Level, str, "str | None"]
 
 def _intervals(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
     found: list[_Finding] = []
+    scans = estimate.method == "scan-matching"  # ordinary driving: no square, no runs
+    more = _MORE_DRIVING if scans else _MORE_RUNS
+    where = (
+        f"over {test.side_length:g} m of driving"
+        if scans
+        else f"on the {test.side_length:g} m square"
+    )
     for name in ("E_d", "E_b", "E_s"):
         interval = estimate.interval(name)
         value = getattr(estimate, name)
@@ -270,20 +283,17 @@ def _intervals(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
                     f"{shown} holds both 1 (no correction) and {mirror:.6f}, a robot this "
                     "correction would make twice as wrong: the runs do not say which way to "
                     "correct",
-                    _MORE_RUNS,
+                    more,
                 )
             )
         elif low <= 1.0 <= high and correction >= floor:
-            found.append(
-                ("care", f"{shown} holds 1: the correction is barely resolved", _MORE_RUNS)
-            )
+            found.append(("care", f"{shown} holds 1: the correction is barely resolved", more))
         elif half >= WIDE_INTERVAL * floor and low <= 1.0 <= high:
             found.append(
                 (
                     "care",
-                    f"{shown} is wide enough to hide an error that matters on the "
-                    f"{test.side_length:g} m square",
-                    _MORE_RUNS,
+                    f"{shown} is wide enough to hide an error that matters {where}",
+                    more,
                 )
             )
     return found

@@ -125,7 +125,15 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     it; --force only replaces files that exist).
     """
     from umbmark import calibrate as run_calibration
-    from umbmark.cli.common import command_line, console, note, warn, working, wrote
+    from umbmark.cli.common import (
+        EXIT_DO_NOT_APPLY,
+        command_line,
+        console,
+        note,
+        warn,
+        working,
+        wrote,
+    )
 
     options["command"] = command_line(sys.argv)
     method = str(options.get("method"))
@@ -151,3 +159,5 @@ def calibrate(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
         from umbmark.cli.render import render_calibration
 
         render_calibration(report, console())
+    if report.overlay_withheld:  # a valid result, not to apply: a script can tell
+        click.get_current_context().exit(EXIT_DO_NOT_APPLY)

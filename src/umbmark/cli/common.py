@@ -20,6 +20,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "EXIT_BAD_INPUT",
+    "EXIT_DO_NOT_APPLY",
     "command_line",
     "console",
     "error_line",
@@ -35,6 +36,10 @@ __all__ = [
 
 #: Exit status for bad input (as for a usage error).
 EXIT_BAD_INPUT = 2
+#: Exit status of a calibration done whose verdict is "do not apply" (its overlay
+#: withheld): a valid result that a script must not apply. 3 is the environment's, 70
+#: umbmark's own failure, 130 an interrupt (``cli.main.main``).
+EXIT_DO_NOT_APPLY = 4
 #: Width of output that goes to a file or a pipe: wide enough that no table is narrowed
 #: (a long path in a cell would otherwise be cut, or a value split across lines).
 _PIPE_WIDTH = 10_000

@@ -137,8 +137,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     """Entry point of the ``umbmark`` console script.
 
     Exit status: 0 done, 2 bad input or options (one line on stderr naming the file or
-    flag), 3 the environment failed (disk full, permission denied, a path too long), 70 a
-    failure of umbmark itself (one line; please report it), 130 interrupted.
+    flag), 3 the environment failed (disk full, permission denied, a path too long) or
+    the robot was stopped for safety, 4 a calibration done whose verdict is "do not
+    apply" (its overlay withheld; ``--override-verdict`` gives 0), 70 a failure of
+    umbmark itself (one line; please report it), 130 interrupted.
     """
     for stream in (sys.stdout, sys.stderr):  # an ASCII-only terminal: escape, never crash
         reconfigure = getattr(stream, "reconfigure", None)
