@@ -189,7 +189,8 @@ def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
         needs = "".join(f" {flag} ..." for flag in bag.needs)
         out.print(
             Text(
-                "Wheels against the laser's scan matching (docs/scan-matching.md): umbmark "
+                "Wheels against the laser's scan matching (umbmark calibrate --help, "
+                "--scan-topic): umbmark "
                 f"calibrate {bag.path} {bag.scan_options}{needs}",
                 style="bold",
             )
