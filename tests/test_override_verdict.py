@@ -47,7 +47,7 @@ def test_force_replaces_the_result_but_writes_no_overlay(swapped: Path, tmp_path
     # status says "do not apply" (4), so that a script can tell (docs/commands.md).
     assert proc.returncode == 4, proc.stderr
     data = json.loads(result.read_text())  # replaced: the old text is no JSON
-    assert data["apply"]["level"] == "do-not-apply"
+    assert data["verdict"]["level"] == "do-not-apply"
     assert not overlay.exists()
     assert proc.stdout.startswith("Verdict: do not apply: the model check fails strongly")
     assert "ros__parameters" not in proc.stdout
@@ -72,7 +72,7 @@ def test_the_override_writes_the_overlay(swapped: Path, tmp_path: Path):
     text = overlay.read_text()
     assert "# Verdict: do not apply: " in text
     assert "wheel_separation_multiplier" in text
-    assert json.loads(result.read_text())["apply"]["level"] == "do-not-apply"
+    assert json.loads(result.read_text())["verdict"]["level"] == "do-not-apply"
     # The override replaces nothing: a second run onto the same files is refused.
     again = run_cli("calibrate", str(swapped), *ARGS, "--override-verdict", "-o", str(result))
     assert again.returncode == 2
@@ -87,7 +87,7 @@ def test_the_library_keeps_the_two_apart(swapped: Path, tmp_path: Path):
     assert report.withheld == ("yaml",)
     assert report.overlay_withheld
     assert not overlay.exists()
-    assert json.loads(result.read_text())["apply"]["level"] == "do-not-apply"
+    assert json.loads(result.read_text())["verdict"]["level"] == "do-not-apply"
     with pytest.raises(umbmark.InputError, match="override_verdict=True writes it"):
         report.write(yaml=overlay, force=True)
     assert not overlay.exists()

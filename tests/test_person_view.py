@@ -45,7 +45,7 @@ def test_one_verdict_on_terminal_page_and_json(demo_command: DemoCommand, tmp_pa
     line = next(x for x in proc.stdout.splitlines() if x.startswith("E_max,syst = 27.5 mm >"))
     assert "just above" in line
     data = json.loads(run_cli("calibrate", *common, "--json").stdout)
-    assert data["verdict"] == line
+    assert data["second_pass"] == line
     text = page.read_text(encoding="utf-8").replace("&gt;", ">").replace("&lt;", "<")
     assert line in text
     assert "well above" not in text

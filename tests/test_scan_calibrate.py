@@ -101,7 +101,7 @@ def _check_truth(data: dict) -> None:  # type: ignore[type-arg]
 def test_the_python_api_recovers_the_truth(result: umbmark.CalibrationReport) -> None:
     data = result.to_dict()
     _check_truth(data)
-    assert data["apply"]["level"] == "apply"
+    assert data["verdict"]["level"] == "apply"
     assert result.warnings == ()
     said = " ".join(result.notes)
     assert "motion intervals matched" in said
@@ -129,7 +129,7 @@ def test_ros2_bags_recover_the_truth(tmp_path: Path, storage: str, upside_down: 
         bag, scan_topic="/scan", wheelbase=B_NOMINAL, wheel_diameter=D_NOMINAL
     )
     _check_truth(report.to_dict())
-    assert report.to_dict()["apply"]["level"] == "apply"
+    assert report.to_dict()["verdict"]["level"] == "apply"
 
 
 def test_the_mounting_read_from_tf_static(bag: Path) -> None:

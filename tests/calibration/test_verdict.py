@@ -206,7 +206,7 @@ def test_the_example_with_cw_and_ccw_swapped_is_not_applied(tmp_path: Path):
     assert "No ros2_control overlay: the verdict is do not apply" in proc.stdout
     assert not yaml.exists()
     data = json.loads(run_cli(*args, "--json").stdout)
-    assert data["apply"]["level"] == "do-not-apply"
+    assert data["verdict"]["level"] == "do-not-apply"
     # swapped back, the same runs apply
     back = _swapped(swapped, tmp_path / "back.csv")
     assert umbmark.calibrate(back, side_length=L, wheelbase=B, unit="mm").verdict.level == "apply"
@@ -257,8 +257,8 @@ def test_a_trajectory_fit_to_a_lost_truth_is_not_applied(lost_truth: Path, tmp_p
     ) in proc.stderr
     data = json.loads(json_out.read_text())
     assert next(iter(data)) == "apply"
-    assert data["apply"]["level"] == "do-not-apply"
-    assert "ground truth" in data["apply"]["instead"]
+    assert data["verdict"]["level"] == "do-not-apply"
+    assert "ground truth" in data["verdict"]["instead"]
     # Why it matters: the fit's E_b lies on the other side of 1 than the robot's (1.02):
     # the correction would make the robot worse. The end points are unaffected (the
     # reflection came and went mid-run): the square's own estimate is right and applies.
@@ -387,9 +387,9 @@ def test_an_interval_that_holds_no_correction_and_its_double_is_not_applied(
     E_b = data["E_b"]
     assert E_b - 1.0 > 0.0014  # a correction that matters on the square, and robots
     assert low <= 2.0 - E_b < 1.0 <= high  # it would make twice as wrong, or none at all
-    assert data["apply"]["level"] == "do-not-apply"
-    assert data["apply"]["reasons"][0].startswith("E_b's 95 % interval")
-    assert data["apply"]["instead"].startswith("record more runs")
+    assert data["verdict"]["level"] == "do-not-apply"
+    assert data["verdict"]["reasons"][0].startswith("E_b's 95 % interval")
+    assert data["verdict"]["instead"].startswith("record more runs")
     assert not yaml.exists()
     assert "--yaml not written: the verdict is do not apply" in proc.stderr
     # The Python API refuses to write it, even with force, unless overridden.
@@ -504,10 +504,15 @@ def test_the_verdict_is_printed_first_and_is_json_s_first_key(tmp_path: Path):
     assert proc.stdout.splitlines()[0] == "Verdict: apply."
     assert "ros__parameters" in proc.stdout
     data = json.loads(run_cli(*args, "--json").stdout)
-    assert next(iter(data)) == "apply"
-    assert data["apply"] == {"level": "apply", "reasons": [], "instead": None}
-    # the 3 x SEM line keeps its key
-    assert data["verdict"].startswith("E_max,syst = ")
+    assert next(iter(data)) == "verdict"
+    assert data["verdict"] == {"level": "apply", "reasons": [], "instead": None}
+    assert data["second_pass"].startswith("E_max,syst = ")
+    assert "apply" not in data
+    # One name for each, the same in Python and in the JSON: the verdict on applying, and
+    # the 3 x SEM sentence (whether another pass is worth it).
+    report = umbmark.calibrate(str(table), side_length=4, wheelbase=0.34, unit="mm")
+    assert report.verdict.to_dict() == data["verdict"]
+    assert report.second_pass == data["second_pass"]
     # A recorded calibration to apply suggests the command that marks it applied.
     db = tmp_path / "h.sqlite3"
     recorded = run_cli(*args, "--robot", "r", "--history", str(db))

@@ -169,6 +169,13 @@ class CalibrationResult(JsonText):
 
         return judge(self.estimate, self.test, self._evidence())
 
+    @property
+    def second_pass(self) -> str | None:
+        """The paper's 3 x SEM rule said in a sentence: whether another pass (apply the
+        correction, run UMBmark again) is worth it; None without end points (JSON
+        ``second_pass``)."""
+        return None if self.benchmark is None else sem_verdict(self.benchmark)
+
     def _evidence(self) -> Evidence:
         from umbmark.calibration.verdict import Evidence, mean_path
 
@@ -246,7 +253,7 @@ class CalibrationResult(JsonText):
         bench, cal = self.benchmark, self.calibration
         est, active = cal.estimate, cal.active
         out: dict[str, Any] = {
-            "apply": self.verdict.to_dict(),
+            "verdict": self.verdict.to_dict(),
             "umbmark_version": __version__,
             "source": self.source,
             "sources": list(self.sources),
@@ -271,11 +278,11 @@ class CalibrationResult(JsonText):
                     "sem": bench.sem,
                     "second_pass_threshold": bench.second_pass_threshold,
                     "second_pass_recommended": bench.second_pass_recommended,
-                    "verdict": sem_verdict(bench),
+                    "second_pass": sem_verdict(bench),
                 }
             )
         else:
-            out.update({"e_max_syst": None, "second_pass_recommended": None, "verdict": None})
+            out.update({"e_max_syst": None, "second_pass_recommended": None, "second_pass": None})
         out.update(
             {
                 "alpha": est.alpha,

@@ -86,7 +86,7 @@ def history_entry(result: CalibrationResult) -> NewCalibration:
         standard_errors=data["standard_errors"],
         active=data["active"],
         new=data["new"],
-        verdict=data["apply"],
+        verdict=data["verdict"],
         wheelbase=active.wheelbase,
         wheel_diameter=active.wheel_diameter,
     )
