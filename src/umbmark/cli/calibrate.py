@@ -18,7 +18,7 @@ from umbmark.cli.click_options import (
     tum_time_option,
 )
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, method_help, names
-from umbmark.options.spec import OUTPUTS, SIDE_LENGTH, TEST, WHEELBASE
+from umbmark.options.spec import HISTORY, OUTPUTS, SIDE_LENGTH, TEST, WHEELBASE
 
 __all__ = ["calibrate"]
 
@@ -59,13 +59,7 @@ __all__ = ["calibrate"]
             "history NAME lists them); refused when the robot is known with another nominal "
             "wheelbase or wheel diameter (one unknown on either side is no difference).",
         ),
-        option(
-            "--history",
-            section=TEST,
-            type=click.Path(),
-            help="The history file [default: $UMBMARK_HISTORY, else "
-            "~/.local/share/umbmark/history.sqlite3].",
-        ),
+        spec_option(HISTORY, section=TEST),
     ]
 )
 @source_options(wheelbase=False)

@@ -13,8 +13,9 @@ from umbmark.cli.click_options import (
     force_option,
     option,
     override_option,
+    spec_option,
 )
-from umbmark.options.spec import OUTPUTS
+from umbmark.options.spec import HISTORY, OUTPUTS
 
 __all__ = ["history"]
 
@@ -23,9 +24,7 @@ __all__ = ["history"]
 @click.argument("robot", required=False)
 @apply(
     [
-        option("--history", section=OTHER, type=click.Path(),
-               help="The history file [default: $UMBMARK_HISTORY, else "
-               "$XDG_DATA_HOME/umbmark/history.sqlite3 or ~/.local/share/umbmark/...]."),
+        spec_option(HISTORY, section=OTHER),
         option("--applied", section=OTHER, type=click.IntRange(min=1),
                help="Mark this calibration (its id) of the robot as applied; refused for "
                "a calibration whose verdict was do not apply."),

@@ -26,7 +26,7 @@ from umbmark.options.selfcal import (
     SQUARE_SIDE,
     TAPE_MARKS,
 )
-from umbmark.options.spec import OUTPUTS, TEST
+from umbmark.options.spec import HISTORY, OUTPUTS, TEST
 
 if TYPE_CHECKING:
     from umbmark.routines.watch import Progress, RunsLeft, Stopped
@@ -54,13 +54,17 @@ ROS = "ROS robots (--ros1, --ros2)"
                "ROS_DOMAIN_ID)."),
         option("--sim-E-d", "--E-d", "E_d", section=ROBOT, type=float, default=1.004,
                show_default=True,
-               help="With --sim: the virtual robot's D_R / D_L."),
+               help="With --sim: the virtual robot's true wheel-diameter ratio D_R / D_L (Eq. "
+               "2.3); by default a robot with errors to calibrate (simulate's has none unless "
+               "told)."),
         option("--sim-E-b", "--E-b", "E_b", section=ROBOT, type=float, default=0.97,
                show_default=True,
-               help="With --sim: the virtual robot's true wheelbase over the nominal one."),
+               help="With --sim: the virtual robot's true wheelbase over nominal, b_actual / b "
+               "(Eq. 2.4); by default a robot with errors to calibrate."),
         option("--sim-E-s", "--E-s", "E_s", section=ROBOT, type=float, default=1.0,
                show_default=True,
-               help="With --sim: the virtual robot's mean wheel diameter over the nominal one."),
+               help="With --sim: the virtual robot's true average wheel diameter over nominal, "
+               "D_avg / D_n."),
         option("--sim-slip", "--slip", "slip", section=ROBOT, type=float, default=0.0004,
                show_default=True, help="With --sim: the virtual robot's wheel slip [m^0.5]."),
         option("--seed", section=ROBOT, type=click.IntRange(0, 2**63 - 1), default=1,
@@ -116,8 +120,7 @@ ROS = "ROS robots (--ros1, --ros2)"
                "restart (its settings; the robot options as before)."),
         option("--robot", section=OUTPUTS, default=None,
                help="Record every pass in the history under this name (umbmark history NAME)."),
-        option("--history", section=OUTPUTS, type=click.Path(dir_okay=False), default=None,
-               help="The history file [default: $UMBMARK_HISTORY, else the per-user one]."),
+        spec_option(HISTORY),
         option("--out", section=OUTPUTS, type=click.Path(file_okay=False), default=None,
                help="Folder for the passes' run logs, the report and the overlay: new or "
                "empty, or (--force) one holding an earlier self-calibration [default: "

@@ -100,7 +100,7 @@ PLAN_OPTIONS: tuple[Spec, ...] = (
     replace(SIDE_LENGTH, help="Side of the square [m]: with --runs, predict instead of recommend."),
     Spec(
         "runs",
-        ("--runs",),
+        ("--runs", "-n"),
         TEST,
         "Runs per direction.",
         kind="integer",

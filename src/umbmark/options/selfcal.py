@@ -20,6 +20,7 @@ __all__ = [
     "OBSTACLE_MARGIN",
     "OBSTACLE_MARGIN_RANGE",
     "ROUTINE",
+    "ROUTINE_SECTION",
     "RUNS",
     "SQUARE_SIDE",
     "SQUARE_SIDE_RANGE",
@@ -27,12 +28,16 @@ __all__ = [
     "TAPE_MARKS",
 ]
 
+#: The section of ``umbmark selfcal --help`` listing which routine the robot drives (the
+#: squares' options are "The square test"; the anywhere pattern has none of its own).
+ROUTINE_SECTION = "The routine"
+
 #: ``--routine`` of ``selfcal`` (``routine=`` of :func:`umbmark.selfcal`): what the robot
 #: drives to calibrate itself.
 ROUTINE = Spec(
     "routine",
     ("--routine",),
-    TEST,
+    ROUTINE_SECTION,
     "umbmark: the paper's squares, measured at an L-shaped corner (needs 4 x 4 m and the "
     "corner); anywhere: a short pattern of turns, straights and arcs on about 2 x 2 m, "
     "calibrated against the laser's own motion (needs a laser and walls or furniture in "

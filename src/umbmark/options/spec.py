@@ -30,6 +30,7 @@ from umbmark.options.checks import check_bounded, check_list
 __all__ = [
     "BAGS",
     "FORCE",
+    "HISTORY",
     "LOGS",
     "LONGEST_GAP",
     "LONGEST_REST",
@@ -287,6 +288,18 @@ FORCE = Spec(
     "Replace output files that exist, and write into output folders that hold files "
     "(without it, nothing is replaced). Nothing else: see --override-verdict.",
     kind="flag",
+)
+
+#: ``--history`` of ``calibrate``, ``selfcal`` and ``history`` (``history=`` of the
+#: library): the robots' calibration history, an SQLite file
+#: (:func:`umbmark.store.history.default_history_path` says the default).
+HISTORY = Spec(
+    "history",
+    ("--history",),
+    OUTPUTS,
+    "The history file [default: $UMBMARK_HISTORY, else "
+    "$XDG_DATA_HOME/umbmark/history.sqlite3, else ~/.local/share/umbmark/history.sqlite3].",
+    kind="file",
 )
 
 #: ``--override-verdict`` of ``calibrate``, ``report``, ``replay``, ``validate`` and
