@@ -34,6 +34,7 @@ LAYERS = (
     "outputs",
     "robot",
     "routines",
+    "fleet",
     "jobs",
     "cli",
 )
@@ -381,3 +382,37 @@ def test_tests_of_one_module_sit_in_its_layers_folder(tmp_path):
         "core/test_missing.py: no module missing in core/",
         "nowhere/test_x.py: nowhere is no layer",
     ]
+
+
+#: Third-party packages only one module of umbmark may import: the engine at the edge.
+EDGE_IMPORTS = {"dask": "umbmark.fleet.engine", "distributed": "umbmark.fleet.engine"}
+
+
+def edge_import_violations(root: Path = PACKAGE) -> list[str]:
+    """Modules that import an edge package (Dask) other than the one module allowed."""
+    bad = []
+    for name, path in _modules(root).items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and not node.level:
+                names = [node.module or ""]
+            elif isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            else:
+                continue
+            for imported in names:
+                top = imported.split(".")[0]
+                if top in EDGE_IMPORTS and name != EDGE_IMPORTS[top]:
+                    bad.append(f"{name}:{node.lineno} imports {imported}")
+    return bad
+
+
+def test_the_engine_stays_at_the_edge(tmp_path):
+    """Only ``umbmark.fleet.engine`` imports Dask: calibrating one recording knows nothing
+    of the engine. The check finds an import elsewhere."""
+    assert edge_import_violations() == []
+    package = tmp_path / "umbmark"
+    (package / "jobs").mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    (package / "jobs" / "__init__.py").write_text("")
+    (package / "jobs" / "fleet.py").write_text("from distributed import Client\n")
+    assert edge_import_violations(package) == ["umbmark.jobs.fleet:1 imports distributed"]

@@ -3,9 +3,8 @@
 An option's keyword is the library's (``current_c_l`` of :func:`umbmark.calibrate`), its
 first flag the command line's (``--current-c-l``); messages name it by its keyword
 (:func:`umbmark.core.errors.option`), which the command line shows as the flag and the
-library as the keyword. From these
-entries come the click options (:func:`umbmark.cli.click_options.spec_option`), the defaults
-and checks of :class:`umbmark.runs.read_options.ReadOptions`, and the defaults of
+library as the keyword. From these entries come the click options
+(:func:`umbmark.cli.click_options.spec_option`), the defaults and checks of :class:`umbmark.runs.read_options.ReadOptions`, and the defaults of
 :class:`umbmark.sources.bag.bag_options.BagOptions`. Lengths in metres, times in seconds.
 """
 
@@ -290,9 +289,8 @@ FORCE = Spec(
     kind="flag",
 )
 
-#: ``--history`` of ``calibrate``, ``selfcal`` and ``history`` (``history=`` of the
-#: library): the robots' calibration history, an SQLite file
-#: (:func:`umbmark.store.history.default_history_path` says the default).
+#: ``--history`` of ``calibrate``, ``selfcal`` and ``history``: the robots' calibration
+#: history (SQLite; the default: :func:`umbmark.store.history.default_history_path`).
 HISTORY = Spec(
     "history",
     ("--history",),

@@ -1,0 +1,186 @@
+"""The fleet's engine, Dask distributed, started for real: a local cluster of worker
+processes, and a scheduler and workers started as separate processes with Dask's own
+command-line programs on free ports of this machine.
+
+What is checked: every item comes back once, to this process, in the order they finish;
+an item whose function raises comes back failed with its one-line reason while the others
+go on; the same work on an existing cluster (``scheduler=``, and Dask's own
+``DASK_SCHEDULER_ADDRESS``) gives the same results as the local run; a worker killed
+mid-item loses nothing (its item is redone on another worker).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
+
+import fleet_tasks
+from umbmark.core.errors import InputError
+from umbmark.fleet.engine import Done, run_each
+
+TESTS = Path(__file__).resolve().parents[1]
+ROOT = TESTS.parent
+DASK = Path(sys.executable).with_name("dask")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _env() -> dict[str, str]:
+    path = os.pathsep.join([str(TESTS), str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])
+    return {**os.environ, "PYTHONPATH": path}
+
+
+class Cluster:
+    """``dask scheduler`` and ``dask worker`` processes on localhost, ended by PID."""
+
+    def __init__(self, tmp: Path, workers: int) -> None:
+        self.port = _free_port()
+        self.address = f"tcp://127.0.0.1:{self.port}"
+        self.logs = tmp
+        self.files: list = []  # type: ignore[type-arg]
+        self.scheduler = self._start(
+            "scheduler", "--host", "127.0.0.1", "--port", str(self.port),
+            "--dashboard-address", ":0", "--no-show",
+        )  # fmt: skip
+        self._wait_for_port()
+        self.workers = [
+            self._start("worker", self.address, "--nworkers", "1", "--nthreads", "1",
+                        "--no-nanny", "--dashboard-address", ":0", "--name", f"w{k}")
+            for k in range(workers)
+        ]  # fmt: skip
+        self._wait_for_workers(workers)
+
+    def _start(self, *args: str) -> subprocess.Popen[bytes]:
+        log = open(self.logs / f"{args[0]}-{time.monotonic_ns()}.log", "wb")  # noqa: SIM115
+        self.files.append(log)
+        return subprocess.Popen([str(DASK), *args], env=_env(), stdout=log, stderr=log)
+
+    def _wait_for_port(self) -> None:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            with socket.socket() as s:
+                if s.connect_ex(("127.0.0.1", self.port)) == 0:
+                    return
+            time.sleep(0.1)
+        raise AssertionError("the scheduler did not start")
+
+    def _wait_for_workers(self, n: int) -> None:
+        from distributed import Client
+
+        with Client(self.address, timeout=60) as client:
+            client.wait_for_workers(n, timeout=60)
+
+    def close(self) -> None:
+        for proc in [*self.workers, self.scheduler]:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+        for proc in [*self.workers, self.scheduler]:
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+        for log in self.files:
+            log.close()
+
+
+@pytest.fixture
+def cluster(tmp_path: Path) -> Iterator[Cluster]:
+    made = Cluster(tmp_path, workers=2)
+    try:
+        yield made
+    finally:
+        made.close()
+
+
+def _collect(fn, items, **kw) -> list[Done]:  # type: ignore[no-untyped-def]
+    done: list[Done] = []
+    assert run_each(fn, items, done.append, **kw) == len(items)
+    return done
+
+
+@pytest.mark.slow
+def test_a_local_cluster_returns_every_item_once_and_names_the_failed_one():
+    items = [3, -1, 4, 0, 7]
+    done = _collect(fleet_tasks.square_or_refuse, items, workers=2)
+    assert sorted(d.index for d in done) == list(range(len(items)))
+    by = {d.index: d for d in done}
+    for k, n in enumerate(items):
+        if n < 0:
+            assert by[k].result is None
+            assert by[k].error == f"rec-{n}.bag: item {n} cannot be read"
+        else:
+            assert by[k].result == n * n
+            assert by[k].error is None
+
+
+@pytest.mark.slow
+def test_an_existing_cluster_gives_what_the_local_run_gives(cluster: Cluster, monkeypatch):
+    items = list(range(-2, 9))
+    local = {
+        d.index: (d.result, d.error)
+        for d in _collect(fleet_tasks.square_or_refuse, items, workers=1)
+    }
+    remote = {
+        d.index: (d.result, d.error)
+        for d in _collect(fleet_tasks.square_or_refuse, items, scheduler=cluster.address)
+    }
+    assert remote == local
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", cluster.address)  # Dask's own variable
+    by_env = {d.index: (d.result, d.error) for d in _collect(fleet_tasks.square_or_refuse, items)}
+    assert by_env == local
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_item_loses_nothing(cluster: Cluster, tmp_path: Path):
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    items = [(n, str(marks), 2.0) for n in range(4)]
+    pids = {proc.pid for proc in cluster.workers}
+    killed: list[int] = []
+
+    import threading
+
+    def killer() -> None:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not killed:
+            for mark in marks.iterdir():
+                pid = int(mark.name.rsplit("-", 1)[1])
+                if pid in pids:
+                    os.kill(pid, signal.SIGKILL)
+                    killed.append(pid)
+                    return
+            time.sleep(0.05)
+
+    thread = threading.Thread(target=killer)
+    thread.start()
+    done = _collect(fleet_tasks.slow_square, items, scheduler=cluster.address)
+    thread.join()
+    assert killed, "no worker was killed"
+    assert sorted(d.index for d in done) == [0, 1, 2, 3]
+    assert all(d.error is None for d in done), [d.error for d in done]
+    assert {d.index: d.result[0] for d in done} == {n: n * n for n in range(4)}
+    # The killed worker's item was redone by the other worker.
+    assert all(d.result[1] != killed[0] for d in done)
+
+
+def test_no_scheduler_at_the_address_is_one_line():
+    port = _free_port()
+    with pytest.raises(InputError, match=f"no Dask scheduler answers at tcp://127.0.0.1:{port}"):
+        run_each(
+            fleet_tasks.square_or_refuse, [1], lambda d: None, scheduler=f"tcp://127.0.0.1:{port}"
+        )
