@@ -3,9 +3,9 @@
 An option's keyword is the library's (``current_c_l`` of :func:`umbmark.calibrate`), its
 first flag the command line's (``--current-c-l``); messages name it by its keyword
 (:func:`umbmark.core.errors.option`), which the command line shows as the flag and the
-library as the keyword. From these entries come the click options
-(:func:`umbmark.cli.click_options.spec_option`), the defaults and checks of :class:`umbmark.runs.read_options.ReadOptions`, and the defaults of
-:class:`umbmark.sources.bag.bag_options.BagOptions`. Lengths in metres, times in seconds.
+library as the keyword. Its entries make the click options (``spec_option``), the
+defaults and checks of ``ReadOptions`` and the defaults of ``BagOptions``. Lengths in
+metres, times in seconds.
 """
 
 from __future__ import annotations
