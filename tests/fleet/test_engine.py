@@ -182,5 +182,9 @@ def test_no_scheduler_at_the_address_is_one_line():
     port = _free_port()
     with pytest.raises(InputError, match=f"no Dask scheduler answers at tcp://127.0.0.1:{port}"):
         run_each(
-            fleet_tasks.square_or_refuse, [1], lambda d: None, scheduler=f"tcp://127.0.0.1:{port}"
+            fleet_tasks.square_or_refuse,
+            [1],
+            lambda d: None,
+            scheduler=f"tcp://127.0.0.1:{port}",
+            connect_timeout=1.0,
         )

@@ -97,7 +97,7 @@ def _one_line(exc: BaseException) -> str:
 
 
 @contextmanager
-def _client(address: str | None, workers: int | None) -> Iterator[Any]:
+def _client(address: str | None, workers: int | None, timeout: float) -> Iterator[Any]:
     try:
         import dask
         from distributed import Client, LocalCluster
@@ -111,7 +111,7 @@ def _client(address: str | None, workers: int | None) -> Iterator[Any]:
     with dask.config.set(settings):
         if address is not None:
             try:
-                client = Client(address, timeout=CONNECT_TIMEOUT)
+                client = Client(address, timeout=timeout)
             except (OSError, TimeoutError) as exc:
                 raise InputError(
                     f"no Dask scheduler answers at {address} ({_one_line(exc)})",
@@ -147,6 +147,7 @@ def run_each(
     *,
     scheduler: str | None = None,
     workers: int | None = None,
+    connect_timeout: float = CONNECT_TIMEOUT,
 ) -> int:
     """Run ``fn`` on every item on the engine; hand each outcome to ``on_done`` as it
     finishes, in this process.
@@ -164,6 +165,8 @@ def run_each(
         ``$DASK_SCHEDULER_ADDRESS``, else a local cluster.
     workers : int, optional
         Workers of the local cluster (default: this machine's cores).
+    connect_timeout : float
+        Seconds to wait for an existing scheduler to answer.
 
     Returns
     -------
@@ -180,7 +183,7 @@ def run_each(
     if not items:
         return 0
     address = engine_address(scheduler)
-    with _client(address, workers) as client:
+    with _client(address, workers, connect_timeout) as client:
         from distributed import as_completed
 
         futures = client.map(fn, list(items), pure=False)
