@@ -38,15 +38,15 @@ from umbmark.model.run import Run
 __all__ = ["FAR", "FITS", "SCALE_FLOOR", "TYPO", "FarRow", "Judged", "far_rows", "judge_rows"]
 
 #: A row this many (robust) standard deviations from its cluster is named whatever the
-#: cause. In 20 000 simulated tables of Gaussian runs (3 to 20 a direction, coordinates
-#: and clusters scattering alike) no row came beyond 13; with one cluster twice as wide
-#: and one axis twice the other, 1 table in 3 000 (5 runs a direction) has a row beyond
-#: 15; the real OptiOdom sessions' farthest rows lie 1.7 out, the bundled table's 2.1.
+#: cause, and from :data:`TYPO` on where one character or its label brings it back.
+#: ``tools/far_rows_thresholds.py`` (20 000 Gaussian tables a setting, like the bundled
+#: one): with both axes and clusters scattering alike, 1 table in 10 000 of 5 runs a
+#: direction has a row named (1 in 2 900 of 3 runs, none of 10 or 20); with one axis
+#: twice the other, 1 in 2 000; and the ccw cluster twice as wide besides, 1 in 540 (5
+#: runs), 1 in 900 (10). The real OptiOdom sessions' farthest rows lie 1.7 and 1.5 out, the
+#: bundled table's 2.1; a sign flipped in its ccw rows puts the row 12 to 15 out.
 FAR = 15.0
-#: A row this far out is named where one character (a sign, two digits) or its direction
-#: label brings it back: a Gaussian run lies this far out in fewer than 1 table in 1 000
-#: (5 runs a direction, unequal clusters), and its coming back by such a change is
-#: rarer still.
+#: See :data:`FAR`.
 TYPO = 8.0
 #: ... back: within this many standard deviations of its cluster's median.
 FITS = 3.0
