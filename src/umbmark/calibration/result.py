@@ -40,12 +40,46 @@ __all__ = [
     "ABSOLUTE_FIGURES",
     "Calibrated",
     "CalibrationResult",
+    "Without",
     "calibrated_name",
     "calibrated_nominal",
     "calibrated_params",
 ]
 
 PathLike = str | os.PathLike[str]
+
+
+@dataclass(frozen=True)
+class Without:
+    """The result without the rows far outside their cluster (shown beside the result).
+
+    Attributes
+    ----------
+    rows : tuple of str
+        The rows left out (``row 13``: the file's line).
+    e_max_syst : float or None
+        E_max,syst [m] of the other runs.
+    E_d, E_b : float
+        The estimate of the other runs.
+    apply : str
+        Its verdict's level (``apply``, ``care``, ``do-not-apply``).
+    """
+
+    rows: tuple[str, ...]
+    e_max_syst: float | None
+    E_d: float
+    E_b: float
+    apply: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"rows": [...], "e_max_syst": ..., "E_d": ..., "E_b": ..., "apply": ...}``."""
+        return {
+            "rows": list(self.rows),
+            "e_max_syst": self.e_max_syst,
+            "E_d": self.E_d,
+            "E_b": self.E_b,
+            "apply": self.apply,
+        }
 
 
 @dataclass(frozen=True, repr=False)
@@ -100,6 +134,9 @@ class CalibrationResult(JsonText):
     sensor : ScanCalibration or None
         A calibration from motion intervals (``format="tuples"``, no runs): the wheels
         and the sensor's mounting it found, with their covariance.
+    without : Without or None
+        The result without a table's rows far outside their cluster
+        (:func:`umbmark.estimators.rows.far_rows`), None when there are none.
     """
 
     sources: tuple[str, ...]
@@ -122,6 +159,7 @@ class CalibrationResult(JsonText):
     command: str | None = field(default=None, compare=False)
     recorded: str | None = field(default=None, compare=False)
     sensor: ScanCalibration | None = field(default=None, compare=False)
+    without: Without | None = None
 
     def __repr__(self) -> str:
         est = self.estimate
@@ -332,6 +370,8 @@ class CalibrationResult(JsonText):
             out["motions"] = motion_coverage(logs, self.params).to_dict()
         if self.associations:
             out["time_association"] = {name: a.to_dict() for name, a in self.associations}
+        if self.without is not None:
+            out["without_rows"] = self.without.to_dict()
         if self.notes:
             out["notes"] = list(self.notes)
         return out

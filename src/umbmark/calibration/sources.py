@@ -14,13 +14,21 @@ from dataclasses import replace
 from pathlib import Path
 
 from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
-from umbmark.calibration.result import CalibrationResult
+from umbmark.calibration.result import CalibrationResult, Without
 from umbmark.core.bounds import check_square_geometry
-from umbmark.core.errors import InputError, option
+from umbmark.core.errors import InputError, ProblemError, option
 from umbmark.estimators.plausibility import judge_table
 from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
+from umbmark.estimators.rows import FarRow, far_rows
 from umbmark.runs.active import read_each
-from umbmark.runs.read import RunSource, is_intervals, is_runs, pool_runs, source_name
+from umbmark.runs.read import (
+    RunSource,
+    SourceRuns,
+    is_intervals,
+    is_runs,
+    pool_runs,
+    source_name,
+)
 from umbmark.runs.read_options import ReadOptions
 
 __all__ = ["calibrate_sources"]
@@ -175,6 +183,12 @@ def _calibrate_runs(
             strict=True,
         )
     ]
+    far = [
+        row
+        for source, one in zip(sources, each, strict=True)
+        if not is_runs(source) and one.formats == ("table",)
+        for row in far_rows(one.runs, read_options.unit)
+    ]
     read = each[0] if len(each) == 1 else pool_runs(each)
     if any(run.kind == "square" for run in read.runs):
         active = read.active
@@ -186,8 +200,25 @@ def _calibrate_runs(
         from umbmark.calibration.auto import auto_method
 
         chosen, note, nominal_best = auto_method(each, read)
-    result = calibrate_runs(read, chosen, fit_truth_offset=fit_truth_offset)
+    warned = replace(read, notes=(*read.notes, *(row.warning() for row in far)))
+    result = calibrate_runs(warned, chosen, fit_truth_offset=fit_truth_offset)
+    if far:
+        result = replace(result, without=_without(read, far, chosen))
     if chosen in names(trajectories=True) and len(read.parts) > 1:
         disagree = sessions_disagree(read.parts, fit_truth_offset=fit_truth_offset)
         result = replace(result, input_warnings=(*result.input_warnings, *disagree))
     return result, note, nominal_best
+
+
+def _without(read: SourceRuns, far: Sequence[FarRow], method: str) -> Without | None:
+    """The calibration of the runs without the rows ``far`` names (None where the rest
+    cannot be calibrated: too few runs left)."""
+    gone = {id(row.run) for row in far}
+    kept = tuple(run for run in read.runs if id(run) not in gone)
+    try:
+        alone = calibrate_runs(replace(read, runs=kept), method)
+    except (InputError, ProblemError, ValueError):
+        return None
+    est = alone.estimate
+    rows = tuple(row.label for row in far)
+    return Without(rows, alone.e_max_syst, est.E_d, est.E_b, alone.verdict.level)

@@ -33,6 +33,11 @@ threshold here and the reason for it:
 - **Too few runs** (:data:`MIN_RUNS`): apply with care.
 - **Implausible errors** (:data:`PLAUSIBLE_E_D`, :data:`PLAUSIBLE_E_B`,
   :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry.
+- **The input is wrong as read**: a warning that the table's numbers are in another unit
+  than it says (no robot scatters by less than a tape measure resolves) or that a row
+  lies far outside its cluster (a typo) (:class:`umbmark.core.messages.Blocking`, from
+  :mod:`umbmark.estimators.plausibility` and :mod:`umbmark.estimators.rows`): the result
+  is no robot's. Do not apply, with the warning's reason and remedy.
 - **Warnings**: a result that comes with warnings (the model check of the end poses, a
   run in the other cluster, the paper's small-angle formulas beyond their range, input
   read with doubts) is valid but shaky: apply with care.
@@ -52,6 +57,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from umbmark.core.errors import with_flags
+from umbmark.core.messages import Blocking
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.returns.clusters import NO_RETURN_ERROR
 from umbmark.sources.bag.truth.independence import REFERENCES
@@ -465,14 +471,16 @@ def judge(estimate: ErrorEstimate, test: SquareTest, evidence: Evidence) -> Verd
                 "more runs, squares in both directions, longer paths",
             )
         )
+    blocked = [w for w in evidence.warnings if isinstance(w, Blocking)]
+    found += [("do-not-apply", w.reason, w.instead) for w in blocked]
     found += _no_return_error(evidence)
     found += _intervals(estimate, test)
     found += _misfit(estimate, evidence)
     found += _model_check(estimate, test)
     found += _few_runs(evidence)
     found += _implausible(estimate, evidence.wheel_diameter)
-    if evidence.warnings:
-        n = len(evidence.warnings)
+    if len(evidence.warnings) > len(blocked):
+        n = len(evidence.warnings) - len(blocked)
         said = f"{n} warnings come" if n > 1 else "a warning comes"
         found.append(("care", f"{said} with the result (listed with it)", None))
     if not found:

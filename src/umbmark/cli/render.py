@@ -99,6 +99,7 @@ def render_calibration(
         _render_benchmark(report, bench, console)
 
     _render_errors(report, console)
+    _render_without(report, console)
     _render_correction(report, console)
 
     if overlay and report.overlay_withheld:
@@ -152,6 +153,26 @@ def _render_errors(report: CalibrationResult, console: Console) -> None:
     ]
     if intervals:
         console.print("95 % intervals: " + ", ".join(intervals))
+
+
+def _render_without(report: CalibrationResult, console: Console) -> None:
+    """The result without the rows far outside their cluster, beside the result."""
+    without = report.without
+    if without is None:
+        return
+    e_max = (
+        "" if without.e_max_syst is None else f"E_max,syst = {without.e_max_syst * _MM:.1f} mm, "
+    )
+    words = {"apply": "apply", "care": "apply with care", "do-not-apply": "do not apply"}
+    console.print(
+        Text(
+            f"Without {' and '.join(without.rows)}: {e_max}E_d = {without.E_d:.6f}, "
+            f"E_b = {without.E_b:.6f} (its verdict: {words[without.apply]}); with "
+            f"{'them' if len(without.rows) > 1 else 'it'}: E_d = {report.estimate.E_d:.6f}, "
+            f"E_b = {report.estimate.E_b:.6f}",
+            style="bold",
+        )
+    )
 
 
 def _render_correction(report: CalibrationResult, console: Console) -> None:

@@ -18,13 +18,42 @@ from collections.abc import Iterable, Sequence
 
 from umbmark.core.errors import with_flags
 
-__all__ = ["Info", "info", "join_names", "split_messages"]
+__all__ = ["Blocking", "Info", "blocking", "info", "join_names", "split_messages"]
 
 
 class Info(str):
     """A message that is information (what was done, found or chosen), not a warning."""
 
     __slots__ = ()
+
+
+class Blocking(str):
+    """A warning that makes the verdict "do not apply": the input is wrong as read (a
+    table in another unit than it says, a row typed wrong), so the result is no robot's.
+
+    Attributes
+    ----------
+    reason : str
+        Why not to apply, for the verdict.
+    instead : str or None
+        What to do instead.
+    """
+
+    reason: str
+    instead: str | None
+
+    def __new__(cls, text: str, reason: str, instead: str | None = None) -> Blocking:
+        made = super().__new__(cls, text)
+        made.reason, made.instead = reason, instead
+        return made
+
+    def __reduce__(self) -> tuple[type[Blocking], tuple[str, str, str | None]]:
+        return (Blocking, (str(self), self.reason, self.instead))
+
+
+def blocking(text: str, reason: str, instead: str | None = None) -> Blocking:
+    """Mark ``text`` as a warning that makes the verdict "do not apply"."""
+    return Blocking(text, reason, instead)
 
 
 def info(text: str) -> Info:
@@ -34,11 +63,15 @@ def info(text: str) -> Info:
 
 def split_messages(messages: Iterable[str]) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """``(notes, warnings)``: the messages marked :func:`info`, and all the others, each
-    in their order (as plain ``str``; an option a message names with
-    :func:`umbmark.core.errors.option` as the command line's flag)."""
+    in their order (as plain ``str``, a :class:`Blocking` warning staying one; an option a
+    message names with :func:`umbmark.core.errors.option` as the command line's flag)."""
     notes: list[str] = []
     warnings: list[str] = []
     for message in messages:
+        if isinstance(message, Blocking):
+            instead = None if message.instead is None else with_flags(message.instead)
+            warnings.append(Blocking(with_flags(str(message)), with_flags(message.reason), instead))
+            continue
         (notes if isinstance(message, Info) else warnings).append(with_flags(str(message)))
     return tuple(notes), tuple(warnings)
 

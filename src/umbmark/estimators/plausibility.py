@@ -39,6 +39,7 @@ import numpy as np
 
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, option, with_flags
+from umbmark.core.messages import Blocking, blocking
 from umbmark.model.run import EndPose, Run
 
 if TYPE_CHECKING:
@@ -251,25 +252,18 @@ def _table_unit_hints(
     if given is None:
         return []
     tiny = given.reach < _TINY_REACH * side
-    if given.reach == 0.0 or (given.typical(side) and not tiny):
+    still = given.scatter is not None and 0.0 < given.scatter < _LEAST_SCATTER
+    if given.reach == 0.0 or (given.typical(side) and not tiny and not still):
         return []
     readings = [_read_as(squares, unit, other) for other in UNITS if other != unit]
     sound = [r for r in readings if r is not None and r.sound(side)]
     fits = {r.unit: _fit(r, side, wheelbase) for r in sound}
     # Units one robot explains; where none does, the magnitudes alone.
     named = [r for r in sound if fits[r.unit] != "misfit" and fits[r.unit] != "fails"] or [
-        r for r in sound if given.error > _REACHABLE * side or tiny
+        r for r in sound if given.error > _REACHABLE * side or tiny or still
     ]
-    if tiny:
-        if not named:
-            return []
-        return [
-            with_flags(
-                f"the end points and return errors reach only {1000 * given.reach:.3g} mm on "
-                f"a {side:g} m square, less than a tape measure resolves; "
-                f"{_choice(named, unit)}"
-            )
-        ]
+    if tiny or still:
+        return [] if not named else [_unit_mistake(given, named, unit, side, tiny=tiny)]
     worst = max(range(len(squares)), key=lambda k: math.hypot(*given.runs[k].return_error))
     label = squares[worst].label or "a run"
     if given.error > _REACHABLE * side:
@@ -314,6 +308,33 @@ def _table_unit_hints(
     if beyond and fit == "fails":
         raise InputError(_too_large(label, given, side), source=name)
     return []
+
+
+def _unit_mistake(
+    given: _Reading, named: Sequence[_Reading], unit: str, side: float, *, tiny: bool
+) -> Blocking:
+    """The warning (and the verdict's reason) where the table's numbers are far smaller
+    than any robot's in the unit given and another unit makes them a robot's."""
+    said = []
+    square = f" on a {side:g} m square"
+    if tiny:
+        said.append(f"the end points and return errors reach only {1000 * given.reach:.3g} mm")
+    if given.scatter is not None and given.scatter < _LEAST_SCATTER:
+        said.append(f"the runs scatter by only {1000 * given.scatter:.3g} mm about their centres")
+    said[0] += square
+    why = (
+        f"{' and '.join(said)}, less than a tape measure resolves (no robot driving a "
+        f"square comes back within {1000 * _LEAST_SCATTER:g} mm of where it came back "
+        "before: slip alone scatters the returns by millimetres)"
+    )
+    others = " or ".join(r.unit for r in named)
+    options = " or ".join(option("unit", r.unit) for r in named)
+    return blocking(
+        with_flags(f"{why}; {_choice(named, unit)}"),
+        f"the table is likely in another unit than {unit} ({others}): {' and '.join(said)}, "
+        "less than a tape measure resolves; the correction is no robot's",
+        f"calibrate again with the table's unit ({options})",
+    )
 
 
 def _choice(
@@ -366,6 +387,7 @@ def check_columns(runs: Sequence[Run], side: float | None, name: str) -> list[st
     if not squares:
         return []
     scale = 4.0 if side is None else side
+    _check_odometry_frame(squares, scale, name)
     odometry = statistics.median(math.hypot(r.odometry_end.x, r.odometry_end.y) for r in squares)
     truth = statistics.median(math.hypot(r.true_end.x, r.true_end.y) for r in squares)
     if odometry < _NEAR_ODOMETRY * scale or odometry < _DOUBTFUL_RATIO * truth:
@@ -384,6 +406,48 @@ def check_columns(runs: Sequence[Run], side: float | None, name: str) -> list[st
             source=name,
         )
     return [f"{said}: are the measured and odometry columns swapped?"]
+
+
+def _check_odometry_frame(squares: Sequence[Run], scale: float, name: str) -> None:
+    """Refuse odometry end points that are all one offset from the start: the odom frame.
+
+    A robot steering by its odometry ends where its odometry says it started, so in each
+    run's start frame the odometry's end points lie near (0, 0). Odometry read in the odom
+    frame (where the robot started its first run, or was switched on) puts them all near
+    the run's start pose in that frame instead: one point, off the start by more than a
+    controller's tolerance (:data:`_NEAR_START` of the side), gathered more tightly there
+    than the measured end points gather (they scatter by the runs' errors), while the
+    measured end points lie nearer the start than that point. Columns swapped put the
+    measured end points, in their two clusters, in the odometry's columns: they do not
+    gather tightly (:func:`check_columns` names those).
+
+    Raises
+    ------
+    InputError
+        Naming the offset and the remedy.
+    """
+    ox = statistics.median(r.odometry_end.x for r in squares)
+    oy = statistics.median(r.odometry_end.y for r in squares)
+    tx = statistics.median(r.true_end.x for r in squares)
+    ty = statistics.median(r.true_end.y for r in squares)
+    odometry = [math.hypot(r.odometry_end.x - ox, r.odometry_end.y - oy) for r in squares]
+    truth = [math.hypot(r.true_end.x - tx, r.true_end.y - ty) for r in squares]
+    near = statistics.median(math.hypot(r.true_end.x, r.true_end.y) for r in squares)
+    there = statistics.median(math.hypot(r.true_end.x - ox, r.true_end.y - oy) for r in squares)
+    offset = math.hypot(ox, oy)
+    spread = statistics.median(odometry)
+    if offset < _NEAR_START * scale or spread > statistics.median(truth) or near >= there:
+        return
+    raise InputError(
+        f"x_odo, y_odo put every run's end near ({1000 * ox:.4g}, {1000 * oy:.4g}) mm "
+        f"(median; half of them within {1000 * spread:.3g} mm of it), {1000 * offset:.4g} mm "
+        "from the start, while x_abs, y_abs end near the start; a robot steering by its "
+        "odometry ends where its odometry says it started, so the odometry's end points are "
+        "in another frame, offset by that much (the odom frame, not each run's start frame): "
+        "give x_odo, y_odo relative to each run's start (subtract the start pose the "
+        "odometry gave at the run's start)",
+        source=name,
+    )
 
 
 def _heading_unit_hints(squares: Sequence[Run], angle_unit: str) -> list[str]:
