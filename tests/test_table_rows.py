@@ -100,7 +100,7 @@ def test_the_example_in_metres_read_as_millimetres_is_not_offered(tmp_path):
     rows = [[d, *(f"{float(v) / 1000:.4f}" for v in rest)] for d, *rest in _rows()]
     path = _table(tmp_path, rows)
     proc = run_cli("calibrate", str(path), "-L", "4", "-b", "0.34", "--unit", "mm")
-    assert proc.returncode == 0, proc.stderr
+    assert proc.returncode == 4, proc.stderr  # do not apply
     assert "Verdict: do not apply" in proc.stdout
     assert "are these m, not mm? (--unit m)" in proc.stderr
     assert "wheel_separation_multiplier" not in proc.stdout  # no overlay offered
@@ -137,7 +137,7 @@ def test_a_dropped_minus_is_named_with_its_row_and_the_result_without_it(tmp_pat
         "e_max_syst": pytest.approx(without.e_max_syst),
         "E_d": pytest.approx(without.E_d),
         "E_b": pytest.approx(without.E_b),
-        "apply": alone.verdict.level,
+        "verdict": alone.verdict.level,
     }
 
 
@@ -147,7 +147,7 @@ def test_swapped_digits_are_named_and_the_terminal_shows_the_result_beside(tmp_p
     # Line 7 typed -615.0 for -165.0 (y_abs): 450 mm out, and -165 fits its cluster.
     path = _table(tmp_path, _with((5, 2), "-615.0"))
     proc = run_cli("calibrate", str(path), "-L", "4", "-b", "0.34", "--unit", "mm")
-    assert proc.returncode == 0, proc.stderr
+    assert proc.returncode == 4, proc.stderr  # do not apply
     assert "row 7 lies 18 standard deviations from the other ccw runs in y" in proc.stderr
     assert "swapped digits: y_abs -615 (-165 fits)" in proc.stderr
     assert "Verdict: do not apply: row 7 lies 18 standard deviations" in proc.stdout
@@ -159,7 +159,7 @@ def test_swapped_digits_are_named_and_the_terminal_shows_the_result_beside(tmp_p
     )
     assert shown["without_rows"]["rows"] == ["row 7"]
     assert shown["without_rows"]["e_max_syst"] == pytest.approx(math.hypot(0.229875, 0.216425))
-    assert shown["apply"]["level"] == "do-not-apply"
+    assert shown["verdict"]["level"] == "do-not-apply"
 
 
 # --- item 4: odometry in the odom frame ---------------------------------------------------

@@ -61,7 +61,7 @@ class Without:
         E_max,syst [m] of the other runs.
     E_d, E_b : float
         The estimate of the other runs.
-    apply : str
+    verdict : str
         Its verdict's level (``apply``, ``care``, ``do-not-apply``).
     """
 
@@ -69,16 +69,16 @@ class Without:
     e_max_syst: float | None
     E_d: float
     E_b: float
-    apply: str
+    verdict: str
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"rows": [...], "e_max_syst": ..., "E_d": ..., "E_b": ..., "apply": ...}``."""
+        """``{"rows": [...], "e_max_syst": ..., "E_d": ..., "E_b": ..., "verdict": ...}``."""
         return {
             "rows": list(self.rows),
             "e_max_syst": self.e_max_syst,
             "E_d": self.E_d,
             "E_b": self.E_b,
-            "apply": self.apply,
+            "verdict": self.verdict,
         }
 
 

@@ -167,7 +167,7 @@ def _render_without(report: CalibrationResult, console: Console) -> None:
     console.print(
         Text(
             f"Without {' and '.join(without.rows)}: {e_max}E_d = {without.E_d:.6f}, "
-            f"E_b = {without.E_b:.6f} (its verdict: {words[without.apply]}); with "
+            f"E_b = {without.E_b:.6f} (its verdict: {words[without.verdict]}); with "
             f"{'them' if len(without.rows) > 1 else 'it'}: E_d = {report.estimate.E_d:.6f}, "
             f"E_b = {report.estimate.E_b:.6f}",
             style="bold",
