@@ -1,0 +1,276 @@
+"""One recording of a fleet calibrated by what it holds: a plain function that knows
+nothing of the engine it runs on.
+
+:func:`calibrate_recording` looks into the recording (:func:`~umbmark.sources.bag.info.
+summary.bag_info`: topics, wheels, a laser, an independent reference, the robot's
+description) and calibrates it through the calls ``umbmark calibrate`` makes
+(:func:`~umbmark.calibration.sources.calibrate_sources`):
+
+- **scan matching** where it holds wheels (or the controller's odometry) and a laser: the
+  wheels' diameters, the wheelbase, ``E_s`` and the laser's mounting from ordinary driving;
+- **a trajectory fit** where it holds an independent reference (motion capture) and no
+  laser;
+- else it is **left out**, with the reason.
+
+The reading options the user gave (``--truth-topic``, ``-b``, ...) win over what the look
+into the recording suggests. What comes back, :class:`RecordingOutcome`, is a small value
+(picklable: the engine's workers send it back), with each figure and its standard error,
+E_max,syst projected on the standard 4 m square, the multipliers to configure, and the
+recording's robot, start, length and digest. A recording that cannot be read comes back
+failed with its one-line reason, never as an exception.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from umbmark.core.conventions import Direction
+from umbmark.core.errors import InputError, ProblemError
+
+__all__ = [
+    "FIGURES",
+    "STANDARD_SIDE",
+    "RecordingOutcome",
+    "RecordingTask",
+    "calibrate_recording",
+]
+
+#: The figures a fleet follows per robot, in this order.
+FIGURES = ("E_d", "E_b", "E_s", "laser_x", "laser_y", "laser_yaw")
+#: The square E_max,syst is projected on [m] (the paper's).
+STANDARD_SIDE = 4.0
+
+
+@dataclass(frozen=True)
+class RecordingTask:
+    """One recording to calibrate.
+
+    Attributes
+    ----------
+    path : str
+        The recording.
+    robot : str or None
+        Its robot from the path's pattern; None: from the recording.
+    day : datetime.date or None
+        Its day from the path's pattern; None: from the recording's clock.
+    options : mapping of str to object
+        Reading options by keyword (as :func:`umbmark.calibrate` takes them), for every
+        recording of this robot.
+    """
+
+    path: str
+    robot: str | None = None
+    day: dt.date | None = None
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class RecordingOutcome:
+    """What one recording gave.
+
+    Attributes
+    ----------
+    path : str
+    robot : str
+        The robot (the pattern's, else the recording's namespace, else ``unnamed``).
+    start : float or None
+        When the recording started [s since 1970, UTC]: the pattern's day at midnight
+        where given, else the recording's first message.
+    hours : float
+        Its length [h].
+    digest : str or None
+        SHA-256 of its bytes.
+    method : str or None
+        ``scan-matching`` or ``trajectory``; None when left out or failed.
+    figures : dict of str to (float, float or None)
+        Each of :data:`FIGURES` it measured: value and standard error (metres, radians).
+    e_max_syst : float or None
+        E_max,syst [m] these errors make on the standard 4 m square driven by the
+        odometry (both directions, the worse), from ``E_d``, ``E_b``, ``E_s``.
+    multipliers : tuple of float or None
+        ``(wheel_separation_multiplier, left, right)`` to configure.
+    verdict : str or None
+        ``apply``, ``care`` or ``do-not-apply``.
+    reason : str or None
+        Why it was left out or failed (one line); None when calibrated.
+    failed : bool
+        It could not be read (``reason`` says why), as opposed to left out.
+    wheelbase : float or None
+        The nominal wheelbase [m] of the calibration.
+    """
+
+    path: str
+    robot: str
+    start: float | None
+    hours: float
+    digest: str | None
+    method: str | None = None
+    figures: dict[str, tuple[float, float | None]] = field(default_factory=dict)
+    e_max_syst: float | None = None
+    multipliers: tuple[float, float, float] | None = None
+    verdict: str | None = None
+    reason: str | None = None
+    failed: bool = False
+    wheelbase: float | None = None
+
+    @property
+    def calibrated(self) -> bool:
+        """Whether the recording gave a calibration."""
+        return self.method is not None
+
+
+def _keywords(flags: tuple[tuple[str, str], ...]) -> dict[str, str]:
+    """Command-line options (``("--truth-topic", "/mocap/pose")``) as keywords."""
+    from umbmark.options.spec import READ_OPTIONS
+
+    by_flag = {flag: spec.name for spec in READ_OPTIONS for flag in spec.flags}
+    return {by_flag[flag]: value for flag, value in flags if flag in by_flag}
+
+
+_NAMESPACE = re.compile(r"^/([^/]+)/")
+
+
+def _robot_of(info: Any, given: str | None) -> str:  # noqa: ANN401 (BagInfo)
+    """The robot: the pattern's, else the namespace most of the bag's topics share."""
+    if given:
+        return given
+    names: dict[str, int] = {}
+    for topic in info.topics:
+        match = _NAMESPACE.match(topic.name)
+        if match is not None and match[1] not in ("tf", "tf_static", "rosout", "parameter_events"):
+            names[match[1]] = names.get(match[1], 0) + 1
+    if names and max(names.values()) * 2 > len(info.topics):
+        return max(names, key=lambda n: names[n])
+    return "unnamed"
+
+
+def _start(info: Any, day: dt.date | None) -> float | None:  # noqa: ANN401 (BagInfo)
+    if day is not None:
+        return dt.datetime(day.year, day.month, day.day, tzinfo=dt.timezone.utc).timestamp()
+    return None if info.start is None else float(info.start)
+
+
+def _projected(E_d: float, E_b: float, E_s: float, wheelbase: float) -> float | None:
+    """E_max,syst [m] of these errors on the standard square (the worse direction)."""
+    from umbmark.model.square import square_run_end
+
+    worst = 0.0
+    for direction in (Direction.CW, Direction.CCW):
+        end = square_run_end(E_d, E_b, E_s, STANDARD_SIDE, wheelbase, direction)
+        worst = max(worst, math.hypot(float(end[0]), float(end[1])))
+    return worst if math.isfinite(worst) else None
+
+
+def _plan(info: Any, options: Mapping[str, Any]) -> tuple[str | None, dict[str, Any], str]:  # noqa: ANN401
+    """How to calibrate the bag: the method, its reading options, and a reason."""
+    inputs = info.wheels[:1] or info.odometry[:1]
+    reading: dict[str, Any] = {}
+    if inputs:
+        reading.update(_keywords(inputs[0].options))
+    if info.laser_scans and inputs:
+        reading["scan_topic"] = info.laser_scans[0]
+        return "scan-matching", {**reading, **options}, ""
+    truth = [c for c in info.truth if c.warning is None]
+    if truth and inputs and info.independent:
+        reading.update(_keywords(truth[0].options))
+        return "trajectory", {**reading, **options}, ""
+    if not inputs:
+        return None, {}, "no wheels or controller odometry found"
+    return None, {}, "neither a laser scan nor an independent reference (motion capture)"
+
+
+def _figures(result: Any) -> dict[str, tuple[float, float | None]]:  # noqa: ANN401
+    est = result.estimate
+    se = dict(est.standard_errors)
+    out: dict[str, tuple[float, float | None]] = {
+        "E_d": (float(est.E_d), se.get("E_d")),
+        "E_b": (float(est.E_b), se.get("E_b")),
+    }
+    if est.E_s is not None:
+        out["E_s"] = (float(est.E_s), se.get("E_s"))
+    sensor = result.sensor
+    if sensor is not None:
+        sse = sensor.standard_errors
+        for k, name in enumerate(("laser_x", "laser_y", "laser_yaw")):
+            out[name] = (float(sensor.laser_pose[k]), float(sse[name]))
+    return out
+
+
+def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
+    """Calibrate one recording by what it holds (see the module).
+
+    Parameters
+    ----------
+    task : RecordingTask
+
+    Returns
+    -------
+    RecordingOutcome
+        Calibrated, left out (``reason``) or failed (``failed``, ``reason``): never an
+        exception for a recording that cannot be read.
+    """
+    from umbmark.core.digest import path_sha256
+
+    path = Path(task.path)
+    robot = task.robot or "unnamed"
+    try:
+        digest = path_sha256(path)
+        info = _bag_info(path)
+    except (InputError, ProblemError, OSError) as exc:
+        return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
+    robot = _robot_of(info, task.robot)
+    start, hours = _start(info, task.day), info.duration / 3600.0
+    method, options, reason = _plan(info, task.options)
+    if method is None:
+        return RecordingOutcome(task.path, robot, start, hours, digest, reason=reason)
+    try:
+        result = _calibrate(path, method, options)
+    except (InputError, ProblemError) as exc:
+        return RecordingOutcome(task.path, robot, start, hours, digest, reason=_line(exc))
+    figures = _figures(result)
+    cal = result.calibration
+    wheelbase = float(cal.active.wheelbase)
+    E_s = figures.get("E_s", (1.0, None))[0]
+    return RecordingOutcome(
+        task.path,
+        robot,
+        start,
+        hours,
+        digest,
+        method=method,
+        figures=figures,
+        e_max_syst=_projected(figures["E_d"][0], figures["E_b"][0], E_s, wheelbase),
+        multipliers=(cal.new_separation_multiplier, cal.new_c_left, cal.new_c_right),
+        verdict=result.verdict.level,
+        wheelbase=wheelbase,
+    )
+
+
+def _bag_info(path: Path) -> Any:  # noqa: ANN401 (BagInfo)
+    from umbmark.runs.load import detect_format
+    from umbmark.sources.bag.info.summary import bag_info
+
+    if detect_format(path) != "bag":
+        raise InputError("is not a ROS bag or MCAP file", source=path)
+    return bag_info(path)
+
+
+def _calibrate(path: Path, method: str, options: Mapping[str, Any]) -> Any:  # noqa: ANN401
+    from umbmark.calibration.sources import calibrate_sources
+    from umbmark.runs.read_options import ReadOptions
+
+    wheelbase = options.get("wheelbase")
+    reading = {k: v for k, v in options.items() if k != "wheelbase"}
+    fit = None if method == "scan-matching" else method
+    return calibrate_sources([str(path)], ReadOptions.of(reading), method=fit, wheelbase=wheelbase)
+
+
+def _line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__

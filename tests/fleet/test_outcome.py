@@ -1,0 +1,68 @@
+"""One recording of a fleet calibrated by what it holds, as a plain function: a bag with
+motion capture by a trajectory fit (the simulated truth recovered), a bag with neither a
+laser nor a reference left out with the reason, an unreadable file failed with its line."""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+from pathlib import Path
+
+import pytest
+
+from umbmark.core.conventions import Direction
+from umbmark.fleet.outcome import RecordingTask, calibrate_recording
+from umbmark.model.square import square_run_end
+
+from helpers import run_cli
+
+E_D, E_B = 1.002, 1.01
+GEOMETRY = {"wheelbase": 0.34, "wheel_diameter": 0.15}
+
+
+@pytest.fixture(scope="module")
+def bag(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("fleet") / "r1.bag"
+    made = run_cli("simulate", "--E-d", str(E_D), "--E-b", str(E_B), "--seed", "7",
+                   "--dt", "0.02", "-L", "2", "--bag", str(path))  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    return path
+
+
+@pytest.mark.slow
+def test_a_bag_with_motion_capture_is_fitted_to_the_truth(bag: Path):
+    task = RecordingTask(str(bag), robot="amr1", day=dt.date(2026, 11, 2), options=GEOMETRY)
+    out = calibrate_recording(task)
+    assert (out.method, out.robot, out.failed, out.reason) == ("trajectory", "amr1", False, None)
+    assert out.start == dt.datetime(2026, 11, 2, tzinfo=dt.timezone.utc).timestamp()
+    for name, truth in (("E_d", E_D), ("E_b", E_B), ("E_s", 1.0)):
+        value, se = out.figures[name]
+        assert se is not None, name
+        assert abs(value - truth) < 4 * se, name
+    # E_max,syst on the standard 4 m square, from the closed form of the square's end
+    # (model.square) with the true errors: within the estimate's reach of it.
+    worst = max(
+        math.hypot(*square_run_end(E_D, E_B, 1.0, 4.0, 0.34, d)[:2])
+        for d in (Direction.CW, Direction.CCW)
+    )
+    assert out.e_max_syst == pytest.approx(worst, rel=0.05)
+    sep, left, right = out.multipliers
+    assert sep == pytest.approx(E_B, abs=1e-3)
+    assert right / left == pytest.approx(E_D, abs=2e-4)
+    assert out.hours > 0
+    assert len(out.digest) == 64
+
+
+@pytest.mark.slow
+def test_without_geometry_or_reference_it_is_left_out_or_failed(bag: Path, tmp_path: Path):
+    out = calibrate_recording(RecordingTask(str(bag), options={"truth_topic": "/nothing"}))
+    assert not out.calibrated
+    assert not out.failed
+    assert out.reason
+    garbage = tmp_path / "broken.bag"
+    garbage.write_bytes(b"#ROSBAG V2.0\n" + b"\0" * 100)
+    failed = calibrate_recording(RecordingTask(str(garbage)))
+    assert failed.failed
+    assert not failed.calibrated
+    assert failed.reason
+    assert "broken.bag" in failed.reason
