@@ -1,0 +1,292 @@
+"""What a fleet's calibrations say, robot by robot: the latest figures with their
+intervals, each figure's course over time (steady, a step since a recording, a trend per
+week: :func:`umbmark.fleet.changes.change_of`), what to apply, and the robots with no
+usable recording and why.
+
+:func:`summarize` takes every recording's outcome (:class:`~umbmark.fleet.outcome.
+RecordingOutcome`, from this run or from the history) and returns a
+:class:`FleetSummary`; the page and the JSON of ``umbmark fleet`` render it.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from umbmark.fleet.changes import Change, change_of
+from umbmark.fleet.outcome import FIGURES, STANDARD_SIDE, RecordingOutcome
+
+__all__ = ["FIGURE_UNITS", "FigureTrack", "FleetSummary", "RobotSummary", "summarize"]
+
+#: How each figure is shown: (label, factor to the shown unit, unit, decimals).
+FIGURE_UNITS: dict[str, tuple[str, float, str, int]] = {
+    "E_d": ("E_d = D_R / D_L", 1.0, "", 6),
+    "E_b": ("E_b = b_actual / b", 1.0, "", 6),
+    "E_s": ("E_s = D_avg / D", 1.0, "", 6),
+    "laser_x": ("laser forward", 1000.0, "mm", 2),
+    "laser_y": ("laser left", 1000.0, "mm", 2),
+    "laser_yaw": ("laser yaw", 180.0 / math.pi, "deg", 3),
+}
+#: z of a 95 % interval.
+Z95 = 1.959964
+
+
+@dataclass(frozen=True)
+class FigureTrack:
+    """One figure of one robot over its calibrations.
+
+    Attributes
+    ----------
+    name : str
+        One of :data:`~umbmark.fleet.outcome.FIGURES`.
+    times : tuple of float
+        When each recording started [s since 1970].
+    values, errors : tuple of float
+        Each calibration's value and standard error.
+    paths : tuple of str
+        Each calibration's recording.
+    change : Change
+        Steady, a step or a trend.
+    """
+
+    name: str
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+    errors: tuple[float, ...]
+    paths: tuple[str, ...]
+    change: Change
+
+    @property
+    def latest(self) -> tuple[float, float]:
+        """The latest value and its standard error: the chosen model's (a steady robot's
+        mean of all its calibrations, the value after a step, the trend's line now)."""
+        return self.change.value, self.change.se
+
+    def flag(self) -> str | None:
+        """The change in words, or None when steady."""
+        _, factor, unit, decimals = FIGURE_UNITS[self.name]
+        unit = f" {unit}" if unit else ""
+        size, se = self.change.size * factor, self.change.size_se * factor
+        if self.change.kind == "step" and self.change.since is not None:
+            k = self.change.since
+            when = dt.datetime.fromtimestamp(self.times[k], dt.timezone.utc).date()
+            return (
+                f"{self.name} stepped by {size:+.{decimals}f} ± {Z95 * se:.{decimals}f}{unit} "
+                f"since {self.paths[k]} ({when})"
+            )
+        if self.change.kind == "trend":
+            return (
+                f"{self.name} trends by {size:+.{decimals}f} ± {Z95 * se:.{decimals}f}{unit} "
+                "per week"
+            )
+        return None
+
+
+@dataclass(frozen=True)
+class RobotSummary:
+    """One robot of the fleet.
+
+    Attributes
+    ----------
+    robot : str
+    recordings : int
+        Its recordings (calibrated, left out and failed).
+    hours : float
+        Their length [h].
+    tracks : dict of str to FigureTrack
+        Each figure it has calibrations of.
+    latest : RecordingOutcome or None
+        Its latest calibrated recording.
+    left_out : tuple of (str, str)
+        Recordings not calibrated: path and reason.
+    """
+
+    robot: str
+    recordings: int
+    hours: float
+    tracks: dict[str, FigureTrack] = field(default_factory=dict)
+    latest: RecordingOutcome | None = None
+    left_out: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def flags(self) -> tuple[str, ...]:
+        """Every figure that changed beyond its intervals, in words."""
+        return tuple(f for f in (t.flag() for t in self.tracks.values()) if f is not None)
+
+    @property
+    def changed(self) -> bool:
+        return bool(self.flags)
+
+    @property
+    def usable(self) -> bool:
+        """Whether any recording gave a calibration."""
+        return self.latest is not None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (metres, radians, seconds)."""
+        latest = self.latest
+        return {
+            "robot": self.robot,
+            "recordings": self.recordings,
+            "hours": self.hours,
+            "usable": self.usable,
+            "figures": {
+                name: {
+                    "value": track.latest[0],
+                    "standard_error": track.latest[1],
+                    "interval_95": [
+                        track.latest[0] - Z95 * track.latest[1],
+                        track.latest[0] + Z95 * track.latest[1],
+                    ],
+                    "change": track.change.kind,
+                    "since": None
+                    if track.change.since is None
+                    else track.paths[track.change.since],
+                    "size": track.change.size,
+                    "size_standard_error": track.change.size_se,
+                    "times": list(track.times),
+                    "values": list(track.values),
+                    "standard_errors": list(track.errors),
+                }
+                for name, track in self.tracks.items()
+            },
+            "flags": list(self.flags),
+            "latest": None
+            if latest is None
+            else {
+                "path": latest.path,
+                "start": latest.start,
+                "method": latest.method,
+                "e_max_syst": latest.e_max_syst,
+                "multipliers": None if latest.multipliers is None else list(latest.multipliers),
+                "verdict": latest.verdict,
+            },
+            "left_out": [{"path": p, "reason": r} for p, r in self.left_out],
+        }
+
+
+@dataclass(frozen=True)
+class FleetSummary:
+    """The fleet, robot by robot.
+
+    Attributes
+    ----------
+    robots : tuple of RobotSummary
+        By name.
+    """
+
+    robots: tuple[RobotSummary, ...]
+
+    @property
+    def drifted(self) -> tuple[str, ...]:
+        """The robots with a figure that changed."""
+        return tuple(r.robot for r in self.robots if r.changed)
+
+    @property
+    def unusable(self) -> tuple[str, ...]:
+        """The robots with no recording that gave a calibration."""
+        return tuple(r.robot for r in self.robots if not r.usable)
+
+    @property
+    def worst(self) -> tuple[str, float] | None:
+        """The robot whose latest errors make the largest E_max,syst on the standard 4 m
+        square, and that E_max,syst [m]."""
+        found = [
+            (r.robot, r.latest.e_max_syst)
+            for r in self.robots
+            if r.latest is not None and r.latest.e_max_syst is not None
+        ]
+        return max(found, key=lambda f: f[1]) if found else None
+
+    def line(self) -> str:
+        """One line for people."""
+        worst = self.worst
+        said = (
+            ""
+            if worst is None
+            else f"; worst E_max,syst on the {STANDARD_SIDE:g} m square: {worst[1] * 1000:.1f} "
+            f"mm ({worst[0]})"
+        )
+        return (
+            f"{len(self.robots)} robots: {len(self.drifted)} changed beyond their intervals, "
+            f"{len(self.unusable)} with no usable recording{said}"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        worst = self.worst
+        return {
+            "robots": [r.to_dict() for r in self.robots],
+            "drifted": list(self.drifted),
+            "unusable": list(self.unusable),
+            "worst_e_max_syst": None if worst is None else {"robot": worst[0], "value": worst[1]},
+            "standard_side": STANDARD_SIDE,
+        }
+
+
+def _track(name: str, outcomes: Sequence[RecordingOutcome]) -> FigureTrack | None:
+    rows = [
+        (o.start, o.figures[name][0], o.figures[name][1], o.path)
+        for o in outcomes
+        if name in o.figures
+        and o.figures[name][1] is not None
+        and o.start is not None
+        and math.isfinite(o.figures[name][1] or math.nan)
+        and (o.figures[name][1] or 0.0) > 0.0
+    ]
+    if not rows:
+        return None
+    rows.sort(key=lambda r: (r[0], r[3]))
+    times = np.array([r[0] for r in rows], dtype=np.float64)
+    values = np.array([r[1] for r in rows], dtype=np.float64)
+    errors = np.array([r[2] for r in rows], dtype=np.float64)
+    return FigureTrack(
+        name,
+        tuple(float(t) for t in times),
+        tuple(float(v) for v in values),
+        tuple(float(e) for e in errors),
+        tuple(r[3] for r in rows),
+        change_of(times, values, errors),
+    )
+
+
+def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
+    """The fleet's robots from their recordings' outcomes (any order).
+
+    Parameters
+    ----------
+    outcomes : sequence of RecordingOutcome
+
+    Returns
+    -------
+    FleetSummary
+    """
+    by_robot: dict[str, list[RecordingOutcome]] = {}
+    for outcome in outcomes:
+        by_robot.setdefault(outcome.robot, []).append(outcome)
+    robots = []
+    for name in sorted(by_robot):
+        mine = by_robot[name]
+        calibrated = sorted(
+            (o for o in mine if o.calibrated), key=lambda o: (o.start or 0.0, o.path)
+        )
+        tracks = {}
+        for figure in FIGURES:
+            track = _track(figure, calibrated)
+            if track is not None:
+                tracks[figure] = track
+        robots.append(
+            RobotSummary(
+                name,
+                len(mine),
+                float(sum(o.hours for o in mine)),
+                tracks,
+                calibrated[-1] if calibrated else None,
+                tuple((o.path, o.reason or "") for o in mine if not o.calibrated),
+            )
+        )
+    return FleetSummary(tuple(robots))
