@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from umbmark.core.errors import InputError
+from umbmark.fleet.outcome import RecordingOutcome
 
 
 def square_or_refuse(n: int) -> int:
@@ -24,3 +25,29 @@ def slow_square(task: tuple[int, str, float]) -> tuple[int, int]:
     Path(folder, f"started-{n}-{os.getpid()}").write_text("")
     time.sleep(seconds)
     return n * n, os.getpid()
+
+
+DAY = 86400.0
+T0 = 1_790_000_000.0
+SE = {"E_d": 1e-4, "E_b": 3e-4, "E_s": 2e-4, "laser_x": 3e-4, "laser_y": 3e-4, "laser_yaw": 5e-4}
+
+
+def daily_outcomes(robot, days, rng, step_day=None, figure=None, jump=0.0):  # type: ignore[no-untyped-def]
+    """A robot's daily outcomes with known figures, ``figure`` stepped by ``jump`` from
+    ``step_day`` on (scan matching, 8 h a day)."""
+    out = []
+    truth = {"E_d": 1.003, "E_b": 0.98, "E_s": 1.0, "laser_x": 0.12, "laser_y": -0.04,
+             "laser_yaw": 0.07}  # fmt: skip
+    for day in range(days):
+        figures = {}
+        for name, value in truth.items():
+            stepped = step_day is not None and name == figure and day >= step_day
+            figures[name] = (value + jump * stepped + rng.normal(0.0, SE[name]), SE[name])
+        out.append(
+            RecordingOutcome(
+                f"{robot}/day{day:02d}.mcap", robot, T0 + day * DAY, 8.0, "0" * 64,
+                method="scan-matching", figures=figures, e_max_syst=0.1 + 0.001 * day,
+                multipliers=(0.98, 0.9985, 1.0015), verdict="apply",
+            )
+        )  # fmt: skip
+    return out

@@ -8,39 +8,17 @@ import json
 
 import numpy as np
 
+from fleet_tasks import T0, daily_outcomes
 from umbmark.fleet.outcome import RecordingOutcome
 from umbmark.fleet.summary import summarize
-
-DAY = 86400.0
-T0 = 1_790_000_000.0
-SE = {"E_d": 1e-4, "E_b": 3e-4, "E_s": 2e-4, "laser_x": 3e-4, "laser_y": 3e-4, "laser_yaw": 5e-4}
-
-
-def _outcomes(robot, days, rng, step_day=None, figure=None, jump=0.0):  # type: ignore[no-untyped-def]
-    out = []
-    truth = {"E_d": 1.003, "E_b": 0.98, "E_s": 1.0, "laser_x": 0.12, "laser_y": -0.04,
-             "laser_yaw": 0.07}  # fmt: skip
-    for day in range(days):
-        figures = {}
-        for name, value in truth.items():
-            stepped = step_day is not None and name == figure and day >= step_day
-            figures[name] = (value + jump * stepped + rng.normal(0.0, SE[name]), SE[name])
-        out.append(
-            RecordingOutcome(
-                f"{robot}/day{day:02d}.mcap", robot, T0 + day * DAY, 8.0, "0" * 64,
-                method="scan-matching", figures=figures, e_max_syst=0.1 + 0.001 * day,
-                multipliers=(0.98, 0.9985, 1.0015), verdict="apply",
-            )
-        )  # fmt: skip
-    return out
 
 
 def test_the_changed_robots_are_flagged_at_their_day_and_the_steady_ones_are_not():
     rng = np.random.default_rng(4)
     outcomes = [
-        *_outcomes("steady", 20, rng),
-        *_outcomes("wheel", 20, rng, step_day=12, figure="E_d", jump=20 * SE["E_d"]),
-        *_outcomes("laser", 20, rng, step_day=7, figure="laser_yaw", jump=0.03),
+        *daily_outcomes("steady", 20, rng),
+        *daily_outcomes("wheel", 20, rng, step_day=12, figure="E_d", jump=20 * 1e-4),
+        *daily_outcomes("laser", 20, rng, step_day=7, figure="laser_yaw", jump=0.03),
         RecordingOutcome("blind/day00.mcap", "blind", T0, 8.0, None,
                          reason="neither a laser scan nor an independent reference"),
         RecordingOutcome("blind/day01.mcap", "blind", None, 0.0, None,

@@ -1,0 +1,44 @@
+"""The fleet's page: self-contained, one row per usable robot with a plot per figure, the
+flags where a robot changed, the robots with no usable recording and why."""
+
+from __future__ import annotations
+
+from html.parser import HTMLParser
+
+import numpy as np
+
+from fleet_tasks import daily_outcomes
+from umbmark.fleet.outcome import RecordingOutcome
+from umbmark.fleet.page import fleet_page
+from umbmark.fleet.summary import summarize
+
+
+class _Shape(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.tags: dict[str, int] = {}
+        self.sources: list[str] = []
+
+    def handle_starttag(self, tag, attrs):  # type: ignore[no-untyped-def]
+        self.tags[tag] = self.tags.get(tag, 0) + 1
+        self.sources += [v for k, v in attrs if k in ("src", "href") and v]
+
+
+def test_the_page_shows_every_robot_its_plots_and_its_flags():
+    rng = np.random.default_rng(9)
+    outcomes = [
+        *daily_outcomes("steady", 12, rng),
+        *daily_outcomes("wheel", 12, rng, step_day=6, figure="E_d", jump=2e-3),
+        RecordingOutcome("blind/a.mcap", "blind", None, 1.0, None, reason="no laser <b>"),
+    ]
+    page = fleet_page(summarize(outcomes), made="umbmark fleet fleet/")
+    shape = _Shape()
+    shape.feed(page)
+    assert shape.sources == []  # self-contained: nothing loaded from elsewhere
+    assert shape.tags["tr"] == 1 + 2  # the header and the two usable robots
+    assert shape.tags["svg"] == 2 * 6  # each robot's six figures
+    assert "E_d stepped by +0.002" in page
+    assert "within its intervals" in page
+    assert "blind/a.mcap: no laser &lt;b&gt;" in page  # escaped
+    assert "umbmark fleet fleet/" in page
+    assert page.count('class="changed"') == 1
