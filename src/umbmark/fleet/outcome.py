@@ -103,6 +103,10 @@ class RecordingOutcome:
         It could not be read (``reason`` says why), as opposed to left out.
     wheelbase : float or None
         The nominal wheelbase [m] of the calibration.
+    record : dict
+        What the history records of the calibration (``calibrate --json``'s
+        ``standard_errors``, ``active``, ``new``, ``verdict`` and the nominal wheel
+        diameter); empty when not calibrated.
     """
 
     path: str
@@ -118,11 +122,57 @@ class RecordingOutcome:
     reason: str | None = None
     failed: bool = False
     wheelbase: float | None = None
+    record: dict[str, Any] = field(default_factory=dict)
 
     @property
     def calibrated(self) -> bool:
         """Whether the recording gave a calibration."""
         return self.method is not None
+
+    @property
+    def status(self) -> str:
+        """``calibrated``, ``left out`` or ``failed``."""
+        return "calibrated" if self.calibrated else "failed" if self.failed else "left out"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (metres, radians, seconds); :meth:`of_dict` reads it back."""
+        return {
+            "path": self.path,
+            "robot": self.robot,
+            "start": self.start,
+            "hours": self.hours,
+            "digest": self.digest,
+            "status": self.status,
+            "method": self.method,
+            "figures": {k: list(v) for k, v in self.figures.items()},
+            "e_max_syst": self.e_max_syst,
+            "multipliers": None if self.multipliers is None else list(self.multipliers),
+            "verdict": self.verdict,
+            "reason": self.reason,
+            "wheelbase": self.wheelbase,
+            "record": self.record,
+        }
+
+    @classmethod
+    def of_dict(cls, data: Mapping[str, Any]) -> RecordingOutcome:
+        """The outcome :meth:`to_dict` gave."""
+        multipliers = data.get("multipliers")
+        return cls(
+            str(data["path"]),
+            str(data["robot"]),
+            data.get("start"),
+            float(data.get("hours") or 0.0),
+            data.get("digest"),
+            method=data.get("method"),
+            figures={k: (float(v[0]), v[1]) for k, v in dict(data.get("figures") or {}).items()},
+            e_max_syst=data.get("e_max_syst"),
+            multipliers=None if multipliers is None else tuple(multipliers),
+            verdict=data.get("verdict"),
+            reason=data.get("reason"),
+            failed=data.get("status") == "failed",
+            wheelbase=data.get("wheelbase"),
+            record=dict(data.get("record") or {}),
+        )
 
 
 def _keywords(flags: tuple[tuple[str, str], ...]) -> dict[str, str]:
@@ -249,7 +299,19 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
         multipliers=(cal.new_separation_multiplier, cal.new_c_left, cal.new_c_right),
         verdict=result.verdict.level,
         wheelbase=wheelbase,
+        record=_record(result),
     )
+
+
+def _record(result: Any) -> dict[str, Any]:  # noqa: ANN401 (CalibrationResult)
+    data = result.to_dict()
+    return {
+        "standard_errors": data.get("standard_errors") or {},
+        "active": data.get("active") or {},
+        "new": data.get("new") or {},
+        "verdict": data.get("verdict") or {},
+        "wheel_diameter": result.calibration.active.wheel_diameter,
+    }
 
 
 def _bag_info(path: Path) -> Any:  # noqa: ANN401 (BagInfo)

@@ -21,7 +21,7 @@ import datetime as dt
 import json
 import os
 import sqlite3
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -91,8 +91,36 @@ def _migrate_2(db: sqlite3.Connection) -> None:
     db.execute("ALTER TABLE calibrations ADD COLUMN verdict TEXT")
 
 
+def _migrate_fleet(db: sqlite3.Connection) -> None:
+    """The fleet's recordings (``umbmark fleet``): each recording looked at, by digest and
+    reading options, with what it gave (:mod:`umbmark.store.recordings`)."""
+    db.execute(
+        """CREATE TABLE recordings (
+            id INTEGER PRIMARY KEY AUTOINCREMENT,
+            robot TEXT NOT NULL,
+            path TEXT NOT NULL,
+            digest TEXT,
+            identity TEXT,
+            options_key TEXT NOT NULL,
+            start REAL,
+            hours REAL NOT NULL,
+            status TEXT NOT NULL,
+            reason TEXT,
+            calibration INTEGER REFERENCES calibrations(id),
+            outcome TEXT NOT NULL,
+            recorded TEXT NOT NULL
+        )"""
+    )
+    db.execute("CREATE INDEX recordings_done ON recordings(options_key, identity)")
+    db.execute("CREATE INDEX recordings_robot ON recordings(robot, start)")
+
+
 #: The schema's migrations: ``MIGRATIONS[k]`` takes a file from version ``k`` to ``k + 1``.
-MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_migrate_1, _migrate_2)
+MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (
+    _migrate_1,
+    _migrate_2,
+    _migrate_fleet,
+)
 #: The schema version this umbmark writes.
 SCHEMA_VERSION = len(MIGRATIONS)
 
@@ -231,11 +259,20 @@ class History:
         with self._connect() as db:
             return int(db.execute("PRAGMA user_version").fetchone()[0])
 
+    @contextmanager
+    def transaction(self, *, write: bool = False) -> Iterator[sqlite3.Connection]:
+        """A connection in one transaction (``BEGIN IMMEDIATE`` when writing), for the
+        store's other tables (:mod:`umbmark.store.recordings`)."""
+        with self._connect(write=write) as db:
+            yield db
+
     def record(
         self,
         robot: str,
         calibration: NewCalibration,
         inputs: Sequence[str | os.PathLike[str]] = (),
+        *,
+        digests: Mapping[str, str | None] | None = None,
     ) -> int:
         """Record a calibration of ``robot``; a new robot is added with the calibration's
         nominal wheelbase and wheel diameter.
@@ -248,6 +285,8 @@ class History:
             The calibration, as the job that made it says it.
         inputs : sequence of path
             Its inputs (hashed with SHA-256 when they are files or folders).
+        digests : mapping of str to str, optional
+            SHA-256 of inputs hashed already (by name): not read again.
 
         Returns
         -------
@@ -264,7 +303,16 @@ class History:
         if not robot.strip():
             raise InputError(f"{option('robot')}: give a non-empty name")
         ours = (calibration.wheelbase, calibration.wheel_diameter)
-        hashed = [{"name": os.fspath(p), "sha256": path_sha256(Path(os.fspath(p)))} for p in inputs]
+        known = digests or {}
+        hashed = [
+            {
+                "name": os.fspath(p),
+                "sha256": known[os.fspath(p)]
+                if os.fspath(p) in known
+                else path_sha256(Path(os.fspath(p))),
+            }
+            for p in inputs
+        ]
         with self._connect(write=True) as db:
             row = db.execute(
                 "SELECT wheelbase, wheel_diameter FROM robots WHERE name = ?", (robot,)

@@ -1,0 +1,174 @@
+"""The fleet's recordings in the calibration history: every recording looked at, by its
+digest and the reading options it was read with, with what it gave.
+
+A recording that gave a calibration is also a calibration of its robot in the history
+(``umbmark history NAME`` lists it, with the recording's time and digest as its input);
+its row here holds the whole outcome (every figure, the laser's mounting) as JSON, which
+the fleet's summary is made from. A recording already here with the same digest and
+options, calibrated or left out, is not done again; one that failed is tried again.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from umbmark.store.history import History
+from umbmark.store.records import NewCalibration
+
+__all__ = [
+    "RecordingRow",
+    "Status",
+    "done_recordings",
+    "identity",
+    "options_key",
+    "read_recordings",
+    "record_recording",
+]
+
+Status = Literal["calibrated", "left out", "failed"]
+
+
+@dataclass(frozen=True)
+class RecordingRow:
+    """One recording as the history holds it.
+
+    Attributes
+    ----------
+    robot, path : str
+    digest : str or None
+        SHA-256 of its bytes.
+    identity : str
+        Its path, size and modification time (:func:`identity`): a recording seen before
+        is known by it without reading its bytes again.
+    options_key : str
+        The reading options it was read with (:func:`options_key`).
+    start : float or None
+        When it started [s since 1970, UTC].
+    hours : float
+    status : {"calibrated", "left out", "failed"}
+    reason : str or None
+        Why it was left out or failed.
+    outcome : dict
+        Everything it gave (JSON-ready; the fleet's outcome).
+    calibration : int or None
+        Its calibration's id in the history.
+    """
+
+    robot: str
+    path: str
+    digest: str | None
+    identity: str
+    options_key: str
+    start: float | None
+    hours: float
+    status: Status
+    reason: str | None
+    outcome: dict[str, Any]
+    calibration: int | None = None
+
+
+def options_key(options: Mapping[str, Any]) -> str:
+    """A short digest of reading options (their keywords and values, sorted): the same
+    options give the same key."""
+    text = json.dumps({k: options[k] for k in sorted(options)}, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def identity(path: str) -> str:
+    """A recording's path, size and modification time, as one text (a folder's: of its
+    files): what tells a recording seen before without reading its bytes."""
+    import os
+    from pathlib import Path
+
+    where = Path(path)
+    files = sorted(p for p in where.rglob("*") if p.is_file()) if where.is_dir() else [where]
+    stats = [(p.stat().st_size, p.stat().st_mtime_ns) for p in files]
+    size, newest = sum(s for s, _ in stats), max((m for _, m in stats), default=0)
+    return f"{os.path.abspath(path)}|{size}|{newest}"
+
+
+def done_recordings(history: History, key: str) -> tuple[set[str], set[str]]:
+    """The identities and the digests of the recordings already calibrated or left out
+    with options ``key`` (a failed one is tried again)."""
+    with history.transaction() as db:
+        rows = db.execute(
+            "SELECT identity, digest FROM recordings WHERE options_key = ? AND status != 'failed'",
+            (key,),
+        ).fetchall()
+    return {str(r[0]) for r in rows if r[0]}, {str(r[1]) for r in rows if r[1]}
+
+
+def record_recording(
+    history: History, row: RecordingRow, calibration: NewCalibration | None
+) -> int | None:
+    """Record one recording, and its calibration (with the recording as its input, its
+    digest not read again) when it gave one.
+
+    Returns
+    -------
+    int or None
+        The calibration's id in the history.
+    """
+    id = None
+    if calibration is not None:
+        digests = {row.path: row.digest}
+        id = history.record(row.robot, calibration, [row.path], digests=digests)
+    now = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    with history.transaction(write=True) as db:
+        db.execute(
+            "INSERT INTO recordings (robot, path, digest, identity, options_key, start, hours, "
+            "status, reason, calibration, outcome, recorded) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (
+                row.robot,
+                row.path,
+                row.digest,
+                row.identity,
+                row.options_key,
+                row.start,
+                row.hours,
+                row.status,
+                row.reason,
+                id,
+                json.dumps(row.outcome),
+                now,
+            ),
+        )
+    return id
+
+
+def read_recordings(history: History, robots: Sequence[str] = ()) -> list[RecordingRow]:
+    """The recordings of ``robots`` (all when empty), oldest first; of a recording
+    recorded more than once (tried again after a failure) the latest row."""
+    query = (
+        "SELECT robot, path, digest, identity, options_key, start, hours, status, reason, "
+        "outcome, calibration FROM recordings"
+    )
+    args: tuple[str, ...] = ()
+    if robots:
+        query += f" WHERE robot IN ({', '.join('?' * len(robots))})"
+        args = tuple(robots)
+    with history.transaction() as db:
+        rows = db.execute(query + " ORDER BY id", args).fetchall()
+    latest: dict[tuple[str, str, str], RecordingRow] = {}
+    for r in rows:
+        row = RecordingRow(
+            str(r[0]),
+            str(r[1]),
+            None if r[2] is None else str(r[2]),
+            str(r[3] or ""),
+            str(r[4]),
+            None if r[5] is None else float(r[5]),
+            float(r[6]),
+            r[7],
+            None if r[8] is None else str(r[8]),
+            json.loads(r[9]),
+            None if r[10] is None else int(r[10]),
+        )
+        latest[(row.robot, row.digest or row.path, row.options_key)] = row
+    return sorted(latest.values(), key=lambda row: (row.start or 0.0, row.path))
