@@ -285,6 +285,53 @@ def test_outside_range_writes_the_yaml_and_leaves_the_server(
     assert 1.6 not in seen["held"].values()
 
 
+#: A user's ROS 1 controller file (``rosparam load``), commented and hand-tuned.
+ROS1_FILE = """\
+# base controllers: hand-tuned, do not lose these comments!
+diff_drive_controller:
+  type: "diff_drive_controller/DiffDriveController"
+  left_wheel: 'left_wheel_joint'
+  right_wheel: right_wheel_joint
+  wheel_separation: 0.34    # m
+  wheel_radius_multiplier: 1.01   # both wheels (by hand)
+  wheel_separation_multiplier: 1.0
+  pose_covariance_diagonal: [0.001, 0.001, 1000000.0, 1000000.0, 1000000.0, 1000.0]
+
+joint_state_controller:
+  type: joint_state_controller/JointStateController
+  publish_rate: 50   # Hz
+"""
+
+
+@pytest.mark.slow
+def test_outside_range_changes_the_users_file_in_place(graph: RosGraph, tmp_path: Path) -> None:
+    """Outside dynamic_reconfigure's range the user's file is changed in place: the
+    separation value replaced, the left and right ones added after the block's last line,
+    ``wheel_radius_multiplier`` (both wheels) removed, every other byte kept; the previous
+    file kept beside it; the result's method is ``yaml`` and its message names the file
+    and the change."""
+    params = tmp_path / "control.yaml"
+    params.write_text(ROS1_FILE)
+    seen = _probe(graph, "outside", str(params))
+    assert (seen["method"], seen["active"], seen["file"]) == ("yaml", False, str(params))
+    expected = (
+        ROS1_FILE.replace("  wheel_radius_multiplier: 1.01   # both wheels (by hand)\n", "")
+        .replace("wheel_separation_multiplier: 1.0\n", "wheel_separation_multiplier: 1.6\n")
+        .replace(
+            "1000000.0, 1000.0]\n",
+            "1000000.0, 1000.0]\n  left_wheel_radius_multiplier: 0.9\n"
+            "  right_wheel_radius_multiplier: 1.1\n",
+        )
+    )
+    assert params.read_text() == expected
+    assert (tmp_path / "control.yaml.bak").read_text() == ROS1_FILE
+    assert (
+        f"changed {params}: diff_drive_controller's wheel_separation_multiplier 1.0 -> 1.6"
+        in (seen["message"])
+    )
+    assert "previous file kept as" in seen["message"]
+
+
 @pytest.mark.slow
 def test_ctrl_c_stops_the_robot(graph: RosGraph, tmp_path: Path) -> None:
     """Ctrl-C while ``umbmark selfcal --ros1`` drives: exit 130, and the last velocity it

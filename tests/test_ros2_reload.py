@@ -227,3 +227,68 @@ def _plan(env: dict[str, str], *args: str) -> dict[str, Any]:
     assert done.returncode == 0, done.stderr[-3000:]
     out: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
     return out
+
+
+#: A user's controller file, as a person writes and tunes it.
+USER_FILE = """\
+# my_controllers.yaml: hand-tuned, do not lose these comments!
+controller_manager:
+  ros__parameters:
+    update_rate: 100  # Hz
+
+diff_cont:
+  ros__parameters:
+    left_wheel_names: ["left_wheel_joint"]
+    right_wheel_names: [ 'right_wheel_joint' ]
+
+    wheel_separation: 0.34   # m, measured with a tape
+    wheel_radius: 0.075      # m
+    wheel_separation_multiplier: 1.0   # calibrated by hand, 2024
+    left_wheel_radius_multiplier: 1.0
+    right_wheel_radius_multiplier: 1.0 # same tyres
+    publish_rate: 50.0  # Hz
+"""
+
+
+@pytest.mark.slow
+def test_a_controller_named_diff_cont_and_its_commented_file(tmp_path: Path) -> None:
+    """Kilted through ``--reload``, the controller ``/diff_cont``, ``--params-file`` the
+    user's commented file: the pass's correction went by set_parameters and the JSON's
+    ``apply_method`` says so (not ``yaml``); the file holds the values the controller
+    runs on, every other byte as it was (the three value substrings masked, byte for
+    byte), its previous copy beside it, and a line on the terminal named it; the overlay
+    and the page's overlay are keyed ``diff_cont``."""
+    import html
+    import re
+
+    env = ros2_env(tmp_path)
+    out, mine = tmp_path / "out", tmp_path / "my_controllers.yaml"
+    mine.write_text(USER_FILE)
+    node = Node(env, "--upside-down", "--controller", "/diff_cont", "--params-file", str(mine))
+    try:
+        done = _umbmark(env, "selfcal", "--ros2", "--reload", "--controller", "/diff_cont",
+                        "--params-file", str(mine), "--runs", "2", "-L", "1", "--max-passes",
+                        "1", "--no-coarse", "--out", str(out), "--json")  # fmt: skip
+    finally:
+        final = node.ended()
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout)
+    first = report["passes"][0]
+    assert first["applied"] is True
+    assert first["apply_method"] == "set_parameters"
+    assert final["calls"] == [c.replace(NAME, "diff_cont") for c in CONFIGURE]
+    configured = {k: final["configured"][k] for k in MULTIPLIERS}
+    _truth_held(configured)
+    value = r"(?<=_multiplier: )[0-9.e+-]+"
+    assert re.sub(value, "V", mine.read_text()) == re.sub(value, "V", USER_FILE)
+    written = yaml.safe_load(mine.read_text())["diff_cont"]["ros__parameters"]
+    assert {k: written[k] for k in MULTIPLIERS} == pytest.approx(configured, rel=1e-9)
+    assert (tmp_path / "my_controllers.yaml.bak").read_text() == USER_FILE
+    assert f"umbmark: changed {mine}: diff_cont's wheel_separation_multiplier 1.0 -> " in (
+        done.stderr
+    )
+    assert list(yaml.safe_load((out / "overlay.yaml").read_text())) == ["diff_cont"]
+    page = (out / "report.html").read_text()
+    shown = re.search(r'<pre id="overlay-yaml">(.*?)</pre>', page, re.S)
+    assert shown is not None
+    assert list(yaml.safe_load(html.unescape(shown[1]))) == ["diff_cont"]

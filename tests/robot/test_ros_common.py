@@ -196,8 +196,10 @@ def test_held_problem_names_a_clamped_value() -> None:
 
 def test_write_params_new_ros1_file_is_read_back(tmp_path: Path) -> None:
     path = tmp_path / "controller.yaml"
-    notes = write_params(path, _params(0.97, 0.998, 1.002), "/diff_drive_controller", ros2=False)
-    assert notes == []
+    done = write_params(path, _params(0.97, 0.998, 1.002), "/diff_drive_controller", ros2=False)
+    assert done.backup is None
+    assert done.edited.removed == ()
+    assert done.line().startswith(f"wrote {path} (new): diff_drive_controller's ")
     read = read_controller_params(path, "/diff_drive_controller")
     assert read.ros2 is False
     assert (
@@ -226,9 +228,8 @@ def test_write_params_keeps_the_rest_of_an_existing_file(tmp_path: Path) -> None
         "joint_state_controller:\n"
         "  publish_rate: 50\n"
     )
-    notes = write_params(path, _params(0.97, 0.998, 1.002), "/diff_drive_controller", ros2=False)
-    assert len(notes) == 1
-    assert "removed wheel_radius_multiplier" in notes[0]
+    done = write_params(path, _params(0.97, 0.998, 1.002), "/diff_drive_controller", ros2=False)
+    assert done.edited.removed == ("  wheel_radius_multiplier: 1.01",)
     read = read_controller_params(path, "/diff_drive_controller")
     assert read.wheel_separation == 0.34
     assert read.left_wheel_radius_multiplier == 0.998

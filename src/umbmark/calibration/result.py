@@ -25,8 +25,10 @@ from umbmark.model.run import Run
 from umbmark.returns.clusters import Benchmark, Cluster, sem_verdict
 from umbmark.runs.association import Association
 from umbmark.sources.params.reader import (
+    DEFAULT_CONTROLLER,
     CalibratedParams,
     ControllerParams,
+    key_path_of,
     read_calibrated_params,
     result_nominal,
 )
@@ -44,7 +46,18 @@ __all__ = [
     "calibrated_name",
     "calibrated_nominal",
     "calibrated_params",
+    "unnamed_controller",
 ]
+
+
+def unnamed_controller() -> str:
+    """What is said where nothing named the controller (its file, ``--controller``, a
+    result or the history): the overlays are keyed by the default."""
+    return (
+        f"no controller named: keyed {DEFAULT_CONTROLLER}; give --controller NAME (with its "
+        "namespace, e.g. /robot1/diff_cont) or --current-params with its parameter file"
+    )
+
 
 PathLike = str | os.PathLike[str]
 
@@ -261,6 +274,7 @@ class CalibrationResult(JsonText):
                 wheel_diameter_right=model["wheel_diameter_right"],
                 spot_wheelbase=model["spot_wheelbase"],
                 source=self.source,
+                controller=self._controller_name,
             )
         return CalibratedParams(
             wheelbase=cal.wheelbase_corrected,
@@ -272,7 +286,12 @@ class CalibrationResult(JsonText):
             configured_wheelbase=cal.active.wheelbase,
             wheel_diameter=cal.active.wheel_diameter,
             source=self.source,
+            controller=self._controller_name,
         )
+
+    @property
+    def _controller_name(self) -> str | None:
+        return self.controller.name if self.controller.named else None
 
     def _model(self) -> dict[str, float] | None:
         """The richer model a method fitted (absolute values [m]), if any."""
@@ -296,6 +315,7 @@ class CalibrationResult(JsonText):
             "source": self.source,
             "sources": list(self.sources),
             "method": est.method,
+            "controller": self.controller.name if self.controller.named else None,
             "units": {"length": "m", "angle": "rad"},
             "side_length": self.test.side_length,
             "n_runs": len(self.runs),
@@ -394,6 +414,7 @@ class CalibrationResult(JsonText):
             f"{active.separation_multiplier:g}, left {active.c_left:g}, right {active.c_right:g}.",
             "diff_drive_controller reads these on configure: reload or restart the controller.",
             *([] if self.verdict.level == "apply" else [self.verdict.line()]),
+            *([] if self.controller.named else [unnamed_controller()]),
             *(
                 [
                     "open_loop is true: the controller's odometry integrates its commands, "
@@ -428,7 +449,9 @@ class CalibrationResult(JsonText):
                 "controller's parameters: ROS 1's diff_drive_controller uses it instead of "
                 "the left and right ones, which here include it."
             )
-        keys = controller.key_path if not controller.ros2 else (controller.controller,)
+        keys = (
+            key_path_of(controller.name) if "*" not in controller.name else (controller.controller,)
+        )
         return ros1_params(self._new_multipliers(), comments, keys)
 
 

@@ -106,10 +106,13 @@ ROS = "ROS robots (--ros1, --ros2)"
                help="Ground-truth pose topic, geometry_msgs/PoseStamped (--measure truth)."),
         option("--base-frame", section=ROS, default="base_link", show_default=True,
                help="The robot's base frame."),
-        option("--controller", section=ROS, default="/diff_drive_controller",
-               show_default=True, help="The diff_drive_controller's namespace."),
+        option("--controller", section=ROS, default=None, metavar="NAME",
+               help="The diff_drive_controller's name with its namespace; the overlays and "
+               "the history are keyed by it (with --sim too) [default: "
+               "/diff_drive_controller]."),
         option("--params-file", section=ROS, type=click.Path(dir_okay=False), default=None,
-               help="The YAML the controller loads (--apply yaml writes the multipliers)."),
+               help="The YAML the controller loads: the new multipliers are written into it "
+               "in place (every other byte kept; the previous file kept as FILE.bak)."),
         option("--reload", section=ROS, is_flag=True,
                help="ROS 2: apply each pass through the controller manager (deactivate, "
                "configure, activate; Rolling: unload and load with --params-file appended); "
@@ -173,7 +176,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         ranges=tuple(t.strip() for t in ranges.split(",")) if ranges else (),
         truth=options.pop("truth_topic"),
         base_frame=options.pop("base_frame"),
-        controller=options.pop("controller"),
+        controller=options["controller"] or "/diff_drive_controller",
         params_file=options.pop("params_file"),
         reload=options.pop("reload"),
         laser_mount=None if options["laser_mount"] is None else laser_mount(options["laser_mount"]),

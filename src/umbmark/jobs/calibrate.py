@@ -21,6 +21,7 @@ from umbmark.runs.read_options import ReadOptions, SourceOptions
 if TYPE_CHECKING:
     from typing_extensions import Unpack
 
+    from umbmark.outputs.files import OutputPlan
     from umbmark.outputs.tum import TumTime
 
 __all__ = ["calibrate"]
@@ -140,10 +141,21 @@ def calibrate(
         files = {"yaml": plan.yaml, "ros1_yaml": plan.ros1_yaml}
         result = replace(result, withheld=tuple(k for k, v in files.items() if v is not None))
         plan = replace(plan, yaml=None, ros1_yaml=None)
+    result = _said_keyed(result, plan)
     result.write_planned(plan, time, override_verdict=override_verdict)
     if store is not None and robot is not None:
         result = recorded(result, store, robot, sources, override_verdict)
     return result
+
+
+def _said_keyed(result: CalibrationReport, plan: OutputPlan) -> CalibrationReport:
+    """``result`` with a note where it writes an overlay keyed by the default controller
+    (nothing named it)."""
+    if result.controller.named or not any((plan.yaml, plan.ros1_yaml, plan.report)):
+        return result
+    from umbmark.calibration.result import unnamed_controller
+
+    return replace(result, notes=(*result.notes, unnamed_controller()))
 
 
 def _tum_time(tum_time: str) -> TumTime:

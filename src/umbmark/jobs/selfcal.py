@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from umbmark.calibration.passes import Holds
+from umbmark.calibration.result import unnamed_controller
 from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError, unexpected_keyword
 from umbmark.jobs.selfcal_anywhere import AnywhereReport, selfcal_anywhere, square_only
@@ -134,6 +135,7 @@ def selfcal(
         return selfcal_anywhere(
             robot, apply=g.apply_method, verify=g.verify, robot_name=g.robot_name,
             history=g.history, out=g.out, progress=progress, limits=g.limits, force=g.force,
+            controller=robot_controller(robot, g.controller),
         )  # fmt: skip
     return _squares(robot, chosen, _Calls(progress, ask, notify, runs_left))
 
@@ -167,6 +169,7 @@ def _squares(robot: Robot, g: SelfcalSetup, calls: _Calls) -> SelfCalReport:
             corner_side=s.get("corner_side", "right"),
         )  # fmt: skip
     method = g.apply_method
+    controller = robot_controller(robot, g.controller)
     limits = g.limits or DriveLimits()
     marks = marks_for(robot, g.tape_marks) if g.measure == "tape" else None
     how = Measure(g.measure, ask=calls.ask, marks=marks, side=g.corner_side)
@@ -185,7 +188,7 @@ def _squares(robot: Robot, g: SelfcalSetup, calls: _Calls) -> SelfCalReport:
         problem = pending_problem(robot.drive_params(), state.pending)
         if problem is not None:
             raise InputError(f"{problem} ({folder / 'overlay.yaml'})")
-        prior = resumed_passes(folder, state)
+        prior = resumed_passes(folder, state, controller)
         check_outputs(None, page, g.force)  # the folder's own page and overlay are replaced
     else:
         check_outputs(folder, page, g.force)  # before anything moves
@@ -194,7 +197,7 @@ def _squares(robot: Robot, g: SelfcalSetup, calls: _Calls) -> SelfCalReport:
         drive = PassDriver(
             robot, how, Path(logs), g.side_length, g.runs, limits, name,
             Watch(calls.progress, calls.notify, calls.runs_left, g.runs), record_as=g.robot_name,
-            history=g.history, kept=folder is not None,
+            history=g.history, kept=folder is not None, controller=controller,
         )  # fmt: skip
         found = _calibrate(
             drive, method, g.verify, g.max_passes, g.coarse,
@@ -206,13 +209,15 @@ def _squares(robot: Robot, g: SelfcalSetup, calls: _Calls) -> SelfCalReport:
         files = write_outputs(
             [p.folder for p in found.passes if p.folder is not None],
             None if holds.held is None else found.passes[holds.held - 1].report,
-            holds, folder, page, g.force or state is not None,
+            holds, folder, page, g.force or state is not None, controller,
         )  # fmt: skip
+        if controller is None and found.passes and calls.notify is not None:
+            calls.notify(unnamed_controller())  # the overlay's keys: the default
         restart = None
         if found.pending is not None and folder is not None:
             settings = locals_settings(g.side_length, g.runs, g.measure, g.max_passes, g.verify)
             restart, more = _stop_for_restart(
-                robot, folder, found.passes, found.pending,
+                controller, folder, found.passes, found.pending,
                 {**settings, "corner_side": g.corner_side},
             )  # fmt: skip
             files.extend(more)
@@ -332,6 +337,8 @@ def _calibrate(
                     * coarse_check.ratio,
                 )
                 coarse_applied = robot.apply(coarse_params, method)
+                if coarse_applied.wrote is not None:
+                    watch.say(coarse_applied.wrote)
                 if not coarse_applied.active and restart.note is not None:
                     pending = coarse_params
             # where it stands now, by a fix without a prior (the turns moved its odometry)
@@ -348,6 +355,8 @@ def _calibrate(
             watch.begin_pass(max_passes - k + 1 + int(verify))
             result, new = apply_pass(robot, drive(f"pass {k}", home), method)
             passes.append(result)
+            if result.applied is not None and result.applied.wrote is not None:
+                watch.say(result.applied.wrote)  # the user's file changed: said at once
             watch.say(result.summary())
             drive.mark_applied(result)
             home.reanchor(robot)
@@ -403,19 +412,38 @@ def locals_settings(
     }  # fmt: skip
 
 
+def robot_controller(robot: Robot, given: str | None) -> str | None:
+    """The controller the corrections are for: the one ``given``, else a ROS robot's own
+    (its options' ``controller``), else None (the default, said so)."""
+    if given is not None:
+        return given
+    ros = getattr(robot, "options", None)
+    name = getattr(ros, "controller", None)
+    return name if isinstance(name, str) and name.strip("/") else None
+
+
 def _stop_for_restart(
-    robot: Robot,
+    controller: str | None,
     folder: Path,
     passes: list[PassResult],
     pending: DriveParams,
     settings: dict[str, Any],
 ) -> tuple[str, list[Path]]:
     """Write the overlay of the pending parameters and the state; what to do next."""
-    from umbmark.robot.ros_common import restart_commands, write_params
+    from umbmark.core.atomic import atomic_write_text
+    from umbmark.robot.ros_common import multipliers, restart_commands
+    from umbmark.sources.params.reader import DEFAULT_CONTROLLER, key_path_of
+    from umbmark.sources.params.writer import ros2_control_overlay
 
-    controller = getattr(getattr(robot, "options", None), "controller", "/diff_drive_controller")
+    name = controller or DEFAULT_CONTROLLER
     overlay = folder / "restart-overlay.yaml"
-    write_params(overlay, pending, controller, ros2=True)
+    m = multipliers(pending)
+    new = (
+        m["left_wheel_radius_multiplier"],
+        m["right_wheel_radius_multiplier"],
+        m["wheel_separation_multiplier"],
+    )
+    atomic_write_text(overlay, ros2_control_overlay(new, (), key_path_of(name)))
     path = write_state(
         folder,
         SelfCalState(
@@ -429,7 +457,7 @@ def _stop_for_restart(
         ),
     )
     text = (
-        f"stopped for a controller restart: {restart_commands(controller, pending, str(overlay))}"
+        f"stopped for a controller restart: {restart_commands(name, pending, str(overlay))}"
         f"; then: umbmark selfcal --resume {folder} (with the same robot options)"
     )
     return text, [overlay, path]

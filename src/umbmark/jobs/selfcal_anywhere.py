@@ -164,10 +164,12 @@ def selfcal_anywhere(
     limits: DriveLimits | None = None,
     force: bool = False,
     repeats: int = 4,
+    controller: str | None = None,
 ) -> AnywhereReport:
     """Calibrate ``robot`` anywhere (the module's documentation); the options as
     :func:`umbmark.selfcal`'s (``apply`` as a method). ``repeats``: how often the pattern
-    is driven in a row for one calibration (1 to :data:`MAX_REPEATS`).
+    is driven in a row for one calibration (1 to :data:`MAX_REPEATS`). ``controller``:
+    the controller the overlay and the history are keyed by (None: the default).
 
     Raises
     ------
@@ -188,7 +190,8 @@ def selfcal_anywhere(
         check_scene(robot, limits)
         checks = ("the laser sees a scene with structure: scan matching can measure motion",)
         with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
-            drive = _Pass(robot, Path(logs), limits, progress, repeats, robot_name, history, force)
+            drive = _Pass(robot, Path(logs), limits, progress, repeats, robot_name, history,
+                          force, controller)  # fmt: skip
             first = drive("pass 1")
             first = _apply(robot, first, apply)
             if first.applied is not None and first.applied.active and robot_name is not None:
@@ -249,6 +252,7 @@ class _Pass:
     record_as: str | None
     history: str | os.PathLike[str] | None
     force: bool
+    controller: str | None = None
 
     def __call__(self, label: str) -> AnywherePass:
         from umbmark.outputs.calibration import CalibrationReport
@@ -272,6 +276,7 @@ class _Pass:
                 "current_c_l": p.left_wheel_radius_multiplier,
                 "current_c_r": p.right_wheel_radius_multiplier,
                 "current_separation_multiplier": p.wheel_separation_multiplier,
+                **({} if self.controller is None else {"controller": self.controller}),
             },
             method=SCAN_MATCHING.name,
             wheelbase=p.wheel_separation,

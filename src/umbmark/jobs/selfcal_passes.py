@@ -20,17 +20,27 @@ from umbmark.routines.passes import Home, drive_pass, strays
 from umbmark.routines.record import MeasuredRun, pass_folder, record_pass
 from umbmark.routines.resume import SelfCalState
 from umbmark.routines.watch import Watch
+from umbmark.runs.read_options import SourceOptions
 
-__all__ = ["PassDriver", "apply_pass", "holds_of", "resumed_passes"]
+__all__ = ["PassDriver", "apply_pass", "controller_options", "holds_of", "resumed_passes"]
 
 
-def resumed_passes(folder: Path, state: SelfCalState) -> list[PassResult]:
+def controller_options(controller: str | None) -> SourceOptions:
+    """The reading options that key a pass's calibration by ``controller`` (none: the
+    default, said so)."""
+    return {} if controller is None else {"controller": controller}
+
+
+def resumed_passes(
+    folder: Path, state: SelfCalState, controller: str | None = None
+) -> list[PassResult]:
     """The passes a stopped self-calibration drove, their parameters now applied."""
     from umbmark.store.calibrations import calibrate_recorded
 
     out = []
     for label, where, params in state.passes:
-        report = CalibrationReport.of(calibrate_recorded([folder / where], {}))
+        found = calibrate_recorded([folder / where], controller_options(controller))
+        report = CalibrationReport.of(found)
         out.append(PassResult(label, folder / where, report, params))
     if out:
         out[-1] = replace(
@@ -54,6 +64,7 @@ class PassDriver:
     record_as: str | None = None
     history: str | os.PathLike[str] | None = None
     kept: bool = True
+    controller: str | None = None
 
     def __call__(self, label: str, home: Home) -> PassResult:
         from umbmark.store.calibrations import calibrate_recorded
@@ -71,7 +82,10 @@ class PassDriver:
         )
         where = pass_folder(self.folder, label)
         record_pass(where, measured, params, self.side, self.how.method, self.name)
-        found = calibrate_recorded([where], {}, robot=self.record_as, history=self.history)
+        found = calibrate_recorded(
+            [where], controller_options(self.controller), robot=self.record_as,
+            history=self.history,
+        )  # fmt: skip
         report = CalibrationReport.of(found)
         return PassResult(label, where, report, params, warnings=strays(measured, self.limits))
 

@@ -18,6 +18,7 @@ from umbmark.core.arrays import FloatArray
 
 __all__ = [
     "APPLY_METHODS",
+    "AppliedBy",
     "ApplyResult",
     "DriveParams",
     "Pose2D",
@@ -141,15 +142,26 @@ ApplyMethod = Literal["reconfigure", "yaml", "none"]
 APPLY_METHODS: tuple[ApplyMethod, ...] = ("reconfigure", "yaml", "none")
 
 
+#: How parameters did reach a controller (:attr:`ApplyResult.method`): ``reconfigure``
+#: (ROS 1's dynamic_reconfigure, the virtual robot at once), ``set_parameters`` (ROS 2:
+#: set on the controller, which the controller manager then configures again),
+#: ``reload`` (ROS 2: the parameter file appended to the controller's, which the manager
+#: unloads and loads again), ``yaml`` (the parameter file written; the controller takes
+#: it on a restart), ``none``.
+AppliedBy = Literal["reconfigure", "set_parameters", "reload", "yaml", "none"]
+
+
 @dataclass(frozen=True)
 class ApplyResult:
-    """What applying parameters did: how, whether the controller now runs with them, the
-    file written (if any), and a line for people."""
+    """What applying parameters did: the way they took (the one used, which may not be
+    the one asked for), whether the controller now runs with them, a line for people, the
+    file written (if any) and the line saying how it was changed."""
 
-    method: ApplyMethod
+    method: AppliedBy
     active: bool
     message: str
     file: str | None = None
+    wrote: str | None = None
 
 
 @runtime_checkable

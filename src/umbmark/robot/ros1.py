@@ -328,12 +328,12 @@ class Ros1Robot(RosRobot):
             return ApplyResult(
                 "none", False, f"{lead}no --params-file to write them to: not applied"
             )
-        notes = write_params(path, params, self.options.controller, ros2=False)
-        extra = "".join(f"; {n}" for n in notes)
+        edit = write_params(path, params, self.options.controller, ros2=False)
         return ApplyResult(
             "yaml",
             False,
-            f"{lead}wrote {os.fspath(path)}: load it (rosparam load) and restart the "
-            f"controller to run with them{extra}",
+            f"{lead}{edit.line()}: load it (rosparam load) and restart the controller to run "
+            "with them",
             file=os.fspath(path),
+            wrote=edit.line(),
         )

@@ -48,7 +48,7 @@ import time
 from typing import Any
 
 from umbmark.core.errors import InputError, SafetyError, option
-from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams
+from umbmark.robot.base import AppliedBy, ApplyMethod, ApplyResult, DriveParams
 from umbmark.robot.ros2_reload import RESTART, ReloadPlan, plan_reload, reload
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
@@ -336,26 +336,30 @@ class Ros2Robot(RosRobot):
     def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
         """Write the parameter file (when given) and, where the plan found before moving
         allows, reload the controller through the controller manager; else say how to
-        restart it on the new values."""
+        restart it on the new values. The result's method is the way taken:
+        ``set_parameters`` or ``reload`` through the manager, ``yaml`` where only the file
+        was written, ``none`` where nothing was."""
         plan = plan_apply(params, "yaml" if method == "reconfigure" else method)
         if plan.method == "none":
             return ApplyResult("none", False, plan.reason)
         path = self.options.params_file
-        notes = [] if path is None else write_params(path, params, self.options.controller,
+        edit = None if path is None else write_params(path, params, self.options.controller,
                                                       ros2=True)  # fmt: skip
-        extra = "".join(f"; {n}" for n in notes)
-        wrote = "" if path is None else f"wrote {os.fspath(path)}; "
+        wrote = "" if edit is None else f"{edit.line()}; "
         file = None if path is None else os.fspath(path)
+        line = None if edit is None else edit.line()
         way = self._plan().way
         if way is not None:
             done = reload(self, way, params)
-            return ApplyResult("yaml", True, f"{wrote}{done}{extra}", file=file)
+            how: AppliedBy = "set_parameters" if way == "configure" else "reload"
+            return ApplyResult(how, True, f"{wrote}{done}", file=file, wrote=line)
         return ApplyResult(
-            "yaml",
+            "yaml" if edit is not None else "none",
             False,
             f"{wrote}restart the controller on them: "
-            f"{restart_commands(self.options.controller, params, path)}{extra}",
+            f"{restart_commands(self.options.controller, params, path)}",
             file=file,
+            wrote=line,
         )
 
     def wait_back(self, since: float) -> None:

@@ -12,7 +12,8 @@ controller at ``/diff_drive_controller``, frames from ``/tf`` and ``/tf_static``
   clock stops.
 - Applying parameters: :func:`plan_apply` decides how (dynamic_reconfigure takes only
   ``0.5 .. 1.5``: outside, the YAML file is written and the result says so),
-  :func:`write_params` writes the controller's parameter file atomically, and
+  :func:`write_params` changes the controller's parameter file in place (every
+  other byte kept, the previous file kept beside it), and
   :func:`held_problem` checks what a reconfigure server holds afterwards (it clamps
   without a word).
 """
@@ -25,14 +26,16 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 import numpy as np
 
-from umbmark.core.atomic import atomic_write_text
 from umbmark.core.errors import InputError, option
 from umbmark.core.geometry import quaternion_yaw
 from umbmark.robot.base import ApplyMethod, DriveParams, Pose2D, RangeReading, ScanSweep
+
+if TYPE_CHECKING:
+    from umbmark.sources.params.edit import ParamsEdit
 
 __all__ = [
     "MULTIPLIERS",
@@ -461,63 +464,34 @@ def controller_keys(controller: str) -> tuple[str, ...]:
 
 def write_params(
     path: str | Path, params: DriveParams, controller: str, *, ros2: bool
-) -> list[str]:
-    """Write the multipliers of ``params`` into the controller's parameter file, atomically.
+) -> ParamsEdit:
+    """Write the multipliers of ``params`` into the controller's parameter file.
 
-    A new file holds the controller's block only: ROS 1 ``diff_drive_controller:
-    {wheel_separation_multiplier: ...}`` (the namespace's keys, as ``rosparam load``
-    reads it), ROS 2 the ros2_control overlay ``diff_drive_controller: {ros__parameters:
-    {...}}``. In a file that exists, the controller's block (as
-    :func:`umbmark.sources.params.reader.read_controller_params` finds it, in the file's
-    own form) gets the three values and everything else stays (comments are not kept); a
-    file without that controller gets its block added. Values are doubles (``1.0``).
+    A file that exists is changed in place: the three values of the controller's block
+    (as :func:`umbmark.sources.params.reader.read_controller_params` finds it, in the
+    file's own form), a missing one added, ROS 1's ``wheel_radius_multiplier`` removed
+    (it would override both wheels'), every other byte kept, the previous file kept as
+    ``FILE.bak`` (``.bak.2``, ...), the new one written atomically
+    (:func:`umbmark.sources.params.edit.edit_parameter_file`). A new file holds the
+    controller's block only: ROS 1 ``diff_drive_controller: {wheel_separation_multiplier:
+    ...}`` (the namespace's keys, as ``rosparam load`` reads it), ROS 2 the ros2_control
+    overlay ``diff_drive_controller: {ros__parameters: {...}}``. Values are doubles
+    (``1.0``).
 
     Returns
     -------
-    list of str
-        Notes for people (a ROS 1 ``wheel_radius_multiplier`` removed: it would override
-        both wheels').
+    ParamsEdit
+        What was changed, with the line for people (:meth:`ParamsEdit.line`).
 
     Raises
     ------
     InputError
-        The file cannot be read as a parameter file, or written.
+        The file cannot be read as a parameter file, changed in place, or written.
     """
-    from umbmark.sources.params.reader import read_controller_params
-    from umbmark.sources.params.writer import multiplier_values, parameter_document
-    from umbmark.sources.text import load_yaml
+    from umbmark.sources.params.edit import edit_parameter_file
 
-    target = Path(path)
-    values = multiplier_values(*multipliers(params).values())
-    keys, file_ros2 = controller_keys(controller), ros2
-    data: dict[str, Any] = {}
-    comments: tuple[str, ...] = (f"{keys[-1]}'s odometry multipliers, written by umbmark selfcal",)
-    if target.exists():
-        loaded = load_yaml(target)
-        if not isinstance(loaded, dict | None):
-            raise InputError("is not a parameter file (not a YAML mapping)", source=target)
-        data, comments = loaded or {}, ()
-        try:
-            found = read_controller_params(target, controller)
-            keys, file_ros2 = found.key_path, found.ros2
-        except InputError:
-            pass  # no block of this controller yet: add one
-    block = data
-    for key in (*keys, "ros__parameters") if file_ros2 else keys:
-        inner = block.get(key)
-        if not isinstance(inner, dict):
-            inner = block[key] = {}
-        block = inner
-    notes = []
-    if not file_ros2 and "wheel_radius_multiplier" in block:
-        del block["wheel_radius_multiplier"]
-        notes.append(
-            "removed wheel_radius_multiplier: ROS 1's diff_drive_controller would take it "
-            "for both wheels and ignore the left and right ones"
-        )
-    block.update(values)
-    atomic_write_text(target, parameter_document(data, comments))
-    return notes
+    controller_keys(controller)  # a name, not an empty one
+    return edit_parameter_file(path, multipliers(params), controller, ros2=ros2)
 
 
 def restart_commands(controller: str, params: DriveParams, overlay: str | None) -> str:

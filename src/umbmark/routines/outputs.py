@@ -44,16 +44,20 @@ def write_outputs(
     folder: Path | None,
     page: Path | None,
     force: bool,
+    controller: str | None = None,
 ) -> list[Path]:
     """The page of all passes (their run logs in ``folders``) [``folder/report.html``]
     and, in ``folder``, the overlay of ``held``, the pass the controller holds; checked
-    before the robot moved (:func:`check_outputs`)."""
+    before the robot moved (:func:`check_outputs`). The page's overlay is keyed by
+    ``controller`` (None: the default) as ``held``'s is."""
     written: list[Path] = []
     if not folders:
         return written
     page = page or (None if folder is None else folder / REPORT_FILE)
     if page is not None:
-        found, _ = calibrate_passes(folders, {})
+        found, _ = calibrate_passes(
+            folders, {} if controller is None else {"controller": controller}
+        )
         predicted = predict_after(found[0]) if len(found) == 1 else None
         pages = Passes(passes=tuple(found), predicted=predicted, holds=holds)
         written.append(write_passes_page(pages, page, force=force))

@@ -80,6 +80,10 @@ class SelfcalSetup:
         Where the corner stands seen from the start: behind it and to its right or left
         (which wall each range sensor or tape mark faces; the first fix must find it
         there, else nothing moves).
+    controller : str, optional
+        The controller the corrections are for, with its namespace
+        (``/robot1/diff_cont``): the overlays and the history are keyed by it [default:
+        a ROS robot's own (``--controller``), else ``diff_drive_controller``, said so].
 
     Raises
     ------
@@ -103,6 +107,7 @@ class SelfcalSetup:
     force: bool = False
     resume: str | os.PathLike[str] | None = None
     corner_side: CornerSide = CORNER_SIDE.default
+    controller: str | None = None
 
     def __post_init__(self) -> None:
         for spec in (SQUARE_SIDE, RUNS, MAX_PASSES, MEASURE):

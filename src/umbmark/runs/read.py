@@ -25,7 +25,7 @@ from umbmark.model.run import Run
 from umbmark.options.spec import READ
 from umbmark.runs.load import Format, Loaded, LoadOptions, detect_format, load_runs
 from umbmark.runs.read_options import ReadOptions
-from umbmark.sources.params.reader import ControllerParams, read_parameter_file
+from umbmark.sources.params.reader import ControllerParams, named_controller, read_parameter_file
 from umbmark.sources.runs_table.reader import RecordedActive, read_table_active
 
 if TYPE_CHECKING:
@@ -210,8 +210,7 @@ def parameter_file(options: ReadOptions) -> ControllerParams:
     """The parameter file ``current_params`` (read), or the default controller named by
     ``controller``."""
     if options.current_params is None:
-        name = options.controller or "diff_drive_controller"
-        return ControllerParams(controller=name.strip("/").rsplit("/", 1)[-1], key_path=(name,))
+        return named_controller(options.controller)
     return read_parameter_file(Path(options.current_params), options.controller)
 
 

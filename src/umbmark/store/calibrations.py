@@ -89,4 +89,5 @@ def history_entry(result: CalibrationResult) -> NewCalibration:
         verdict=data["verdict"],
         wheelbase=active.wheelbase,
         wheel_diameter=active.wheel_diameter,
+        controller=data["controller"],
     )

@@ -91,9 +91,17 @@ def _migrate_2(db: sqlite3.Connection) -> None:
     db.execute("ALTER TABLE calibrations ADD COLUMN verdict TEXT")
 
 
-def _migrate_fleet(db: sqlite3.Connection) -> None:
-    """The fleet's recordings (``umbmark fleet``): each recording looked at, by digest and
-    reading options, with what it gave (:mod:`umbmark.store.recordings`)."""
+def _migrate_3(db: sqlite3.Connection) -> None:
+    """Version 3: the controller each calibration is for, with its namespace
+    (``/robot1/diff_cont``; NULL where nothing named it, and for the calibrations
+    recorded before)."""
+    db.execute("ALTER TABLE calibrations ADD COLUMN controller TEXT")
+
+
+def _migrate_4(db: sqlite3.Connection) -> None:
+    """Version 4: the fleet's recordings (``umbmark fleet``): each recording looked at,
+    by identity, digest and reading options, with what it gave
+    (:mod:`umbmark.store.recordings`)."""
     db.execute(
         """CREATE TABLE recordings (
             id INTEGER PRIMARY KEY AUTOINCREMENT,
@@ -119,7 +127,8 @@ def _migrate_fleet(db: sqlite3.Connection) -> None:
 MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (
     _migrate_1,
     _migrate_2,
-    _migrate_fleet,
+    _migrate_3,
+    _migrate_4,
 )
 #: The schema version this umbmark writes.
 SCHEMA_VERSION = len(MIGRATIONS)
@@ -332,8 +341,8 @@ class History:
                     )
             cursor = db.execute(
                 "INSERT INTO calibrations (robot, time, method, inputs, E_d, E_b, E_s, "
-                "e_max_syst, standard_errors, active, new, applied, verdict) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, ?)",
+                "e_max_syst, standard_errors, active, new, applied, verdict, controller) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 0, ?, ?)",
                 (
                     robot,
                     calibration.time.astimezone(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
@@ -347,6 +356,7 @@ class History:
                     json.dumps(calibration.active),
                     json.dumps(calibration.new),
                     json.dumps(calibration.verdict),
+                    calibration.controller,
                 ),
             )
             return int(cursor.lastrowid or 0)
@@ -424,7 +434,7 @@ class History:
         with self._connect() as db:
             rows = db.execute(
                 "SELECT id, robot, time, method, inputs, E_d, E_b, E_s, e_max_syst, "
-                "standard_errors, active, new, applied, verdict FROM calibrations "
+                "standard_errors, active, new, applied, verdict, controller FROM calibrations "
                 "WHERE robot = ? ORDER BY id",
                 (robot,),
             ).fetchall()
@@ -498,6 +508,7 @@ def _calibration(row: Sequence[Any]) -> CalibrationRecord:
         new=json.loads(row[11]),
         applied=bool(row[12]),
         verdict=None if row[13] is None else json.loads(row[13]),
+        controller=None if row[14] is None else str(row[14]),
     )
 
 
@@ -520,7 +531,8 @@ def compose_last_applied(
     Returns
     -------
     options : SourceOptions
-        The options, with the multipliers of the last applied calibration when taken.
+        The options, with the multipliers of the last applied calibration when taken,
+        and its controller where the options name none.
     note : str or None
         A note saying so, when taken.
     """
@@ -542,12 +554,16 @@ def compose_last_applied(
     composed["current_c_l"] = c_left
     composed["current_c_r"] = c_right
     composed["current_separation_multiplier"] = separation
+    controller = ""
+    if options.get("controller") is None and last.controller is not None:
+        composed["controller"] = last.controller  # the overlays keyed as the last one was
+        controller = f", for controller {last.controller}"
     from umbmark.core.messages import info
 
     note = info(
         f"robot {robot}: taken as active during the runs, the new parameters of its last "
-        f"applied calibration {last.id} ({last.time[:19]}Z): c_L {c_left:.6f}, c_R "
-        f"{c_right:.6f}, wheel_separation_multiplier {separation:.6f} (give "
+        f"applied calibration {last.id} ({last.time[:19]}Z{controller}): c_L {c_left:.6f}, "
+        f"c_R {c_right:.6f}, wheel_separation_multiplier {separation:.6f} (give "
         "--current-params or --current-c-l/--current-c-r/--current-separation-multiplier "
         "to say otherwise)"
     )

@@ -38,6 +38,9 @@ class NewCalibration:
         Nominal wheelbase [m]: the active one, as configured.
     wheel_diameter : float or None
         Nominal wheel diameter [m], when known.
+    controller : str or None
+        The controller it is for, with its namespace (``/robot1/diff_cont``; None where
+        nothing named it).
     """
 
     time: dt.datetime
@@ -52,6 +55,7 @@ class NewCalibration:
     verdict: dict[str, Any]
     wheelbase: float
     wheel_diameter: float | None
+    controller: str | None = None
 
 
 @dataclass(frozen=True)
@@ -115,6 +119,9 @@ class CalibrationRecord:
     verdict : dict or None
         The calibration's verdict, ``{"level", "reasons", "instead"}`` (``calibrate
         --json``'s ``apply``); None for calibrations recorded before umbmark judged them.
+    controller : str or None
+        The controller it is for (``/robot1/diff_cont``); None where nothing named it, and
+        for calibrations recorded before umbmark kept it.
     """
 
     id: int
@@ -131,6 +138,7 @@ class CalibrationRecord:
     new: dict[str, Any]
     applied: bool
     verdict: dict[str, Any] | None = None
+    controller: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (metres)."""
@@ -138,6 +146,7 @@ class CalibrationRecord:
             "id": self.id,
             "time": self.time,
             "method": self.method,
+            "controller": self.controller,
             "E_d": self.E_d,
             "E_b": self.E_b,
             "E_s": self.E_s,

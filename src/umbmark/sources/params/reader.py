@@ -31,7 +31,10 @@ __all__ = [
     "DEFAULT_CONTROLLER",
     "CalibratedParams",
     "ControllerParams",
+    "check_controller_name",
     "is_result_file",
+    "key_path_of",
+    "named_controller",
     "read_calibrated_params",
     "read_controller_params",
     "read_parameter_file",
@@ -110,6 +113,10 @@ class ControllerParams:
         ROS 1's ``wheel_radius_multiplier`` when the file sets it.
     odom_frame_id, base_frame_id : str or None
         The frames of the controller's odometry (for ``--odom-tf``).
+    named : bool
+        Something named the controller (its file, ``--controller``, a result or the
+        history that carried its name); else :data:`DEFAULT_CONTROLLER` is taken, and
+        the overlays say so.
     """
 
     wheel_separation_multiplier: float = 1.0
@@ -126,6 +133,54 @@ class ControllerParams:
     radius_multiplier: float | None = None
     odom_frame_id: str | None = None
     base_frame_id: str | None = None
+    named: bool = False
+
+    @property
+    def name(self) -> str:
+        """The controller's name with its namespace: ``/robot1/diff_cont`` (``/**`` for
+        a file's wildcard block)."""
+        return "/" + "/".join(k.strip("/") for k in self.key_path if k.strip("/"))
+
+
+def key_path_of(name: str) -> tuple[str, ...]:
+    """The keys of a controller's block for its name, outermost first:
+    ``/robot1/diff_cont`` is ``robot1: diff_cont:``; a wildcard (``/**``) stays one key."""
+    name = name.strip()
+    if "*" in name:
+        return (name,)
+    return tuple(k for k in name.split("/") if k) or (DEFAULT_CONTROLLER,)
+
+
+def named_controller(name: str | None) -> ControllerParams:
+    """The controller of this name (``/robot1/diff_cont``), where no parameter file says
+    more of it; None: :data:`DEFAULT_CONTROLLER`, not named."""
+    keys = key_path_of(name or DEFAULT_CONTROLLER)
+    return ControllerParams(controller=keys[-1], key_path=keys, named=name is not None)
+
+
+def check_controller_name(name: object, source: str | Path) -> str | None:
+    """A result's or the history's ``controller``: a name such as ``/robot1/diff_cont``
+    (None where it holds none).
+
+    Raises
+    ------
+    InputError
+        Anything else.
+    """
+    if name is None:
+        return None
+    if (
+        not isinstance(name, str)
+        or not name.strip("/ ")
+        or len(name) > 256
+        or any(c.isspace() for c in name)
+    ):
+        shown = f"{name!r}"[:40]
+        raise InputError(
+            f"controller is {shown}, not a controller's name (e.g. /robot1/diff_cont)",
+            source=str(source),
+        )
+    return name
 
 
 @dataclass(frozen=True)
@@ -152,6 +207,9 @@ class CalibratedParams:
         :class:`umbmark.model.kinematics.WheelParams`).
     source : str
         The file.
+    controller : str or None
+        The controller the result is for, with its namespace (``/robot1/diff_cont``);
+        None where nothing named it.
     """
 
     wheelbase: float
@@ -164,6 +222,7 @@ class CalibratedParams:
     wheel_diameter: float | None = None
     spot_wheelbase: float | None = None
     source: str = ""
+    controller: str | None = None
 
     def applied_to(self, nominal: WheelParams) -> WheelParams:
         """``nominal`` with this result's wheelbase(s) and wheel factors.
@@ -231,6 +290,7 @@ def read_calibrated_params(path: str | Path) -> CalibratedParams:
     active = data.get("active")
     if not isinstance(active, dict):
         active = {}
+    controller = check_controller_name(data.get("controller"), path)
     model = data.get("model")
     if isinstance(model, dict):
         # The fitted model replays as fitted; "new" holds the single set for controllers.
@@ -242,6 +302,7 @@ def read_calibrated_params(path: str | Path) -> CalibratedParams:
             wheel_diameter_right=number(model, "wheel_diameter_right", "model."),
             spot_wheelbase=optional(model, "spot_wheelbase", "model."),
             source=str(path),
+            controller=controller,
         )
     return CalibratedParams(
         wheelbase=number(new, "wheelbase", "new."),
@@ -253,6 +314,7 @@ def read_calibrated_params(path: str | Path) -> CalibratedParams:
         configured_wheelbase=optional(active, "wheelbase", "active."),
         wheel_diameter=optional(active, "wheel_diameter", "active."),
         source=str(path),
+        controller=controller,
     )
 
 
@@ -303,7 +365,8 @@ def read_parameter_file(path: str | Path, controller: str | None = None) -> Cont
     """What was active during the runs, from a controller parameter YAML or a result JSON.
 
     A result's new values count as applied: the configured wheelbase stays, the
-    separation multiplier and the wheel factors are the result's new ones.
+    separation multiplier and the wheel factors are the result's new ones, and the
+    controller is the one it names (its ``controller``) unless ``controller`` is given.
 
     Raises
     ------
@@ -313,15 +376,13 @@ def read_parameter_file(path: str | Path, controller: str | None = None) -> Cont
     if Path(path).suffix.lower() != ".json" and not is_result_file(path):
         return read_controller_params(path, controller)
     new = read_calibrated_params(path)
-    name = controller or DEFAULT_CONTROLLER
-    return ControllerParams(
+    return replace(
+        named_controller(controller or new.controller),  # the one given, else the result's
         wheel_separation_multiplier=new.separation_multiplier,
         left_wheel_radius_multiplier=new.c_left,
         right_wheel_radius_multiplier=new.c_right,
         wheel_separation=new.configured_wheelbase,
         wheel_radius=None if new.wheel_diameter is None else 0.5 * new.wheel_diameter,
-        controller=name.strip("/").rsplit("/", 1)[-1],
-        key_path=(name,),
     )
 
 
@@ -445,6 +506,7 @@ def _controller(
         radius_multiplier=both,
         odom_frame_id=frames["odom_frame_id"] if isinstance(frames["odom_frame_id"], str) else None,
         base_frame_id=frames["base_frame_id"] if isinstance(frames["base_frame_id"], str) else None,
+        named=True,
     )
 
 
