@@ -54,6 +54,10 @@ def test_ros1_overlay_says_to_delete_wheel_radius_multiplier(tmp_path, table):
     report = umbmark.calibrate(_runs(table), side_length=4, current_params=path)
     text = report.ros1_yaml()
     assert "Delete wheel_radius_multiplier (1.02)" in text
+    # A ROS 1 controller reads its parameters when it is loaded: no ROS 2 "configure".
+    assert "on configure" not in text
+    assert "reads these when it is loaded: load them (rosparam load)" in text
+    assert "reads these on configure" in report.overlay_yaml()  # the ROS 2 overlay
     values = yaml.safe_load(text)["husky_velocity_controller"]
     # The new left and right multipliers include the 1.02 that was active.
     est = report.estimate

@@ -396,8 +396,9 @@ class CalibrationResult(JsonText):
             out["notes"] = list(self.notes)
         return out
 
-    def provenance(self) -> list[str]:
-        """Comment lines saying where a parameter file came from."""
+    def provenance(self, *, ros1: bool = False) -> list[str]:
+        """Comment lines saying where a parameter file came from (``ros1``: a ROS 1
+        parameter file, which the controller reads when it is loaded)."""
         cal = self.calibration
         active = cal.active
         stamp = self.created.strftime("%Y-%m-%dT%H:%M:%SZ")
@@ -412,7 +413,11 @@ class CalibrationResult(JsonText):
             f"E_d = {cal.estimate.E_d:.6f}, E_b = {cal.estimate.E_b:.6f}{e_max}.",
             "Multiplied into the values active during the runs: separation "
             f"{active.separation_multiplier:g}, left {active.c_left:g}, right {active.c_right:g}.",
-            "diff_drive_controller reads these on configure: reload or restart the controller.",
+            "diff_drive_controller reads these when it is loaded: load them (rosparam load) and "
+            "restart the controller (controller_manager)."
+            if ros1
+            else "diff_drive_controller reads these on configure: reload or restart the "
+            "controller.",
             *([] if self.verdict.level == "apply" else [self.verdict.line()]),
             *([] if self.controller.named else [unnamed_controller()]),
             *(
@@ -442,7 +447,7 @@ class CalibrationResult(JsonText):
         from umbmark.sources.params.writer import ros1_params
 
         controller = self.controller
-        comments = self.provenance()
+        comments = self.provenance(ros1=True)
         if controller.radius_multiplier is not None:
             comments.append(
                 f"Delete wheel_radius_multiplier ({controller.radius_multiplier:g}) from the "

@@ -26,7 +26,7 @@ from umbmark.options.selfcal import (
     SQUARE_SIDE,
     TAPE_MARKS,
 )
-from umbmark.options.spec import HISTORY, OUTPUTS, TEST
+from umbmark.options.spec import HISTORY, OUTPUTS, READ, TEST
 
 if TYPE_CHECKING:
     from umbmark.routines.watch import Progress, RunsLeft, Stopped
@@ -106,10 +106,7 @@ ROS = "ROS robots (--ros1, --ros2)"
                help="Ground-truth pose topic, geometry_msgs/PoseStamped (--measure truth)."),
         option("--base-frame", section=ROS, default="base_link", show_default=True,
                help="The robot's base frame."),
-        option("--controller", section=ROS, default=None, metavar="NAME",
-               help="The diff_drive_controller's name with its namespace; the overlays and "
-               "the history are keyed by it (with --sim too) [default: "
-               "/diff_drive_controller]."),
+        spec_option(READ["controller"], section=ROS),
         option("--params-file", section=ROS, type=click.Path(dir_okay=False), default=None,
                help="The YAML the controller loads: the new multipliers are written into it "
                "in place (every other byte kept; the previous file kept as FILE.bak)."),

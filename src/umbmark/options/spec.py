@@ -277,9 +277,8 @@ TUM_TIME = Spec(
     choices=("recording", "run"),
 )
 
-#: ``--force`` of every command that writes files (``force=True`` of the library): without
-#: it no file is replaced (:class:`umbmark.outputs.files.OutputPlan`). It lifts nothing
-#: else: overriding a verdict is :data:`OVERRIDE_VERDICT`.
+#: ``--force`` of every command that writes (``force=True``): without it no file is
+#: replaced (``OutputPlan``); it lifts nothing else (see :data:`OVERRIDE_VERDICT`).
 FORCE = Spec(
     "force",
     ("--force",),
@@ -382,8 +381,9 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "controller",
         ("--controller",),
         PARAMETERS,
-        "Controller name in parameter files [default: the one in --current-params, else "
-        "diff_drive_controller].",
+        "The diff_drive_controller's name with its namespace (/robot1/diff_cont): parameter "
+        "files are read under it, overlays and the history keyed by it [default: the one a "
+        "parameter file names, else diff_drive_controller].",
     ),
     Spec(
         "format",
