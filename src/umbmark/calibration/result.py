@@ -35,6 +35,7 @@ if TYPE_CHECKING:
     from umbmark.calibration.verdict import Evidence, Verdict
     from umbmark.estimators.scan_matching import ScanCalibration
     from umbmark.estimators.trajectory_fit import TrajectoryFit
+    from umbmark.model.scans import LaserMounting
 
 __all__ = [
     "ABSOLUTE_FIGURES",
@@ -100,6 +101,9 @@ class CalibrationResult(JsonText):
     sensor : ScanCalibration or None
         A calibration from motion intervals (``format="tuples"``, no runs): the wheels
         and the sensor's mounting it found, with their covariance.
+    stated_mounting : LaserMounting or None
+        The laser's mounting as the robot states it (TF, ``/tf_static``, the URDF), which
+        the fitted one is compared with (None: not known).
     """
 
     sources: tuple[str, ...]
@@ -122,6 +126,7 @@ class CalibrationResult(JsonText):
     command: str | None = field(default=None, compare=False)
     recorded: str | None = field(default=None, compare=False)
     sensor: ScanCalibration | None = field(default=None, compare=False)
+    stated_mounting: LaserMounting | None = field(default=None, compare=False)
 
     def __repr__(self) -> str:
         est = self.estimate
