@@ -176,7 +176,11 @@ def test_the_report_page(calibrated, tmp_path) -> None:  # type: ignore[no-untyp
     assert ros1 is not None
     assert ros1[1].split()[3:] == [*origin.groups()[:3], origin[6], origin[5], origin[4],
                                    "base_link", "laser"]  # fmt: skip
-    assert "outside the fit's 95 % interval in x, y, yaw" in html.unescape(text)
+    said = html.unescape(text)
+    assert (
+        "outside the fit's 95 % interval in x, y, yaw: correct the stated mounting (the URDF"
+        in said
+    )
     assert 'id="mounting-figure"><svg' in text
 
 

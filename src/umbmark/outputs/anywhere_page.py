@@ -90,6 +90,11 @@ class AnywherePage:
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
 
 
+def _sentence(text: str) -> str:
+    """``text`` with its first letter upper case (the rest as it is: URDF, E_d)."""
+    return text[:1].upper() + text[1:]
+
+
 def _apply(page: AnywherePage) -> str:
     from umbmark.outputs.html_verdict import verdict_box
 
@@ -169,7 +174,7 @@ def _mounting(forms: MountingForms | None) -> str:
             "fitted minus stated", "stated outside the interval"]  # fmt: skip
     where = f" ({escape(s.source)})" if s is not None and s.source else ""
     return (
-        f'<p class="big" id="mounting-verdict">{escape(forms.verdict().capitalize())}.</p>\n'
+        f'<p class="big" id="mounting-verdict">{escape(_sentence(forms.verdict()))}.</p>\n'
         f"<p>The laser's mounting in <code>{escape(f.base)}</code>, stated{where} and "
         "fitted:</p>\n"
         + table(head, rows)
@@ -276,7 +281,7 @@ def _before_after(page: AnywherePage) -> str:
 def _messages(page: AnywherePage) -> str:
     from umbmark.outputs.html_report import fit_messages
 
-    out = "".join(f"<p>{escape(c.capitalize())}.</p>\n" for c in page.checks)
+    out = "".join(f"<p>{escape(_sentence(c))}.</p>\n" for c in page.checks)
     for one in (page.calibration, page.verification):
         if one is not None:
             out += f"<h3>{escape(one.label)}</h3>\n{fit_messages(one.result)}"
