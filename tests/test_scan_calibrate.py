@@ -6,6 +6,7 @@ proposing it; the refusals."""
 from __future__ import annotations
 
 import dataclasses
+import html
 import math
 from pathlib import Path
 
@@ -202,6 +203,9 @@ def test_the_command_gives_the_same_in_metres_and_radians(
     assert f"  ROS 2: {forms['ros2_static_transform_publisher']}" in lines
     assert f"  ROS 1: {forms['ros1_static_transform_publisher']}" in lines
     said = next(line for line in lines if line.startswith("  stated (/tf_static in base_link)"))
+    # and the page (--report): the same forms, escaped
+    page = result.html()
+    assert f'id="urdf-origin">{html.escape(forms["urdf_origin"])}</pre>' in page
     dx, dy, dyaw = forms["difference"]
     assert (
         f"x {dx * 1000:+.1f} mm, y {dy * 1000:+.1f} mm, yaw {math.degrees(dyaw):+.3f} deg" in said

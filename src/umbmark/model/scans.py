@@ -103,8 +103,3 @@ class LaserMounting:
     base: str = "base_link"
     frame: str = "laser"
     source: str = ""
-
-    def __post_init__(self) -> None:
-        values = (self.x, self.y, self.yaw, *(self.lift or ()))
-        if not all(math.isfinite(v) for v in values):
-            raise ValueError("LaserMounting must be finite")

@@ -16,25 +16,18 @@ ros2_control overlay; the provenance. Every text is escaped.
 from __future__ import annotations
 
 import datetime as dt
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from html import escape
 from typing import TYPE_CHECKING
 
 from umbmark.core.version import __version__
-from umbmark.outputs.html_parts import CSS, num, table
+from umbmark.outputs.html_parts import CSS, num, sentence, table
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
     from umbmark.calibration.result import CalibrationResult
-    from umbmark.outputs.mounting import MountingForms
 
 __all__ = ["AnywherePage", "PatternPass", "anywhere_html"]
-
-#: The commands wrap on a narrow page (and copy whole).
-_CSS = ".command { white-space: pre-wrap; overflow-wrap: anywhere; }\n"
 
 
 @dataclass(frozen=True)
@@ -90,11 +83,6 @@ class AnywherePage:
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
 
 
-def _sentence(text: str) -> str:
-    """``text`` with its first letter upper case (the rest as it is: URDF, E_d)."""
-    return text[:1].upper() + text[1:]
-
-
 def _apply(page: AnywherePage) -> str:
     from umbmark.outputs.html_verdict import verdict_box
 
@@ -148,96 +136,13 @@ def _fit(page: AnywherePage) -> str:
     )
 
 
-def _mounting(forms: MountingForms | None) -> str:
+def _mounting(page: AnywherePage) -> str:
+    from umbmark.outputs.mounting import mounting_forms, mounting_html
+
+    forms = mounting_forms(page.calibration.result)
     if forms is None:  # pragma: no cover - a calibration from intervals has a mounting
         return "<p>No mounting was fitted.</p>\n"
-    f, s = forms.fitted, forms.stated
-    difference, outside = forms.difference(), forms.outside()
-    rows = []
-    for k, (name, unit, scale) in enumerate(
-        (("x, forward", "mm", 1000.0), ("y, left", "mm", 1000.0), ("yaw", "deg", 180 / math.pi))
-    ):
-        low, high = forms.intervals[k]
-        fitted = (f.x, f.y, f.yaw)[k]
-        rows.append(
-            [
-                f"{name} [{unit}]",
-                "–" if s is None else f"{(s.x, s.y, s.yaw)[k] * scale:.2f}",
-                f"{fitted * scale:.2f}",
-                f"{forms.standard_errors[k] * scale:.2f}",
-                f"{low * scale:.2f} to {high * scale:.2f}",
-                "–" if difference is None else f"{difference[k] * scale:+.2f}",
-                "–" if outside is None else ("yes" if outside[k] else "no"),
-            ]
-        )
-    head = ["", "stated", "fitted", "standard error", "95 % interval",
-            "fitted minus stated", "stated outside the interval"]  # fmt: skip
-    where = f" ({escape(s.source)})" if s is not None and s.source else ""
-    return (
-        f'<p class="big" id="mounting-verdict">{escape(_sentence(forms.verdict()))}.</p>\n'
-        f"<p>The laser's mounting in <code>{escape(f.base)}</code>, stated{where} and "
-        "fitted:</p>\n"
-        + table(head, rows)
-        + _mounting_figure(forms)
-        + f"<p>The URDF joint origin of <code>{escape(f.frame)}</code> (its pose in "
-        f"<code>{escape(f.base)}</code>; where the laser hangs under another link, compose "
-        "the chain):</p>\n"
-        f'<pre class="command" id="urdf-origin">{escape(forms.urdf_origin())}</pre>\n'
-        "<p>Or publish it as a static transform, ROS 2 (Humble and later):</p>\n"
-        f'<pre class="command" id="ros2-static-transform">{escape(forms.ros2_command())}</pre>\n'
-        "<p>ROS 1 (positional: x y z yaw pitch roll, yaw first):</p>\n"
-        f'<pre class="command" id="ros1-static-transform">{escape(forms.ros1_command())}</pre>\n'
-        f"<p>Metres and radians; {escape(forms.lift_note())}. Apply one of them (not both: "
-        "a second publisher of the same frame fights the first), restart what reads it, "
-        "and run the calibration again to check.</p>\n"
-    )
-
-
-def _mounting_figure(forms: MountingForms) -> str:
-    from umbmark.outputs.report_figures import inline_svg
-
-    return (
-        f'<figure id="mounting-figure">{inline_svg(_top_view(forms), "umbmark-mount")}'
-        "<figcaption>The laser's mounting seen from above, in mm: the base frame's origin "
-        "(the cross, x forward), the stated mounting (grey, dashed) and the fitted one "
-        "(blue), each an arrow along the laser's x axis; the fitted one with its 95 % "
-        "interval in x and y (the box).</figcaption></figure>\n"
-    )
-
-
-def _top_view(forms: MountingForms) -> Figure:
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Rectangle
-
-    fig = Figure(figsize=(4.0, 4.0))
-    ax = fig.add_subplot()
-    f, s = forms.fitted, forms.stated
-    points = [(0.0, 0.0), (f.x, f.y)] + ([] if s is None else [(s.x, s.y)])
-    span = max(0.05, *(max(abs(x), abs(y)) for x, y in points)) * 1000.0
-    arrow = 0.3 * span
-    ax.plot([0.0], [0.0], "k+", markersize=12)
-    for pose, style, colour, label, size in (
-        (s, "--", "0.5", "stated", 11),
-        (f, "-", "tab:blue", "fitted", 5),
-    ):
-        if pose is None:
-            continue
-        x, y = pose.x * 1000.0, pose.y * 1000.0
-        ax.plot([x], [y], "o", color=colour, label=label, markersize=size, mfc="none")
-        tip = (x + arrow * math.cos(pose.yaw), y + arrow * math.sin(pose.yaw))
-        ax.plot([x, tip[0]], [y, tip[1]], style, color=colour)
-    (xl, xh), (yl, yh) = forms.intervals[0], forms.intervals[1]
-    box = Rectangle((xl * 1000, yl * 1000), (xh - xl) * 1000, (yh - yl) * 1000, fill=False,
-                    edgecolor="tab:blue", linewidth=0.8)  # fmt: skip
-    ax.add_patch(box)
-    ax.set_xlim(-1.4 * span, 1.4 * span)
-    ax.set_ylim(-1.4 * span, 1.4 * span)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x, forward [mm]")
-    ax.set_ylabel("y, left [mm]")
-    ax.legend(loc="lower right", fontsize="small")
-    ax.grid(True, linewidth=0.3)
-    return fig
+    return mounting_html(forms)
 
 
 def _before_after(page: AnywherePage) -> str:
@@ -281,7 +186,7 @@ def _before_after(page: AnywherePage) -> str:
 def _messages(page: AnywherePage) -> str:
     from umbmark.outputs.html_report import fit_messages
 
-    out = "".join(f"<p>{escape(_sentence(c))}.</p>\n" for c in page.checks)
+    out = "".join(f"<p>{escape(sentence(c))}.</p>\n" for c in page.checks)
     for one in (page.calibration, page.verification):
         if one is not None:
             out += f"<h3>{escape(one.label)}</h3>\n{fit_messages(one.result)}"
@@ -334,14 +239,14 @@ def anywhere_html(page: AnywherePage) -> str:
     """The self-calibration anywhere as one self-contained HTML page (the module's
     documentation: its sections)."""
     from umbmark.outputs.html_verdict import CSS as VERDICT_CSS
-    from umbmark.outputs.mounting import mounting_forms
+    from umbmark.outputs.mounting import CSS as MOUNTING_CSS
 
     title = f"{page.robot}: umbmark self-calibration anywhere"
     sections = [
         ("apply", "Apply the correction?", _apply(page)),
         ("intervals", "Motion intervals used and left out", _intervals(page)),
         ("fit", "The fit: estimates and 95 % intervals", _fit(page)),
-        ("mounting", "The laser's mounting", _mounting(mounting_forms(page.calibration.result))),
+        ("mounting", "The laser's mounting", _mounting(page)),
         ("before-after", "Before and after", _before_after(page)),
         ("messages", "Checks, figures of the fit, warnings and notes", _messages(page)),
         ("overlay", "ros2_control overlay", _overlay(page)),
@@ -355,6 +260,6 @@ def anywhere_html(page: AnywherePage) -> str:
         "<!DOCTYPE html>\n"
         '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
-        f"<title>{escape(title)}</title>\n<style>{CSS}{VERDICT_CSS}{_CSS}</style>\n</head>\n<body>\n"
+        f"<title>{escape(title)}</title>\n<style>{CSS}{VERDICT_CSS}{MOUNTING_CSS}</style>\n</head>\n<body>\n"
         f"<h1>{escape(title)}</h1>\n{body}</body>\n</html>\n"
     )

@@ -1,8 +1,8 @@
 """The parts every HTML page of umbmark is built from: the style sheet that reads on a
-phone and prints (:data:`CSS`), a number or a dash (:func:`num`), and a table whose cells
-are escaped (:func:`table`). The page of UMBmark passes
-(:mod:`umbmark.outputs.html_report`) and the page of the self-calibration anywhere
-(:mod:`umbmark.outputs.anywhere_page`) share them."""
+phone and prints (:data:`CSS`), a number or a dash (:func:`num`), a sentence's capital
+(:func:`sentence`), and a table whose cells are escaped (:func:`table`). The page of
+UMBmark passes (:mod:`umbmark.outputs.html_report`) and the page of the self-calibration
+anywhere (:mod:`umbmark.outputs.anywhere_page`) share them."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import math
 from collections.abc import Collection
 from html import escape
 
-__all__ = ["CSS", "num", "table"]
+__all__ = ["CSS", "num", "sentence", "table"]
 
 CSS = """
 :root { color-scheme: light; }
@@ -46,6 +46,11 @@ def num(value: float | None, fmt: str) -> str:
     if value is None or not math.isfinite(value):
         return "–"
     return format(value, fmt)
+
+
+def sentence(text: str) -> str:
+    """``text`` with its first letter upper case, the rest as it is (URDF, E_d)."""
+    return text[:1].upper() + text[1:]
 
 
 def table(head: list[str], rows: list[list[str]], wrap: Collection[int] = ()) -> str:

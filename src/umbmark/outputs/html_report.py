@@ -489,7 +489,9 @@ def passes_html(page: Passes) -> str:
     SVG figure (and the predicted after of a single pass of recorded runs, marked as a
     prediction), every run, the estimates with their 95 % intervals (alpha and beta in
     degrees) and the correction, the figures of the fit (each with its unit and
-    meaning), warnings, notes and any validation table, the ros2_control overlay of the
+    meaning), warnings, notes and any validation table, the laser's mounting in the forms
+    a user applies (a calibration from motion intervals:
+    :func:`umbmark.outputs.mounting.mounting_html`), the ros2_control overlay of the
     last pass and the provenance (inputs with their SHA-256, the parameters active, the
     command, the umbmark version and the method).
     """
@@ -503,13 +505,18 @@ def passes_html(page: Passes) -> str:
     if robot:
         title = f"{robot}: {title}"
     from umbmark.outputs.html_verdict import CSS, verdict_section
+    from umbmark.outputs.mounting import CSS as MOUNTING_CSS
+    from umbmark.outputs.mounting import mounting_forms, mounting_html
 
+    forms = mounting_forms(page.last)  # None but for a calibration from motion intervals
+    mounting = [] if forms is None else [("mounting", "The laser's mounting", mounting_html(forms))]
     sections = [
         ("apply", "Apply the correction?", verdict_section(page)),
         ("verdict", "E_max,syst and the 3 x SEM rule", _verdict(page) + _clusters(page)),
         ("clusters", "Cluster view (Fig. 6)", _figure(page)),
         ("runs", "Runs", _runs(page)),
         ("estimates", "Estimates and 95 % intervals", _estimates(page)),
+        *mounting,
         ("messages", "Figures of the fit, warnings and notes", _messages(page)),
         ("overlay", "ros2_control overlay", _overlay(page)),
         ("provenance", "Provenance", _provenance(page)),
@@ -522,7 +529,8 @@ def passes_html(page: Passes) -> str:
         "<!DOCTYPE html>\n"
         '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
-        f"<title>{escape(title)}</title>\n<style>{_CSS}{CSS}</style>\n</head>\n<body>\n"
+        f"<title>{escape(title)}</title>\n<style>{_CSS}{CSS}{MOUNTING_CSS}</style>\n</head>\n"
+        "<body>\n"
         f"<h1>{escape(title)}</h1>\n{body}</body>\n</html>\n"
     )
 

@@ -219,13 +219,13 @@ class Mount:
     lift: tuple[float, float, float] | None = None
 
 
-def lift_of(z: float, r: np.ndarray) -> tuple[float, float, float]:
-    """``z, roll, pitch`` of a frame at height ``z`` [m] turned by ``r`` (3, 3): the
-    fixed-axis angles of ``r = Rz(yaw) Ry(pitch) Rx(roll)``, pitch within +-90 degrees
-    (so that the yaw is the direction of the frame's x axis)."""
-    roll = math.atan2(float(r[2, 1]), float(r[2, 2]))
-    pitch = math.atan2(-float(r[2, 0]), math.hypot(float(r[2, 1]), float(r[2, 2])))
-    return float(z), roll, pitch
+def lift_of(z: float, last_row: Sequence[float]) -> tuple[float, float, float]:
+    """``z, roll, pitch`` of a frame at height ``z`` [m] whose rotation ``r = Rz(yaw)
+    Ry(pitch) Rx(roll)`` has the last row ``last_row`` (``r[2, :]``, (3,)): its fixed-axis
+    roll and pitch, pitch within +-90 degrees (so that the yaw is the direction of the
+    frame's x axis)."""
+    r20, r21, r22 = (float(v) for v in last_row)
+    return float(z), math.atan2(r21, r22), math.atan2(-r20, math.hypot(r21, r22))
 
 
 def mount_from_transform(transform: object) -> Mount:
@@ -238,10 +238,8 @@ def mount_from_transform(transform: object) -> Mount:
     pose = Pose2D(float(position.x), float(position.y), float(quaternion_yaw(x, y, z, w)))  # type: ignore[attr-defined]
     n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
     x, y, z, w = x / n, y / n, z / n, w / n
-    bottom = np.array(  # the rotation's last row: all that roll and pitch need
-        [[0.0] * 3, [0.0] * 3, [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-    )
-    lift = lift_of(float(position.z), bottom)  # type: ignore[attr-defined]
+    last_row = (2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y))
+    lift = lift_of(float(position.z), last_row)  # type: ignore[attr-defined]
     return Mount(pose, upside_down=z_up < 0.0, lift=lift)
 
 

@@ -100,7 +100,7 @@ def _mount(t: np.ndarray, r: np.ndarray) -> Mount:
     where its x axis points, and whether its z axis points down."""
     yaw = math.atan2(float(r[1, 0]), float(r[0, 0]))
     pose = Pose2D(float(t[0]), float(t[1]), yaw)
-    return Mount(pose, upside_down=bool(r[2, 2] < 0.0), lift=lift_of(float(t[2]), r))
+    return Mount(pose, upside_down=bool(r[2, 2] < 0.0), lift=lift_of(float(t[2]), r[2]))
 
 
 def static_mount(
