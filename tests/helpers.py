@@ -257,6 +257,25 @@ def unavailable(reason: str) -> None:
     pytest.skip(reason, allow_module_level=True)
 
 
+def dom_text(page: Path, tmp_path: Path) -> str:
+    """The page's DOM as headless chromium builds it (its own text where chromium is
+    missing, outside CI, which installs it)."""
+    import shutil
+    import subprocess
+
+    import pytest
+
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        if in_ci():
+            pytest.fail("chromium is missing on CI (apt-get install chromium)")
+        return page.read_text()
+    argv = [chromium, "--headless", "--disable-gpu", "--no-sandbox", "--dump-dom"]
+    argv += [f"--user-data-dir={tmp_path / 'profile'}", page.resolve().as_uri()]
+    done = subprocess.run(argv, check=True, capture_output=True, text=True, timeout=60)
+    return done.stdout
+
+
 #: What the ROS 1 tests' robot node and probe (tests/ros1_robot_node.py, ros1_probe.py)
 #: import besides the adapter's own modules (umbmark.robot.ros1.ROS1_MODULES).
 ROS1_TEST_MODULES = (

@@ -12,8 +12,10 @@ Run it with ``ROS_MASTER_URI`` set; it prints ``ready`` on stdout once everythin
   ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``) every ``--scan-every`` periods,
   ``/ground_truth`` (``geometry_msgs/PoseStamped``, motion capture), ``/tf``
   (``odom -> base_link``) and ``/tf_static`` (``base_link -> laser``: the laser
-  ``--laser-x`` metres ahead of the centre, ``--upside-down`` rolled by 180 degrees, its
-  beams then published in the reversed order such a laser has); the corner behind the
+  ``--laser-x`` metres ahead of the centre and 0.2 m up, ``--upside-down`` rolled by 180
+  degrees, its beams then published in the reversed order such a laser has; with
+  ``--stated-laser x,y,yaw`` that mounting stated, while the beams are cast from the true
+  one); the corner behind the
   start on its right, or ``--corner-side left``;
 - serves dynamic_reconfigure at ``/diff_drive_controller`` with the three multipliers of
   ros_controllers' ``DiffDriveController.cfg`` (0.5 to 1.5, the server clamps), and keeps
@@ -149,7 +151,11 @@ class SimNode:
         self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
         world = replace(world, lidar=self.lidar)
         self.robot = VirtualRobot(
-            E_d=args.E_d, E_b=args.E_b, slip=args.slip, seed=args.seed, world=world
+            E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed, world=world
+        )
+        stated = args.stated_laser
+        self.stated = (
+            (args.laser_x, 0.0, 0.0) if stated is None else tuple(map(float, stated.split(",")))
         )
         self.upside_down = args.upside_down
         self.rate, self.scan_every = args.rate, args.scan_every
@@ -180,9 +186,10 @@ class SimNode:
         t = TransformStamped()
         t.header.stamp = _stamp(0.0)
         t.header.frame_id, t.child_frame_id = "base_link", "laser"
-        m = self.lidar.mount
-        t.transform.translation.x, t.transform.translation.y = m.x, m.y
-        q = _quaternion(m.theta, math.pi if self.upside_down else 0.0)
+        x, y, yaw = self.stated
+        t.transform.translation.x, t.transform.translation.y = x, y
+        t.transform.translation.z = 0.2
+        q = _quaternion(yaw, math.pi if self.upside_down else 0.0)
         r = t.transform.rotation
         r.x, r.y, r.z, r.w = q
         return t
@@ -279,10 +286,15 @@ def main() -> None:
     parser.add_argument("--scan-every", type=int, default=5, help="periods between scans")
     parser.add_argument("--E-d", dest="E_d", type=float, default=1.004)
     parser.add_argument("--E-b", dest="E_b", type=float, default=0.97)
+    parser.add_argument("--E-s", dest="E_s", type=float, default=1.0)
     parser.add_argument("--slip", type=float, default=0.0004)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--laser-x", type=float, default=0.1)
     parser.add_argument("--upside-down", action="store_true")
+    parser.add_argument(
+        "--stated-laser", default=None,
+        help="x,y,yaw [m, m, rad]: the mounting /tf_static states, off the true one",
+    )  # fmt: skip
     parser.add_argument(
         "--corner-side", choices=("right", "left"), default="right", help="the corner's side"
     )

@@ -46,7 +46,9 @@ The controller's interfaces as ros2_controllers has them (``diff_drive_controlle
   apart, cylinders of ``wheel_radius``) and the laser joint (``--laser-x`` ahead,
   ``--upside-down``: rolled by 180 degrees, its beams then published in reverse order;
   ``--laser-only-in-tf``: left out); where ``tf2_msgs`` is importable, the laser's
-  mounting on ``/tf_static`` too (``base_link`` -> ``laser_mount`` -> ``laser``);
+  mounting on ``/tf_static`` too (``base_link`` -> ``laser_mount`` -> ``laser``); with
+  ``--stated-laser x,y,yaw`` both state that mounting, while the beams are cast from the
+  true one (a description that is off);
 - ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``, sensor-data QoS) every
   ``--scan-every`` periods; ``/ground_truth`` (``geometry_msgs/PoseStamped``, the true pose).
 """
@@ -115,10 +117,17 @@ def read_params(files: list[str], controller: str) -> dict[str, float]:
 
 
 def urdf(
-    separation: float, radius: float, laser_x: float, upside_down: bool, laser: bool = True
+    separation: float,
+    radius: float,
+    laser_x: float,
+    upside_down: bool,
+    laser: bool = True,
+    stated: tuple[float, float, float] | None = None,
 ) -> str:
-    """The robot's description: base_link, two wheels, the laser (``laser``: in it)."""
+    """The robot's description: base_link, two wheels, the laser (``laser``: in it) at
+    ``laser_x`` ahead, or where ``stated`` (x, y, yaw) says."""
     roll = math.pi if upside_down else 0.0
+    x, y, yaw = stated or (laser_x, 0.0, 0.0)
 
     def wheel(side: str, y: float) -> str:
         return f"""
@@ -133,7 +142,7 @@ def urdf(
   <link name="laser"/>
   <joint name="laser_joint" type="fixed">
     <parent link="base_link"/><child link="laser"/>
-    <origin xyz="{laser_x} 0 0.2" rpy="{roll} 0 0"/>
+    <origin xyz="{x} {y} 0.2" rpy="{roll} 0 {yaw}"/>
   </joint>"""
     wheels = wheel("left", separation / 2) + wheel("right", -separation / 2)
     return f"""<?xml version="1.0"?>
@@ -322,7 +331,7 @@ class SimNode:
         world = corner_world()
         self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
         self.robot = VirtualRobot(
-            E_d=args.E_d, E_b=args.E_b, slip=args.slip, seed=args.seed,
+            E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed,
             world=replace(world, lidar=self.lidar), command_timeout=60.0,
             params=DriveParams(**{k: v for k, v in configured.items() if k != "cmd_vel_timeout"}),
         )  # fmt: skip
@@ -343,7 +352,7 @@ class SimNode:
             String(
                 data=urdf(
                     configured["wheel_separation"], configured["wheel_radius"], args.laser_x,
-                    args.upside_down, laser=not args.laser_only_in_tf,
+                    args.upside_down, laser=not args.laser_only_in_tf, stated=self._stated(),
                 )
             )
         )  # fmt: skip
@@ -366,23 +375,35 @@ class SimNode:
         else:
             self.manager = Manager(self)
 
+    def _stated(self) -> tuple[float, float, float]:
+        """The laser's mounting the robot states (x, y, yaw): ``--stated-laser``, else the
+        true one."""
+        given = self.args.stated_laser
+        if given is None:
+            return self.args.laser_x, 0.0, 0.0
+        x, y, yaw = (float(v) for v in given.split(","))
+        return x, y, yaw
+
     def _static_transforms(self) -> list[Any]:
         """The laser's mounting as robot_state_publisher puts it on /tf_static, through a
-        frame between: base_link -> laser_mount (ahead, up) -> laser (rolled over when
-        upside down)."""
+        frame between: base_link -> laser_mount (ahead, up, turned) -> laser (rolled over
+        when upside down)."""
         from geometry_msgs.msg import TransformStamped
 
+        x, y, yaw = self._stated()
         out = []
-        for parent, child, x, z, roll in (
-            ("base_link", "laser_mount", self.args.laser_x, 0.2, 0.0),
-            ("laser_mount", "laser", 0.0, 0.0, math.pi if self.upside_down else 0.0),
+        for parent, child, shift, roll, turn in (
+            ("base_link", "laser_mount", (x, y, 0.2), 0.0, yaw),
+            ("laser_mount", "laser", (0.0, 0.0, 0.0), math.pi if self.upside_down else 0.0, 0.0),
         ):
             tf = TransformStamped()
             tf.header.stamp.sec, tf.header.stamp.nanosec = _stamp(0.0)
             tf.header.frame_id, tf.child_frame_id = parent, child
-            tf.transform.translation.x, tf.transform.translation.z = x, z
-            r = tf.transform.rotation
-            r.x, r.y, r.z, r.w = math.sin(roll / 2), 0.0, 0.0, math.cos(roll / 2)
+            t = tf.transform.translation
+            t.x, t.y, t.z = shift
+            r = tf.transform.rotation  # a roll or a turn, never both
+            r.x, r.y = math.sin(roll / 2), 0.0
+            r.z, r.w = math.sin(turn / 2), math.cos(roll / 2) * math.cos(turn / 2)
             out.append(tf)
         return out
 
@@ -537,10 +558,16 @@ def main() -> None:
     parser.add_argument("--unstamped", action="store_true", help="Humble: geometry_msgs/Twist")
     parser.add_argument("--E-d", dest="E_d", type=float, default=1.004)
     parser.add_argument("--E-b", dest="E_b", type=float, default=0.97)
+    parser.add_argument("--E-s", dest="E_s", type=float, default=1.0)
     parser.add_argument("--slip", type=float, default=0.0004)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--laser-x", type=float, default=0.1)
     parser.add_argument("--upside-down", action="store_true")
+    parser.add_argument(
+        "--stated-laser", default=None,
+        help="x,y,yaw [m, m, rad]: the mounting the URDF and /tf_static state, where it is "
+        "off the true one (--laser-x ahead)",
+    )  # fmt: skip
     parser.add_argument(
         "--laser-only-in-tf", action="store_true",
         help="the URDF has no laser: only /tf_static mounts it (needs tf2_msgs)",

@@ -435,6 +435,8 @@ def _cli_options() -> set[str]:
 OTHER_PROGRAMS = {
     "--upgrade", "--upgrade-strategy", "--clear", "--system-site-packages", "--check", "--ref",
     "--align_origin", "--once", "--list", "--filter", "--strict",
+    # ROS 2's static_transform_publisher, in the laser mounting's forms
+    "--roll", "--pitch", "--yaw", "--frame-id", "--child-frame-id",
 }  # fmt: skip
 
 

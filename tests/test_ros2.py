@@ -186,14 +186,16 @@ def test_selfcal_end_to_end_over_ros2_with_a_controller_restart(tmp_path: Path) 
 @pytest.mark.slow
 def test_selfcal_anywhere_over_ros2(tmp_path: Path) -> None:
     """``umbmark selfcal --ros2 --routine anywhere`` against the node (E_d 1.004, E_b
-    0.97, E_s 1, its laser 0.1 m ahead of the centre in the URDF) at 8x sim time: the
-    wheels from the odometry, the sweeps from /scan; the truth recovered within the
-    routine's promise. Without controller_manager_msgs the controller takes the result
-    only on a restart: nothing is verified, the overlay holds the result, and the apply
-    message says how to restart."""
+    0.97, E_s 1.01, its laser 0.1 m ahead of the centre, the URDF and /tf_static stating
+    it 28 mm and 3 degrees off, 0.2 m up) at 8x sim time: the wheels from the odometry,
+    the sweeps from /scan; the truth recovered within the routine's promise, not what the
+    robot states, and the difference from it given. Without controller_manager_msgs the
+    controller takes the result only on a restart: nothing is verified, the overlay holds
+    the result, and the apply message says how to restart."""
     env = ros2_env(tmp_path)
     out = tmp_path / "out"
-    node = Robot2(env)
+    stated = (0.08, 0.02, math.radians(3.0))
+    node = Robot2(env, "--E-s", "1.01", "--stated-laser", ",".join(map(str, stated)))
     try:
         done = _umbmark(env, "selfcal", "--ros2", "--routine", "anywhere", "--out", str(out),
                         "--json", timeout=400.0)  # fmt: skip
@@ -204,10 +206,20 @@ def test_selfcal_anywhere_over_ros2(tmp_path: Path) -> None:
     assert report["routine"] == "anywhere"
     assert abs(report["E_d"] - E_D) < 5e-4
     assert abs(report["E_b"] - E_B) < 0.002
-    assert abs(report["E_s"] - 1.0) < 0.002
+    assert abs(report["E_s"] - 1.01) < 0.002
     x, y, yaw = report["laser_pose"]
     assert math.hypot(x - LASER_X, y) < 0.005
     assert abs(yaw) < math.radians(0.5)
+    mounting = report["laser_mounting"]
+    dx, dy, dyaw = mounting["difference"]
+    assert math.hypot(dx - (LASER_X - stated[0]), dy + stated[1]) < 0.005
+    assert abs(dyaw + stated[2]) < math.radians(0.5)
+    assert mounting["outside_interval_95"] == [True, True, True]
+    assert mounting["xyz"][2] == pytest.approx(0.2)  # the stated height, kept
+    assert mounting["rpy"][:2] == pytest.approx([0.0, 0.0], abs=1e-9)
+    assert (mounting["base_frame"], mounting["laser_frame"]) == ("base_link", "laser")
+    page = (out / "report.html").read_text()
+    assert mounting["ros2_static_transform_publisher"] in page
     assert report["applied"] is False
     assert "restart the controller" in report["apply_message"]
     assert report["verification"] is None

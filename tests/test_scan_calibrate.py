@@ -6,6 +6,7 @@ proposing it; the refusals."""
 from __future__ import annotations
 
 import dataclasses
+import html
 import math
 from pathlib import Path
 
@@ -133,10 +134,37 @@ def test_ros2_bags_recover_the_truth(tmp_path: Path, storage: str, upside_down: 
 
 
 def test_the_mounting_read_from_tf_static(bag: Path) -> None:
-    base, pose = scan_mounting(bag, "laser")  # type: ignore[misc]
+    base, pose, lift = scan_mounting(bag, "laser")  # type: ignore[misc]
     assert base == "base_link"
     assert pose == pytest.approx(STATED, abs=1e-9)
+    assert lift == pytest.approx((0.0, 0.0, 0.0), abs=1e-12)  # the writer's: on the floor, flat
     assert scan_mounting(bag, "no_such_frame") is None
+
+
+def test_the_mounting_in_the_forms_a_user_applies(result: umbmark.CalibrationReport) -> None:
+    """The fitted mounting as the URDF origin and the static transform publishers'
+    arguments, and its difference from what /tf_static states: the truth's (2 cm and 3
+    degrees), outside the fit's 95 % intervals (4 standard errors apart at least)."""
+    data = result.to_dict()
+    forms = data["laser_mounting"]
+    x, y, yaw = data["laser_pose"]
+    se = data["laser_pose_standard_errors"]
+    assert forms["stated"]["source"] == "/tf_static in base_link"
+    assert forms["stated"]["lift"] == pytest.approx((0.0, 0.0, 0.0), abs=1e-12)
+    truth = (LASER.x - STATED[0], LASER.y - STATED[1], LASER.theta - STATED[2])
+    for k, what in enumerate(("dx", "dy", "dyaw")):
+        _within(forms["difference"][k], truth[k], se[k], what)
+    assert forms["outside_interval_95"] == [True, True, True]
+    assert forms["urdf_origin"] == (
+        f'<origin xyz="{x:.4f} {y:.4f} 0.0000" rpy="0.00000 0.00000 {yaw:.5f}"/>'
+    )
+    assert forms["ros1_static_transform_publisher"] == (
+        f"rosrun tf2_ros static_transform_publisher {x:.4f} {y:.4f} 0.0000 {yaw:.5f} "
+        "0.00000 0.00000 base_link laser"
+    )
+    assert forms["ros2_static_transform_publisher"].endswith(
+        f"--yaw {yaw:.5f} --frame-id base_link --child-frame-id laser"
+    )
 
 
 def test_an_upside_down_mounting_keeps_its_position_and_heading(tmp_path: Path) -> None:
@@ -148,9 +176,10 @@ def test_an_upside_down_mounting_keeps_its_position_and_heading(tmp_path: Path) 
         laser_pose=STATED,
     )  # fmt: skip
     # turned over about its x axis: the frame right side up has the same origin and x axis
-    base, pose = scan_mounting(bag, "laser")  # type: ignore[misc]
+    base, pose, (z, roll, pitch) = scan_mounting(bag, "laser")  # type: ignore[misc]
     assert base == "base_link"
     assert pose == pytest.approx(STATED, abs=1e-9)
+    assert (z, abs(roll), pitch) == pytest.approx((0.0, math.pi, 0.0), abs=1e-9)
 
 
 @pytest.mark.slow
@@ -164,6 +193,23 @@ def test_the_command_gives_the_same_in_metres_and_radians(
         assert data[key] == pytest.approx(api[key], rel=1e-12)
     assert data["laser_pose"] == pytest.approx(api["laser_pose"], rel=1e-12)
     assert data["new"] == pytest.approx(api["new"], rel=1e-12)  # the overlay's values
+    assert data["laser_mounting"] == api["laser_mounting"]
+    # the terminal: the same forms, whole on their lines (to copy)
+    text = run_cli("calibrate", str(bag), "--scan-topic", "/scan", *JOINTS, *NOMINAL)
+    assert text.returncode == 0, text.stderr
+    lines = text.stdout.splitlines()
+    forms = api["laser_mounting"]
+    assert f"  URDF joint origin of laser: {forms['urdf_origin']}" in lines
+    assert f"  ROS 2: {forms['ros2_static_transform_publisher']}" in lines
+    assert f"  ROS 1: {forms['ros1_static_transform_publisher']}" in lines
+    said = next(line for line in lines if line.startswith("  stated (/tf_static in base_link)"))
+    # and the page (--report): the same forms, escaped
+    page = result.html()
+    assert f'id="urdf-origin">{html.escape(forms["urdf_origin"])}</pre>' in page
+    dx, dy, dyaw = forms["difference"]
+    assert (
+        f"x {dx * 1000:+.1f} mm, y {dy * 1000:+.1f} mm, yaw {math.degrees(dyaw):+.3f} deg" in said
+    )
 
 
 @pytest.mark.slow

@@ -5,8 +5,10 @@ the CLI end to end, and its agreement with the UMBmark routine on the same error
 
 from __future__ import annotations
 
+import html
 import json
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -18,11 +20,16 @@ from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import ROOM_LASER, World, box, legs, room_world
 from umbmark.routines.anywhere import PATTERN, PATTERN_REACH
 
-from helpers import api_error, run_cli
+from helpers import api_error, dom_text, run_cli
 
 #: The true errors and the laser's true mounting (off the axle centre, turned).
 E_D, E_B, E_S = 1.004, 0.97, 1.01
 LASER = (0.12, -0.04, math.radians(4.0))
+#: The mounting the robot states (its TF): 28 mm and 3 deg off the true one, over a hundred
+#: standard errors of the fit (0.1 mm, 0.03 deg): the fit must find the truth, not this.
+STATED = (0.10, -0.06, math.radians(1.0))
+#: The height and tilt it states (z, roll, pitch [m, rad]): the planar fit keeps them.
+LIFT = (0.25, 0.0, 0.0)
 #: The tolerances the routine promises (issue 23).
 TOL_E_D, TOL_E_B, TOL_E_S = 5e-4, 0.002, 0.002
 TOL_POSITION, TOL_YAW = 0.005, math.radians(0.5)
@@ -43,7 +50,7 @@ def _stood_still(robot: VirtualRobot) -> None:
 
 @pytest.fixture(scope="module")
 def calibrated(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
-    robot = _robot()
+    robot = _robot(stated_laser_pose=STATED, stated_laser_lift=LIFT)
     out = tmp_path_factory.mktemp("anywhere") / "out"
     history = out.parent / "history.sqlite"
     report = umbmark.selfcal(
@@ -65,6 +72,15 @@ def test_recovers_the_wheels_and_the_lasers_mounting(calibrated) -> None:  # typ
     x, y, yaw = data["laser_pose"]
     assert math.hypot(x - LASER[0], y - LASER[1]) < TOL_POSITION
     assert abs(yaw - LASER[2]) < TOL_YAW
+    assert math.hypot(x - STATED[0], y - STATED[1]) > 0.02  # not what the robot stated
+    # the difference from the stated mounting: the truth's, outside the fit's interval
+    mounting = data["laser_mounting"]
+    dx, dy, dyaw = mounting["difference"]
+    assert abs(dx - (LASER[0] - STATED[0])) < TOL_POSITION
+    assert abs(dy - (LASER[1] - STATED[1])) < TOL_POSITION
+    assert abs(dyaw - (LASER[2] - STATED[2])) < TOL_YAW
+    assert mounting["outside_interval_95"] == [True, True, True]
+    assert mounting["xyz"][2] == LIFT[0]
     # the absolute figures against the robot's true geometry [m]
     nominal_d, nominal_b = 0.15, 0.34  # the virtual robot's defaults
     true_left = 2.0 * E_S * nominal_d / (E_D + 1.0)
@@ -109,10 +125,63 @@ def test_history_overlay_and_files(calibrated) -> None:  # type: ignore[no-untyp
     assert records[0].applied
     assert not records[1].applied
     names = sorted(f.name for f in report.files)
-    assert names == ["intervals.tuple", "intervals.tuple", "overlay.yaml"]
+    assert names == ["intervals.tuple", "intervals.tuple", "overlay.yaml", "report.html"]
     overlay = next(f for f in report.files if f.name == "overlay.yaml").read_text()
     final = report.final
     assert f"{final.wheel_separation_multiplier:.6f}"[:6] in overlay
+
+
+@pytest.mark.slow
+def test_the_report_page(calibrated, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """OUT/report.html as headless chromium builds it: the intervals used and left out,
+    the fit, the verdict, before and after, and the mounting in the forms a user applies,
+    their numbers against the robot's truth."""
+    _, report, _ = calibrated
+    (page,) = [f for f in report.files if f.name == "report.html"]
+    text = dom_text(page, tmp_path)
+    for section in ("apply", "intervals", "fit", "mounting", "before-after", "overlay"):
+        assert f'<section id="{section}">' in text
+    data = report.to_dict()
+    used = data["motion_intervals"]
+    intervals = re.search(r"<td>pass 1</td><td>(\d+)</td><td>(\d+)</td><td[^>]*>([^<]*)</td>"
+                          r"<td>(\d+)</td><td>(\d+)</td>", text)  # fmt: skip
+    assert intervals is not None
+    assert int(intervals[2]) == used["n"]
+    assert (int(intervals[4]), int(intervals[5])) == (used["used"], used["outliers"])
+    assert 'data-level="apply"' in text
+    assert "Applied (reconfigure)" in text
+    # before and after: E_b went from the truth to 1
+    table = text[text.index('id="before-after-table"') :]
+    e_b = re.search(r"<td>E_b = b_actual / b_used</td><td>([\d.]+)</td><td>[^<]*</td>"
+                    r"<td>([\d.]+)</td>", table)  # fmt: skip
+    assert e_b is not None
+    assert abs(float(e_b[1]) - E_B) < TOL_E_B
+    assert abs(float(e_b[2]) - 1.0) < TOL_E_B
+    # the mounting: the URDF origin and both publishers' arguments, against the truth
+    origin = re.search(r'id="urdf-origin">&lt;origin xyz="(\S+) (\S+) (\S+)" rpy="(\S+) (\S+) '
+                       r'(\S+)"/&gt;</pre>', text)  # fmt: skip
+    assert origin is not None
+    x, y, z, roll, pitch, yaw = (float(v) for v in origin.groups())
+    assert math.hypot(x - LASER[0], y - LASER[1]) < TOL_POSITION
+    assert abs(yaw - LASER[2]) < TOL_YAW
+    assert (z, roll, pitch) == LIFT
+    ros2 = re.search(r'id="ros2-static-transform">([^<]*)</pre>', text)
+    assert ros2 is not None
+    args = ros2[1].split()
+    flags = dict(zip(args[4::2], args[5::2], strict=True))
+    assert args[:4] == ["ros2", "run", "tf2_ros", "static_transform_publisher"]
+    assert [float(flags[f"--{k}"]) for k in ("x", "y", "yaw")] == [x, y, yaw]
+    assert (flags["--frame-id"], flags["--child-frame-id"]) == ("base_link", "laser")
+    ros1 = re.search(r'id="ros1-static-transform">([^<]*)</pre>', text)
+    assert ros1 is not None
+    assert ros1[1].split()[3:] == [*origin.groups()[:3], origin[6], origin[5], origin[4],
+                                   "base_link", "laser"]  # fmt: skip
+    said = html.unescape(text)
+    assert (
+        "outside the fit's 95 % interval in x, y, yaw: correct the stated mounting (the URDF"
+        in said
+    )
+    assert 'id="mounting-figure"><svg' in text
 
 
 def test_the_virtual_lasers_sweeps_come_from_its_mounting() -> None:

@@ -93,6 +93,7 @@ def test_mounting_from_a_transform() -> None:
     assert mount.pose.y == -0.05
     assert mount.pose.theta == pytest.approx(math.pi / 2)
     assert mount.upside_down is False
+    assert mount.lift == pytest.approx((0.3, 0.0, 0.0))
 
 
 def test_a_laser_rolled_by_180_degrees_is_upside_down() -> None:
@@ -100,6 +101,28 @@ def test_a_laser_rolled_by_180_degrees_is_upside_down() -> None:
     mount = mount_from_transform(Msg(translation=Msg(x=0, y=0, z=0), rotation=_q(1, 0, 0, 0)))
     assert mount.upside_down is True
     assert mount.pose.theta == pytest.approx(0.0)
+    assert mount.lift is not None
+    assert (mount.lift[0], abs(mount.lift[1]), mount.lift[2]) == pytest.approx((0.0, math.pi, 0.0))
+
+
+def test_the_height_and_tilt_of_a_mounting() -> None:
+    """Roll 0.1, pitch -0.2, yaw 0.3 rad as a quaternion (the half-angle product of
+    Rz(yaw) Ry(pitch) Rx(roll), written out): the mounting keeps z, roll and pitch."""
+    roll, pitch, yaw = 0.1, -0.2, 0.3
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    q = _q(
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+        cr * cp * cy + sr * sp * sy,
+    )
+    mount = mount_from_transform(Msg(translation=Msg(x=0.12, y=-0.04, z=0.25), rotation=q))
+    assert mount.pose.theta == pytest.approx(yaw)
+    assert mount.lift == pytest.approx((0.25, roll, pitch))
+    scan = scan_from_message(_scan_msg(-0.5, 0.25, [1, 2, 3, 4]), mount, "/base_footprint")
+    assert (scan.lift, scan.frame, scan.base) == (mount.lift, "laser", "base_footprint")
 
 
 # --- scans and ranges -----------------------------------------------------------------------

@@ -53,6 +53,9 @@ def test_a_mounting_through_a_chain_of_joints() -> None:
     assert (mount.pose.x, mount.pose.y) == pytest.approx((0.05, 0.1))
     assert mount.pose.theta == pytest.approx(math.pi / 2)
     assert mount.upside_down
+    # 0.1 + 0.2 m up; Rz(90 deg) Rx(180 deg) is rpy (180 deg, 0, 90 deg)
+    assert mount.lift is not None
+    assert (mount.lift[0], abs(mount.lift[1]), mount.lift[2]) == pytest.approx((0.3, math.pi, 0))
     chassis = urdf_mount(URDF, "base_link", "chassis")
     assert chassis is not None
     assert not chassis.upside_down

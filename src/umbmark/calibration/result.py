@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from umbmark.calibration.verdict import Evidence, Verdict
     from umbmark.estimators.scan_matching import ScanCalibration
     from umbmark.estimators.trajectory_fit import TrajectoryFit
+    from umbmark.model.scans import LaserMounting
 
 __all__ = [
     "ABSOLUTE_FIGURES",
@@ -150,6 +151,9 @@ class CalibrationResult(JsonText):
     without : Without or None
         The result without a table's rows far outside their cluster
         (:func:`umbmark.estimators.rows.far_rows`), None when there are none.
+    stated_mounting : LaserMounting or None
+        The laser's mounting as the robot states it (TF, ``/tf_static``, the URDF), which
+        the fitted one is compared with (None: not known).
     """
 
     sources: tuple[str, ...]
@@ -173,6 +177,7 @@ class CalibrationResult(JsonText):
     recorded: str | None = field(default=None, compare=False)
     sensor: ScanCalibration | None = field(default=None, compare=False)
     without: Without | None = None
+    stated_mounting: LaserMounting | None = field(default=None, compare=False)
 
     def __repr__(self) -> str:
         est = self.estimate

@@ -26,6 +26,7 @@ from umbmark.estimators.registry import INTERVALS, Estimator, estimator
 from umbmark.model.active import ActiveParams
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.motion_intervals import MotionIntervals
+from umbmark.model.scans import LaserMounting
 from umbmark.options.spec import WHEELBASE
 from umbmark.runs.active import choose_active
 from umbmark.runs.read import Chosen, bag_options, check_invertible, parameter_file
@@ -113,6 +114,7 @@ def _calibrate(
     format: str,
     side_length: float | None,
     notes: Sequence[str] = (),
+    stated: LaserMounting | None = None,
 ) -> CalibrationResult:
     """The estimator ``entry`` on ``intervals`` with the active parameters ``chosen``."""
     if chosen.wheelbase is None:
@@ -155,6 +157,7 @@ def _calibrate(
         notes=said,
         input_warnings=warnings,
         sensor=sensor,
+        stated_mounting=stated,
     )
 
 
@@ -202,6 +205,7 @@ def calibrate_scan_bags(
     chosen = choose_active(options, file, wheelbase, None)
     paths = [Path(b) for b in bags]
     parts, notes = [], list[str]()
+    stated: LaserMounting | None = None
     for path in paths:
         name = str(path)
         configured, diameter = chosen.wheelbase, chosen.wheel_diameter
@@ -233,6 +237,7 @@ def calibrate_scan_bags(
             tf_mounting=True,
         )
         notes += report.notes
+        stated = stated or report.stated
         kept = len(report.intervals)
         dropped = ", ".join(f"{n} {why}" for why, n in sorted(report.left_out.items()))
         notes.append(
@@ -255,7 +260,7 @@ def calibrate_scan_bags(
     try:
         return _calibrate(
             intervals, entry, chosen, file, tuple(map(str, paths)), where, "bag",
-            side_length, notes,
+            side_length, notes, stated,
         )  # fmt: skip
     except InputError as error:
         if error.source is None and where is not None:

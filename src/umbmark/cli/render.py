@@ -101,6 +101,7 @@ def render_calibration(
     _render_errors(report, console)
     _render_without(report, console)
     _render_correction(report, console)
+    _render_mounting(report, console)
 
     if overlay and report.overlay_withheld:
         console.print(
@@ -116,6 +117,18 @@ def render_calibration(
         )
         # Plain text, no box: it must copy and paste as it is.
         console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
+
+
+def _render_mounting(report: CalibrationResult, console: Console) -> None:
+    """The laser's fitted mounting in the forms a user applies (a calibration from motion
+    intervals): plain lines, the commands whole to copy."""
+    from umbmark.outputs.mounting import mounting_forms
+
+    forms = mounting_forms(report)
+    if forms is None:
+        return
+    for line in forms.lines():
+        console.print(Text(line), soft_wrap=True)
 
 
 def _render_errors(report: CalibrationResult, console: Console) -> None:

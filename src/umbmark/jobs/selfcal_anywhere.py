@@ -16,7 +16,12 @@ pattern again.
    controller takes it only on a restart: a ROS 2 controller without the controller
    manager's messages; the report's apply message says how);
 5. with ``verify`` and the result applied: the pattern again, calibrated the same way
-   (``out/verification``): what is left after the correction.
+   (``out/verification``): what is left after the correction;
+6. with ``out``: ``out/report.html``, the page of it all
+   (:mod:`umbmark.outputs.anywhere_page`): the intervals used and left out, the fit, the
+   verdict, before and after, and the laser's mounting in the forms a user applies (the
+   URDF origin, the static transform publishers' arguments, the difference from the
+   mounting the robot states).
 """
 
 from __future__ import annotations
@@ -50,6 +55,8 @@ __all__ = ["AnywherePass", "AnywhereReport", "selfcal_anywhere", "square_only"]
 
 #: The file of a pass's motion intervals (``docs/formats.md``: tuple files).
 INTERVALS_FILE = "intervals.tuple"
+#: The page of the routine, in ``out``.
+REPORT_FILE = "report.html"
 #: Most repeats of the pattern in one pass.
 MAX_REPEATS = 10
 
@@ -75,6 +82,10 @@ class AnywherePass:
         The intervals matched and left out, for people.
     applied : ApplyResult or None
         What applying its correction did (None: not applied).
+    tried : int
+        The motion intervals cut from the drive.
+    left_out : tuple of (str, int)
+        The intervals that could not be scan matched, by reason.
     """
 
     label: str
@@ -83,6 +94,8 @@ class AnywherePass:
     params: DriveParams
     matched: str
     applied: ApplyResult | None = None
+    tried: int = 0
+    left_out: tuple[tuple[str, int], ...] = ()
 
     def errors(self) -> dict[str, float | None]:
         """``E_d``, ``E_b``, ``E_s`` against the parameters active during the drive."""
@@ -121,6 +134,39 @@ class AnywhereReport(JsonText):
         """What applying the calibration did (None: not applied)."""
         return self.calibration.applied
 
+    def html(self) -> str:
+        """The routine's page (what ``out/report.html`` holds)."""
+        from umbmark.outputs.anywhere_page import AnywherePage, PatternPass, anywhere_html
+
+        def shown(one: AnywherePass | None) -> PatternPass | None:
+            if one is None:
+                return None
+            return PatternPass(one.label, one.report, one.tried, dict(one.left_out))
+
+        first = shown(self.calibration)
+        assert first is not None
+        return anywhere_html(
+            AnywherePage(
+                robot=self.robot,
+                calibration=first,
+                verification=shown(self.verification),
+                applied=self.applied_words(),
+                final=_multipliers(self.final),
+                checks=self.checks,
+            )
+        )
+
+    def applied_words(self) -> str:
+        """What applying did, in one sentence."""
+        applied = self.applied
+        if applied is None:
+            verdict = self.calibration.report.verdict
+            why = "apply none was asked" if verdict.applies else "the verdict is do not apply"
+            return f"Not applied: {why}."
+        if applied.active:
+            return f"Applied ({applied.method}): {applied.message}."
+        return f"Not applied yet: {applied.message}."
+
     def to_dict(self) -> dict[str, Any]:
         """What ``umbmark selfcal --routine anywhere --json`` prints (metres, radians): the
         calibration's fields as ``umbmark calibrate --scan-topic --json`` gives them, and
@@ -141,15 +187,20 @@ class AnywhereReport(JsonText):
                 "verification": None
                 if self.verification is None
                 else self.verification.report.to_dict(),
-                "final": {
-                    "wheel_separation_multiplier": self.final.wheel_separation_multiplier,
-                    "left_wheel_radius_multiplier": self.final.left_wheel_radius_multiplier,
-                    "right_wheel_radius_multiplier": self.final.right_wheel_radius_multiplier,
-                },
+                "final": _multipliers(self.final),
                 "files": [str(f) for f in self.files],
             }
         )
         return out
+
+
+def _multipliers(params: DriveParams) -> dict[str, float]:
+    """The multipliers ``params`` hold, by their controller names."""
+    return {
+        "wheel_separation_multiplier": params.wheel_separation_multiplier,
+        "left_wheel_radius_multiplier": params.left_wheel_radius_multiplier,
+        "right_wheel_radius_multiplier": params.right_wheel_radius_multiplier,
+    }
 
 
 def selfcal_anywhere(
@@ -212,7 +263,7 @@ def selfcal_anywhere(
     else:
         first = replace(first, folder=None)
         verification = None if verification is None else replace(verification, folder=None)
-    return AnywhereReport(
+    report = AnywhereReport(
         robot=name,
         calibration=first,
         verification=verification,
@@ -220,6 +271,12 @@ def selfcal_anywhere(
         checks=checks,
         files=tuple(files),
     )
+    if folder is None:
+        return report
+    from umbmark.core.atomic import atomic_write_text
+
+    atomic_write_text(folder / REPORT_FILE, report.html())
+    return replace(report, files=(*report.files, folder / REPORT_FILE))
 
 
 def _check_folder(folder: Path | None, force: bool) -> None:
@@ -283,8 +340,10 @@ class _Pass:
             robot=self.record_as,
             history=self.history,
         )
-        report = CalibrationReport.of(found)
-        return AnywherePass(label, where, report, p, intervals_note(matched))
+        report = CalibrationReport.of(replace(found, stated_mounting=recording.stated))
+        left_out = tuple(sorted(matched.left_out.items()))
+        note = intervals_note(matched)
+        return AnywherePass(label, where, report, p, note, tried=matched.tried, left_out=left_out)
 
 
 def _apply(robot: Robot, result: AnywherePass, method: ApplyMethod) -> AnywherePass:

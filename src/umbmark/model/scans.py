@@ -13,7 +13,7 @@ import numpy as np
 
 from umbmark.core.arrays import FloatArray
 
-__all__ = ["ScanSeries"]
+__all__ = ["LaserMounting", "ScanSeries"]
 
 
 @dataclass(frozen=True)
@@ -79,3 +79,27 @@ class ScanSeries:
         return np.asarray(
             self.angle_min + self.angle_increment * np.arange(self.beams, dtype=np.float64)
         )
+
+
+@dataclass(frozen=True)
+class LaserMounting:
+    """A laser's mounting as the robot states it (TF, ``/tf_static``, its URDF): the pose
+    of the laser's frame in the robot's base frame.
+
+    Attributes:
+        x, y: the laser's origin forward and left of the base frame's [m].
+        yaw: the direction of the laser's x axis [rad], ccw from the base's x axis.
+        lift: ``(z, roll, pitch)`` [m, rad, rad], the height and tilt the robot states
+            (URDF ``rpy``: fixed axes, yaw last); None where only the planar mounting is
+            known. The planar scan matching does not see them.
+        base, frame: the base frame and the laser's frame (``header.frame_id``).
+        source: where it was stated, for people (``TF``, ``/tf_static in BAG``, ...).
+    """
+
+    x: float
+    y: float
+    yaw: float
+    lift: tuple[float, float, float] | None = None
+    base: str = "base_link"
+    frame: str = "laser"
+    source: str = ""

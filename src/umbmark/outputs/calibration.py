@@ -9,7 +9,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from umbmark.calibration.result import CalibrationResult
 from umbmark.core.atomic import atomic_write_text
@@ -33,6 +33,18 @@ class CalibrationReport(CalibrationResult):
     def of(cls, result: CalibrationResult) -> CalibrationReport:
         """The report of ``result``."""
         return cls(**{f.name: getattr(result, f.name) for f in fields(result)})
+
+    def to_dict(self) -> dict[str, Any]:
+        """The result's JSON (:meth:`CalibrationResult.to_dict`), and for a calibration
+        from motion intervals the laser's mounting in the forms a user applies
+        (``laser_mounting``: :mod:`umbmark.outputs.mounting`)."""
+        from umbmark.outputs.mounting import mounting_forms
+
+        out = super().to_dict()
+        forms = mounting_forms(self)
+        if forms is not None:
+            out["laser_mounting"] = forms.to_dict()
+        return out
 
     def figure(self) -> Figure:
         """The Fig. 6 view of the return errors (what ``--plot`` draws).

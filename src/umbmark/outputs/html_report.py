@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
-from collections.abc import Collection, Sequence
+from collections.abc import Sequence
 from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,6 +19,9 @@ from typing import TYPE_CHECKING
 from umbmark.core.digest import file_sha256
 from umbmark.core.version import __version__
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
+from umbmark.outputs.html_parts import CSS as _CSS
+from umbmark.outputs.html_parts import num as _num
+from umbmark.outputs.html_parts import table as _table
 from umbmark.returns.clusters import scatter_standing, sem_verdict
 
 if TYPE_CHECKING:
@@ -28,68 +31,11 @@ if TYPE_CHECKING:
     from umbmark.estimators.base import ErrorEstimate
     from umbmark.returns.clusters import Benchmark
 
-__all__ = ["calibration_html", "pass_name", "passes_html"]
+__all__ = ["calibration_html", "estimate_section", "fit_messages", "pass_name", "passes_html"]
 
 _MM = 1000.0
 #: Files of an input folder listed with their SHA-256 at most.
 _MAX_FOLDER_FILES = 50
-
-_CSS = """
-:root { color-scheme: light; }
-body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; line-height: 1.45;
-  margin: 0 auto; padding: 1rem; max-width: 60rem; color: #111; background: #fff; }
-h1 { font-size: 1.5rem; }
-h1, h3, p, li, figcaption { overflow-wrap: anywhere; } h2 { font-size: 1.2rem; margin-top: 2rem;
-  border-bottom: 1px solid #ccc; }
-.verdict { padding: .75rem 1rem; border-left: .4rem solid #c60; background: #fff6ec; }
-.verdict.ok { border-color: #2a7; background: #eefaf3; }
-.big { font-size: 1.4rem; font-weight: bold; }
-.scroll { overflow-x: auto; }
-table { border-collapse: collapse; margin: .5rem 0; }
-th, td { padding: .2rem .6rem; border-bottom: 1px solid #ddd; text-align: right;
-  white-space: nowrap; }
-th { white-space: normal; vertical-align: bottom; }
-.wrap { white-space: normal; overflow-wrap: anywhere; min-width: 6rem; text-align: left; }
-th:first-child, td:first-child { text-align: left; }
-pre { background: #f4f4f4; padding: .75rem; overflow-x: auto; font-size: .85rem; }
-figure { margin: 0; } figure svg { max-width: 100%; height: auto; }
-code { word-break: break-all; }
-.predicted { color: #555; font-style: italic; }
-@media print {
-  body { max-width: none; padding: 0; font-size: 10pt; }
-  .scroll, pre { overflow: visible; } pre { white-space: pre-wrap; }
-  h2 { break-after: avoid; } figure, table { break-inside: avoid; }
-}
-"""
-
-
-def _num(value: float | None, fmt: str) -> str:
-    """``value`` formatted, or a dash for None and non-finite values."""
-    if value is None or not math.isfinite(value):
-        return "–"
-    return format(value, fmt)
-
-
-def _table(head: list[str], rows: list[list[str]], wrap: Collection[int] = ()) -> str:
-    """An HTML table (in a scrolling box) of already formatted cells; escaped here.
-
-    Headers wrap between words, numbers never; the cells of the columns ``wrap`` (their
-    indices: names, paths, digests, explanations) wrap anywhere, so that a wide table fits
-    a page.
-    """
-    cls = [' class="wrap"' if k in wrap else "" for k in range(len(head))]
-    th = "".join(f"<th{c}>{escape(h)}</th>" for c, h in zip(cls, head, strict=True))
-    tds = [f"<td{c}>" for c in cls]
-    body = "".join(
-        "<tr>"
-        + "".join(f"{td}{escape(cell)}</td>" for td, cell in zip(tds, row, strict=False))
-        + "</tr>\n"
-        for row in rows
-    )
-    return (
-        f'<div class="scroll"><table>\n<thead><tr>{th}</tr></thead>\n'
-        f"<tbody>\n{body}</tbody></table></div>\n"
-    )
 
 
 def pass_name(k: int, n: int) -> str:
@@ -303,7 +249,8 @@ def _runs(page: Passes) -> str:
     return _table(head, rows, wrap={head.index("run")}) + note
 
 
-def _estimate(one: CalibrationResult) -> str:
+def estimate_section(one: CalibrationResult) -> str:
+    """The estimates of one calibration with their 95 % intervals, and its correction."""
     cal = one.calibration
     est = cal.estimate
     se = est.standard_errors
@@ -377,11 +324,13 @@ def _absolute_rows(est: ErrorEstimate) -> list[list[str]]:
 def _estimates(page: Passes) -> str:
     passes = _passes(page)
     if len(passes) == 1:
-        return _estimate(passes[0][1])
-    return "".join(f"<h3>{escape(name)}</h3>\n{_estimate(one)}" for name, one in passes)
+        return estimate_section(passes[0][1])
+    return "".join(f"<h3>{escape(name)}</h3>\n{estimate_section(one)}" for name, one in passes)
 
 
-def _checks(one: CalibrationResult) -> str:
+def fit_messages(one: CalibrationResult) -> str:
+    """The figures of one calibration's fit (each with its unit and meaning), its
+    warnings and notes."""
     parts = []
     est = one.estimate
     main = {"alpha", "beta", "E_d", "E_b", "E_s"}  # in the estimates' table already
@@ -429,9 +378,9 @@ def _mm(value: float | None) -> str:
 def _messages(page: Passes) -> str:
     passes = _passes(page)
     if len(passes) == 1:
-        body = _checks(passes[0][1])
+        body = fit_messages(passes[0][1])
     else:
-        body = "".join(f"<h3>{escape(name)}</h3>\n{_checks(one)}" for name, one in passes)
+        body = "".join(f"<h3>{escape(name)}</h3>\n{fit_messages(one)}" for name, one in passes)
     if page.validation is not None:
         body += _validation(page.validation)
     return body
@@ -540,7 +489,9 @@ def passes_html(page: Passes) -> str:
     SVG figure (and the predicted after of a single pass of recorded runs, marked as a
     prediction), every run, the estimates with their 95 % intervals (alpha and beta in
     degrees) and the correction, the figures of the fit (each with its unit and
-    meaning), warnings, notes and any validation table, the ros2_control overlay of the
+    meaning), warnings, notes and any validation table, the laser's mounting in the forms
+    a user applies (a calibration from motion intervals:
+    :func:`umbmark.outputs.mounting.mounting_html`), the ros2_control overlay of the
     last pass and the provenance (inputs with their SHA-256, the parameters active, the
     command, the umbmark version and the method).
     """
@@ -554,13 +505,18 @@ def passes_html(page: Passes) -> str:
     if robot:
         title = f"{robot}: {title}"
     from umbmark.outputs.html_verdict import CSS, verdict_section
+    from umbmark.outputs.mounting import CSS as MOUNTING_CSS
+    from umbmark.outputs.mounting import mounting_forms, mounting_html
 
+    forms = mounting_forms(page.last)  # None but for a calibration from motion intervals
+    mounting = [] if forms is None else [("mounting", "The laser's mounting", mounting_html(forms))]
     sections = [
         ("apply", "Apply the correction?", verdict_section(page)),
         ("verdict", "E_max,syst and the 3 x SEM rule", _verdict(page) + _clusters(page)),
         ("clusters", "Cluster view (Fig. 6)", _figure(page)),
         ("runs", "Runs", _runs(page)),
         ("estimates", "Estimates and 95 % intervals", _estimates(page)),
+        *mounting,
         ("messages", "Figures of the fit, warnings and notes", _messages(page)),
         ("overlay", "ros2_control overlay", _overlay(page)),
         ("provenance", "Provenance", _provenance(page)),
@@ -573,7 +529,8 @@ def passes_html(page: Passes) -> str:
         "<!DOCTYPE html>\n"
         '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
-        f"<title>{escape(title)}</title>\n<style>{_CSS}{CSS}</style>\n</head>\n<body>\n"
+        f"<title>{escape(title)}</title>\n<style>{_CSS}{CSS}{MOUNTING_CSS}</style>\n</head>\n"
+        "<body>\n"
         f"<h1>{escape(title)}</h1>\n{body}</body>\n</html>\n"
     )
 

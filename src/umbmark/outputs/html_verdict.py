@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from umbmark.calibration.passes import Holds, Passes
     from umbmark.calibration.verdict import Verdict
 
-__all__ = ["CSS", "WITHHELD", "verdict_section"]
+__all__ = ["CSS", "WITHHELD", "verdict_box", "verdict_section"]
 
 #: The style of the verdict's box: green to apply, orange with care, red not to.
 CSS = """
@@ -25,7 +25,8 @@ CSS = """
 """
 
 
-def _box(verdict: Verdict, lead: str) -> str:
+def verdict_box(verdict: Verdict, lead: str) -> str:
+    """The verdict in its coloured box, after ``lead``: its reasons, and what instead."""
     reasons = "".join(f"<li>{escape(reason)}</li>\n" for reason in verdict.reasons)
     listed = f"<ul>\n{reasons}</ul>\n" if reasons else ""
     if verdict.instead:
@@ -50,7 +51,7 @@ def verdict_section(page: Passes) -> str:
         f"<li>Pass {k}: {escape(one.verdict.words)}</li>\n"
         for k, one in enumerate(page.passes[:-1], 1)
     )
-    return _box(page.last.verdict, lead) + (f"<ul>\n{earlier}</ul>\n" if earlier else "")
+    return verdict_box(page.last.verdict, lead) + (f"<ul>\n{earlier}</ul>\n" if earlier else "")
 
 
 def _named(k: int, labels: tuple[str, ...]) -> str:
@@ -64,7 +65,7 @@ def _holds_section(page: Passes, holds: Holds) -> str:
     # the pass it holds; with none applied, the last pass's correction, to apply by hand
     shown = holds.held or len(page.passes)
     applied = "applied" if holds.held is not None else "not applied"
-    box = _box(page.passes[shown - 1].verdict, f"{_named(shown, holds.labels)}, {applied}: ")
+    box = verdict_box(page.passes[shown - 1].verdict, f"{_named(shown, holds.labels)}, {applied}: ")
     lines = "".join(
         f"<li>{escape(_named(k, holds.labels))}: {escape(one.verdict.words)}; "
         f"{'applied' if holds.applied(k) else 'not applied'}</li>\n"

@@ -80,6 +80,12 @@ class ScanSweep:
         The scanner's valid range [m].
     mount : Pose2D
         The laser's pose in the robot's base frame (TF ``base_link -> laser``).
+    lift : (float, float, float) or None
+        The mounting's ``z, roll, pitch`` [m, rad, rad] as the robot states them (TF, its
+        URDF: fixed-axis roll and pitch, yaw last), which the planar matching does not
+        use; None where only the planar mounting is known.
+    frame, base : str
+        The laser's frame (``header.frame_id``) and the base frame (empty: not known).
     """
 
     time: float
@@ -89,6 +95,9 @@ class ScanSweep:
     range_min: float
     range_max: float
     mount: Pose2D = field(default_factory=Pose2D)
+    lift: tuple[float, float, float] | None = None
+    frame: str = ""
+    base: str = ""
 
     def angles(self) -> FloatArray:
         """Beam angles [rad], shape (n,), in the laser's frame."""

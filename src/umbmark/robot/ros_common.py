@@ -48,6 +48,7 @@ __all__ = [
     "default_topics",
     "held_problem",
     "laser_mount",
+    "lift_of",
     "master_problem",
     "mount_from_transform",
     "multipliers",
@@ -211,10 +212,23 @@ class Mount:
         Where the sensor is and where its x axis points, in the base frame.
     upside_down : bool
         The sensor's z axis points down: its angles run clockwise seen from above.
+    lift : (float, float, float) or None
+        Its height and tilt ``z, roll, pitch`` [m, rad, rad] (fixed axes, yaw last: the
+        URDF's ``rpy``); None where only the planar mounting is known (``--laser-mount``).
     """
 
     pose: Pose2D
     upside_down: bool = False
+    lift: tuple[float, float, float] | None = None
+
+
+def lift_of(z: float, last_row: Sequence[float]) -> tuple[float, float, float]:
+    """``z, roll, pitch`` of a frame at height ``z`` [m] whose rotation ``r = Rz(yaw)
+    Ry(pitch) Rx(roll)`` has the last row ``last_row`` (``r[2, :]``, (3,)): its fixed-axis
+    roll and pitch, pitch within +-90 degrees (so that the yaw is the direction of the
+    frame's x axis)."""
+    r20, r21, r22 = (float(v) for v in last_row)
+    return float(z), math.atan2(r21, r22), math.atan2(-r20, math.hypot(r21, r22))
 
 
 def mount_from_transform(transform: object) -> Mount:
@@ -225,13 +239,17 @@ def mount_from_transform(transform: object) -> Mount:
     x, y, z, w = _xyzw(rotation)
     z_up = 1.0 - 2.0 * (x * x + y * y)  # the z component of the sensor's z axis
     pose = Pose2D(float(position.x), float(position.y), float(quaternion_yaw(x, y, z, w)))  # type: ignore[attr-defined]
-    return Mount(pose, upside_down=z_up < 0.0)
+    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
+    x, y, z, w = x / n, y / n, z / n, w / n
+    last_row = (2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y))
+    lift = lift_of(float(position.z), last_row)  # type: ignore[attr-defined]
+    return Mount(pose, upside_down=z_up < 0.0, lift=lift)
 
 
-def scan_from_message(msg: object, mount: Mount) -> ScanSweep:
+def scan_from_message(msg: object, mount: Mount, base: str = "") -> ScanSweep:
     """A ``sensor_msgs/LaserScan`` as a :class:`~umbmark.robot.base.ScanSweep` with its
-    mounting; a laser mounted upside down has its beams reversed, so that angles run
-    counter-clockwise in the base frame again."""
+    mounting in the frame ``base``; a laser mounted upside down has its beams reversed, so
+    that angles run counter-clockwise in the base frame again."""
     ranges = np.asarray(msg.ranges, dtype=np.float64)  # type: ignore[attr-defined]
     angle_min = float(msg.angle_min)  # type: ignore[attr-defined]
     increment = float(msg.angle_increment)  # type: ignore[attr-defined]
@@ -246,6 +264,9 @@ def scan_from_message(msg: object, mount: Mount) -> ScanSweep:
         range_min=float(msg.range_min),  # type: ignore[attr-defined]
         range_max=float(msg.range_max),  # type: ignore[attr-defined]
         mount=mount.pose,
+        lift=mount.lift,
+        frame=str(msg.header.frame_id).lstrip("/"),  # type: ignore[attr-defined]
+        base=base.lstrip("/"),
     )
 
 

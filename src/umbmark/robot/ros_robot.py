@@ -153,7 +153,7 @@ class RosRobot:
         msg = self._scan.get()
         if msg is None:
             return None
-        return scan_from_message(msg, self._mount(msg.header.frame_id))
+        return scan_from_message(msg, self._mount(msg.header.frame_id), self.options.base_frame)
 
     def ranges(self) -> RangeReading | None:
         """The latest reading of each range sensor (None: a sensor said nothing yet)."""

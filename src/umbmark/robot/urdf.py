@@ -14,7 +14,7 @@ import numpy as np
 
 from umbmark.core.errors import InputError
 from umbmark.robot.base import Pose2D
-from umbmark.robot.ros_common import Mount
+from umbmark.robot.ros_common import Mount, lift_of
 
 __all__ = ["MAX_URDF", "static_mount", "urdf_geometry", "urdf_mount"]
 
@@ -99,7 +99,8 @@ def _mount(t: np.ndarray, r: np.ndarray) -> Mount:
     """The planar mounting of a frame at ``t`` (3,) turned by ``r`` (3, 3) in the base:
     where its x axis points, and whether its z axis points down."""
     yaw = math.atan2(float(r[1, 0]), float(r[0, 0]))
-    return Mount(Pose2D(float(t[0]), float(t[1]), yaw), upside_down=bool(r[2, 2] < 0.0))
+    pose = Pose2D(float(t[0]), float(t[1]), yaw)
+    return Mount(pose, upside_down=bool(r[2, 2] < 0.0), lift=lift_of(float(t[2]), r[2]))
 
 
 def static_mount(

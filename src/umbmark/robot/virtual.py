@@ -90,7 +90,14 @@ class VirtualRobot:
         The laser's true mounting ``x, y, yaw`` [m, m, rad] in the base frame: the scans
         are cast from there (default: the world's laser as it is; a world without one gets
         the standard laser, :data:`umbmark.robot.world.DEFAULT_LIDAR`). The scans report
-        this mounting, as TF would.
+        this mounting, as TF would, unless ``stated_laser_pose`` says otherwise.
+    stated_laser_pose : (float, float, float), optional
+        The mounting ``x, y, yaw`` [m, m, rad] the robot states (its TF, its URDF) where
+        it differs from the true one: the scans report it, the beams are cast from the
+        true one (a robot whose description is off).
+    stated_laser_lift : (float, float, float), optional
+        The height and tilt ``z, roll, pitch`` [m, rad, rad] the robot states with the
+        mounting (None: only the planar mounting). The planar world ignores them.
     """
 
     name = "virtual robot"
@@ -112,6 +119,8 @@ class VirtualRobot:
         params: DriveParams | None = None,
         command_timeout: float = 0.5,
         laser_pose: tuple[float, float, float] | None = None,
+        stated_laser_pose: tuple[float, float, float] | None = None,
+        stated_laser_lift: tuple[float, float, float] | None = None,
     ) -> None:
         _check_arguments(E_d, E_b, E_s, wheelbase, wheel_diameter, slip, command_timeout)
         nominal = WheelParams(
@@ -133,6 +142,9 @@ class VirtualRobot:
         if laser_pose is not None:
             world = _with_laser(world, laser_pose)
         self.world = world
+        stated = stated_laser_pose
+        self._stated = None if stated is None else _laser_pose(stated, "stated_laser_pose")
+        self._lift = None if stated_laser_lift is None else _lift(stated_laser_lift)
         self._rng = np.random.default_rng(seed)
         self._params = params or DriveParams(wheelbase, 0.5 * wheel_diameter)
         self._pulses = gear_ratio * encoder_resolution  # per wheel revolution
@@ -173,8 +185,13 @@ class VirtualRobot:
         return StampedPose(self._odom_time, Pose2D(*self._odom))
 
     def scan(self) -> ScanSweep | None:
-        """A laser scan from the true pose, if the world has a laser on the robot."""
-        return self.world.scan(self._pose, self._time, self._rng)
+        """A laser scan from the true pose, if the world has a laser on the robot, with
+        the mounting the robot states (frames ``base_link`` and ``laser``)."""
+        sweep = self.world.scan(self._pose, self._time, self._rng)
+        if sweep is None:
+            return None
+        mount = sweep.mount if self._stated is None else self._stated
+        return replace(sweep, mount=mount, lift=self._lift, frame="laser", base="base_link")
 
     def ranges(self) -> RangeReading | None:
         """The range sensors' readings from the true pose, if the robot has them."""
@@ -299,12 +316,28 @@ def _with_laser(world: World, pose: tuple[float, float, float]) -> World:
     """``world`` with its laser (the standard one where it has none) mounted at ``pose``."""
     from umbmark.robot.world import DEFAULT_LIDAR
 
+    mount = _laser_pose(pose)
+    return replace(world, lidar=replace(world.lidar or DEFAULT_LIDAR, mount=mount))
+
+
+def _laser_pose(pose: tuple[float, float, float], name: str = "laser_pose") -> Pose2D:
+    """A laser's mounting ``x, y, yaw`` checked: finite, within 2 m of the axle centre."""
     values = tuple(float(v) for v in pose)
     if len(values) != 3 or not all(math.isfinite(v) for v in values):
-        raise InputError(f"laser_pose={pose!r}: give x, y [m] and yaw [rad]")
+        raise InputError(f"{name}={pose!r}: give x, y [m] and yaw [rad]")
     if math.hypot(values[0], values[1]) > 2.0:
-        raise InputError(f"laser_pose={pose!r}: the laser must sit within 2 m of the axle centre")
-    return replace(world, lidar=replace(world.lidar or DEFAULT_LIDAR, mount=Pose2D(*values)))
+        raise InputError(f"{name}={pose!r}: the laser must sit within 2 m of the axle centre")
+    return Pose2D(*values)
+
+
+def _lift(lift: tuple[float, float, float]) -> tuple[float, float, float]:
+    """A stated ``z, roll, pitch`` checked: finite, within 2 m and 180 degrees."""
+    values = tuple(float(v) for v in lift)
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise InputError(f"stated_laser_lift={lift!r}: give z [m], roll and pitch [rad]")
+    if abs(values[0]) > 2.0 or max(abs(values[1]), abs(values[2])) > math.pi:
+        raise InputError(f"stated_laser_lift={lift!r}: z within 2 m, angles within pi rad")
+    return values[0], values[1], values[2]
 
 
 def _arc(

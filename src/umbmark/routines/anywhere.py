@@ -40,7 +40,7 @@ from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, option
 from umbmark.model.kinematics import OdometryGeometry
 from umbmark.model.recording import PoseSeries, WheelSeries
-from umbmark.model.scans import ScanSeries
+from umbmark.model.scans import LaserMounting, ScanSeries
 from umbmark.robot.base import (
     ApplyMethod,
     ApplyResult,
@@ -233,6 +233,8 @@ class PatternRecording:
         The laser's mounting as the robot states it (TF): the matching's first guess.
     start, end : Stamped
         The settled odometry before and after.
+    stated : LaserMounting or None
+        The stated mounting with its height, tilt and frames, for the report.
     """
 
     scans: ScanSeries
@@ -241,6 +243,7 @@ class PatternRecording:
     mount: Pose2D
     start: StampedPose
     end: StampedPose
+    stated: LaserMounting | None = None
 
 
 def check_scene(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep:
@@ -403,13 +406,19 @@ def _recording(
         )
         series = PoseSeries(time=o[:, 0], poses=o[:, 1:])
         wheels = wheels_from_odometry(series, geometry, "the odometry", name).wheels
+    first = recorder.scans[0]
+    stated = LaserMounting(
+        first.mount.x, first.mount.y, first.mount.theta, first.lift,
+        first.base or "base_link", first.frame or "laser",
+    )  # fmt: skip
     return PatternRecording(
         scans=_series(recorder.scans, f"{name}'s laser"),
         wheels=wheels,
         params=params,
-        mount=recorder.scans[0].mount,
+        mount=first.mount,
         start=start,
         end=end,
+        stated=stated,
     )
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from umbmark.core.messages import info
 from umbmark.model.motion_intervals import MotionIntervals
+from umbmark.model.scans import LaserMounting
 from umbmark.scans.intervals import (
     DEFAULT_OPTIONS,
     IntervalOptions,
@@ -90,7 +91,7 @@ def scan_intervals_from_bag(
     notes: tuple[str, ...] = ()
     mounted = _mounting(path, scans.frame, bag) if tf_mounting and options.guess else None
     if options.guess is not None and mounted is not None:
-        where, pose = mounted
+        where, pose = mounted.source, (mounted.x, mounted.y, mounted.yaw)
         guess = dataclasses.replace(options.guess, laser_pose=pose)
         options = dataclasses.replace(options, guess=guess)
         notes = (
@@ -101,23 +102,24 @@ def scan_intervals_from_bag(
             ),
         )
     report = match_intervals(scans, wheel_series, options)
-    return dataclasses.replace(report, guess=options.guess, notes=notes)
+    return dataclasses.replace(report, guess=options.guess, notes=notes, stated=mounted)
 
 
-def _mounting(
-    path: str | Path, frame: str, bag: BagOptions
-) -> tuple[str, tuple[float, float, float]] | None:
-    """The scanner's nominal mounting: from ``/tf_static``, else from the bag's robot
-    description; where it came from (for people) and ``x, y, yaw`` [m, m, rad]."""
+def _mounting(path: str | Path, frame: str, bag: BagOptions) -> LaserMounting | None:
+    """The scanner's nominal mounting: from ``/tf_static`` (with its height and tilt),
+    else from the bag's robot description (planar); its source says where, for people."""
     found = scan_mounting(path, frame)
     if found is not None:
-        return f"/tf_static in {found[0]}", found[1]
+        base, (x, y, yaw), lift = found
+        return LaserMounting(x, y, yaw, lift, base, frame.lstrip("/"), f"/tf_static in {base}")
     from umbmark.sources.bag.urdf import bag_robot_description
 
     description, _ = bag_robot_description(path, bag.left_joints, bag.right_joints)
     if description is None or frame not in description.mountings:
         return None
-    return f"the robot description ({description.topic})", description.mountings[frame]
+    x, y, yaw = description.mountings[frame]
+    where = f"the robot description ({description.topic})"
+    return LaserMounting(x, y, yaw, frame=frame.lstrip("/"), source=where)
 
 
 def intervals_from_bag(

@@ -48,7 +48,7 @@ import numpy as np
 from umbmark.core.arrays import FloatArray
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.model.recording import WheelSeries
-from umbmark.model.scans import ScanSeries
+from umbmark.model.scans import LaserMounting, ScanSeries
 from umbmark.scans.icp import DEFAULT_SETTINGS, MatchSettings, match
 from umbmark.scans.points import PreparedScan, prepare, series_points
 
@@ -140,6 +140,9 @@ class IntervalReport:
         The nominal geometry the matches started from.
     notes : tuple of str
         Where the guess came from, for people.
+    stated : LaserMounting or None
+        The laser's mounting as the recording states it (``/tf_static``, the robot
+        description), where it does.
     """
 
     intervals: MotionIntervals
@@ -147,6 +150,7 @@ class IntervalReport:
     rms: FloatArray = field(default_factory=lambda: np.zeros(0))
     guess: OdometryGuess | None = None
     notes: tuple[str, ...] = ()
+    stated: LaserMounting | None = None
 
     @property
     def tried(self) -> int:

@@ -272,11 +272,15 @@ def upside_down_frame(reader: AnyReader, topics: dict[str, str], frame: str, src
     return 1.0 - 2.0 * (x * x + y * y) / norm < 0.0
 
 
-def scan_mounting(path: str | Path, frame: str) -> tuple[str, tuple[float, float, float]] | None:
+def scan_mounting(
+    path: str | Path, frame: str
+) -> tuple[str, tuple[float, float, float], tuple[float, float, float]] | None:
     """The scanner's mounting as the bag's ``/tf_static`` states it: the base frame (the
-    first of :data:`BASE_LINKS` up the chain, else its root) and the pose ``x, y, yaw``
+    first of :data:`BASE_LINKS` up the chain, else its root), the pose ``x, y, yaw``
     [m, m, rad] of ``frame`` in it (of its frame right side up: the same origin and x
-    axis). None without a static transform for ``frame``.
+    axis), and its height and tilt ``z, roll, pitch`` [m, rad, rad] (fixed axes, yaw
+    last, pitch within +-90 degrees: the URDF's ``rpy``). None without a static transform
+    for ``frame``.
 
     Raises
     ------
@@ -289,9 +293,17 @@ def scan_mounting(path: str | Path, frame: str) -> tuple[str, tuple[float, float
         parents = _static_tree(reader, bag_reader.topic_types(reader), src)
     if not frame or frame not in parents:
         return None
-    base, (x, y, _), rotation = _compose_up(parents, frame, BASE_LINKS)
+    base, (x, y, z), rotation = _compose_up(parents, frame, BASE_LINKS)
     ex, ey, _ = _rotate(rotation, (1.0, 0.0, 0.0))
-    return base, (x, y, math.atan2(ey, ex))
+    r20, r21, r22 = _rotate(_conjugate(rotation), (0.0, 0.0, 1.0))  # the matrix's last row
+    roll = math.atan2(r21, r22)
+    pitch = math.atan2(-r20, math.hypot(r21, r22))
+    return base, (x, y, math.atan2(ey, ex)), (z, roll, pitch)
+
+
+def _conjugate(q: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    """The inverse rotation of the quaternion ``q`` (``x, y, z, w``)."""
+    return -q[0], -q[1], -q[2], q[3]
 
 
 def _rotate(
