@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from umbmark.core.errors import InputError
-from umbmark.fleet.outcome import RecordingOutcome
+from umbmark.fleets.outcome import RecordingOutcome
 
 
 def square_or_refuse(n: int) -> int:

@@ -34,7 +34,7 @@ LAYERS = (
     "outputs",
     "robot",
     "routines",
-    "fleet",
+    "fleets",
     "jobs",
     "cli",
 )
@@ -385,7 +385,7 @@ def test_tests_of_one_module_sit_in_its_layers_folder(tmp_path):
 
 
 #: Third-party packages only one module of umbmark may import: the engine at the edge.
-EDGE_IMPORTS = {"dask": "umbmark.fleet.cluster", "distributed": "umbmark.fleet.cluster"}
+EDGE_IMPORTS = {"dask": "umbmark.fleets.cluster", "distributed": "umbmark.fleets.cluster"}
 
 
 def edge_import_violations(root: Path = PACKAGE) -> list[str]:
@@ -407,7 +407,7 @@ def edge_import_violations(root: Path = PACKAGE) -> list[str]:
 
 
 def test_the_engine_stays_at_the_edge(tmp_path):
-    """Only ``umbmark.fleet.cluster`` imports Dask: calibrating one recording knows nothing
+    """Only ``umbmark.fleets.cluster`` imports Dask: calibrating one recording knows nothing
     of the engine. The check finds an import elsewhere."""
     assert edge_import_violations() == []
     package = tmp_path / "umbmark"

@@ -40,6 +40,8 @@ _EXPORTS = {
     "info": "umbmark.jobs.info",
     "history": "umbmark.jobs.history",
     "HistoryReport": "umbmark.jobs.history",
+    "fleet": "umbmark.jobs.fleet",
+    "FleetReport": "umbmark.jobs.fleet",
     "History": "umbmark.store.history",
     "plan": "umbmark.jobs.plan",
     "PlanReport": "umbmark.calibration.plan",
@@ -95,6 +97,7 @@ __all__ = [
     "Direction",
     "EndPose",
     "ErrorEstimate",
+    "FleetReport",
     "History",
     "HistoryReport",
     "InfoReport",
@@ -121,6 +124,7 @@ __all__ = [
     "estimate_errors",
     "example",
     "example_sessions",
+    "fleet",
     "history",
     "info",
     "integrate_odometry",
@@ -148,6 +152,7 @@ if TYPE_CHECKING:
     from umbmark.jobs.calibrate import calibrate
     from umbmark.jobs.demo import DemoReport, demo
     from umbmark.jobs.example import example, example_sessions
+    from umbmark.jobs.fleet import FleetReport, fleet
     from umbmark.jobs.history import HistoryReport, history
     from umbmark.jobs.info import InfoReport, info
     from umbmark.jobs.plan import plan

@@ -47,6 +47,7 @@ COMMANDS = (
     "example",
     "history",
     "selfcal",
+    "fleet",
 )
 
 

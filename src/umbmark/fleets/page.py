@@ -11,8 +11,8 @@ import datetime as dt
 import math
 from html import escape
 
-from umbmark.fleet.changes import SECONDS_PER_WEEK
-from umbmark.fleet.summary import FIGURE_UNITS, Z95, FigureTrack, FleetSummary, RobotSummary
+from umbmark.fleets.changes import SECONDS_PER_WEEK
+from umbmark.fleets.summary import FIGURE_UNITS, Z95, FigureTrack, FleetSummary, RobotSummary
 
 __all__ = ["fleet_page"]
 
@@ -160,7 +160,10 @@ def fleet_page(summary: FleetSummary, *, title: str = "umbmark fleet", made: str
     unusable = [r for r in summary.robots if not r.usable]
     left = "".join(
         f"<li><b>{escape(r.robot)}</b>: "
-        + "; ".join(escape(f"{path}: {reason}") for path, reason in r.left_out[:5])
+        + "; ".join(
+            escape(reason if path in reason else f"{path}: {reason}")
+            for path, reason in r.left_out[:5]
+        )
         + (f" (and {len(r.left_out) - 5} more)" if len(r.left_out) > 5 else "")
         + "</li>"
         for r in unusable

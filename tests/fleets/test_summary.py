@@ -9,8 +9,8 @@ import json
 import numpy as np
 
 from fleet_tasks import T0, daily_outcomes
-from umbmark.fleet.outcome import RecordingOutcome
-from umbmark.fleet.summary import summarize
+from umbmark.fleets.outcome import RecordingOutcome
+from umbmark.fleets.summary import summarize
 
 
 def test_the_changed_robots_are_flagged_at_their_day_and_the_steady_ones_are_not():

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from umbmark.core.conventions import Direction
-from umbmark.fleet.outcome import RecordingTask, calibrate_recording
+from umbmark.fleets.outcome import RecordingTask, calibrate_recording
 from umbmark.model.square import square_run_end
 
 from helpers import run_cli

@@ -8,9 +8,9 @@ from html.parser import HTMLParser
 import numpy as np
 
 from fleet_tasks import daily_outcomes
-from umbmark.fleet.outcome import RecordingOutcome
-from umbmark.fleet.page import fleet_page
-from umbmark.fleet.summary import summarize
+from umbmark.fleets.outcome import RecordingOutcome
+from umbmark.fleets.page import fleet_page
+from umbmark.fleets.summary import summarize
 
 
 class _Shape(HTMLParser):

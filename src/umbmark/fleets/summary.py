@@ -1,9 +1,9 @@
 """What a fleet's calibrations say, robot by robot: the latest figures with their
 intervals, each figure's course over time (steady, a step since a recording, a trend per
-week: :func:`umbmark.fleet.changes.change_of`), what to apply, and the robots with no
+week: :func:`umbmark.fleets.changes.change_of`), what to apply, and the robots with no
 usable recording and why.
 
-:func:`summarize` takes every recording's outcome (:class:`~umbmark.fleet.outcome.
+:func:`summarize` takes every recording's outcome (:class:`~umbmark.fleets.outcome.
 RecordingOutcome`, from this run or from the history) and returns a
 :class:`FleetSummary`; the page and the JSON of ``umbmark fleet`` render it.
 """
@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from umbmark.fleet.changes import Change, change_of
-from umbmark.fleet.outcome import FIGURES, STANDARD_SIDE, RecordingOutcome
+from umbmark.fleets.changes import Change, change_of
+from umbmark.fleets.outcome import FIGURES, STANDARD_SIDE, RecordingOutcome
 
 __all__ = ["FIGURE_UNITS", "FigureTrack", "FleetSummary", "RobotSummary", "summarize"]
 
@@ -43,7 +43,7 @@ class FigureTrack:
     Attributes
     ----------
     name : str
-        One of :data:`~umbmark.fleet.outcome.FIGURES`.
+        One of :data:`~umbmark.fleets.outcome.FIGURES`.
     times : tuple of float
         When each recording started [s since 1970].
     values, errors : tuple of float

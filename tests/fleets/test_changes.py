@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from umbmark.core.errors import InputError
-from umbmark.fleet.changes import SECONDS_PER_WEEK, Z_CHANGE, change_of
+from umbmark.fleets.changes import SECONDS_PER_WEEK, Z_CHANGE, change_of
 
 DAY = 86400.0
 SE = 1e-4

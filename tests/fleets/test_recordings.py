@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from umbmark.core.errors import InputError
-from umbmark.fleet.recordings import find_recordings, match_path, path_pattern
+from umbmark.fleets.recordings import find_recordings, match_path, path_pattern
 
 
 @pytest.fixture

@@ -26,7 +26,7 @@ pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fle
 
 import fleet_tasks
 from umbmark.core.errors import InputError
-from umbmark.fleet.cluster import Done, run_each
+from umbmark.fleets.cluster import Done, run_each
 
 TESTS = Path(__file__).resolve().parents[1]
 ROOT = TESTS.parent

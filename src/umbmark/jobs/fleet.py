@@ -1,0 +1,304 @@
+"""The fleet job: every new recording of every robot calibrated by what it holds, on a
+distributed engine, recorded in the history; the fleet's page and JSON.
+
+:func:`fleet` is what ``umbmark fleet`` does. Each recording is calibrated by
+:func:`umbmark.fleets.outcome.calibrate_recording`, a plain function, handed to the engine
+(:func:`umbmark.fleets.cluster.run_each`: a local cluster of this machine's cores, or an
+existing Dask scheduler); this process is the one writer of the history, recording each
+outcome as it comes back. A recording already in the history with the same reading
+options (its path, size and time unchanged) is not done again. What the fleet shows is
+made from the history, so a nightly run that calibrates only the new recordings still
+shows every robot's whole course.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from umbmark.core.errors import InputError
+from umbmark.core.jsontext import JsonText
+from umbmark.fleets.outcome import RecordingOutcome, RecordingTask
+from umbmark.fleets.summary import FleetSummary
+from umbmark.runs.read_options import SourceOptions
+
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
+__all__ = ["FleetProgress", "FleetReport", "fleet"]
+
+
+@dataclass(frozen=True)
+class FleetProgress:
+    """How far a fleet run is (handed to ``progress`` after each recording).
+
+    Attributes
+    ----------
+    done, total : int
+        Recordings finished, and to do in this run.
+    robots : int
+        Robots with a recording finished.
+    hours : float
+        Hours of recordings finished.
+    """
+
+    done: int
+    total: int
+    robots: int
+    hours: float
+
+    def text(self) -> str:
+        return (
+            f"{self.done} of {self.total} recordings, {self.robots} robots, {self.hours:.1f} h done"
+        )
+
+
+@dataclass(frozen=True)
+class FleetReport(JsonText):
+    """What a fleet run did and what the fleet shows.
+
+    Attributes
+    ----------
+    summary : FleetSummary
+        Every robot of the recordings given, from all its recordings in the history.
+    found : int
+        Recordings found under the sources.
+    done : tuple of RecordingOutcome
+        The recordings calibrated, left out or failed in this run.
+    skipped : int
+        Recordings already in the history with the same options (not done again).
+    history : str
+        The history file.
+    files : tuple of str
+        The files written (the page, the JSON).
+    """
+
+    summary: FleetSummary
+    found: int
+    done: tuple[RecordingOutcome, ...]
+    skipped: int
+    history: str
+    files: tuple[str, ...] = ()
+    command: str | None = field(default=None, compare=False)
+
+    @property
+    def failed(self) -> tuple[RecordingOutcome, ...]:
+        """The recordings of this run that could not be read."""
+        return tuple(o for o in self.done if o.failed)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (metres, radians, seconds): what ``fleet --json`` prints."""
+        return {
+            "summary": self.summary.line(),
+            **self.summary.to_dict(),
+            "recordings_found": self.found,
+            "recordings_done": len(self.done),
+            "recordings_skipped": self.skipped,
+            "failed": [{"path": o.path, "reason": o.reason} for o in self.failed],
+            "history": self.history,
+        }
+
+
+def _calibration(outcome: RecordingOutcome) -> Any:  # noqa: ANN401 (NewCalibration)
+    """What the history records of a calibrated recording: the recording's time."""
+    from umbmark.store.records import NewCalibration
+
+    record = outcome.record
+    when = (
+        dt.datetime.fromtimestamp(outcome.start, dt.timezone.utc)
+        if outcome.start is not None
+        else dt.datetime.now(dt.timezone.utc)
+    )
+    figures = outcome.figures
+    return NewCalibration(
+        when,
+        str(outcome.method),
+        figures["E_d"][0],
+        figures["E_b"][0],
+        figures["E_s"][0] if "E_s" in figures else None,
+        outcome.e_max_syst,
+        dict(record.get("standard_errors") or {}),
+        dict(record.get("active") or {}),
+        dict(record.get("new") or {}),
+        dict(record.get("verdict") or {}),
+        float(outcome.wheelbase or 0.0),
+        record.get("wheel_diameter"),
+    )
+
+
+def _tasks(
+    found: Sequence[Any],
+    common: Mapping[str, Any],
+    per_robot: Mapping[str, Mapping[str, Any]],
+) -> list[RecordingTask]:
+    return [
+        RecordingTask(f.path, f.robot, f.day, {**common, **(per_robot.get(f.robot or "", {}))})
+        for f in found
+    ]
+
+
+def fleet(
+    *sources: str | os.PathLike[str],
+    robot_from: str | None = None,
+    robot_options: str | os.PathLike[str] | None = None,
+    history: str | os.PathLike[str] | None = None,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    report: str | os.PathLike[str] | None = None,
+    output: str | os.PathLike[str] | None = None,
+    force: bool = False,
+    command: str | None = None,
+    progress: Callable[[FleetProgress], None] | None = None,
+    wheelbase: float | None = None,
+    **options: Unpack[SourceOptions],
+) -> FleetReport:
+    """Calibrate every new recording of a fleet and say what the fleet shows.
+
+    Parameters
+    ----------
+    *sources : path or glob
+        Recordings (ROS 1 and 2 bags, MCAP), folders to search, globs.
+    robot_from : str, optional
+        A pattern of the recordings' paths naming the robot and the day
+        (``{robot}/{date}/*.mcap``); else the robot comes from the recording.
+    robot_options : path, optional
+        A YAML file of per-robot reading options
+        (:func:`umbmark.sources.robot_options.read_robot_options`).
+    history : path, optional
+        The history file (default ``$UMBMARK_HISTORY``, else the per-user file).
+    scheduler : str, optional
+        An existing Dask scheduler (``tcp://host:8786``); default
+        ``$DASK_SCHEDULER_ADDRESS``, else a local cluster of this machine's cores.
+    workers : int, optional
+        Workers of the local cluster.
+    report : path, optional
+        Write the fleet's page (.html).
+    output : path, optional
+        Write the JSON.
+    force : bool
+        Replace ``report`` and ``output`` if they exist.
+    command : str, optional
+        The command line that ran (shown on the page).
+    progress : callable, optional
+        Called with a :class:`FleetProgress` after each recording.
+    wheelbase : float, optional
+        The wheelbase the odometry used [m], where a recording does not say it.
+    **options
+        Reading options for every recording (as :func:`umbmark.calibrate` takes them:
+        ``truth_topic``, ``scan_topic``, ``wheelbase``, ``wheel_diameter``, ...).
+
+    Returns
+    -------
+    FleetReport
+
+    Raises
+    ------
+    InputError
+        No recording found, a bad pattern, options file or output, the engine missing or
+        its scheduler not answering.
+    """
+    from umbmark.fleets.cluster import run_each
+    from umbmark.fleets.outcome import calibrate_recording
+    from umbmark.fleets.recordings import find_recordings
+    from umbmark.options.fleet import FLEET
+    from umbmark.outputs.files import OutputPlan
+    from umbmark.runs.read_options import ReadOptions
+    from umbmark.sources.robot_options import read_robot_options
+    from umbmark.store.history import History
+    from umbmark.store.recordings import done_recordings, identity, options_key
+
+    FLEET["workers"].check(workers)
+    ReadOptions.of(dict(options))  # checked once, before anything is read
+    # The options given (None: not given, so a recording's own candidates are used).
+    reading: dict[str, Any] = {k: v for k, v in options.items() if v is not None}
+    if wheelbase is not None:
+        reading["wheelbase"] = wheelbase
+    plan = OutputPlan.of(force=force, inputs=sources, report=report, output=output)
+    per_robot = read_robot_options(robot_options) if robot_options is not None else {}
+    found = find_recordings(sources, robot_from)
+    store = History(history)
+    tasks, skipped = [], 0
+    for task in _tasks(found, reading, per_robot):
+        ids, _ = done_recordings(store, options_key(task.options))
+        if identity(task.path) in ids:
+            skipped += 1
+        else:
+            tasks.append(task)
+    done: list[RecordingOutcome] = []
+    robots: set[str] = set()
+
+    def record(finished: Any) -> None:  # noqa: ANN401 (Done)
+        outcome = finished.result or RecordingOutcome(
+            finished.item.path, finished.item.robot or "unnamed", None, 0.0, None,
+            reason=finished.error, failed=True,
+        )  # fmt: skip
+        outcome = _recorded(store, finished.item, outcome)
+        done.append(outcome)
+        robots.add(outcome.robot)
+        if progress is not None:
+            hours = sum(o.hours for o in done)
+            progress(FleetProgress(len(done), len(tasks), len(robots), hours))
+
+    run_each(calibrate_recording, tasks, record, scheduler=scheduler, workers=workers)
+    names = sorted({*(o.robot for o in done), *(f.robot for f in found if f.robot)})
+    result = FleetReport(
+        _summary(store, names), len(found), tuple(done), skipped, str(store.path),
+        command=command,
+    )  # fmt: skip
+    return _written(result, plan)
+
+
+def _recorded(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> RecordingOutcome:  # noqa: ANN401
+    """Record one outcome (the one writer); a calibration the history refuses (a robot
+    known with another nominal geometry) is recorded as failed with why."""
+    from dataclasses import replace
+
+    from umbmark.store.recordings import RecordingRow, identity, options_key, record_recording
+
+    calibration = _calibration(outcome) if outcome.calibrated else None
+    try:
+        ident = identity(task.path)
+    except OSError:
+        ident = ""
+    row = RecordingRow(
+        outcome.robot, outcome.path, outcome.digest, ident, options_key(task.options),
+        outcome.start, outcome.hours, outcome.status,  # type: ignore[arg-type]
+        outcome.reason, outcome.to_dict(),
+    )  # fmt: skip
+    try:
+        record_recording(store, row, calibration)
+    except InputError as exc:
+        failed = replace(outcome, method=None, reason=str(exc), failed=True)
+        row = replace(row, status="failed", reason=failed.reason, outcome=failed.to_dict())
+        record_recording(store, row, None)
+        return failed
+    return outcome
+
+
+def _summary(store: Any, robots: Sequence[str]) -> FleetSummary:  # noqa: ANN401 (History)
+    from umbmark.fleets.summary import summarize
+    from umbmark.store.recordings import read_recordings
+
+    rows = read_recordings(store, robots) if robots else read_recordings(store)
+    return summarize([RecordingOutcome.of_dict(r.outcome) for r in rows])
+
+
+def _written(result: FleetReport, plan: Any) -> FleetReport:  # noqa: ANN401 (OutputPlan)
+    from dataclasses import replace
+
+    from umbmark.core.atomic import atomic_write_text
+    from umbmark.fleets.page import fleet_page
+
+    files = []
+    if plan.report is not None:
+        atomic_write_text(plan.report, fleet_page(result.summary, made=result.command or ""))
+        files.append(str(plan.report))
+    if plan.output is not None:
+        atomic_write_text(plan.output, result.to_json())
+        files.append(str(plan.output))
+    if not files:
+        return result
+    return replace(result, files=tuple(files))
