@@ -13,11 +13,7 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
-import subprocess
-import sys
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -25,86 +21,9 @@ import pytest
 pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
 
 import fleet_tasks
+from dask_cluster import Cluster, free_port
 from umbmark.core.errors import InputError
 from umbmark.fleets.cluster import Done, run_each
-
-TESTS = Path(__file__).resolve().parents[1]
-ROOT = TESTS.parent
-DASK = Path(sys.executable).with_name("dask")
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def _env() -> dict[str, str]:
-    path = os.pathsep.join([str(TESTS), str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])
-    return {**os.environ, "PYTHONPATH": path}
-
-
-class Cluster:
-    """``dask scheduler`` and ``dask worker`` processes on localhost, ended by PID."""
-
-    def __init__(self, tmp: Path, workers: int) -> None:
-        self.port = _free_port()
-        self.address = f"tcp://127.0.0.1:{self.port}"
-        self.logs = tmp
-        self.files: list = []  # type: ignore[type-arg]
-        self.scheduler = self._start(
-            "scheduler", "--host", "127.0.0.1", "--port", str(self.port),
-            "--dashboard-address", ":0", "--no-show",
-        )  # fmt: skip
-        self._wait_for_port()
-        self.workers = [
-            self._start("worker", self.address, "--nworkers", "1", "--nthreads", "1",
-                        "--no-nanny", "--dashboard-address", ":0", "--name", f"w{k}")
-            for k in range(workers)
-        ]  # fmt: skip
-        self._wait_for_workers(workers)
-
-    def _start(self, *args: str) -> subprocess.Popen[bytes]:
-        log = open(self.logs / f"{args[0]}-{time.monotonic_ns()}.log", "wb")  # noqa: SIM115
-        self.files.append(log)
-        return subprocess.Popen([str(DASK), *args], env=_env(), stdout=log, stderr=log)
-
-    def _wait_for_port(self) -> None:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            with socket.socket() as s:
-                if s.connect_ex(("127.0.0.1", self.port)) == 0:
-                    return
-            time.sleep(0.1)
-        raise AssertionError("the scheduler did not start")
-
-    def _wait_for_workers(self, n: int) -> None:
-        from distributed import Client
-
-        with Client(self.address, timeout=60) as client:
-            client.wait_for_workers(n, timeout=60)
-
-    def close(self) -> None:
-        for proc in [*self.workers, self.scheduler]:
-            if proc.poll() is None:
-                proc.send_signal(signal.SIGTERM)
-        for proc in [*self.workers, self.scheduler]:
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-        for log in self.files:
-            log.close()
-
-
-@pytest.fixture
-def cluster(tmp_path: Path) -> Iterator[Cluster]:
-    made = Cluster(tmp_path, workers=2)
-    try:
-        yield made
-    finally:
-        made.close()
 
 
 def _collect(fn, items, **kw) -> list[Done]:  # type: ignore[no-untyped-def]
@@ -179,7 +98,7 @@ def test_a_worker_killed_mid_item_loses_nothing(cluster: Cluster, tmp_path: Path
 
 
 def test_no_scheduler_at_the_address_is_one_line():
-    port = _free_port()
+    port = free_port()
     with pytest.raises(InputError, match=f"no Dask scheduler answers at tcp://127.0.0.1:{port}"):
         run_each(
             fleet_tasks.square_or_refuse,
