@@ -398,6 +398,30 @@ def test_humble_unstamped_topic_is_found_on_the_graph_and_driven(tmp_path: Path)
 
 
 @pytest.mark.slow
+def test_a_monitor_on_cmd_vel_does_not_hide_humbles_unstamped_topic(tmp_path: Path) -> None:
+    """Another node subscribing ``~/cmd_vel`` as TwistStamped (a monitor: the probe's
+    ``watch``) beside a Humble controller on ``~/cmd_vel_unstamped``: the client takes the
+    controller's own subscription, where commands on ``~/cmd_vel`` would drive nothing."""
+    env = ros2_env(tmp_path)
+    node = Robot2(env, *humble_unstamped(tmp_path))
+    watch = subprocess.Popen(
+        [str(PYTHON), str(PROBE), "watch"], env=env, stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 60.0
+        while not (graph := _probe(env, "graph"))[STAMPED_TOPIC]:  # the monitor is up
+            assert time.monotonic() < deadline, "the monitor never subscribed"
+        read = _probe(env, "read")
+    finally:
+        watch.communicate("", timeout=30.0)
+        node.close()
+    assert graph[STAMPED_TOPIC] == ["/umbmark_watch geometry_msgs/msg/TwistStamped"]
+    assert read["cmd_vel"] == UNSTAMPED_TOPIC
+    assert read["stamped"] is False
+
+
+@pytest.mark.slow
 def test_selfcal_over_humbles_unstamped_topic(tmp_path: Path) -> None:
     """``umbmark selfcal --ros2`` against a Humble controller with ``use_stamped_vel:
     false``: a check line names the topic it drives on, it drives the first pass (exit
