@@ -3,12 +3,16 @@ what it observed as one JSON line (for tests/test_ros2.py and benchmarks/bench_r
 Run it with the ROS 2 wheels' Python (``.venv-ros2``) and the node's ROS_DOMAIN_ID.
 
 - ``read``: sim time, the odometry's and scan's stamps, the laser's mounting, the controller's
-  parameters, the velocity type found on the graph;
+  parameters, the velocity topic and type found on the graph;
 - ``drive SECONDS``: the 50 Hz drive loop (a velocity each period of sim time) at 0.2 m/s
   for SECONDS of sim time: loops per sim second and per wall second, the odometry's travel;
 - ``plan [--reload]``: what ``can_apply`` and ``apply_note`` say (which way applying goes);
 - ``watch``: subscribes the velocity topic (TwistStamped) and prints ``moving`` at the first
-  non-zero command; when stdin closes, the last command and two true poses 0.3 s apart.
+  non-zero command; when stdin closes, the last command and two true poses 0.3 s apart;
+- ``graph``: the subscribers of the controller's two velocity topics (node, type);
+- ``lifecycle``: the subscribers of the controller's two velocity topics (node, type) on the
+  graph, active as the node starts, then after each call to the controller manager:
+  deactivate, cleanup, configure, activate (1 s of discovery after each).
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ import math
 import sys
 import threading
 import time
+from typing import Any
 
 from umbmark.robot.ros2 import Ros2Robot
 from umbmark.robot.ros_common import RosOptions
@@ -54,6 +59,7 @@ def read() -> dict[str, object]:
             "mount": [scan.mount.x, scan.mount.y, scan.mount.theta],
             "upside_down": robot._mount(msg_frame(robot)).upside_down,
             "stamped": robot._stamped,
+            "cmd_vel": robot.options.cmd_vel,
             "params": [params.wheel_separation, params.wheel_radius],
         }
     finally:
@@ -128,6 +134,88 @@ def watch() -> dict[str, object]:
     return out
 
 
+#: The controller's two velocity topics (Humble's unstamped one, and ~/cmd_vel).
+VELOCITY_TOPICS = ("/diff_drive_controller/cmd_vel_unstamped", "/diff_drive_controller/cmd_vel")
+
+
+def _discovered(node: Any) -> None:
+    """Wait (up to 30 s) until the controller's node is discovered: its odometry publisher
+    is seen (its other endpoints come with it)."""
+    deadline = time.monotonic() + 30.0
+    while node.count_publishers("/diff_drive_controller/odom") == 0:
+        assert time.monotonic() < deadline, "the controller's node was not discovered"
+        time.sleep(0.05)
+
+
+def _graph(node: Any) -> dict[str, list[str]]:
+    """Each velocity topic's subscribers, as ``NODE TYPE``, after 1 s of discovery (on one
+    machine, endpoints come and go within it)."""
+    time.sleep(1.0)
+    return {
+        topic: sorted(
+            f"{i.node_namespace.rstrip('/')}/{i.node_name} {i.topic_type}"
+            for i in node.get_subscriptions_info_by_topic(topic)
+        )
+        for topic in VELOCITY_TOPICS
+    }
+
+
+def graph() -> dict[str, object]:
+    import rclpy
+
+    rclpy.init()
+    node = rclpy.create_node("umbmark_graph")
+    try:
+        _discovered(node)
+        return dict(_graph(node))
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def lifecycle() -> dict[str, object]:
+    import rclpy
+    from controller_manager_msgs.srv import CleanupController, ConfigureController, SwitchController
+
+    rclpy.init()
+    node = rclpy.create_node("umbmark_lifecycle")
+    spin = threading.Thread(target=rclpy.spin, args=(node,), daemon=True)
+    spin.start()
+
+    def graph() -> dict[str, list[str]]:
+        return _graph(node)
+
+    def call(kind: Any, name: str, request: Any) -> bool:
+        client = node.create_client(kind, f"/controller_manager/{name}")
+        assert client.wait_for_service(timeout_sec=20.0), name
+        future = client.call_async(request)
+        deadline = time.monotonic() + 20.0
+        while not future.done():
+            assert time.monotonic() < deadline, f"{name} did not answer"
+            time.sleep(0.01)
+        return bool(future.result().ok)
+
+    def switch(activate: list[str], deactivate: list[str]) -> bool:
+        request = SwitchController.Request()
+        request.activate_controllers, request.deactivate_controllers = activate, deactivate
+        request.strictness = SwitchController.Request.STRICT
+        return call(SwitchController, "switch_controller", request)
+
+    name = "diff_drive_controller"
+    _discovered(node)
+    out: dict[str, object] = {"active": graph()}
+    out["deactivate"] = [switch([], [name]), graph()]
+    out["cleanup"] = [call(CleanupController, "cleanup_controller",
+                           CleanupController.Request(name=name)), graph()]  # fmt: skip
+    out["configure"] = [call(ConfigureController, "configure_controller",
+                             ConfigureController.Request(name=name)), graph()]  # fmt: skip
+    out["activate"] = [switch([name], []), graph()]
+    node.destroy_node()
+    rclpy.try_shutdown()
+    spin.join(2.0)
+    return out
+
+
 def plan(reload: bool) -> dict[str, object]:
     robot = Ros2Robot(RosOptions(timeout=10.0, reload=reload))
     try:
@@ -144,6 +232,10 @@ def main() -> None:
         out = drive(float(sys.argv[2]))
     elif what == "watch":
         out = watch()
+    elif what == "graph":
+        out = graph()
+    elif what == "lifecycle":
+        out = lifecycle()
     elif what == "plan":
         out = plan("--reload" in sys.argv[2:])
     else:

@@ -4,13 +4,24 @@ tests/test_ros2.py and benchmarks/bench_ros2.py). Run it with the ROS 2 wheels' 
 (``.venv-ros2``); it prints ``ready`` on stdout once everything is up.
 
 The controller's interfaces as ros2_controllers has them (``diff_drive_controller.cpp``,
-``odometry.cpp``, ``diff_drive_controller_parameter.yaml``; Jazzy and Kilted):
+``odometry.cpp``, ``diff_drive_controller_parameter.yaml``; ``--distro``, default Kilted):
 
 - the controller is a node of its own, ``/diff_drive_controller`` (``--controller``); the
-  clock, laser, truth and URDF are published by ``/sim_robot``. The controller subscribes
-  ``~/cmd_vel`` as ``geometry_msgs/TwistStamped`` (``--unstamped``: ``geometry_msgs/Twist``,
-  Humble with ``use_stamped_vel: false``). A zero stamp is taken as "now"; a message whose
-  stamp is older than ``cmd_vel_timeout`` (0.5 s) when it comes is ignored; at each update a
+  clock, laser, truth and URDF are published by ``/sim_robot``. Its velocity subscription
+  is created by ``on_configure`` and dropped by ``on_cleanup`` (``reset()``), on every
+  distribution: none while unconfigured, kept while inactive (commands then ignored).
+  Which one (the branches' ``diff_drive_controller.cpp``):
+
+  - Humble and Iron (``--distro humble``): the parameter ``use_stamped_vel`` (default
+    true, read on configure): true, ``geometry_msgs/TwistStamped`` on ``~/cmd_vel``
+    (``DEFAULT_COMMAND_TOPIC``); false, ``geometry_msgs/Twist`` on ``~/cmd_vel_unstamped``
+    (``DEFAULT_COMMAND_UNSTAMPED_TOPIC``, stamped with the time it came) and nothing on
+    ``~/cmd_vel``;
+  - Jazzy, Kilted and Rolling: ``use_stamped_vel`` is gone (ros2_controllers #812, 4.0.0):
+    ``TwistStamped`` on ``~/cmd_vel`` only, whatever the parameter files say.
+
+  A zero stamp is taken as "now"; a message whose stamp is older than ``cmd_vel_timeout``
+  (0.5 s) when it comes is ignored (Jazzy's rule, kept for Humble here); at each update a
   command older than the timeout brakes (zero velocity);
 - it publishes ``~/odom`` (``nav_msgs/Odometry``, ``odom`` -> ``base_link``) every update;
   ``/tf`` too where ``tf2_msgs`` is importable;
@@ -30,15 +41,17 @@ The controller's interfaces as ros2_controllers has them (``diff_drive_controlle
 - where ``controller_manager_msgs`` is importable (``tools/build_ros2_interfaces.py``), a
   controller manager, ``/controller_manager``, with ``~/list_controllers``,
   ``~/switch_controller``, ``~/configure_controller``, ``~/load_controller`` and
-  ``~/unload_controller`` under controller_manager.cpp's rules (Kilted): configure only
-  an unconfigured or inactive controller (an inactive one is cleaned up first), unload
+  ``~/unload_controller``, ``~/cleanup_controller`` under controller_manager.cpp's rules
+  (Kilted): configure only an unconfigured or inactive controller (an inactive one is
+  cleaned up first), clean up only an inactive one (an unconfigured one: nothing), unload
   only one not active (its node destroyed), load only one not loaded (its node created
   on the files of the manager's ``NAME.params_file``, a string array as the spawner sets
   it), switch (STRICT) to activate only an inactive one and deactivate only an active
   one. ``--fail-configure``: every configure through the manager fails (``on_configure``
   returned FAILURE: the controller stays unconfigured). At its end the node prints
   ``final {json}``: the parameters its controller runs on, its node's parameters, its
-  state, the manager's calls in order, the odometry's first pose after each activation;
+  state, the manager's calls in order, the odometry's first pose after each activation,
+  its velocity subscription (topic and type, or null);
 - ``/clock`` (``rosgraph_msgs/Clock``) runs ``--rate`` times faster than real time, one
   controller period (20 ms) at a time, from 1000 s;
 - ``/robot_description`` (``std_msgs/String``, transient local, as robot_state_publisher
@@ -103,17 +116,33 @@ def _quaternion(yaw: float) -> tuple[float, float, float, float]:
     return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
 
 
+def _blocks(files: list[str], controller: str) -> list[dict[str, Any]]:
+    """The controller's ``ros__parameters`` in each file, in order."""
+    name = controller.strip("/").split("/")[-1]
+    out = []
+    for path in files:
+        data = yaml.safe_load(Path(path).read_text()) or {}
+        out.append((data.get(name) or {}).get("ros__parameters") or {})
+    return out
+
+
 def read_params(files: list[str], controller: str) -> dict[str, float]:
     """The controller's parameters from ros2_control YAML files (later files override)."""
     values = dict(DEFAULTS)
-    name = controller.strip("/").split("/")[-1]
-    for path in files:
-        data = yaml.safe_load(Path(path).read_text()) or {}
-        block = (data.get(name) or {}).get("ros__parameters") or {}
+    for block in _blocks(files, controller):
         for key in DEFAULTS:
             if key in block:
                 values[key] = float(block[key])
     return values
+
+
+def read_stamped(files: list[str], controller: str) -> bool:
+    """Humble's ``use_stamped_vel`` from the files (later files override; default true)."""
+    value = True
+    for block in _blocks(files, controller):
+        if "use_stamped_vel" in block:
+            value = bool(block["use_stamped_vel"])
+    return value
 
 
 def urdf(
@@ -154,7 +183,8 @@ def urdf(
 
 class Controller:
     """The diff_drive_controller's node: its parameters (declared from the parameter files;
-    Rolling: the multipliers read-only), ``~/cmd_vel`` and ``~/odom``; its lifecycle state."""
+    Rolling: the multipliers read-only; Humble: ``use_stamped_vel`` too), ``~/odom``, the
+    velocity subscription (from configure to cleanup); its lifecycle state."""
 
     def __init__(self, sim: SimNode, values: dict[str, float]) -> None:
         self.sim = sim
@@ -163,19 +193,42 @@ class Controller:
         for key, value in values.items():  # set_parameters changes these, not the robot
             locked = read_only and key.endswith("_multiplier")
             node.declare_parameter(key, value, ParameterDescriptor(read_only=locked))
+        if sim.args.distro == "humble":  # Humble's and Iron's parameter (gone in Jazzy)
+            node.declare_parameter("use_stamped_vel", read_stamped(sim.files, sim.name))
         self.state = "unconfigured"
         self.timeout = values["cmd_vel_timeout"]
         self.command = (0.0, 0.0)
         self.command_time = -math.inf  # sim time of the command's stamp
         self.odom = node.create_publisher(Odometry, "~/odom", 10)
-        if sim.args.unstamped:
-            node.create_subscription(Twist, "~/cmd_vel", self._on_twist, 10)
-        else:
-            node.create_subscription(TwistStamped, "~/cmd_vel", self._on_stamped, 10)
+        self.velocity: Any = None  # velocity_command_(unstamped_)subscriber_
+        self.velocity_topic: list[str] | None = None
 
     def values(self) -> dict[str, float]:
         """The node's parameters now (what on_configure reads)."""
         return {k: float(self.node.get_parameter(k).value) for k in DEFAULTS}
+
+    def subscribe(self) -> None:
+        """on_configure's "initialize command subscriber": Humble with ``use_stamped_vel``
+        false, Twist on ``~/cmd_vel_unstamped``; else TwistStamped on ``~/cmd_vel``."""
+        self.reset()
+        humble = self.sim.args.distro == "humble"
+        if humble and not self.node.get_parameter("use_stamped_vel").value:
+            self.velocity = self.node.create_subscription(
+                Twist, "~/cmd_vel_unstamped", self._on_twist, 10
+            )
+            self.velocity_topic = ["~/cmd_vel_unstamped", "geometry_msgs/msg/Twist"]
+        else:
+            self.velocity = self.node.create_subscription(
+                TwistStamped, "~/cmd_vel", self._on_stamped, 10
+            )
+            self.velocity_topic = ["~/cmd_vel", "geometry_msgs/msg/TwistStamped"]
+
+    def reset(self) -> None:
+        """reset() (on_cleanup, on_error, the start of on_configure): the velocity
+        subscription dropped."""
+        if self.velocity is not None:
+            self.node.destroy_subscription(self.velocity)
+        self.velocity, self.velocity_topic = None, None
 
     def _on_twist(self, msg: Twist) -> None:
         with self.sim.lock:  # Humble's unstamped topic: stamped on arrival
@@ -233,6 +286,12 @@ class Manager:
         node.create_service(ConfigureController, "~/configure_controller", self._configure)
         node.create_service(LoadController, "~/load_controller", self._load)
         node.create_service(UnloadController, "~/unload_controller", self._unload)
+        try:  # Jazzy's and later controller_manager_msgs
+            from controller_manager_msgs.srv import CleanupController
+        except ImportError:
+            pass
+        else:
+            node.create_service(CleanupController, "~/cleanup_controller", self._cleanup)
         sim.executor.add_node(node)
 
     def _list(self, request: object, response: Any) -> Any:
@@ -286,8 +345,23 @@ class Manager:
                 response.ok = False
                 return response
             if c.state == "inactive":  # cleaned up first: on_cleanup's reset()
+                c.reset()
                 c.state = "unconfigured"
             response.ok = sim._configure()
+        return response
+
+    def _cleanup(self, request: Any, response: Any) -> Any:
+        sim = self.sim
+        with sim.lock:
+            sim.calls.append(f"cleanup {request.name}")
+            c = sim.controller
+            if c is None or request.name != sim.name or c.state == "active":
+                response.ok = False  # "can not be cleaned-up from 'active' state"
+                return response
+            if c.state == "inactive":  # an unconfigured one: "all good nothing to do!"
+                c.reset()
+                c.state = "unconfigured"
+            response.ok = True
         return response
 
     def _load(self, request: Any, response: Any) -> Any:
@@ -420,6 +494,7 @@ class SimNode:
         controller = self.controller
         assert controller is not None
         if self.args.fail_configure and self.calls:  # the spawner's first configure passes
+            controller.reset()
             controller.state = "unconfigured"  # on_configure returned FAILURE
             return False
         values = controller.values()
@@ -427,6 +502,7 @@ class SimNode:
         self.robot.configure_controller(params, loaded=self.loaded)
         self.loaded = False
         controller.timeout = values["cmd_vel_timeout"]
+        controller.subscribe()
         controller.state = "inactive"
         return True
 
@@ -449,6 +525,7 @@ class SimNode:
             "calls": self.calls,
             "restarts": self.restarts,
             "params_file": self.files,
+            "velocity": None if controller is None else controller.velocity_topic,
         }
 
     def _step(self, step: int) -> None:
@@ -555,7 +632,6 @@ def main() -> None:
     parser.add_argument("--scan-every", type=int, default=5, help="periods between scans")
     parser.add_argument("--controller", default="/diff_drive_controller")
     parser.add_argument("--params-file", action="append", default=[])
-    parser.add_argument("--unstamped", action="store_true", help="Humble: geometry_msgs/Twist")
     parser.add_argument("--E-d", dest="E_d", type=float, default=1.004)
     parser.add_argument("--E-b", dest="E_b", type=float, default=0.97)
     parser.add_argument("--E-s", dest="E_s", type=float, default=1.0)
@@ -573,9 +649,10 @@ def main() -> None:
         help="the URDF has no laser: only /tf_static mounts it (needs tf2_msgs)",
     )  # fmt: skip
     parser.add_argument(
-        "--distro", choices=("kilted", "rolling"), default="kilted",
-        help="kilted (Humble and Jazzy alike here): the multipliers can be set and are read "
-        "on configure; rolling: they are read-only",
+        "--distro", choices=("humble", "jazzy", "kilted", "rolling"), default="kilted",
+        help="humble (and Iron): use_stamped_vel from the parameter files (false: Twist on "
+        "~/cmd_vel_unstamped); jazzy, kilted: TwistStamped on ~/cmd_vel, the multipliers "
+        "can be set and are read on configure; rolling: they are read-only",
     )  # fmt: skip
     parser.add_argument(
         "--fail-configure", action="store_true",

@@ -373,20 +373,103 @@ def test_the_controller_going_away_mid_run_stops_the_robot(tmp_path: Path) -> No
     assert seen["last"] == [0.0, 0.0]
 
 
+#: The controller's velocity topics: Humble's unstamped one, and ~/cmd_vel.
+UNSTAMPED_TOPIC = "/diff_drive_controller/cmd_vel_unstamped"
+STAMPED_TOPIC = "/diff_drive_controller/cmd_vel"
+
+
+def humble_unstamped(tmp: Path) -> tuple[str, ...]:
+    """The node's arguments for a Humble controller with ``use_stamped_vel: false`` in its
+    parameter file (as a robot's controllers.yaml sets it)."""
+    path = tmp / "humble_unstamped.yaml"
+    path.write_text("diff_drive_controller:\n  ros__parameters:\n    use_stamped_vel: false\n")
+    return ("--distro", "humble", "--params-file", str(path))
+
+
 @pytest.mark.slow
-def test_humble_unstamped_twist_is_found_on_the_graph(tmp_path: Path) -> None:
-    """Humble's controller with ``use_stamped_vel: false`` takes geometry_msgs/Twist: the
-    adapter finds that on the graph and the robot moves on it."""
+def test_humble_unstamped_topic_is_found_on_the_graph_and_driven(tmp_path: Path) -> None:
+    """Humble's controller with ``use_stamped_vel: false`` subscribes geometry_msgs/Twist
+    on ``~/cmd_vel_unstamped`` and nothing on ``~/cmd_vel`` (diff_drive_controller.cpp,
+    humble branch): the client finds that topic and type, and the robot moves on it."""
     env = ros2_env(tmp_path)
-    node = Robot2(env, "--unstamped")
+    node = Robot2(env, *humble_unstamped(tmp_path))
     try:
-        seen = _probe(env, "drive", "1")
+        graph = _probe(env, "graph")
         read = _probe(env, "read")
+        seen = _probe(env, "drive", "1")
     finally:
         node.close()
+    assert graph == {
+        UNSTAMPED_TOPIC: ["/diff_drive_controller geometry_msgs/msg/Twist"],
+        STAMPED_TOPIC: [],
+    }
+    assert read["cmd_vel"] == UNSTAMPED_TOPIC
     assert read["stamped"] is False
     assert seen["sim"] >= 1.0
     assert 0.1 * seen["sim"] <= seen["travel"] <= 0.2 * (seen["sim"] + 0.5)
+
+
+@pytest.mark.slow
+def test_a_monitor_on_cmd_vel_does_not_hide_humbles_unstamped_topic(tmp_path: Path) -> None:
+    """Another node subscribing ``~/cmd_vel`` as TwistStamped (a monitor: the probe's
+    ``watch``) beside a Humble controller on ``~/cmd_vel_unstamped``: the client takes the
+    controller's own subscription, where commands on ``~/cmd_vel`` would drive nothing."""
+    env = ros2_env(tmp_path)
+    node = Robot2(env, *humble_unstamped(tmp_path))
+    watch = subprocess.Popen(
+        [str(PYTHON), str(PROBE), "watch"], env=env, stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 60.0
+        while not (graph := _probe(env, "graph"))[STAMPED_TOPIC]:  # the monitor is up
+            assert time.monotonic() < deadline, "the monitor never subscribed"
+        read = _probe(env, "read")
+    finally:
+        watch.communicate("", timeout=30.0)
+        node.close()
+    assert graph[STAMPED_TOPIC] == ["/umbmark_watch geometry_msgs/msg/TwistStamped"]
+    assert read["cmd_vel"] == UNSTAMPED_TOPIC
+    assert read["stamped"] is False
+
+
+@pytest.mark.slow
+def test_selfcal_over_humbles_unstamped_topic(tmp_path: Path) -> None:
+    """``umbmark selfcal --ros2`` against a Humble controller with ``use_stamped_vel:
+    false``: a check line names the topic it drives on, it drives the first pass (exit
+    0, stopped for a controller restart) and measures the uncorrected robot as the
+    stamped end-to-end test does (E_b 0.97 on 1 m squares: about 0.16 m)."""
+    env = ros2_env(tmp_path)
+    node = Robot2(env, *humble_unstamped(tmp_path))
+    try:
+        done = _umbmark(env, "selfcal", "--ros2", "--runs", "2", "-L", "1", "--max-passes",
+                        "1", "--json", "--out", str(tmp_path / "out"))  # fmt: skip
+    finally:
+        node.close()
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert f"velocity commands: geometry_msgs/msg/Twist on {UNSTAMPED_TOPIC}" in done.stderr
+    report = json.loads(done.stdout)
+    assert [p["label"] for p in report["passes"]] == ["pass 1"]
+    assert 0.10 < report["e_max_syst_before"] < 0.25
+
+
+@pytest.mark.slow
+def test_a_given_cmd_vel_wins_and_nobody_on_it_names_the_topics_found(tmp_path: Path) -> None:
+    """``--cmd-vel`` given is the topic used, even where the controller takes another: on
+    Humble's unstamped controller, ``--cmd-vel CONTROLLER/cmd_vel`` has nobody subscribing;
+    one line names it and the twist topic that has a subscriber, exit 2."""
+    env = ros2_env(tmp_path)
+    node = Robot2(env, *humble_unstamped(tmp_path))
+    try:
+        done = _umbmark(env, "selfcal", "--ros2", "--cmd-vel", STAMPED_TOPIC, "--out",
+                        str(tmp_path / "out"), timeout=60.0)  # fmt: skip
+    finally:
+        node.close()
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert f"nobody subscribes {STAMPED_TOPIC} after" in lines[0]
+    assert f"{UNSTAMPED_TOPIC} (geometry_msgs/msg/Twist)" in lines[0]
 
 
 @pytest.mark.slow

@@ -25,7 +25,19 @@ from typing import Any
 import pytest
 import yaml
 
-from test_ros2 import E_B, E_D, PROBE, PYTHON, Robot2, _umbmark, ros2_env
+from test_ros2 import (
+    E_B,
+    E_D,
+    PROBE,
+    PYTHON,
+    STAMPED_TOPIC,
+    UNSTAMPED_TOPIC,
+    Robot2,
+    _probe,
+    _umbmark,
+    humble_unstamped,
+    ros2_env,
+)  # fmt: skip
 
 #: The controller (ros2_robot_node's default).
 NAME = "diff_drive_controller"
@@ -217,6 +229,38 @@ def test_the_plan_is_said_before_moving(tmp_path: Path) -> None:
         node.close()
     assert kilted["can_apply"] is None
     assert "deactivates, configures and activates" in kilted["note"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("distro", ["humble-unstamped", "kilted"])
+def test_the_velocity_subscription_lives_from_configure_to_cleanup(
+    tmp_path: Path, distro: str
+) -> None:
+    """The controller creates its velocity subscription on configure and drops it on
+    cleanup (diff_drive_controller.cpp: on_configure, reset()), as the graph shows through
+    the controller manager: there while active and inactive, gone once cleaned up, back
+    after configure. Humble with ``use_stamped_vel: false``: Twist on
+    ``~/cmd_vel_unstamped`` only; Kilted: TwistStamped on ``~/cmd_vel`` only."""
+    env = ros2_env(tmp_path)
+    args = humble_unstamped(tmp_path) if distro == "humble-unstamped" else ()
+    node = Node(env, *args)
+    try:
+        seen = _probe(env, "lifecycle")
+    finally:
+        final = node.ended()
+    if distro == "humble-unstamped":
+        there = {UNSTAMPED_TOPIC: [f"/{NAME} geometry_msgs/msg/Twist"], STAMPED_TOPIC: []}
+    else:
+        there = {UNSTAMPED_TOPIC: [], STAMPED_TOPIC: [f"/{NAME} geometry_msgs/msg/TwistStamped"]}
+    gone = {UNSTAMPED_TOPIC: [], STAMPED_TOPIC: []}
+    assert seen["active"] == there
+    assert seen["deactivate"] == [True, there]
+    assert seen["cleanup"] == [True, gone]
+    assert seen["configure"] == [True, there]
+    assert seen["activate"] == [True, there]
+    assert final["state"] == "active"
+    assert final["calls"] == [f"switch + -{NAME}", f"cleanup {NAME}", f"configure {NAME}",
+                              f"switch +{NAME} -"]  # fmt: skip
 
 
 def _plan(env: dict[str, str], *args: str) -> dict[str, Any]:

@@ -91,7 +91,8 @@ ROS = "ROS robots (--ros1, --ros2)"
         spec_option(OBSTACLE_MARGIN),
         option("--cmd-vel", section=ROS, default="",
                help="Velocity command topic, Twist or TwistStamped as the controller takes it "
-               "[default: ROS 2 CONTROLLER/cmd_vel, ROS 1 /cmd_vel]."),
+               "[default: ROS 2 the one the controller subscribes, CONTROLLER/cmd_vel or "
+               "Humble's CONTROLLER/cmd_vel_unstamped; ROS 1 /cmd_vel]."),
         option("--odom-topic", section=ROS, default="",
                help="Odometry topic, nav_msgs/Odometry [default: ROS 2 CONTROLLER/odom, "
                "ROS 1 /odom]."),

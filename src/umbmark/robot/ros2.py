@@ -6,11 +6,15 @@ controller manager, 8x sim time). What it needs is rclpy and the message package
 install ".[ros2]"``); ``controller_manager_msgs`` for ``--reload`` (no wheel:
 ``tools/build_ros2_interfaces.py`` builds it); not ``tf2_ros``.
 
-- Topics default from the controller: ``<controller>/cmd_vel``, ``<controller>/odom``.
-- Velocity out: the type the controller subscribes, taken from the graph —
-  ``geometry_msgs/msg/TwistStamped`` (Jazzy and later), stamped with the node's clock (sim
-  time when ``/clock`` runs, so the controller never finds it stale), or
-  ``geometry_msgs/msg/Twist`` (Humble's unstamped topic).
+- Topics default from the controller: ``<controller>/odom``; the velocity topic is the
+  one the controller subscribes, found on the graph (:func:`pick_velocity`):
+  ``<controller>/cmd_vel`` with ``geometry_msgs/msg/TwistStamped`` (Jazzy and later;
+  Humble and Iron with ``use_stamped_vel`` true, their default), stamped with the node's
+  clock (sim time when ``/clock`` runs, so the controller never finds it stale), or
+  ``<controller>/cmd_vel_unstamped`` with ``geometry_msgs/msg/Twist`` (Humble and Iron with
+  ``use_stamped_vel: false``). ``options.cmd_vel`` (``--cmd-vel``), where given, is the
+  topic, its type from the graph. :meth:`Ros2Robot.velocity_note` says which, before the
+  robot moves.
 - In: ``nav_msgs/msg/Odometry``, ``sensor_msgs/msg/LaserScan`` (sensor-data QoS), three
   ``sensor_msgs/msg/Range``, a ground-truth ``geometry_msgs/msg/PoseStamped``, the URDF on
   ``/robot_description`` (transient local, as robot_state_publisher latches it).
@@ -45,6 +49,8 @@ import math
 import os
 import threading
 import time
+from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 from umbmark.core.errors import InputError, SafetyError, option
@@ -55,6 +61,7 @@ from umbmark.robot.ros_common import (
     Latest,
     Mount,
     RosOptions,
+    controller_keys,
     default_topics,
     plan_apply,
     restart_commands,
@@ -67,6 +74,42 @@ __all__ = ["Ros2Robot"]
 
 #: The velocity types a diff_drive_controller subscribes.
 STAMPED, UNSTAMPED = "geometry_msgs/msg/TwistStamped", "geometry_msgs/msg/Twist"
+#: Its velocity topics in its namespace (diff_drive_controller.cpp's
+#: ``DEFAULT_COMMAND_TOPIC``, and Humble's and Iron's ``DEFAULT_COMMAND_UNSTAMPED_TOPIC``).
+VELOCITY_TOPICS = ("cmd_vel", "cmd_vel_unstamped")
+#: How long a twist subscriber that is not the controller's node is waited on, for the
+#: controller's own to be discovered too [s].
+DISCOVERY_GRACE = 1.0
+
+
+def pick_velocity(
+    endpoints: Sequence[tuple[str, str, str]], topics: Sequence[str], controller: str
+) -> tuple[str, str, str] | None:
+    """The velocity topic to publish on, from the graph's subscribers.
+
+    Parameters
+    ----------
+    endpoints : sequence of (topic, node, type)
+        The subscribers of the candidate topics: topic name, the subscribing node's fully
+        qualified name, the message type.
+    topics : sequence of str
+        The candidate topics, preferred first.
+    controller : str
+        The controller's fully qualified node name (``/diff_drive_controller``).
+
+    Returns
+    -------
+    (topic, type, node) or None
+        The controller's own twist subscription where it has one, else the first twist
+        subscriber in ``topics``' order (TwistStamped before Twist on one topic); None
+        where no candidate topic has a twist subscriber.
+    """
+    twists = [e for e in endpoints if e[0] in topics and e[2] in (STAMPED, UNSTAMPED)]
+    if not twists:
+        return None
+    own = [e for e in twists if e[1] == controller] or twists
+    topic, node, kind = min(own, key=lambda e: (topics.index(e[0]), e[2] != STAMPED))
+    return topic, kind, node
 
 
 class Ros2Robot(RosRobot):
@@ -92,6 +135,7 @@ class Ros2Robot(RosRobot):
                 f"--ros2 needs rclpy ({exc}): python -m pip install '.[ros2]' in umbmark's "
                 "checkout, or source your ROS 2 setup (/opt/ros/DISTRO)"
             ) from None
+        given_cmd_vel = bool(options.cmd_vel)
         options = default_topics(options, ros2=True)
         if not (0.0 < options.timeout < math.inf):
             raise InputError(f"timeout {options.timeout!r} s: give a positive time")
@@ -108,7 +152,7 @@ class Ros2Robot(RosRobot):
         self._ticks = threading.Condition()
         self._description: Latest[str] = Latest()
         try:
-            self._connect(options)
+            self._connect(options, given_cmd_vel)
         except BaseException:
             self.close()
             raise
@@ -119,7 +163,7 @@ class Ros2Robot(RosRobot):
             while self._running and self._context.ok():
                 self._executor.spin_once(timeout_sec=0.05)
 
-    def _connect(self, options: RosOptions) -> None:
+    def _connect(self, options: RosOptions, given_cmd_vel: bool) -> None:
         from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
         from nav_msgs.msg import Odometry
         from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
@@ -129,7 +173,9 @@ class Ros2Robot(RosRobot):
         from std_msgs.msg import String
 
         node = self._node
-        kind = self._velocity_type(options)
+        topic, kind, whose = self._velocity_topic(options, given_cmd_vel)
+        options = replace(options, cmd_vel=topic)
+        self._velocity_line = _velocity_line(topic, kind, whose, options, given_cmd_vel)
         self._stamped = kind == STAMPED
         twist = TwistStamped if self._stamped else Twist
         self._use_sim = False  # sim time: decided below, once the robot's node is seen
@@ -165,30 +211,60 @@ class Ros2Robot(RosRobot):
                     )
                 self._ticks.wait(0.01)
 
-    def _velocity_type(self, options: RosOptions) -> str:
-        """The twist type the velocity topic's subscriber takes, from the graph (the
-        controller's: a TwistStamped subscriber wins over a Twist one)."""
+    def _velocity_topic(self, options: RosOptions, given: bool) -> tuple[str, str, str]:
+        """The velocity topic, its twist type and the node subscribing it, from the graph:
+        ``options.cmd_vel`` where ``given``, else the controller's ``cmd_vel`` or
+        ``cmd_vel_unstamped`` (:func:`pick_velocity`). A subscriber not the controller's
+        node is taken only after :data:`DISCOVERY_GRACE` without the controller's own."""
         timeout = options.timeout
+        ns = "/" + "/".join(controller_keys(options.controller))
+        topics = [options.cmd_vel] if given else [f"{ns}/{name}" for name in VELOCITY_TOPICS]
         deadline = time.monotonic() + timeout
+        grace: float | None = None
         while True:
-            infos = self._node.get_subscriptions_info_by_topic(options.cmd_vel)
-            kinds = {info.topic_type for info in infos}
-            if kinds:
+            endpoints = [
+                (topic, _node_name(info.node_namespace, info.node_name), info.topic_type)
+                for topic in topics
+                for info in self._node.get_subscriptions_info_by_topic(topic)
+            ]
+            found = pick_velocity(endpoints, topics, ns)
+            now = time.monotonic()
+            if found is not None:
+                grace = now + DISCOVERY_GRACE if grace is None else grace
+                if found[2] == ns or now > min(grace, deadline):
+                    return found
+            elif now > deadline:
                 break
-            if time.monotonic() > deadline:
-                raise InputError(
-                    f"nobody subscribes {options.cmd_vel} after {timeout:g} s: is the robot's "
-                    f"controller running, on this ROS_DOMAIN_ID? ({option('controller')}, "
-                    f"{option('cmd_vel')})"
-                )
             time.sleep(0.05)
-        for kind in (STAMPED, UNSTAMPED):
-            if kind in kinds:
-                return kind
+        others = sorted({f"{e[0]} ({e[2]})" for e in endpoints})
+        if others:
+            raise InputError(
+                f"the velocity topic is subscribed as no geometry_msgs Twist or TwistStamped: "
+                f"{', '.join(others)} ({option('cmd_vel')})"
+            )
         raise InputError(
-            f"{options.cmd_vel} is subscribed as {', '.join(sorted(kinds))}, not a "
-            f"geometry_msgs Twist or TwistStamped ({option('cmd_vel')})"
+            f"nobody subscribes {' or '.join(topics)} after {timeout:g} s: is the robot's "
+            f"controller running, on this ROS_DOMAIN_ID? ({option('controller')}, "
+            f"{option('cmd_vel')}) {self._twist_topics()}"
         )
+
+    def _twist_topics(self) -> str:
+        """The graph's twist topics that have a subscriber, said in a few words."""
+        found = [
+            f"{name} ({kind})"
+            for name, kinds in self._node.get_topic_names_and_types()
+            for kind in kinds
+            if kind in (STAMPED, UNSTAMPED) and self._node.count_subscribers(name) > 0
+        ]
+        if not found:
+            return "No twist topic has a subscriber."
+        more = f" and {len(found) - 4} more" if len(found) > 4 else ""
+        return f"Twist topics with a subscriber: {', '.join(found[:4])}{more}."
+
+    def velocity_note(self) -> str:
+        """Which velocity topic and type the robot is driven on, and why (a line for the
+        checks before moving)."""
+        return self._velocity_line
 
     def _on_static(self, msg: Any) -> None:  # noqa: ANN401 (a tf2_msgs TFMessage)
         """Keep each static transform: child frame -> parent, translation, rotation."""
@@ -417,6 +493,24 @@ class Ros2Robot(RosRobot):
             return future.result()
         finally:
             self._node.destroy_client(client)
+
+
+def _node_name(namespace: str, name: str) -> str:
+    """A node's fully qualified name (``/ns/name``; ``/name`` in the root namespace)."""
+    return f"{namespace.rstrip('/')}/{name}"
+
+
+def _velocity_line(topic: str, kind: str, whose: str, options: RosOptions, given: bool) -> str:
+    """The check line naming the velocity topic and type, and where they came from."""
+    if given:
+        why = f"as given by {option('cmd_vel')}, subscribed by {whose}"
+    elif whose != "/" + "/".join(controller_keys(options.controller)):
+        why = f"subscribed by {whose}, not the controller's node"
+    elif topic.endswith("/cmd_vel_unstamped"):
+        why = "the controller's subscription: Humble's or Iron's use_stamped_vel false"
+    else:
+        why = "the controller's subscription"
+    return f"velocity commands: {kind} on {topic} ({why})"
 
 
 def _double(value: Any) -> float | None:  # noqa: ANN401 (rcl_interfaces/ParameterValue)

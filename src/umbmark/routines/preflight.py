@@ -87,6 +87,10 @@ def preflight(
         f"{params.wheel_radius:g} m, multipliers {params.wheel_separation_multiplier:g}, "
         f"{params.left_wheel_radius_multiplier:g}, {params.right_wheel_radius_multiplier:g}"
     )
+    velocity_note = getattr(robot, "velocity_note", None)  # a ROS 2 robot's velocity topic
+    said = velocity_note() if callable(velocity_note) else None
+    if isinstance(said, str):
+        lines.append(said)
     sensor = {"lidar": robot.scan, "ranges": robot.ranges, "truth": robot.ground_truth}
     read = sensor.get(how.method)
     if read is not None and read() is None:
