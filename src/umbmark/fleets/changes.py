@@ -19,7 +19,7 @@ where that exceeds 1 (calibrations that scatter more than their intervals say do
 a change out of that scatter). Where both pass, the one with the smaller ``chi^2`` wins. The
 threshold is high because the step's place is searched: with 100 calibrations about 100
 places are tried, and a Gaussian's two-sided tail beyond 5 sigma is 6e-7, so a steady
-robot is flagged in well under one of a thousand series (``tests/fleet/test_changes.py``
+robot is flagged in well under one of a thousand series (``tests/fleets/test_changes.py``
 measures it on simulated series).
 """
 
