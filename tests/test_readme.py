@@ -437,6 +437,8 @@ OTHER_PROGRAMS = {
     "--align_origin", "--once", "--list", "--filter", "--strict",
     # ROS 2's static_transform_publisher, in the laser mounting's forms
     "--roll", "--pitch", "--yaw", "--frame-id", "--child-frame-id",
+    # Dask's scheduler and workers, in docs/fleet.md's cluster
+    "--port", "--nworkers", "--nthreads",
 }  # fmt: skip
 
 
