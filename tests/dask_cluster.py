@@ -46,7 +46,8 @@ class Cluster:
         self._wait_for_port()
         self.workers = [
             self._start("worker", self.address, "--nworkers", "1", "--nthreads", "1",
-                        "--no-nanny", "--dashboard-address", ":0", "--name", f"w{k}")
+                        "--no-nanny", "--dashboard-address", ":0", "--name", f"w{k}",
+                        "--local-directory", str(tmp))
             for k in range(workers)
         ]  # fmt: skip
         self._wait_for_workers(workers)

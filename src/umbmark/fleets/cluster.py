@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import logging
 import os
+import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -125,19 +126,21 @@ def _client(address: str | None, workers: int | None, timeout: float) -> Iterato
         n = workers if workers is not None else min(os.cpu_count() or 1, MAX_LOCAL_WORKERS)
         if not 1 <= n <= MAX_LOCAL_WORKERS:
             raise InputError(f"{option('workers', n)} must be 1 to {MAX_LOCAL_WORKERS}")
-        cluster = LocalCluster(
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-        )
-        client = Client(cluster)
-        try:
-            yield client
-        finally:
-            client.close()
-            cluster.close()
+        with tempfile.TemporaryDirectory(prefix="umbmark-dask-") as scratch:
+            cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+                local_directory=scratch,  # the workers' scratch space, removed after
+            )
+            client = Client(cluster)
+            try:
+                yield client
+            finally:
+                client.close()
+                cluster.close()
 
 
 def run_each(
