@@ -305,6 +305,15 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         split_options=options.split_options,
         max_gap=options.max_gap,
     )
+    if side is not None:
+        from umbmark.runs.legs import check_side
+
+        named = (
+            option("side_length")
+            if options.side_length is not None or "side_length" not in origins
+            else origins["side_length"].named(str(source))
+        )
+        check_side(found.runs, side, named, params, str(source))
     return Loaded(
         format=kind,
         runs=found.runs,
