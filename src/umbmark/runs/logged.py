@@ -313,7 +313,8 @@ def runs_from_recordings(
         The odometry parameters the wheel data is integrated with.
     split : {"rests", "none", "windows"}
         Split each recording at rests near the start and at resets of the ground truth
-        (see :mod:`umbmark.runs.segmentation`), take each recording as one run, or cut
+        (see :mod:`umbmark.runs.segmentation`), take each recording as one run (cut
+        only where its ground truth was reset: the robot was put back), or cut
         it by ``windows`` (seconds from its start). Windows are cut before any check: what
         they leave out is not looked at.
 
@@ -422,13 +423,37 @@ def _segments(
     resets = find_resets(time, angles, truth, rest_speed, radius)
     check_motion(recording.where, time, angles, truth, headings=headings, resets=resets)
     if split == "none":
-        return [(0, time.size - 1)], [], False
+        return _cut_at_resets(recording, resets, rest_speed, out.notes), [], False
     found = find_runs(time, angles, truth, split_options, radius)
     out.notes.extend(
         info(f"{recording.name}: {reset.describe(time)}: a run ends there")
         for reset in found.resets
     )
     return found.runs, list(found.left_out), found.whole
+
+
+def _cut_at_resets(
+    recording: Recording, resets: Sequence[Reset], rest_speed: float, notes: list[str]
+) -> list[tuple[int, int]]:
+    """A recording taken as one run (``--split none``) cut where its ground truth was
+    reset (the robot put back: no run goes on across it), each piece trimmed to its
+    motion; a line for each cut to ``notes``."""
+    time, angles = recording.wheels.time, recording.wheels.angles
+    if not resets:
+        return [(0, time.size - 1)]
+    starts = [0, *(r.last for r in resets)]
+    ends = [*(r.first for r in resets), time.size - 1]
+    out: list[tuple[int, int]] = []
+    for a, b in zip(starts, ends, strict=True):
+        if b > a:
+            out += [
+                (a + c, a + d)
+                for c, d in trim_to_motion(time[a : b + 1], angles[a : b + 1], rest_speed)
+            ]
+    notes.extend(
+        info(f"{recording.name}: {reset.describe(time)}: a run ends there") for reset in resets
+    )
+    return out
 
 
 def _split_at_gaps(
