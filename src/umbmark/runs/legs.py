@@ -3,10 +3,11 @@
 A run of the square path drives four legs with a quarter turn between each two. Where the
 ground truth follows the whole run, its corners are where the heading (the reference's,
 or for a position-only reference the odometry's) changes faster than :data:`CURVATURE`
-per metre moved, by at least :data:`CORNER` in all; a run with three or four corners is
-a square, and its legs run from one corner's end to the next one's start (the first from
-the run's start). Measured between the turns, a reference off the axle (a marker that
-swings round a turn on the spot) measures the leg, not the swing.
+per metre moved, by at least :data:`CORNER` in all; a run with three or four corners,
+each a quarter turn (within :data:`CORNER`) the same way, is a square, and its legs run
+from one corner's end to the next one's start (the first from the run's start). Measured
+between the turns, a reference off the axle (a marker that swings round a turn on the
+spot) measures the leg, not the swing.
 
 The side length a calibration is given (an option, a file's field) must agree with the
 median leg within :data:`LEG_TOLERANCE`: a robot driven by its odometry makes legs longer
@@ -105,6 +106,9 @@ def _run_legs(run: Run, params: WheelParams | None) -> list[float] | None:
     corners = _corners(turning, driving, turn)
     if len(corners) not in (3, 4):
         return None
+    turns = [float(np.sum(turn[a:b])) for a, b in corners]
+    if not all(CORNER <= t * np.sign(turns[0]) <= 3 * CORNER for t in turns):
+        return None  # not quarter turns all one way: no square
     ends = [0, *(c for c, _ in corners), ok.size - 1]
     starts = [0, *(d for _, d in corners)]
     legs = [math.hypot(*(xy[b] - xy[a])) for a, b in zip(starts, ends[1:], strict=False)]

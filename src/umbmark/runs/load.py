@@ -67,7 +67,7 @@ class LoadOptions:
     params : WheelParams or None
         Odometry parameters to integrate logged wheel data with; overrides what the
         source says.
-    split : {"rests", "none", "windows"}
+    split : {"rests", "none", "windows", "file"}
         How to find runs in a recording; OptiOdom files are one run each whatever this
         says.
     windows : sequence of (float, float)
@@ -276,7 +276,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         recordings, metadata = read_runlog(source)
         params, side = metadata.params, metadata.side_length
         if metadata.one_run_per_file:
-            split = "none"
+            split = "file"
         meta = str((source if source.is_dir() else source.parent) / METADATA_FILE)
         origins = {key: Origin(key, meta) for key in ("wheelbase", "wheel_diameter", "side_length")}
         origins["separation_multiplier"] = Origin("wheel_separation_multiplier", meta)
@@ -285,7 +285,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
 
         recordings, session = read_optiodom(source)
         params, side = session.params, session.side_length
-        split = "none"  # each OptiOdom file is one run
+        split = "file"  # each OptiOdom file is one run
         fields = {"wheelbase": "Li", "wheel_diameter": "Di", "side_length": "L"}
         origins = {key: Origin(name, str(session.path)) for key, name in fields.items()}
     else:

@@ -42,7 +42,7 @@ __all__ = [
     "runs_from_recordings",
 ]
 
-SplitMode = Literal["rests", "none", "windows"]
+SplitMode = Literal["rests", "none", "windows", "file"]
 
 #: A wheel turning by more than this in one sample is a corrupt sample, not motion [rad].
 MAX_WHEEL_STEP = 50.0
@@ -316,10 +316,12 @@ def runs_from_recordings(
         Each must have ground truth.
     params : WheelParams
         The odometry parameters the wheel data is integrated with.
-    split : {"rests", "none", "windows"}
+    split : {"rests", "none", "windows", "file"}
         Split each recording at rests near the start and at resets of the ground truth
         (see :mod:`umbmark.runs.segmentation`), take each recording as one run (cut
-        only where its ground truth was reset: the robot was put back), or cut
+        only where its ground truth was reset: the robot was put back), take each as
+        the one run its file holds (``"file"``: OptiOdom files, run logs of one run per
+        file; a reset inside leaves it out), or cut
         it by ``windows`` (seconds from its start). Windows are cut before any check: what
         they leave out is not looked at.
     keep_stretches : bool
@@ -444,6 +446,8 @@ def _segments(
     radius = _jump_radius(recording, params)
     resets = find_resets(time, angles, truth, rest_speed, radius)
     check_motion(recording.where, time, angles, truth, headings=headings, resets=resets)
+    if split == "file":
+        return [(0, time.size - 1)], [], False
     if split == "none":
         return _cut_at_resets(recording, resets, rest_speed, out.notes), [], False
     found = find_runs(time, angles, truth, split_options, radius)
