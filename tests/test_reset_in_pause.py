@@ -104,15 +104,24 @@ def test_the_recording_in_memory_gives_four_runs(session, split):
     assert not [n for n in loaded.notes if "left out" in n]
 
 
-@pytest.mark.parametrize(("fmt", "odom_resets"), [("sqlite3", False), ("ros1", True)])
+@pytest.mark.parametrize(
+    ("fmt", "odom_resets", "wheels"),
+    [("sqlite3", False, "joints"), ("ros1", True, "joints"), ("mcap", True, "odom")],
+)
 @pytest.mark.parametrize("split", ["rests", "none"])
 def test_a_reset_in_a_pause_of_the_recording_starts_a_new_run(
-    tmp_path, session, fmt, odom_resets, split
+    tmp_path, session, fmt, odom_resets, wheels, split
 ):
+    """The wheels from the joints (``/odom`` reset with the world or not), or from a
+    controller's ``/odom`` that starts again at zero after each reset."""
     # the truth comes back to the start: 4.4, 4.4 and 22.3 cm from where the squares ended
     assert [round(math.hypot(e[0], e[1]), 3) for e in session.ends[:3]] == [0.044, 0.044, 0.223]
     bag = _write(tmp_path / "world", fmt, session, odom_resets=odom_resets)
-    report = umbmark.calibrate(bag, **KEYWORDS, split=split, method="exact")
+    keywords = dict(KEYWORDS)
+    if wheels == "odom":
+        del keywords["left_joint"], keywords["right_joint"]
+        keywords["odom_topic"] = "/odom"
+    report = umbmark.calibrate(bag, **keywords, split=split, method="exact")
     assert [run.direction.value for run in report.runs] == DIRS
     for run, (x, y, theta) in zip(report.runs, session.ends, strict=True):
         # the truth at 33 Hz: the last sample before the pause is up to 30 ms early
