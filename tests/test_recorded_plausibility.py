@@ -4,6 +4,7 @@ values that overflow and return errors larger than the side refuse with one clea
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -98,14 +99,23 @@ def test_a_run_without_motion(tmp_path: Path, session) -> None:  # type: ignore[
 
 
 def test_return_error_larger_than_the_side_of_logged_runs(tmp_path: Path, session) -> None:  # type: ignore[no-untyped-def]
-    # a wrong wheelbase in the metadata: the odometry ends 0.68 m from the truth
-    folder = session_log(tmp_path / "log", session, session[2], wheelbase=0.12, side=0.3)
+    # a wrong wheelbase in the metadata (0.25 m for 0.34 m): the odometry turns a third
+    # too far and ends over a side from the truth
+    folder = session_log(tmp_path / "log", session, session[2], wheelbase=0.25, side=1.0)
     message = api_error(umbmark.calibrate, folder, method="paper")
-    assert message == (
-        f"{folder}: the return error of session.csv run 2 (0.679 m) is larger than the "
-        "square's side (0.3 m), beyond the paper's small-angle formulas: use method exact "
-        "or endpose (the exact geometry)"
+    match = re.fullmatch(
+        rf"{re.escape(str(folder))}: the return error of session.csv run 2 \((\d\.\d+) m\) is "
+        r"larger than the square's side \(1 m\), beyond the paper's small-angle formulas: "
+        r"use method exact or endpose \(the exact geometry\)",
+        message,
     )
+    assert match is not None, message
+    assert float(match[1]) > 1.0
+    # a side of 0.3 m for these 1 m squares: the ground truth's legs refuse it first
+    folder = session_log(tmp_path / "short", session, session[2], wheelbase=0.12, side=0.3)
+    message = api_error(umbmark.calibrate, folder, method="paper")
+    assert "side_length in " in message
+    assert "0.3 m, but the reference's legs measure 1.00 m (median of 16 legs" in message
 
 
 @needs_data

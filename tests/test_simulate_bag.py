@@ -361,3 +361,18 @@ def test_a_noise_free_simulations_motion_capture_stays_a_reference(tmp_path):
     assert report.estimate.E_d == pytest.approx(E_D, abs=2e-4)
     assert report.estimate.E_b == pytest.approx(E_B, abs=2e-3)
     assert report.verdict.level != "do-not-apply"
+
+
+# --- a side length the reference's legs disagree with -------------------------------------
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_a_side_length_the_legs_disagree_with_is_refused(bags, fmt):
+    """The squares are 1 m; the motion capture measures the legs (issue 30, item 1)."""
+    options = [*GEOMETRY_ARGS[:-2], *_suggested(bags[fmt])]
+    for wrong in ("1.25", "0.75"):
+        line = cli_error("calibrate", str(bags[fmt]), *options, "-L", wrong)
+        assert f"--side-length {wrong} m, but the reference's legs measure 1.00 m" in line
+        assert "(median of 24 legs in 6 runs): give --side-length 1 m" in line
+    data = cli_json("calibrate", str(bags[fmt]), *options, "-L", "0.95")
+    assert data["E_d"] > 0  # 5 % off: within what a scale error makes, not refused

@@ -13,8 +13,9 @@ from collections.abc import Sequence
 
 from umbmark.calibration.compose import Calibration, check_calibration
 from umbmark.calibration.result import CalibrationResult
-from umbmark.core.messages import split_messages
+from umbmark.core.messages import info, split_messages
 from umbmark.estimators.dispatch import estimate_runs
+from umbmark.estimators.registry import estimator
 from umbmark.runs.read import SourceRuns
 
 __all__ = ["calibrate_runs", "sessions_disagree"]
@@ -40,9 +41,10 @@ def calibrate_runs(
         square_side=read.square_side,
         fit_truth_offset=fit_truth_offset,
         where=read.sources[0] if len(read.sources) == 1 else None,
+        stretches=read.stretches,
     )
     check_calibration(Calibration(found.estimate, active), read.origins)
-    notes, warnings = split_messages(read.notes)
+    notes, warnings = split_messages([*read.notes, *_stretches_used(read, method)])
     return CalibrationResult(
         sources=read.sources,
         format=read.format,
@@ -57,6 +59,21 @@ def calibrate_runs(
         input_warnings=warnings,
         model_fit=found.model_fit,
     )
+
+
+def _stretches_used(read: SourceRuns, method: str) -> list[str]:
+    """A line saying that ``method`` fitted the motion left out of the runs too, if it
+    did (an estimator of paths of any shape)."""
+    if not read.stretches or estimator(method).needs != "logs":
+        return []
+    seconds = sum(float(run.log.time[-1]) for run in read.stretches if run.log is not None)
+    return [
+        info(
+            f"the {method} fit used the {len(read.runs)} run(s) and {len(read.stretches)} "
+            f"stretch(es) of motion left out of them ({seconds:.1f} s), every stretch with "
+            "a reference"
+        )
+    ]
 
 
 def sessions_disagree(parts: Sequence[SourceRuns], *, fit_truth_offset: bool = False) -> list[str]:

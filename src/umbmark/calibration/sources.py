@@ -179,6 +179,7 @@ def _calibrate_runs(
                 wheelbase=wheelbase,
                 side_length=side_length,
                 override_verdict=override_verdict,
+                stretches=method == AUTO or (entry is not None and entry.needs == "logs"),
             ),
             strict=True,
         )

@@ -161,6 +161,7 @@ def estimate_runs(
     square_side: Callable[[], float],
     fit_truth_offset: bool = False,
     where: str | None = None,
+    stretches: Sequence[Run] = (),
 ) -> Estimated:
     """The estimate of ``method`` from a calibration's runs, square tests or recordings.
 
@@ -183,6 +184,9 @@ def estimate_runs(
         The trajectory methods: fit the ground truth's tracked point.
     where : str, optional
         The source named in errors.
+    stretches : sequence of Run
+        Motion left out of the runs (:attr:`umbmark.runs.read.SourceRuns.stretches`): the
+        estimators of paths of any shape fit it with the runs.
 
     Raises
     ------
@@ -191,8 +195,9 @@ def estimate_runs(
     """
     try:
         return _estimate(
-            method, runs, wheelbase, params, side_length, square_side, fit_truth_offset, where
-        )
+            method, runs, wheelbase, params, side_length, square_side, fit_truth_offset, where,
+            stretches,
+        )  # fmt: skip
     except InputError:
         raise
     except np.linalg.LinAlgError as exc:  # a ValueError: caught before the others
@@ -213,6 +218,7 @@ def _estimate(
     square_side: Callable[[], float],
     fit_truth_offset: bool,
     where: str | None,
+    stretches: Sequence[Run] = (),
 ) -> Estimated:
     """:func:`estimate_runs` without its translation of failures."""
     entry = estimator(method)
@@ -229,7 +235,7 @@ def _estimate(
         test = SquareTest(side, wheelbase)
         estimate, bench = estimate_square_test(method, runs, test)
         return Estimated(estimate, test, bench)
-    logs = [run.log for run in runs if run.log is not None]
+    logs = [run.log for run in (*runs, *stretches) if run.log is not None]
     if not logs or params is None:
         raise InputError(
             f"the {method} method needs logged runs (a run log, an OptiOdom session "

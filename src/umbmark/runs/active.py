@@ -123,6 +123,7 @@ def read_each(
     wheelbase: float | None = None,
     side_length: float | None = None,
     override_verdict: bool = False,
+    stretches: bool = False,
 ) -> list[SourceRuns]:
     """Each source's runs read on its own, with the odometry parameters the options say
     (:func:`read_runs` before pooling; the held-out validation holds them out one by one).
@@ -132,6 +133,10 @@ def read_each(
     InputError
         For bad options, a bad source, or a result file of another robot as
         ``current_params`` (without ``override_verdict``).
+
+    ``stretches``: for an estimator that fits paths of any shape, a recording whose motion
+    was all left out of its runs is read as its stretches with a reference
+    (:func:`umbmark.runs.logged.runs_from_recordings`) rather than refused.
     """
     if not sources:
         raise InputError("no source given: name a runs table, run log, OptiOdom session or bag")
@@ -143,7 +148,9 @@ def read_each(
     WHEELBASE.check(wheelbase)
     SIDE_LENGTH.check(side_length)
     file = parameter_file(options)
-    read = [_read_one(source, options, file, wheelbase, side_length) for source in sources]
+    read = [
+        _read_one(source, options, file, wheelbase, side_length, stretches) for source in sources
+    ]
     if options.current_params is not None and not override_verdict:
         path = Path(options.current_params)
         if is_result_file(path):
@@ -165,12 +172,15 @@ def _read_one(
     file: ControllerParams,
     wheelbase: float | None,
     side_length: float | None,
+    stretches: bool = False,
 ) -> SourceRuns:
     """One source read with the active parameters resolved for it."""
     path, kind = source_format(source, options)
     recorded = None if path is None else recorded_active(path, kind)
     chosen = choose_active(options, file, wheelbase, recorded, note_wheelbase=kind == "table")
-    return read_source(source, kind, options, file, chosen, side_length, recorded)
+    return read_source(
+        source, kind, options, file, chosen, side_length, recorded, stretches=stretches
+    )
 
 
 #: Given and recorded active parameters closer than this (relative) agree.

@@ -11,12 +11,16 @@ gap is known only at its two ends, so odometry can cross it as one arc only when
 motion was steady:
 
 - a gap is **bridged** (its interval integrated like any other) when the wheels did not
-  turn across it, or when it is at most :data:`MAX_BRIDGE` long and either each wheel
-  turned across it at the speed it had in the :data:`SPEED_WINDOW` before it and after
-  it (within :data:`BRIDGE_TOLERANCE` of the larger speed, plus a rest speed), or the
-  robot barely turned across it (one arc ends at most :data:`MAX_ARC_ERROR` from any
-  path of the same length and turn, whatever the speeds did: a recorder's hiccup while
-  the robot speeds up);
+  turn across it (their speed across it under a rest speed, or, across one longer than
+  :data:`MAX_BRIDGE`, their turn at most a twitch,
+  :data:`~umbmark.runs.rests.TWITCH_ANGLE`, and one arc across it within
+  :data:`MAX_ARC_ERROR` of any path: a rest, as :mod:`umbmark.runs.rests` takes it, where
+  a reset of the ground truth ends a run), or when it is at most :data:`MAX_BRIDGE` long
+  and either each wheel turned across it at the speed it had in the :data:`SPEED_WINDOW`
+  before it and after it (within :data:`BRIDGE_TOLERANCE` of the larger speed, plus a
+  rest speed), or the robot barely turned across it (one arc ends at most
+  :data:`MAX_ARC_ERROR` from any path of the same length and turn, whatever the speeds
+  did: a recorder's hiccup while the robot speeds up);
 - otherwise the path across it is unknown: the run holding it is left out, or, where
   the recording holds no loop to tell runs apart (its motion is one run of any shape),
   the recording is split there and the motion on either side is a run of its own (see
@@ -35,6 +39,7 @@ import numpy as np
 from umbmark.core.arrays import FloatArray
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import gap_mask
+from umbmark.runs.rests import TWITCH_ANGLE
 
 __all__ = [
     "BRIDGE_TOLERANCE",
@@ -169,6 +174,12 @@ def _bridge(time: FloatArray, angles: FloatArray, k: int, error: float | None) -
     if np.all(np.abs(across) < REST_SPEED):
         return True, "the wheels did not turn across it"
     if dt > MAX_BRIDGE:
+        turned = float(np.max(np.abs(angles[k + 1] - angles[k])))
+        if turned <= TWITCH_ANGLE and (error is None or error <= MAX_ARC_ERROR):
+            return True, (
+                f"the wheels did not move across it (they turned {turned:.2f} rad at most, "
+                "a twitch): a rest"
+            )
         return False, f"longer than {MAX_BRIDGE:g} s while the wheels turned"
     before, after = _speeds_around(time, angles, k)
     if before is not None and after is not None:

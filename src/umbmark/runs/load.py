@@ -67,7 +67,7 @@ class LoadOptions:
     params : WheelParams or None
         Odometry parameters to integrate logged wheel data with; overrides what the
         source says.
-    split : {"rests", "none", "windows"}
+    split : {"rests", "none", "windows", "file"}
         How to find runs in a recording; OptiOdom files are one run each whatever this
         says.
     windows : sequence of (float, float)
@@ -79,6 +79,9 @@ class LoadOptions:
     truth_offset : (float, float) or None
         Where the ground truth's tracked point sits in the robot frame [m] (forward,
         left of the axle centre); the ground truth is moved to the axle centre.
+    keep_stretches : bool
+        A recording whose motion was all left out of its runs is read as its stretches
+        with a reference, for an estimator of paths of any shape, rather than refused.
     """
 
     unit: str = "m"
@@ -91,6 +94,7 @@ class LoadOptions:
     max_gap: float = DEFAULT_MAX_GAP
     bag: BagOptions | None = None
     truth_offset: tuple[float, float] | None = None
+    keep_stretches: bool = False
 
 
 @dataclass(frozen=True)
@@ -111,6 +115,9 @@ class Loaded:
     origins : dict of str to Origin
         Where the source's own parameters are written (``wheelbase``,
         ``wheel_diameter``, ``side_length``, ``separation_multiplier``), for messages.
+    stretches : list of Run
+        Motion left out of the runs, in stretches with a reference
+        (:func:`umbmark.runs.logged.runs_from_recordings`).
     """
 
     format: str
@@ -120,6 +127,7 @@ class Loaded:
     associations: list[tuple[str, Association]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     origins: dict[str, Origin] = field(default_factory=dict)
+    stretches: list[Run] = field(default_factory=list)
 
 
 #: Bytes of a folder's ``metadata.yaml`` looked into to tell a ROS 2 bag.
@@ -268,7 +276,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         recordings, metadata = read_runlog(source)
         params, side = metadata.params, metadata.side_length
         if metadata.one_run_per_file:
-            split = "none"
+            split = "file"
         meta = str((source if source.is_dir() else source.parent) / METADATA_FILE)
         origins = {key: Origin(key, meta) for key in ("wheelbase", "wheel_diameter", "side_length")}
         origins["separation_multiplier"] = Origin("wheel_separation_multiplier", meta)
@@ -277,7 +285,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
 
         recordings, session = read_optiodom(source)
         params, side = session.params, session.side_length
-        split = "none"  # each OptiOdom file is one run
+        split = "file"  # each OptiOdom file is one run
         fields = {"wheelbase": "Li", "wheel_diameter": "Di", "side_length": "L"}
         origins = {key: Origin(name, str(session.path)) for key, name in fields.items()}
     else:
@@ -304,7 +312,17 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         windows=options.windows,
         split_options=options.split_options,
         max_gap=options.max_gap,
+        keep_stretches=options.keep_stretches,
     )
+    if side is not None:
+        from umbmark.runs.legs import check_side
+
+        named = (
+            option("side_length")
+            if options.side_length is not None or "side_length" not in origins
+            else origins["side_length"].named(str(source))
+        )
+        check_side(found.runs, side, named, params, str(source))
     return Loaded(
         format=kind,
         runs=found.runs,
@@ -313,6 +331,7 @@ def load_runs(source: str | Path, fmt: Format, options: LoadOptions) -> Loaded:
         associations=found.associations,
         notes=[*read_notes, *found.notes],
         origins=origins,
+        stretches=found.stretches,
     )
 
 

@@ -42,7 +42,7 @@ __all__ = [
     "runs_from_recordings",
 ]
 
-SplitMode = Literal["rests", "none", "windows"]
+SplitMode = Literal["rests", "none", "windows", "file"]
 
 #: A wheel turning by more than this in one sample is a corrupt sample, not motion [rad].
 MAX_WHEEL_STEP = 50.0
@@ -74,11 +74,15 @@ class LoadedRuns:
         Time matching of each recording.
     notes : list of str
         What was found and left out, for people.
+    stretches : list of Run
+        The motion left out of the runs, cut where no path crosses (a gap not bridged, a
+        reset), each stretch with a reference a run of any shape.
     """
 
     runs: list[Run]
     associations: list[tuple[str, Association]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    stretches: list[Run] = field(default_factory=list)
 
 
 def check_motion(
@@ -302,6 +306,7 @@ def runs_from_recordings(
     split_options: SplitOptions | None = None,
     max_gap: float = DEFAULT_MAX_GAP,
     method: IntegrationMethod = "arc",
+    keep_stretches: bool = False,
 ) -> LoadedRuns:
     """Find the runs in ``recordings`` and compute their true and odometry end poses.
 
@@ -311,11 +316,18 @@ def runs_from_recordings(
         Each must have ground truth.
     params : WheelParams
         The odometry parameters the wheel data is integrated with.
-    split : {"rests", "none", "windows"}
+    split : {"rests", "none", "windows", "file"}
         Split each recording at rests near the start and at resets of the ground truth
-        (see :mod:`umbmark.runs.segmentation`), take each recording as one run, or cut
+        (see :mod:`umbmark.runs.segmentation`), take each recording as one run (cut
+        only where its ground truth was reset: the robot was put back), take each as
+        the one run its file holds (``"file"``: OptiOdom files, run logs of one run per
+        file; a reset inside leaves it out), or cut
         it by ``windows`` (seconds from its start). Windows are cut before any check: what
         they leave out is not looked at.
+    keep_stretches : bool
+        Where no run is left, the stretches of the motion left out (``stretches`` of
+        :class:`LoadedRuns`) are the runs, paths of any shape for the estimators of whole
+        trajectories, rather than an error.
 
     Gaps in the wheel samples (:mod:`umbmark.runs.gaps`) are bridged with a note, or
     the run holding one is left out with a note; so is a run (a window, a whole
@@ -383,10 +395,23 @@ def runs_from_recordings(
             )
             out.notes.append(f"{recording.name}: {line}")
             left.append((recording.name, line))
+        out.stretches.extend(
+            _stretches(recording, truth, left_out, gaps, split_options, params, method)
+        )
         if found == 0:
             out.notes.append(f"{recording.name}: no run found")
         logs = [run.log for run in out.runs[first_run:] if run.log is not None]
         check_not_reproduced(recording, logs, params)
+    if not out.runs and keep_stretches and out.stretches:
+        seconds = sum(float(run.log.time[-1]) for run in out.stretches if run.log is not None)
+        out.notes.append(
+            info(
+                f"no run is left: the {len(out.stretches)} stretch(es) of motion with a "
+                f"reference ({seconds:.1f} s) are runs of any shape, for the estimators of "
+                "whole trajectories"
+            )
+        )
+        return LoadedRuns(out.stretches, out.associations, out.notes)
     if not out.runs:
         if left:
             name, line = left[0]
@@ -421,14 +446,83 @@ def _segments(
     radius = _jump_radius(recording, params)
     resets = find_resets(time, angles, truth, rest_speed, radius)
     check_motion(recording.where, time, angles, truth, headings=headings, resets=resets)
-    if split == "none":
+    if split == "file":
         return [(0, time.size - 1)], [], False
+    if split == "none":
+        return _cut_at_resets(recording, resets, rest_speed, out.notes), [], False
     found = find_runs(time, angles, truth, split_options, radius)
     out.notes.extend(
         info(f"{recording.name}: {reset.describe(time)}: a run ends there")
         for reset in found.resets
     )
     return found.runs, list(found.left_out), found.whole
+
+
+def _stretches(
+    recording: Recording,
+    truth: FloatArray,
+    left_out: Sequence[LeftOut],
+    gaps: Sequence[Gap],
+    split_options: SplitOptions | None,
+    params: WheelParams,
+    method: IntegrationMethod,
+) -> list[Run]:
+    """The motion ``left_out`` of a recording's runs cut at its gaps that are not bridged
+    and at the resets of its ground truth ``truth``, each piece trimmed to its motion: the
+    pieces with a reference (two samples of it, motion :func:`check_motion` accepts) as
+    runs of any shape, labelled ``NAME stretch K``."""
+    time, angles = recording.wheels.time, recording.wheels.angles
+    rest_speed = (split_options or SplitOptions()).rest_speed
+    radius = _jump_radius(recording, params)
+    out: list[Run] = []
+    for piece in sorted(left_out, key=lambda p: p.first):
+        a, b = piece.first, piece.last
+        sl = slice(a, b + 1)
+        cuts = [(g.index, g.index + 1) for g in gaps if a <= g.index < b and not g.bridged]
+        resets = find_resets(time[sl], angles[sl], truth[sl], rest_speed, radius)
+        merged: list[tuple[int, int]] = []
+        for i, j in sorted([*cuts, *((a + r.first, a + r.last) for r in resets)]):
+            if merged and i <= merged[-1][1]:
+                merged[-1] = (merged[-1][0], max(j, merged[-1][1]))
+            else:
+                merged.append((i, j))
+        starts, ends = [a, *(j for _, j in merged)], [*(i for i, _ in merged), b]
+        for c, d in zip(starts, ends, strict=True):
+            if d <= c:
+                continue
+            for e, f in trim_to_motion(time[c : d + 1], angles[c : d + 1], rest_speed):
+                label = f"{recording.name} stretch {len(out) + 1}"
+                try:
+                    run = _run(recording, truth, c + e, c + f, params, label, method)
+                except InputError:  # no motion with a reference to fit
+                    continue
+                if run is not None:
+                    out.append(run)
+    return out
+
+
+def _cut_at_resets(
+    recording: Recording, resets: Sequence[Reset], rest_speed: float, notes: list[str]
+) -> list[tuple[int, int]]:
+    """A recording taken as one run (``--split none``) cut where its ground truth was
+    reset (the robot put back: no run goes on across it), each piece trimmed to its
+    motion; a line for each cut to ``notes``."""
+    time, angles = recording.wheels.time, recording.wheels.angles
+    if not resets:
+        return [(0, time.size - 1)]
+    starts = [0, *(r.last for r in resets)]
+    ends = [*(r.first for r in resets), time.size - 1]
+    out: list[tuple[int, int]] = []
+    for a, b in zip(starts, ends, strict=True):
+        if b > a:
+            out += [
+                (a + c, a + d)
+                for c, d in trim_to_motion(time[a : b + 1], angles[a : b + 1], rest_speed)
+            ]
+    notes.extend(
+        info(f"{recording.name}: {reset.describe(time)}: a run ends there") for reset in resets
+    )
+    return out
 
 
 def _split_at_gaps(

@@ -90,6 +90,10 @@ class SourceRuns:
     origins : dict of str to Origin
         Where ``wheelbase``, ``separation_multiplier`` and ``side_length`` came from where
         an option did not give them (a file's field), for messages.
+    stretches : tuple of Run
+        Motion left out of the runs (a square closed several times with no stop between,
+        cut short by a reset, broken by a gap) in stretches with a reference, for the
+        estimators that fit paths of any shape.
     """
 
     sources: tuple[str, ...]
@@ -105,6 +109,7 @@ class SourceRuns:
     parts: tuple[SourceRuns, ...] = field(default=(), repr=False, compare=False)
     nominal: WheelParams | None = field(default=None, repr=False, compare=False)
     origins: Mapping[str, Origin] = field(default_factory=dict, repr=False, compare=False)
+    stretches: tuple[Run, ...] = field(default=(), repr=False, compare=False)
 
     def square_side(self) -> float:
         """The side [m] of the square every source drove.
@@ -249,10 +254,13 @@ def read_source(
     chosen: Chosen,
     side_length: float | None,
     recorded: RecordedActive | None,
+    *,
+    stretches: bool = False,
 ) -> SourceRuns:
     """The runs of one source of format ``kind`` (see :func:`source_format`), read with
     the active parameters ``chosen`` for it (what ``recorded`` says the source recorded
-    as active; ``file``, the parameter file or the default controller).
+    as active; ``file``, the parameter file or the default controller); ``stretches``:
+    see :func:`umbmark.runs.active.read_each`.
 
     Raises
     ------
@@ -291,7 +299,8 @@ def read_source(
             )
             if options.odom_topic is not None or options.odom_tf is not None:
                 check_invertible(file, name)
-        loaded = load_runs(path, kind, _load_options(options, kind, side_length, given, file))
+        load = _load_options(options, kind, side_length, given, file, stretches)
+        loaded = load_runs(path, kind, load)
         if kind == "table":
             _require_wheelbase(configured)
 
@@ -328,9 +337,10 @@ def read_source(
         c_left=_first(chosen.c_left, base.c_left),
         c_right=_first(chosen.c_right, base.c_right),
     )
-    runs = loaded.runs
+    runs, kept = loaded.runs, loaded.stretches
     if params != base:
         runs = [run.reintegrated(params) for run in runs]
+        kept = [run.reintegrated(params) for run in kept]
     active = ActiveParams(
         wheelbase=configured,
         c_left=params.c_left,
@@ -354,6 +364,7 @@ def read_source(
         sides=(loaded.side_length,),
         nominal=nominal,
         origins=_origins(chosen, loaded, side_length),
+        stretches=tuple(kept),
     )
 
 
@@ -393,6 +404,7 @@ def _load_options(
     side_length: float | None,
     params: WheelParams | None,
     file: ControllerParams,
+    stretches: bool = False,
 ) -> LoadOptions:
     windows = options.time_windows
     split_options = None
@@ -415,6 +427,7 @@ def _load_options(
             if options.truth_offset is not None
             else None
         ),
+        keep_stretches=stretches,
     )
 
 
@@ -500,7 +513,11 @@ def pool_runs(read: Sequence[SourceRuns]) -> SourceRuns:
         )
         read = [
             *read[:k],
-            replace(other, runs=tuple(run.reintegrated(first.params) for run in other.runs)),
+            replace(
+                other,
+                runs=tuple(run.reintegrated(first.params) for run in other.runs),
+                stretches=tuple(run.reintegrated(first.params) for run in other.stretches),
+            ),
             *read[k + 1 :],
         ]
     sides = tuple(r.side_length for r in read)
@@ -523,4 +540,9 @@ def pool_runs(read: Sequence[SourceRuns]) -> SourceRuns:
         sides=sides,
         parts=tuple(original),
         origins=first.origins,
+        stretches=tuple(
+            replace(run, label=f"{Path(r.sources[0]).name} {run.label}".strip())
+            for r in read
+            for run in r.stretches
+        ),
     )

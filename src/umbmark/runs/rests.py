@@ -10,6 +10,11 @@ therefore a stretch of samples where
   motion (at most :data:`TWITCH_TIME` long, widened by the window) in which neither
   wheel turns more than :data:`TWITCH_ANGLE` from where it was, are one stop (a
   twitch); and
+- a gap in the samples (:func:`umbmark.model.recording.gap_mask`: the recording paused)
+  long enough to hold a twitch between two stops (``2 BESIDE_TWITCH + TWITCH_TIME``,
+  0.7 s) across which neither wheel turned more than :data:`TWITCH_ANGLE` is still,
+  however long: the wheels did not move meanwhile (a simulator paused while its world
+  was reset); a shorter one is a recorder's hiccup, motion or not as the wheels say;
 - a stop begins and ends at samples still from sample to sample, where there are any
   within half a window of its ends, so that the window does not move where the runs
   around it end and begin.
@@ -39,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from umbmark.core.arrays import BoolArray, FloatArray
+from umbmark.model.recording import gap_mask
 
 __all__ = [
     "CREEP_WINDOW",
@@ -101,6 +107,10 @@ def still_intervals(time: FloatArray, angles: FloatArray, rest_speed: float) -> 
     still: BoolArray = np.all(speed < rest_speed, axis=1)
     if still.size == 0:
         return still
+    # A gap in the samples long enough to hold a twitch between two stops, across which
+    # the wheels turned at most a twitch: a rest.
+    rest_gap = gap_mask(time) & (dt >= 2 * BESIDE_TWITCH + TWITCH_TIME)
+    still |= rest_gap & np.all(np.abs(np.diff(angles, axis=0)) <= TWITCH_ANGLE, axis=1)
     # Creep: the speed over a window around each interval (at least the interval itself).
     middle = 0.5 * (time[:-1] + time[1:])
     low = np.minimum(np.maximum(middle - 0.5 * CREEP_WINDOW, time[0]), time[:-1])
@@ -225,20 +235,22 @@ def find_resets(
 def _jumps(
     time: FloatArray, angles: FloatArray, poses: FloatArray, wheel_radius: float
 ) -> list[Reset]:
-    """The steps of the ground truth the wheels cannot explain (see the module)."""
-    ok = np.all(np.isfinite(poses[:, :2]), axis=1)
-    both = ok[:-1] & ok[1:]
-    if np.count_nonzero(both) < 2:
+    """The steps of the ground truth the wheels cannot explain (see the module), from
+    each sample with a position to the next one (a reference that missed samples, as
+    around a pause of the recording, steps across them)."""
+    rows = np.flatnonzero(np.all(np.isfinite(poses[:, :2]), axis=1))
+    if rows.size < 3:
         return []
-    step = np.hypot(*np.diff(poses[:, :2], axis=0).T)
-    travel = wheel_radius * np.sum(np.abs(np.diff(angles, axis=0)), axis=1)
-    allowed = JUMP_ALLOWANCE * travel
-    excess = np.where(both, step - allowed, 0.0)
-    scatter = float(np.percentile(np.maximum(excess[both], 0.0), 99))
+    known = poses[rows]
+    step = np.hypot(*np.diff(known[:, :2], axis=0).T)
+    wheels = np.concatenate([[0.0], np.cumsum(np.sum(np.abs(np.diff(angles, axis=0)), axis=1))])
+    allowed = JUMP_ALLOWANCE * wheel_radius * np.diff(wheels[rows])
+    excess = step - allowed
+    scatter = float(np.percentile(np.maximum(excess, 0.0), 99))
     limit = max(MIN_JUMP, JUMP_FACTOR * scatter)
     # A reference slower than the wheels spreads one jump over several wheel intervals.
     found = _true_runs(excess > limit)
-    shifts = [poses[stop, :2] - poses[first, :2] for first, stop in found]
+    shifts = [known[stop, :2] - known[first, :2] for first, stop in found]
     glitch = set()
     for k in range(len(found) - 1):  # out and back again: a tracker that lost the robot
         back = float(np.hypot(*(shifts[k] + shifts[k + 1])))
@@ -248,12 +260,20 @@ def _jumps(
     for k, (first, stop) in enumerate(found):
         if k in glitch:
             continue
-        a, b = poses[first], poses[stop]
+        a, b = known[first], known[stop]
         moved = math.hypot(float(b[0] - a[0]), float(b[1] - a[1]))
         turn = abs(float(b[2] - a[2])) if np.isfinite(a[2]) and np.isfinite(b[2]) else 0.0
         largest = first + int(np.argmax(step[first:stop]))
-        wheels = float(np.sum(allowed[first:stop]))
-        out.append(Reset(first, stop, largest + 1, moved, turn, wheels))
+        out.append(
+            Reset(
+                int(rows[first]),
+                int(rows[stop]),
+                int(rows[largest + 1]),
+                moved,
+                turn,
+                float(np.sum(allowed[first:stop])),
+            )
+        )
     return out
 
 
