@@ -46,12 +46,10 @@ SplitMode = Literal["rests", "none", "windows", "file"]
 
 #: A wheel turning by more than this in one sample is a corrupt sample, not motion [rad].
 MAX_WHEEL_STEP = 50.0
-#: A wheel step this many times the 99th percentile of the steps, and above
-#: :data:`MIN_JUMP` [rad], is a jump too.
+#: A wheel step this many times the steps' 99th percentile and above MIN_JUMP [rad]: a jump.
 JUMP_FACTOR = 10.0
 MIN_JUMP = 10.0
-#: Spreads of the wheel angles [rad] and of the ground truth [m, rad] below these are
-#: taken for no motion at all.
+#: Spreads of the wheel angles [rad] and the ground truth [m, rad] below these: no motion.
 STILL_WHEELS = 1e-9
 STILL_TRUTH = 1e-9
 #: Between two ground-truth samples the tracked point moves at most this far [m], or
@@ -387,14 +385,7 @@ def runs_from_recordings(
             )
             found += 1
             out.runs.append(run)
-        for piece in sorted(left_out, key=lambda p: p.first):
-            time = recording.wheels.time
-            line = (
-                f"left out the motion from {time[piece.first] - time[0]:.2f} to "
-                f"{time[piece.last] - time[0]:.2f} s: {piece.why}"
-            )
-            out.notes.append(f"{recording.name}: {line}")
-            left.append((recording.name, line))
+        left += _said_left_out(recording, left_out, out.notes)
         out.stretches.extend(
             _stretches(recording, truth, left_out, gaps, split_options, params, method)
         )
@@ -419,6 +410,22 @@ def runs_from_recordings(
         names = ", ".join(r.where for r in recordings) or "the recordings"
         raise InputError(f"found no run with ground truth in {names}", source=None)
     return out
+
+
+def _said_left_out(
+    recording: Recording, left_out: Sequence[LeftOut], notes: list[str]
+) -> list[tuple[str, str]]:
+    """A note of each piece of motion left out, in time order; ``(name, line)`` of each."""
+    said = []
+    time = recording.wheels.time
+    for piece in sorted(left_out, key=lambda p: p.first):
+        line = (
+            f"left out the motion from {time[piece.first] - time[0]:.2f} to "
+            f"{time[piece.last] - time[0]:.2f} s: {piece.why}"
+        )
+        notes.append(f"{recording.name}: {line}")
+        said.append((recording.name, line))
+    return said
 
 
 def _segments(

@@ -90,8 +90,9 @@ class ReadFields:
     wheel_diameter : float | None
         Nominal wheel diameter D_n [m]; for logged runs, overrides the source's.
     controller : str | None
-        Controller name in parameter files [default: the one in ``current_params``, else
-        diff_drive_controller].
+        The diff_drive_controller's name with its namespace (/robot1/diff_cont): parameter files are
+        read under it, overlays and the history keyed by it [default: the one a parameter file
+        names, else diff_drive_controller].
     format : Literal["auto", "table", "log", "optiodom", "bag", "tuples"]
         Source format (auto: by the path; tuples: motion intervals of the wheels against a laser's
         scan matching, for ``method`` scan-matching).
