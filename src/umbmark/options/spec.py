@@ -400,7 +400,7 @@ READ_OPTIONS: tuple[Spec, ...] = (
         ("--split",),
         LOGS,
         "How to find runs in a recording: at rests near the start (rests), the whole "
-        "recording (none), or --windows.",
+        "recording cut only where its reference was reset (none), or --windows.",
         kind="choice",
         default="rests",
         choices=("rests", "none", "windows"),

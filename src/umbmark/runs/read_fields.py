@@ -97,8 +97,8 @@ class ReadFields:
         Source format (auto: by the path; tuples: motion intervals of the wheels against a laser's
         scan matching, for ``method`` scan-matching).
     split : Literal["rests", "none", "windows"]
-        How to find runs in a recording: at rests near the start (rests), the whole recording
-        (none), or ``windows``.
+        How to find runs in a recording: at rests near the start (rests), the whole recording cut
+        only where its reference was reset (none), or ``windows``.
     windows : str | Sequence[tuple[float, float]] | None
         Runs as time windows, seconds from the recording's start: '0:95,100:190'.
     max_gap : float
