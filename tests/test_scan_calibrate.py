@@ -221,10 +221,28 @@ def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
         umbmark.replay(bag, scan_topic="/scan", **kw)
 
 
-def test_without_the_nominal_parameters_the_bag_says_what_is_missing(bag: Path) -> None:
-    message = api_error(umbmark.calibrate, bag, scan_topic="/scan")
-    assert str(bag) in message
-    assert "give wheelbase and wheel_diameter" in message
+def test_without_the_nominal_parameters_the_bag_gives_absolute_figures(bag: Path) -> None:
+    # no --wheelbase, --wheel-diameter, no robot description: the matches start from the
+    # scans alone and the radii, wheelbase and mounting come out absolute (each true
+    # figure is many standard errors from the guess /tf_static states: 2 cm, 3 degrees)
+    report = umbmark.calibrate(bag, scan_topic="/scan")
+    data = report.to_dict()
+    assert data["nominal"] is None
+    assert data["E_b"] is None
+    assert data["E_s"] is None
+    for side, truth in zip(("left", "right"), TRUE_DIAMETERS, strict=True):
+        key = f"wheel_diameter_{side}"
+        _within(data[key], truth, data[f"{key}_standard_error"], key)
+    _within(data["wheelbase"], TRUE_WHEELBASE, data["wheelbase_standard_error"], "wheelbase")
+    _within(data["E_d"], E_D, data["standard_errors"]["E_d"], "E_d")
+    assert 6 * data["standard_errors"]["E_d"] < E_D - 1
+    for k, truth in enumerate((LASER.x, LASER.y, LASER.theta)):
+        error = data["laser_pose_standard_errors"][k]
+        _within(data["laser_pose"][k], truth, error, "laser")
+        assert abs(STATED[k] - truth) > 6 * error
+    summary = run_cli("calibrate", str(bag), "--scan-topic", "/scan").stdout
+    assert "no nominal geometry was given" in summary
+    assert "overlay (paste it" not in summary
 
 
 def test_the_mounting_read_from_a_robot_description() -> None:
