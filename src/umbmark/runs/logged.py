@@ -386,7 +386,9 @@ def runs_from_recordings(
         if found == 0:
             out.notes.append(f"{recording.name}: no run found")
         logs = [run.log for run in out.runs[first_run:] if run.log is not None]
-        check_not_reproduced(recording, logs, params)
+        noiseless = check_not_reproduced(recording, logs, params)
+        if noiseless is not None:
+            out.notes.append(noiseless)
     if not out.runs:
         if left:
             name, line = left[0]
