@@ -369,4 +369,10 @@ def test_agrees_with_the_umbmark_routine(tmp_path) -> None:  # type: ignore[no-u
         low_b, high_b = b.interval(name)  # type: ignore[misc]
         overlap = low_a <= high_b and low_b <= high_a
         assert overlap, (name, (low_a, high_a), (low_b, high_b))
-    assert np.isfinite(b.E_s)
+    # and each is the robot's truth, which is far from no calibration (1): E_d 0.3 % off
+    # and E_b 0.8 % off, six times and four times the fixed tolerances of issue 23
+    for name, truth, tolerance in (("E_d", errors[0], TOL_E_D), ("E_b", errors[1], TOL_E_B)):
+        assert abs(truth - 1.0) > 4 * tolerance
+        assert abs(getattr(b, name) - truth) < tolerance, (name, getattr(b, name))
+        assert abs(getattr(a, name) - truth) < 2 * tolerance, (name, getattr(a, name))
+    assert abs(b.E_s - errors[2]) < TOL_E_S

@@ -335,16 +335,22 @@ def test_the_controllers_odometry_as_ground_truth_is_refused_whatever_its_topic(
 
 
 @pytest.mark.slow
-def test_the_controllers_odometry_is_refused_whatever_parameters_are_given(bags):
-    """Given a wheelbase and diameter the odometry was not computed with, the fit still
-    finds the controller's own (radii 75 mm, wheelbase 340 mm) and refuses."""
+def test_the_controllers_odometry_under_other_parameters_is_the_calibration(bags):
+    """Given a wheelbase and diameter the odometry was not computed with, the controller's
+    odometry follows the wheels only with other geometry than the one given (radii 75 mm,
+    wheelbase 340 mm): as a noise-free reference would, it is taken, with a note naming
+    that geometry, and the calibration is that geometry against the one given."""
     for fmt in ("sqlite3", "mcap"):
-        err = api_error(
-            umbmark.calibrate, bags[fmt], wheelbase=0.36, wheel_diameter=0.14, side_length=SIDE,
+        report = umbmark.calibrate(
+            bags[fmt], wheelbase=0.345, wheel_diameter=0.151, side_length=SIDE, method="exact",
             truth_topic="/odom", left_joint="left_wheel_joint", right_joint="right_wheel_joint",
         )  # fmt: skip
-        assert "the ground truth /odom reproduces the wheels' own odometry" in err
-        assert "75.000 and 75.000 mm and a wheelbase of 340.00 mm" in err
+        (note,) = [n for n in report.notes if "follows the wheels without noise" in n]
+        assert "75.000 and 75.000 mm and a wheelbase of 340.00 mm" in note
+        # the square sees the turning: wheelbase over radius, 0.8 % from the given one
+        turning = (0.34 / 0.075) / (0.345 / 0.0755)
+        assert report.estimate.E_b == pytest.approx(turning, abs=2e-4)  # 1st order
+        assert report.estimate.E_d == pytest.approx(1.0, abs=1e-6)
 
 
 def test_a_noise_free_simulations_motion_capture_stays_a_reference(tmp_path):

@@ -311,7 +311,40 @@ def test_calibrate_reads_a_tuple_file(tmp_path):
     summary = run_cli(*args, "--wheel-diameter", "0.082").stdout
     assert re.search(r"laser yaw +1[67]\.\d+ ± 0\.\d+ deg", summary), summary
     assert re.search(r"wheelbase +8[78]\.\d+ ± 0\.\d+ mm", summary), summary
-    assert "--wheel-diameter is required" in cli_error(*args)
+    yaml = cli_error(*args, "--yaml", str(tmp_path / "o.yaml"))
+    assert "--yaml needs the nominal geometry" in yaml
     assert "calibrated by --method scan-matching, not exact" in cli_error(
         "calibrate", str(path), "--method", "exact", "--wheelbase", "0.09"
     )
+
+
+def test_a_tuple_file_calibrates_without_nominal_geometry(tmp_path):
+    # scan matching measures the radii and the wheelbase absolutely: no --wheelbase or
+    # --wheel-diameter is needed; E_d = D_R / D_L, and no E_b, E_s or multipliers (they
+    # are against a nominal nobody gave)
+    import umbmark
+
+    path = write_tuples(
+        tmp_path / "sim.tuple", simulate(_mix(400), rng=np.random.default_rng(12), noise=NOISE)
+    )
+    report = umbmark.calibrate(path, method="scan-matching")
+    out = report.to_dict()
+    se = out["standard_errors"]
+    for key, truth in (
+        ("wheel_diameter_left", 2 * R_L),
+        ("wheel_diameter_right", 2 * R_R),
+        ("wheelbase", B),
+    ):
+        assert abs(out[key] - truth) < 4 * se[key], key
+    # D_R / D_L = 1.00728: more than 6 standard errors from 1 (equal wheels fail)
+    assert abs(out["E_d"] - R_R / R_L) < 4 * se["E_d"]
+    assert 6 * se["E_d"] < R_R / R_L - 1
+    off = np.abs(np.array(out["laser_pose"]) - LASER)
+    assert np.all(off < 4 * np.array(out["laser_pose_standard_errors"]))
+    assert out["nominal"] is None
+    for key in ("E_b", "E_s", "c_L", "c_R", "new", "active"):
+        assert out[key] is None, key
+    assert any("no nominal geometry" in note for note in report.notes)
+    with pytest.raises(InputError, match="yaml needs the nominal geometry"):
+        umbmark.calibrate(path, method="scan-matching", yaml=tmp_path / "o.yaml")
+    assert not (tmp_path / "o.yaml").exists()

@@ -154,6 +154,13 @@ class CalibrationResult(JsonText):
     stated_mounting : LaserMounting or None
         The laser's mounting as the robot states it (TF, ``/tf_static``, the URDF), which
         the fitted one is compared with (None: not known).
+    nominal : bool
+        False for a calibration from motion intervals given no nominal geometry (no
+        wheelbase, no wheel diameter): its figures are absolute (the wheel diameters, the
+        wheelbase, the mounting, ``E_d = D_R / D_L``); the calibration is then made
+        against the measured geometry itself, so ``E_b``, ``E_s``, ``alpha`` and the
+        multipliers say nothing and the JSON gives them as null, and no parameter file
+        is written.
     """
 
     sources: tuple[str, ...]
@@ -178,6 +185,7 @@ class CalibrationResult(JsonText):
     sensor: ScanCalibration | None = field(default=None, compare=False)
     without: Without | None = None
     stated_mounting: LaserMounting | None = field(default=None, compare=False)
+    nominal: bool = True
 
     def __repr__(self) -> str:
         est = self.estimate
@@ -388,6 +396,10 @@ class CalibrationResult(JsonText):
             out["model"] = {"kind": "scrub", **model}
         if self.sensor is not None:
             out.update(_sensor_dict(self.sensor))
+            nominal = {"wheelbase": active.wheelbase, "wheel_diameter": active.wheel_diameter}
+            out["nominal"] = nominal if self.nominal else None
+        if not self.nominal:
+            _without_nominal(out)
         logs = [run.log for run in self.runs if run.log is not None]
         if self.params is not None and logs:
             from umbmark.estimators.motions import motion_coverage
@@ -540,6 +552,17 @@ def _sensor_dict(sensor: ScanCalibration) -> dict[str, Any]:
         },
         "uncertainty": "Cramer-Rao bound, sensor noise from the residuals",
     }
+
+
+#: What a calibration is against a nominal geometry: null in the JSON without one.
+_AGAINST_NOMINAL = ("alpha", "E_b", "E_s", "c_L", "c_R", "wheelbase_corrected", "active", "new")
+
+
+def _without_nominal(out: dict[str, Any]) -> None:
+    """``out`` (a result's JSON) with what needs a nominal geometry set null."""
+    out.update(dict.fromkeys(_AGAINST_NOMINAL))
+    for key in ("standard_errors", "intervals_95"):
+        out[key] = {k: v for k, v in out[key].items() if k not in _AGAINST_NOMINAL}
 
 
 def _cluster_dict(cluster: Cluster) -> dict[str, Any]:

@@ -16,6 +16,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from umbmark.calibration.compose import Calibration, check_calibration
 from umbmark.calibration.result import CalibrationResult
@@ -32,6 +33,9 @@ from umbmark.runs.active import choose_active
 from umbmark.runs.read import Chosen, bag_options, check_invertible, parameter_file
 from umbmark.runs.read_options import ReadOptions
 from umbmark.sources.params.reader import ControllerParams
+
+if TYPE_CHECKING:
+    from umbmark.scans.intervals import OdometryGuess
 
 __all__ = ["IntervalSource", "calibrate_intervals", "calibrate_scan_bags", "read_intervals"]
 
@@ -116,19 +120,21 @@ def _calibrate(
     notes: Sequence[str] = (),
     stated: LaserMounting | None = None,
 ) -> CalibrationResult:
-    """The estimator ``entry`` on ``intervals`` with the active parameters ``chosen``."""
-    if chosen.wheelbase is None:
-        raise InputError(
-            f"{option('wheelbase')} is required: the wheelbase the odometry used [m] (or "
-            f"{option('current_params')})",
-            source=where,
-        )
-    if chosen.wheel_diameter is None:
-        raise InputError(
-            f"{option('wheel_diameter')} is required: the nominal wheel diameter D_n the "
-            f"odometry used [m] (or {option('current_params')})",
-            source=where,
-        )
+    """The estimator ``entry`` on ``intervals`` with the active parameters ``chosen``;
+    without a nominal wheelbase or wheel diameter, against the geometry it measures (the
+    result's ``nominal`` False: absolute figures only)."""
+    run = entry.load()
+    nominal = chosen.wheelbase is not None and chosen.wheel_diameter is not None
+    if not nominal:
+        _, found = run(intervals, WheelParams(1.0, 1.0), side_length, **dict(entry.options))
+        measured = found.radius_left + found.radius_right
+        chosen = replace(
+            chosen, wheelbase=found.wheelbase, wheel_diameter=measured, c_left=None,
+            c_right=None, separation=None,
+        )  # fmt: skip
+        notes = [*notes, _ABSOLUTE]
+    assert chosen.wheelbase is not None
+    assert chosen.wheel_diameter is not None
     active = ActiveParams(
         wheelbase=chosen.wheelbase,
         c_left=1.0 if chosen.c_left is None else chosen.c_left,
@@ -142,7 +148,7 @@ def _calibrate(
         c_left=active.c_left,
         c_right=active.c_right,
     )
-    estimate, sensor = entry.load()(intervals, used, side_length, **dict(entry.options))
+    estimate, sensor = run(intervals, used, side_length, **dict(entry.options))
     calibration = Calibration(estimate, active)
     check_calibration(calibration, chosen.origins)
     said, warnings = split_messages([*chosen.notes, *notes])
@@ -158,7 +164,16 @@ def _calibrate(
         input_warnings=warnings,
         sensor=sensor,
         stated_mounting=stated,
+        nominal=nominal,
     )
+
+
+#: The note of a calibration given no nominal geometry.
+_ABSOLUTE = info(
+    "no nominal geometry given (wheelbase and wheel diameter): the figures are absolute "
+    "(the wheel diameters, the wheelbase, the laser's mounting and E_d = D_R / D_L); E_b, "
+    "E_s and the multipliers need the nominal the odometry uses"
+)
 
 
 def calibrate_scan_bags(
@@ -189,8 +204,7 @@ def calibrate_scan_bags(
         (what to drive).
     """
     from umbmark.scans.bag import scan_intervals_from_bag
-    from umbmark.scans.intervals import IntervalOptions, OdometryGuess
-    from umbmark.sources.bag.urdf import described_geometry
+    from umbmark.scans.intervals import IntervalOptions
 
     entry = _interval_estimator(method)
     topic = options.scan_topic
@@ -208,27 +222,7 @@ def calibrate_scan_bags(
     stated: LaserMounting | None = None
     for path in paths:
         name = str(path)
-        configured, diameter = chosen.wheelbase, chosen.wheel_diameter
-        if configured is None or diameter is None:
-            joints = bag_options(options, None, file)
-            configured, diameter, described = described_geometry(
-                path, joints.left_joints, joints.right_joints, configured, diameter
-            )
-            chosen = replace(chosen, wheelbase=configured, wheel_diameter=diameter)
-            notes.append(described)
-        c_left = 1.0 if chosen.c_left is None else chosen.c_left
-        c_right = 1.0 if chosen.c_right is None else chosen.c_right
-        separation = 1.0 if chosen.separation is None else chosen.separation
-        used = WheelParams(
-            wheelbase=configured * separation,
-            wheel_diameter=diameter,
-            c_left=c_left,
-            c_right=c_right,
-        )
-        if options.odom_topic is not None or options.odom_tf is not None:
-            check_invertible(file, name)
-        radius = 0.5 * diameter
-        guess = OdometryGuess(c_left * radius, c_right * radius, used.wheelbase)
+        guess, used, chosen = _bag_guess(path, options, file, chosen, notes)
         report = scan_intervals_from_bag(
             path,
             topic,
@@ -266,3 +260,38 @@ def calibrate_scan_bags(
         if error.source is None and where is not None:
             raise InputError(error.problem, source=where) from None
         raise
+
+
+def _bag_guess(
+    path: Path, options: ReadOptions, file: ControllerParams, chosen: Chosen, notes: list[str]
+) -> tuple[OdometryGuess | None, WheelParams | None, Chosen]:
+    """The first guess of a bag's matches, the geometry its wheels are read with and the
+    active parameters with it: the nominal given, else the bag's robot description's (a
+    note in ``notes`` says so), else none (the matches start from the scans alone; wheels
+    read as odometry need one)."""
+    from umbmark.scans.intervals import OdometryGuess
+    from umbmark.sources.bag.urdf import described_geometry
+
+    configured, diameter = chosen.wheelbase, chosen.wheel_diameter
+    if configured is None or diameter is None:
+        joints = bag_options(options, None, file)
+        try:
+            configured, diameter, described = described_geometry(
+                path, joints.left_joints, joints.right_joints, configured, diameter
+            )
+        except InputError:
+            if options.odom_topic is not None or options.odom_tf is not None:
+                raise
+            return None, None, chosen
+        notes.append(described)
+        chosen = replace(chosen, wheelbase=configured, wheel_diameter=diameter)
+    c_left = 1.0 if chosen.c_left is None else chosen.c_left
+    c_right = 1.0 if chosen.c_right is None else chosen.c_right
+    separation = 1.0 if chosen.separation is None else chosen.separation
+    used = WheelParams(
+        wheelbase=configured * separation, wheel_diameter=diameter, c_left=c_left, c_right=c_right
+    )
+    if options.odom_topic is not None or options.odom_tf is not None:
+        check_invertible(file, str(path))
+    radius = 0.5 * diameter
+    return OdometryGuess(c_left * radius, c_right * radius, used.wheelbase), used, chosen

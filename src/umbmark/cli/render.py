@@ -99,6 +99,17 @@ def render_calibration(
         _render_benchmark(report, bench, console)
 
     _render_errors(report, console)
+    if not report.nominal:
+        console.print(
+            Text(
+                "No correction and no overlay: no nominal geometry was given (--wheelbase "
+                "and --wheel-diameter, or --current-params); the diameters, wheelbase and "
+                "mounting above are absolute.",
+                style="bold",
+            )
+        )
+        _render_mounting(report, console)
+        return
     _render_without(report, console)
     _render_correction(report, console)
     _render_mounting(report, console)
@@ -141,18 +152,24 @@ def _render_errors(report: CalibrationResult, console: Console) -> None:
         name += ": not identified, one wheelbase fitted (see the warning)"
     errors = table(f"Systematic errors: {name}", ["", "value"])
     column(errors, "", text=True)
+    nominal = report.nominal
     for name, label, note in (
         ("alpha", "alpha, Type A error per turn", "> 0: turns too little"),
         ("beta", "beta, Type B error per leg", "> 0: legs curve left"),
     ):
-        shown = _plus_minus(to_shown(getattr(est, name), ANGLE_UNIT), _angle(se.get(name)), ".4f")
-        _row(errors, label, f"{shown} {ANGLE_UNIT}", note)
-    _row(
-        errors, "E_b = b_actual / b_nominal", _plus_minus(est.E_b, se.get("E_b"), ".6f"), "Eq. 4.27"
-    )
+        if nominal or name == "beta":
+            shown = _plus_minus(
+                to_shown(getattr(est, name), ANGLE_UNIT), _angle(se.get(name)), ".4f"
+            )
+            _row(errors, label, f"{shown} {ANGLE_UNIT}", note)
+    if nominal:
+        E_b = _plus_minus(est.E_b, se.get("E_b"), ".6f")
+        _row(errors, "E_b = b_actual / b_nominal", E_b, "Eq. 4.27")
     _row(errors, "E_d = D_R / D_L", _plus_minus(est.E_d, se.get("E_d"), ".6f"), "Eq. 4.22")
-    if est.E_s is not None:
+    if est.E_s is not None and nominal:
         _row(errors, "E_s = D_avg / D_active", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "scale")
+    if not nominal:
+        _row(errors, "E_b, E_s", "not given", "no nominal geometry to compare with")
     if est.method in LOGGED:
         _trajectory_rows(errors, est.components, se)
     if sensor is not None:
@@ -160,7 +177,7 @@ def _render_errors(report: CalibrationResult, console: Console) -> None:
     console.print(errors)
     intervals = [
         f"{name} [{low:.6f}, {high:.6f}]"
-        for name in ("E_d", "E_b", "E_s")
+        for name in (("E_d", "E_b", "E_s") if nominal else ("E_d",))
         if (interval := est.interval(name)) is not None
         for low, high in [interval]
     ]

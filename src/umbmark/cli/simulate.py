@@ -30,6 +30,11 @@ __all__ = ["simulate"]
                "bag folder (needs the ros extra)."),
         option("--bag-storage", section=OUTPUTS, type=click.Choice(["sqlite3", "mcap"]),
                help="Storage of a ROS 2 --bag [default: sqlite3, as rosbags writes]."),
+        option("--scan", section=OUTPUTS, is_flag=True,
+               help="With --bag: a 2D laser too, in a room around the runs: /scan at 10 Hz "
+               "(360 beams, 1 cm noise), its mounting (0.1 m ahead of the axle) on /tf_static "
+               "and in /robot_description with the nominal wheels, for calibrate --scan-topic "
+               "/scan."),
         force_option("A --logs folder's run log is replaced whole (its older runs are "
                      "removed, never mixed with the new ones; a folder holding another "
                      ".csv is refused all the same)."),

@@ -135,6 +135,7 @@ def calibrate(
         override_verdict=override_verdict, fit_truth_offset=fit_truth_offset,
     )  # fmt: skip
     result = replace(CalibrationReport.of(found), robot=robot, command=command)
+    result.check_nominal(plan, robot if store is not None else None)
     if store is not None and robot is not None:
         result = same_robot(result, store, robot, composed)
     if result.overlay_withheld:  # the verdict says what to do instead

@@ -132,6 +132,26 @@ class CalibrationReport(CalibrationResult):
         )
         return self.write_planned(plan, time, override_verdict=override_verdict)
 
+    def check_nominal(self, plan: OutputPlan, robot: str | None = None) -> None:
+        """Refuse the parameter files (and a history's record) of a calibration given no
+        nominal geometry: they are multipliers of a nominal nobody gave.
+
+        Raises
+        ------
+        InputError
+            Naming the options asked for.
+        """
+        files = (("yaml", plan.yaml), ("ros1_yaml", plan.ros1_yaml), ("robot", robot))
+        asked = [option(f) for f, p in files if p]
+        if asked and not self.nominal:
+            raise InputError(
+                f"{', '.join(asked)} needs the nominal geometry the odometry uses "
+                f"({option('wheelbase')} and {option('wheel_diameter')}, or "
+                f"{option('current_params')}): without it the calibration gives absolute "
+                "figures, no multipliers",
+                source=self.source,
+            )
+
     def write_planned(
         self, plan: OutputPlan, time: TumTime, *, override_verdict: bool
     ) -> list[Path]:
@@ -141,6 +161,7 @@ class CalibrationReport(CalibrationResult):
                 f"{option('plot')} needs runs in both directions (cw and ccw)", source=self.source
             )
         asked = [option(f) for f, p in (("yaml", plan.yaml), ("ros1_yaml", plan.ros1_yaml)) if p]
+        self.check_nominal(plan)
         if asked and self.overlay_withheld and not override_verdict:
             raise InputError(
                 f"{', '.join(asked)}: {self.verdict.line()} ({option('override_verdict')} "

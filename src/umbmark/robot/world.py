@@ -23,12 +23,15 @@ from numpy.typing import NDArray
 
 from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
+from umbmark.model.recording import PoseSeries
+from umbmark.model.scans import ScanSeries
 from umbmark.robot.base import Pose2D, RangeReading, ScanSweep, StampedPose
 
 __all__ = [
     "CORNER_SENSORS",
     "DEFAULT_LIDAR",
     "ROOM_LASER",
+    "SCAN_LIDAR",
     "LCorner",
     "Lidar",
     "MotionCapture",
@@ -38,8 +41,10 @@ __all__ = [
     "chair",
     "corner_world",
     "legs",
+    "room_around",
     "room_world",
     "square_path",
+    "sweeps_along",
 ]
 
 
@@ -456,3 +461,60 @@ def room_world(clutter: bool = True) -> World:
         parts += [box(-2.7, -1.0, 0.5, 1.2), box(4.4, -2.0, 0.9, 1.6, 0.1)]
         circles += [chair(-1.8, 2.2, 0.4), legs(2.4, -1.8, 0.9)]
     return World.build(np.vstack(parts), np.vstack(circles) if circles else (), lidar=DEFAULT_LIDAR)
+
+
+def room_around(path: FloatArray, margin: float = 1.5, lidar: Lidar | None = None) -> World:
+    """A room for a path: four walls ``margin`` [m] beyond the extent of ``path`` (``(n,
+    2)`` positions [m] in the world), a cupboard in one corner and a pillar in the opposite
+    one (so that no motion along a wall matches itself), the laser ``lidar`` (360 beams, 1
+    cm noise, 12 m by default).
+
+    Each thing stands at least ``margin - 0.8`` m from the path's bounding box.
+    """
+    lo, hi = np.min(path, axis=0) - margin, np.max(path, axis=0) + margin
+    (x0, y0), (x1, y1) = lo.tolist(), hi.tolist()
+    walls = np.array(
+        [[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1], [x0, y1, x0, y0]], dtype=float
+    )
+    parts = [walls, box(x0 + 0.45, y0 + 0.4, 0.6, 0.5), box(x1 - 0.5, y1 - 0.6, 0.5, 0.8, 0.3)]
+    return World.build(np.vstack(parts), lidar=lidar or SCAN_LIDAR)
+
+
+#: The laser of :func:`room_around`: 0.1 m ahead of the axle centre, 360 beams over 360
+#: degrees, 1 cm noise, 1 % dropouts, 12 m.
+SCAN_LIDAR = Lidar(Pose2D(0.1, 0.0, 0.0), beams=360, increment=2 * math.pi / 360, dropout=0.01)
+
+
+def sweeps_along(
+    world: World, truth: PoseSeries, rate: float, rng: np.random.Generator
+) -> ScanSeries:
+    """The sweeps of ``world``'s laser on a robot at the true poses ``truth`` (the axle
+    centre in the world, headings unwrapped), ``rate`` [Hz] from its first time to its
+    last, each taken at one instant (poses interpolated).
+
+    Raises
+    ------
+    ValueError
+        When the world has no laser or ``rate`` is not positive.
+    """
+    lidar = world.lidar
+    if lidar is None or not rate > 0.0:
+        raise ValueError("sweeps need a laser and a rate > 0")
+    times = np.arange(float(truth.time[0]), float(truth.time[-1]), 1.0 / rate)
+    heading = np.unwrap(truth.poses[:, 2])
+    x = np.interp(times, truth.time, truth.poses[:, 0])
+    y = np.interp(times, truth.time, truth.poses[:, 1])
+    theta = np.interp(times, truth.time, heading)
+    ranges = np.empty((times.size, lidar.beams))
+    for k in range(times.size):
+        sweep = world.scan(Pose2D(float(x[k]), float(y[k]), float(theta[k])), 0.0, rng)
+        assert sweep is not None
+        ranges[k] = sweep.ranges
+    return ScanSeries(
+        times=times,
+        ranges=ranges,
+        angle_min=lidar.angle_min,
+        angle_increment=lidar.increment,
+        range_min=lidar.range_min,
+        range_max=lidar.range_max,
+    )

@@ -30,6 +30,7 @@ from umbmark.runs.rests import Reset, find_resets
 from umbmark.runs.segmentation import (
     LeftOut,
     SplitOptions,
+    cut_at_resets,
     find_runs,
     split_by_windows,
     trim_to_motion,
@@ -392,7 +393,9 @@ def runs_from_recordings(
         if found == 0:
             out.notes.append(f"{recording.name}: no run found")
         logs = [run.log for run in out.runs[first_run:] if run.log is not None]
-        check_not_reproduced(recording, logs, params)
+        noiseless = check_not_reproduced(recording, logs, params)
+        if noiseless is not None:
+            out.notes.append(noiseless)
     if not out.runs and keep_stretches and out.stretches:
         seconds = sum(float(run.log.time[-1]) for run in out.stretches if run.log is not None)
         out.notes.append(
@@ -456,7 +459,7 @@ def _segments(
     if split == "file":
         return [(0, time.size - 1)], [], False
     if split == "none":
-        return _cut_at_resets(recording, resets, rest_speed, out.notes), [], False
+        return cut_at_resets(recording, resets, rest_speed, out.notes), [], False
     found = find_runs(time, angles, truth, split_options, radius)
     out.notes.extend(
         info(f"{recording.name}: {reset.describe(time)}: a run ends there")
@@ -505,30 +508,6 @@ def _stretches(
                     continue
                 if run is not None:
                     out.append(run)
-    return out
-
-
-def _cut_at_resets(
-    recording: Recording, resets: Sequence[Reset], rest_speed: float, notes: list[str]
-) -> list[tuple[int, int]]:
-    """A recording taken as one run (``--split none``) cut where its ground truth was
-    reset (the robot put back: no run goes on across it), each piece trimmed to its
-    motion; a line for each cut to ``notes``."""
-    time, angles = recording.wheels.time, recording.wheels.angles
-    if not resets:
-        return [(0, time.size - 1)]
-    starts = [0, *(r.last for r in resets)]
-    ends = [*(r.first for r in resets), time.size - 1]
-    out: list[tuple[int, int]] = []
-    for a, b in zip(starts, ends, strict=True):
-        if b > a:
-            out += [
-                (a + c, a + d)
-                for c, d in trim_to_motion(time[a : b + 1], angles[a : b + 1], rest_speed)
-            ]
-    notes.extend(
-        info(f"{recording.name}: {reset.describe(time)}: a run ends there") for reset in resets
-    )
     return out
 
 

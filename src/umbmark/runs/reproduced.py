@@ -16,9 +16,15 @@ where the reference and the wheels were stamped at the same instant, in closed f
    exact arc, a midpoint chord or Borenstein's segment (whichever fits best), scaled by
    one factor (radii and wheelbase scaled together), by linear least squares.
 
-The reference is refused when its heading fits to within rounding, a residual under
-:data:`EXACT` rad per radian turned (root mean square), and its path closely, under
-:data:`CLOSE` m per metre driven. The heading is what tells: whatever scheme and rate the
+The reference was computed from the wheels when its heading fits to within rounding, a
+residual under :data:`EXACT` rad per radian turned (root mean square), and its path
+closely, under :data:`CLOSE` m per metre driven. It is refused when the fitted geometry is
+the one the robot's odometry uses (the active parameters, or the nominal ones without the
+wheel multipliers, each radius and the wheelbase to :data:`SAME_GEOMETRY`): calibrating
+against it returns those parameters. One the wheels reproduce only with other radii or
+another wheelbase is a noise-free reference of a robot with errors (a simulation without
+noise or slip), the calibration itself: it is taken, with a note that it follows the
+wheels without noise. The heading is what tells: whatever scheme and rate the
 odometry was integrated with, a heading computed from the wheel angles is that linear
 function of them, where any measured reference strays far more: motion capture by its
 noise (1e-4 rad and more), a physics simulator by its wheels' slip, and even a
@@ -47,6 +53,7 @@ from numpy.typing import NDArray
 
 from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
+from umbmark.core.messages import info
 from umbmark.model.kinematics import INTEGRATION_METHODS, WheelParams
 from umbmark.model.recording import Recording, RunLog
 from umbmark.sources.bag.truth.independence import REFERENCES
@@ -64,6 +71,9 @@ CLOSE = 1e-5
 MIN_SAMPLES = 20
 #: Most ratio of the two fitted wheel radii that is a robot's (either way).
 RADIUS_RATIO = 2.0
+#: A fitted radius or wheelbase within this share of the odometry's is the odometry's
+#: (the fit finds a computed reference's geometry to 1e-9; a robot's errors are 1e-3).
+SAME_GEOMETRY = 1e-5
 #: Two stamps this close [s] are the same instant (a float's rounding of epoch seconds).
 SAME_INSTANT = 1e-6
 
@@ -103,6 +113,12 @@ class Reproduction:
         samples can match them exactly with negative ones)."""
         positive = min(self.r_left, self.r_right, self.wheelbase) > 0.0
         return positive and 1.0 / RADIUS_RATIO <= self.r_left / self.r_right <= RADIUS_RATIO
+
+    def same_geometry(self, geometry: tuple[float, float, float]) -> bool:
+        """The fitted radii and wheelbase are ``geometry`` ``(r_L, r_R, b)`` [m], each to
+        :data:`SAME_GEOMETRY` of itself."""
+        fitted = (self.r_left, self.r_right, self.wheelbase)
+        return all(abs(f - g) <= SAME_GEOMETRY * g for f, g in zip(fitted, geometry, strict=True))
 
     @property
     def exact(self) -> bool:
@@ -172,10 +188,27 @@ def reproduction(
     )
 
 
-def check_not_reproduced(recording: Recording, logs: Sequence[RunLog], params: WheelParams) -> None:
+def _odometry_geometries(params: WheelParams) -> list[tuple[float, float, float]]:
+    """``(r_L, r_R, b)`` [m] the robot's odometry may use: the active parameters, and the
+    nominal ones (no wheel multipliers)."""
+    radius = 0.5 * params.wheel_diameter
+    active = (params.c_left * radius, params.c_right * radius, params.wheelbase)
+    return [active, (radius, radius, params.wheelbase)]
+
+
+def check_not_reproduced(
+    recording: Recording, logs: Sequence[RunLog], params: WheelParams
+) -> str | None:
     """Refuse the reference of ``recording`` if the odometry of its wheels reproduces it
-    (see the module); ``logs`` are its runs, integrated with ``params`` (the nominal
-    wheelbase and diameter the fit starts from).
+    with the geometry the robot's odometry uses (see the module); ``logs`` are its runs,
+    integrated with ``params`` (the active parameters, where the fit starts from).
+
+    Returns
+    -------
+    str or None
+        A note when the wheels reproduce the reference exactly, but only with another
+        geometry than the odometry's: a noise-free reference of a robot with errors,
+        accepted.
 
     Raises
     ------
@@ -183,10 +216,19 @@ def check_not_reproduced(recording: Recording, logs: Sequence[RunLog], params: W
         One line naming the recording, its reference and the fit.
     """
     if recording.truth is None or not recording.truth.headings:
-        return
+        return None
     found = reproduction(logs, recording.truth.time, params)
     if found is None or not found.exact:
-        return
+        return None
+    if not any(found.same_geometry(g) for g in _odometry_geometries(params)):
+        return info(
+            f"{recording.truth_name} follows the wheels without noise: with wheel radii "
+            f"{1000 * found.r_left:.3f} and {1000 * found.r_right:.3f} mm and a wheelbase of "
+            f"{1000 * found.wheelbase:.2f} mm the wheels give its heading to "
+            f"{found.heading_rms:.1g} rad, not with the odometry's (a noise-free "
+            "simulation's truth, or an odometry computed with other parameters than those "
+            "given): it is taken as the reference, and the calibration is that geometry"
+        )
     raise InputError(
         f"{recording.truth_name} reproduces the wheels' own odometry: with wheel radii "
         f"{1000 * found.r_left:.3f} and {1000 * found.r_right:.3f} mm and a wheelbase of "

@@ -39,6 +39,8 @@ from numpy.typing import NDArray
 
 from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
+from umbmark.core.messages import info
+from umbmark.model.recording import Recording
 from umbmark.runs.rests import TWITCH_ANGLE, Reset, find_resets, stops
 
 __all__ = [
@@ -46,6 +48,7 @@ __all__ = [
     "LeftOut",
     "Segmentation",
     "SplitOptions",
+    "cut_at_resets",
     "find_runs",
     "split_by_rests",
     "split_by_windows",
@@ -352,4 +355,28 @@ def split_by_windows(
                 source=source or None,
             )
         out.append((int(inside[0]), int(inside[-1])))
+    return out
+
+
+def cut_at_resets(
+    recording: Recording, resets: Sequence[Reset], rest_speed: float, notes: list[str]
+) -> list[tuple[int, int]]:
+    """A recording taken as one run (``--split none``) cut where its ground truth was
+    reset (the robot put back: no run goes on across it), each piece trimmed to its
+    motion; a line for each cut to ``notes``."""
+    time, angles = recording.wheels.time, recording.wheels.angles
+    if not resets:
+        return [(0, time.size - 1)]
+    starts = [0, *(r.last for r in resets)]
+    ends = [*(r.first for r in resets), time.size - 1]
+    out: list[tuple[int, int]] = []
+    for a, b in zip(starts, ends, strict=True):
+        if b > a:
+            out += [
+                (a + c, a + d)
+                for c, d in trim_to_motion(time[a : b + 1], angles[a : b + 1], rest_speed)
+            ]
+    notes.extend(
+        info(f"{recording.name}: {reset.describe(time)}: a run ends there") for reset in resets
+    )
     return out

@@ -52,6 +52,7 @@ __all__ = [
     "description_topics",
     "parse_robot_description",
     "read_description",
+    "robot_urdf",
 ]
 
 
@@ -421,3 +422,34 @@ def described_geometry(
     chosen = diameter if diameter is not None else description.wheel_diameter
     assert chosen is not None
     return (description.wheelbase if wheelbase is None else wheelbase), chosen, note
+
+
+def robot_urdf(
+    wheelbase: float,
+    wheel_diameter: float,
+    laser_pose: tuple[float, float, float],
+    joints: tuple[str, str] = ("left_wheel_joint", "right_wheel_joint"),
+    laser_frame: str = "laser",
+) -> str:
+    """A differential-drive robot's URDF, as a bag's ``/robot_description`` holds it: the
+    wheels ``joints`` (left, right) ``wheelbase`` [m] apart with cylinders of
+    ``wheel_diameter`` [m], and the laser ``laser_frame`` at ``laser_pose`` ``x, y, yaw``
+    [m, m, rad] on ``base_link`` (the wheels and mounting :func:`parse_robot_description`
+    reads back)."""
+    half, radius = 0.5 * wheelbase, 0.5 * wheel_diameter
+    x, y, yaw = laser_pose
+    links = [name.removesuffix("_joint") + "_link" for name in joints]
+    wheels = "".join(
+        f'<joint name="{name}" type="continuous"><parent link="base_link"/>'
+        f'<child link="{link}"/><origin xyz="0 {side * half!r} 0" rpy="{-math.pi / 2!r} 0 0"/>'
+        f'<axis xyz="0 0 1"/></joint><link name="{link}"><collision><geometry>'
+        f'<cylinder length="0.02" radius="{radius!r}"/></geometry></collision></link>\n'
+        for name, link, side in zip(joints, links, (1.0, -1.0), strict=True)
+    )
+    return (
+        '<?xml version="1.0"?>\n<robot name="umbmark_simulated">\n<link name="base_link"/>\n'
+        f"{wheels}"
+        f'<joint name="{laser_frame}_joint" type="fixed"><parent link="base_link"/>'
+        f'<child link="{laser_frame}"/><origin xyz="{x!r} {y!r} 0.2" rpy="0 0 {yaw!r}"/></joint>'
+        f'<link name="{laser_frame}"/>\n</robot>\n'
+    )

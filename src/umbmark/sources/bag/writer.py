@@ -12,7 +12,9 @@ differential-drive robot with motion capture publishes (names in :class:`BagTopi
 * ``/mocap/robot/pose`` (``geometry_msgs/PoseStamped``, frame ``world``): the ground truth;
 * with ``scans``: ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``), the sweeps as
   given, and ``/tf_static`` with the mounting ``base_link -> laser`` (``laser_pose``,
-  rolled by 180 degrees for a scanner mounted upside down).
+  rolled by 180 degrees for a scanner mounted upside down);
+* with ``description``: ``/robot_description`` (``std_msgs/String``), a URDF, once at
+  the start (:func:`umbmark.sources.bag.urdf.robot_urdf` writes one).
 
 Header stamps and bag (receive) times are equal: the recording's start epoch plus each
 sample's time, in nanoseconds; messages are written in time order.
@@ -52,6 +54,7 @@ from umbmark.sources.bag.msgtypes import (
     LASER_SCAN,
     ODOMETRY,
     POSE_STAMPED,
+    STRING,
     TF_MESSAGE,
     TF_STATIC_TOPIC,
     TF_TOPIC,
@@ -72,6 +75,8 @@ START_EPOCH = 1_704_067_200
 #: Samples written between two progress reports.
 _REPORT_EVERY = 2000
 
+#: Where a robot description goes.
+DESCRIPTION_TOPIC = "/robot_description"
 _Make = Callable[[int, int], "_Msg"]  # (sample index, stamp [ns]) -> message object
 
 TF_DEFINITION = "geometry_msgs/TransformStamped[] transforms"
@@ -191,6 +196,7 @@ def write_bag(
     progress: Callable[[float], None] | None = None,
     scans: ScanSeries | None = None,
     laser_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    description: str | None = None,
 ) -> Path:
     """Write the wheels, the odometry and the ground truth as a ROS bag (module notes).
 
@@ -214,6 +220,8 @@ def write_bag(
         A laser's sweeps, on the wheels' clock, written as ``/scan``.
     laser_pose : tuple of float
         The laser's mounting ``x, y, yaw`` [m, m, rad] in ``base_link`` (``/tf_static``).
+    description : str, optional
+        A URDF, written once at the start as ``/robot_description`` (``std_msgs/String``).
 
     Returns
     -------
@@ -247,7 +255,7 @@ def write_bag(
         with _temporary_beside(real) as scratch:
             fresh = scratch / real.name
             _write(fresh, target.format, store, names, wheels, odometry, truth, start_epoch,
-                   progress, scans, laser_pose)  # fmt: skip
+                   progress, scans, laser_pose, description)  # fmt: skip
             for file in [fresh] if fresh.is_file() else sorted(fresh.iterdir()):
                 fsync(file)
             _put(fresh, real, scratch)
@@ -319,6 +327,7 @@ def _write(
     progress: Callable[[float], None] | None,
     scans: ScanSeries | None = None,
     laser_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    description: str | None = None,
 ) -> None:
     """Write the bag at ``path`` (which does not exist yet)."""
     from rosbags.rosbag1 import Writer as Writer1
@@ -337,6 +346,10 @@ def _write(
         mount = messages.mounting(laser_pose, upside_down=scans.upside_down)
         series.append((TF_STATIC_TOPIC, TF_MESSAGE, at_start, mount))
         series.append((names.scan, LASER_SCAN, scans.times, messages.scan(scans)))
+    if description is not None:
+        text = store.types[STRING](data=description)
+        once = np.array([float(wheels.time[0])])
+        series.append((DESCRIPTION_TOPIC, STRING, once, lambda i, stamp: text))
     writer: Writer1 | Writer2
     if fmt == "ros1":
         writer = Writer1(path)
