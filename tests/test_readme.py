@@ -305,6 +305,7 @@ SLOW_SECTIONS = {
     "Quick start: motion capture or run logs",
     "Quick start: the robot calibrates itself",
     "Quick start: a ROS bag",
+    "Quick start: a fleet",
 }
 
 

@@ -41,6 +41,8 @@ _EXPORTS = {
     "history": "umbmark.jobs.history",
     "HistoryReport": "umbmark.jobs.history",
     "fleet": "umbmark.jobs.fleet",
+    "simulate_fleet": "umbmark.jobs.simulate_fleet",
+    "FleetSimulation": "umbmark.jobs.simulate_fleet",
     "FleetReport": "umbmark.jobs.fleet",
     "History": "umbmark.store.history",
     "plan": "umbmark.jobs.plan",
@@ -98,6 +100,7 @@ __all__ = [
     "EndPose",
     "ErrorEstimate",
     "FleetReport",
+    "FleetSimulation",
     "History",
     "HistoryReport",
     "InfoReport",
@@ -136,6 +139,7 @@ __all__ = [
     "reproduce_table1",
     "selfcal",
     "simulate",
+    "simulate_fleet",
     "study",
     "umbmark_benchmark",
     "validate",
@@ -162,6 +166,7 @@ if TYPE_CHECKING:
     from umbmark.jobs.selfcal import SelfCalReport, selfcal
     from umbmark.jobs.selfcal_anywhere import AnywhereReport
     from umbmark.jobs.simulate import SimulationReport, simulate
+    from umbmark.jobs.simulate_fleet import FleetSimulation, simulate_fleet
     from umbmark.jobs.study import StudyReport, study
     from umbmark.jobs.validate import validate
     from umbmark.model.active import ActiveParams

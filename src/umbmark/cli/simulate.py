@@ -8,6 +8,7 @@ from typing import Any
 import click
 
 from umbmark.cli.click_options import Command, apply, force_option, option, spec_option
+from umbmark.options.fleet import FLEET_SIMULATION_OPTIONS
 from umbmark.options.simulate import SIMULATE_OPTIONS
 from umbmark.options.spec import OUTPUTS
 
@@ -40,6 +41,7 @@ __all__ = ["simulate"]
                      ".csv is refused all the same)."),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print a JSON summary."),
+        *(spec_option(spec) for spec in FLEET_SIMULATION_OPTIONS),
     ]
 )  # fmt: skip
 def simulate(json_out: bool, turn_angle: float, **options: Any) -> None:
@@ -53,6 +55,10 @@ def simulate(json_out: bool, turn_angle: float, **options: Any) -> None:
     from umbmark import simulate as run_simulation
     from umbmark.cli.common import console, progress_bar, wrote
 
+    fleet = {k: options.pop(k) for k in ("fleet", "days", "minutes", "out")}
+    if fleet["fleet"] is not None:
+        _fleet(json_out, fleet, options)
+        return
     runs = options["runs"] * (2 if options["direction"] == "both" else 1)
     bag = f", writing {options['bag']}" if options["bag"] else ""
     with progress_bar(f"simulating {runs} runs{bag}") as progress:
@@ -96,3 +102,39 @@ def simulate(json_out: bool, turn_angle: float, **options: Any) -> None:
     shift = summary.get("centre_shift")
     if isinstance(shift, float):
         out.print(f"sideways shift of the centre: {shift * 1000:.3f} mm")
+
+
+def _fleet(json_out: bool, fleet: dict[str, Any], options: dict[str, Any]) -> None:
+    """``--fleet N``: a simulated fleet's recordings (the other outputs do not apply)."""
+    from umbmark import simulate_fleet
+    from umbmark.cli.common import console, progress_bar, wrote
+    from umbmark.core.errors import InputError, option
+
+    for name in ("output", "logs", "bag", "scan"):
+        if options.get(name):
+            raise InputError(
+                f"{option('fleet')} writes its recordings into {option('out')}, not {option(name)}"
+            )
+    storage = options.get("bag_storage") or "mcap"
+    with progress_bar(f"simulating {fleet['fleet']} robots for {fleet['days']} days") as bar:
+        report = simulate_fleet(
+            fleet["out"], robots=fleet["fleet"], days=fleet["days"], minutes=fleet["minutes"],
+            seed=options["seed"], bag_storage=storage, force=options["force"], progress=bar,
+        )  # fmt: skip
+    wrote([report.folder])
+    if json_out:
+        click.echo(report.to_json(), nl=False)
+        return
+    out = console()
+    out.print(
+        f"{len(report.recordings)} recordings of {len(report.events)} robots in "
+        f"{report.folder} (truth.json beside them):",
+        markup=False,
+    )
+    for robot, event in report.events.items():
+        out.print(f"  {robot}: {event}", markup=False)
+    out.print(
+        f"Watch it: umbmark fleet {report.folder} --robot-from '{{robot}}/{{date}}/*' "
+        "--report fleet.html",
+        markup=False,
+    )

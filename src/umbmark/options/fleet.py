@@ -7,7 +7,15 @@ from __future__ import annotations
 
 from umbmark.options.spec import OUTPUTS, Bound, Spec
 
-__all__ = ["ENGINE", "FLEET", "FLEET_OPTIONS", "MAX_WORKERS", "RECORDINGS"]
+__all__ = [
+    "A_FLEET",
+    "ENGINE",
+    "FLEET",
+    "FLEET_OPTIONS",
+    "FLEET_SIMULATION_OPTIONS",
+    "MAX_WORKERS",
+    "RECORDINGS",
+]
 
 #: The ``--help`` section of what the fleet reads.
 RECORDINGS = "The recordings"
@@ -72,3 +80,48 @@ FLEET_OPTIONS: tuple[Spec, ...] = (
 
 #: The options by keyword.
 FLEET: dict[str, Spec] = {spec.name: spec for spec in FLEET_OPTIONS}
+
+#: The ``--help`` section of ``umbmark simulate``'s fleet.
+A_FLEET = "A fleet (umbmark fleet's input)"
+
+#: ``umbmark simulate``'s options for a simulated fleet (:func:`umbmark.simulate_fleet`).
+FLEET_SIMULATION_OPTIONS: tuple[Spec, ...] = (
+    Spec(
+        "fleet",
+        ("--fleet",),
+        A_FLEET,
+        "Write the recordings of this many virtual robots driving ordinary missions in a "
+        "warehouse (corridors, turns at shelves, whole turns now and then), wheels and a "
+        "laser, one a day each, into --out ROBOT/DATE/drive; one wheel changed, one laser "
+        "knocked, one robot's tyres wearing; truth.json beside them.",
+        kind="integer",
+        bound=Bound("range", 200, 1),
+    ),
+    Spec(
+        "days",
+        ("--days",),
+        A_FLEET,
+        "With --fleet: days of recordings.",
+        kind="integer",
+        default=8,
+        bound=Bound("range", 365, 1),
+    ),
+    Spec(
+        "minutes",
+        ("--minutes",),
+        A_FLEET,
+        "With --fleet: each recording's driving [min].",
+        kind="number",
+        default=2.0,
+        unit="min",
+        bound=Bound("range", 60.0, 0.2),
+    ),
+    Spec(
+        "out",
+        ("--out",),
+        A_FLEET,
+        "With --fleet: the folder to write the fleet into (new or empty, or --force).",
+        kind="folder",
+        default="umbmark-fleet",
+    ),
+)

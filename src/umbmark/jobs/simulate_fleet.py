@@ -1,0 +1,277 @@
+"""A fleet to try ``umbmark fleet`` on: ``umbmark simulate --fleet N --days D``.
+
+:func:`simulate_fleet` writes the recordings of ``N`` virtual robots over ``D`` days, one a
+day each, as a fleet records them: ``FOLDER/ROBOT/DATE/drive`` (ROS 2 MCAP, or ROS 1
+``drive.bag``), each with the wheels (``/joint_states``), the odometry, a 2D laser
+(``/scan``, its stated mounting on ``/tf_static`` and in ``/robot_description``) and the
+motion capture's truth, driving ordinary missions in a warehouse
+(:func:`umbmark.sim.missions.mission`: corridors, quarter turns at shelves, whole turns
+now and then; not squares). Each robot has errors of its own; some change:
+
+- robot 2's right wheel is changed halfway (``E_d`` steps by :data:`WHEEL_STEP`);
+- robot 3's laser is knocked the same day (:data:`KNOCK`: 10 mm forward, 3 degrees);
+- robot 4's tyres wear (``E_s`` falls by :data:`WEAR_PER_DAY` a day);
+- the others stay as they are.
+
+``FOLDER/truth.json`` holds every robot's true errors and laser mounting per day, and
+the events, beside the recordings. The recordings' clocks start on their days, so the
+day is in each recording as well as in its path.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from umbmark.core.errors import InputError, option
+from umbmark.core.jsontext import JsonText
+
+__all__ = ["KNOCK", "WEAR_PER_DAY", "WHEEL_STEP", "FleetDay", "FleetSimulation", "simulate_fleet"]
+
+#: The changed wheel's step in ``E_d``.
+WHEEL_STEP = -0.006
+#: The knocked laser: forward [m], yaw [rad].
+KNOCK = (0.01, math.radians(3.0))
+#: The wearing robot's loss of ``E_s`` a day.
+WEAR_PER_DAY = 0.0008
+#: Most robots and days.
+MAX_ROBOTS, MAX_DAYS = 200, 365
+#: The fleet's nominal wheels: wheelbase, diameter [m].
+NOMINAL = (0.34, 0.15)
+#: The missions' speed [m/s] and the simulation's period [s].
+SPEED, DT = 0.4, 0.02
+
+
+@dataclass(frozen=True)
+class FleetDay:
+    """One robot's recording of one day, and its truth.
+
+    Attributes
+    ----------
+    robot : str
+    day : str
+        ``YYYY-MM-DD``.
+    path : str
+        The recording.
+    E_d, E_b, E_s : float
+        The robot's true errors that day.
+    laser : (float, float, float)
+        The laser's true mounting ``x, y, yaw`` [m, m, rad] (stated: 0.1, 0, 0).
+    """
+
+    robot: str
+    day: str
+    path: str
+    E_d: float
+    E_b: float
+    E_s: float
+    laser: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class FleetSimulation(JsonText):
+    """What :func:`simulate_fleet` wrote.
+
+    Attributes
+    ----------
+    folder : str
+    recordings : tuple of FleetDay
+    events : dict of str to str
+        Each robot's change, in words (none: steady).
+    """
+
+    folder: str
+    recordings: tuple[FleetDay, ...]
+    events: dict[str, str]
+
+    def to_dict(self) -> dict[str, Any]:
+        """What ``truth.json`` holds (metres, radians)."""
+        return {
+            "folder": self.folder,
+            "events": self.events,
+            "recordings": [
+                {
+                    "robot": r.robot,
+                    "day": r.day,
+                    "path": r.path,
+                    "E_d": r.E_d,
+                    "E_b": r.E_b,
+                    "E_s": r.E_s,
+                    "laser": list(r.laser),
+                }
+                for r in self.recordings
+            ],
+        }
+
+
+def _truths(
+    robots: int, days: int, rng: np.random.Generator
+) -> tuple[list[list[tuple[float, float, float, tuple[float, float, float]]]], dict[str, str]]:
+    """Every robot's true ``E_d``, ``E_b``, ``E_s`` and laser per day, and the events."""
+    out, events = [], {}
+    half = days // 2
+    for k in range(robots):
+        name = f"robot{k + 1:02d}"
+        e_d = 1.0 + float(rng.normal(0.0, 0.002))
+        e_b = 1.0 + float(rng.normal(0.0, 0.01))
+        e_s = 1.0 + float(rng.normal(0.0, 0.003))
+        laser = (0.1, 0.0, 0.0)
+        mine = []
+        for d in range(days):
+            day_e_d, day_e_s, day_laser = e_d, e_s, laser
+            if k == 1 and d >= half:
+                day_e_d = e_d + WHEEL_STEP
+            if k == 2 and d >= half:
+                day_laser = (laser[0] + KNOCK[0], laser[1], laser[2] + KNOCK[1])
+            if k == 3:
+                day_e_s = e_s - WEAR_PER_DAY * d
+            mine.append((day_e_d, e_b, day_e_s, day_laser))
+        out.append(mine)
+        events[name] = {
+            1: f"right wheel changed on day {half + 1}: E_d {WHEEL_STEP:+g}",
+            2: f"laser knocked on day {half + 1}: {KNOCK[0] * 1000:g} mm forward, "
+            f"{math.degrees(KNOCK[1]):g} deg",
+            3: f"tyres wearing: E_s {-WEAR_PER_DAY * 7:+g} a week",
+        }.get(k, "steady")
+    return out, events
+
+
+def simulate_fleet(
+    folder: str | os.PathLike[str],
+    *,
+    robots: int = 6,
+    days: int = 8,
+    minutes: float = 2.0,
+    seed: int = 1,
+    first_day: str = "2026-11-02",
+    bag_storage: str = "mcap",
+    force: bool = False,
+    progress: Callable[[float], None] | None = None,
+) -> FleetSimulation:
+    """Write a simulated fleet's recordings and their truth into ``folder``.
+
+    Parameters
+    ----------
+    folder : path
+        New or empty (``force``: one holding an earlier fleet is written into).
+    robots, days : int
+        How many robots, and days of one recording each.
+    minutes : float
+        Each recording's driving [min].
+    seed : int
+    first_day : str
+        ``YYYY-MM-DD`` of the first day.
+    bag_storage : {"mcap", "sqlite3", "ros1"}
+        ROS 2 bags (a folder each) or ROS 1 ``.bag`` files.
+    force : bool
+    progress : callable, optional
+        Called with the fraction done (0 to 1).
+
+    Raises
+    ------
+    InputError
+        For counts out of range, a bad day or storage, or a folder that holds files
+        (without ``force``).
+    """
+    from umbmark.core.atomic import atomic_write_text
+    from umbmark.core.bounds import check_int_option, check_range
+    from umbmark.outputs.files import check_folder_output, check_new_folder
+
+    robots = check_int_option(option("fleet"), robots, 1, MAX_ROBOTS)
+    days = check_int_option(option("days"), days, 1, MAX_DAYS)
+    check_range(option("minutes"), minutes, (0.2, 60.0), unit="min")
+    if bag_storage not in ("mcap", "sqlite3", "ros1"):
+        raise InputError(f"{option('bag_storage', repr(bag_storage))}: use mcap, sqlite3 or ros1")
+    try:
+        start = dt.date.fromisoformat(first_day)
+    except ValueError:
+        raise InputError(f"{option('first_day', repr(first_day))}: give YYYY-MM-DD") from None
+    target = Path(folder)
+    check_folder_output(target)
+    if not force:
+        check_new_folder(target)
+    rng = np.random.default_rng(seed)
+    truths, events = _truths(robots, days, rng)
+    written: list[FleetDay] = []
+    total = robots * days
+    for k in range(robots):
+        for d in range(days):
+            day = start + dt.timedelta(days=d)
+            e_d, e_b, e_s, laser = truths[k][d]
+            name = f"robot{k + 1:02d}"
+            where = target / name / day.isoformat()
+            path = where / ("drive.bag" if bag_storage == "ros1" else "drive")
+            where.mkdir(parents=True, exist_ok=True)
+            _record(
+                path,
+                bag_storage,
+                k,
+                day,
+                (e_d, e_b, e_s),
+                laser,
+                minutes,
+                seed * 10007 + k * 389 + d,
+                force,
+            )
+            written.append(FleetDay(name, day.isoformat(), str(path), e_d, e_b, e_s, laser))
+            if progress is not None:
+                progress(len(written) / total)
+    result = FleetSimulation(str(target), tuple(written), events)
+    atomic_write_text(target / "truth.json", json.dumps(result.to_dict(), indent=1) + "\n")
+    return result
+
+
+def _record(
+    path: Path,
+    storage: str,
+    k: int,
+    day: dt.date,
+    errors: tuple[float, float, float],
+    laser: tuple[float, float, float],
+    minutes: float,
+    seed: int,
+    force: bool,
+) -> None:
+    """One robot's recording of one day."""
+    from umbmark.core.conventions import Direction
+    from umbmark.model.kinematics import WheelParams
+    from umbmark.robot.base import Pose2D
+    from umbmark.robot.warehouse import FLEET_LIDAR, warehouse_world
+    from umbmark.robot.world import sweeps_along
+    from umbmark.sim.engine import simulate as run_simulation
+    from umbmark.sim.missions import Warehouse, mission
+    from umbmark.sim.robot import ControlConfig, NoiseModel, SimRobot
+    from umbmark.sim.session import continuous_session
+    from umbmark.sources.bag.urdf import robot_urdf
+    from umbmark.sources.bag.writer import bag_target, write_bag
+
+    rng = np.random.default_rng(seed)
+    odometry = WheelParams(  # 2000-count encoders on a 20:1 gear, as simulate's robot
+        wheelbase=NOMINAL[0], wheel_diameter=NOMINAL[1], encoder_resolution=2000.0,
+        gear_ratio=20.0,
+    )  # fmt: skip
+    robot = SimRobot.with_errors(odometry, *errors, noise=NoiseModel(slip=0.0002))
+    warehouse = Warehouse()
+    start = warehouse.start(k)
+    route = mission(warehouse, start, rng, 60.0 * minutes, SPEED)
+    result = run_simulation(
+        robot, route, [Direction.CCW], ControlConfig(dt=DT, speed=SPEED), rng, record=True
+    )
+    session = continuous_session(result, odometry.radians_per_pulse, start=start)
+    world = warehouse_world(warehouse, Pose2D(*laser))
+    sweeps = sweeps_along(world, session.truth, 5.0, rng)
+    stated = (FLEET_LIDAR.mount.x, FLEET_LIDAR.mount.y, FLEET_LIDAR.mount.theta)
+    epoch = dt.datetime(day.year, day.month, day.day, 8, tzinfo=dt.timezone.utc).timestamp()
+    write_bag(
+        bag_target(path, None if storage == "ros1" else storage, force=force),
+        session.wheels, session.odometry, session.truth, scans=sweeps, laser_pose=stated,
+        description=robot_urdf(NOMINAL[0], NOMINAL[1], stated), start_epoch=epoch + 60.0 * k,
+    )  # fmt: skip
