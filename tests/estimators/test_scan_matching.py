@@ -293,8 +293,10 @@ def test_calibrate_reads_a_tuple_file(tmp_path):
     path = write_tuples(
         tmp_path / "sim.tuple", simulate(_mix(200), rng=np.random.default_rng(11), noise=NOISE)
     )
+    # the nominal 80 mm wheels and 90 mm wheelbase are 3 % and 2 % off the truth (82.7, 88
+    # mm): a correction the verdict applies
     args = ("calibrate", str(path), "--method", "scan-matching", "--wheelbase", "0.09")
-    out = cli_json(*args, "--wheel-diameter", "0.082")
+    out = cli_json(*args, "--wheel-diameter", "0.080")
     assert out["format"] == "tuples"
     se = out["standard_errors"]
     for key, truth in (
@@ -308,7 +310,7 @@ def test_calibrate_reads_a_tuple_file(tmp_path):
     assert np.all(off < 4 * np.array(out["laser_pose_standard_errors"]))
     assert out["E_d"] == pytest.approx(out["wheel_diameter_right"] / out["wheel_diameter_left"])
     json.dumps(out)
-    summary = run_cli(*args, "--wheel-diameter", "0.082").stdout
+    summary = run_cli(*args, "--wheel-diameter", "0.080").stdout
     assert re.search(r"laser yaw +1[67]\.\d+ ± 0\.\d+ deg", summary), summary
     assert re.search(r"wheelbase +8[78]\.\d+ ± 0\.\d+ mm", summary), summary
     yaml = cli_error(*args, "--yaml", str(tmp_path / "o.yaml"))
