@@ -347,6 +347,10 @@ def test_a_tuple_file_calibrates_without_nominal_geometry(tmp_path):
     for key in ("E_b", "E_s", "c_L", "c_R", "new", "active"):
         assert out[key] is None, key
     assert any("no nominal geometry" in note for note in report.notes)
+    page = umbmark.calibrate(path, method="scan-matching").html()
+    assert "No overlay: no nominal geometry was given" in page
+    assert "wheel_separation_multiplier:" not in page  # no overlay
+    assert "Correction, composed" not in page
     with pytest.raises(InputError, match="yaml needs the nominal geometry"):
         umbmark.calibrate(path, method="scan-matching", yaml=tmp_path / "o.yaml")
     assert not (tmp_path / "o.yaml").exists()
