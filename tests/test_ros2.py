@@ -285,7 +285,9 @@ def test_the_drive_loop_holds_50_hz_of_sim_time(stamped: dict[str, str]) -> None
     (a loop stalled past the timeout, 62 ms of wall time at 8x, makes the controller brake:
     seen at load 14 on this machine)."""
     seen = _probe(stamped, "drive", "2")
-    assert 0.0 < seen["loops_per_sim_second"] <= 51.0
+    # one velocity per 20 ms of sim time, the last loop started before the end: at most
+    # 50 + 1 / sim a sim second; at least a fifth of the rate (12 measured at load 13)
+    assert 10.0 <= seen["loops_per_sim_second"] <= 50.0 + 1.0 / seen["sim"]
     assert seen["sim"] >= 2.0
     assert 0.1 * seen["sim"] <= seen["travel"] <= 0.2 * (seen["sim"] + 0.5)
 

@@ -293,8 +293,10 @@ def test_calibrate_reads_a_tuple_file(tmp_path):
     path = write_tuples(
         tmp_path / "sim.tuple", simulate(_mix(200), rng=np.random.default_rng(11), noise=NOISE)
     )
+    # the nominal 80 mm wheels and 90 mm wheelbase are 3 % and 2 % off the truth (82.7, 88
+    # mm): a correction the verdict applies
     args = ("calibrate", str(path), "--method", "scan-matching", "--wheelbase", "0.09")
-    out = cli_json(*args, "--wheel-diameter", "0.082")
+    out = cli_json(*args, "--wheel-diameter", "0.080")
     assert out["format"] == "tuples"
     se = out["standard_errors"]
     for key, truth in (
@@ -308,7 +310,7 @@ def test_calibrate_reads_a_tuple_file(tmp_path):
     assert np.all(off < 4 * np.array(out["laser_pose_standard_errors"]))
     assert out["E_d"] == pytest.approx(out["wheel_diameter_right"] / out["wheel_diameter_left"])
     json.dumps(out)
-    summary = run_cli(*args, "--wheel-diameter", "0.082").stdout
+    summary = run_cli(*args, "--wheel-diameter", "0.080").stdout
     assert re.search(r"laser yaw +1[67]\.\d+ ± 0\.\d+ deg", summary), summary
     assert re.search(r"wheelbase +8[78]\.\d+ ± 0\.\d+ mm", summary), summary
     yaml = cli_error(*args, "--yaml", str(tmp_path / "o.yaml"))
@@ -345,6 +347,10 @@ def test_a_tuple_file_calibrates_without_nominal_geometry(tmp_path):
     for key in ("E_b", "E_s", "c_L", "c_R", "new", "active"):
         assert out[key] is None, key
     assert any("no nominal geometry" in note for note in report.notes)
+    page = umbmark.calibrate(path, method="scan-matching").html()
+    assert "No overlay: no nominal geometry was given" in page
+    assert "wheel_separation_multiplier:" not in page  # no overlay
+    assert "Correction, composed" not in page
     with pytest.raises(InputError, match="yaml needs the nominal geometry"):
         umbmark.calibrate(path, method="scan-matching", yaml=tmp_path / "o.yaml")
     assert not (tmp_path / "o.yaml").exists()

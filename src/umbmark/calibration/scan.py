@@ -149,6 +149,9 @@ def _calibrate(
         c_right=active.c_right,
     )
     estimate, sensor = run(intervals, used, side_length, **dict(entry.options))
+    if not nominal:  # against the measured geometry: E_b = E_s = 1 by construction
+        errors = {k: v for k, v in estimate.standard_errors.items() if k not in _NOMINAL_ONLY}
+        estimate = replace(estimate, E_s=None, standard_errors=errors)
     calibration = Calibration(estimate, active)
     check_calibration(calibration, chosen.origins)
     said, warnings = split_messages([*chosen.notes, *notes])
@@ -168,6 +171,8 @@ def _calibrate(
     )
 
 
+#: The figures that say nothing without a nominal geometry.
+_NOMINAL_ONLY = ("E_b", "E_s", "alpha")
 #: The note of a calibration given no nominal geometry.
 _ABSOLUTE = info(
     "no nominal geometry given (wheelbase and wheel diameter): the figures are absolute "

@@ -264,7 +264,7 @@ def estimate_section(one: CalibrationResult) -> str:
     ]
     for name, unit, meaning in names:
         value = getattr(est, name)
-        if value is None:
+        if value is None or (not one.nominal and name in ("E_b", "alpha")):
             continue
         interval = est.interval(name)
         low, high = (None, None) if interval is None else interval
@@ -281,6 +281,8 @@ def estimate_section(one: CalibrationResult) -> str:
         )
     rows += _absolute_rows(est)
     table = _table(["", "estimate", "standard error", "95 % low", "95 % high", ""], rows, {5})
+    if not one.nominal:  # absolute figures only: no correction of a nominal
+        return f"<p>Method: <code>{escape(est.method)}</code></p>\n{table}"
     active = cal.active
     correction = [
         ["c_L", f"{active.c_left:.6f}", f"{cal.new_c_left:.6f}"],
@@ -387,7 +389,7 @@ def _messages(page: Passes) -> str:
 
 
 def _overlay(page: Passes) -> str:
-    from umbmark.outputs.html_verdict import WITHHELD
+    from umbmark.outputs.html_verdict import NO_NOMINAL, WITHHELD
 
     n = len(page.passes)
     which = "" if n == 1 else f" of the last pass (pass {n})"
@@ -397,8 +399,8 @@ def _overlay(page: Passes) -> str:
         which = f" the controller holds ({page.holds.label})"
     elif page.holds is not None:
         which = f" of the last pass (pass {n}), not applied"
-    if shown.overlay_withheld:
-        return WITHHELD
+    if shown.overlay_withheld or not shown.nominal:
+        return WITHHELD if shown.nominal else NO_NOMINAL
     return (
         f"<p>The correction{which}, composed with the values active during its runs; "
         "copy it into the controller's parameters:</p>\n"
@@ -426,17 +428,16 @@ def _inputs(report: CalibrationResult) -> list[list[str]]:
 
 def _parameters(one: CalibrationResult) -> list[str]:
     active = one.calibration.active
-    return [
-        _num(one.test.side_length, ".4f"),
+    values = [
         _num(one.test.wheelbase, ".4f"),
         f"{active.wheelbase:.6f}",
         f"{active.separation_multiplier:g}",
         f"{active.c_left:g}",
         f"{active.c_right:g}",
         _num(active.wheel_diameter, "g"),
-        one.format,
-        one.estimate.method,
-    ]
+    ]  # none known without a nominal geometry
+    shown = values if one.nominal else ["not given"] * len(values)
+    return [_num(one.test.side_length, ".4f"), *shown, one.format, one.estimate.method]
 
 
 def _provenance(page: Passes) -> str:

@@ -80,3 +80,8 @@ WITHHELD = (
     '<p id="overlay-withheld">No overlay: the verdict is do not apply (its reasons head the '
     "page). <code>--override-verdict</code> writes it all the same.</p>\n"
 )
+#: What stands instead of the overlay of a calibration given no nominal geometry.
+NO_NOMINAL = (
+    '<p id="overlay-withheld">No overlay: no nominal geometry was given (wheelbase and wheel '
+    "diameter); the diameters, wheelbase and mounting above are absolute.</p>\n"
+)
