@@ -55,3 +55,44 @@ def test_the_simulated_fleet_is_watched(fleet: Path, tmp_path: Path):
     for robot, r in by.items():
         low, high = r["figures"]["E_d"]["interval_95"]
         assert low - 1e-4 <= last[robot]["E_d"] <= high + 1e-4, robot
+
+
+@pytest.mark.slow
+def test_ctrl_c_keeps_what_finished_and_the_next_run_does_the_rest(fleet: Path, tmp_path: Path):
+    import signal
+    import sqlite3
+    import subprocess
+    import time
+
+    from helpers import umbmark_command
+
+    history = tmp_path / "h.sqlite3"
+    args = [umbmark_command(), "fleet", str(fleet), "--robot-from", "{robot}/{date}/*",
+            "--history", str(history), "--workers", "1"]  # fmt: skip
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    def recorded() -> int:
+        if not history.exists():
+            return 0
+        try:
+            with sqlite3.connect(history) as db:
+                return int(db.execute("SELECT count(*) FROM recordings").fetchone()[0])
+        except sqlite3.OperationalError:  # the table is being made
+            return 0
+
+    deadline = time.monotonic() + 300
+    while recorded() < 2 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    kept = recorded()
+    assert 2 <= kept < ROBOTS * DAYS
+    # The next run does only what was not finished.
+    again = run_cli("fleet", str(fleet), "--robot-from", "{robot}/{date}/*",
+                    "--history", str(history), "--workers", "1", "--json", timeout=900)  # fmt: skip
+    assert again.returncode == 0, again.stderr
+    data = json.loads(again.stdout)
+    assert (data["recordings_done"], data["recordings_skipped"]) == (ROBOTS * DAYS - kept, kept)
+    assert data["drifted"] == ["robot02", "robot03", "robot04"]
