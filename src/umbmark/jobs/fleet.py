@@ -207,8 +207,8 @@ def fleet(
     from umbmark.outputs.files import OutputPlan
     from umbmark.runs.read_options import ReadOptions
     from umbmark.sources.robot_options import read_robot_options
+    from umbmark.store.fleet_recordings import done_recordings, identity, options_key
     from umbmark.store.history import History
-    from umbmark.store.recordings import done_recordings, identity, options_key
 
     FLEET["workers"].check(workers)
     ReadOptions.of(dict(options))  # checked once, before anything is read
@@ -256,7 +256,7 @@ def _recorded(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> Rec
     known with another nominal geometry) is recorded as failed with why."""
     from dataclasses import replace
 
-    from umbmark.store.recordings import RecordingRow, identity, options_key, record_recording
+    from umbmark.store.fleet_recordings import RecordingRow, identity, options_key, record_recording
 
     calibration = _calibration(outcome) if outcome.calibrated else None
     try:
@@ -280,7 +280,7 @@ def _recorded(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> Rec
 
 def _summary(store: Any, robots: Sequence[str]) -> FleetSummary:  # noqa: ANN401 (History)
     from umbmark.fleets.summary import summarize
-    from umbmark.store.recordings import read_recordings
+    from umbmark.store.fleet_recordings import read_recordings
 
     rows = read_recordings(store, robots) if robots else read_recordings(store)
     return summarize([RecordingOutcome.of_dict(r.outcome) for r in rows])

@@ -101,7 +101,7 @@ def _migrate_3(db: sqlite3.Connection) -> None:
 def _migrate_4(db: sqlite3.Connection) -> None:
     """Version 4: the fleet's recordings (``umbmark fleet``): each recording looked at,
     by identity, digest and reading options, with what it gave
-    (:mod:`umbmark.store.recordings`)."""
+    (:mod:`umbmark.store.fleet_recordings`)."""
     db.execute(
         """CREATE TABLE recordings (
             id INTEGER PRIMARY KEY AUTOINCREMENT,
@@ -271,7 +271,7 @@ class History:
     @contextmanager
     def transaction(self, *, write: bool = False) -> Iterator[sqlite3.Connection]:
         """A connection in one transaction (``BEGIN IMMEDIATE`` when writing), for the
-        store's other tables (:mod:`umbmark.store.recordings`)."""
+        store's other tables (:mod:`umbmark.store.fleet_recordings`)."""
         with self._connect(write=write) as db:
             yield db
 

@@ -7,8 +7,7 @@ from __future__ import annotations
 import datetime as dt
 from pathlib import Path
 
-from umbmark.store.history import History
-from umbmark.store.recordings import (
+from umbmark.store.fleet_recordings import (
     RecordingRow,
     done_recordings,
     identity,
@@ -16,6 +15,7 @@ from umbmark.store.recordings import (
     read_recordings,
     record_recording,
 )
+from umbmark.store.history import History
 from umbmark.store.records import NewCalibration
 
 
