@@ -9,6 +9,7 @@ import pytest
 
 import umbmark
 
+from dask_cluster import cluster  # noqa: F401 (a fixture: Dask started as processes)
 from helpers import DemoCommand, run_cli, write_table
 
 
