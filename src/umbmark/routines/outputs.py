@@ -44,10 +44,12 @@ def write_outputs(
     folder: Path | None,
     page: Path | None,
     force: bool,
+    command: str | None = None,
 ) -> list[Path]:
     """The page of all passes (their run logs in ``folders``) [``folder/report.html``]
     and, in ``folder``, the overlay of ``held``, the pass the controller holds; checked
-    before the robot moved (:func:`check_outputs`)."""
+    before the robot moved (:func:`check_outputs`). ``command``: the command line that
+    ran, for the page's provenance (None: made from Python)."""
     written: list[Path] = []
     if not folders:
         return written
@@ -55,7 +57,7 @@ def write_outputs(
     if page is not None:
         found, _ = calibrate_passes(folders, {})
         predicted = predict_after(found[0]) if len(found) == 1 else None
-        pages = Passes(passes=tuple(found), predicted=predicted, holds=holds)
+        pages = Passes(passes=tuple(found), predicted=predicted, holds=holds, command=command)
         written.append(write_passes_page(pages, page, force=force))
     if held is not None and folder is not None:
         written += held.write(yaml=folder / OVERLAY_FILE, force=force)

@@ -20,9 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import wheel_travel_from_poses
-from umbmark.robot.base import DriveParams
+from umbmark.robot.base import DriveParams, Pose2D
 from umbmark.routines.corner import CornerFix
 from umbmark.routines.drive import DrivenRun
 from umbmark.sources.runlog.reader import LogMetadata
@@ -35,6 +36,7 @@ __all__ = [
     "clear_selfcal",
     "pass_folder",
     "record_pass",
+    "return_error",
 ]
 
 #: The page of all passes a self-calibration writes into its folder.
@@ -101,6 +103,22 @@ def _samples(run: DrivenRun) -> np.ndarray:
     keep = np.ones(odometry.shape[0], dtype=bool)
     keep[:-1] = np.diff(odometry[:, 0]) > 0.0
     return odometry[keep]
+
+
+def return_error(measured: MeasuredRun) -> tuple[float, float, float]:
+    """The run's return error, Eq. 3.1 (absolute minus calculated): the end fix seen from
+    the start fix, less the odometry's end seen from its start (the first and last
+    readings the run log holds): ``eps_x``, ``eps_y`` [m] and ``eps_theta`` [rad], wrapped
+    into ``[-pi, pi)``. What ``calibrate`` reads back from the run log, run by run."""
+    odometry = _samples(measured.run)
+    start, end = (Pose2D(*(float(v) for v in odometry[i, 1:4])) for i in (0, -1))
+    calculated = end.relative_to(start)
+    absolute = measured.end.pose.relative_to(measured.start.pose)
+    return (
+        absolute.x - calculated.x,
+        absolute.y - calculated.y,
+        float(wrap_angle(absolute.theta - calculated.theta)),
+    )
 
 
 #: The odometry stands still while it changes by less than this [m, rad].
