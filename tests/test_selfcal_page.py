@@ -28,7 +28,7 @@ _RUN_LINE = re.compile(
 
 
 @pytest.fixture(scope="module")
-def ran(tmp_path_factory: pytest.TempPathFactory) -> tuple[list[str], str, str, str]:
+def ran(tmp_path_factory: pytest.TempPathFactory) -> tuple[list[str], str, str, str, Path]:
     out = tmp_path_factory.mktemp("selfcal") / "out"
     args = [
         "selfcal", "--sim", "--sim-E-b", str(TRUE_E_B), "-L", "1", "-n", "2",
@@ -37,7 +37,7 @@ def ran(tmp_path_factory: pytest.TempPathFactory) -> tuple[list[str], str, str, 
     proc = run_cli(*args)
     assert proc.returncode == 0, proc.stderr
     page = (out / "report.html").read_text(encoding="utf-8")
-    return args, proc.stdout, proc.stderr, page
+    return args, proc.stdout, proc.stderr, page, out
 
 
 def _cells(page: str, section: str) -> list[list[str]]:
@@ -52,7 +52,7 @@ def _cells(page: str, section: str) -> list[list[str]]:
 
 @pytest.mark.slow
 def test_the_page_shows_the_command_that_ran(ran):
-    args, _, _, page = ran
+    args, _, _, page, _ = ran
     assert "made from Python" not in page
     shown = unescape(re.search(r'<code id="command">(.*?)</code>', page)[1])
     assert shlex.split(shown)[1:] == args
@@ -60,7 +60,7 @@ def test_the_page_shows_the_command_that_ran(ran):
 
 @pytest.mark.slow
 def test_the_passes_have_the_terminals_names(ran):
-    _, stdout, _, page = ran
+    _, stdout, _, page, _ = ran
     for label in ("pass 1", "pass 2", "verification"):
         assert re.search(rf"^\s+{label}\s", stdout, flags=re.M), label
     runs = _cells(page, "runs")
@@ -72,7 +72,7 @@ def test_the_passes_have_the_terminals_names(ran):
 
 @pytest.mark.slow
 def test_each_runs_return_error_is_the_terminals(ran):
-    _, _, stderr, page = ran
+    _, _, stderr, page, _ = ran
     said = {(m[1], m[2]): m.groups()[2:] for m in _RUN_LINE.finditer(stderr)}
     assert len(said) == 12, stderr
     shown = {(r[0], r[1]): (r[5], r[6], r[7]) for r in _cells(page, "runs")}
@@ -83,7 +83,7 @@ def test_each_runs_return_error_is_the_terminals(ran):
 
 @pytest.mark.slow
 def test_the_applied_method_is_named(ran):
-    _, stdout, _, page = ran
+    _, stdout, _, page, _ = ran
     assert re.search(r"^\s+pass 1 .*\breconfigure\s*$", stdout, flags=re.M)
     text = unescape(re.sub("<[^>]+>", "", page))
     assert "applied: Apply" not in text
@@ -92,7 +92,7 @@ def test_the_applied_method_is_named(ran):
 
 @pytest.mark.slow
 def test_the_e_b_after_a_coarse_correction_is_the_residual(ran):
-    _, stdout, stderr, page = ran
+    _, stdout, stderr, page, _ = ran
     ratio = float(re.search(r"\(ratio (\d\.\d+)\): corrected", stderr)[1])
     assert ratio == pytest.approx(TRUE_E_B, abs=0.01)
     # the terminal: pass 1's E_b residual, composed beside it; pass 2's not marked
@@ -114,7 +114,7 @@ def test_the_e_b_after_a_coarse_correction_is_the_residual(ran):
 def test_the_page_in_headless_chromium(ran, tmp_path: Path):
     from test_report_command import Chromium
 
-    _, _, stderr, page = ran
+    _, _, stderr, page, _ = ran
     path = tmp_path / "report.html"
     path.write_text(page, encoding="utf-8")
     browser = Chromium(tmp_path / "profile")
@@ -136,3 +136,18 @@ def test_the_page_in_headless_chromium(ran, tmp_path: Path):
         for label, k, x, y, t in said
     ]
     assert "applied by reconfigure" in verdict
+
+
+@pytest.mark.slow
+def test_each_run_file_says_the_terminals_return_error(ran):
+    _, _, stderr, _, out = ran
+    said = list(_RUN_LINE.finditer(stderr))
+    assert len(said) == 12, stderr
+    for m in said:
+        label, k = m[1], int(m[2])
+        (path,) = (out / label.replace(" ", "-")).glob(f"run-{k:02d}-*.csv")
+        head = path.read_text(encoding="utf-8").splitlines()[1]
+        assert head == (
+            "# return error (Eq. 3.1, the corner fixes against the odometry): "
+            f"x {m[3]} mm, y {m[4]} mm, {m[5]} deg"
+        )

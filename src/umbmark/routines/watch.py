@@ -11,13 +11,13 @@
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from umbmark.core.conventions import Direction
+from umbmark.routines.record import return_error_words
 
 __all__ = ["Progress", "RunsLeft", "Stopped", "Watch", "stopped"]
 
@@ -117,8 +117,7 @@ class Watch:
         number = (k - 1) % self.runs + 1
         self.say(
             f"{label}, run {k} of {2 * self.runs} ({direction.value} {number} of {self.runs}): "
-            f"return error x {error[0] * 1000:+.1f} mm, y {error[1] * 1000:+.1f} mm, "
-            f"{math.degrees(error[2]):+.3f} deg (the corner fixes against the odometry)"
+            f"return error {return_error_words(error)} (the corner fixes against the odometry)"
         )
         self._report()
 
