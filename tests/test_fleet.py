@@ -17,8 +17,8 @@ import pytest
 pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
 
 import umbmark
-from dask_cluster import Cluster
 
+from dask_cluster import Cluster
 from helpers import run_cli
 
 DAYS = 6

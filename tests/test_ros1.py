@@ -418,23 +418,26 @@ def test_geometry_only_in_the_urdf(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_selfcal_with_the_corner_on_the_left_and_the_geometry_in_the_urdf(tmp_path: Path) -> None:
     """The issue's ROS 1 robot: its geometry only in the URDF, the corner behind the start
-    and to its left (``--corner-side left``): the same figures as the end-to-end test."""
+    and to its left, found there with no ``--corner-side`` (issue 29, item 2): the same
+    figures as the end-to-end test."""
     g = RosGraph(tmp_path, "--urdf-geometry", "--corner-side", "left")
     try:
         done = _umbmark(g.env, "selfcal", "--ros1", "--runs", "2", "-L", "1", "--max-passes",
-                        "1", "--corner-side", "left", "--out", str(tmp_path / "out"),
-                        "--json")  # fmt: skip
+                        "1", "--out", str(tmp_path / "out"), "--json")  # fmt: skip
         assert done.returncode == 0, done.stderr
+        assert "the corner found behind the robot and to its left (corner side auto)" in (
+            done.stderr
+        )
         report = json.loads(done.stdout)
         wrong = _umbmark(g.env, "selfcal", "--ros1", "--runs", "2", "-L", "1",
-                         "--out", str(tmp_path / "wrong"))  # fmt: skip
+                         "--corner-side", "right", "--out", str(tmp_path / "wrong"))  # fmt: skip
     finally:
         g.close()
     before, after = report["e_max_syst_before"], report["e_max_syst_after"]
     assert 0.10 < before < 0.25
     assert after < before / 5.0
     assert report["applied"]["wheel_separation_multiplier"] == pytest.approx(0.97, abs=0.005)
-    # the default side is refused before moving, naming the side the corner is on
+    # the other side forced is refused before moving, naming the side the corner is on
     assert wrong.returncode == 2
     assert "corner was found behind the robot and to its left" in wrong.stderr.splitlines()[-1]
 

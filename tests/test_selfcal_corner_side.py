@@ -88,12 +88,42 @@ def test_a_tape_fix_in_a_corner_on_either_side(side, answers, expected):
     assert (truth.x, truth.y) == pytest.approx((x, y), abs=1e-12)
 
 
-def test_a_corner_on_the_other_side_is_refused_before_moving(tmp_path):
-    robot = VirtualRobot(seed=1, world=corner_world(side="left"))
-    with pytest.raises(InputError, match=r"found behind the robot and to its left .*y = 1\.30 m"):
-        selfcal(robot, side_length=1.0, runs=2, out=tmp_path / "out")  # the default: right
+@pytest.mark.parametrize(("world", "forced"), [("left", "right"), ("right", "left")])
+def test_a_side_given_is_forced_and_the_other_refused_before_moving(world, forced, tmp_path):
+    robot = VirtualRobot(seed=1, world=corner_world(side=world))
+    y = r"1\.30" if world == "left" else r"-1\.30"
+    with pytest.raises(InputError, match=rf"found behind the robot and to its {world} .*y = {y} m"):
+        selfcal(robot, side_length=1.0, runs=2, corner_side=forced, out=tmp_path / "out")
     assert all((v, w) == (0.0, 0.0) for _, v, w in robot.commands)
     assert robot.true_pose.x == 0.0
+
+
+@pytest.mark.parametrize("measure", ["lidar", "ranges"])
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_the_corner_is_found_on_its_side_by_default(side, measure, tmp_path):
+    """No side given (``auto``): the first fix finds the corner behind the robot on the
+    left (or right), the check lines say so, and the routine completes there."""
+    robot = VirtualRobot(E_d=1.002, E_b=0.99, seed=2, world=corner_world(side=side))
+    lines: list[str] = []
+    report = selfcal(
+        robot, side_length=1.0, runs=2, max_passes=1, verify=False, coarse=False,
+        measure=measure, out=tmp_path / "out", notify=lines.append,
+    )  # fmt: skip
+    found = f"the corner found behind the robot and to its {side} (corner side auto)"
+    assert [c for c in report.checks if c.startswith("the corner found")] == [found]
+    assert found in lines
+    assert len(report.passes) == 1
+    assert len(report.passes[0].report.runs) == 4
+    errors = report.measurement_errors()
+    assert errors is not None
+    assert errors[0] <= 0.003  # m rms: the fixes in the corner frame of that side
+
+
+def test_the_option_takes_auto_right_or_left():
+    from umbmark.options.selfcal import CORNER_SIDE
+
+    assert CORNER_SIDE.default == "auto"
+    assert CORNER_SIDE.choices == ("auto", "right", "left")
 
 
 def test_the_option_takes_right_or_left():
@@ -134,3 +164,25 @@ def test_a_person_with_a_tape_in_a_corner_on_the_left(tmp_path):
     assert errors is not None
     assert errors[0] <= 0.002  # m rms: millimetre readings
     assert math.degrees(errors[1]) <= 0.4  # deg rms
+
+
+def test_a_tape_cannot_tell_the_side_and_takes_the_right_saying_so():
+    """The person's three distances fit a corner on either side: ``auto`` takes the right
+    (the pose by hand as in the tape test above) and the check line says so."""
+    from umbmark.routines.corner_sensors import TapeMarks
+    from umbmark.routines.measure import first_fix
+
+    robot = VirtualRobot(seed=1, world=corner_world(side="right"))
+    answers = iter(("1250", "1250", "1050"))
+    how = Measure(
+        "tape", ask=lambda prompt: next(answers), marks=TapeMarks(robot.tape_marks()), side="auto"
+    )
+    fix, taken, line = first_fix(robot, how)
+    assert taken.side == "right"
+    assert (fix.pose.x, fix.pose.y) == pytest.approx((1.6, 1.3), abs=1e-9)
+    assert line is not None
+    assert line.startswith("the corner taken behind the robot and to its right")
+    assert "corner side left" in line
+    from umbmark.core.errors import option_names
+
+    assert option_names(line) == []  # a line for people, no option markers

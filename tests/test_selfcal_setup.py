@@ -17,7 +17,7 @@ from umbmark.jobs.selfcal import selfcal
 from umbmark.options.selfcal import APPLY, CORNER_SIDE, MAX_PASSES, MEASURE, RUNS, SQUARE_SIDE
 from umbmark.robot.base import ApplyMethod
 from umbmark.robot.virtual import VirtualRobot
-from umbmark.routines.measure import CornerSide, MeasureMethod
+from umbmark.routines.measure import CornerChoice, MeasureMethod
 from umbmark.routines.setup import SQUARE_ONLY, SelfcalSetup
 from umbmark.routines.watch import RunsLeft
 
@@ -60,7 +60,7 @@ def test_the_defaults_are_the_option_specs() -> None:
 def test_the_spec_choices_are_the_library_types() -> None:
     assert MEASURE.choices == typing.get_args(MeasureMethod)
     assert APPLY.choices == typing.get_args(ApplyMethod)
-    assert CORNER_SIDE.choices == typing.get_args(CornerSide)
+    assert CORNER_SIDE.choices == typing.get_args(CornerChoice)
     assert set(SQUARE_ONLY) <= {f.name for f in fields(SelfcalSetup)}
 
 

@@ -62,7 +62,7 @@ def test_checks_runs_and_passes_are_said_as_they_happen_with_the_runs_left(tmp_p
     runs = [
         k
         for k, line in enumerate(lines)
-        if re.match(r"(pass 1|verification), run [1-4] of 4 \(c?cw [12] of 2\): ended", line)
+        if re.match(r"(pass 1|verification), run [1-4] of 4 \(c?cw [12] of 2\): return error", line)
     ]
     assert len(runs) == 8
     assert runs[0] == coarse + 1
@@ -148,7 +148,7 @@ def test_sigint_to_the_command_stops_the_robot_and_says_how_to_go_on(tmp_path):
                 break
         assert lines, "no line from the command"
         assert lines[-1].startswith("umbmark: pass 1: E_max,syst"), "".join(lines)
-        assert "applied (reconfigure)" in lines[-1]
+        assert "applied by reconfigure" in lines[-1]
         proc.send_signal(signal.SIGINT)
         rest = proc.stderr.read()
         assert proc.wait(timeout=60) == 130, rest
@@ -317,7 +317,7 @@ def test_on_a_terminal_the_progress_is_one_live_line(tmp_path):
     os.close(primary)
     text = b"".join(chunks).decode("utf-8", "replace")
     assert re.search(r"[1-8] of 8 runs, about \d+ s left", text), text[-3000:]
-    assert "umbmark: pass 1, run 1 of 4 (cw 1 of 2): ended" in text
+    assert "umbmark: pass 1, run 1 of 4 (cw 1 of 2): return error" in text
     assert "umbmark: progress:" not in text
 
 

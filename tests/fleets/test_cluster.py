@@ -20,10 +20,11 @@ import pytest
 
 pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
 
-import fleet_tasks
-from dask_cluster import Cluster, free_port
 from umbmark.core.errors import InputError
 from umbmark.fleets.cluster import Done, run_each
+
+import fleet_tasks
+from dask_cluster import Cluster, free_port
 
 
 def _collect(fn, items, **kw) -> list[Done]:  # type: ignore[no-untyped-def]

@@ -7,10 +7,11 @@ from html.parser import HTMLParser
 
 import numpy as np
 
-from fleet_tasks import daily_outcomes
 from umbmark.fleets.outcome import RecordingOutcome
 from umbmark.fleets.page import fleet_page
 from umbmark.fleets.summary import summarize
+
+from fleet_tasks import daily_outcomes
 
 
 class _Shape(HTMLParser):

@@ -8,9 +8,10 @@ import json
 
 import numpy as np
 
-from fleet_tasks import T0, daily_outcomes
 from umbmark.fleets.outcome import RecordingOutcome
 from umbmark.fleets.summary import summarize
+
+from fleet_tasks import T0, daily_outcomes
 
 
 def test_the_changed_robots_are_flagged_at_their_day_and_the_steady_ones_are_not():

@@ -25,7 +25,14 @@ from umbmark.runs.read_options import ReadOptions, SourceOptions
 if TYPE_CHECKING:
     from umbmark.calibration.validation import ValidationReport
 
-__all__ = ["Holds", "Passes", "PredictedPass", "calibrate_passes", "predict_after"]
+__all__ = [
+    "Holds",
+    "Passes",
+    "PredictedPass",
+    "calibrate_passes",
+    "e_b_words",
+    "predict_after",
+]
 
 
 @dataclass(frozen=True)
@@ -114,6 +121,13 @@ class Holds:
         The multipliers the controller holds (``wheel_separation_multiplier``,
         ``left_wheel_radius_multiplier``, ``right_wheel_radius_multiplier``), as it
         reports them.
+    methods : tuple of (str or None)
+        How each pass's correction reached the controller (``reconfigure``, ``yaml``,
+        ...; None: not applied), as the pass recorded it; empty: not recorded.
+    coarse : float or None
+        The factor a coarse turning correction multiplied ``wheel_separation_multiplier``
+        by before the first pass (None: none applied): the first pass's ``E_b`` is the
+        residual on that corrected wheelbase (:func:`e_b_words`).
     """
 
     labels: tuple[str, ...]
@@ -121,6 +135,8 @@ class Holds:
     separation_multiplier: float
     c_left: float
     c_right: float
+    methods: tuple[str | None, ...] = ()
+    coarse: float | None = None
 
     def __post_init__(self) -> None:
         if self.held is not None and not 1 <= self.held <= len(self.labels):
@@ -135,6 +151,19 @@ class Holds:
         """Whether pass ``k`` (1-based) was applied: passes are applied in order until one
         is not, so every pass up to the held one."""
         return self.held is not None and k <= self.held
+
+    def method(self, k: int) -> str | None:
+        """How pass ``k`` (1-based) was applied (None: not applied, or not recorded)."""
+        if not self.applied(k):
+            return None
+        return self.methods[k - 1] if k <= len(self.methods) else None
+
+    def applied_words(self, k: int) -> str:
+        """``applied by reconfigure``, ``applied``, or ``not applied``: pass ``k``."""
+        if not self.applied(k):
+            return "not applied"
+        method = self.method(k)
+        return "applied" if method is None else f"applied by {method}"
 
     def multipliers(self) -> dict[str, float]:
         """The multipliers under the controller's parameter names."""
@@ -156,6 +185,16 @@ class Holds:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the pass's name (or None) and the multipliers."""
         return {"pass": self.label, **self.multipliers()}
+
+
+def e_b_words(e_b: float, coarse: float | None) -> str:
+    """``E_b`` as every output shows it: ``0.999890``; measured after a coarse turning
+    correction by ``coarse`` (the factor on ``wheel_separation_multiplier``), the residual
+    on the corrected wheelbase with the value composed with it beside:
+    ``0.999890 residual, 1.099879 composed``."""
+    if coarse is None:
+        return f"{e_b:.6f}"
+    return f"{e_b:.6f} residual, {e_b * coarse:.6f} composed"
 
 
 @dataclass(frozen=True, repr=False)

@@ -13,6 +13,7 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
+from umbmark.calibration.passes import e_b_words
 from umbmark.calibration.result import ABSOLUTE_FIGURES, CalibrationResult
 from umbmark.estimators.registry import LOGGED, find, method_label
 from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
@@ -449,7 +450,7 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
         ["pass", "E_max,syst [mm]", "E_d", "E_b", "verdict", "applied"],
         left={"pass", "verdict", "applied"},
     )
-    for p in report.passes:
+    for k, p in enumerate(report.passes, 1):
         r = p.report
         e = r.e_max_syst
         applied = "-" if p.applied is None else (p.applied.method if p.applied.active else "no")
@@ -458,11 +459,17 @@ def render_selfcal(report: SelfCalReport, screen: Console) -> None:
             p.label,
             "-" if e is None else f"{e * 1000:.1f}",
             f"{r.estimate.E_d:.6f}",
-            f"{r.estimate.E_b:.6f}",
+            e_b_words(r.estimate.E_b, report.holds.coarse if k == 1 else None),
             r.verdict.words,
             applied,
         )
     screen.print(grid)
+    if report.holds.coarse is not None and report.passes:
+        screen.print(
+            f"{report.passes[0].label}'s E_b is the residual on the wheelbase the coarse turning "
+            f"check corrected (wheel_separation_multiplier x{report.holds.coarse:.4f}); "
+            "composed: with that correction."
+        )
     before, after = report.e_max_syst_before, report.e_max_syst_after
     if before is not None and after is not None and after > 0:
         screen.print(

@@ -75,7 +75,7 @@ ROS = "ROS robots (--ros1, --ros2)"
         spec_option(MEASURE),
         spec_option(TAPE_MARKS),
         spec_option(CORNER_SIDE, help=f"{CORNER_SIDE.help} With --sim, the virtual "
-                    "robot's corner stands there."),
+                    "robot's corner stands there (auto: on the right)."),
         spec_option(APPLY),
         spec_option(MAX_PASSES),
         option("--verify/--no-verify", section=TEST, default=True,
@@ -153,7 +153,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     its wheels, E_s and its laser's mounting against the laser's own motion (scan
     matching), applies the result and drives the pattern again to verify.
     """
-    from umbmark.cli.common import console, note, warn, wrote
+    from umbmark.cli.common import command_line, console, note, warn, wrote
     from umbmark.cli.render import render_anywhere, render_selfcal
     from umbmark.core.errors import InputError
     from umbmark.jobs.selfcal import default_folder
@@ -206,7 +206,10 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     try:
         if anywhere:  # before the square's options are checked: it takes none of them
             square_only(**SelfcalSetup.square_options(None, options))
-        setup = SelfcalSetup(limits=limits, robot_name=options.pop("robot"), **options)
+        setup = SelfcalSetup(
+            limits=limits, robot_name=options.pop("robot"), command=command_line(sys.argv),
+            **options,
+        )  # fmt: skip
         with _watching() as (progress, runs_left):
             report = run_selfcal(
                 robot, setup, routine=routine, progress=progress, ask=ask,

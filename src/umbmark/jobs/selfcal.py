@@ -47,7 +47,14 @@ from umbmark.options.selfcal import MAX_SELFCAL_PASSES, MAX_SELFCAL_RUNS, ROUTIN
 from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
 from umbmark.routines.coarse import CoarseTurning, coarse_turning
 from umbmark.routines.drive import DriveLimits, settle
-from umbmark.routines.measure import Measure, MeasureMethod, check_side, marks_for, take_fix
+from umbmark.routines.measure import (
+    CornerSide,
+    Measure,
+    MeasureMethod,
+    first_fix,
+    marks_for,
+    take_fix,
+)
 from umbmark.routines.outputs import check_outputs, write_outputs
 from umbmark.routines.passes import Home, corner_truth
 from umbmark.routines.preflight import preflight
@@ -205,11 +212,11 @@ def _squares(robot: Robot, g: SelfcalSetup, calls: _Calls) -> SelfCalReport:
             _Restart(restart_note, calls.notify, prior),
         )  # fmt: skip
         final = robot.drive_params()
-        holds = holds_of(found.passes, final)
+        holds = holds_of(found.passes, final, found.coarse_factor)
         files = write_outputs(
             [p.folder for p in found.passes if p.folder is not None],
             None if holds.held is None else found.passes[holds.held - 1].report,
-            holds, folder, page, g.force or state is not None, controller,
+            holds, folder, page, g.force or state is not None, controller, g.command,
         )  # fmt: skip
         if controller is None and found.passes and calls.notify is not None:
             calls.notify(unnamed_controller())  # the overlay's keys: the default
@@ -218,7 +225,7 @@ def _squares(robot: Robot, g: SelfcalSetup, calls: _Calls) -> SelfCalReport:
             settings = locals_settings(g.side_length, g.runs, g.measure, g.max_passes, g.verify)
             restart, more = _stop_for_restart(
                 controller, folder, found.passes, found.pending,
-                {**settings, "corner_side": g.corner_side},
+                {**settings, "corner_side": found.side},
             )  # fmt: skip
             files.extend(more)
     return _report(name, g.side_length, g.measure, found, final, holds, files, restart, folder)
@@ -290,6 +297,13 @@ class _Found:
     coarse_applied: ApplyResult | None
     passes: list[PassResult]
     pending: DriveParams | None = None
+    side: CornerSide = "right"
+
+    @property
+    def coarse_factor(self) -> float | None:
+        """The factor the coarse turning correction applied (None: none applied)."""
+        applied = self.coarse_applied is not None and self.coarse_applied.active
+        return self.coarse.ratio if applied and self.coarse is not None else None
 
 
 def _calibrate(
@@ -316,9 +330,11 @@ def _calibrate(
             if restart.notify is not None:
                 restart.notify(restart.note)
         odom = settle(robot, limits).pose
-        first = take_fix(robot, how)
-        if how.method != "truth":  # motion capture's frame is not the corner's
-            check_side(first, how.side)
+        first, how, side_line = first_fix(robot, how)  # auto: on the side found
+        drive = replace(drive, how=how)
+        if side_line is not None:
+            checks.append(side_line)
+            watch.say(side_line)
         home = Home(first.pose, first, odom)
         home.fixes.append((first, corner_truth(robot, how)))
         moved = True  # the checks and the first fix passed: the robot moves from here on
@@ -357,7 +373,9 @@ def _calibrate(
             passes.append(result)
             if result.applied is not None and result.applied.wrote is not None:
                 watch.say(result.applied.wrote)  # the user's file changed: said at once
-            watch.say(result.summary())
+            after_coarse = coarse_applied is not None and coarse_applied.active and k == 1
+            ratio = coarse_check.ratio if after_coarse and coarse_check is not None else None
+            watch.say(result.summary(ratio))
             drive.mark_applied(result)
             home.reanchor(robot)
             bench = result.report.benchmark
@@ -378,7 +396,7 @@ def _calibrate(
             mark_stopped(exc, _stopped(robot, passes, drive))
         raise
     robot.send_velocity(0.0, 0.0)
-    return _Found(checks, home, coarse_check, coarse_applied, passes, pending)
+    return _Found(checks, home, coarse_check, coarse_applied, passes, pending, how.sided)
 
 
 def _stopped(robot: Robot, passes: list[PassResult], drive: PassDriver) -> Stopped:

@@ -17,7 +17,7 @@ from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
 from umbmark.routines.drive import DriveLimits
 from umbmark.routines.measure import Measure
 from umbmark.routines.passes import Home, drive_pass, strays
-from umbmark.routines.record import MeasuredRun, pass_folder, record_pass
+from umbmark.routines.record import MeasuredRun, pass_folder, record_pass, return_error
 from umbmark.routines.resume import SelfCalState
 from umbmark.routines.watch import Watch
 from umbmark.runs.read_options import SourceOptions
@@ -75,7 +75,7 @@ class PassDriver:
             self.watch.status(label, k, direction, what)
 
         def ran(k: int, direction: Direction, run: MeasuredRun) -> None:
-            self.watch.run_measured(label, k, direction, run.start.pose, run.end.pose)
+            self.watch.run_measured(label, k, direction, return_error(run))
 
         measured = drive_pass(
             self.robot, self.how, self.side, self.runs, home, self.limits, said, ran
@@ -117,14 +117,21 @@ def apply_pass(
     return replace(result, applied=robot.apply(new, method)), new
 
 
-def holds_of(passes: list[PassResult], final: DriveParams) -> Holds:
+def holds_of(passes: list[PassResult], final: DriveParams, coarse: float | None = None) -> Holds:
     """What the controller holds: the last pass applied (passes are applied in order until
-    one is not) and the multipliers the controller reports."""
-    applied = [k for k, p in enumerate(passes, 1) if p.applied is not None and p.applied.active]
+    one is not), how each was applied, the multipliers the controller reports and the
+    factor of a coarse turning correction applied before the first pass."""
+    active = [p.applied is not None and p.applied.active for p in passes]
+    applied = [k for k, on in enumerate(active, 1) if on]
     return Holds(
         labels=tuple(p.label for p in passes),
         held=applied[-1] if applied else None,
         separation_multiplier=final.wheel_separation_multiplier,
         c_left=final.left_wheel_radius_multiplier,
         c_right=final.right_wheel_radius_multiplier,
+        methods=tuple(
+            p.applied.method if on and p.applied is not None else None
+            for p, on in zip(passes, active, strict=True)
+        ),
+        coarse=coarse,
     )

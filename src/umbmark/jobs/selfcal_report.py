@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from umbmark.calibration.passes import Holds
+from umbmark.calibration.passes import Holds, e_b_words
 from umbmark.core.jsontext import JsonText
 from umbmark.robot.base import ApplyResult, DriveParams
 from umbmark.routines.coarse import CoarseTurning
@@ -48,19 +48,21 @@ class PassResult:
     applied: ApplyResult | None = None
     warnings: tuple[str, ...] = ()
 
-    def summary(self) -> str:
-        """One line: E_max,syst, the estimate, the verdict and whether it was applied."""
+    def summary(self, coarse: float | None = None) -> str:
+        """One line: E_max,syst, the estimate, the verdict and whether it was applied;
+        ``coarse``: the factor of a coarse turning correction this pass was measured
+        after (its E_b the residual, :func:`umbmark.calibration.passes.e_b_words`)."""
         r = self.report
         e = "-" if r.e_max_syst is None else f"{r.e_max_syst * 1000:.1f} mm"
         if self.applied is None:
             applied = "not applied"
         elif self.applied.active:
-            applied = f"applied ({self.applied.method})"
+            applied = f"applied by {self.applied.method}"
         else:
             applied = f"not active: {self.applied.message}"
         return (
             f"{self.label}: E_max,syst {e}, E_d {r.estimate.E_d:.6f}, E_b "
-            f"{r.estimate.E_b:.6f}; {r.verdict.words}; {applied}"
+            f"{e_b_words(r.estimate.E_b, coarse)}; {r.verdict.words}; {applied}"
         )
 
     def to_dict(self) -> dict[str, Any]:

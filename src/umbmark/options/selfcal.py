@@ -74,10 +74,11 @@ CORNER_SIDE = Spec(
     ("--corner-side",),
     TEST,
     "Where the L-shaped corner stands, seen from the robot at its start: behind it and to "
-    "its right, or to its left (the wall beside the start on that side).",
+    "its right, or to its left (the wall beside the start on that side); auto: found by "
+    "the first fix (lidar, ranges), the right taken for a tape.",
     kind="choice",
-    default="right",
-    choices=("right", "left"),
+    default="auto",
+    choices=("auto", "right", "left"),
 )
 
 #: The sides of a square the self-calibration drives [m].

@@ -127,7 +127,7 @@ def _intervals(page: AnywherePage) -> str:
 
 
 def _fit(page: AnywherePage) -> str:
-    from umbmark.outputs.html_report import estimate_section
+    from umbmark.outputs.html_estimates import estimate_section
 
     return (
         "<p>The first drive's fit (the scan-matching calibration of Censi et al. 2013), "

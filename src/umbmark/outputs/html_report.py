@@ -18,7 +18,9 @@ from typing import TYPE_CHECKING
 
 from umbmark.core.digest import file_sha256
 from umbmark.core.version import __version__
-from umbmark.outputs.components import ANGLE_UNIT, component, to_shown
+from umbmark.outputs.components import component, to_shown
+from umbmark.outputs.html_estimates import MM as _MM
+from umbmark.outputs.html_estimates import estimates_section
 from umbmark.outputs.html_parts import CSS as _CSS
 from umbmark.outputs.html_parts import num as _num
 from umbmark.outputs.html_parts import table as _table
@@ -28,12 +30,10 @@ if TYPE_CHECKING:
     from umbmark.calibration.passes import Passes
     from umbmark.calibration.result import CalibrationResult
     from umbmark.calibration.validation import ValidationReport
-    from umbmark.estimators.base import ErrorEstimate
     from umbmark.returns.clusters import Benchmark
 
-__all__ = ["calibration_html", "estimate_section", "fit_messages", "pass_name", "passes_html"]
+__all__ = ["calibration_html", "fit_messages", "pass_name", "passes_html"]
 
-_MM = 1000.0
 #: Files of an input folder listed with their SHA-256 at most.
 _MAX_FOLDER_FILES = 50
 
@@ -47,11 +47,19 @@ def pass_name(k: int, n: int) -> str:
     return f"pass {k} (after pass {k - 1})"
 
 
-def _passes(page: Passes) -> list[tuple[str, CalibrationResult]]:
+def _names(page: Passes) -> list[str]:
+    """Each pass's name: a self-calibration's as it named them (``pass 1``, ``pass 2``,
+    ``verification``), else :func:`pass_name`'s."""
     n = len(page.passes)
-    if n == 1:
+    if page.holds is not None and len(page.holds.labels) == n:
+        return list(page.holds.labels)
+    return [pass_name(k, n) for k in range(1, n + 1)]
+
+
+def _passes(page: Passes) -> list[tuple[str, CalibrationResult]]:
+    if len(page.passes) == 1 and page.holds is None:
         return [("measured", page.passes[0])]
-    return [(pass_name(k, n), one) for k, one in enumerate(page.passes, 1)]
+    return list(zip(_names(page), page.passes, strict=True))
 
 
 _PREDICTED = "predicted after (replayed)"
@@ -172,10 +180,11 @@ def _figure(page: Passes) -> str:
 
     n = len(page.passes)
     # One pass: cw and ccw each in its own colour; several: each pass in its own colour.
+    names = _names(page)
     sets = [
         ClusterSet(one.benchmark, "", SINGLE_COLOUR, by_direction=True)
         if n == 1
-        else ClusterSet(one.benchmark, pass_name(k, n), PASS_COLOURS[(k - 1) % len(PASS_COLOURS)])
+        else ClusterSet(one.benchmark, names[k - 1], PASS_COLOURS[(k - 1) % len(PASS_COLOURS)])
         for k, one in enumerate(page.passes, 1)
         if one.benchmark is not None
     ]
@@ -219,6 +228,7 @@ def _runs(page: Passes) -> str:
             for run in page.passes[0].runs
         ]
     rows = []
+    names = _names(page) if page.holds is not None else None
     for k, one in enumerate(page.passes, 1):
         for i, run in enumerate(one.runs, 1):
             heading = None if run.heading_error is None else math.degrees(run.heading_error)
@@ -232,7 +242,7 @@ def _runs(page: Passes) -> str:
                 _num(heading, ".3f"),
             ]
             if many:
-                row.insert(0, str(k))
+                row.insert(0, str(k) if names is None else names[k - 1])
             if predicted:
                 after = predicted[i - 1]
                 row += (
@@ -249,85 +259,9 @@ def _runs(page: Passes) -> str:
     return _table(head, rows, wrap={head.index("run")}) + note
 
 
-def estimate_section(one: CalibrationResult) -> str:
-    """The estimates of one calibration with their 95 % intervals, and its correction."""
-    cal = one.calibration
-    est = cal.estimate
-    se = est.standard_errors
-    rows = []
-    names = [
-        ("E_d", "", "D_R / D_L"),
-        ("E_b", "", "b_actual / b_nominal"),
-        ("E_s", "", "D_avg / D_active"),
-        ("alpha", ANGLE_UNIT, "Type A error per turn; > 0: turns too little"),
-        ("beta", ANGLE_UNIT, "Type B error per leg; > 0: legs curve left"),
-    ]
-    for name, unit, meaning in names:
-        value = getattr(est, name)
-        if value is None or (not one.nominal and name in ("E_b", "alpha")):
-            continue
-        interval = est.interval(name)
-        low, high = (None, None) if interval is None else interval
-        fmt = ".4f" if unit else ".6f"
-        rows.append(
-            [
-                f"{name} [{unit}]" if unit else name,
-                *(
-                    _num(None if v is None else to_shown(v, unit), fmt)
-                    for v in (value, se.get(name), low, high)
-                ),
-                meaning,
-            ]
-        )
-    rows += _absolute_rows(est)
-    table = _table(["", "estimate", "standard error", "95 % low", "95 % high", ""], rows, {5})
-    if not one.nominal:  # absolute figures only: no correction of a nominal
-        return f"<p>Method: <code>{escape(est.method)}</code></p>\n{table}"
-    active = cal.active
-    correction = [
-        ["c_L", f"{active.c_left:.6f}", f"{cal.new_c_left:.6f}"],
-        ["c_R", f"{active.c_right:.6f}", f"{cal.new_c_right:.6f}"],
-        [
-            "wheel_separation_multiplier",
-            f"{active.separation_multiplier:.6f}",
-            f"{cal.new_separation_multiplier:.6f}",
-        ],
-        ["wheelbase [m]", f"{active.effective_wheelbase:.6f}", f"{cal.wheelbase_corrected:.6f}"],
-    ]
-    return (
-        f"<p>Method: <code>{escape(est.method)}</code></p>\n{table}"
-        "<p>Correction, composed with the values active during the runs:</p>\n"
-        + _table(["", "active", "new"], correction)
-    )
-
-
-def _absolute_rows(est: ErrorEstimate) -> list[list[str]]:
-    """The rows of the absolute figures an estimate carries, in their units shown."""
-    rows = []
-    from umbmark.calibration.result import ABSOLUTE_FIGURES
-
-    for name in ABSOLUTE_FIGURES:
-        if name not in est.components or name not in est.standard_errors:
-            continue
-        shown = component(name)
-        interval = est.interval(name)
-        low, high = (None, None) if interval is None else interval
-        values = (est.components[name], est.standard_errors[name], low, high)
-        rows.append(
-            [
-                shown.heading,
-                *("–" if v is None else shown.show(v) for v in values),
-                shown.meaning,
-            ]
-        )
-    return rows
-
-
 def _estimates(page: Passes) -> str:
-    passes = _passes(page)
-    if len(passes) == 1:
-        return estimate_section(passes[0][1])
-    return "".join(f"<h3>{escape(name)}</h3>\n{estimate_section(one)}" for name, one in passes)
+    coarse = None if page.holds is None else page.holds.coarse  # before the first pass
+    return estimates_section(_passes(page), coarse)
 
 
 def fit_messages(one: CalibrationResult) -> str:
@@ -392,13 +326,14 @@ def _overlay(page: Passes) -> str:
     from umbmark.outputs.html_verdict import NO_NOMINAL, WITHHELD
 
     n = len(page.passes)
-    which = "" if n == 1 else f" of the last pass (pass {n})"
+    last = _names(page)[-1]
+    which = "" if n == 1 else f" of the last pass ({last})"
     shown = page.last
     if page.holds is not None and page.holds.held is not None:
         shown = page.passes[page.holds.held - 1]
         which = f" the controller holds ({page.holds.label})"
     elif page.holds is not None:
-        which = f" of the last pass (pass {n}), not applied"
+        which = f" of the last pass ({last}), not applied"
     if shown.overlay_withheld or not shown.nominal:
         return WITHHELD if shown.nominal else NO_NOMINAL
     return (
@@ -502,6 +437,8 @@ def passes_html(page: Passes) -> str:
         if n == 1
         else f"umbmark: {n} UMBmark passes, {page.passes[0].source} to {page.last.source}"
     )
+    if page.holds is not None:  # a self-calibration's passes, by its names
+        title = f"umbmark self-calibration: {', '.join(_names(page))}"
     robot = page.passes[0].robot
     if robot:
         title = f"{robot}: {title}"

@@ -25,7 +25,7 @@ CSS = """
 """
 
 
-def verdict_box(verdict: Verdict, lead: str) -> str:
+def verdict_box(verdict: Verdict, lead: str, capitalize: bool = True) -> str:
     """The verdict in its coloured box, after ``lead``: its reasons, and what instead."""
     reasons = "".join(f"<li>{escape(reason)}</li>\n" for reason in verdict.reasons)
     listed = f"<ul>\n{reasons}</ul>\n" if reasons else ""
@@ -34,7 +34,8 @@ def verdict_box(verdict: Verdict, lead: str) -> str:
         listed += f'<p class="instead">{what}: {escape(verdict.instead)}.</p>\n'
     return (
         f'<div class="apply {verdict.level}" id="apply-verdict" data-level="{verdict.level}">'
-        f'<p class="big">{escape(lead)}{escape(verdict.words.capitalize())}</p>\n'
+        f'<p class="big">{escape(lead)}'
+        f"{escape(verdict.words.capitalize() if capitalize else verdict.words)}</p>\n"
         f"{listed}</div>\n"
     )
 
@@ -55,20 +56,20 @@ def verdict_section(page: Passes) -> str:
 
 
 def _named(k: int, labels: tuple[str, ...]) -> str:
-    """``Pass 2``, or ``Pass 3 (verification)`` where the pass has a name of its own."""
+    """The pass's name as the terminal says it, capitalized: ``Pass 2``, ``Verification``."""
     label = labels[k - 1]
-    return f"Pass {k}" if label == f"pass {k}" else f"Pass {k} ({label})"
+    return label[:1].upper() + label[1:]
 
 
 def _holds_section(page: Passes, holds: Holds) -> str:
     said = f'<p class="big" id="holds" data-pass="{holds.held or ""}">{escape(holds.words())}</p>\n'
     # the pass it holds; with none applied, the last pass's correction, to apply by hand
     shown = holds.held or len(page.passes)
-    applied = "applied" if holds.held is not None else "not applied"
-    box = verdict_box(page.passes[shown - 1].verdict, f"{_named(shown, holds.labels)}, {applied}: ")
+    lead = f"{_named(shown, holds.labels)}, {holds.applied_words(shown)}; its verdict: "
+    box = verdict_box(page.passes[shown - 1].verdict, lead, capitalize=False)
     lines = "".join(
         f"<li>{escape(_named(k, holds.labels))}: {escape(one.verdict.words)}; "
-        f"{'applied' if holds.applied(k) else 'not applied'}</li>\n"
+        f"{holds.applied_words(k)}</li>\n"
         for k, one in enumerate(page.passes, 1)
         if k != shown
     )

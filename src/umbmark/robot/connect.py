@@ -24,7 +24,7 @@ def connect(
     seed: int | None = None,
     ros: RosOptions | None = None,
     room: bool = False,
-    corner_side: Literal["right", "left"] = "right",
+    corner_side: Literal["auto", "right", "left"] = "right",
 ) -> Robot:
     """The robot to calibrate.
 
@@ -57,7 +57,7 @@ def connect(
             laser = (ROOM_LASER.x, ROOM_LASER.y, ROOM_LASER.theta)
             return VirtualRobot(E_d, E_b, E_s, slip=slip, seed=seed, world=room_world(),
                                 laser_pose=laser)  # fmt: skip
-        world = corner_world(side=corner_side)
+        world = corner_world(side="left" if corner_side == "left" else "right")
         return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed, world=world)
     if backend == "ros1":
         from umbmark.robot.ros1 import Ros1Robot

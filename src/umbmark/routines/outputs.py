@@ -45,11 +45,13 @@ def write_outputs(
     page: Path | None,
     force: bool,
     controller: str | None = None,
+    command: str | None = None,
 ) -> list[Path]:
     """The page of all passes (their run logs in ``folders``) [``folder/report.html``]
     and, in ``folder``, the overlay of ``held``, the pass the controller holds; checked
     before the robot moved (:func:`check_outputs`). The page's overlay is keyed by
-    ``controller`` (None: the default) as ``held``'s is."""
+    ``controller`` (None: the default) as ``held``'s is; ``command``: the command line
+    that ran, for the page's provenance (None: made from Python)."""
     written: list[Path] = []
     if not folders:
         return written
@@ -59,7 +61,7 @@ def write_outputs(
             folders, {} if controller is None else {"controller": controller}
         )
         predicted = predict_after(found[0]) if len(found) == 1 else None
-        pages = Passes(passes=tuple(found), predicted=predicted, holds=holds)
+        pages = Passes(passes=tuple(found), predicted=predicted, holds=holds, command=command)
         written.append(write_passes_page(pages, page, force=force))
     if held is not None and folder is not None:
         written += held.write(yaml=folder / OVERLAY_FILE, force=force)

@@ -20,13 +20,19 @@ from pathlib import Path
 
 import numpy as np
 
+from umbmark.core.conventions import wrap_angle
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import wheel_travel_from_poses
-from umbmark.robot.base import DriveParams
+from umbmark.robot.base import DriveParams, Pose2D
 from umbmark.routines.corner import CornerFix
 from umbmark.routines.drive import DrivenRun
 from umbmark.sources.runlog.reader import LogMetadata
-from umbmark.sources.runlog.writer import clear_run_log, write_log_csv, write_metadata
+from umbmark.sources.runlog.writer import (
+    as_written,
+    clear_run_log,
+    write_log_csv,
+    write_metadata,
+)
 
 __all__ = [
     "OVERLAY_FILE",
@@ -35,6 +41,8 @@ __all__ = [
     "clear_selfcal",
     "pass_folder",
     "record_pass",
+    "return_error",
+    "return_error_words",
 ]
 
 #: The page of all passes a self-calibration writes into its folder.
@@ -103,6 +111,45 @@ def _samples(run: DrivenRun) -> np.ndarray:
     return odometry[keep]
 
 
+def _fixes(measured: MeasuredRun) -> tuple[Pose2D, Pose2D]:
+    """The start and end fixes as the run file holds them (:func:`as_written`), the end
+    heading unwrapped by the run's full turn (left for ccw)."""
+    start, end = measured.start.pose, measured.end.pose
+    turn = measured.run.direction.turn_sign * 2 * math.pi
+    end_heading = start.theta + turn + math.remainder(end.theta - start.theta, 2 * math.pi)
+    return (
+        Pose2D(*as_written(start.x, start.y, start.theta)),
+        Pose2D(*as_written(end.x, end.y, end_heading)),
+    )
+
+
+def return_error(measured: MeasuredRun) -> tuple[float, float, float]:
+    """The run's return error, Eq. 3.1 (absolute minus calculated): the end fix seen from
+    the start fix, less the odometry's end seen from its start (the first and last
+    readings the run log holds): ``eps_x``, ``eps_y`` [m] and ``eps_theta`` [rad], wrapped
+    into ``[-pi, pi)``. The fixes as the run file holds them: what ``calibrate`` reads
+    back from the run log, run by run."""
+    odometry = _samples(measured.run)
+    start, end = (Pose2D(*(float(v) for v in odometry[i, 1:4])) for i in (0, -1))
+    calculated = end.relative_to(start)
+    first, last = _fixes(measured)
+    absolute = last.relative_to(first)
+    return (
+        absolute.x - calculated.x,
+        absolute.y - calculated.y,
+        float(wrap_angle(absolute.theta - calculated.theta)),
+    )
+
+
+def return_error_words(error: tuple[float, float, float]) -> str:
+    """A return error as the terminal, the run file and the page show it: ``x -22.3 mm,
+    y -21.9 mm, +2.411 deg``."""
+    return (
+        f"x {error[0] * 1000:+.1f} mm, y {error[1] * 1000:+.1f} mm, "
+        f"{math.degrees(error[2]):+.3f} deg"
+    )
+
+
 #: The odometry stands still while it changes by less than this [m, rad].
 STILL = 1e-6
 
@@ -169,12 +216,10 @@ def record_pass(
         time = odometry[:, 0]
         truth = np.full((time.size, 3), math.nan)
         first, last = _still(odometry)
-        start, end = measured.start.pose, measured.end.pose
-        # The run turned one full turn (left for ccw): the fixes' headings, unwrapped so.
-        turn = run.direction.turn_sign * 2 * math.pi
-        end_heading = start.theta + turn + math.remainder(end.theta - start.theta, 2 * math.pi)
+        start, end = _fixes(measured)  # the end heading unwrapped by the run's full turn
         truth[:first] = (start.x, start.y, start.theta)
-        truth[last:] = (end.x, end.y, end_heading)
+        truth[last:] = (end.x, end.y, end.theta)
+        eps = return_error(measured)
         path = folder / f"run-{k:02d}-{run.direction.value}.csv"
         write_log_csv(
             path,
@@ -183,7 +228,9 @@ def record_pass(
             _wheel_angles(odometry, params),
             comment=(
                 f"{run.direction.value} run {k} of a self-calibration: odometry turned back "
-                f"into wheel angles; truth: corner fixes ({method}) where the robot stood"
+                f"into wheel angles; truth: corner fixes ({method}) where the robot stood\n"
+                f"return error (Eq. 3.1, the corner fixes against the odometry): "
+                f"{return_error_words(eps)}"
             ),
         )
         written.append(path)

@@ -18,7 +18,7 @@ from typing import Literal
 from umbmark.options.selfcal import APPLY, CORNER_SIDE, MAX_PASSES, MEASURE, RUNS, SQUARE_SIDE
 from umbmark.robot.base import ApplyMethod
 from umbmark.routines.drive import DriveLimits
-from umbmark.routines.measure import CornerSide, MeasureMethod
+from umbmark.routines.measure import CornerChoice, MeasureMethod
 
 __all__ = ["SQUARE_ONLY", "Routine", "SelfcalSetup"]
 
@@ -76,14 +76,18 @@ class SelfcalSetup:
         The folder of a self-calibration stopped for a controller restart: go on with its
         settings (the test's given here are not used), once the controller holds the
         parameters it stopped on (:mod:`umbmark.routines.resume`).
-    corner_side : {"right", "left"}
+    corner_side : {"auto", "right", "left"}
         Where the corner stands seen from the start: behind it and to its right or left
         (which wall each range sensor or tape mark faces; the first fix must find it
-        there, else nothing moves).
+        there, else nothing moves); ``auto``, the default: the side the first fix finds
+        it on (a check line says which; a tape fix takes the right).
     controller : str, optional
         The controller the corrections are for, with its namespace
         (``/robot1/diff_cont``): the overlays and the history are keyed by it [default:
         a ROS robot's own (``--controller``), else ``diff_drive_controller``, said so].
+    command : str, optional
+        The command line that runs it (``umbmark selfcal ...``), shown on the page
+        (None: "made from Python").
 
     Raises
     ------
@@ -106,8 +110,9 @@ class SelfcalSetup:
     coarse: bool = True
     force: bool = False
     resume: str | os.PathLike[str] | None = None
-    corner_side: CornerSide = CORNER_SIDE.default
+    corner_side: CornerChoice = CORNER_SIDE.default
     controller: str | None = None
+    command: str | None = None
 
     def __post_init__(self) -> None:
         for spec in (SQUARE_SIDE, RUNS, MAX_PASSES, MEASURE):

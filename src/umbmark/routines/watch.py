@@ -11,14 +11,13 @@
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from umbmark.core.conventions import Direction, wrap_angle
-from umbmark.robot.base import Pose2D
+from umbmark.core.conventions import Direction
+from umbmark.routines.record import return_error_words
 
 __all__ = ["Progress", "RunsLeft", "Stopped", "Watch", "stopped"]
 
@@ -108,19 +107,17 @@ class Watch:
         self._report()
 
     def run_measured(
-        self, label: str, k: int, direction: Direction, start: Pose2D, end: Pose2D
+        self, label: str, k: int, direction: Direction, error: tuple[float, float, float]
     ) -> None:
-        """A run ended and was measured: its return error (the end fix seen from the start
-        fix, ``start`` and ``end`` in the corner frame), and the runs left."""
-        rel = end.relative_to(start)
+        """A run ended and was measured: its return error (Eq. 3.1, ``eps_x``, ``eps_y``
+        [m], ``eps_theta`` [rad]: the corner fixes against the odometry,
+        :func:`umbmark.routines.record.return_error`), and the runs left."""
         self.done += 1
         self.planned = max(self.planned, self.done)
         number = (k - 1) % self.runs + 1
         self.say(
             f"{label}, run {k} of {2 * self.runs} ({direction.value} {number} of {self.runs}): "
-            f"ended "
-            f"x {rel.x * 1000:+.1f} mm, y {rel.y * 1000:+.1f} mm, "
-            f"{math.degrees(float(wrap_angle(rel.theta))):+.2f} deg from its start (by the fixes)"
+            f"return error {return_error_words(error)} (the corner fixes against the odometry)"
         )
         self._report()
 

@@ -18,6 +18,7 @@ from umbmark.core.errors import InputError
 from umbmark.sources.runlog.reader import FORMAT_NAME, LOG_COLUMNS, METADATA_FILE, LogMetadata
 
 __all__ = [
+    "as_written",
     "clear_run_log",
     "format_metadata",
     "run_file_name",
@@ -28,6 +29,19 @@ __all__ = [
 #: The run files of a whole run log written by umbmark: ``run-01.csv``, ``run-02.csv``, ...
 #: (``simulate --logs``), ``run-01-cw.csv``, ... (a self-calibration's pass).
 _RUN_FILE = re.compile(r"run-\d{2,}(-cw|-ccw)?\.csv")
+
+
+def _pose_cells(x: float, y: float, theta: float) -> list[str]:
+    """A ground-truth pose's cells as a run file holds them: ``x, y`` to the micrometre,
+    ``theta`` to 1e-8 rad."""
+    return [f"{x:.6f}", f"{y:.6f}", f"{theta:.8f}"]
+
+
+def as_written(x: float, y: float, theta: float) -> tuple[float, float, float]:
+    """A ground-truth pose as :func:`write_log_csv` writes it and a reader reads it back
+    [m, rad]: what a figure computed before writing must use to equal the reader's."""
+    a, b, c = (float(cell) for cell in _pose_cells(x, y, theta))
+    return a, b, c
 
 
 def run_file_name(k: int) -> str:
@@ -121,7 +135,7 @@ def write_log_csv(
         if pose is None or np.isnan(pose[i]).any():
             row += ["", "", ""]
         else:
-            row += [f"{pose[i, 0]:.6f}", f"{pose[i, 1]:.6f}", f"{pose[i, 2]:.8f}"]
+            row += _pose_cells(float(pose[i, 0]), float(pose[i, 1]), float(pose[i, 2]))
         w: Sequence[Any] = wheels[i]
         row += [str(int(v)) for v in w] if integer else [f"{float(v):.9f}" for v in w]
         writer.writerow(row)
