@@ -4,8 +4,10 @@ flags where a robot changed, the robots with no usable recording and why."""
 from __future__ import annotations
 
 from html.parser import HTMLParser
+from pathlib import Path
 
 import numpy as np
+import pytest
 
 from umbmark.fleets.outcome import RecordingOutcome
 from umbmark.fleets.page import fleet_page
@@ -43,3 +45,37 @@ def test_the_page_shows_every_robot_its_plots_and_its_flags():
     assert "blind/a.mcap: no laser &lt;b&gt;" in page  # escaped
     assert "umbmark fleet fleet/" in page
     assert page.count('class="changed"') == 1
+
+
+@pytest.mark.slow
+def test_the_page_in_headless_chromium(tmp_path: Path):
+    """The page as a browser shows it: no error, every plot drawn with its points, the
+    body never scrolling sideways (the wide table scrolls in its box), on a desk and a
+    phone."""
+    from test_report_command import Chromium
+
+    rng = np.random.default_rng(9)
+    outcomes = [
+        *daily_outcomes("steady", 12, rng),
+        *daily_outcomes("wheel", 12, rng, step_day=6, figure="E_d", jump=2e-3),
+    ]
+    page = tmp_path / "fleet.html"
+    page.write_text(fleet_page(summarize(outcomes)), encoding="utf-8")
+    browser = Chromium(tmp_path / "profile")
+    try:
+        for width, mobile in ((1200, False), (390, True)):
+            browser.open(page, width, mobile=mobile)
+            assert browser.errors() == []
+            plots = browser.evaluate(
+                "[...document.querySelectorAll('svg')].map(s => {const b = "
+                "s.getBoundingClientRect(); return [b.width, b.height, "
+                "s.querySelectorAll('circle').length]})"
+            )
+            assert len(plots) == 12
+            assert all(w > 100 and h > 40 and n == 12 for w, h, n in plots), plots
+            overflow = "document.documentElement.scrollWidth - document.documentElement.clientWidth"
+            assert browser.evaluate(overflow) <= 0, width
+            flagged = browser.evaluate("document.querySelectorAll('tr.changed').length")
+            assert flagged == 1
+    finally:
+        browser.close()
