@@ -16,11 +16,7 @@ from umbmark.routines.clearance import path_blocked, scan_points
 from umbmark.routines.drive import DriveLimits
 from umbmark.routines.measure import Measure
 
-__all__ = ["ROBOT_RADIUS", "free_floor", "preflight", "square_paths"]
-
-#: Room kept around the squares' lines for the robot's body [m] (the anywhere pattern's
-#: floor check).
-ROBOT_RADIUS = 0.3
+__all__ = ["free_floor", "preflight", "square_paths"]
 
 
 def square_paths(side: float) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
