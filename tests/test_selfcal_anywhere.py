@@ -245,21 +245,28 @@ def test_refused_with_something_on_the_patterns_floor() -> None:
 
 
 def test_an_obstacle_that_appears_stops_the_robot() -> None:
-    """A person steps in front of the robot while it drives forward: a safety stop, a
-    zero velocity last."""
+    """A person steps in front of the robot while it drives forward (legs of 6 cm radius
+    at x = 0.75 m, 0.2 m apart, their near side at 0.69 m, 0.09 m past the end of the
+    0.6 m straight: within the 0.3 m margin, so on its path): a safety stop, a zero
+    velocity last. Braking at the acceleration limit (0.3 m/s^2) it comes to rest at least
+    the margin from the legs (less the laser's 1 cm noise) and at most margin + v t + 3
+    cm (v = 0.2 m/s, t = 0.4 s)."""
     from umbmark.routines.drive import SafetyError
 
-    robot = _robot()
+    robot = _robot(acceleration=0.3)
     people = np.vstack([robot.world.circles, legs(0.75, -0.04)])  # ahead of the 0.6 m straight
 
     def step_in(label: str, k: int, direction: None, what: str) -> None:
         if what.startswith("straight +0.60"):
+            assert abs(robot.true_pose.x) < 0.005  # it starts at the start
             robot.world = replace(robot.world, circles=people)
 
-    with pytest.raises(SafetyError, match="an obstacle"):
+    with pytest.raises(SafetyError, match=r"an obstacle .* ahead on the robot's path"):
         umbmark.selfcal(robot, routine="anywhere", progress=step_in)
     assert robot.commands[-1][1:] == (0.0, 0.0)
-    assert robot.true_pose.x < 0.6
+    robot.wait(3.0)
+    gap = 0.69 - robot.true_pose.x
+    assert 0.3 - 0.01 <= gap <= 0.3 + 0.2 * 0.4 + 0.03, gap
 
 
 class _OdometryOnly(VirtualRobot):

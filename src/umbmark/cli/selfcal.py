@@ -7,6 +7,7 @@ import contextlib
 import shlex
 import sys
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,6 +22,7 @@ from umbmark.options.selfcal import (
     MAX_PASSES,
     MEASURE,
     OBSTACLE_MARGIN,
+    ROBOT_WIDTH,
     ROUTINE,
     RUNS,
     SQUARE_SIDE,
@@ -89,6 +91,7 @@ ROS = "ROS robots (--ros1, --ros2)"
         option("--turn-rate", section=DRIVING, type=float, default=0.8, show_default=True,
                help="Top turn rate on the spot [rad/s] (0.05 to 3)."),
         spec_option(OBSTACLE_MARGIN),
+        spec_option(ROBOT_WIDTH),
         option("--cmd-vel", section=ROS, default="",
                help="Velocity command topic, Twist or TwistStamped as the controller takes it "
                "[default: ROS 2 the one the controller subscribes, CONTROLLER/cmd_vel or "
@@ -181,6 +184,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     )
     options.pop("laser_mount")
     sim = {k: options.pop(k) for k in ("E_d", "E_b", "E_s", "slip", "seed")}
+    from umbmark.routines.clearance import robot_footprint
     from umbmark.routines.drive import DriveLimits
 
     limits = DriveLimits(
@@ -197,6 +201,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         corner_side=options["corner_side"],
         **sim,
     )
+    limits = replace(limits, footprint=robot_footprint(robot, options.pop("robot_width")))
     if options["out"] is None:  # the command's own folder; a new one beside an earlier run's
         options["out"] = fresh_folder(default_folder(options["robot"] or robot.name))
     ask = _ask_person if options["measure"] == "tape" else None

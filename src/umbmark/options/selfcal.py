@@ -19,6 +19,8 @@ __all__ = [
     "MEASURE",
     "OBSTACLE_MARGIN",
     "OBSTACLE_MARGIN_RANGE",
+    "ROBOT_WIDTH",
+    "ROBOT_WIDTH_RANGE",
     "ROUTINE",
     "ROUTINE_SECTION",
     "RUNS",
@@ -67,6 +69,23 @@ OBSTACLE_MARGIN = Spec(
     kind="number",
     default=0.3,
     unit="m",
+)
+#: The values ``--robot-width`` may take [m].
+ROBOT_WIDTH_RANGE = (0.1, 2.0)
+#: ``--robot-width`` of ``selfcal``: the footprint where the robot's description gives none.
+ROBOT_WIDTH = Spec(
+    "robot_width",
+    ("--robot-width",),
+    DRIVING,
+    f"The robot's width [m] ({ROBOT_WIDTH_RANGE[0]:g} to {ROBOT_WIDTH_RANGE[1]:g}; its "
+    "footprint taken as a square this wide around the axle centre): the band its path "
+    "sweeps, which the laser watches and the check before moving keeps free. Default: "
+    "the base link's collision (else visual) box or cylinder in the robot's description, "
+    "else 0.4 m.",
+    kind="number",
+    default=None,
+    unit="m",
+    bound=Bound("range", ROBOT_WIDTH_RANGE[1], ROBOT_WIDTH_RANGE[0]),
 )
 #: ``--corner-side`` of ``selfcal``: where the L-shaped corner stands, seen from the start.
 CORNER_SIDE = Spec(

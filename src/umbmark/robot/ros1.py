@@ -255,6 +255,14 @@ class Ros1Robot(RosRobot):
             values[name] = float(rospy.get_param(f"{ns}/{name}", 1.0))
         return DriveParams(**values)
 
+    def footprint(self) -> tuple[float, float, float] | None:
+        """The base link's outline in the ``robot_description`` parameter: length, width,
+        offset [m] (:func:`umbmark.robot.urdf.urdf_footprint`); None: none there."""
+        from umbmark.robot.urdf import urdf_footprint
+
+        text = self._rospy.get_param("robot_description", None)
+        return urdf_footprint(text, self.options.base_frame) if isinstance(text, str) else None
+
     def _urdf_geometry(self, ns: str) -> tuple[float, float]:
         """The wheel separation and radius from the ``robot_description`` parameter, with
         the controller's ``left_wheel``/``right_wheel`` joints, as the controller takes

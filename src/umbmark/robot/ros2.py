@@ -68,7 +68,7 @@ from umbmark.robot.ros_common import (
     write_params,
 )
 from umbmark.robot.ros_robot import RosRobot
-from umbmark.robot.urdf import static_mount, urdf_geometry, urdf_mount
+from umbmark.robot.urdf import static_mount, urdf_footprint, urdf_geometry, urdf_mount
 
 __all__ = ["Ros2Robot"]
 
@@ -349,6 +349,12 @@ class Ros2Robot(RosRobot):
         if self._use_sim and self._sim_time is not None:
             return self._sim_time
         return float(self._node.get_clock().now().nanoseconds) * 1e-9
+
+    def footprint(self) -> tuple[float, float, float] | None:
+        """The base link's outline in the URDF on ``/robot_description``: length, width,
+        offset [m] (:func:`umbmark.robot.urdf.urdf_footprint`); None: none there."""
+        text = self._description.wait(min(1.0, self.options.timeout))
+        return None if text is None else urdf_footprint(text, self.options.base_frame)
 
     def drive_params(self) -> DriveParams:
         """The controller's parameters (its ``get_parameters`` service); the wheel

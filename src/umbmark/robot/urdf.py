@@ -16,7 +16,7 @@ from umbmark.core.errors import InputError
 from umbmark.robot.base import Pose2D
 from umbmark.robot.ros_common import Mount, lift_of
 
-__all__ = ["MAX_URDF", "static_mount", "urdf_geometry", "urdf_mount"]
+__all__ = ["MAX_URDF", "static_mount", "urdf_footprint", "urdf_geometry", "urdf_mount"]
 
 #: The longest robot description read [characters].
 MAX_URDF = 10_000_000
@@ -191,3 +191,43 @@ def _radius(root: Any, link_name: str) -> float | None:  # noqa: ANN401 (an Elem
                             f"the robot description's {link_name} radius is not a number"
                         ) from None
     return None
+
+
+def urdf_footprint(text: str, base: str = "base_link") -> tuple[float, float, float] | None:
+    """The robot's footprint from its description: the base link's collision (else
+    visual) box or cylinder seen from above, as ``length, width, offset`` [m] (the
+    outline's centre ``offset`` ahead of the base frame's origin; a cylinder: a square
+    its diameter across). None: the base link has no box or cylinder."""
+    _, root = _urdf_joints(text)
+    for link in root.iter("link"):
+        if link.get("name") != base:
+            continue
+        for kind in ("collision", "visual"):
+            for element in link.findall(kind):
+                found = _outline(element, base)
+                if found is not None:
+                    return found
+    return None
+
+
+def _outline(element: Any, base: str) -> tuple[float, float, float] | None:  # noqa: ANN401
+    """A collision or visual element's box or cylinder: length, width, offset [m]."""
+    origin = element.find("origin")
+    x, _, _ = _numbers(None if origin is None else origin.get("xyz"), f"{base} origin")
+    _, _, yaw = _numbers(None if origin is None else origin.get("rpy"), f"{base} origin")
+    box = element.find("geometry/box")
+    if box is not None:
+        sx, sy, _ = _numbers(box.get("size"), f"{base} box size")
+        c, s = abs(math.cos(yaw)), abs(math.sin(yaw))
+        length, width = c * sx + s * sy, s * sx + c * sy  # its extent in the base frame
+    else:
+        cylinder = element.find("geometry/cylinder")
+        if cylinder is None:
+            return None
+        try:
+            length = width = 2.0 * float(cylinder.get("radius", "nan"))
+        except ValueError:
+            raise InputError(f"the robot description's {base} radius is not a number") from None
+    if not (length > 0.0 and width > 0.0 and math.isfinite(length + width)):
+        raise InputError(f"the robot description's {base} outline is not a positive size")
+    return length, width, x

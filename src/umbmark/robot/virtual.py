@@ -98,6 +98,12 @@ class VirtualRobot:
     stated_laser_lift : (float, float, float), optional
         The height and tilt ``z, roll, pitch`` [m, rad, rad] the robot states with the
         mounting (None: only the planar mounting). The planar world ignores them.
+    acceleration, turn_acceleration : float
+        How fast the base changes its speed [m/s^2] and turn rate [rad/s^2] at most, as a
+        real base's motor controller does: a zero velocity brakes at this deceleration,
+        it is not obeyed at once (default: a stiff base, 5 m/s^2 being the largest
+        ``--acceleration``; give the acceleration limit to brake as the obstacle stop's
+        formula assumes).
     """
 
     name = "virtual robot"
@@ -121,6 +127,8 @@ class VirtualRobot:
         laser_pose: tuple[float, float, float] | None = None,
         stated_laser_pose: tuple[float, float, float] | None = None,
         stated_laser_lift: tuple[float, float, float] | None = None,
+        acceleration: float = 5.0,
+        turn_acceleration: float = 20.0,
     ) -> None:
         _check_arguments(E_d, E_b, E_s, wheelbase, wheel_diameter, slip, command_timeout)
         nominal = WheelParams(
@@ -135,6 +143,14 @@ class VirtualRobot:
             raise InputError(f"period must be a positive time, got {period!r} s")
         self.period = float(period)
         self.command_timeout = float(command_timeout)
+        if not (acceleration > 0.0 and turn_acceleration > 0.0):
+            raise InputError(
+                f"acceleration {acceleration!r} m/s^2 and turn acceleration "
+                f"{turn_acceleration!r} rad/s^2 must be positive"
+            )
+        self.acceleration = float(acceleration)
+        self.turn_acceleration = float(turn_acceleration)
+        self._velocity = (0.0, 0.0)  # the base's true linear, angular velocity
         if world is None:
             from umbmark.robot.world import corner_world
 
@@ -281,6 +297,11 @@ class VirtualRobot:
         linear, angular, sent = self._command
         if self._time - sent > self.command_timeout:
             linear = angular = 0.0
+        was_linear, was_angular = self._velocity
+        step, turn_step = self.acceleration * dt, self.turn_acceleration * dt
+        linear = min(max(linear, was_linear - step), was_linear + step)
+        angular = min(max(angular, was_angular - turn_step), was_angular + turn_step)
+        self._velocity = (linear, angular)
         p = self._params
         separation = p.wheel_separation * p.wheel_separation_multiplier
         r_left = p.wheel_radius * p.left_wheel_radius_multiplier

@@ -285,21 +285,20 @@ def check_scene(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep:
             "one direction within the laser's range: move the robot, or use "
             f"{option('routine', 'umbmark')} with a corner"
         )
-    _free_floor(first)
+    _free_floor(first, limits)
     return first
 
 
-def _free_floor(scan: ScanSweep) -> None:
+def _free_floor(scan: ScanSweep, limits: DriveLimits) -> None:
     """Refuse a return of the laser on the pattern's floor: within :data:`PATTERN_REACH`
-    plus the robot's body (:data:`umbmark.routines.preflight.ROBOT_RADIUS`) of its centre."""
-    from umbmark.routines.preflight import ROBOT_RADIUS
-
+    plus the reach of the robot's footprint (:attr:`clearance.Footprint.reach`: the disc
+    it sweeps turning) of its centre; the watch then looks at the band of each move."""
     ranges = np.asarray(scan.ranges, dtype=np.float64)
     ok = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
     angles = scan.angles()[ok] + scan.mount.theta
     x = scan.mount.x + ranges[ok] * np.cos(angles)
     y = scan.mount.y + ranges[ok] * np.sin(angles)
-    reach = PATTERN_REACH + ROBOT_RADIUS
+    reach = PATTERN_REACH + limits.footprint.reach
     near = np.hypot(x, y) < reach
     if near.any():
         k = int(np.argmin(np.hypot(x[near], y[near])))

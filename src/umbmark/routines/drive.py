@@ -18,19 +18,20 @@ commanded one closely (:data:`DriveLimits.end_position`, :data:`DriveLimits.end_
 
 Safety comes first: a zero velocity is sent on any error or interruption and before any
 :class:`SafetyError` propagates: odometry older than ``stale_odometry``, a scan older than
-``stale_scan``, an obstacle in the scan ahead nearer than the stop distance at the speed
-driven (:meth:`DriveLimits.stop_distance`), the odometry jumping (a controller restarted
-under it), the robot's clock going back or jumping forward (``clock_jump``), the odometry
-leaving the square plus ``margin``, or a run taking more than ``time_factor`` times its
-expected time. Knows nothing of ROS: it drives a
-:class:`~umbmark.robot.base.Robot`.
+``stale_scan``, an obstacle on the robot's path (the band its footprint sweeps,
+:mod:`umbmark.routines.clearance`) nearer than the stop distance at the speed driven
+(:meth:`DriveLimits.stop_distance`) and than the end of the leg plus the margin, the
+odometry jumping (a controller restarted under it), the robot's clock going back or
+jumping forward (``clock_jump``), the odometry leaving the square plus ``margin``, or a
+run taking more than ``time_factor`` times its expected time. Knows nothing of ROS: it
+drives a :class:`~umbmark.robot.base.Robot`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -38,7 +39,8 @@ from umbmark.core.bounds import check_range
 from umbmark.core.conventions import Direction, wrap_angle
 from umbmark.core.errors import SafetyError, option
 from umbmark.options.selfcal import OBSTACLE_MARGIN_RANGE, STOP_LATENCY
-from umbmark.robot.base import Pose2D, Robot, ScanSweep, StampedPose
+from umbmark.robot.base import Pose2D, Robot, StampedPose
+from umbmark.routines.clearance import Footprint, arc_band, scan_points, straight_band
 
 __all__ = [
     "DriveLimits",
@@ -86,20 +88,23 @@ class DriveLimits:
         The odometry moving between two readings by more than this [m] beyond what the
         speed allows (or by more than ten times this in radians beyond the turn rate)
         stops the robot: a controller restarted under it (its odometry reset).
-    obstacle_margin, stop_latency, obstacle_half_angle : float
-        A scan return ahead (within ``obstacle_half_angle`` [rad] of the direction of
-        travel) nearer than the stop distance at the speed ``v`` driven
-        (:meth:`stop_distance`: ``v^2 / (2 acceleration) + v stop_latency +
-        obstacle_margin``) stops the robot. ``obstacle_margin`` [m] is what is left
-        between the robot's centre and the obstacle once stopped; ``stop_latency`` [s]
-        covers the look-ahead period, the scan's age and the zero velocity's way to the
-        wheels.
+    obstacle_margin, stop_latency : float
+        A scan return in the band the footprint sweeps on the rest of the leg (or arc)
+        nearer than the stop distance at the speed ``v`` driven (:meth:`stop_distance`:
+        ``v^2 / (2 acceleration) + v stop_latency + obstacle_margin``) and than the
+        leg's remaining length plus ``obstacle_margin`` stops the robot.
+        ``obstacle_margin`` [m] is what is left between the robot's centre and the
+        obstacle once stopped; ``stop_latency`` [s] covers the look-ahead period, the
+        scan's age and the zero velocity's way to the wheels.
     obstacle_period : float
         The scan ahead is looked at this often [s] on the legs.
     clock_jump : float
         The robot's clock (sim time where ``/clock`` runs) going backwards, or forward by
         more than this [s] between two control steps, stops the robot (a restarted or
         stalled simulation, a clock stepped under a running robot).
+    footprint : Footprint
+        The robot's outline: the band it sweeps is what the watch looks at
+        (:mod:`umbmark.routines.clearance`).
     closing_time : float
         Closing in, the speed (turn rate) is at most the remaining distance (angle) over
         this [s]: an approach with this time constant, which a command arriving a few
@@ -132,12 +137,12 @@ class DriveLimits:
     odometry_jump: float = 0.05
     obstacle_margin: float = 0.3
     stop_latency: float = STOP_LATENCY
-    obstacle_half_angle: float = math.radians(30.0)
     obstacle_period: float = 0.25
     clock_jump: float = 5.0
     margin: float = 0.5
     time_factor: float = 2.0
     closing_time: float = 0.2
+    footprint: Footprint = field(default_factory=Footprint)
 
     def __post_init__(self) -> None:
         bounds = {
@@ -309,11 +314,22 @@ class _Driver:
                 f"{dt:.2f} s: was the controller restarted (its odometry reset)?",
             )
 
-    def check_ahead(self, forward: bool, backward: bool = False) -> None:
-        """Stop for a scan return within the obstacle distance in the direction of travel
-        (ahead, or behind when driving ``backward``), and for a laser gone silent."""
+    def check_ahead(
+        self,
+        remaining: float,
+        backward: bool = False,
+        heading: float = 0.0,
+        radius: float | None = None,
+        left: bool = True,
+    ) -> None:
+        """Stop for a scan return in the band the robot sweeps (:mod:`clearance`) on the
+        rest of its leg (straight at ``heading`` [rad, base frame], or on an arc of
+        ``radius`` [m] whose centre is on the ``left``), driving ``backward`` or not, and
+        for a laser gone silent. A return in the band stops the robot when nearer than
+        the stop distance at the speed driven and than ``remaining`` [m] plus the
+        margin: one beyond where the robot stops anyway does not."""
         scan = self.robot.scan()
-        if scan is None or not forward:
+        if scan is None:
             return
         age = self.robot.now() - scan.time
         if age > self.limits.stale_scan:
@@ -322,14 +338,21 @@ class _Driver:
                 f"scan stale ({age:.2f} s old, limit {self.limits.stale_scan:g} s): the laser "
                 "went silent, and nothing watches for obstacles",
             )
-        distance = obstacle_ahead(scan, self.limits.obstacle_half_angle, backward)
-        limit = self.limits.stop_distance(self.linear)
+        points = scan_points(scan)
+        half = self.limits.footprint.half_width
+        if radius is None:
+            distance = straight_band(points, half, heading, backward)
+        else:
+            if backward:
+                points = points * np.array([-1.0, 1.0])
+            distance = arc_band(points, half, radius, left)
+        limit = min(self.limits.stop_distance(self.linear), remaining + self.limits.obstacle_margin)
         if distance < limit:
             where = "behind" if backward else "ahead"
             raise stop_safely(
                 self.robot,
-                f"an obstacle {distance:.2f} m {where} (stop distance {limit:.2f} m at "
-                f"{abs(self.linear):.2f} m/s)",
+                f"an obstacle {distance:.2f} m {where} on the robot's path (stop distance "
+                f"{limit:.2f} m at {abs(self.linear):.2f} m/s)",
             )
 
     def command(self, linear: float, angular: float) -> None:
@@ -357,7 +380,7 @@ class _Driver:
             if remaining <= lim.position_tolerance:
                 break
             if k % scan_every == 0:
-                self.check_ahead(True, backward)
+                self.check_ahead(remaining, backward, float(wrap_angle(start.theta - pose.theta)))
             k += 1
             brake = math.sqrt(2.0 * lim.acceleration * remaining)
             close = remaining / max(dt, lim.closing_time)
@@ -385,7 +408,8 @@ class _Driver:
             if abs(error) <= lim.heading_tolerance:
                 break
             if k % scan_every == 0:
-                self.check_ahead(True, backward)
+                # the centre: left when the heading turns left driving forward
+                self.check_ahead(remaining, backward, radius=radius, left=(error > 0) != backward)
             k += 1
             brake = math.sqrt(2.0 * lim.acceleration * remaining)
             close = remaining / max(dt, lim.closing_time)
@@ -451,23 +475,6 @@ class _Driver:
 #: The control loop with its safety checks, for moves other than the square (the
 #: self-calibration anywhere: :mod:`umbmark.routines.anywhere`).
 Driver = _Driver
-
-
-def obstacle_ahead(scan: ScanSweep, half_angle: float, backward: bool = False) -> float:
-    """The nearest return [m] within ``half_angle`` of the robot's forward direction (or
-    its backward one) from the robot's centre, the laser's mounting taken into account;
-    inf if none."""
-    ranges = np.asarray(scan.ranges, dtype=np.float64)
-    ok = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
-    if not ok.any():
-        return math.inf
-    angles = scan.angles()[ok] + scan.mount.theta
-    r = ranges[ok]
-    x = scan.mount.x + r * np.cos(angles)
-    y = scan.mount.y + r * np.sin(angles)
-    x = -x if backward else x
-    ahead = (x > 0.0) & (np.abs(np.arctan2(y, x)) <= half_angle)
-    return float(np.min(np.hypot(x[ahead], y[ahead]))) if ahead.any() else math.inf
 
 
 def drive_square(

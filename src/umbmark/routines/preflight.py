@@ -10,47 +10,82 @@ from collections.abc import Callable
 import numpy as np
 
 from umbmark.core.errors import InputError, option
+from umbmark.options.selfcal import SQUARE_SIDE_RANGE
 from umbmark.robot.base import Robot
+from umbmark.routines.clearance import path_blocked, scan_points
 from umbmark.routines.drive import DriveLimits
 from umbmark.routines.measure import Measure
 
-__all__ = ["ROBOT_RADIUS", "free_floor", "preflight"]
-
-#: Room kept around the squares' lines for the robot's body [m].
-ROBOT_RADIUS = 0.3
+__all__ = ["free_floor", "preflight", "square_paths"]
 
 
-def free_floor(robot: Robot, side: float) -> str:
-    """Whether the laser sees anything on the floor of the two squares (cw to the right,
-    ccw to the left, both along the robot's heading), widened by :data:`ROBOT_RADIUS`.
+def square_paths(side: float) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
+    """The two squares' vertices [m] in the robot's frame at the start, start first and
+    last: ccw (to the left), cw (to the right)."""
+    return (
+        [(0.0, 0.0), (side, 0.0), (side, side), (0.0, side), (0.0, 0.0)],
+        [(0.0, 0.0), (side, 0.0), (side, -side), (0.0, -side), (0.0, 0.0)],
+    )
+
+
+def _blocked(points: np.ndarray, side: float, limits: DriveLimits) -> np.ndarray:
+    found = np.zeros(len(points), dtype=bool)
+    for path in square_paths(side):
+        found |= path_blocked(points, path, limits.footprint, limits.obstacle_margin)
+    return found
+
+
+def _advice(points: np.ndarray, side: float, limits: DriveLimits) -> str:
+    """What to change so that the squares fit: the robot moved forward or sideways by
+    the least that clears the band, or the longest side that fits."""
+    ways = []
+    for name, (ux, uy) in (("forward", (1.0, 0.0)), ("to the left", (0.0, 1.0))):
+        for sign, label in ((1.0, name), (-1.0, "to the right" if uy else "")):
+            if not label:
+                continue
+            for step in np.arange(0.05, 2.0 + 1e-9, 0.05):
+                shift = np.array([sign * ux * step, sign * uy * step])
+                if not _blocked(points - shift, side, limits).any():
+                    ways.append(f"move the robot {step:.2f} m {label}")
+                    break
+    for shorter in np.arange(side - 0.1, SQUARE_SIDE_RANGE[0] - 1e-9, -0.1):
+        if not _blocked(points, float(shorter), limits).any():
+            ways.append(f"use {option('side_length', round(float(shorter), 1), 'm')}")
+            break
+    return "; or ".join(ways) if ways else "clear the floor, or place the robot elsewhere"
+
+
+def free_floor(robot: Robot, side: float, limits: DriveLimits | None = None) -> str:
+    """Whether the laser sees anything on the two squares' path (cw to the right, ccw to
+    the left, both along the robot's heading): the band the robot's footprint sweeps on
+    each leg and past its end by the obstacle margin, the disc it sweeps turning at each
+    corner, widened by the drift its errors allow (:func:`clearance.path_blocked`). What
+    passes here is not stopped for on the way by the watch, which looks at the same band.
 
     Raises
     ------
     InputError
-        Naming the nearest return in the way, in the robot's frame.
+        Naming the nearest return in the way, in the robot's frame, and what to change:
+        move the robot forward or sideways by how much, or a side that fits.
     """
+    limits = limits or DriveLimits()
     scan = robot.scan()
     if scan is None:
         return "no laser: the floor of the squares is not checked"
-    ranges = np.asarray(scan.ranges, dtype=np.float64)
-    ok = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
-    angles = scan.angles()[ok] + scan.mount.theta
-    x = scan.mount.x + ranges[ok] * np.cos(angles)
-    y = scan.mount.y + ranges[ok] * np.sin(angles)
-    r = ROBOT_RADIUS
-    inside = (x > -r) & (x < side + r) & (np.abs(y) < side + r)
-    # the squares' area only: the band around the four legs of each square
-    legs = (np.abs(y) < r) | (np.abs(x - side) < r) | (np.abs(np.abs(y) - side) < r) | (x < r)
-    blocked = inside & legs
+    points = scan_points(scan)
+    blocked = _blocked(points, side, limits)
     if blocked.any():
-        k = int(np.argmin(np.hypot(x[blocked], y[blocked])))
-        px, py = float(x[blocked][k]), float(y[blocked][k])
+        near = points[blocked]
+        k = int(np.argmin(np.hypot(near[:, 0], near[:, 1])))
+        px, py = float(near[k, 0]), float(near[k, 1])
+        fp = limits.footprint
         raise InputError(
             f"something stands on the squares' path at x = {px:.2f} m, y = {py:.2f} m of the "
-            f"robot ({int(blocked.sum())} laser returns within {r:g} m of the {side:g} m "
-            "squares): clear the floor, or place the robot elsewhere"
+            f"robot ({int(blocked.sum())} laser returns in the band a {fp.width:g} m wide robot "
+            f"sweeps on the {side:g} m squares, its turns and {limits.obstacle_margin:g} m "
+            f"past each leg's end): {_advice(points, side, limits)}"
         )
-    return f"the squares' path is clear as far as the laser sees ({int(ok.sum())} returns)"
+    return f"the squares' path is clear as far as the laser sees ({len(points)} returns)"
 
 
 def preflight(
@@ -97,7 +132,7 @@ def preflight(
         names = {"lidar": "laser scan", "ranges": "range readings", "truth": "ground truth"}
         raise InputError(f"{option('measure', how.method)}: the robot gives no {names[how.method]}")
     if how.method == "lidar":
-        lines.append(free_floor(robot, side))
+        lines.append(free_floor(robot, side, limits))
     apply_note = getattr(robot, "apply_note", None)  # a ROS 2 controller manager's way
     note = apply_note() if callable(apply_note) else None
     if isinstance(note, str):
@@ -111,7 +146,8 @@ def preflight(
         stop = limits.stop_distance(limits.speed)
         lines.append(
             f"the laser watches for obstacles: at {limits.speed:g} m/s the robot stops for "
-            f"one {stop:.2f} m ahead or nearer"
+            f"one {stop:.2f} m ahead or nearer on its path ({limits.footprint.width:g} m wide "
+            "plus room each side)"
         )
     return list(lines)
 
