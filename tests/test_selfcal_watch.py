@@ -69,7 +69,10 @@ def test_checks_runs_and_passes_are_said_as_they_happen_with_the_runs_left(tmp_p
     pass_1 = lines.index(next(line for line in lines if line.startswith("pass 1: E_max,syst")))
     assert runs[:4] == list(range(coarse + 1, pass_1))
     assert runs[4] == pass_1 + 1
-    assert lines[-1].startswith("verification: E_max,syst")
+    # the last: the verification, and then what the overlay is keyed by (no controller
+    # was named: the default)
+    assert lines[-2].startswith("verification: E_max,syst")
+    assert lines[-1].startswith("no controller named: keyed diff_drive_controller")
     # said while driving: the robot's clock went on between the lines
     times = [t for t, _ in said]
     assert times[runs[0]] > times[coarse]
