@@ -112,7 +112,8 @@ def diff_drive_config() -> types.SimpleNamespace:
 
 
 def urdf(separation: float, radius: float, laser_x: float) -> str:
-    """A robot description with the wheels ``separation`` apart and the laser."""
+    """A robot description with the wheels ``separation`` apart, the laser, and a base
+    0.45 m long, 0.38 m wide, its centre 5 cm behind the axle."""
     wheels = "".join(
         f"""
   <link name="{side}_wheel"><collision><geometry><cylinder radius="{radius}" length="0.04"/>
@@ -124,7 +125,8 @@ def urdf(separation: float, radius: float, laser_x: float) -> str:
         for side, y in (("left", separation / 2), ("right", -separation / 2))
     )
     return f"""<?xml version="1.0"?>
-<robot name="sim_robot"><link name="base_link"/>{wheels}
+<robot name="sim_robot"><link name="base_link"><collision><origin xyz="-0.05 0 0.1"/>
+  <geometry><box size="0.45 0.38 0.2"/></geometry></collision></link>{wheels}
   <link name="laser"/>
   <joint name="laser_joint" type="fixed"><parent link="base_link"/><child link="laser"/>
     <origin xyz="{laser_x} 0 0.2"/></joint>

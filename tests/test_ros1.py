@@ -349,13 +349,15 @@ def test_unknown_odometry_topic_is_one_line(graph: RosGraph, tmp_path: Path) -> 
 def test_geometry_only_in_the_urdf(tmp_path: Path) -> None:
     """A controller with no wheel_separation or wheel_radius on the parameter server takes
     them from the URDF (robot_description, its left_wheel/right_wheel joints): so does the
-    adapter. The node's URDF has the wheels 0.34 m apart, radius 0.075 m."""
+    adapter. The node's URDF has the wheels 0.34 m apart, radius 0.075 m, and its base a
+    collision box 0.45 x 0.38 m 5 cm behind the axle: the footprint."""
     g = RosGraph(tmp_path, "--urdf-geometry")
     try:
         seen = _probe(g, "read")
     finally:
         g.close()
     assert seen["params"][:2] == pytest.approx([0.34, 0.075])
+    assert seen["footprint"] == pytest.approx([0.45, 0.38, -0.05])
 
 
 @pytest.mark.slow
