@@ -32,6 +32,7 @@ import time
 import types
 from dataclasses import replace
 
+import numpy as np
 import rospy
 from dynamic_reconfigure.encoding import extract_params
 from dynamic_reconfigure.server import Server
@@ -45,7 +46,7 @@ from tf2_msgs.msg import TFMessage
 
 from umbmark.robot.base import Pose2D
 from umbmark.robot.virtual import VirtualRobot
-from umbmark.robot.world import Lidar, corner_world
+from umbmark.robot.world import LCorner, Lidar, World, corner_world
 
 #: ROS time at the simulation's start [s] (ROS time 0 means "no time yet").
 T0 = 1000.0
@@ -148,11 +149,15 @@ def _quaternion(yaw: float, roll: float = 0.0) -> tuple[float, float, float, flo
 class SimNode:
     def __init__(self, args: argparse.Namespace) -> None:
         world = corner_world(side=args.corner_side)
+        if args.tight_corner:  # walls 0.45 m behind, 0.4 m beside the 1 m cw square's far leg
+            corner = LCorner(vertex=(-0.45, -1.4), heading=0.0, x_length=3.0, y_length=3.4)
+            world = World.build(np.zeros((0, 4)), (), corner, lidar=world.lidar)
         self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
         world = replace(world, lidar=self.lidar)
         self.robot = VirtualRobot(
-            E_d=args.E_d, E_b=args.E_b, slip=args.slip, seed=args.seed, world=world
-        )
+            E_d=args.E_d, E_b=args.E_b, slip=args.slip, seed=args.seed, world=world,
+            acceleration=args.acceleration,
+        )  # fmt: skip
         self.upside_down = args.upside_down
         self.rate, self.scan_every = args.rate, args.scan_every
         self.lock = threading.Lock()
@@ -284,6 +289,10 @@ def main() -> None:
     parser.add_argument("--slip", type=float, default=0.0004)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--laser-x", type=float, default=0.1)
+    parser.add_argument("--tight-corner", action="store_true", help="issue 29's corner")
+    parser.add_argument(
+        "--acceleration", type=float, default=5.0, help="the base's braking [m/s^2]"
+    )
     parser.add_argument("--upside-down", action="store_true")
     parser.add_argument(
         "--corner-side", choices=("right", "left"), default="right", help="the corner's side"
