@@ -69,6 +69,7 @@ def read(robot: Ros1Robot) -> dict[str, Any]:
         "true": true,
         "ahead": float(np.median(ranges[np.isfinite(ranges)])),
         "params": _params(robot.drive_params()),
+        "footprint": robot.footprint(),
     }
 
 

@@ -34,6 +34,7 @@ import time
 import types
 from dataclasses import replace
 
+import numpy as np
 import rospy
 from dynamic_reconfigure.encoding import extract_params
 from dynamic_reconfigure.server import Server
@@ -47,7 +48,7 @@ from tf2_msgs.msg import TFMessage
 
 from umbmark.robot.base import Pose2D
 from umbmark.robot.virtual import VirtualRobot
-from umbmark.robot.world import Lidar, corner_world
+from umbmark.robot.world import LCorner, Lidar, World, corner_world
 
 #: ROS time at the simulation's start [s] (ROS time 0 means "no time yet").
 T0 = 1000.0
@@ -114,7 +115,8 @@ def diff_drive_config() -> types.SimpleNamespace:
 
 
 def urdf(separation: float, radius: float, laser_x: float) -> str:
-    """A robot description with the wheels ``separation`` apart and the laser."""
+    """A robot description with the wheels ``separation`` apart, the laser, and a base
+    0.45 m long, 0.38 m wide, its centre 5 cm behind the axle."""
     wheels = "".join(
         f"""
   <link name="{side}_wheel"><collision><geometry><cylinder radius="{radius}" length="0.04"/>
@@ -126,7 +128,8 @@ def urdf(separation: float, radius: float, laser_x: float) -> str:
         for side, y in (("left", separation / 2), ("right", -separation / 2))
     )
     return f"""<?xml version="1.0"?>
-<robot name="sim_robot"><link name="base_link"/>{wheels}
+<robot name="sim_robot"><link name="base_link"><collision><origin xyz="-0.05 0 0.1"/>
+  <geometry><box size="0.45 0.38 0.2"/></geometry></collision></link>{wheels}
   <link name="laser"/>
   <joint name="laser_joint" type="fixed"><parent link="base_link"/><child link="laser"/>
     <origin xyz="{laser_x} 0 0.2"/></joint>
@@ -148,11 +151,15 @@ def _quaternion(yaw: float, roll: float = 0.0) -> tuple[float, float, float, flo
 class SimNode:
     def __init__(self, args: argparse.Namespace) -> None:
         world = corner_world(side=args.corner_side)
+        if args.tight_corner:  # walls 0.45 m behind, 0.4 m beside the 1 m cw square's far leg
+            corner = LCorner(vertex=(-0.45, -1.4), heading=0.0, x_length=3.0, y_length=3.4)
+            world = World.build(np.zeros((0, 4)), (), corner, lidar=world.lidar)
         self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
         world = replace(world, lidar=self.lidar)
         self.robot = VirtualRobot(
-            E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed, world=world
-        )
+            E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed,
+            world=world, acceleration=args.acceleration,
+        )  # fmt: skip
         stated = args.stated_laser
         self.stated = (
             (args.laser_x, 0.0, 0.0) if stated is None else tuple(map(float, stated.split(",")))
@@ -290,6 +297,10 @@ def main() -> None:
     parser.add_argument("--slip", type=float, default=0.0004)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--laser-x", type=float, default=0.1)
+    parser.add_argument("--tight-corner", action="store_true", help="issue 29's corner")
+    parser.add_argument(
+        "--acceleration", type=float, default=5.0, help="the base's braking [m/s^2]"
+    )
     parser.add_argument("--upside-down", action="store_true")
     parser.add_argument(
         "--stated-laser", default=None,

@@ -185,6 +185,24 @@ def test_selfcal_end_to_end_over_ros1(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+def test_selfcal_in_a_tight_corner_over_ros1(tmp_path: Path) -> None:
+    """Issue 29: walls 0.45 m behind the start and 0.4 m beside the 1 m cw square's far
+    leg, the robot braking at 0.3 m/s^2 (the acceleration limit): the preflight passes and
+    every run is driven, cw and ccw, without a safety stop (before: "an obstacle 0.42 m
+    ahead" on the first ccw run, exit 3)."""
+    g = RosGraph(tmp_path, "--tight-corner", "--acceleration", "0.3")
+    try:
+        done = _umbmark(g.env, "selfcal", "--ros1", "--runs", "2", "-L", "1", "--max-passes",
+                        "1", "--no-verify", "--out", str(tmp_path / "out"), "--json")  # fmt: skip
+    finally:
+        g.close()
+    assert done.returncode == 0, done.stderr
+    assert "the squares' path is clear" in done.stderr
+    report = json.loads(done.stdout)
+    assert 0.10 < report["e_max_syst_before"] < 0.25
+
+
+@pytest.mark.slow
 def test_selfcal_anywhere_over_ros1(tmp_path: Path) -> None:
     """``umbmark selfcal --ros1 --routine anywhere`` against a fresh robot (E_d 1.004, E_b
     0.97, E_s 0.99, its laser 0.1 m ahead of the centre, in the corner's room, /tf_static
@@ -406,13 +424,15 @@ def test_unknown_odometry_topic_is_one_line(graph: RosGraph, tmp_path: Path) -> 
 def test_geometry_only_in_the_urdf(tmp_path: Path) -> None:
     """A controller with no wheel_separation or wheel_radius on the parameter server takes
     them from the URDF (robot_description, its left_wheel/right_wheel joints): so does the
-    adapter. The node's URDF has the wheels 0.34 m apart, radius 0.075 m."""
+    adapter. The node's URDF has the wheels 0.34 m apart, radius 0.075 m, and its base a
+    collision box 0.45 x 0.38 m 5 cm behind the axle: the footprint."""
     g = RosGraph(tmp_path, "--urdf-geometry")
     try:
         seen = _probe(g, "read")
     finally:
         g.close()
     assert seen["params"][:2] == pytest.approx([0.34, 0.075])
+    assert seen["footprint"] == pytest.approx([0.45, 0.38, -0.05])
 
 
 @pytest.mark.slow
