@@ -9,7 +9,8 @@ Dask cluster of 1 worker, then of 2 (separate processes). Printed side by side:
   (the speed-up of the second worker);
 - the peak memory of one process calibrating one recording
   (:func:`umbmark.fleets.outcome.calibrate_recording`, alone in a fresh process) against
-  the recording's length, and its growth per minute of recording;
+  the recording's length (2, 10 and 20 minutes): its growth per minute within one window
+  of sweeps (:data:`umbmark.scans.bag.WINDOW`, 10 minutes) and beyond it;
 - the worker-hours a fleet of 100 robots recording 8 hours a day needs, from the robot-
   hours per worker-hour measured on 1 worker (at the laser's rate and scene simulated
   here: 5 Hz sweeps of 360 beams).
@@ -76,7 +77,7 @@ def main() -> None:
         one, two = rates[1], rates[2]
         print(f"  speed-up of the second worker: {one[0] / two[0]:.2f}x")
         lengths = []
-        for minutes in (1.0, 2.0, 4.0):
+        for minutes in (2.0, 10.0, 20.0):  # 20 min: two of the 10-minute windows
             single = scratch / f"len{minutes:g}"
             umbmark.simulate_fleet(single, robots=1, days=1, minutes=minutes, seed=7)
             path = next(single.glob("robot01/*/drive"))
@@ -84,8 +85,10 @@ def main() -> None:
         print("peak memory of one process calibrating one recording:")
         for minutes, peak in lengths:
             print(f"  {minutes:4.1f} min: {peak:7.1f} MiB")
-        growth = (lengths[-1][1] - lengths[0][1]) / (lengths[-1][0] - lengths[0][0])
-        print(f"  growth: {growth:.2f} MiB per minute of recording")
+        within = (lengths[1][1] - lengths[0][1]) / (lengths[1][0] - lengths[0][0])
+        beyond = (lengths[2][1] - lengths[1][1]) / (lengths[2][0] - lengths[1][0])
+        print(f"  growth: {within:.2f} MiB per minute within one window of sweeps, "
+              f"{beyond:.2f} MiB per minute beyond it (the wheels and the intervals)")  # fmt: skip
         per_worker_hour = one[2] / one[0] * 3600.0  # robot-hours per worker-hour
         need = 100 * 8.0 / per_worker_hour
         print(f"100 robots x 8 h a day: {need:.1f} worker-hours a day at "

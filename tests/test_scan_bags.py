@@ -160,3 +160,31 @@ def test_wheels_from_the_controllers_odometry(drive, tmp_path: Path) -> None:  #
     )
     np.testing.assert_allclose(iv.phi_left, true_left * RADIUS_LEFT / 0.05, atol=2e-3)
     np.testing.assert_allclose(iv.phi_right, true_right * RADIUS_RIGHT / 0.05, atol=2e-3)
+
+
+@pytest.mark.slow
+def test_windows_give_the_intervals_of_a_whole_read(tmp_path: Path):
+    """A long recording's sweeps are read a window at a time (its memory that of one
+    window's sweeps): the intervals a whole read gives, less the few that straddle two
+    windows."""
+    import umbmark
+    from umbmark.scans.bag import scan_intervals_from_bag
+
+    umbmark.simulate_fleet(tmp_path / "f", robots=1, days=1, minutes=3.0, seed=5)
+    (path,) = (tmp_path / "f").glob("robot01/*/drive")
+    whole = scan_intervals_from_bag(path, "/scan", window=600.0)
+    parts = scan_intervals_from_bag(path, "/scan", window=45.0)  # five windows
+    assert len(whole.intervals) > 100
+    lost = len(whole.intervals) - len(parts.intervals)
+    assert 0 <= lost <= 5  # at most one interval across each boundary
+    assert 0 <= whole.tried - parts.tried <= 5  # tried or not, across a boundary
+    # The intervals kept in both are the same intervals, matched alike.
+    starts = whole.intervals.start_time
+    assert starts is not None
+    assert parts.intervals.start_time is not None
+    common = np.isin(starts, parts.intervals.start_time)
+    assert np.count_nonzero(common) == len(parts.intervals)
+    theirs = np.isin(parts.intervals.start_time, starts)
+    np.testing.assert_allclose(
+        parts.intervals.sensor_motion[theirs], whole.intervals.sensor_motion[common], atol=1e-9
+    )

@@ -14,9 +14,12 @@ import dataclasses
 import math
 from pathlib import Path
 
+import numpy as np
+
+from umbmark.core.errors import InputError
 from umbmark.core.messages import info
 from umbmark.model.motion_intervals import MotionIntervals
-from umbmark.model.scans import LaserMounting
+from umbmark.model.scans import LaserMounting, ScanSeries
 from umbmark.scans.intervals import (
     DEFAULT_OPTIONS,
     IntervalOptions,
@@ -26,9 +29,14 @@ from umbmark.scans.intervals import (
 )
 from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.bag.recording import read_recording
-from umbmark.sources.bag.scans import MAX_SCANS, read_scan_bag, scan_mounting
+from umbmark.sources.bag.scans import MAX_SCANS, bag_span, read_scan_bag, scan_mounting
 
-__all__ = ["intervals_from_bag", "scan_intervals_from_bag"]
+__all__ = ["WINDOW", "intervals_from_bag", "scan_intervals_from_bag"]
+
+#: A long recording's sweeps are read and matched this many seconds at a time, so that
+#: the memory it takes stays bounded whatever its length (the wheels, a few numbers a
+#: sample, are read whole).
+WINDOW = 600.0
 
 
 def scan_intervals_from_bag(
@@ -41,6 +49,7 @@ def scan_intervals_from_bag(
     min_period: float = 0.0,
     max_scans: int = MAX_SCANS,
     tf_mounting: bool = False,
+    window: float = WINDOW,
 ) -> IntervalReport:
     """The motion intervals of a bag and what was left out.
 
@@ -66,6 +75,10 @@ def scan_intervals_from_bag(
         sweeps' frame (:func:`~umbmark.sources.bag.scans.scan_mounting`), else the bag's
         robot description (:attr:`~umbmark.sources.bag.urdf.RobotDescription.mountings`),
         where either states one; a note in the report says so.
+    window : float
+        Read and match the sweeps this many seconds [s] of the recording at a time: a
+        recording longer than that takes the memory of one window's sweeps, not of all
+        (an interval across two windows is left out).
 
     Raises
     ------
@@ -76,14 +89,15 @@ def scan_intervals_from_bag(
         wheels or BagOptions(), truth_topic=None, tf_parent=None, tf_child=None, truth_model=None
     )
     wheel_series = read_recording(path, bag).wheels
-    scans = read_scan_bag(
-        path,
-        scan_topic,
-        header=bag.time_source == "header",
-        upside_down=upside_down,
-        min_period=min_period,
-        max_scans=max_scans,
-    )
+    windows = _windows(path, window)
+
+    def sweeps(span: tuple[int, int] | None) -> ScanSeries:
+        return read_scan_bag(
+            path, scan_topic, header=bag.time_source == "header", upside_down=upside_down,
+            min_period=min_period, max_scans=max_scans, window=span,
+        )  # fmt: skip
+
+    scans = sweeps(windows[0])
     geometry = bag.odom_geometry
     if options.guess is None and geometry is not None:
         guess = OdometryGuess(geometry.left_radius, geometry.right_radius, geometry.separation)
@@ -101,8 +115,41 @@ def scan_intervals_from_bag(
                 "deg (the first guess of the scan matching only)"
             ),
         )
-    report = match_intervals(scans, wheel_series, options)
+    reports = [match_intervals(scans, wheel_series, options)]
+    for span in windows[1:]:  # a long recording: one window's sweeps at a time
+        try:
+            more = sweeps(span)
+        except InputError:  # fewer than 2 sweeps in this window (the laser paused)
+            continue
+        reports.append(match_intervals(more, wheel_series, options))
+    report = _joined(reports)
     return dataclasses.replace(report, guess=options.guess, notes=notes, stated=mounted)
+
+
+def _windows(path: str | Path, window: float) -> list[tuple[int, int] | None]:
+    """The bag's time cut into windows of ``window`` seconds [ns]: one, None, for a bag
+    no longer than that."""
+    if not window > 0.0:
+        raise ValueError("a window must be a positive time")
+    first, last = bag_span(path)
+    step = int(window * 1e9)
+    if last - first <= step:
+        return [None]
+    return [(a, min(a + step, last + 1)) for a in range(first, last + 1, step)]
+
+
+def _joined(reports: list[IntervalReport]) -> IntervalReport:
+    """The reports of a recording's windows as one."""
+    if len(reports) == 1:
+        return reports[0]
+    kept = [r.intervals for r in reports if len(r.intervals)]
+    left: dict[str, int] = {}
+    for r in reports:
+        for why, n in r.left_out.items():
+            left[why] = left.get(why, 0) + n
+    intervals = MotionIntervals.concatenate(kept) if kept else reports[0].intervals
+    rms = np.concatenate([r.rms for r in reports])
+    return IntervalReport(intervals, left, rms)
 
 
 def _mounting(path: str | Path, frame: str, bag: BagOptions) -> LaserMounting | None:

@@ -207,23 +207,29 @@ def message_count(conns: Sequence[Connection]) -> int:
 
 
 def messages(
-    reader: AnyReader, conns: Sequence[Connection], topic: str, src: str
+    reader: AnyReader,
+    conns: Sequence[Connection],
+    topic: str,
+    src: str,
+    window: tuple[int, int] | None = None,
 ) -> Iterator[tuple[int, bytes]]:
-    """``(bag time [ns], raw message)`` of ``conns``; read errors become InputError.
+    """``(bag time [ns], raw message)`` of ``conns`` (within ``window``, bag times [ns] from
+    and before, if given); read errors become InputError.
 
     Inside a read that reports progress (:func:`umbmark.sources.progress.tracking`), the
     messages yielded are counted and reported every
     :data:`~umbmark.sources.progress.REPORT_EVERY` messages.
     """
     tracker = current_tracker()
+    start, stop = (None, None) if window is None else window
     if tracker is None:
-        yield from raw_messages(reader, conns, topic, src)
+        yield from raw_messages(reader, conns, topic, src, start, stop)
         return
     tracker.begin(topic, message_count(conns))
     every = max(1, tracker.every)
     pending = 0
     try:
-        for item in raw_messages(reader, conns, topic, src):
+        for item in raw_messages(reader, conns, topic, src, start, stop):
             yield item
             pending += 1
             if pending == every:
@@ -240,10 +246,12 @@ def raw_messages(
     topic: str,
     src: str,
     start: int | None = None,
+    stop: int | None = None,
 ) -> Iterator[tuple[int, bytes]]:
-    """``(bag time [ns], raw message)`` of ``conns`` (from ``start`` [ns] on, if given),
-    uncounted; read errors become InputError. The stream is closed when left early."""
-    stream = reader.messages(connections=conns, start=start)
+    """``(bag time [ns], raw message)`` of ``conns`` (from ``start`` [ns] on and before
+    ``stop``, if given), uncounted; read errors become InputError. The stream is closed
+    when left early."""
+    stream = reader.messages(connections=conns, start=start, stop=stop)
     try:
         while True:
             try:

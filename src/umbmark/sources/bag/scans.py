@@ -46,6 +46,7 @@ __all__ = [
     "MAX_BEAMS",
     "MAX_SCANS",
     "MAX_SWEEP",
+    "bag_span",
     "read_scan_bag",
     "read_scans",
     "scan_mounting",
@@ -68,8 +69,10 @@ def read_scan_bag(
     upside_down: bool | None = None,
     min_period: float = 0.0,
     max_scans: int = MAX_SCANS,
+    window: tuple[int, int] | None = None,
 ) -> ScanSeries:
-    """The sweeps of ``topic`` in the bag at ``path`` (:func:`read_scans`)."""
+    """The sweeps of ``topic`` in the bag at ``path`` (:func:`read_scans`), those received
+    within ``window`` (bag times [ns] from and before) where given."""
     src = str(path)
     with bag_reader.open_bag(Path(path), src) as reader:
         topics = bag_reader.topic_types(reader)
@@ -82,7 +85,15 @@ def read_scan_bag(
             upside_down=upside_down,
             min_period=min_period,
             max_scans=max_scans,
+            window=window,
         )
+
+
+def bag_span(path: str | Path) -> tuple[int, int]:
+    """The bag's first and last message times [ns]."""
+    src = str(path)
+    with bag_reader.open_bag(Path(path), src) as reader:
+        return int(reader.start_time), int(reader.end_time)
 
 
 def read_scans(
@@ -95,6 +106,7 @@ def read_scans(
     upside_down: bool | None = None,
     min_period: float = 0.0,
     max_scans: int = MAX_SCANS,
+    window: tuple[int, int] | None = None,
 ) -> ScanSeries:
     """The sweeps of ``topic`` from the open bag (the module's docstring).
 
@@ -113,6 +125,8 @@ def read_scans(
         Skip sweeps closer than this [s] to the last one kept.
     max_scans : int
         Most sweeps kept; more is an error.
+    window : (int, int), optional
+        Only the sweeps received from the first and before the second bag time [ns].
 
     Raises
     ------
@@ -130,7 +144,8 @@ def read_scans(
     stamps: list[int] = []
     rows: list[NDArray[np.float32]] = []
     last = -math.inf
-    for k, (bag_ns, raw) in enumerate(bag_reader.messages(reader, conns, topic, src)):
+    stream = bag_reader.messages(reader, conns, topic, src, window)
+    for k, (bag_ns, raw) in enumerate(stream):
         msg: LaserScan = bag_reader.deserialize(reader, raw, msgtype, topic, src)  # type: ignore[assignment]
         ranges = np.asarray(msg.ranges, dtype=np.float32)
         these = (
