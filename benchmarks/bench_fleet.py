@@ -68,7 +68,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         scratch = Path(tmp)
         folder = scratch / "fleet"
-        umbmark.simulate_fleet(folder, robots=args.robots, days=args.days, minutes=args.minutes)
+        umbmark.simulate_fleet(folder, fleet=args.robots, days=args.days, minutes=args.minutes)
         rates = {w: _fleet_rate(folder, w, scratch) for w in (1, 2)}
         print(f"fleet of {args.robots} robots x {args.days} days, {args.minutes:g} min each:")
         for w, (seconds, n, hours) in rates.items():
@@ -79,7 +79,7 @@ def main() -> None:
         lengths = []
         for minutes in (2.0, 10.0, 20.0):  # 20 min: two of the 10-minute windows
             single = scratch / f"len{minutes:g}"
-            umbmark.simulate_fleet(single, robots=1, days=1, minutes=minutes, seed=7)
+            umbmark.simulate_fleet(single, fleet=1, days=1, minutes=minutes, seed=7)
             path = next(single.glob("robot01/*/drive"))
             lengths.append((minutes, _peak_memory(str(path))))
         print("peak memory of one process calibrating one recording:")

@@ -170,7 +170,7 @@ def test_windows_give_the_intervals_of_a_whole_read(tmp_path: Path):
     import umbmark
     from umbmark.scans.bag import scan_intervals_from_bag
 
-    umbmark.simulate_fleet(tmp_path / "f", robots=1, days=1, minutes=3.0, seed=5)
+    umbmark.simulate_fleet(tmp_path / "f", fleet=1, days=1, minutes=3.0, seed=5)
     (path,) = (tmp_path / "f").glob("robot01/*/drive")
     whole = scan_intervals_from_bag(path, "/scan", window=600.0)
     parts = scan_intervals_from_bag(path, "/scan", window=45.0)  # five windows

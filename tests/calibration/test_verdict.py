@@ -256,7 +256,7 @@ def test_a_trajectory_fit_to_a_lost_truth_is_not_applied(lost_truth: Path, tmp_p
         "(--override-verdict writes them; --force only replaces files that exist)\n"
     ) in proc.stderr
     data = json.loads(json_out.read_text())
-    assert next(iter(data)) == "apply"
+    assert next(iter(data)) == "verdict"
     assert data["verdict"]["level"] == "do-not-apply"
     assert "ground truth" in data["verdict"]["instead"]
     # Why it matters: the fit's E_b lies on the other side of 1 than the robot's (1.02):

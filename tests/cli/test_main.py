@@ -162,7 +162,12 @@ def test_output_files_and_what_was_written(table, tmp_path):
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     assert json.loads(out.read_text()) == json.loads(proc.stdout)
-    assert proc.stderr == f"umbmark: wrote {out}\numbmark: wrote {overlay}\n"
+    # What was written, after what the overlay is keyed by (no controller named).
+    assert proc.stderr == (
+        "umbmark: no controller named: keyed diff_drive_controller; give --controller NAME "
+        "(with its namespace, e.g. /robot1/diff_cont) or --current-params with its "
+        f"parameter file\numbmark: wrote {out}\numbmark: wrote {overlay}\n"
+    )
     assert overlay.read_text().startswith("# Written by umbmark")
 
 
@@ -274,6 +279,7 @@ def _commands() -> list[tuple[str, click.Command, object]]:
         ("demo", cli.commands["demo"], umbmark.demo),
         ("example", cli.commands["example"], umbmark.example),
         ("plan", cli.commands["plan"], umbmark.plan),
+        ("fleet", cli.commands["fleet"], umbmark.fleet),
         ("table1", reproduce.commands["table1"], umbmark.reproduce_table1),
         ("fig4", reproduce.commands["fig4"], umbmark.reproduce_fig4),
     ]
@@ -286,6 +292,8 @@ def test_every_option_is_a_keyword_of_the_library_function(name, command, functi
     taken = keywords_of(function)  # **options of a TypedDict or a dataclass's fields too
     assert taken is not None, f"{name}: the library function takes any keyword"
     keywords = set(taken)
+    if name == "simulate":  # simulate --fleet N is umbmark.simulate_fleet(fleet=N, ...)
+        keywords |= set(keywords_of(umbmark.simulate_fleet) or ())
     for param in command.params:
         if param.name in _RENDERING or (name, param.name) in _CONVERTED:
             continue

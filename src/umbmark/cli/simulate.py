@@ -118,7 +118,7 @@ def _fleet(json_out: bool, fleet: dict[str, Any], options: dict[str, Any]) -> No
     storage = options.get("bag_storage") or "mcap"
     with progress_bar(f"simulating {fleet['fleet']} robots for {fleet['days']} days") as bar:
         report = simulate_fleet(
-            fleet["out"], robots=fleet["fleet"], days=fleet["days"], minutes=fleet["minutes"],
+            fleet["out"], fleet=fleet["fleet"], days=fleet["days"], minutes=fleet["minutes"],
             seed=options["seed"], bag_storage=storage, force=options["force"], progress=bar,
         )  # fmt: skip
     wrote([report.folder])

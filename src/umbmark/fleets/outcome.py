@@ -32,6 +32,7 @@ from typing import Any
 
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, ProblemError
+from umbmark.estimators.registry import SCAN_MATCHING, TRAJECTORY
 
 __all__ = [
     "FIGURES",
@@ -225,11 +226,11 @@ def _plan(info: Any, options: Mapping[str, Any]) -> tuple[str | None, dict[str, 
         reading.update(_keywords(inputs[0].options))
     if info.laser_scans and inputs:
         reading["scan_topic"] = info.laser_scans[0]
-        return "scan-matching", {**reading, **options}, ""
+        return SCAN_MATCHING.name, {**reading, **options}, ""
     truth = [c for c in info.truth if c.warning is None]
     if truth and inputs and info.independent:
         reading.update(_keywords(truth[0].options))
-        return "trajectory", {**reading, **options}, ""
+        return TRAJECTORY.name, {**reading, **options}, ""
     if not inputs:
         return None, {}, "no wheels or controller odometry found"
     return None, {}, "neither a laser scan nor an independent reference (motion capture)"
@@ -329,7 +330,7 @@ def _calibrate(path: Path, method: str, options: Mapping[str, Any]) -> Any:  # n
 
     wheelbase = options.get("wheelbase")
     reading = {k: v for k, v in options.items() if k != "wheelbase"}
-    fit = None if method == "scan-matching" else method
+    fit = None if method == SCAN_MATCHING.name else method
     return calibrate_sources([str(path)], ReadOptions.of(reading), method=fit, wheelbase=wheelbase)
 
 

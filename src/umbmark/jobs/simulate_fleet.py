@@ -145,9 +145,9 @@ def _truths(
 
 
 def simulate_fleet(
-    folder: str | os.PathLike[str],
+    out: str | os.PathLike[str] = "umbmark-fleet",
     *,
-    robots: int = 6,
+    fleet: int = 6,
     days: int = 8,
     minutes: float = 2.0,
     seed: int = 1,
@@ -160,9 +160,10 @@ def simulate_fleet(
 
     Parameters
     ----------
-    folder : path
-        New or empty (``force``: one holding an earlier fleet is written into).
-    robots, days : int
+    out : path
+        The folder to write into: new or empty (``force``: one holding an earlier fleet is
+        written into).
+    fleet, days : int
         How many robots, and days of one recording each.
     minutes : float
         Each recording's driving [min].
@@ -185,7 +186,7 @@ def simulate_fleet(
     from umbmark.core.bounds import check_int_option, check_range
     from umbmark.outputs.files import check_folder_output, check_new_folder
 
-    robots = check_int_option(option("fleet"), robots, 1, MAX_ROBOTS)
+    robots = check_int_option(option("fleet"), fleet, 1, MAX_ROBOTS)
     days = check_int_option(option("days"), days, 1, MAX_DAYS)
     check_range(option("minutes"), minutes, (0.2, 60.0), unit="min")
     if bag_storage not in ("mcap", "sqlite3", "ros1"):
@@ -194,7 +195,7 @@ def simulate_fleet(
         start = dt.date.fromisoformat(first_day)
     except ValueError:
         raise InputError(f"{option('first_day', repr(first_day))}: give YYYY-MM-DD") from None
-    target = Path(folder)
+    target = Path(out)
     check_folder_output(target)
     if not force:
         check_new_folder(target)
