@@ -22,7 +22,7 @@ from html import escape
 from typing import TYPE_CHECKING
 
 from umbmark.core.version import __version__
-from umbmark.outputs.html_parts import CSS, num, sentence, table
+from umbmark.outputs.html_parts import CSS, document, num, sentence, table
 
 if TYPE_CHECKING:
     from umbmark.calibration.result import CalibrationResult
@@ -252,14 +252,4 @@ def anywhere_html(page: AnywherePage) -> str:
         ("overlay", "ros2_control overlay", _overlay(page)),
         ("provenance", "Provenance", _provenance(page)),
     ]
-    body = "".join(
-        f'<section id="{key}">\n<h2>{escape(name)}</h2>\n{content}</section>\n'
-        for key, name, content in sections
-    )
-    return (
-        "<!DOCTYPE html>\n"
-        '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
-        '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
-        f"<title>{escape(title)}</title>\n<style>{CSS}{VERDICT_CSS}{MOUNTING_CSS}</style>\n</head>\n<body>\n"
-        f"<h1>{escape(title)}</h1>\n{body}</body>\n</html>\n"
-    )
+    return document(title, sections, f"{CSS}{VERDICT_CSS}{MOUNTING_CSS}")

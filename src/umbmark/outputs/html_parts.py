@@ -10,7 +10,7 @@ import math
 from collections.abc import Collection
 from html import escape
 
-__all__ = ["CSS", "num", "sentence", "table"]
+__all__ = ["CSS", "document", "num", "sentence", "table"]
 
 CSS = """
 :root { color-scheme: light; }
@@ -72,4 +72,20 @@ def table(head: list[str], rows: list[list[str]], wrap: Collection[int] = ()) ->
     return (
         f'<div class="scroll"><table>\n<thead><tr>{th}</tr></thead>\n'
         f"<tbody>\n{body}</tbody></table></div>\n"
+    )
+
+
+def document(title: str, sections: list[tuple[str, str, str]], css: str) -> str:
+    """A whole page: ``title``, then each section ``(id, heading, HTML content)`` under its
+    heading, with the style sheet ``css`` inline (no file beside it)."""
+    body = "".join(
+        f'<section id="{key}">\n<h2>{escape(name)}</h2>\n{content}</section>\n'
+        for key, name, content in sections
+    )
+    return (
+        "<!DOCTYPE html>\n"
+        '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
+        f"<title>{escape(title)}</title>\n<style>{css}</style>\n</head>\n<body>\n"
+        f"<h1>{escape(title)}</h1>\n{body}</body>\n</html>\n"
     )

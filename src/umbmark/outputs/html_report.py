@@ -22,6 +22,7 @@ from umbmark.outputs.components import component, to_shown
 from umbmark.outputs.html_estimates import MM as _MM
 from umbmark.outputs.html_estimates import estimates_section
 from umbmark.outputs.html_parts import CSS as _CSS
+from umbmark.outputs.html_parts import document
 from umbmark.outputs.html_parts import num as _num
 from umbmark.outputs.html_parts import table as _table
 from umbmark.returns.clusters import scatter_standing, sem_verdict
@@ -459,18 +460,7 @@ def passes_html(page: Passes) -> str:
         ("overlay", "ros2_control overlay", _overlay(page)),
         ("provenance", "Provenance", _provenance(page)),
     ]
-    body = "".join(
-        f'<section id="{key}">\n<h2>{escape(name)}</h2>\n{content}</section>\n'
-        for key, name, content in sections
-    )
-    return (
-        "<!DOCTYPE html>\n"
-        '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
-        '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
-        f"<title>{escape(title)}</title>\n<style>{_CSS}{CSS}{MOUNTING_CSS}</style>\n</head>\n"
-        "<body>\n"
-        f"<h1>{escape(title)}</h1>\n{body}</body>\n</html>\n"
-    )
+    return document(title, sections, f"{_CSS}{CSS}{MOUNTING_CSS}")
 
 
 def calibration_html(report: CalibrationResult) -> str:
