@@ -368,7 +368,39 @@ def commands(folder: Path) -> dict[str, Command]:
                 number_opt("--acceleration", real(0.1, 1.0)),
                 number_opt("--turn-rate", real(0.5, 1.5)),
                 number_opt("--obstacle-margin", real(0.05, 0.5)),
-                choice_opt("--corner-side", "right", "left", "behind"),
+                choice_opt("--corner-side", "auto", "right", "left", "behind"),
+                number_opt("--robot-width", real(0.2, 0.5)),
+            ],
+        ),
+        "simulate-fleet": Command(
+            [
+                "simulate",
+                "--fleet",
+                "1",
+                "--days",
+                "1",
+                "--minutes",
+                "0.2",
+                "--force",
+                "--out",
+                str(folder / "fleet"),
+            ],
+            [
+                number_opt("--fleet", whole(1, 2)),
+                number_opt("--days", whole(1, 2)),
+                number_opt("--minutes", real(0.2, 0.3)),
+            ],
+        ),
+        # An empty folder: every option is checked before the recordings are looked for
+        # (and no engine is started for none).
+        "fleet": Command(
+            ["fleet", str(folder), "--history", str(folder / "fleet.sqlite3")],
+            [
+                number_opt("--workers", whole(1, 64)),
+                number_opt("-b", real(0.01, 1.9), "--wheelbase"),
+                *reading,
+                *logged,
+                *factors,
             ],
         ),
         "fig4": Command(["reproduce", "fig4"], [number_opt("--leg-bend", real(-10.0, 10.0))]),
@@ -483,12 +515,14 @@ NAMES = [
     "history",
     "report",
     "selfcal",
+    "simulate-fleet",
+    "fleet",
 ]
 
 
 #: The commands whose examples take seconds each (a demo, a self-calibration, a study, the
 #: reproductions, a report page): fuzzed in the full run only.
-SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study", "table1", "report"}
+SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study", "table1", "report", "simulate-fleet"}
 
 
 @pytest.mark.parametrize(
