@@ -365,7 +365,7 @@ def test_the_controller_going_away_mid_run_stops_the_robot(tmp_path: Path) -> No
                 p.kill()
                 p.communicate()
     assert proc.returncode in (2, 3), err
-    lines = [line for line in err.strip().splitlines() if "error" in line]
+    lines = [line for line in err.strip().splitlines() if line.startswith("umbmark: error:")]
     assert len(lines) == 1, err
     assert any(
         words in lines[0] for words in ("ROS time stopped", "nobody subscribes", "odometry stale")

@@ -190,7 +190,7 @@ def test_a_failed_configure_stops_the_robot_and_drives_no_further_pass(
     finally:
         final = node.ended()
     assert done.returncode == 3, done.stderr[-3000:]
-    errors = [line for line in done.stderr.splitlines() if "error" in line]
+    errors = [line for line in done.stderr.splitlines() if line.startswith("umbmark: error:")]
     assert len(errors) == 1, done.stderr
     assert "failed to configure diff_drive_controller" in errors[0]
     assert "is unconfigured now" in errors[0]
