@@ -221,9 +221,12 @@ def fleet(
     found = find_recordings(sources, robot_from)
     store = History(history)
     tasks, skipped = [], 0
+    done_by_key: dict[str, set[str]] = {}  # one look into the history per set of options
     for task in _tasks(found, reading, per_robot):
-        ids, _ = done_recordings(store, options_key(task.options))
-        if identity(task.path) in ids:
+        key = options_key(task.options)
+        if key not in done_by_key:
+            done_by_key[key] = done_recordings(store, key)[0]
+        if identity(task.path) in done_by_key[key]:
             skipped += 1
         else:
             tasks.append(task)
