@@ -407,6 +407,7 @@ def test_robot_descriptions_are_read_within_bounds():
     from umbmark.sources.bag.urdf import MAX_URDF_CHARS, parse_robot_description
 
     described = parse_robot_description(TB3_URDF)
+    assert described.name == "turtlebot3_burger"  # its <robot name>
     assert (described.left_joints, described.right_joints) == (
         ("wheel_left_joint",),
         ("wheel_right_joint",),

@@ -66,3 +66,15 @@ def test_without_geometry_or_reference_it_is_left_out_or_failed(bag: Path, tmp_p
     assert not failed.calibrated
     assert failed.reason
     assert "broken.bag" in failed.reason
+
+
+@pytest.mark.slow
+def test_without_a_pattern_the_robot_is_named_by_its_description(tmp_path: Path):
+    """Topics without a namespace: the robot is the name its recorded robot description
+    gives (the simulated fleet names each robot's URDF)."""
+    import umbmark
+
+    umbmark.simulate_fleet(tmp_path / "f", fleet=2, days=1, minutes=0.5)
+    (path,) = (tmp_path / "f").glob("robot02/*/drive")
+    out = calibrate_recording(RecordingTask(str(path)))
+    assert out.robot == "robot02"

@@ -188,7 +188,8 @@ _NAMESPACE = re.compile(r"^/([^/]+)/")
 
 
 def _robot_of(info: Any, given: str | None) -> str:  # noqa: ANN401 (BagInfo)
-    """The robot: the pattern's, else the namespace most of the bag's topics share."""
+    """The robot: the pattern's, else the namespace most of the bag's topics share, else
+    the name in its robot description."""
     if given:
         return given
     names: dict[str, int] = {}
@@ -198,7 +199,8 @@ def _robot_of(info: Any, given: str | None) -> str:  # noqa: ANN401 (BagInfo)
             names[match[1]] = names.get(match[1], 0) + 1
     if names and max(names.values()) * 2 > len(info.topics):
         return max(names, key=lambda n: names[n])
-    return "unnamed"
+    described = "" if info.robot is None else str(getattr(info.robot, "name", ""))
+    return described or "unnamed"
 
 
 def _start(info: Any, day: dt.date | None) -> float | None:  # noqa: ANN401 (BagInfo)

@@ -274,5 +274,6 @@ def _record(
     write_bag(
         bag_target(path, None if storage == "ros1" else storage, force=force),
         session.wheels, session.odometry, session.truth, scans=sweeps, laser_pose=stated,
-        description=robot_urdf(NOMINAL[0], NOMINAL[1], stated), start_epoch=epoch + 60.0 * k,
+        description=robot_urdf(NOMINAL[0], NOMINAL[1], stated, name=f"robot{k + 1:02d}"),
+        start_epoch=epoch + 60.0 * k,
     )  # fmt: skip

@@ -82,6 +82,8 @@ class RobotDescription:
         The links fixed to the robot and their pose ``x, y, yaw`` [m, m, rad] in
         ``base_link`` or ``base_footprint`` (else the root link), of the link's frame
         right side up (its origin and x axis).
+    name : str
+        The robot's name (the URDF's ``<robot name>``; empty where it has none).
     """
 
     wheelbase: float
@@ -92,6 +94,7 @@ class RobotDescription:
     mountings: Mapping[str, tuple[float, float, float]] = field(
         default_factory=dict, repr=False, compare=False
     )
+    name: str = field(default="", compare=False)
 
     def describe(self) -> str:
         """``wheelbase 0.16 m and wheel diameter 0.066 m from /robot_description
@@ -249,7 +252,10 @@ def parse_robot_description(
         radii.append(None if link is None else _radius(link))
     known = [r for r in radii if r is not None]
     diameter = 2.0 * float(np.mean(known)) if len(known) == len(radii) else None
-    return RobotDescription(wheelbase, diameter, left, right, source, _mountings(joints, by_child))
+    return RobotDescription(
+        wheelbase, diameter, left, right, source, _mountings(joints, by_child),
+        str(root.get("name", ""))[:200],
+    )  # fmt: skip
 
 
 def _mountings(
@@ -430,12 +436,13 @@ def robot_urdf(
     laser_pose: tuple[float, float, float],
     joints: tuple[str, str] = ("left_wheel_joint", "right_wheel_joint"),
     laser_frame: str = "laser",
+    name: str = "umbmark_simulated",
 ) -> str:
     """A differential-drive robot's URDF, as a bag's ``/robot_description`` holds it: the
     wheels ``joints`` (left, right) ``wheelbase`` [m] apart with cylinders of
     ``wheel_diameter`` [m], and the laser ``laser_frame`` at ``laser_pose`` ``x, y, yaw``
     [m, m, rad] on ``base_link`` (the wheels and mounting :func:`parse_robot_description`
-    reads back)."""
+    reads back); the robot called ``name``."""
     half, radius = 0.5 * wheelbase, 0.5 * wheel_diameter
     x, y, yaw = laser_pose
     links = [name.removesuffix("_joint") + "_link" for name in joints]
@@ -447,7 +454,7 @@ def robot_urdf(
         for name, link, side in zip(joints, links, (1.0, -1.0), strict=True)
     )
     return (
-        '<?xml version="1.0"?>\n<robot name="umbmark_simulated">\n<link name="base_link"/>\n'
+        f'<?xml version="1.0"?>\n<robot name="{name}">\n<link name="base_link"/>\n'
         f"{wheels}"
         f'<joint name="{laser_frame}_joint" type="fixed"><parent link="base_link"/>'
         f'<child link="{laser_frame}"/><origin xyz="{x!r} {y!r} 0.2" rpy="0 0 {yaw!r}"/></joint>'
