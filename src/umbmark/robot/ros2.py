@@ -78,8 +78,8 @@ STAMPED, UNSTAMPED = "geometry_msgs/msg/TwistStamped", "geometry_msgs/msg/Twist"
 #: ``DEFAULT_COMMAND_TOPIC``, and Humble's and Iron's ``DEFAULT_COMMAND_UNSTAMPED_TOPIC``).
 VELOCITY_TOPICS = ("cmd_vel", "cmd_vel_unstamped")
 #: How long a twist subscriber that is not the controller's node is waited on, for the
-#: controller's own to be discovered too [s].
-DISCOVERY_GRACE = 1.0
+#: controller's own to be discovered too [s] (discovery on a loaded machine takes over 1 s).
+DISCOVERY_GRACE = 3.0
 
 
 def pick_velocity(
