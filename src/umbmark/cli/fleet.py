@@ -92,7 +92,8 @@ def _bar() -> Any:
 
 def _render(report: Any, out: Any) -> None:
     from umbmark.cli.render import row, table
-    from umbmark.fleets.summary import FIGURE_UNITS, Z95
+    from umbmark.fleets.outcome import FIGURES
+    from umbmark.fleets.summary import FIGURE_UNITS
 
     summary = report.summary
     out.print(
@@ -100,8 +101,7 @@ def _render(report: Any, out: Any) -> None:
         f"before (in {report.history}).",
         markup=False,
     )
-    names = [n for n in ("E_d", "E_b", "E_s", "laser_x", "laser_y", "laser_yaw")
-             if any(n in r.tracks for r in summary.robots)]  # fmt: skip
+    names = [n for n in FIGURES if any(n in r.tracks for r in summary.robots)]
     heads = [f"{FIGURE_UNITS[n][0]}{' [' + FIGURE_UNITS[n][2] + ']' if FIGURE_UNITS[n][2] else ''}"
              for n in names]  # fmt: skip
     grid = table("The fleet (latest, ± 95 %)", ["robot", "recordings", *heads, "changes"],
@@ -115,9 +115,7 @@ def _render(report: Any, out: Any) -> None:
             if track is None:
                 cells.append("-")
                 continue
-            _, factor, _, decimals = FIGURE_UNITS[name]
-            value, se = track.latest
-            cells.append(f"{value * factor:.{decimals}f} ± {Z95 * se * factor:.{decimals}f}")
+            cells.append(track.shown(unit=False))
         row(grid, robot.robot, str(robot.recordings), *cells, "; ".join(robot.flags) or "-")
     out.print(grid)
     for robot in summary.robots:

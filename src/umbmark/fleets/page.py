@@ -38,15 +38,6 @@ code{font-size:.92em}
 """
 
 
-def _shown(track: FigureTrack) -> str:
-    _, factor, unit, decimals = FIGURE_UNITS[track.name]
-    value, se = track.latest
-    return (
-        f"{value * factor:.{decimals}f} ± {Z95 * se * factor:.{decimals}f}"
-        f"{' ' + unit if unit else ''}"
-    )
-
-
 def _plot(track: FigureTrack) -> str:
     """A small SVG of the figure over time: each calibration with its 95 % interval, and
     the course found (steady, a step, a trend)."""
@@ -126,7 +117,7 @@ def _row(robot: RobotSummary, figures: list[str]) -> str:
         if track is None:
             cells.append("<td>-</td>")
             continue
-        cells.append(f'<td class="num">{escape(_shown(track))}{_plot(track)}</td>')
+        cells.append(f'<td class="num">{escape(track.shown())}{_plot(track)}</td>')
     flags = robot.flags
     said = (
         "<br>".join(f'<span class="flag">{escape(f)}</span>' for f in flags)

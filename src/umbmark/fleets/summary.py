@@ -67,6 +67,15 @@ class FigureTrack:
         mean of all its calibrations, the value after a step, the trend's line now)."""
         return self.change.value, self.change.se
 
+    def shown(self, unit: bool = True) -> str:
+        """The latest value and its 95 % interval in the shown unit (``1.002034 ±
+        0.000118``, ``100.18 ± 0.30 mm``; ``unit=False`` leaves the unit out, for a
+        column that names it)."""
+        _, factor, name, decimals = FIGURE_UNITS[self.name]
+        value, se = self.latest
+        said = f"{value * factor:.{decimals}f} ± {Z95 * se * factor:.{decimals}f}"
+        return f"{said} {name}" if unit and name else said
+
     def flag(self) -> str | None:
         """The change in words, or None when steady."""
         _, factor, unit, decimals = FIGURE_UNITS[self.name]

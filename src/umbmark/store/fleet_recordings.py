@@ -13,8 +13,10 @@ from __future__ import annotations
 import datetime as dt
 import hashlib
 import json
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Literal
 
 from umbmark.store.history import History
@@ -82,9 +84,6 @@ def options_key(options: Mapping[str, Any]) -> str:
 def identity(path: str) -> str:
     """A recording's path, size and modification time, as one text (a folder's: of its
     files): what tells a recording seen before without reading its bytes."""
-    import os
-    from pathlib import Path
-
     where = Path(path)
     files = sorted(p for p in where.rglob("*") if p.is_file()) if where.is_dir() else [where]
     stats = [(p.stat().st_size, p.stat().st_mtime_ns) for p in files]
