@@ -9,8 +9,9 @@ Dask cluster of 1 worker, then of 2 (separate processes). Printed side by side:
   (the speed-up of the second worker);
 - the peak memory of one process calibrating one recording
   (:func:`umbmark.fleets.outcome.calibrate_recording`, alone in a fresh process) against
-  the recording's length (2, 10 and 20 minutes): its growth per minute within one window
-  of sweeps (:data:`umbmark.scans.bag.WINDOW`, 10 minutes) and beyond it;
+  the recording's length (5, 20 and 60 minutes: one window of
+  :data:`umbmark.scans.bag.WINDOW`, 5 minutes, then 4 and 12 of them, read one at a
+  time): its growth per minute beyond the first window;
 - the worker-hours a fleet of 100 robots recording 8 hours a day needs, from the robot-
   hours per worker-hour measured on 1 worker (at the laser's rate and scene simulated
   here: 5 Hz sweeps of 360 beams).
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -29,6 +31,7 @@ import time
 from pathlib import Path
 
 import umbmark
+from umbmark.scans.bag import WINDOW
 
 _PEAK = """
 import json, resource, sys
@@ -77,18 +80,18 @@ def main() -> None:
         one, two = rates[1], rates[2]
         print(f"  speed-up of the second worker: {one[0] / two[0]:.2f}x")
         lengths = []
-        for minutes in (2.0, 10.0, 20.0):  # 20 min: two of the 10-minute windows
+        for minutes in (5.0, 20.0, 60.0):
             single = scratch / f"len{minutes:g}"
             umbmark.simulate_fleet(single, fleet=1, days=1, minutes=minutes, seed=7)
             path = next(single.glob("robot01/*/drive"))
             lengths.append((minutes, _peak_memory(str(path))))
+            shutil.rmtree(single)
         print("peak memory of one process calibrating one recording:")
         for minutes, peak in lengths:
             print(f"  {minutes:4.1f} min: {peak:7.1f} MiB")
-        within = (lengths[1][1] - lengths[0][1]) / (lengths[1][0] - lengths[0][0])
-        beyond = (lengths[2][1] - lengths[1][1]) / (lengths[2][0] - lengths[1][0])
-        print(f"  growth: {within:.2f} MiB per minute within one window of sweeps, "
-              f"{beyond:.2f} MiB per minute beyond it (the wheels and the intervals)")  # fmt: skip
+        beyond = (lengths[2][1] - lengths[0][1]) / (lengths[2][0] - lengths[0][0])
+        print(f"  growth beyond the first {WINDOW / 60:g}-minute window: {beyond:.3f} MiB per "
+              f"minute of recording ({beyond * 480:.0f} MiB more for 8 hours)")  # fmt: skip
         per_worker_hour = one[2] / one[0] * 3600.0  # robot-hours per worker-hour
         need = 100 * 8.0 / per_worker_hour
         print(f"100 robots x 8 h a day: {need:.1f} worker-hours a day at "

@@ -108,3 +108,30 @@ def test_an_existing_cluster_gives_the_local_results(recordings: Path, tmp_path:
 
     assert figures(remote) == figures(local)
     assert remote["drifted"] == local["drifted"] == ["wheel"]
+
+
+@pytest.mark.slow
+def test_a_robot_named_by_its_recording_gets_its_own_options(tmp_path: Path):
+    """Without a pattern the robots are named by their recordings' robot descriptions,
+    yet each gets its entry of --robot-options; a nightly run redoes a recording only
+    when its own robot's entry changed."""
+    fleet = tmp_path / "fleet"
+    umbmark.simulate_fleet(fleet, fleet=2, days=1, minutes=0.5, seed=3)
+    options, history = tmp_path / "robots.yaml", tmp_path / "h.sqlite3"
+
+    def run(entries: str) -> umbmark.FleetReport:
+        options.write_text(entries, encoding="utf-8")
+        return umbmark.fleet(fleet, robot_options=options, history=history, workers=1)
+
+    first = run("robot02:\n  scan_topic: /front/scan\n")
+    by = {o.robot: o for o in first.done}
+    assert set(by) == {"robot01", "robot02"}
+    assert by["robot01"].calibrated
+    assert not by["robot02"].calibrated
+    assert "/front/scan" in str(by["robot02"].reason)
+    again = run("robot02:\n  scan_topic: /front/scan\n")
+    assert (len(again.done), again.skipped) == (0, 2)
+    # robot02's entry changes (to its real topic): only its recording is done again.
+    fixed = run("robot02:\n  scan_topic: /scan\nrobot03:\n  scan_topic: /x\n")
+    assert ([o.robot for o in fixed.done], fixed.skipped) == (["robot02"], 1)
+    assert fixed.done[0].calibrated

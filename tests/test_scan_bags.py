@@ -164,8 +164,8 @@ def test_wheels_from_the_controllers_odometry(drive, tmp_path: Path) -> None:  #
 
 @pytest.mark.slow
 def test_windows_give_the_intervals_of_a_whole_read(tmp_path: Path):
-    """A long recording's sweeps are read a window at a time (its memory that of one
-    window's sweeps): the intervals a whole read gives, less the few that straddle two
+    """A long recording's sweeps and wheels are read a window at a time (its memory that
+    of one window): the intervals a whole read gives, less the few that straddle two
     windows."""
     import umbmark
     from umbmark.scans.bag import scan_intervals_from_bag
@@ -188,3 +188,9 @@ def test_windows_give_the_intervals_of_a_whole_read(tmp_path: Path):
     np.testing.assert_allclose(
         parts.intervals.sensor_motion[theirs], whole.intervals.sensor_motion[common], atol=1e-9
     )
+    # The wheels too are read a window at a time: the same rotation over each interval.
+    for name in ("phi_left", "phi_right"):
+        np.testing.assert_allclose(
+            getattr(parts.intervals, name)[theirs], getattr(whole.intervals, name)[common],
+            atol=1e-9,
+        )  # fmt: skip

@@ -78,3 +78,10 @@ def test_without_a_pattern_the_robot_is_named_by_its_description(tmp_path: Path)
     (path,) = (tmp_path / "f").glob("robot02/*/drive")
     out = calibrate_recording(RecordingTask(str(path)))
     assert out.robot == "robot02"
+    # A robot named only inside its recording gets its own options all the same.
+    own = {"robot02": {"scan_topic": "/front/scan"}, "robot01": {"scan_topic": "/scan"}}
+    moved = calibrate_recording(RecordingTask(str(path), per_robot=own))
+    assert (moved.robot, moved.calibrated) == ("robot02", False)
+    assert "/front/scan" in str(moved.reason)
+    others = calibrate_recording(RecordingTask(str(path), per_robot={"robot01": own["robot02"]}))
+    assert others.calibrated  # another robot's options are not its own

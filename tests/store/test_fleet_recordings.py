@@ -43,12 +43,12 @@ def test_recordings_are_known_again_by_identity_or_digest(tmp_path: Path):
     assert cal.inputs == [{"name": "a.mcap", "sha256": "d1"}]  # the digest, not read again
     record_recording(store, _row("b.mcap", "left out", "d2", key, 1.0), None)
     record_recording(store, _row("c.mcap", "failed", None, key, 3.0), None)
-    identities, digests = done_recordings(store, key)
-    assert identities == {"a.mcap|1|2", "b.mcap|1|2"}  # the failed one is tried again
-    assert digests == {"d1", "d2"}
-    assert done_recordings(store, options_key({})) == (set(), set())
+    # The failed one is tried again; the others are known with their key and robot.
+    assert done_recordings(store) == {"a.mcap|1|2": {key: "amr1"}, "b.mcap|1|2": {key: "amr1"}}
+    record_recording(store, _row("b.mcap", "left out", "d2", options_key({}), 2.0), None)
+    assert done_recordings(store)["b.mcap|1|2"] == {key: "amr1", options_key({}): "amr1"}
     rows = read_recordings(History(tmp_path / "h.sqlite3", read_only=True))
-    assert [r.path for r in rows] == ["b.mcap", "a.mcap", "c.mcap"]  # oldest first
+    assert [r.path for r in rows] == ["b.mcap", "a.mcap", "b.mcap", "c.mcap"]  # oldest first
     assert rows[1].calibration == 1
     # Tried again and calibrated: the latest row is the one read.
     record_recording(store, _row("c.mcap", "calibrated", "d3", key, 3.0), _calibration())

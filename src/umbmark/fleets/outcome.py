@@ -62,13 +62,23 @@ class RecordingTask:
         Its day from the path's pattern; None: from the recording's clock.
     options : mapping of str to object
         Reading options by keyword (as :func:`umbmark.calibrate` takes them), for every
-        recording of this robot.
+        recording.
+    per_robot : mapping of str to mapping
+        Robots' own reading options by robot name, which win over ``options`` for the
+        robot the recording turns out to be (:meth:`options_for`): for a robot named by
+        the pattern, its own entry; for one named only inside the recording, every entry.
     """
 
     path: str
     robot: str | None = None
     day: dt.date | None = None
     options: Mapping[str, Any] = field(default_factory=dict)
+    per_robot: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+
+    def options_for(self, robot: str) -> dict[str, Any]:
+        """The reading options of this recording once its robot is known: ``options``,
+        and over them the robot's own."""
+        return {**self.options, **self.per_robot.get(robot, {})}
 
 
 @dataclass(frozen=True)
@@ -279,7 +289,7 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
         return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
     robot = _robot_of(info, task.robot)
     start, hours = _start(info, task.day), info.duration / 3600.0
-    method, options, reason = _plan(info, task.options)
+    method, options, reason = _plan(info, task.options_for(robot))
     if method is None:
         return RecordingOutcome(task.path, robot, start, hours, digest, reason=reason)
     try:

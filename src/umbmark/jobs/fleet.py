@@ -134,10 +134,26 @@ def _tasks(
     common: Mapping[str, Any],
     per_robot: Mapping[str, Mapping[str, Any]],
 ) -> list[RecordingTask]:
-    return [
-        RecordingTask(f.path, f.robot, f.day, {**common, **(per_robot.get(f.robot or "", {}))})
-        for f in found
-    ]
+    """A task per recording: a robot the pattern names carries its own options only; one
+    to be named by its recording carries every robot's (it is known only when read)."""
+    tasks = []
+    for f in found:
+        own = per_robot if f.robot is None else {f.robot: per_robot.get(f.robot, {})}
+        tasks.append(RecordingTask(f.path, f.robot, f.day, common, own))
+    return tasks
+
+
+def _options_key(task: RecordingTask, robot: str) -> str:
+    """The key of the options ``task`` is read with as a recording of ``robot``."""
+    from umbmark.store.fleet_recordings import options_key
+
+    return options_key(task.options_for(robot))
+
+
+def _is_done(task: RecordingTask, seen: Mapping[str, str]) -> bool:
+    """Whether a recording already in the history (``seen``: its options keys and the
+    robot each found) was read with the options it would be read with now."""
+    return any(key == _options_key(task, task.robot or robot) for key, robot in seen.items())
 
 
 def fleet(
@@ -207,7 +223,7 @@ def fleet(
     from umbmark.outputs.files import OutputPlan
     from umbmark.runs.read_options import ReadOptions
     from umbmark.sources.robot_options import read_robot_options
-    from umbmark.store.fleet_recordings import done_recordings, identity, options_key
+    from umbmark.store.fleet_recordings import done_recordings, identity
     from umbmark.store.history import History
 
     FLEET["workers"].check(workers)
@@ -221,12 +237,9 @@ def fleet(
     found = find_recordings(sources, robot_from)
     store = History(history)
     tasks, skipped = [], 0
-    done_by_key: dict[str, set[str]] = {}  # one look into the history per set of options
+    seen = done_recordings(store)  # one look into the history
     for task in _tasks(found, reading, per_robot):
-        key = options_key(task.options)
-        if key not in done_by_key:
-            done_by_key[key] = done_recordings(store, key)[0]
-        if identity(task.path) in done_by_key[key]:
+        if _is_done(task, seen.get(identity(task.path), {})):
             skipped += 1
         else:
             tasks.append(task)
@@ -259,7 +272,7 @@ def _recorded(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> Rec
     known with another nominal geometry) is recorded as failed with why."""
     from dataclasses import replace
 
-    from umbmark.store.fleet_recordings import RecordingRow, identity, options_key, record_recording
+    from umbmark.store.fleet_recordings import RecordingRow, identity, record_recording
 
     calibration = _calibration(outcome) if outcome.calibrated else None
     try:
@@ -267,7 +280,7 @@ def _recorded(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> Rec
     except OSError:
         ident = ""
     row = RecordingRow(
-        outcome.robot, outcome.path, outcome.digest, ident, options_key(task.options),
+        outcome.robot, outcome.path, outcome.digest, ident, _options_key(task, outcome.robot),
         outcome.start, outcome.hours, outcome.status,  # type: ignore[arg-type]
         outcome.reason, outcome.to_dict(),
     )  # fmt: skip

@@ -42,8 +42,6 @@ WHEEL_STEP = -0.006
 KNOCK = (0.01, math.radians(3.0))
 #: The wearing robot's loss of ``E_s`` a day.
 WEAR_PER_DAY = 0.0008
-#: Most robots and days.
-MAX_ROBOTS, MAX_DAYS = 200, 365
 #: The fleet's nominal wheels: wheelbase, diameter [m].
 NOMINAL = (0.34, 0.15)
 #: The missions' speed [m/s] and the simulation's period [s].
@@ -183,12 +181,14 @@ def simulate_fleet(
         (without ``force``).
     """
     from umbmark.core.atomic import atomic_write_text
-    from umbmark.core.bounds import check_int_option, check_range
+    from umbmark.options.fleet import FLEET_SIMULATION
     from umbmark.outputs.files import check_folder_output, check_new_folder
 
-    robots = check_int_option(option("fleet"), fleet, 1, MAX_ROBOTS)
-    days = check_int_option(option("days"), days, 1, MAX_DAYS)
-    check_range(option("minutes"), minutes, (0.2, 60.0), unit="min")
+    if fleet is None:
+        raise InputError(f"{option('fleet')}: give how many robots")
+    for name, value in (("fleet", fleet), ("days", days), ("minutes", minutes)):
+        FLEET_SIMULATION[name].check(value)
+    robots, days = int(fleet), int(days)
     if bag_storage not in ("mcap", "sqlite3", "ros1"):
         raise InputError(f"{option('bag_storage', repr(bag_storage))}: use mcap, sqlite3 or ros1")
     try:

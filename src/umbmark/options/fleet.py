@@ -12,6 +12,7 @@ __all__ = [
     "ENGINE",
     "FLEET",
     "FLEET_OPTIONS",
+    "FLEET_SIMULATION",
     "FLEET_SIMULATION_OPTIONS",
     "MAX_WORKERS",
     "RECORDINGS",
@@ -125,3 +126,6 @@ FLEET_SIMULATION_OPTIONS: tuple[Spec, ...] = (
         default="umbmark-fleet",
     ),
 )
+
+#: The fleet simulation's options by keyword.
+FLEET_SIMULATION: dict[str, Spec] = {spec.name: spec for spec in FLEET_SIMULATION_OPTIONS}

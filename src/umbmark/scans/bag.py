@@ -19,7 +19,7 @@ import numpy as np
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info
 from umbmark.model.motion_intervals import MotionIntervals
-from umbmark.model.scans import LaserMounting, ScanSeries
+from umbmark.model.scans import LaserMounting
 from umbmark.scans.intervals import (
     DEFAULT_OPTIONS,
     IntervalOptions,
@@ -31,12 +31,14 @@ from umbmark.sources.bag.bag_options import BagOptions
 from umbmark.sources.bag.recording import read_recording
 from umbmark.sources.bag.scans import MAX_SCANS, bag_span, read_scan_bag, scan_mounting
 
-__all__ = ["WINDOW", "intervals_from_bag", "scan_intervals_from_bag"]
+__all__ = ["PAD", "WINDOW", "intervals_from_bag", "scan_intervals_from_bag"]
 
-#: A long recording's sweeps are read and matched this many seconds at a time, so that
-#: the memory it takes stays bounded whatever its length (the wheels, a few numbers a
-#: sample, are read whole).
-WINDOW = 600.0
+#: A long recording's sweeps and wheels are read and matched this many seconds at a time,
+#: so that the memory it takes stays bounded whatever its length.
+WINDOW = 300.0
+#: The wheels of a window are read this much longer each side [s]: the sweeps at its
+#: edges are matched to wheel samples around them (stamps lag the bag's clock a little).
+PAD = 5.0
 
 
 def scan_intervals_from_bag(
@@ -76,9 +78,10 @@ def scan_intervals_from_bag(
         robot description (:attr:`~umbmark.sources.bag.urdf.RobotDescription.mountings`),
         where either states one; a note in the report says so.
     window : float
-        Read and match the sweeps this many seconds [s] of the recording at a time: a
-        recording longer than that takes the memory of one window's sweeps, not of all
-        (an interval across two windows is left out).
+        Read and match the sweeps and the wheels this many seconds [s] of the recording
+        at a time: a recording longer than that takes the memory of one window, not of
+        all (an interval across two windows is left out; a window with fewer than two
+        sweeps or no wheel readings, a pause, is passed over).
 
     Raises
     ------
@@ -88,42 +91,60 @@ def scan_intervals_from_bag(
     bag = dataclasses.replace(
         wheels or BagOptions(), truth_topic=None, tf_parent=None, tf_child=None, truth_model=None
     )
-    wheel_series = read_recording(path, bag).wheels
-    windows = _windows(path, window)
-
-    def sweeps(span: tuple[int, int] | None) -> ScanSeries:
-        return read_scan_bag(
-            path, scan_topic, header=bag.time_source == "header", upside_down=upside_down,
-            min_period=min_period, max_scans=max_scans, window=span,
-        )  # fmt: skip
-
-    scans = sweeps(windows[0])
     geometry = bag.odom_geometry
     if options.guess is None and geometry is not None:
         guess = OdometryGuess(geometry.left_radius, geometry.right_radius, geometry.separation)
         options = dataclasses.replace(options, guess=guess)
+    windows = _windows(path, window)
     notes: tuple[str, ...] = ()
-    mounted = _mounting(path, scans.frame, bag) if tf_mounting and options.guess else None
-    if options.guess is not None and mounted is not None:
-        where, pose = mounted.source, (mounted.x, mounted.y, mounted.yaw)
-        guess = dataclasses.replace(options.guess, laser_pose=pose)
-        options = dataclasses.replace(options, guess=guess)
-        notes = (
-            info(
-                f"the laser's nominal mounting from {where}: {scans.frame} at x = "
-                f"{pose[0]:.4f} m, y = {pose[1]:.4f} m, yaw = {math.degrees(pose[2]):.2f} "
-                "deg (the first guess of the scan matching only)"
-            ),
-        )
-    reports = [match_intervals(scans, wheel_series, options)]
-    for span in windows[1:]:  # a long recording: one window's sweeps at a time
+    mounted: LaserMounting | None = None
+    reports: list[IntervalReport] = []
+    failed: InputError | None = None
+    for span in windows:  # a long recording: one window's sweeps and wheels at a time
         try:
-            more = sweeps(span)
-        except InputError:  # fewer than 2 sweeps in this window (the laser paused)
+            wheel_series = read_recording(path, bag, window=_padded(span)).wheels
+            scans = read_scan_bag(
+                path, scan_topic, header=bag.time_source == "header", upside_down=upside_down,
+                min_period=min_period, max_scans=max_scans, window=span,
+            )  # fmt: skip
+        except InputError as exc:  # a window with fewer than 2 sweeps or no wheels: a pause
+            if len(windows) == 1:
+                raise
+            failed = failed or exc
             continue
-        reports.append(match_intervals(more, wheel_series, options))
+        if not reports and tf_mounting and options.guess is not None:
+            mounted = _mounting(path, scans.frame, bag)
+            if mounted is not None:
+                options, notes = _guessed_mounting(options, mounted, scans.frame)
+        reports.append(match_intervals(scans, wheel_series, options))
+    if not reports:
+        assert failed is not None
+        raise failed
     report = _joined(reports)
     return dataclasses.replace(report, guess=options.guess, notes=notes, stated=mounted)
+
+
+def _guessed_mounting(
+    options: IntervalOptions, mounted: LaserMounting, frame: str
+) -> tuple[IntervalOptions, tuple[str, ...]]:
+    """The options with the stated mounting as the guess's laser pose, and the note."""
+    assert options.guess is not None
+    pose = (mounted.x, mounted.y, mounted.yaw)
+    guess = dataclasses.replace(options.guess, laser_pose=pose)
+    note = info(
+        f"the laser's nominal mounting from {mounted.source}: {frame} at x = "
+        f"{pose[0]:.4f} m, y = {pose[1]:.4f} m, yaw = {math.degrees(pose[2]):.2f} "
+        "deg (the first guess of the scan matching only)"
+    )
+    return dataclasses.replace(options, guess=guess), (note,)
+
+
+def _padded(span: tuple[int, int] | None) -> tuple[int, int] | None:
+    """A window of sweeps widened by :data:`PAD` each side: the wheels its sweeps need."""
+    if span is None:
+        return None
+    pad = int(PAD * 1e9)
+    return (max(0, span[0] - pad), span[1] + pad)
 
 
 def _windows(path: str | Path, window: float) -> list[tuple[int, int] | None]:

@@ -91,15 +91,19 @@ def identity(path: str) -> str:
     return f"{os.path.abspath(path)}|{size}|{newest}"
 
 
-def done_recordings(history: History, key: str) -> tuple[set[str], set[str]]:
-    """The identities and the digests of the recordings already calibrated or left out
-    with options ``key`` (a failed one is tried again)."""
+def done_recordings(history: History) -> dict[str, dict[str, str]]:
+    """The recordings already calibrated or left out (a failed one is tried again): by
+    identity (:func:`identity`), the options keys it was read with and the robot it was
+    found to be with each."""
     with history.transaction() as db:
         rows = db.execute(
-            "SELECT identity, digest FROM recordings WHERE options_key = ? AND status != 'failed'",
-            (key,),
+            "SELECT identity, options_key, robot FROM recordings WHERE status != 'failed'"
         ).fetchall()
-    return {str(r[0]) for r in rows if r[0]}, {str(r[1]) for r in rows if r[1]}
+    done: dict[str, dict[str, str]] = {}
+    for ident, key, robot in rows:
+        if ident:
+            done.setdefault(str(ident), {})[str(key)] = str(robot)
+    return done
 
 
 def record_recording(

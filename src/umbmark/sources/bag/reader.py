@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 from umbmark.core.errors import InputError
 from umbmark.sources.progress import current_tracker
@@ -112,8 +112,39 @@ def rosbags_requirement() -> str:
     return "rosbags"
 
 
+#: Topics published once and latched: read whole even through a window.
+LATCHED = ("/tf_static", "/robot_description")
+
+
+class _Windowed:
+    """An open reader whose messages are those of one time window: what a reader of the
+    whole bag gets, cut to the window, so that every reader in the package reads one
+    window of a long recording unchanged. Latched topics (:data:`LATCHED`: published once,
+    at the start) are read whole."""
+
+    def __init__(self, reader: AnyReader, window: tuple[int, int]) -> None:
+        self._reader = reader
+        self._window = window
+
+    def __getattr__(self, name: str) -> Any:  # noqa: ANN401 (the reader's own attributes)
+        return getattr(self._reader, name)
+
+    def messages(
+        self,
+        connections: Sequence[Connection] = (),
+        start: int | None = None,
+        stop: int | None = None,
+    ) -> Iterator[tuple[Connection, int, bytes]]:
+        if connections and all(c.topic in LATCHED for c in connections):
+            return self._reader.messages(connections=connections, start=start, stop=stop)
+        first, end = self._window
+        start = first if start is None else max(start, first)
+        stop = end if stop is None else min(stop, end)
+        return self._reader.messages(connections=connections, start=start, stop=stop)
+
+
 @contextmanager
-def open_bag(path: Path, src: str) -> Iterator[AnyReader]:
+def open_bag(path: Path, src: str, window: tuple[int, int] | None = None) -> Iterator[AnyReader]:
     """An open ``AnyReader``; every failure to open becomes an :class:`InputError`.
 
     Parameters
@@ -123,6 +154,10 @@ def open_bag(path: Path, src: str) -> Iterator[AnyReader]:
         ``metadata.yaml``.
     src : str
         The path as the user gave it, for error messages.
+    window : (int, int), optional
+        Bag times [ns], from and before: its messages are only those of this window
+        (:data:`LATCHED` topics whole), so that a long recording is read one window at a
+        time with every reader unchanged.
     """
     location = _bag_location(path, src)
     try:
@@ -141,7 +176,7 @@ def open_bag(path: Path, src: str) -> Iterator[AnyReader]:
             problem += " (a recording that was cut short needs `rosbag reindex` first)"
         raise InputError(problem, source=src) from None
     try:
-        yield reader
+        yield reader if window is None else cast("AnyReader", _Windowed(reader, window))
     finally:
         reader.close()
 

@@ -141,11 +141,17 @@ def read_bag(
 
 
 def read_recording(
-    path: str | Path, options: BagOptions, *, progress: Progress | None = None
+    path: str | Path,
+    options: BagOptions,
+    *,
+    progress: Progress | None = None,
+    window: tuple[int, int] | None = None,
 ) -> BagRead:
     """Read the wheel rotation, the ground truth if configured, and notes, from a bag.
 
-    The parameters and errors are those of :func:`read_bag`.
+    The parameters and errors are those of :func:`read_bag`; ``window`` (bag times [ns],
+    from and before) reads only that part of the recording
+    (:func:`~umbmark.sources.bag.reader.open_bag`).
     """
     src = str(path)
     check_options(options, src)
@@ -158,7 +164,7 @@ def read_recording(
         options.truth_topic, tf_truth, options.odom_topic, options.odom_tf, src
     )
     callback = progress if progress is not None else current_callback()
-    with bag_reader.open_bag(Path(path), src) as reader:
+    with bag_reader.open_bag(Path(path), src, window) as reader:
         topics = bag_reader.topic_types(reader)
         tracker = None
         if callback is not None:
