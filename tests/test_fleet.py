@@ -8,6 +8,7 @@ results as the local run."""
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import sqlite3
 from pathlib import Path
@@ -135,3 +136,23 @@ def test_a_robot_named_by_its_recording_gets_its_own_options(tmp_path: Path):
     fixed = run("robot02:\n  scan_topic: /scan\nrobot03:\n  scan_topic: /x\n")
     assert ([o.robot for o in fixed.done], fixed.skipped) == (["robot02"], 1)
     assert fixed.done[0].calibrated
+
+
+@pytest.mark.slow
+def test_run_logs_are_recordings_of_a_fleet(tmp_path: Path):
+    """umbmark's own run logs (wheels and motion capture by format) are calibrated by a
+    trajectory fit: the simulated truth recovered, the day from the pattern."""
+    root = tmp_path / "labs"
+    for d, e_d in enumerate((1.003, 1.003, 1.003)):
+        umbmark.simulate(E_d=e_d, E_b=1.01, seed=40 + d, dt=0.05, side_length=1.0, runs=2,
+                         logs=str(root / "amr9" / _day(d) / "log"))  # fmt: skip
+    report = umbmark.fleet(root, robot_from="{robot}/{date}/log", history=tmp_path / "h.sqlite3",
+                           workers=1)  # fmt: skip
+    assert [(o.robot, o.method) for o in report.done] == [("amr9", "trajectory")] * 3
+    assert sorted(o.start for o in report.done) == [
+        dt.datetime.fromisoformat(_day(d) + "T00:00:00+00:00").timestamp() for d in range(3)
+    ]
+    for o in report.done:
+        value, se = o.figures["E_d"]
+        assert value == pytest.approx(1.003, abs=max(4 * (se or 0.0), 3e-4))
+        assert o.hours > 0.0

@@ -212,3 +212,72 @@ def test_real_sessions_ship_with_the_package(tmp_path):
     assert "is not empty" in message
     line = cli_error("example", "--real", str(tmp_path / "real"))
     assert "--force" in line
+
+
+def test_a_session_is_dated_by_its_id(tmp_path):
+    """The data set names each session by its capture's day and time (DDMMYYYYhhmm)."""
+    import datetime as dt
+
+    from umbmark.sources.optiodom import session_start
+
+    assert (
+        session_start(SQUARE)
+        == dt.datetime(2020, 6, 23, 20, 42, tzinfo=dt.timezone.utc).timestamp()
+    )
+    for name in ("991399990000", "lab_a"):  # month 13; no time at all
+        odd = tmp_path / name
+        shutil.copytree(SQUARE, odd)
+        for f in odd.iterdir():
+            f.rename(odd / f.name.replace(SQUARE.name, name))
+        assert session_start(odd) is None
+
+
+def _li(session) -> float:  # type: ignore[no-untyped-def]
+    """The session's nominal wheelbase, read here from its metadata's ``Li`` row."""
+    (meta,) = session.glob("*_metadata.csv")
+    for line in meta.read_text(encoding="utf-8-sig").splitlines():
+        cells = line.split(",")
+        if cells[0] == "Li":
+            return float(cells[1])
+    raise AssertionError(f"{meta} has no Li")
+
+
+@needs_second
+@pytest.mark.slow
+def test_a_fleet_of_real_sessions_finds_the_robot_unchanged(tmp_path):
+    """Every OptiOdom session of the shared data as one robot's fleet recordings: each
+    calibrated by a trajectory fit and dated by its id; the sessions whose nominal
+    wheelbase was set off on purpose are compared on the latest nominal, and the robot,
+    which the data set's authors say did not change, is not flagged."""
+    import datetime as dt
+
+    pytest.importorskip("distributed")
+    report = umbmark.fleet(OPTIODOM, history=tmp_path / "h.sqlite3", workers=1)
+    sessions = {p.name: p for p in OPTIODOM.glob("*/*") if p.is_dir()}
+    assert len(report.done) == len(sessions) >= 10
+    assert all(o.calibrated and o.method == "trajectory" for o in report.done)
+    (robot,) = report.summary.robots
+    assert robot.robot == "unnamed"
+    assert robot.flags == ()
+    when = {
+        name: dt.datetime.strptime(name, "%d%m%Y%H%M").replace(tzinfo=dt.timezone.utc).timestamp()
+        for name in sessions
+    }
+    assert {o.path: o.start for o in report.done} == {str(sessions[n]): when[n] for n in sessions}
+    latest = max(sessions, key=lambda n: when[n])
+    li = {n: _li(p) for n, p in sessions.items()}
+    assert {li[n] for n in sessions} == {0.2, 0.205}  # set off on purpose in some
+    track = robot.tracks["E_b"]
+    shown = dict(zip(track.paths, track.values, strict=True))
+    for o in report.done:
+        name = o.path.rsplit("/", 1)[-1]
+        assert shown[o.path] == pytest.approx(
+            o.figures["E_b"][0] * li[name] / li[latest], rel=1e-12
+        )
+    # Same day, same circles, nominal 0.2 m and 0.205 m: the same actual wheelbase.
+    a, b = (f"{OPTIODOM}/circular/{n}" for n in ("250620202104", "250620202119"))
+    (ea,), (eb,) = (
+        [e for p, e in zip(track.paths, track.errors, strict=True) if p == x] for x in (a, b)
+    )
+    assert abs(shown[a] - shown[b]) < 3 * math.hypot(ea, eb)
+    assert any("nominal wheelbase 0.2 m, then 0.205 m" in n for n in robot.notes)

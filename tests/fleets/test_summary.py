@@ -43,3 +43,31 @@ def test_the_changed_robots_are_flagged_at_their_day_and_the_steady_ones_are_not
     data = json.loads(json.dumps(fleet.to_dict()))
     assert data["drifted"] == ["laser", "wheel"]
     assert data["robots"][3]["figures"]["E_d"]["since"] == "wheel/day12.mcap"
+
+
+def test_a_changed_nominal_is_compared_on_the_latest_and_said():
+    """The same robot (actual wheelbase 0.2016 m, mean diameter 0.0836 m) calibrated
+    against a nominal of 0.2 m, then 0.205 m and 0.085 m: E_b and E_s on the latest
+    nominal are the same actual geometry over it, and the change is said."""
+    b, d = 0.2016, 0.0836
+
+    def made(day: int, wheelbase: float, diameter: float) -> RecordingOutcome:
+        figures = {"E_d": (1.001, 1e-4), "E_b": (b / wheelbase, 2e-4), "E_s": (d / diameter, 3e-4)}
+        return RecordingOutcome(f"r/day{day}", "amr", T0 + day * 86400.0, 1.0, None,
+                                method="trajectory", figures=figures, wheelbase=wheelbase,
+                                record={"wheel_diameter": diameter})  # fmt: skip
+
+    outcomes = [made(k, 0.2, 0.084) for k in range(4)] + [made(k, 0.205, 0.085) for k in (4, 5, 6)]
+    (robot,) = summarize(outcomes).robots
+    e_b, e_s = robot.tracks["E_b"], robot.tracks["E_s"]
+    np.testing.assert_allclose(e_b.values, [b / 0.205] * 7, rtol=1e-12)
+    np.testing.assert_allclose(e_s.values, [d / 0.085] * 7, rtol=1e-12)
+    np.testing.assert_allclose(e_b.errors[:4], [2e-4 * 0.2 / 0.205] * 4, rtol=1e-12)
+    assert robot.flags == ()  # the robot did not change; its configuration did
+    assert robot.notes == (
+        "nominal wheelbase 0.2 m, then 0.205 m from r/day4 (2026-09-25): E_b and E_s are "
+        "shown against the latest",
+        "nominal wheel diameter 0.084 m, then 0.085 m from r/day4 (2026-09-25): E_b and E_s "
+        "are shown against the latest",
+    )
+    assert robot.to_dict()["notes"] == list(robot.notes)

@@ -21,6 +21,10 @@ from umbmark.options.spec import HISTORY, OUTPUTS
 __all__ = ["fleet"]
 
 
+#: A robot's notes printed at most (the JSON holds them all).
+NOTES_SHOWN = 3
+
+
 @click.command(cls=Command, no_args_is_help=True)
 @click.argument("sources", nargs=-1, required=True, type=click.Path())
 @apply([spec_option(spec) for spec in FLEET_OPTIONS])
@@ -37,15 +41,15 @@ def fleet(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     """Calibrate every new recording of a fleet by what it holds, and say which robots
     changed.
 
-    SOURCES: recordings (ROS 1 and 2 bags, MCAP), folders to search, or globs, of many
-    robots and days. Each recording is calibrated by what it holds, on a Dask cluster
-    (local by default): scan matching where it has wheels and a laser, a trajectory fit
-    where it has an independent reference, else left out with the reason. Every result
-    goes into the history (--history), per robot with the recording's time and digest; a
-    recording already there with the same options is not done again, so a nightly run
-    does only the new ones. Prints every robot's latest figures with their 95 % intervals
-    and flags a robot whose figures stepped (since which recording) or trend (per week)
-    beyond its own intervals.
+    SOURCES: recordings (ROS 1 and 2 bags, MCAP, run logs, OptiOdom sessions), folders
+    to search, or globs, of many robots and days. Each recording is calibrated by what
+    it holds, on a Dask cluster (local by default): scan matching where it has wheels and
+    a laser, a trajectory fit where it has an independent reference, else left out with
+    the reason. Every result goes into the history (--history), per robot with the
+    recording's time and digest; a recording already there with the same options is not
+    done again, so a nightly run does only the new ones. Prints every robot's latest
+    figures with their 95 % intervals and flags a robot whose figures stepped (since which
+    recording) or trend (per week) beyond its own intervals.
     """
     from umbmark import fleet as run_fleet
     from umbmark.cli.common import command_line, console, note, wrote
@@ -119,6 +123,11 @@ def _render(report: Any, out: Any) -> None:
         row(grid, robot.robot, str(robot.recordings), *cells, "; ".join(robot.flags) or "-")
     out.print(grid)
     for robot in summary.robots:
+        for said in robot.notes[:NOTES_SHOWN]:
+            out.print(f"{robot.robot}: {said}", markup=False)
+        if len(robot.notes) > NOTES_SHOWN:
+            more = len(robot.notes) - NOTES_SHOWN
+            out.print(f"{robot.robot}: and {more} more such changes (--json)", markup=False)
         if not robot.usable:
             reasons = "; ".join(r if p in r else f"{p}: {r}" for p, r in robot.left_out[:3])
             out.print(f"{robot.robot}: no usable recording ({reasons})", markup=False)

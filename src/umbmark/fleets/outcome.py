@@ -9,7 +9,7 @@ description) and calibrates it through the calls ``umbmark calibrate`` makes
 - **scan matching** where it holds wheels (or the controller's odometry) and a laser: the
   wheels' diameters, the wheelbase, ``E_s`` and the laser's mounting from ordinary driving;
 - **a trajectory fit** where it holds an independent reference (motion capture) and no
-  laser;
+  laser, and for a run log or an OptiOdom session (wheels and motion capture by format);
 - else it is **left out**, with the reason.
 
 The reading options the user gave (``--truth-topic``, ``-b``, ...) win over what the look
@@ -25,7 +25,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,6 +36,7 @@ from umbmark.estimators.registry import SCAN_MATCHING, TRAJECTORY
 
 __all__ = [
     "FIGURES",
+    "LOGGED",
     "STANDARD_SIDE",
     "RecordingOutcome",
     "RecordingTask",
@@ -46,6 +47,8 @@ __all__ = [
 FIGURES = ("E_d", "E_b", "E_s", "laser_x", "laser_y", "laser_yaw")
 #: The square E_max,syst is projected on [m] (the paper's).
 STANDARD_SIDE = 4.0
+#: Recordings that are wheels and motion capture by their format (no bag to look into).
+LOGGED = ("log", "optiodom")
 
 
 @dataclass(frozen=True)
@@ -213,7 +216,7 @@ def _robot_of(info: Any, given: str | None) -> str:  # noqa: ANN401 (BagInfo)
     return described or "unnamed"
 
 
-def _start(info: Any, day: dt.date | None) -> float | None:  # noqa: ANN401 (BagInfo)
+def _start(info: Any, day: dt.date | None) -> float | None:  # noqa: ANN401 (BagInfo or None)
     if day is not None:
         return dt.datetime(day.year, day.month, day.day, tzinfo=dt.timezone.utc).timestamp()
     return None if info.start is None else float(info.start)
@@ -279,12 +282,16 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
         exception for a recording that cannot be read.
     """
     from umbmark.core.digest import path_sha256
+    from umbmark.runs.load import detect_format
 
     path = Path(task.path)
     robot = task.robot or "unnamed"
     try:
         digest = path_sha256(path)
-        info = _bag_info(path)
+        kind = detect_format(path)
+        if kind in LOGGED:
+            return _logged(task, digest, kind)
+        info = _bag_info(path, kind)
     except (InputError, ProblemError, OSError) as exc:
         return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
     robot = _robot_of(info, task.robot)
@@ -296,12 +303,25 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
         result = _calibrate(path, method, options)
     except (InputError, ProblemError) as exc:
         return RecordingOutcome(task.path, robot, start, hours, digest, reason=_line(exc))
+    return _calibrated(task.path, robot, start, hours, digest, method, result)
+
+
+def _calibrated(
+    path: str,
+    robot: str,
+    start: float | None,
+    hours: float,
+    digest: str | None,
+    method: str,
+    result: Any,  # noqa: ANN401 (CalibrationResult)
+) -> RecordingOutcome:
+    """The outcome of a recording that gave a calibration."""
     figures = _figures(result)
     cal = result.calibration
     wheelbase = float(cal.active.wheelbase)
     E_s = figures.get("E_s", (1.0, None))[0]
     return RecordingOutcome(
-        task.path,
+        path,
         robot,
         start,
         hours,
@@ -316,6 +336,41 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
     )
 
 
+def _logged(task: RecordingTask, digest: str | None, kind: str) -> RecordingOutcome:
+    """A run log or an OptiOdom session: wheels and motion capture, so a trajectory fit."""
+    path = Path(task.path)
+    robot = task.robot or "unnamed"
+    try:
+        result = _calibrate(path, TRAJECTORY.name, task.options_for(robot))
+    except (InputError, ProblemError) as exc:
+        start = _start(None, task.day) if task.day else _logged_start(path, kind, ())
+        return RecordingOutcome(task.path, robot, start, 0.0, digest, reason=_line(exc))
+    logs = [r.log for r in result.runs if r.log is not None]
+    start = _start(None, task.day) if task.day else _logged_start(path, kind, logs)
+    hours = sum(float(log.time[-1] - log.time[0]) for log in logs) / 3600.0
+    return _calibrated(task.path, robot, start, hours, digest, TRAJECTORY.name, result)
+
+
+#: A run log's clock that reads after this [s since 1970] is a clock of days (ROS time).
+_EPOCH_CLOCK = 1e9
+
+
+def _logged_start(path: Path, kind: str, logs: Sequence[Any]) -> float:
+    """When a run log or an OptiOdom session was recorded [s since 1970]: an OptiOdom
+    session's id, a run log's time column where it is a clock of days (ROS time), else
+    the time its files were last written."""
+    from umbmark.sources.optiodom import session_start
+
+    found = session_start(path) if kind == "optiodom" else None
+    first = min((float(log.start) for log in logs), default=0.0)
+    if found is None and first > _EPOCH_CLOCK:
+        found = first
+    if found is not None:
+        return found
+    files = [p for p in path.rglob("*") if p.is_file()] if path.is_dir() else [path]
+    return max((p.stat().st_mtime for p in files), default=path.stat().st_mtime)
+
+
 def _record(result: Any) -> dict[str, Any]:  # noqa: ANN401 (CalibrationResult)
     data = result.to_dict()
     return {
@@ -327,12 +382,12 @@ def _record(result: Any) -> dict[str, Any]:  # noqa: ANN401 (CalibrationResult)
     }
 
 
-def _bag_info(path: Path) -> Any:  # noqa: ANN401 (BagInfo)
-    from umbmark.runs.load import detect_format
+def _bag_info(path: Path, kind: str) -> Any:  # noqa: ANN401 (BagInfo)
     from umbmark.sources.bag.info.summary import bag_info
 
-    if detect_format(path) != "bag":
-        raise InputError("is not a ROS bag or MCAP file", source=path)
+    if kind != "bag":
+        raise InputError("is not a recording (a ROS bag, MCAP, run log or OptiOdom session)",
+                         source=path)  # fmt: skip
     return bag_info(path)
 
 

@@ -32,6 +32,7 @@ td.num{font-variant-numeric:tabular-nums;white-space:nowrap}
 tr.changed td:first-child{border-left:4px solid #c0392b}
 .flag{color:#c0392b;font-weight:600}
 .ok{color:#27ae60}
+.note{color:#555;font-size:.9em}
 svg{display:block}
 code{font-size:.92em}
 @media print{body{max-width:none}th{position:static}}
@@ -124,6 +125,7 @@ def _row(robot: RobotSummary, figures: list[str]) -> str:
         if flags
         else '<span class="ok">within its intervals</span>'
     )
+    said += "".join(f'<br><span class="note">{escape(n)}</span>' for n in robot.notes)
     latest = robot.latest
     e_max = (
         "-" if latest is None or latest.e_max_syst is None else f"{latest.e_max_syst * 1000:.1f} mm"

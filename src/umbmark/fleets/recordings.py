@@ -1,9 +1,10 @@
 """A fleet's recordings: found in folders, globs and lists, each with its robot and day.
 
 - **Found**: a source is a recording (a ROS 1 bag, a ROS 2 bag folder or its ``.db3`` /
-  ``.mcap``, an MCAP file, an umbmark run log), a folder searched for recordings (a folder
-  that is a recording is not searched further), or a glob (``fleet/*/2026-11-*``). The
-  search is bounded: :data:`MAX_DEPTH` folders deep, :data:`MAX_RECORDINGS` recordings.
+  ``.mcap``, an MCAP file, an umbmark run log, an OptiOdom session), a folder searched
+  for recordings (a folder that is a recording is not searched further), or a glob
+  (``fleet/*/2026-11-*``). The search is bounded: :data:`MAX_DEPTH` folders deep,
+  :data:`MAX_RECORDINGS` recordings.
 - **Named**: ``robot_from``, a pattern of the recording's path (``{robot}/{date}/*.mcap``:
   ``{robot}`` and ``{date}`` stand for one path component each, or part of one, ``*`` for
   any part of one component, ``**`` for any components), gives the robot and the day;
@@ -24,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from umbmark.core.errors import InputError, option
+from umbmark.fleets.outcome import LOGGED
 
 __all__ = [
     "MAX_DEPTH",
@@ -144,7 +146,7 @@ def _is_recording(path: Path) -> bool:
     if not path.is_dir():
         return False
     try:
-        return detect_format(path) in ("bag", "log")
+        return detect_format(path) in ("bag", *LOGGED)
     except InputError:
         return False
 

@@ -11,9 +11,10 @@ RecordingOutcome`, from this run or from the history) and returns a
 from __future__ import annotations
 
 import datetime as dt
+import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -83,7 +84,7 @@ class FigureTrack:
         size, se = self.change.size * factor, self.change.size_se * factor
         if self.change.kind == "step" and self.change.since is not None:
             k = self.change.since
-            when = dt.datetime.fromtimestamp(self.times[k], dt.timezone.utc).date()
+            when = _day(self.times[k])
             return (
                 f"{self.name} stepped by {size:+.{decimals}f} ± {Z95 * se:.{decimals}f}{unit} "
                 f"since {self.paths[k]} ({when})"
@@ -113,6 +114,9 @@ class RobotSummary:
         Its latest calibrated recording.
     left_out : tuple of (str, str)
         Recordings not calibrated: path and reason.
+    notes : tuple of str
+        What else people should know: the robot's configured (nominal) geometry changed
+        between its recordings (``E_b`` and ``E_s`` are then shown against the latest).
     """
 
     robot: str
@@ -121,6 +125,7 @@ class RobotSummary:
     tracks: dict[str, FigureTrack] = field(default_factory=dict)
     latest: RecordingOutcome | None = None
     left_out: tuple[tuple[str, str], ...] = ()
+    notes: tuple[str, ...] = ()
 
     @property
     def flags(self) -> tuple[str, ...]:
@@ -176,6 +181,7 @@ class RobotSummary:
                 "verdict": latest.verdict,
             },
             "left_out": [{"path": p, "reason": r} for p, r in self.left_out],
+            "notes": list(self.notes),
         }
 
 
@@ -283,9 +289,11 @@ def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
         calibrated = sorted(
             (o for o in mine if o.calibrated), key=lambda o: (o.start or 0.0, o.path)
         )
+        latest = calibrated[-1] if calibrated else None
+        on_latest = [_on_nominal(o, latest) for o in calibrated] if latest else []
         tracks = {}
         for figure in FIGURES:
-            track = _track(figure, calibrated)
+            track = _track(figure, on_latest)
             if track is not None:
                 tracks[figure] = track
         robots.append(
@@ -294,8 +302,53 @@ def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
                 len(mine),
                 float(sum(o.hours for o in mine)),
                 tracks,
-                calibrated[-1] if calibrated else None,
+                latest,
                 tuple((o.path, o.reason or "") for o in mine if not o.calibrated),
+                _nominal_changes(calibrated),
             )
         )
     return FleetSummary(tuple(robots))
+
+
+def _nominal(outcome: RecordingOutcome) -> tuple[float | None, float | None]:
+    """The nominal wheelbase and wheel diameter [m] a calibration was made against."""
+    diameter = outcome.record.get("wheel_diameter")
+    return outcome.wheelbase, None if diameter is None else float(diameter)
+
+
+def _ratio(ours: float | None, theirs: float | None) -> float:
+    return ours / theirs if ours and theirs else 1.0
+
+
+def _on_nominal(outcome: RecordingOutcome, latest: RecordingOutcome) -> RecordingOutcome:
+    """``outcome``'s figures against ``latest``'s nominal geometry: ``E_b`` (the actual
+    wheelbase over the nominal) times its nominal over the latest's, ``E_s`` (the actual
+    mean diameter over the nominal) likewise; the rest do not depend on it."""
+    (b, d), (b_latest, d_latest) = _nominal(outcome), _nominal(latest)
+    scale = {"E_b": _ratio(b, b_latest), "E_s": _ratio(d, d_latest)}
+    if scale["E_b"] == 1.0 and scale["E_s"] == 1.0:
+        return outcome
+    figures = {
+        name: (v * scale.get(name, 1.0), None if se is None else se * scale.get(name, 1.0))
+        for name, (v, se) in outcome.figures.items()
+    }
+    return replace(outcome, figures=figures)
+
+
+def _nominal_changes(calibrated: Sequence[RecordingOutcome]) -> tuple[str, ...]:
+    """Where the configured geometry changed between calibrations (in time order)."""
+    notes: list[str] = []
+    for before, now in itertools.pairwise(calibrated):
+        pairs = zip(("wheelbase", "wheel diameter"), _nominal(before), _nominal(now), strict=True)
+        for what, old, new in pairs:
+            if old and new and not math.isclose(old, new, rel_tol=1e-9):
+                when = "" if now.start is None else f" ({_day(now.start)})"
+                notes.append(
+                    f"nominal {what} {old:g} m, then {new:g} m from {now.path}{when}: "
+                    "E_b and E_s are shown against the latest"
+                )
+    return tuple(notes)
+
+
+def _day(start: float) -> dt.date:
+    return dt.datetime.fromtimestamp(start, dt.timezone.utc).date()

@@ -19,6 +19,7 @@ sessions they are equal.
 from __future__ import annotations
 
 import csv
+import datetime as dt
 import math
 import re
 from array import array
@@ -45,6 +46,7 @@ __all__ = [
     "OptiOdomSession",
     "is_optiodom_session",
     "read_optiodom",
+    "session_start",
 ]
 
 #: Most rows (samples) read from one run file; it is read line by line, only the numbers
@@ -114,6 +116,26 @@ class OptiOdomSession:
         """The square's side [m], for square sessions."""
         values = self.meta.get("L", [])
         return self.number("L") if values and values[0].strip() else None
+
+
+#: A session's id: the capture's day and time, ``DDMMYYYYhhmm`` (``230620202042``).
+_SESSION_ID = re.compile(r"^(\d{2})(\d{2})(\d{4})(\d{2})(\d{2})$")
+
+
+def session_start(folder: str | Path) -> float | None:
+    """When a session was captured [s since 1970]: the data set names each session by its
+    capture's day and time (``230620202042``: 23 June 2020, 20:42), taken as UTC (the
+    lab's zone is not recorded); None for an id that is no such time."""
+    meta = _metadata_file(Path(folder))
+    found = None if meta is None else _SESSION_ID.match(meta.name.removesuffix("_metadata.csv"))
+    if found is None:
+        return None
+    day, month, year, hour, minute = (int(g) for g in found.groups())
+    try:
+        when = dt.datetime(year, month, day, hour, minute, tzinfo=dt.timezone.utc)
+    except ValueError:
+        return None
+    return when.timestamp()
 
 
 def _metadata_file(folder: Path) -> Path | None:

@@ -110,7 +110,9 @@ def record_recording(
     history: History, row: RecordingRow, calibration: NewCalibration | None
 ) -> int | None:
     """Record one recording, and its calibration (with the recording as its input, its
-    digest not read again) when it gave one.
+    digest not read again) when it gave one; a calibration whose nominal geometry is not
+    the robot's first is recorded all the same (the fleet's summary compares it on the
+    robot's latest nominal, and says the configuration changed).
 
     Returns
     -------
@@ -120,7 +122,8 @@ def record_recording(
     id = None
     if calibration is not None:
         digests = {row.path: row.digest}
-        id = history.record(row.robot, calibration, [row.path], digests=digests)
+        id = history.record(row.robot, calibration, [row.path], digests=digests,
+                            same_nominal=False)  # fmt: skip
     now = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     with history.transaction(write=True) as db:
         db.execute(

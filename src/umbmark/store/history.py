@@ -282,6 +282,7 @@ class History:
         inputs: Sequence[str | os.PathLike[str]] = (),
         *,
         digests: Mapping[str, str | None] | None = None,
+        same_nominal: bool = True,
     ) -> int:
         """Record a calibration of ``robot``; a new robot is added with the calibration's
         nominal wheelbase and wheel diameter.
@@ -296,6 +297,10 @@ class History:
             Its inputs (hashed with SHA-256 when they are files or folders).
         digests : mapping of str to str, optional
             SHA-256 of inputs hashed already (by name): not read again.
+        same_nominal : bool
+            Refuse a calibration whose nominal geometry is not the robot's (True); False
+            records it all the same, its own nominal kept with it (a fleet, whose robots'
+            configured geometry may change between recordings: it says so).
 
         Returns
         -------
@@ -333,7 +338,8 @@ class History:
                     (robot, calibration.wheelbase, calibration.wheel_diameter, _now()),
                 )
             else:
-                self._check(robot, ours, (row[0], row[1]))
+                if same_nominal:
+                    self._check(robot, ours, (row[0], row[1]))
                 if row[1] is None and calibration.wheel_diameter is not None:
                     db.execute(  # the first calibration that knows it says the diameter
                         "UPDATE robots SET wheel_diameter = ? WHERE name = ?",
