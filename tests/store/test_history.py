@@ -140,6 +140,34 @@ def test_drift_is_flagged(tmp_path: Path) -> None:
     assert verdict.startswith("drift between calibrations 1 and 3: robot E_b")
 
 
+def test_a_changed_nominal_wheelbase_is_no_drift_and_time_orders_the_calibrations(
+    tmp_path: Path,
+) -> None:
+    """A fleet's calibrations, recorded in the order they finished, are listed by their
+    recordings' time; the robot (effective wheelbase 0.2016 m) calibrated against 0.2 m,
+    then 0.205 m, has not drifted: its E_b is compared on the last nominal."""
+    import datetime as dt
+
+    from umbmark.store.records import NewCalibration
+
+    store = History(tmp_path / "h.sqlite3")
+    for day, nominal in ((3, 0.205), (1, 0.2), (2, 0.2)):  # finished out of order
+        when = dt.datetime(2026, 11, day, tzinfo=dt.timezone.utc)
+        store.record("amr", NewCalibration(
+            when, "trajectory", 1.0, 0.2016 / nominal, None, None,
+            {"E_d": 1e-4, "E_b": 1e-4},
+            {"wheelbase": nominal, "c_L": 1.0, "c_R": 1.0, "wheel_separation_multiplier": 1.0},
+            {}, {}, nominal, 0.084,
+        ), same_nominal=False)  # fmt: skip
+    assert [c.time[:10] for c in store.calibrations("amr")] == [
+        "2026-11-01", "2026-11-02", "2026-11-03",
+    ]  # fmt: skip
+    verdict = store.drift("amr")
+    assert verdict is not None
+    assert verdict.startswith("no drift between calibrations 2 and 1: robot E_d")
+    assert "robot E_b 0.983415 -> 0.983415" in verdict  # 0.2016 / 0.205 both
+
+
 def _record_ten(table: str, db: str) -> None:
     for _ in range(10):
         umbmark.calibrate(table, side_length=4, wheelbase=0.34, unit="mm", robot="r1", history=db)

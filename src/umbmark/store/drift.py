@@ -42,8 +42,9 @@ DEFINITIONS = {
     "wheel_separation_multiplier (E_b x multiplier = the new multiplier), the robot's "
     "effective wheelbase over the nominal one",
     "robot_wheelbase": "the robot's effective wheelbase [m]: robot_E_b x nominal wheelbase",
-    "drift": f"robot_E_d and robot_E_b of the first and the last calibration compared; a "
-    f"change over {DRIFT_SIGMAS:g} standard errors of it is drift",
+    "drift": f"robot_E_d and robot_E_b of the first and the last calibration compared (E_b on "
+    f"the last one's nominal wheelbase); a change over {DRIFT_SIGMAS:g} standard errors of it "
+    "is drift",
 }
 
 
@@ -56,7 +57,8 @@ def drift_verdict(calibrations: Sequence[CalibrationRecord]) -> str | None:
     during it), not what the passes measured: passes on corrected odometry measure what
     the correction left. A change counts as drift when it exceeds :data:`DRIFT_SIGMAS`
     times its standard error, ``sqrt(se_first^2 + se_last^2)`` from the two calibrations'
-    standard errors (the active parameters are exact).
+    standard errors (the active parameters are exact). ``E_b`` of a robot whose nominal
+    wheelbase was changed between the two (a fleet's) is compared on the last nominal.
 
     Parameters
     ----------
@@ -78,6 +80,9 @@ def drift_verdict(calibrations: Sequence[CalibrationRecord]) -> str | None:
         a, b = float(getattr(first, f"robot_{name}")), float(getattr(last, f"robot_{name}"))
         se_a = first.robot_standard_errors.get(name)
         se_b = last.robot_standard_errors.get(name)
+        if name == "E_b":  # on the last one's nominal wheelbase, where it was changed
+            scale = float(first.active["wheelbase"]) / float(last.active["wheelbase"])
+            a, se_a = a * scale, None if se_a is None else se_a * scale
         if se_a is None or se_b is None or not math.isfinite(se_a + se_b):
             unknown.append(f"robot {name}")
             continue

@@ -436,12 +436,13 @@ class History:
         return next((r for r in self.robots() if r.name == name), None)
 
     def calibrations(self, robot: str) -> list[CalibrationRecord]:
-        """The robot's calibrations, oldest first (empty for an unknown robot)."""
+        """The robot's calibrations, oldest first (by their time: a fleet's are its
+        recordings', recorded in the order they finished), empty for an unknown robot."""
         with self._connect() as db:
             rows = db.execute(
                 "SELECT id, robot, time, method, inputs, E_d, E_b, E_s, e_max_syst, "
                 "standard_errors, active, new, applied, verdict, controller FROM calibrations "
-                "WHERE robot = ? ORDER BY id",
+                "WHERE robot = ? ORDER BY time, id",
                 (robot,),
             ).fetchall()
         return [_calibration(row) for row in rows]
