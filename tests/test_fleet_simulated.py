@@ -55,6 +55,15 @@ def test_the_simulated_fleet_is_watched(fleet: Path, tmp_path: Path):
     for robot, r in by.items():
         low, high = r["figures"]["E_d"]["interval_95"]
         assert low - 1e-4 <= last[robot]["E_d"] <= high + 1e-4, robot
+    # The knocked laser's mounting to declare is its true one, and is said to be wrong.
+    knocked = by["robot03"]["mounting"]
+    true_x, true_y, true_yaw = last["robot03"]["laser"]
+    assert knocked["xyz"][:2] == pytest.approx([true_x, true_y], abs=1.5e-3)
+    assert knocked["rpy"][2] == pytest.approx(true_yaw, abs=1e-3)
+    assert "correct the stated mounting" in knocked["verdict"]
+    assert "nothing to change" in by["robot01"]["mounting"]["verdict"]
+    # What to apply is the latest calibration's overlay, keyed by the controller.
+    assert "ros__parameters" in by["robot02"]["latest"]["overlay"]
 
 
 @pytest.mark.slow

@@ -79,3 +79,32 @@ def test_the_page_in_headless_chromium(tmp_path: Path):
             assert flagged == 1
     finally:
         browser.close()
+
+
+def test_what_to_apply_is_offered_only_where_the_verdict_lets_it():
+    """The latest calibration's overlay where it may be applied; where its verdict is do
+    not apply, nothing but why. The laser's mounting, the fleet's estimate of it, in the
+    forms a user declares it (the outcomes' truth is 0.12 m forward, 22 mm off the 0.098 m
+    stated here: many standard errors)."""
+    from dataclasses import replace
+
+    rng = np.random.default_rng(3)
+    ok = daily_outcomes("ok", 4, rng)
+    stated = {"x": 0.098, "y": 0.0, "yaw": 0.0, "lift": None, "source": "/tf_static"}
+    record = {"overlay": "diff_cont:\n  ros__parameters:\n    wheel_separation_multiplier: 0.98",
+              "mounting": {"base_frame": "base_link", "laser_frame": "scan_link",
+                           "stated": stated, "z_roll_pitch_stated": False}}  # fmt: skip
+    ok[-1] = replace(ok[-1], record=record)
+    bad = daily_outcomes("bad", 4, rng)
+    why = {"level": "do-not-apply", "reasons": ["the runs scatter more than they err"]}
+    bad[-1] = replace(bad[-1], verdict="do-not-apply", record={"verdict": why})
+    summary = summarize([*ok, *bad])
+    page = fleet_page(summary)
+    assert "wheel_separation_multiplier: 0.98" in page  # ok's overlay, as recorded
+    assert "not offered: do not apply (the runs scatter more than they err)" in page
+    assert page.count("ros__parameters") == 1  # none for bad
+    forms = {r.robot: r.mounting for r in summary.robots}
+    assert forms["ok"] is not None
+    assert forms["ok"].fitted.frame == "scan_link"
+    assert "outside the fit&#x27;s 95 % interval in x" in page
+    assert "--frame-id base_link --child-frame-id scan_link" in page

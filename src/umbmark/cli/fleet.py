@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -17,6 +17,9 @@ from umbmark.cli.click_options import (
 )
 from umbmark.options.fleet import FLEET_OPTIONS
 from umbmark.options.spec import HISTORY, OUTPUTS
+
+if TYPE_CHECKING:
+    from umbmark.fleets.summary import RobotSummary
 
 __all__ = ["fleet"]
 
@@ -123,6 +126,9 @@ def _render(report: Any, out: Any) -> None:
         row(grid, robot.robot, str(robot.recordings), *cells, "; ".join(robot.flags) or "-")
     out.print(grid)
     for robot in summary.robots:
+        if robot.changed:
+            for line in _to_apply(robot):
+                out.print(f"{robot.robot}: {line}", markup=False)
         for said in robot.notes[:NOTES_SHOWN]:
             out.print(f"{robot.robot}: {said}", markup=False)
         if len(robot.notes) > NOTES_SHOWN:
@@ -132,3 +138,25 @@ def _render(report: Any, out: Any) -> None:
             reasons = "; ".join(r if p in r else f"{p}: {r}" for p, r in robot.left_out[:3])
             out.print(f"{robot.robot}: no usable recording ({reasons})", markup=False)
     out.print(summary.line() + ".", markup=False)
+
+
+def _to_apply(robot: RobotSummary) -> list[str]:
+    """What to put into a changed robot's controller and to declare of its laser, from its
+    latest calibration: the overlay's multipliers in one line, the laser's URDF origin."""
+    latest = robot.latest
+    if latest is None or latest.multipliers is None:
+        return []
+    lines = []
+    if latest.verdict == "do-not-apply":
+        lines.append("its latest calibration's verdict is do not apply: no overlay offered")
+    else:
+        sep, left, right = latest.multipliers
+        lines.append(
+            f"to apply: wheel_separation_multiplier {sep:.6f}, left_wheel_radius_multiplier "
+            f"{left:.6f}, right_wheel_radius_multiplier {right:.6f} (the overlay: --report, "
+            "--json)"
+        )
+    forms = robot.mounting
+    if forms is not None:
+        lines.append(f"laser {forms.fitted.frame}: {forms.urdf_origin()} ({forms.verdict()})")
+    return lines

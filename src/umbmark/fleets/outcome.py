@@ -120,7 +120,10 @@ class RecordingOutcome:
     record : dict
         What the history records of the calibration (``calibrate --json``'s
         ``standard_errors``, ``active``, ``new``, ``verdict`` and the nominal wheel
-        diameter); empty when not calibrated.
+        diameter), and what to apply: ``overlay``, the controller's parameter overlay
+        (YAML text; None where the verdict is do not apply), and ``mounting``, the laser's
+        (:meth:`umbmark.outputs.mounting.MountingForms.to_dict`; None without a laser);
+        empty when not calibrated.
     """
 
     path: str
@@ -372,13 +375,22 @@ def _logged_start(path: Path, kind: str, logs: Sequence[Any]) -> float:
 
 
 def _record(result: Any) -> dict[str, Any]:  # noqa: ANN401 (CalibrationResult)
+    """What the history keeps of a calibration: its figures' record, and what to apply in
+    the forms a user applies it (the controller's overlay, keyed as its controller is,
+    only where the verdict lets it be applied; the laser's mounting as a URDF origin and
+    static transforms)."""
+    from umbmark.outputs.mounting import mounting_forms
+
     data = result.to_dict()
+    forms = mounting_forms(result)
     return {
         "standard_errors": data.get("standard_errors") or {},
         "active": data.get("active") or {},
         "new": data.get("new") or {},
         "verdict": data.get("verdict") or {},
         "wheel_diameter": result.calibration.active.wheel_diameter,
+        "overlay": None if result.overlay_withheld else result.overlay_yaml(),
+        "mounting": None if forms is None else forms.to_dict(),
     }
 
 

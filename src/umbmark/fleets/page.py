@@ -33,6 +33,7 @@ tr.changed td:first-child{border-left:4px solid #c0392b}
 .flag{color:#c0392b;font-weight:600}
 .ok{color:#27ae60}
 .note{color:#555;font-size:.9em}
+pre{white-space:pre-wrap;overflow-wrap:anywhere;font-size:.85em;margin:.3em 0}
 svg{display:block}
 code{font-size:.92em}
 @media print{body{max-width:none}th{position:static}}
@@ -91,21 +92,42 @@ def _plot(track: FigureTrack) -> str:
 
 
 def _apply(robot: RobotSummary) -> str:
+    """What to put into the robot's controller and to declare of its laser: the latest
+    calibration's overlay and mounting, or why it is not offered."""
     latest = robot.latest
     if latest is None or latest.multipliers is None:
         return ""
-    sep, left, right = latest.multipliers
-    lines = [
-        f"wheel_separation_multiplier: {sep:.6f}",
-        f"left_wheel_radius_multiplier: {left:.6f}",
-        f"right_wheel_radius_multiplier: {right:.6f}",
-    ]
-    laser = [latest.figures.get(n) for n in ("laser_x", "laser_y", "laser_yaw")]
-    if all(v is not None for v in laser):
-        lx, ly, lyaw = (v[0] for v in laser if v is not None)
-        lines.append(f"laser: xyz {lx:.4f} {ly:.4f} 0, yaw {lyaw:.5f} rad")
-    verdict = "" if latest.verdict is None else f" (verdict: {latest.verdict})"
-    return f"<code>{'<br>'.join(escape(line) for line in lines)}</code>{escape(verdict)}"
+    record = latest.record
+    verdict = dict(record.get("verdict") or {})
+    if latest.verdict == "do-not-apply":
+        reasons = "; ".join(verdict.get("reasons") or []) or "its checks failed"
+        said = f'<span class="flag">not offered: do not apply ({escape(reasons)})</span>'
+        return said + _mounting(robot)
+    overlay = record.get("overlay")
+    if not overlay:  # recorded before the overlay was kept: the multipliers alone
+        sep, left, right = latest.multipliers
+        overlay = (
+            f"wheel_separation_multiplier: {sep:.6f}\nleft_wheel_radius_multiplier: "
+            f"{left:.6f}\nright_wheel_radius_multiplier: {right:.6f}"
+        )
+    said = f"<pre>{escape(str(overlay).strip())}</pre>"
+    if latest.verdict == "care":
+        said += '<span class="note">apply with care: ' + escape(
+            "; ".join(verdict.get("reasons") or [])
+        ) + "</span>"  # fmt: skip
+    return said + _mounting(robot)
+
+
+def _mounting(robot: RobotSummary) -> str:
+    """The laser's mounting to declare (the fleet's estimate of it), whatever the verdict
+    on the wheels."""
+    forms = robot.mounting
+    if forms is None:
+        return ""
+    return (
+        f'<span class="note">laser: {escape(forms.verdict())}</span>'
+        f"<pre>{escape(forms.urdf_origin())}\n{escape(forms.ros2_command())}</pre>"
+    )
 
 
 def _row(robot: RobotSummary, figures: list[str]) -> str:

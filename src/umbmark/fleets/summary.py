@@ -13,7 +13,7 @@ from __future__ import annotations
 import datetime as dt
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -21,6 +21,8 @@ import numpy as np
 
 from umbmark.fleets.changes import Change, change_of
 from umbmark.fleets.outcome import FIGURES, STANDARD_SIDE, RecordingOutcome
+from umbmark.model.scans import LaserMounting
+from umbmark.outputs.mounting import MountingForms
 
 __all__ = ["FIGURE_UNITS", "FigureTrack", "FleetSummary", "RobotSummary", "summarize"]
 
@@ -141,6 +143,19 @@ class RobotSummary:
         """Whether any recording gave a calibration."""
         return self.latest is not None
 
+    @property
+    def mounting(self) -> MountingForms | None:
+        """The laser's mounting to declare: the fleet's latest estimate of it (every
+        calibration since its last change, :attr:`FigureTrack.latest`) in the forms a
+        user applies (a URDF origin, static transforms), against the mounting the latest
+        recording states; None without a laser."""
+        tracks = [self.tracks.get(name) for name in ("laser_x", "laser_y", "laser_yaw")]
+        if self.latest is None or any(t is None for t in tracks):
+            return None
+        return _mounting_forms(
+            [t.latest for t in tracks if t is not None], self.latest.record.get("mounting")
+        )
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (metres, radians, seconds)."""
         latest = self.latest
@@ -179,7 +194,9 @@ class RobotSummary:
                 "e_max_syst": latest.e_max_syst,
                 "multipliers": None if latest.multipliers is None else list(latest.multipliers),
                 "verdict": latest.verdict,
+                "overlay": latest.record.get("overlay"),
             },
+            "mounting": None if self.mounting is None else self.mounting.to_dict(),
             "left_out": [{"path": p, "reason": r} for p, r in self.left_out],
             "notes": list(self.notes),
         }
@@ -308,6 +325,37 @@ def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
             )
         )
     return FleetSummary(tuple(robots))
+
+
+def _mounting_forms(
+    fitted: Sequence[tuple[float, float]], recorded: Mapping[str, Any] | None
+) -> MountingForms:
+    """The forms of a fitted ``x, y, yaw`` (value, standard error each [m, m, rad]), with
+    the frames, height and tilt, and the stated mounting, of a recording's forms."""
+    recorded = recorded or {}
+    xyz, rpy = recorded.get("xyz") or (0.0,) * 3, recorded.get("rpy") or (0.0,) * 3
+    lift = (float(xyz[2]), float(rpy[0]), float(rpy[1]))
+    base = str(recorded.get("base_frame") or "base_link")
+    frame = str(recorded.get("laser_frame") or "laser")
+    (x, se_x), (y, se_y), (yaw, se_yaw) = fitted
+    stated_lift = lift if recorded.get("z_roll_pitch_stated") else None
+    return MountingForms(
+        fitted=LaserMounting(x, y, yaw, stated_lift, base, frame, "fitted"),
+        standard_errors=(se_x, se_y, se_yaw),
+        intervals=tuple((v - Z95 * se, v + Z95 * se) for v, se in fitted),
+        stated=_stated(recorded.get("stated"), base, frame),
+    )
+
+
+def _stated(stated: Mapping[str, Any] | None, base: str, frame: str) -> LaserMounting | None:
+    """The stated mounting of a recording's forms (their ``to_dict``)."""
+    if not stated:
+        return None
+    raw = stated.get("lift")
+    lift = None if raw is None else (float(raw[0]), float(raw[1]), float(raw[2]))
+    source = str(stated.get("source") or "")
+    return LaserMounting(float(stated["x"]), float(stated["y"]), float(stated["yaw"]), lift,
+                         base, frame, source)  # fmt: skip
 
 
 def _nominal(outcome: RecordingOutcome) -> tuple[float | None, float | None]:
