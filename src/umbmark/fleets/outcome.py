@@ -266,14 +266,44 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
     -------
     RecordingOutcome
         Calibrated, left out (``reason``) or failed (``failed``, ``reason``): never an
-        exception for a recording that cannot be read.
+        exception for a recording that cannot be read. A recording at a URL is copied
+        first (:func:`_remote`); its outcome keeps the URL.
     """
+    from umbmark.sources.remote import is_url
+
+    if is_url(task.path):
+        return _remote(task)
+    return _calibrated(task, Path(task.path), None)
+
+
+def _remote(task: RecordingTask) -> RecordingOutcome:
+    """A recording at a URL streamed into a private temporary folder
+    (:func:`umbmark.sources.remote.fetched`: its SHA-256 taken on the way), calibrated
+    there, and the copy deleted whatever happens; the outcome names the URL, never the
+    copy."""
+    from dataclasses import replace
+
+    from umbmark.sources.remote import fetched
+
+    try:
+        with fetched(task.path) as (local, digest):
+            outcome = _calibrated(task, local, digest)
+    except InputError as exc:
+        robot = task.robot or "unnamed"
+        return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
+    if outcome.reason is None:
+        return outcome
+    return replace(outcome, reason=outcome.reason.replace(str(local), task.path.rstrip("/")))
+
+
+def _calibrated(task: RecordingTask, path: Path, digest: str | None) -> RecordingOutcome:
+    """``task``'s recording read at ``path`` (itself, or its local copy); ``digest``: its
+    SHA-256 where already taken."""
     from umbmark.core.digest import path_sha256
 
-    path = Path(task.path)
     robot = task.robot or "unnamed"
     try:
-        digest = path_sha256(path)
+        digest = digest or path_sha256(path)
         info = _bag_info(path)
     except (InputError, ProblemError, OSError) as exc:
         return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
