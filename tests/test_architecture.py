@@ -384,12 +384,19 @@ def test_tests_of_one_module_sit_in_its_layers_folder(tmp_path):
     ]
 
 
-#: Third-party packages only one module of umbmark may import: the engine at the edge.
-EDGE_IMPORTS = {"dask": "umbmark.fleets.cluster", "distributed": "umbmark.fleets.cluster"}
+#: Third-party packages only one module of umbmark may import: the engine at the edge, and
+#: the filesystems of recordings at URLs.
+EDGE_IMPORTS = {
+    "dask": "umbmark.fleets.cluster",
+    "distributed": "umbmark.fleets.cluster",
+    "fsspec": "umbmark.sources.remote",
+    "aiohttp": "umbmark.sources.remote",
+}
 
 
 def edge_import_violations(root: Path = PACKAGE) -> list[str]:
-    """Modules that import an edge package (Dask) other than the one module allowed."""
+    """Modules that import an edge package (Dask, fsspec) other than the one module
+    allowed."""
     bad = []
     for name, path in _modules(root).items():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
@@ -416,3 +423,23 @@ def test_the_engine_stays_at_the_edge(tmp_path):
     (package / "jobs" / "__init__.py").write_text("")
     (package / "jobs" / "fleet.py").write_text("from distributed import Client\n")
     assert edge_import_violations(package) == ["umbmark.jobs.fleet:1 imports distributed"]
+
+
+def test_remote_reading_stays_at_the_edge(tmp_path):
+    """Only ``umbmark.sources.remote`` imports fsspec and its HTTP client: finding,
+    knowing and calibrating a recording at a URL go through it. The check finds an import
+    elsewhere, even inside a function."""
+    assert edge_import_violations() == []
+    package = tmp_path / "umbmark"
+    (package / "fleets").mkdir(parents=True)
+    (package / "sources").mkdir()
+    for init in ("__init__.py", "fleets/__init__.py", "sources/__init__.py"):
+        (package / init).write_text("")
+    (package / "sources" / "remote.py").write_text("import fsspec\nimport aiohttp\n")
+    (package / "fleets" / "outcome.py").write_text(
+        "def f():\n    from fsspec.core import url_to_fs\n    import aiohttp.client\n"
+    )
+    assert edge_import_violations(package) == [
+        "umbmark.fleets.outcome:2 imports fsspec.core",
+        "umbmark.fleets.outcome:3 imports aiohttp.client",
+    ]

@@ -85,3 +85,54 @@ def test_without_a_pattern_the_robot_is_named_by_its_description(tmp_path: Path)
     assert "/front/scan" in str(moved.reason)
     others = calibrate_recording(RecordingTask(str(path), per_robot={"robot01": own["robot02"]}))
     assert others.calibrated  # another robot's options are not its own
+
+
+@pytest.mark.slow
+def test_a_recording_at_a_url_is_copied_calibrated_and_named_by_its_url(tmp_path: Path):
+    """A simulated ROS 2 bag (a folder, MCAP and SQLite), its MCAP file alone and a ROS 1
+    bag, served over HTTP: the outcome of each is the local one's but for the path (the
+    URL), with the local digest; a broken bag's reason names its URL, not the copy; a URL
+    that 404s fails with one line; no copy is left in the temporary folder."""
+    pytest.importorskip("fsspec", reason="the remote extra: pip install '.[remote]'")
+    pytest.importorskip("aiohttp", reason="the remote extra: pip install '.[remote]'")
+    import tempfile
+    from dataclasses import replace
+
+    import umbmark
+
+    from http_served import Served
+
+    recordings = []
+    for storage in ("mcap", "sqlite3", "ros1"):
+        umbmark.simulate_fleet(tmp_path / "f" / storage, fleet=1, days=1, minutes=0.5,
+                               bag_storage=storage)  # fmt: skip
+        (recording,) = (tmp_path / "f" / storage).glob("robot01/*/drive*")
+        recordings.append(recording)
+    recordings.append(recordings[0] / "drive.mcap")
+    assert [p.suffix for p in recordings] == ["", "", ".bag", ".mcap"]
+    assert {p.suffix for p in recordings[1].iterdir()} == {".db3", ".yaml"}
+    (tmp_path / "f" / "broken.bag").write_bytes(b"#ROSBAG V2.0\n" + b"\0" * 100)
+    scratch = Path(tempfile.gettempdir())
+    before = {p.name for p in scratch.glob("umbmark-remote-*")}
+    with Served(tmp_path / "f", tmp_path / "http.log") as server:
+        for local in recordings:
+            url = f"{server.url}/{local.relative_to(tmp_path / 'f').as_posix()}"
+            expected = calibrate_recording(RecordingTask(str(local)))
+            assert expected.calibrated
+            got = calibrate_recording(RecordingTask(url))
+            assert got.path == url
+            assert replace(got, path=str(local), record={}) == replace(expected, record={})
+            theirs, ours = dict(got.record), dict(expected.record)
+            assert theirs.pop("overlay").count(url) == 1  # the overlay's provenance: the URL
+            assert ours.pop("overlay").count(str(local)) == 1
+            assert theirs == ours
+        broken = calibrate_recording(RecordingTask(f"{server.url}/broken.bag"))
+        gone = calibrate_recording(RecordingTask(f"{server.url}/robot01/gone.mcap", "robot01"))
+    assert broken.failed
+    assert broken.reason.startswith(f"{server.url}/broken.bag")
+    assert "umbmark-remote-" not in broken.reason
+    assert (gone.failed, gone.robot, gone.digest) == (True, "robot01", None)
+    assert (
+        gone.reason == f"{server.url}/robot01/gone.mcap: cannot be read (HTTP 404 File not found)"
+    )
+    assert {p.name for p in scratch.glob("umbmark-remote-*")} == before

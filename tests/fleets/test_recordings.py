@@ -80,3 +80,36 @@ def test_bad_sources(tree: Path, tmp_path: Path):
     (bad_day / "x.mcap").write_bytes(b"")
     with pytest.raises(InputError, match="is no date"):
         find_recordings([tree], "{robot}/{date}/*")
+
+
+def test_urls_are_found_and_named_as_their_paths_are(tree: Path, tmp_path: Path):
+    """The same folder served over HTTP (index pages) and as ``file://``: the same
+    recordings, robots and days as on disk; a glob; a recording's URL taken as given; a glob
+    that matches nothing refused."""
+    pytest.importorskip("fsspec", reason="the remote extra: pip install '.[remote]'")
+    pytest.importorskip("aiohttp", reason="the remote extra: pip install '.[remote]'")
+    from http_served import Served
+
+    local = [
+        (Path(f.path).relative_to(tree).as_posix(), f.robot, f.day)
+        for f in find_recordings([tree], "{robot}/{date}/*")
+    ]
+    assert len(local) == 4
+
+    def named(found: list, prefix: str) -> list:  # type: ignore[type-arg]
+        return [(f.path.removeprefix(prefix).rstrip("/"), f.robot, f.day) for f in found]
+
+    with Served(tree.parent, tmp_path / "http.log") as server:
+        url = f"{server.url}/{tree.name}/"
+        assert named(find_recordings([url], "{robot}/{date}/*"), url) == local
+        globbed = find_recordings([f"{url}r1/*/*.mcap", f"{server.url}/elsewhere/gone.bag"],
+                                  "{robot}/{date}/*.mcap")  # fmt: skip
+        assert named(globbed, url) == [
+            ("r1/2026-11-01/a.mcap", "r1", dt.date(2026, 11, 1)),
+            ("r1/2026-11-02/b.mcap", "r1", dt.date(2026, 11, 2)),
+            (f"{server.url}/elsewhere/gone.bag", None, None),
+        ]
+        with pytest.raises(InputError, match="matches no file or folder"):
+            find_recordings([f"{url}*/1999-*"])
+    on_disk = f"file://{tree}/"
+    assert named(find_recordings([on_disk], "{robot}/{date}/*"), on_disk) == local

@@ -68,3 +68,39 @@ def test_identity_is_path_size_and_time(tmp_path: Path):
     (folder / "metadata.yaml").write_text("x")
     (folder / "bag_0.db3").write_bytes(b"yy")
     assert "|3|" in identity(str(folder))
+
+
+def test_a_urls_identity_is_url_size_and_version_and_an_unreadable_one_matches_nothing(
+    tmp_path: Path,
+):
+    """``file://`` and ``memory://`` through fsspec: the URL and size, and a version that
+    follows the modification time; a URL that cannot be read: empty, which no recording
+    done has (it is done again)."""
+    import os
+
+    import pytest
+
+    pytest.importorskip("fsspec", reason="the remote extra: pip install '.[remote]'")
+    one = tmp_path / "a.mcap"
+    one.write_bytes(b"x" * 10)
+    url = f"file://{one}"
+    first = identity(url)
+    assert first.startswith(f"{url}|10|")
+    assert identity(url) == first
+    os.utime(one, ns=(one.stat().st_atime_ns, one.stat().st_mtime_ns + 10**9))
+    assert identity(url).startswith(f"{url}|10|")
+    assert identity(url) != first
+    folder = tmp_path / "bag"
+    folder.mkdir()
+    (folder / "metadata.yaml").write_text("x")
+    (folder / "bag_0.db3").write_bytes(b"yy")
+    assert identity(f"file://{folder}").startswith(f"file://{folder}|3|")
+    gone = f"memory:///umbmark-{os.getpid()}/gone.mcap"
+    assert identity(gone) == ""
+    store = History(tmp_path / "h.sqlite3")
+    key = options_key({})
+    record_recording(store, _row(gone, "calibrated", "d1", key), None)  # identity gone|1|2
+    unreadable = RecordingRow("amr1", gone, "d2", identity(gone), key, 0.0, 1.0, "left out",
+                              "why", {})  # fmt: skip
+    record_recording(store, unreadable, None)
+    assert set(done_recordings(store)) == {f"{gone}|1|2"}  # the empty identity: none

@@ -45,14 +45,15 @@ def fleet(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     changed.
 
     SOURCES: recordings (ROS 1 and 2 bags, MCAP, run logs, OptiOdom sessions), folders
-    to search, or globs, of many robots and days. Each recording is calibrated by what
-    it holds, on a Dask cluster (local by default): scan matching where it has wheels and
-    a laser, a trajectory fit where it has an independent reference, else left out with
-    the reason. Every result goes into the history (--history), per robot with the
-    recording's time and digest; a recording already there with the same options is not
-    done again, so a nightly run does only the new ones. Prints every robot's latest
-    figures with their 95 % intervals and flags a robot whose figures stepped (since which
-    recording) or trend (per week) beyond its own intervals.
+    to search, or globs, of many robots and days; paths, or URLs (https://, s3://, ...:
+    the remote extra). Each recording is calibrated by what it holds, on a Dask cluster
+    (local by default): scan matching where it has wheels and a laser, a trajectory fit
+    where it has an independent reference, else left out with the reason. Every result
+    goes into the history (--history), per robot with the recording's time and digest; a
+    recording already there with the same options is not done again, so a nightly run
+    does only the new ones. Prints every robot's latest figures with their 95 % intervals
+    and flags a robot whose figures stepped (since which recording) or trend (per week)
+    beyond its own intervals.
     """
     from umbmark import fleet as run_fleet
     from umbmark.cli.common import command_line, console, note, wrote

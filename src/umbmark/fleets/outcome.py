@@ -282,18 +282,52 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
     -------
     RecordingOutcome
         Calibrated, left out (``reason``) or failed (``failed``, ``reason``): never an
-        exception for a recording that cannot be read.
+        exception for a recording that cannot be read. A recording at a URL is copied
+        first (:func:`_remote`); its outcome keeps the URL.
     """
+    from umbmark.sources.remote import is_url
+
+    if is_url(task.path):
+        return _remote(task)
+    return _local(task, Path(task.path), None)
+
+
+def _remote(task: RecordingTask) -> RecordingOutcome:
+    """A recording at a URL streamed into a private temporary folder
+    (:func:`umbmark.sources.remote.fetched`: its SHA-256 taken on the way), calibrated
+    there, and the copy deleted whatever happens; the outcome (its reason, the overlay's
+    provenance) names the URL, never the copy."""
+    from dataclasses import replace
+
+    from umbmark.sources.remote import fetched
+
+    try:
+        with fetched(task.path) as (local, digest):
+            outcome = _local(task, local, digest)
+    except InputError as exc:
+        robot = task.robot or "unnamed"
+        return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
+    url = task.path.rstrip("/")
+    overlay = outcome.record.get("overlay")
+    record = dict(outcome.record)
+    if overlay:
+        record["overlay"] = overlay.replace(str(local), url)
+    reason = None if outcome.reason is None else outcome.reason.replace(str(local), url)
+    return replace(outcome, reason=reason, record=record)
+
+
+def _local(task: RecordingTask, path: Path, digest: str | None) -> RecordingOutcome:
+    """``task``'s recording read at ``path`` (itself, or its local copy); ``digest``: its
+    SHA-256 where already taken."""
     from umbmark.core.digest import path_sha256
     from umbmark.runs.load import detect_format
 
-    path = Path(task.path)
     robot = task.robot or "unnamed"
     try:
-        digest = path_sha256(path)
+        digest = digest or path_sha256(path)
         kind = detect_format(path)
         if kind in LOGGED:
-            return _logged(task, digest, kind)
+            return _logged(task, path, digest, kind)
         info = _bag_info(path, kind)
     except (InputError, ProblemError, OSError) as exc:
         return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
@@ -339,9 +373,9 @@ def _calibrated(
     )
 
 
-def _logged(task: RecordingTask, digest: str | None, kind: str) -> RecordingOutcome:
-    """A run log or an OptiOdom session: wheels and motion capture, so a trajectory fit."""
-    path = Path(task.path)
+def _logged(task: RecordingTask, path: Path, digest: str | None, kind: str) -> RecordingOutcome:
+    """A run log or an OptiOdom session at ``path`` (itself, or its local copy): wheels and
+    motion capture, so a trajectory fit."""
     robot = task.robot or "unnamed"
     try:
         result = _calibrate(path, TRAJECTORY.name, task.options_for(robot))

@@ -5,13 +5,18 @@
   for recordings (a folder that is a recording is not searched further), or a glob
   (``fleet/*/2026-11-*``). The search is bounded: :data:`MAX_DEPTH` folders deep,
   :data:`MAX_RECORDINGS` recordings.
+  A source may be a URL (``https://``, ``s3://``, ``gs://``, ``file://``, anything fsspec
+  knows) to a recording, a folder or a glob, found the same way through
+  :mod:`umbmark.sources.remote` (a folder only where its filesystem lists: an HTTP server
+  only with index pages).
 - **Named**: ``robot_from``, a pattern of the recording's path (``{robot}/{date}/*.mcap``:
   ``{robot}`` and ``{date}`` stand for one path component each, or part of one, ``*`` for
   any part of one component, ``**`` for any components), gives the robot and the day;
   it is matched against the path relative to the folder searched, else against the end
-  of the path. ``{date}`` takes ``YYYY-MM-DD`` or
-  ``YYYYMMDD``. Without a pattern, or where it names no robot, the robot is None here and
-  comes from the recording itself (its namespace or robot description) when it is read.
+  of the path (of a URL, its path: :func:`~umbmark.sources.remote.url_path`). ``{date}``
+  takes ``YYYY-MM-DD`` or ``YYYYMMDD``. Without a pattern, or where it names no robot, the
+  robot is None here and comes from the recording itself (its namespace or robot
+  description) when it is read.
 """
 
 from __future__ import annotations
@@ -53,7 +58,7 @@ class FleetRecording:
     Attributes
     ----------
     path : str
-        The recording (a file or a ROS 2 bag's / run log's folder).
+        The recording (a file or a ROS 2 bag's / run log's folder), or its URL.
     robot : str or None
         Its robot, from the pattern; None: from the recording when it is read.
     day : datetime.date or None
@@ -179,6 +184,23 @@ def _expand(source: str) -> list[Path]:
     return [path]
 
 
+def _found(source: str) -> Iterator[tuple[str, str, str, str]]:
+    """Each recording of a source: its path (or URL), the key it is known by once, the path
+    the pattern is matched against, and the folder searched."""
+    from umbmark.sources.remote import expand, is_url, searched, url_path, walk
+
+    if is_url(source):
+        base = searched(source)
+        for top in expand(source, MAX_DEPTH):
+            for url in walk(top, MAX_DEPTH):
+                yield url, url.rstrip("/"), url_path(url), base
+        return
+    base = _base(source)
+    for root in _expand(source):
+        for path in _walk(root, 0):
+            yield str(path), str(path.resolve()), path.as_posix(), base
+
+
 def find_recordings(
     sources: Sequence[str | os.PathLike[str]], robot_from: str | None = None
 ) -> list[FleetRecording]:
@@ -186,8 +208,8 @@ def find_recordings(
 
     Parameters
     ----------
-    sources : sequence of path or glob
-        Recordings, folders to search, or globs.
+    sources : sequence of path, glob or URL
+        Recordings, folders to search, or globs; local or URLs.
     robot_from : str, optional
         A pattern of the recordings' paths naming the robot and the day (see the module).
 
@@ -200,7 +222,8 @@ def find_recordings(
     ------
     InputError
         For a source that does not exist or matches nothing, no recording found, more
-        than :data:`MAX_RECORDINGS`, or a bad pattern.
+        than :data:`MAX_RECORDINGS`, a bad pattern, or a URL without fsspec installed or
+        whose folder cannot be listed.
     """
     if not sources:
         raise InputError("give the fleet's recordings: folders, globs or files")
@@ -208,26 +231,20 @@ def find_recordings(
     seen: set[str] = set()
     found: list[FleetRecording] = []
     for source in sources:
-        base = _base(os.fspath(source))
-        for root in _expand(os.fspath(source)):
-            for path in _walk(root, 0):
-                key = str(path.resolve())
-                if key in seen:
-                    continue
-                seen.add(key)
-                if len(found) >= MAX_RECORDINGS:
-                    raise InputError(
-                        f"more than {MAX_RECORDINGS} recordings", source=os.fspath(source)
-                    )
-                text = path.as_posix()
-                robot, day = None, None
-                match = match_path(regex, text, base) if regex is not None else None
-                if match is not None:
-                    groups = match.groupdict()
-                    robot = groups.get("robot")
-                    if groups.get("date"):
-                        day = _day(groups["date"], text)
-                found.append(FleetRecording(str(path), robot, day))
+        for path, key, text, base in _found(os.fspath(source)):
+            if key in seen:
+                continue
+            seen.add(key)
+            if len(found) >= MAX_RECORDINGS:
+                raise InputError(f"more than {MAX_RECORDINGS} recordings", source=os.fspath(source))
+            robot, day = None, None
+            match = match_path(regex, text, base) if regex is not None else None
+            if match is not None:
+                groups = match.groupdict()
+                robot = groups.get("robot")
+                if groups.get("date"):
+                    day = _day(groups["date"], path)
+            found.append(FleetRecording(path, robot, day))
     if not found:
         names = ", ".join(os.fspath(s) for s in sources)
         raise InputError(f"no recording (ROS bag, MCAP, run log) found in {names}")

@@ -19,6 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+from umbmark.core.errors import InputError
+from umbmark.sources.remote import identity as remote_identity
+from umbmark.sources.remote import is_url
 from umbmark.store.history import History
 from umbmark.store.records import NewCalibration
 
@@ -45,8 +48,9 @@ class RecordingRow:
     digest : str or None
         SHA-256 of its bytes.
     identity : str
-        Its path, size and modification time (:func:`identity`): a recording seen before
-        is known by it without reading its bytes again.
+        Its path, size and modification time, or its URL, size and version
+        (:func:`identity`): a recording seen before is known by it without reading its
+        bytes again.
     options_key : str
         The reading options it was read with (:func:`options_key`).
     start : float or None
@@ -83,7 +87,17 @@ def options_key(options: Mapping[str, Any]) -> str:
 
 def identity(path: str) -> str:
     """A recording's path, size and modification time, as one text (a folder's: of its
-    files): what tells a recording seen before without reading its bytes."""
+    files): what tells a recording seen before without reading its bytes.
+
+    A recording at a URL: the URL, its size and what its filesystem says of its version
+    (ETag, last modification, ...: :func:`umbmark.sources.remote.identity`); an empty
+    text, which matches no recording done, where that cannot be read (it is done again,
+    and fails there with its reason if it cannot be read at all)."""
+    if is_url(path):
+        try:
+            return remote_identity(path)
+        except InputError:
+            return ""
     where = Path(path)
     files = sorted(p for p in where.rglob("*") if p.is_file()) if where.is_dir() else [where]
     stats = [(p.stat().st_size, p.stat().st_mtime_ns) for p in files]

@@ -1,0 +1,102 @@
+"""Folders served over HTTP by real servers started as separate processes on a free port of
+this machine, for the tests of recordings at URLs; ended by their PIDs.
+
+- :class:`Served`: Python's own ``python -m http.server`` (index pages for folders,
+  ``Content-Length`` and ``Last-Modified`` for files, no range requests).
+- :class:`Unsized`: a server that answers every path with one file's bytes and no
+  ``Content-Length`` (the size is known only once it is read).
+"""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+#: A server that sends a file's bytes without saying their length (HTTP/1.0, closed at the
+#: end), to every GET and HEAD.
+_UNSIZED = """
+import sys
+from http.server import BaseHTTPRequestHandler, HTTPServer
+
+data = open(sys.argv[2], "rb").read()
+
+class Handler(BaseHTTPRequestHandler):
+    protocol_version = "HTTP/1.0"
+
+    def do_HEAD(self):
+        self.send_response(200)
+        self.send_header("Content-Type", "application/octet-stream")
+        self.end_headers()
+
+    def do_GET(self):
+        self.do_HEAD()
+        self.wfile.write(data)
+
+    def log_message(self, *args):
+        pass
+
+HTTPServer(("127.0.0.1", int(sys.argv[1])), Handler).serve_forever()
+"""
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+class _Server:
+    """A server process on ``127.0.0.1:port``, ended by its PID."""
+
+    def __init__(self, args: list[str], port: int, log: Path) -> None:
+        self.port = port
+        self.url = f"http://127.0.0.1:{port}"
+        self._log = open(log, "wb")  # noqa: SIM115 (closed by close)
+        self.proc = subprocess.Popen(args, stdout=self._log, stderr=self._log)
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            if self.proc.poll() is not None:
+                raise AssertionError(f"the server ended: {log.read_text()}")
+            with socket.socket() as s:
+                if s.connect_ex(("127.0.0.1", port)) == 0:
+                    return
+            time.sleep(0.05)
+        self.close()
+        raise AssertionError("the server did not start")
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self._log.close()
+
+    def __enter__(self) -> _Server:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class Served(_Server):
+    """``python -m http.server --bind 127.0.0.1 PORT --directory folder``."""
+
+    def __init__(self, folder: Path, log: Path) -> None:
+        port = free_port()
+        args = [sys.executable, "-m", "http.server", "--bind", "127.0.0.1", str(port),
+                "--directory", str(folder)]  # fmt: skip
+        super().__init__(args, port, log)
+
+
+class Unsized(_Server):
+    """Every path answered with ``file``'s bytes, no ``Content-Length``."""
+
+    def __init__(self, file: Path, log: Path) -> None:
+        port = free_port()
+        super().__init__([sys.executable, "-c", _UNSIZED, str(port), str(file)], port, log)
