@@ -22,8 +22,9 @@ from test_readme import SHELLS, Block, blocks, commands
 from helpers import ROOT, umbmark_command
 
 DOCS = ROOT / "docs"
-#: Pages whose examples take more than a few seconds (self-calibrations, simulations).
-SLOW_PAGES = {"selfcal.md", "commands.md", "recorded.md"}
+#: Pages whose examples take more than a few seconds (self-calibrations, simulations, a
+#: fleet on its local cluster, scan matching).
+SLOW_PAGES = {"selfcal.md", "commands.md", "recorded.md", "fleet.md", "scan-matching.md"}
 
 
 def _runnable(page: Path) -> list[Block]:
