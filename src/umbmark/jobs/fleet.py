@@ -175,8 +175,9 @@ def fleet(
 
     Parameters
     ----------
-    *sources : path or glob
-        Recordings (ROS 1 and 2 bags, MCAP), folders to search, globs.
+    *sources : path, glob or URL
+        Recordings (ROS 1 and 2 bags, MCAP, run logs, OptiOdom sessions), folders to
+        search, globs; local, or at URLs fsspec reads (the ``remote`` extra).
     robot_from : str, optional
         A pattern of the recordings' paths naming the robot and the day
         (``{robot}/{date}/*.mcap``); else the robot comes from the recording.
