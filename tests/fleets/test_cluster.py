@@ -6,7 +6,8 @@ What is checked: every item comes back once, to this process, in the order they 
 an item whose function raises comes back failed with its one-line reason while the others
 go on; the same work on an existing cluster (``scheduler=``, and Dask's own
 ``DASK_SCHEDULER_ADDRESS``) gives the same results as the local run; a worker killed
-mid-item loses nothing (its item is redone on another worker).
+mid-item loses nothing (its item is redone on another worker); a local cluster starts
+while Dask's default dashboard port is taken.
 """
 
 from __future__ import annotations
@@ -46,6 +47,25 @@ def test_a_local_cluster_returns_every_item_once_and_names_the_failed_one():
         else:
             assert by[k].result == n * n
             assert by[k].error is None
+
+
+@pytest.mark.slow
+def test_a_local_cluster_starts_without_a_warning_while_port_8787_is_taken():
+    """Dask's default dashboard port taken (by another fleet run on this machine): the local
+    cluster's HTTP server takes a free port instead of warning (warnings are errors)."""
+    import socket
+
+    holder = socket.socket()
+    try:
+        holder.bind(("127.0.0.1", 8787))
+        holder.listen()
+    except OSError:  # taken already: the same situation
+        pass
+    try:
+        done = _collect(fleet_tasks.square_or_refuse, [3], workers=1)
+    finally:
+        holder.close()
+    assert [(d.result, d.error) for d in done] == [(9, None)]
 
 
 @pytest.mark.slow

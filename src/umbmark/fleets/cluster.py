@@ -131,7 +131,9 @@ def _client(address: str | None, workers: int | None, timeout: float) -> Iterato
                 n_workers=n,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                # Its HTTP server on a free port: Dask's default, 8787, is taken by any
+                # other cluster on this machine (another fleet run), and then it warns.
+                dashboard_address=":0",
                 silence_logs=logging.ERROR,
                 local_directory=scratch,  # the workers' scratch space, removed after
             )
