@@ -44,13 +44,27 @@ class Cluster:
             "--dashboard-address", ":0", "--no-show",
         )  # fmt: skip
         self._wait_for_port()
-        self.workers = [
+        self.workers: list[subprocess.Popen[bytes]] = []
+        self.add_workers(workers)
+
+    def add_workers(self, n: int) -> None:
+        """Start ``n`` more workers (one process and one thread each) and wait until the
+        scheduler has them all."""
+        first = len(self.workers)
+        self.workers += [
             self._start("worker", self.address, "--nworkers", "1", "--nthreads", "1",
                         "--no-nanny", "--dashboard-address", ":0", "--name", f"w{k}",
-                        "--local-directory", str(tmp))
-            for k in range(workers)
+                        "--local-directory", str(self.logs))
+            for k in range(first, first + n)
         ]  # fmt: skip
-        self._wait_for_workers(workers)
+        self._wait_for_workers(sum(proc.poll() is None for proc in self.workers))
+
+    def kill(self, pid: int) -> int:
+        """SIGKILL one worker by its PID (no goodbye to the scheduler), wait until it is
+        dead; returns its exit status (``-SIGKILL``)."""
+        (proc,) = [p for p in self.workers if p.pid == pid]
+        os.kill(pid, signal.SIGKILL)
+        return proc.wait(timeout=30)
 
     def _start(self, *args: str) -> subprocess.Popen[bytes]:
         log = open(self.logs / f"{args[0]}-{time.monotonic_ns()}.log", "wb")  # noqa: SIM115

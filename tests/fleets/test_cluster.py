@@ -6,8 +6,9 @@ What is checked: every item comes back once, to this process, in the order they 
 an item whose function raises comes back failed with its one-line reason while the others
 go on; the same work on an existing cluster (``scheduler=``, and Dask's own
 ``DASK_SCHEDULER_ADDRESS``) gives the same results as the local run; a worker killed
-mid-item loses nothing (its item is redone on another worker); a local cluster starts
-while Dask's default dashboard port is taken.
+mid-item loses nothing (its item is redone on another worker), nor does one killed holding a
+finished result not yet fetched, also inside the caller's own ``with Client(...)``; a local
+cluster starts while Dask's default dashboard port is taken.
 """
 
 from __future__ import annotations
@@ -116,6 +117,40 @@ def test_a_worker_killed_mid_item_loses_nothing(cluster: Cluster, tmp_path: Path
     assert {d.index: d.result[0] for d in done} == {n: n * n for n in range(4)}
     # The killed worker's item was redone by the other worker.
     assert all(d.result[1] != killed[0] for d in done)
+
+
+@pytest.mark.slow
+def test_a_result_lost_with_its_worker_is_computed_again_inside_the_callers_client(
+    cluster: Cluster, tmp_path: Path
+):
+    """Item 1 finished on a worker, which is killed before this process fetched its result:
+    it is computed again on the other worker, also where the caller runs the engine inside
+    ``with Client(...)`` of its own (that client is then Dask's current one)."""
+    from distributed import Client
+
+    items = [(0, str(tmp_path), 0.0), (1, str(tmp_path), 1.0)]
+    done: list[Done] = []
+    killed: list[int] = []
+    with Client(cluster.address, timeout=60) as own:
+        pids = own.run(os.getpid)
+
+        def on_done(d: Done) -> None:
+            done.append(d)
+            if killed:
+                return
+            deadline = time.monotonic() + 60
+            while not (held := own.run_on_scheduler(fleet_tasks.holders, 1)):
+                assert time.monotonic() < deadline, "item 1 did not finish"
+                time.sleep(0.02)
+            killed.append(pids[held[0]])
+            assert cluster.kill(killed[0]) == -signal.SIGKILL
+
+        assert run_each(fleet_tasks.slow_square, items, on_done, scheduler=cluster.address) == 2
+    assert [d.index for d in done] == [0, 1]
+    assert [d.error for d in done] == [None, None]
+    assert done[1].result is not None
+    assert done[1].result[0] == 1
+    assert done[1].result[1] != killed[0]  # computed again, by the other worker
 
 
 def test_no_scheduler_at_the_address_is_one_line():

@@ -195,7 +195,11 @@ def run_each(
         where = {future.key: k for k, future in enumerate(futures)}
         finished = 0
         try:
-            for future in as_completed(futures):
+            # On this client's own event loop: by default as_completed takes the current
+            # client's, which is the caller's where it runs inside ``with Client(...)``, and
+            # a result lost with its worker is then waited for on the wrong loop (a
+            # RuntimeError, the item reported failed) instead of being computed again.
+            for future in as_completed(futures, loop=client.loop):
                 k = where[future.key]
                 try:
                     done: Done[T, R] = Done(k, items[k], future.result())
