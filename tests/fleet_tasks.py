@@ -27,6 +27,16 @@ def slow_square(task: tuple[int, str, float]) -> tuple[int, int]:
     return n * n, os.getpid()
 
 
+def executing(dask_worker) -> dict[str, str]:  # type: ignore[no-untyped-def]
+    """What a worker is running right now, by its own state (``Client.run`` hands it the
+    worker): each task it executes (in its thread, not waiting), its key and the path of
+    the recording it calibrates."""
+    return {
+        str(ts.key): next((a.path for a in ts.run_spec.args if hasattr(a, "path")), "")
+        for ts in dask_worker.state.executing
+    }
+
+
 def holders(n: int, dask_scheduler=None) -> list[str]:  # type: ignore[no-untyped-def]
     """The workers holding the finished result of :func:`slow_square`'s item ``n``, by the
     scheduler's own state (``Client.run_on_scheduler`` hands it the scheduler); none while

@@ -1,0 +1,153 @@
+"""The whole fleet job (``umbmark.fleet``) on a real Dask cluster whose workers are killed
+mid-run: a scheduler and two workers started as separate processes with Dask's own
+command-line programs on a free port of this machine (``tests/dask_cluster.py``), the
+recordings a small simulated fleet (ROS 2 bags of ordinary driving with wheels and a
+laser, calibrated by scan matching, about a second each on a worker).
+
+What is checked: a worker killed with SIGKILL (by its PID) while it calibrates a recording
+loses nothing: the recording is redone on the other worker, every recording is done
+exactly once in the run's report and in the history, none failed, the figures are those
+of a local run of the same recordings (``workers=1``, no scheduler) to the last bit, and
+the killed worker's process is dead.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import sqlite3
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
+
+from distributed import Client
+
+import umbmark
+from umbmark.store.fleet_recordings import read_recordings
+from umbmark.store.history import History
+
+import fleet_tasks
+from dask_cluster import Cluster
+
+ROBOTS, DAYS = 2, 3
+#: Each recording's driving [min]: about a second of scan matching on one worker.
+MINUTES = 4.0
+PATTERN = "{robot}/{date}/*"
+#: When an overlay was written, in its first line: what two runs of a recording differ in.
+WRITTEN = re.compile(r" on \d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}Z ")
+
+
+def _but_when(outcome: dict[str, Any]) -> dict[str, Any]:
+    """A recording's outcome (``RecordingOutcome.to_dict()``) without the time its overlay
+    was written."""
+    record = dict(outcome["record"])
+    if "overlay" in record:
+        record["overlay"] = WRITTEN.sub(" on (when) ", record["overlay"], count=1)
+    return {**outcome, "record": record}
+
+
+@pytest.fixture(scope="module")
+def recordings(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("faults") / "fleet"
+    umbmark.simulate_fleet(folder, fleet=ROBOTS, days=DAYS, minutes=MINUTES, seed=4)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def expected(recordings: Path) -> set[str]:
+    """Every recording's path, as the simulator that wrote them lists them."""
+    truth = json.loads((recordings / "truth.json").read_text(encoding="utf-8"))
+    paths = {r["path"] for r in truth["recordings"]}
+    assert len(paths) == ROBOTS * DAYS
+    return paths
+
+
+@pytest.fixture(scope="module")
+def local(recordings: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """The local run's outcome of every recording (one worker, no scheduler), by path, each
+    without the time its overlay was written."""
+    history = tmp_path_factory.mktemp("local") / "h.sqlite3"
+    report = umbmark.fleet(recordings, robot_from=PATTERN, history=history, workers=1)
+    return {o.path: _but_when(o.to_dict()) for o in report.done}
+
+
+def _busy_worker(watch: Client) -> tuple[str, str, str]:
+    """A worker calibrating a recording right now, by its own state: its address, the
+    task's key and the recording's path (waits until one is; a worker between two
+    recordings has none)."""
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        running = watch.run(fleet_tasks.executing)
+        for address in sorted(running):
+            for key, path in running[address].items():
+                return address, key, path
+        time.sleep(0.02)
+    raise AssertionError("no worker was calibrating a recording")
+
+
+def _history(path: Path) -> tuple[Counter[str], Counter[str], int]:
+    """The history's recordings by path, as read back by the store (its latest row of
+    each) and as its table holds them (every row), and how many calibrations it holds."""
+    read = Counter(row.path for row in read_recordings(History(path)))
+    with sqlite3.connect(path) as db:
+        rows = Counter(str(r[0]) for r in db.execute("SELECT path FROM recordings"))
+        calibrations = int(db.execute("SELECT count(*) FROM calibrations").fetchone()[0])
+    return read, rows, calibrations
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_recording_loses_nothing(
+    recordings: Path, expected: set[str], local: dict[str, Any], cluster: Cluster, tmp_path: Path
+):
+    """The kill comes from the job's own ``progress`` callback once the first recording has
+    come back, while the other recordings are in flight on both workers. How we know it
+    lands mid-recording: just before the SIGKILL the worker itself says (its own state,
+    asked through ``Client.run``) that it is executing the task of recording P in its
+    thread, not merely holding it; after it, the scheduler's own record of the worker's
+    removal lists that task among those it was processing (not finished); and P had not
+    come back to the job by then (it comes back later, once, from the other worker)."""
+    history = tmp_path / "h.sqlite3"
+    kill: dict[str, Any] = {}
+    with Client(cluster.address, timeout=60) as watch:
+        pids = watch.run(os.getpid)  # each worker's PID, by its address
+        assert sorted(pids.values()) == sorted(proc.pid for proc in cluster.workers)
+
+        def progress(p: umbmark.FleetProgress) -> None:
+            if kill:
+                return
+            address, key, path = _busy_worker(watch)
+            kill.update(address=address, key=key, path=path, after=p.done)
+            kill["status"] = cluster.kill(pids[address])
+
+        report = umbmark.fleet(recordings, robot_from=PATTERN, history=history,
+                               scheduler=cluster.address, progress=progress)  # fmt: skip
+        events = [e for _, e in watch.get_events(kill["address"])]
+        removed = [e for e in events if e["action"] == "remove-worker"]
+        left = set(watch.nthreads())
+
+    # The worker was killed mid-recording, and is dead.
+    assert kill["path"] in expected
+    assert kill["after"] == 1
+    assert kill["status"] == -signal.SIGKILL
+    with pytest.raises(ProcessLookupError):
+        os.kill(pids[kill["address"]], 0)
+    assert [kill["key"] in e["processing-tasks"] for e in removed] == [True]
+    assert [e["expected"] for e in removed] == [False]
+    assert left == set(pids) - {kill["address"]}
+    paths = [o.path for o in report.done]
+    assert kill["path"] not in paths[: kill["after"]]
+    assert kill["path"] in paths[kill["after"] :]
+    # Nothing lost, nothing twice, nothing failed.
+    assert Counter(paths) == Counter(expected)
+    assert report.failed == ()
+    assert [o.status for o in report.done] == ["calibrated"] * len(expected)
+    assert _history(history) == (Counter(expected), Counter(expected), len(expected))
+    # The figures, and all else each recording gave, are the local run's.
+    assert {o.path: _but_when(o.to_dict()) for o in report.done} == local
