@@ -8,7 +8,9 @@ What is checked: a worker killed with SIGKILL (by its PID) while it calibrates a
 loses nothing: the recording is redone on the other worker, every recording is done
 exactly once in the run's report and in the history, none failed, the figures are those
 of a local run of the same recordings (``workers=1``, no scheduler) to the last bit, and
-the killed worker's process is dead.
+the killed worker's process is dead. Both workers killed mid-run: the job does not wait
+for a worker forever but stops with one line, keeping what finished, and the next run
+(workers started again) does the rest, losing nothing either.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import os
 import re
 import signal
 import sqlite3
+import subprocess
 import time
 from collections import Counter
 from pathlib import Path
@@ -151,3 +154,94 @@ def test_a_worker_killed_mid_recording_loses_nothing(
     assert _history(history) == (Counter(expected), Counter(expected), len(expected))
     # The figures, and all else each recording gave, are the local run's.
     assert {o.path: _but_when(o.to_dict()) for o in report.done} == local
+
+
+def _recorded(history: Path) -> int:
+    """Rows in the history's recordings table (0 while it is being made)."""
+    if not history.exists():
+        return 0
+    try:
+        with sqlite3.connect(history) as db:
+            return int(db.execute("SELECT count(*) FROM recordings").fetchone()[0])
+    except sqlite3.OperationalError:  # the table is being made
+        return 0
+
+
+def _all_busy(watch: Client, workers: int) -> dict[str, str]:
+    """Every worker calibrating a recording right now, by its own state: the recording's
+    path by the worker's address (waits until all ``workers`` are)."""
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        running = watch.run(fleet_tasks.executing)
+        paths = {a: p for a, r in running.items() for p in r.values()}
+        if len(paths) == workers:
+            return paths
+        time.sleep(0.02)
+    raise AssertionError("the workers were not all calibrating a recording")
+
+
+@pytest.mark.slow
+def test_all_workers_killed_mid_run_stop_the_job_with_one_line_and_lose_nothing(
+    recordings: Path, expected: set[str], local: dict[str, Any], cluster: Cluster, tmp_path: Path
+):
+    """``umbmark fleet --scheduler`` with both workers killed (SIGKILL), each while it
+    calibrates a recording (the workers' own state says so just before), once the first
+    recording is in the history: the scheduler is left with no worker, and the job does not
+    wait for one forever. After Dask's own ``distributed.scheduler.no-workers-timeout``
+    (here 2 s, through Dask's environment variable for it) it stops with one line naming
+    the scheduler and exit status 2; what came back before is in the history once and
+    nothing is recorded failed. With workers started again on the same scheduler, the next
+    run does only the rest, and the history then holds every recording once, none failed,
+    each with the local run's outcome."""
+    from helpers import umbmark_command
+
+    history = tmp_path / "h.sqlite3"
+    env = {**os.environ, "DASK_DISTRIBUTED__SCHEDULER__NO_WORKERS_TIMEOUT": "2s"}
+    args = [umbmark_command(), "fleet", str(recordings), "--robot-from", PATTERN,
+            "--history", str(history), "--scheduler", cluster.address, "--json"]  # fmt: skip
+    with Client(cluster.address, timeout=60) as watch:
+        pids = watch.run(os.getpid)
+        proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                env=env)  # fmt: skip
+        try:
+            deadline = time.monotonic() + 300
+            while _recorded(history) < 1:
+                assert time.monotonic() < deadline, "no recording came back"
+                assert proc.poll() is None, proc.communicate()
+                time.sleep(0.05)
+            killed = _all_busy(watch, len(pids))
+            statuses = [cluster.kill(pids[address]) for address in killed]
+            out, err = proc.communicate(timeout=120)
+        finally:
+            if proc.poll() is None:  # it waits for a worker forever
+                proc.kill()
+                proc.communicate()
+    assert statuses == [-signal.SIGKILL] * len(pids)
+    assert (proc.returncode, out) == (2, ""), err
+    kept = _history(history)
+    assert kept[0] == kept[1]  # no recording twice
+    assert set(kept[0].values()) == {1}
+    assert 1 <= len(kept[0]) < len(expected)
+    assert not set(killed.values()) & set(kept[0])  # what was in flight is not recorded
+    assert (proc.returncode, out) == (2, ""), err
+    assert err.splitlines() == [
+        f"umbmark: error: {cluster.address}: the Dask scheduler has had no worker for 2 s, "
+        f"with {len(expected) - len(kept[0])} of {len(expected)} tasks not done: stopped "
+        f"(what finished is kept; start workers: dask worker {cluster.address})"
+    ]
+    with sqlite3.connect(history) as db:
+        assert {r[0] for r in db.execute("SELECT status FROM recordings")} == {"calibrated"}
+    # Workers again on the same scheduler: the next run does only the rest.
+    cluster.add_workers(2)
+    again = subprocess.run(args, capture_output=True, text=True, timeout=600, check=False)
+    assert again.returncode == 0, again.stderr
+    data = json.loads(again.stdout)
+    assert (data["recordings_done"], data["recordings_skipped"]) == (
+        len(expected) - len(kept[0]),
+        len(kept[0]),
+    )
+    assert data["failed"] == []
+    assert _history(history) == (Counter(expected), Counter(expected), len(expected))
+    rows = {row.path: row for row in read_recordings(History(history))}
+    assert {p: row.status for p, row in rows.items()} == dict.fromkeys(expected, "calibrated")
+    assert {p: _but_when(row.outcome) for p, row in rows.items()} == json.loads(json.dumps(local))

@@ -14,6 +14,10 @@ in this process (the one writer of the history).
 - A worker that dies mid-item has the item redone on another worker (the scheduler does
   this, up to :data:`ALLOWED_FAILURES` deaths per item); an item whose function raises is
   reported as failed with its one-line reason, and the others go on.
+- A cluster left with no worker (all died or were stopped) is waited for
+  :data:`NO_WORKERS_TIMEOUT` seconds (Dask's ``distributed.scheduler.no-workers-timeout``,
+  where set), then the run stops with one line (an :class:`InputError`): what finished has
+  already been handed to the caller; the scheduler alone would wait forever.
 - Ctrl-C (``KeyboardInterrupt``) cancels what has not finished and re-raises: what
   finished has already been handed to the caller.
 """
@@ -23,6 +27,7 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
+import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -33,6 +38,7 @@ from umbmark.core.errors import InputError, option
 __all__ = [
     "ALLOWED_FAILURES",
     "ENGINE_MISSING",
+    "NO_WORKERS_TIMEOUT",
     "SCHEDULER_ENV",
     "Done",
     "engine_address",
@@ -52,6 +58,12 @@ ALLOWED_FAILURES = 3
 MAX_LOCAL_WORKERS = 64
 #: Seconds to wait for an existing scheduler to answer.
 CONNECT_TIMEOUT = 30.0
+#: Seconds a run waits while the cluster has no worker and items are not done, before it
+#: stops (Dask's ``distributed.scheduler.no-workers-timeout`` instead, where set): time for
+#: a worker to be restarted, not forever.
+NO_WORKERS_TIMEOUT = 60.0
+#: Seconds between two looks at how many workers the cluster has, while nothing finishes.
+LOOK_EVERY = 1.0
 #: What to install when the engine is missing.
 ENGINE_MISSING = (
     "the fleet runs on Dask distributed, which is not installed: python -m pip install "
@@ -95,6 +107,85 @@ def _one_line(exc: BaseException) -> str:
     if isinstance(exc, InputError):
         return first
     return f"{type(exc).__name__}: {first}" if first else type(exc).__name__
+
+
+def _no_workers_timeout() -> float:
+    """Seconds to wait for a worker: Dask's ``no-workers-timeout`` if set, else ours."""
+    import dask
+    from dask.utils import parse_timedelta
+
+    value = dask.config.get("distributed.scheduler.no-workers-timeout", None)
+    return NO_WORKERS_TIMEOUT if value is None else float(parse_timedelta(value, default="s"))
+
+
+class _Watch:
+    """Whether the cluster has had no worker for too long while items are not done."""
+
+    def __init__(self, client: Any, address: str | None, total: int) -> None:  # noqa: ANN401
+        self.client, self.address, self.total = client, address, total
+        self.left = total  # items not handed over yet
+        self.patience = _no_workers_timeout()
+        self.since: float | None = None  # when the cluster was first seen with no worker
+        self.looked = -LOOK_EVERY
+
+    def _workers(self) -> int | None:
+        """How many workers the scheduler has; None when it cannot say (not answering)."""
+        try:
+            return len(self.client.nthreads())
+        except Exception:  # the scheduler lost: its futures come back cancelled
+            return None
+
+    def check(self) -> None:
+        """Look at the cluster (at most every :data:`LOOK_EVERY` s); raise
+        :class:`InputError` once it has had no worker for the patience."""
+        now = time.monotonic()
+        if now - self.looked >= LOOK_EVERY:
+            self.looked = now
+            if self._workers() != 0:
+                self.since = None
+            elif self.since is None:
+                self.since = now
+        if self.since is not None and now - self.since >= self.patience:
+            where = "the local Dask cluster" if self.address is None else "the Dask scheduler"
+            start = "" if self.address is None else f"; start workers: dask worker {self.address}"
+            raise InputError(
+                f"{where} has had no worker for {self.patience:g} s, with {self.left} of "
+                f"{self.total} tasks not done: stopped (what finished is kept{start})",
+                source=self.address,
+            )
+
+
+def _as_finished(watch: _Watch, futures: list[Any]) -> Iterator[Any]:
+    """``futures`` in the order they finish; an :class:`InputError` from ``watch`` while
+    none finishes."""
+    from distributed import as_completed
+
+    # On this client's own event loop: by default as_completed takes the current client's,
+    # which is the caller's where it runs inside ``with Client(...)``, and a result lost
+    # with its worker is then waited for on the wrong loop (a RuntimeError, the item
+    # reported failed) instead of being computed again.
+    pending = as_completed(futures, loop=watch.client.loop)
+    while not pending.is_empty():
+        if pending.has_ready():
+            yield next(pending)
+            continue
+        watch.check()
+        time.sleep(0.05)
+
+
+def _outcome(watch: _Watch, future: Any) -> tuple[Any, str | None]:  # noqa: ANN401
+    """A finished future's result, or why it failed (one line); an :class:`InputError` from
+    ``watch`` while its result, lost with its worker before it was fetched, waits to be
+    computed again."""
+    while True:
+        try:
+            return future.result(timeout=LOOK_EVERY), None
+        except KeyboardInterrupt:
+            raise
+        except Exception as exc:  # the item failed, or lost too many workers
+            if future.done():
+                return None, _one_line(exc)
+        watch.check()  # not done: its result was lost and waits for a worker
 
 
 @contextmanager
@@ -181,7 +272,9 @@ def run_each(
     Raises
     ------
     InputError
-        Dask is not installed, or no scheduler answers at the address.
+        Dask is not installed, or no scheduler answers at the address, or the cluster has
+        had no worker for :data:`NO_WORKERS_TIMEOUT` seconds (after cancelling what had
+        not finished).
     KeyboardInterrupt
         After cancelling what had not finished.
     """
@@ -189,27 +282,18 @@ def run_each(
         return 0
     address = engine_address(scheduler)
     with _client(address, workers, connect_timeout) as client:
-        from distributed import as_completed
-
         futures = client.map(fn, list(items), pure=False)
         where = {future.key: k for k, future in enumerate(futures)}
+        watch = _Watch(client, address, len(futures))
         finished = 0
         try:
-            # On this client's own event loop: by default as_completed takes the current
-            # client's, which is the caller's where it runs inside ``with Client(...)``, and
-            # a result lost with its worker is then waited for on the wrong loop (a
-            # RuntimeError, the item reported failed) instead of being computed again.
-            for future in as_completed(futures, loop=client.loop):
+            for future in _as_finished(watch, futures):
                 k = where[future.key]
-                try:
-                    done: Done[T, R] = Done(k, items[k], future.result())
-                except KeyboardInterrupt:
-                    raise
-                except Exception as exc:  # the item failed, or lost too many workers
-                    done = Done(k, items[k], None, _one_line(exc))
-                on_done(done)
+                result, error = _outcome(watch, future)
+                on_done(Done(k, items[k], result, error))
                 finished += 1
-        except KeyboardInterrupt:
+                watch.left -= 1
+        except (KeyboardInterrupt, InputError):
             client.cancel([f for f in futures if not f.done()])
             raise
         return finished
