@@ -60,9 +60,9 @@ class Cluster:
         self._wait_for_workers(sum(proc.poll() is None for proc in self.workers))
 
     def kill(self, pid: int) -> int:
-        """SIGKILL one worker by its PID (no goodbye to the scheduler), wait until it is
-        dead; returns its exit status (``-SIGKILL``)."""
-        (proc,) = [p for p in self.workers if p.pid == pid]
+        """SIGKILL one of its processes, a worker or the scheduler, by its PID (no goodbye),
+        wait until it is dead; returns its exit status (``-SIGKILL``)."""
+        (proc,) = [p for p in [*self.workers, self.scheduler] if p.pid == pid]
         os.kill(pid, signal.SIGKILL)
         return proc.wait(timeout=30)
 

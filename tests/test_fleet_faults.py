@@ -8,9 +8,9 @@ What is checked: a worker killed with SIGKILL (by its PID) while it calibrates a
 loses nothing: the recording is redone on the other worker, every recording is done
 exactly once in the run's report and in the history, none failed, the figures are those
 of a local run of the same recordings (``workers=1``, no scheduler) to the last bit, and
-the killed worker's process is dead. Both workers killed mid-run: the job does not wait
-for a worker forever but stops with one line, keeping what finished, and the next run
-(workers started again) does the rest, losing nothing either.
+the killed worker's process is dead. Both workers killed mid-run, or the scheduler: the
+job does not wait forever but stops with one line, keeping what finished (and recording
+nothing as failed), and the next run does the rest, losing nothing either.
 """
 
 from __future__ import annotations
@@ -23,8 +23,9 @@ import sqlite3
 import subprocess
 import time
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import pytest
 
@@ -43,6 +44,7 @@ ROBOTS, DAYS = 2, 3
 #: Each recording's driving [min]: about a second of scan matching on one worker.
 MINUTES = 4.0
 PATTERN = "{robot}/{date}/*"
+T = TypeVar("T")
 #: When an overlay was written, in its first line: what two runs of a recording differ in.
 WRITTEN = re.compile(r" on \d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}Z ")
 
@@ -180,6 +182,69 @@ def _all_busy(watch: Client, workers: int) -> dict[str, str]:
     raise AssertionError("the workers were not all calibrating a recording")
 
 
+def _killed_mid_run(
+    args: list[str], history: Path, kill: Callable[[], T], env: dict[str, str] | None = None
+) -> tuple[T, int, str, str]:
+    """Start ``umbmark ARGS``, ``kill()`` once the first recording is in the history, and
+    wait for it to end: what ``kill`` gave, the exit status, stdout and stderr."""
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env)  # fmt: skip
+    try:
+        deadline = time.monotonic() + 300
+        while _recorded(history) < 1:
+            assert time.monotonic() < deadline, "no recording came back"
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        killed = kill()
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:  # it waits forever
+            proc.kill()
+            proc.communicate()
+    return killed, proc.returncode, out, err
+
+
+def _kept(history: Path, expected: set[str], in_flight: set[str]) -> Counter[str]:
+    """What a run stopped mid-way kept: some recordings, each once, none failed, none of
+    those in flight when it was stopped."""
+    kept = _history(history)
+    assert kept[0] == kept[1]  # none twice
+    assert set(kept[0].values()) == {1}
+    assert kept[2] == len(kept[0])
+    assert 1 <= len(kept[0]) < len(expected)
+    assert set(kept[0]) <= expected
+    assert not in_flight & set(kept[0])
+    with sqlite3.connect(history) as db:
+        assert {r[0] for r in db.execute("SELECT status FROM recordings")} == {"calibrated"}
+    return kept[0]
+
+
+def _does_the_rest(
+    args: list[str], history: Path, expected: set[str], kept: Counter[str], local: dict[str, Any]
+) -> None:
+    """``umbmark ARGS`` again does only what was not kept; the history then holds every
+    recording once, none failed, each with the local run's outcome."""
+    again = subprocess.run(args, capture_output=True, text=True, timeout=600, check=False)
+    assert again.returncode == 0, again.stderr
+    data = json.loads(again.stdout)
+    assert (data["recordings_done"], data["recordings_skipped"]) == (
+        len(expected) - len(kept),
+        len(kept),
+    )
+    assert data["failed"] == []
+    assert _history(history) == (Counter(expected), Counter(expected), len(expected))
+    rows = {row.path: row for row in read_recordings(History(history))}
+    assert {p: row.status for p, row in rows.items()} == dict.fromkeys(expected, "calibrated")
+    assert {p: _but_when(row.outcome) for p, row in rows.items()} == json.loads(json.dumps(local))
+
+
+def _fleet_args(recordings: Path, history: Path, scheduler: str) -> list[str]:
+    from helpers import umbmark_command
+
+    return [umbmark_command(), "fleet", str(recordings), "--robot-from", PATTERN,
+            "--history", str(history), "--scheduler", scheduler, "--json"]  # fmt: skip
+
+
 @pytest.mark.slow
 def test_all_workers_killed_mid_run_stop_the_job_with_one_line_and_lose_nothing(
     recordings: Path, expected: set[str], local: dict[str, Any], cluster: Cluster, tmp_path: Path
@@ -193,55 +258,64 @@ def test_all_workers_killed_mid_run_stop_the_job_with_one_line_and_lose_nothing(
     nothing is recorded failed. With workers started again on the same scheduler, the next
     run does only the rest, and the history then holds every recording once, none failed,
     each with the local run's outcome."""
-    from helpers import umbmark_command
-
     history = tmp_path / "h.sqlite3"
+    args = _fleet_args(recordings, history, cluster.address)
     env = {**os.environ, "DASK_DISTRIBUTED__SCHEDULER__NO_WORKERS_TIMEOUT": "2s"}
-    args = [umbmark_command(), "fleet", str(recordings), "--robot-from", PATTERN,
-            "--history", str(history), "--scheduler", cluster.address, "--json"]  # fmt: skip
     with Client(cluster.address, timeout=60) as watch:
         pids = watch.run(os.getpid)
-        proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                env=env)  # fmt: skip
-        try:
-            deadline = time.monotonic() + 300
-            while _recorded(history) < 1:
-                assert time.monotonic() < deadline, "no recording came back"
-                assert proc.poll() is None, proc.communicate()
-                time.sleep(0.05)
-            killed = _all_busy(watch, len(pids))
-            statuses = [cluster.kill(pids[address]) for address in killed]
-            out, err = proc.communicate(timeout=120)
-        finally:
-            if proc.poll() is None:  # it waits for a worker forever
-                proc.kill()
-                proc.communicate()
-    assert statuses == [-signal.SIGKILL] * len(pids)
-    assert (proc.returncode, out) == (2, ""), err
-    kept = _history(history)
-    assert kept[0] == kept[1]  # no recording twice
-    assert set(kept[0].values()) == {1}
-    assert 1 <= len(kept[0]) < len(expected)
-    assert not set(killed.values()) & set(kept[0])  # what was in flight is not recorded
-    assert (proc.returncode, out) == (2, ""), err
+
+        def kill() -> dict[str, tuple[str, int]]:
+            busy = _all_busy(watch, len(pids))
+            return {a: (path, cluster.kill(pids[a])) for a, path in busy.items()}
+
+        killed, status, out, err = _killed_mid_run(args, history, kill, env)
+    assert [s for _, s in killed.values()] == [-signal.SIGKILL] * len(pids)
+    kept = _kept(history, expected, {path for path, _ in killed.values()})
+    assert (status, out) == (2, ""), err
     assert err.splitlines() == [
         f"umbmark: error: {cluster.address}: the Dask scheduler has had no worker for 2 s, "
-        f"with {len(expected) - len(kept[0])} of {len(expected)} tasks not done: stopped "
+        f"with {len(expected) - len(kept)} of {len(expected)} tasks not done: stopped "
         f"(what finished is kept; start workers: dask worker {cluster.address})"
     ]
-    with sqlite3.connect(history) as db:
-        assert {r[0] for r in db.execute("SELECT status FROM recordings")} == {"calibrated"}
     # Workers again on the same scheduler: the next run does only the rest.
     cluster.add_workers(2)
-    again = subprocess.run(args, capture_output=True, text=True, timeout=600, check=False)
-    assert again.returncode == 0, again.stderr
-    data = json.loads(again.stdout)
-    assert (data["recordings_done"], data["recordings_skipped"]) == (
-        len(expected) - len(kept[0]),
-        len(kept[0]),
-    )
-    assert data["failed"] == []
-    assert _history(history) == (Counter(expected), Counter(expected), len(expected))
-    rows = {row.path: row for row in read_recordings(History(history))}
-    assert {p: row.status for p, row in rows.items()} == dict.fromkeys(expected, "calibrated")
-    assert {p: _but_when(row.outcome) for p, row in rows.items()} == json.loads(json.dumps(local))
+    _does_the_rest(args, history, expected, kept, local)
+
+
+@pytest.mark.slow
+def test_the_scheduler_killed_mid_run_stops_the_job_with_one_line_and_loses_nothing(
+    recordings: Path, expected: set[str], local: dict[str, Any], cluster: Cluster, tmp_path: Path
+):
+    """``umbmark fleet --scheduler`` with the scheduler killed (SIGKILL) once the first
+    recording is in the history, while both workers calibrate one (their own state says so
+    just before): the job stops with one line naming the scheduler and exit status 2, not
+    with Dask's tracebacks, nor with the recordings not done recorded as failed; what came
+    back before is in the history once. The next run, on a new cluster, does only the
+    rest, and the history then holds every recording once, none failed, each with the local
+    run's outcome."""
+    history = tmp_path / "h.sqlite3"
+    args = _fleet_args(recordings, history, cluster.address)
+    with Client(cluster.address, timeout=60) as watch:
+        pids = watch.run(os.getpid)
+
+        def kill() -> tuple[set[str], int]:
+            busy = _all_busy(watch, len(pids))
+            return set(busy.values()), cluster.kill(cluster.scheduler.pid)
+
+        (in_flight, killed), status, out, err = _killed_mid_run(args, history, kill)
+    assert killed == -signal.SIGKILL
+    kept = _kept(history, expected, in_flight)
+    assert (status, out) == (2, ""), err
+    assert err.splitlines() == [
+        f"umbmark: error: {cluster.address}: the Dask scheduler cancelled this run's tasks "
+        f"(lost, or restarted), with {len(expected) - len(kept)} of {len(expected)} not done: "
+        "stopped (what finished is kept)"
+    ]
+    # The next run, on a new cluster, does only the rest.
+    (tmp_path / "again").mkdir()
+    again = Cluster(tmp_path / "again", workers=2)
+    try:
+        _does_the_rest(_fleet_args(recordings, history, again.address), history, expected, kept,
+                       local)  # fmt: skip
+    finally:
+        again.close()

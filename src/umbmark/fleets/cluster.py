@@ -17,7 +17,10 @@ in this process (the one writer of the history).
 - A cluster left with no worker (all died or were stopped) is waited for
   :data:`NO_WORKERS_TIMEOUT` seconds (Dask's ``distributed.scheduler.no-workers-timeout``,
   where set), then the run stops with one line (an :class:`InputError`): what finished has
-  already been handed to the caller; the scheduler alone would wait forever.
+  already been handed to the caller; the scheduler alone would wait forever. A scheduler
+  lost mid-run (its tasks cancelled) stops it at once, the same way, rather than report
+  the items not done as failed; Dask's client, which logs a lost scheduler's tracebacks,
+  is kept quiet.
 - Ctrl-C (``KeyboardInterrupt``) cancels what has not finished and re-raises: what
   finished has already been handed to the caller.
 """
@@ -64,6 +67,9 @@ CONNECT_TIMEOUT = 30.0
 NO_WORKERS_TIMEOUT = 60.0
 #: Seconds between two looks at how many workers the cluster has, while nothing finishes.
 LOOK_EVERY = 1.0
+#: How often a finished item's result is asked for, its scheduler answering, before the
+#: item counts as failed with why it could not be fetched.
+FETCH_TRIES = 3
 #: What to install when the engine is missing.
 ENGINE_MISSING = (
     "the fleet runs on Dask distributed, which is not installed: python -m pip install "
@@ -135,6 +141,18 @@ class _Watch:
         except Exception:  # the scheduler lost: its futures come back cancelled
             return None
 
+    @property
+    def where(self) -> str:
+        return "the local Dask cluster" if self.address is None else "the Dask scheduler"
+
+    def lost(self) -> InputError:
+        """The run stopped: the engine cancelled its tasks (the scheduler lost)."""
+        return InputError(
+            f"{self.where} cancelled this run's tasks (lost, or restarted), with {self.left} "
+            f"of {self.total} not done: stopped (what finished is kept)",
+            source=self.address,
+        )
+
     def check(self) -> None:
         """Look at the cluster (at most every :data:`LOOK_EVERY` s); raise
         :class:`InputError` once it has had no worker for the patience."""
@@ -146,10 +164,9 @@ class _Watch:
             elif self.since is None:
                 self.since = now
         if self.since is not None and now - self.since >= self.patience:
-            where = "the local Dask cluster" if self.address is None else "the Dask scheduler"
             start = "" if self.address is None else f"; start workers: dask worker {self.address}"
             raise InputError(
-                f"{where} has had no worker for {self.patience:g} s, with {self.left} of "
+                f"{self.where} has had no worker for {self.patience:g} s, with {self.left} of "
                 f"{self.total} tasks not done: stopped (what finished is kept{start})",
                 source=self.address,
             )
@@ -174,18 +191,43 @@ def _as_finished(watch: _Watch, futures: list[Any]) -> Iterator[Any]:
 
 
 def _outcome(watch: _Watch, future: Any) -> tuple[Any, str | None]:  # noqa: ANN401
-    """A finished future's result, or why it failed (one line); an :class:`InputError` from
-    ``watch`` while its result, lost with its worker before it was fetched, waits to be
-    computed again."""
+    """A finished future's result, or why its item failed (one line). An
+    :class:`InputError` from ``watch`` while its result, lost with its worker before it
+    was fetched, waits to be computed again; and when the engine cancelled it or its
+    result cannot be fetched, its scheduler lost (the item is not at fault, and no other
+    will finish)."""
+    import asyncio
+
+    tries = 0
     while True:
         try:
             return future.result(timeout=LOOK_EVERY), None
         except KeyboardInterrupt:
             raise
-        except Exception as exc:  # the item failed, or lost too many workers
-            if future.done():
+        except (Exception, asyncio.CancelledError) as exc:
+            if future.status == "error":  # the item raised, or lost too many workers
                 return None, _one_line(exc)
+            if future.cancelled() or watch.client.status != "running":
+                raise watch.lost() from None  # only the engine cancels what this run wants
+            if future.done():  # finished, but its result was not fetched
+                tries += 1
+                if tries >= FETCH_TRIES:
+                    return None, _one_line(exc)
+                time.sleep(LOOK_EVERY)
         watch.check()  # not done: its result was lost and waits for a worker
+
+
+@contextmanager
+def _quiet(name: str) -> Iterator[None]:
+    """Logger ``name`` silent but for CRITICAL: the client logs a lost scheduler's
+    tracebacks, which :func:`run_each` says in one line instead."""
+    logger = logging.getLogger(name)
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 @contextmanager
@@ -200,7 +242,7 @@ def _client(address: str | None, workers: int | None, timeout: float) -> Iterato
         "distributed.worker.daemon": False,  # a worker's own pool may start processes
         "distributed.admin.system-monitor.gil.enabled": False,
     }
-    with dask.config.set(settings):
+    with dask.config.set(settings), _quiet("distributed.client"):
         if address is not None:
             try:
                 client = Client(address, timeout=timeout)
@@ -273,8 +315,8 @@ def run_each(
     ------
     InputError
         Dask is not installed, or no scheduler answers at the address, or the cluster has
-        had no worker for :data:`NO_WORKERS_TIMEOUT` seconds (after cancelling what had
-        not finished).
+        had no worker for :data:`NO_WORKERS_TIMEOUT` seconds, or its scheduler was lost
+        (after cancelling what had not finished).
     KeyboardInterrupt
         After cancelling what had not finished.
     """
