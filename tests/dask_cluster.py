@@ -35,17 +35,25 @@ class Cluster:
     """``dask scheduler`` and ``dask worker`` processes on localhost, ended by PID."""
 
     def __init__(self, tmp: Path, workers: int) -> None:
-        self.port = free_port()
-        self.address = f"tcp://127.0.0.1:{self.port}"
         self.logs = tmp
         self.files: list = []  # type: ignore[type-arg]
-        self.scheduler = self._start(
-            "scheduler", "--host", "127.0.0.1", "--port", str(self.port),
-            "--dashboard-address", ":0", "--no-show",
-        )  # fmt: skip
-        self._wait_for_port()
         self.workers: list[subprocess.Popen[bytes]] = []
-        self.add_workers(workers)
+        try:
+            for _ in range(3):  # a free port can be taken before the scheduler binds it
+                self.port = free_port()
+                self.address = f"tcp://127.0.0.1:{self.port}"
+                self.scheduler = self._start(
+                    "scheduler", "--host", "127.0.0.1", "--port", str(self.port),
+                    "--dashboard-address", ":0", "--no-show",
+                )  # fmt: skip
+                if self._wait_for_port():
+                    break
+            else:
+                raise AssertionError("the scheduler did not start (its port taken, 3 times)")
+            self.add_workers(workers)
+        except BaseException:
+            self.close()
+            raise
 
     def add_workers(self, n: int) -> None:
         """Start ``n`` more workers (one process and one thread each) and wait until the
@@ -71,12 +79,16 @@ class Cluster:
         self.files.append(log)
         return subprocess.Popen([str(DASK), *args], env=_env(), stdout=log, stderr=log)
 
-    def _wait_for_port(self) -> None:
+    def _wait_for_port(self) -> bool:
+        """Whether the scheduler listens on its port; False when it ended (the port was
+        taken)."""
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
+            if self.scheduler.poll() is not None:
+                return False
             with socket.socket() as s:
                 if s.connect_ex(("127.0.0.1", self.port)) == 0:
-                    return
+                    return self.scheduler.poll() is None
             time.sleep(0.1)
         raise AssertionError("the scheduler did not start")
 
@@ -89,7 +101,8 @@ class Cluster:
     def close(self) -> None:
         """End the workers, then the scheduler (a worker told to stop while its scheduler
         goes away can hang in its own closing, here until it is killed 30 s later)."""
-        for group in (self.workers, [self.scheduler]):
+        scheduler = getattr(self, "scheduler", None)  # none yet: it failed to start
+        for group in (self.workers, [scheduler] if scheduler is not None else []):
             for proc in group:
                 if proc.poll() is None:
                     proc.send_signal(signal.SIGTERM)
