@@ -276,7 +276,7 @@ def test_all_workers_killed_mid_run_stop_the_job_with_one_line_and_lose_nothing(
         f"umbmark: error: {cluster.address}: the Dask scheduler has had no worker for 2 s, "
         f"with {len(expected) - len(kept)} of {len(expected)} tasks not done: stopped "
         f"(what finished is kept; start workers: dask worker {cluster.address})"
-    ]
+    ], err
     # Workers again on the same scheduler: the next run does only the rest.
     cluster.add_workers(2)
     _does_the_rest(args, history, expected, kept, local)
@@ -310,7 +310,7 @@ def test_the_scheduler_killed_mid_run_stops_the_job_with_one_line_and_loses_noth
         f"umbmark: error: {cluster.address}: the Dask scheduler cancelled this run's tasks "
         f"(lost, or restarted), with {len(expected) - len(kept)} of {len(expected)} not done: "
         "stopped (what finished is kept)"
-    ]
+    ], err
     # The next run, on a new cluster, does only the rest.
     (tmp_path / "again").mkdir()
     again = Cluster(tmp_path / "again", workers=2)
