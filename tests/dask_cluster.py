@@ -35,34 +35,60 @@ class Cluster:
     """``dask scheduler`` and ``dask worker`` processes on localhost, ended by PID."""
 
     def __init__(self, tmp: Path, workers: int) -> None:
-        self.port = free_port()
-        self.address = f"tcp://127.0.0.1:{self.port}"
         self.logs = tmp
         self.files: list = []  # type: ignore[type-arg]
-        self.scheduler = self._start(
-            "scheduler", "--host", "127.0.0.1", "--port", str(self.port),
-            "--dashboard-address", ":0", "--no-show",
-        )  # fmt: skip
-        self._wait_for_port()
-        self.workers = [
+        self.workers: list[subprocess.Popen[bytes]] = []
+        try:
+            for _ in range(3):  # a free port can be taken before the scheduler binds it
+                self.port = free_port()
+                self.address = f"tcp://127.0.0.1:{self.port}"
+                self.scheduler = self._start(
+                    "scheduler", "--host", "127.0.0.1", "--port", str(self.port),
+                    "--dashboard-address", ":0", "--no-show",
+                )  # fmt: skip
+                if self._wait_for_port():
+                    break
+            else:
+                raise AssertionError("the scheduler did not start (its port taken, 3 times)")
+            self.add_workers(workers)
+        except BaseException:
+            self.close()
+            raise
+
+    def add_workers(self, n: int) -> None:
+        """Start ``n`` more workers (one process and one thread each) and wait until the
+        scheduler has them all."""
+        first = len(self.workers)
+        self.workers += [
             self._start("worker", self.address, "--nworkers", "1", "--nthreads", "1",
                         "--no-nanny", "--dashboard-address", ":0", "--name", f"w{k}",
-                        "--local-directory", str(tmp))
-            for k in range(workers)
+                        "--local-directory", str(self.logs))
+            for k in range(first, first + n)
         ]  # fmt: skip
-        self._wait_for_workers(workers)
+        self._wait_for_workers(sum(proc.poll() is None for proc in self.workers))
+
+    def kill(self, pid: int) -> int:
+        """SIGKILL one of its processes, a worker or the scheduler, by its PID (no goodbye),
+        wait until it is dead; returns its exit status (``-SIGKILL``)."""
+        (proc,) = [p for p in [*self.workers, self.scheduler] if p.pid == pid]
+        os.kill(pid, signal.SIGKILL)
+        return proc.wait(timeout=30)
 
     def _start(self, *args: str) -> subprocess.Popen[bytes]:
         log = open(self.logs / f"{args[0]}-{time.monotonic_ns()}.log", "wb")  # noqa: SIM115
         self.files.append(log)
         return subprocess.Popen([str(DASK), *args], env=_env(), stdout=log, stderr=log)
 
-    def _wait_for_port(self) -> None:
+    def _wait_for_port(self) -> bool:
+        """Whether the scheduler listens on its port; False when it ended (the port was
+        taken)."""
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
+            if self.scheduler.poll() is not None:
+                return False
             with socket.socket() as s:
                 if s.connect_ex(("127.0.0.1", self.port)) == 0:
-                    return
+                    return self.scheduler.poll() is None
             time.sleep(0.1)
         raise AssertionError("the scheduler did not start")
 
@@ -73,15 +99,19 @@ class Cluster:
             client.wait_for_workers(n, timeout=60)
 
     def close(self) -> None:
-        for proc in [*self.workers, self.scheduler]:
-            if proc.poll() is None:
-                proc.send_signal(signal.SIGTERM)
-        for proc in [*self.workers, self.scheduler]:
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        """End the workers, then the scheduler (a worker told to stop while its scheduler
+        goes away can hang in its own closing, here until it is killed 30 s later)."""
+        scheduler = getattr(self, "scheduler", None)  # none yet: it failed to start
+        for group in (self.workers, [scheduler] if scheduler is not None else []):
+            for proc in group:
+                if proc.poll() is None:
+                    proc.send_signal(signal.SIGTERM)
+            for proc in group:
+                try:
+                    proc.wait(timeout=30)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
         for log in self.files:
             log.close()
 

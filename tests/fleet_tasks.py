@@ -27,6 +27,27 @@ def slow_square(task: tuple[int, str, float]) -> tuple[int, int]:
     return n * n, os.getpid()
 
 
+def executing(dask_worker) -> dict[str, str]:  # type: ignore[no-untyped-def]
+    """What a worker is running right now, by its own state (``Client.run`` hands it the
+    worker): each task it executes (in its thread, not waiting), its key and the path of
+    the recording it calibrates."""
+    return {
+        str(ts.key): next((a.path for a in ts.run_spec.args if hasattr(a, "path")), "")
+        for ts in dask_worker.state.executing
+    }
+
+
+def holders(n: int, dask_scheduler=None) -> list[str]:  # type: ignore[no-untyped-def]
+    """The workers holding the finished result of :func:`slow_square`'s item ``n``, by the
+    scheduler's own state (``Client.run_on_scheduler`` hands it the scheduler); none while
+    it is not finished."""
+    for ts in dask_scheduler.tasks.values():
+        args = getattr(ts.run_spec, "args", ())
+        if args and isinstance(args[0], tuple) and args[0][0] == n and ts.state == "memory":
+            return sorted(ws.address for ws in ts.who_has)
+    return []
+
+
 DAY = 86400.0
 T0 = 1_790_000_000.0
 SE = {"E_d": 1e-4, "E_b": 3e-4, "E_s": 2e-4, "laser_x": 3e-4, "laser_y": 3e-4, "laser_yaw": 5e-4}

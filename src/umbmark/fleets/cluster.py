@@ -14,6 +14,13 @@ in this process (the one writer of the history).
 - A worker that dies mid-item has the item redone on another worker (the scheduler does
   this, up to :data:`ALLOWED_FAILURES` deaths per item); an item whose function raises is
   reported as failed with its one-line reason, and the others go on.
+- A cluster left with no worker (all died or were stopped) is waited for
+  :data:`NO_WORKERS_TIMEOUT` seconds (Dask's ``distributed.scheduler.no-workers-timeout``,
+  where set), then the run stops with one line (an :class:`InputError`): what finished has
+  already been handed to the caller; the scheduler alone would wait forever. A scheduler
+  lost mid-run (its tasks cancelled) stops it at once, the same way, rather than report
+  the items not done as failed; Dask's client, which logs a lost scheduler's tracebacks,
+  is kept quiet.
 - Ctrl-C (``KeyboardInterrupt``) cancels what has not finished and re-raises: what
   finished has already been handed to the caller.
 """
@@ -23,6 +30,7 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
+import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -33,6 +41,7 @@ from umbmark.core.errors import InputError, option
 __all__ = [
     "ALLOWED_FAILURES",
     "ENGINE_MISSING",
+    "NO_WORKERS_TIMEOUT",
     "SCHEDULER_ENV",
     "Done",
     "engine_address",
@@ -52,6 +61,15 @@ ALLOWED_FAILURES = 3
 MAX_LOCAL_WORKERS = 64
 #: Seconds to wait for an existing scheduler to answer.
 CONNECT_TIMEOUT = 30.0
+#: Seconds a run waits while the cluster has no worker and items are not done, before it
+#: stops (Dask's ``distributed.scheduler.no-workers-timeout`` instead, where set): time for
+#: a worker to be restarted, not forever.
+NO_WORKERS_TIMEOUT = 60.0
+#: Seconds between two looks at how many workers the cluster has, while nothing finishes.
+LOOK_EVERY = 1.0
+#: How often a finished item's result is asked for, its scheduler answering, before the
+#: item counts as failed with why it could not be fetched.
+FETCH_TRIES = 3
 #: What to install when the engine is missing.
 ENGINE_MISSING = (
     "the fleet runs on Dask distributed, which is not installed: python -m pip install "
@@ -97,6 +115,121 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {first}" if first else type(exc).__name__
 
 
+def _no_workers_timeout() -> float:
+    """Seconds to wait for a worker: Dask's ``no-workers-timeout`` if set, else ours."""
+    import dask
+    from dask.utils import parse_timedelta
+
+    value = dask.config.get("distributed.scheduler.no-workers-timeout", None)
+    return NO_WORKERS_TIMEOUT if value is None else float(parse_timedelta(value, default="s"))
+
+
+class _Watch:
+    """Whether the cluster has had no worker for too long while items are not done."""
+
+    def __init__(self, client: Any, address: str | None, total: int) -> None:  # noqa: ANN401
+        self.client, self.address, self.total = client, address, total
+        self.left = total  # items not handed over yet
+        self.patience = _no_workers_timeout()
+        self.since: float | None = None  # when the cluster was first seen with no worker
+        self.looked = -LOOK_EVERY
+
+    def _workers(self) -> int | None:
+        """How many workers the scheduler has; None when it cannot say (not answering)."""
+        try:
+            return len(self.client.nthreads())
+        except Exception:  # the scheduler lost: its futures come back cancelled
+            return None
+
+    @property
+    def where(self) -> str:
+        return "the local Dask cluster" if self.address is None else "the Dask scheduler"
+
+    def lost(self) -> InputError:
+        """The run stopped: the engine cancelled its tasks (the scheduler lost)."""
+        return InputError(
+            f"{self.where} cancelled this run's tasks (lost, or restarted), with {self.left} "
+            f"of {self.total} not done: stopped (what finished is kept)",
+            source=self.address,
+        )
+
+    def check(self) -> None:
+        """Look at the cluster (at most every :data:`LOOK_EVERY` s); raise
+        :class:`InputError` once it has had no worker for the patience."""
+        now = time.monotonic()
+        if now - self.looked >= LOOK_EVERY:
+            self.looked = now
+            if self._workers() != 0:
+                self.since = None
+            elif self.since is None:
+                self.since = now
+        if self.since is not None and now - self.since >= self.patience:
+            start = "" if self.address is None else f"; start workers: dask worker {self.address}"
+            raise InputError(
+                f"{self.where} has had no worker for {self.patience:g} s, with {self.left} of "
+                f"{self.total} tasks not done: stopped (what finished is kept{start})",
+                source=self.address,
+            )
+
+
+def _as_finished(watch: _Watch, futures: list[Any]) -> Iterator[Any]:
+    """``futures`` in the order they finish; an :class:`InputError` from ``watch`` while
+    none finishes."""
+    from distributed import as_completed
+
+    # On this client's own event loop: by default as_completed takes the current client's,
+    # which is the caller's where it runs inside ``with Client(...)``, and a result lost
+    # with its worker is then waited for on the wrong loop (a RuntimeError, the item
+    # reported failed) instead of being computed again.
+    pending = as_completed(futures, loop=watch.client.loop)
+    while not pending.is_empty():
+        if pending.has_ready():
+            yield next(pending)
+            continue
+        watch.check()
+        time.sleep(0.05)
+
+
+def _outcome(watch: _Watch, future: Any) -> tuple[Any, str | None]:  # noqa: ANN401
+    """A finished future's result, or why its item failed (one line). An
+    :class:`InputError` from ``watch`` while its result, lost with its worker before it
+    was fetched, waits to be computed again; and when the engine cancelled it or its
+    result cannot be fetched, its scheduler lost (the item is not at fault, and no other
+    will finish)."""
+    import asyncio
+
+    tries = 0
+    while True:
+        try:
+            return future.result(timeout=LOOK_EVERY), None
+        except KeyboardInterrupt:
+            raise
+        except (Exception, asyncio.CancelledError) as exc:
+            if future.status == "error":  # the item raised, or lost too many workers
+                return None, _one_line(exc)
+            if future.cancelled() or watch.client.status != "running":
+                raise watch.lost() from None  # only the engine cancels what this run wants
+            if future.done():  # finished, but its result was not fetched
+                tries += 1
+                if tries >= FETCH_TRIES:
+                    return None, _one_line(exc)
+                time.sleep(LOOK_EVERY)
+        watch.check()  # not done: its result was lost and waits for a worker
+
+
+@contextmanager
+def _quiet(name: str) -> Iterator[None]:
+    """Logger ``name`` silent but for CRITICAL: the client logs a lost scheduler's
+    tracebacks, which :func:`run_each` says in one line instead."""
+    logger = logging.getLogger(name)
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 @contextmanager
 def _client(address: str | None, workers: int | None, timeout: float) -> Iterator[Any]:
     try:
@@ -109,7 +242,7 @@ def _client(address: str | None, workers: int | None, timeout: float) -> Iterato
         "distributed.worker.daemon": False,  # a worker's own pool may start processes
         "distributed.admin.system-monitor.gil.enabled": False,
     }
-    with dask.config.set(settings):
+    with dask.config.set(settings), _quiet("distributed.client"):
         if address is not None:
             try:
                 client = Client(address, timeout=timeout)
@@ -131,7 +264,9 @@ def _client(address: str | None, workers: int | None, timeout: float) -> Iterato
                 n_workers=n,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                # Its HTTP server on a free port: Dask's default, 8787, is taken by any
+                # other cluster on this machine (another fleet run), and then it warns.
+                dashboard_address=":0",
                 silence_logs=logging.ERROR,
                 local_directory=scratch,  # the workers' scratch space, removed after
             )
@@ -179,7 +314,9 @@ def run_each(
     Raises
     ------
     InputError
-        Dask is not installed, or no scheduler answers at the address.
+        Dask is not installed, or no scheduler answers at the address, or the cluster has
+        had no worker for :data:`NO_WORKERS_TIMEOUT` seconds, or its scheduler was lost
+        (after cancelling what had not finished).
     KeyboardInterrupt
         After cancelling what had not finished.
     """
@@ -187,23 +324,18 @@ def run_each(
         return 0
     address = engine_address(scheduler)
     with _client(address, workers, connect_timeout) as client:
-        from distributed import as_completed
-
         futures = client.map(fn, list(items), pure=False)
         where = {future.key: k for k, future in enumerate(futures)}
+        watch = _Watch(client, address, len(futures))
         finished = 0
         try:
-            for future in as_completed(futures):
+            for future in _as_finished(watch, futures):
                 k = where[future.key]
-                try:
-                    done: Done[T, R] = Done(k, items[k], future.result())
-                except KeyboardInterrupt:
-                    raise
-                except Exception as exc:  # the item failed, or lost too many workers
-                    done = Done(k, items[k], None, _one_line(exc))
-                on_done(done)
+                result, error = _outcome(watch, future)
+                on_done(Done(k, items[k], result, error))
                 finished += 1
-        except KeyboardInterrupt:
+                watch.left -= 1
+        except (KeyboardInterrupt, InputError):
             client.cancel([f for f in futures if not f.done()])
             raise
         return finished
