@@ -11,7 +11,7 @@ Dask cluster of 1 worker, then of 2 (separate processes). Printed side by side:
   (:func:`umbmark.fleets.outcome.calibrate_recording`, alone in a fresh process) against
   the recording's length (5, 20 and 60 minutes: one window of
   :data:`umbmark.scans.bag.WINDOW`, 5 minutes, then 4 and 12 of them, read one at a
-  time): its growth per minute beyond the first window;
+  time): its growth per minute between the two longer ones;
 - the worker-hours a fleet of 100 robots recording 8 hours a day needs, from the robot-
   hours per worker-hour measured on 1 worker (at the laser's rate and scene simulated
   here: 5 Hz sweeps of 360 beams).
@@ -33,12 +33,16 @@ from pathlib import Path
 import umbmark
 from umbmark.scans.bag import WINDOW
 
+# The peak is this process's own memory's high-water mark (VmHWM, Linux): getrusage's
+# ru_maxrss is kept across exec, so in a child it holds the parent's peak too (here the
+# simulation's) when that was larger.
 _PEAK = """
-import json, resource, sys
+import json, sys
 from umbmark.fleets.outcome import RecordingTask, calibrate_recording
 out = calibrate_recording(RecordingTask(sys.argv[1]))
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB to MiB (Linux)
-print(json.dumps({"peak": peak, "method": out.method, "reason": out.reason}))
+with open("/proc/self/status") as status:
+    kib = next(int(line.split()[1]) for line in status if line.startswith("VmHWM:"))
+print(json.dumps({"peak": kib / 1024.0, "method": out.method, "reason": out.reason}))
 """
 
 
@@ -89,9 +93,10 @@ def main() -> None:
         print("peak memory of one process calibrating one recording:")
         for minutes, peak in lengths:
             print(f"  {minutes:4.1f} min: {peak:7.1f} MiB")
-        beyond = (lengths[2][1] - lengths[0][1]) / (lengths[2][0] - lengths[0][0])
-        print(f"  growth beyond the first {WINDOW / 60:g}-minute window: {beyond:.3f} MiB per "
-              f"minute of recording ({beyond * 480:.0f} MiB more for 8 hours)")  # fmt: skip
+        beyond = (lengths[2][1] - lengths[1][1]) / (lengths[2][0] - lengths[1][0])
+        span = f"{lengths[1][0]:g} to {lengths[2][0]:g} minutes ({WINDOW / 60:g}-minute windows)"
+        print(f"  growth from {span}: {beyond:.3f} MiB per minute of recording "
+              f"({beyond * 480:.0f} MiB more for 8 hours)")  # fmt: skip
         per_worker_hour = one[2] / one[0] * 3600.0  # robot-hours per worker-hour
         need = 100 * 8.0 / per_worker_hour
         print(f"100 robots x 8 h a day: {need:.1f} worker-hours a day at "
