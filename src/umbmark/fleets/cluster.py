@@ -30,6 +30,7 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -65,7 +66,7 @@ CONNECT_TIMEOUT = 30.0
 #: stops (Dask's ``distributed.scheduler.no-workers-timeout`` instead, where set): time for
 #: a worker to be restarted, not forever.
 NO_WORKERS_TIMEOUT = 60.0
-#: Seconds between two looks at how many workers the cluster has, while nothing finishes.
+#: Seconds between two looks at how many workers the cluster has, while a run waits.
 LOOK_EVERY = 1.0
 #: How often a finished item's result is asked for, its scheduler answering, before the
 #: item counts as failed with why it could not be fetched.
@@ -125,14 +126,26 @@ def _no_workers_timeout() -> float:
 
 
 class _Watch:
-    """Whether the cluster has had no worker for too long while items are not done."""
+    """The cluster watched from a thread of its own while a run waits for its tasks: once
+    it has had no worker for :func:`_no_workers_timeout` seconds, the watch cancels the
+    tasks not done, which ends the wait (Dask's own waits are never cut short by a timeout:
+    one that is leaves Dask's inner waits behind, logging tracebacks at exit)."""
 
-    def __init__(self, client: Any, address: str | None, total: int) -> None:  # noqa: ANN401
-        self.client, self.address, self.total = client, address, total
-        self.left = total  # items not handed over yet
+    def __init__(self, client: Any, address: str | None, futures: list[Any]) -> None:  # noqa: ANN401
+        self.client, self.address, self.futures = client, address, futures
+        self.left = len(futures)  # tasks not handed over yet
         self.patience = _no_workers_timeout()
-        self.since: float | None = None  # when the cluster was first seen with no worker
-        self.looked = -LOOK_EVERY
+        self.idle = False  # whether it cancelled the tasks, the cluster without a worker
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="umbmark-watch", daemon=True)
+
+    def __enter__(self) -> _Watch:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
 
     def _workers(self) -> int | None:
         """How many workers the scheduler has; None when it cannot say (not answering)."""
@@ -141,80 +154,61 @@ class _Watch:
         except Exception:  # the scheduler lost: its futures come back cancelled
             return None
 
-    @property
-    def where(self) -> str:
-        return "the local Dask cluster" if self.address is None else "the Dask scheduler"
-
-    def lost(self) -> InputError:
-        """The run stopped: the engine cancelled its tasks (the scheduler lost)."""
-        return InputError(
-            f"{self.where} cancelled this run's tasks (lost, or restarted), with {self.left} "
-            f"of {self.total} not done: stopped (what finished is kept)",
-            source=self.address,
-        )
-
-    def check(self) -> None:
-        """Look at the cluster (at most every :data:`LOOK_EVERY` s); raise
-        :class:`InputError` once it has had no worker for the patience."""
-        now = time.monotonic()
-        if now - self.looked >= LOOK_EVERY:
-            self.looked = now
+    def _run(self) -> None:
+        since: float | None = None  # when the cluster was first seen with no worker
+        while not self._stop.wait(LOOK_EVERY):
+            now = time.monotonic()
             if self._workers() != 0:
-                self.since = None
-            elif self.since is None:
-                self.since = now
-        if self.since is not None and now - self.since >= self.patience:
+                since = None
+            elif since is None:
+                since = now
+            elif now - since >= self.patience:
+                self.idle = True
+                self.client.cancel([f for f in self.futures if not f.done()])
+                return
+
+    def stopped(self) -> InputError:
+        """Why the run stopped, its tasks cancelled: the cluster without a worker, else its
+        scheduler lost (or restarted)."""
+        where = "the local Dask cluster" if self.address is None else "the Dask scheduler"
+        total = len(self.futures)
+        if self.idle:
             start = "" if self.address is None else f"; start workers: dask worker {self.address}"
-            raise InputError(
-                f"{self.where} has had no worker for {self.patience:g} s, with {self.left} of "
-                f"{self.total} tasks not done: stopped (what finished is kept{start})",
-                source=self.address,
+            text = (
+                f"{where} has had no worker for {self.patience:g} s, with {self.left} of "
+                f"{total} tasks not done: stopped (what finished is kept{start})"
             )
-
-
-def _as_finished(watch: _Watch, futures: list[Any]) -> Iterator[Any]:
-    """``futures`` in the order they finish; an :class:`InputError` from ``watch`` while
-    none finishes."""
-    from distributed import as_completed
-
-    # On this client's own event loop: by default as_completed takes the current client's,
-    # which is the caller's where it runs inside ``with Client(...)``, and a result lost
-    # with its worker is then waited for on the wrong loop (a RuntimeError, the item
-    # reported failed) instead of being computed again.
-    pending = as_completed(futures, loop=watch.client.loop)
-    while not pending.is_empty():
-        if pending.has_ready():
-            yield next(pending)
-            continue
-        watch.check()
-        time.sleep(0.05)
+        else:
+            text = (
+                f"{where} cancelled this run's tasks (lost, or restarted), with {self.left} of "
+                f"{total} not done: stopped (what finished is kept)"
+            )
+        return InputError(text, source=self.address)
 
 
 def _outcome(watch: _Watch, future: Any) -> tuple[Any, str | None]:  # noqa: ANN401
-    """A finished future's result, or why its item failed (one line). An
-    :class:`InputError` from ``watch`` while its result, lost with its worker before it
-    was fetched, waits to be computed again; and when the engine cancelled it or its
-    result cannot be fetched, its scheduler lost (the item is not at fault, and no other
-    will finish)."""
+    """A finished future's result, or why its item failed (one line); an
+    :class:`InputError` when the run's tasks were cancelled (the cluster without a worker,
+    or its scheduler lost: the item is not at fault, and no other will finish)."""
     import asyncio
 
     tries = 0
     while True:
         try:
-            return future.result(timeout=LOOK_EVERY), None
+            # Its result lost with its worker before it was fetched: computed again, or
+            # cancelled by the watch.
+            return future.result(), None
         except KeyboardInterrupt:
             raise
         except (Exception, asyncio.CancelledError) as exc:
             if future.status == "error":  # the item raised, or lost too many workers
                 return None, _one_line(exc)
             if future.cancelled() or watch.client.status != "running":
-                raise watch.lost() from None  # only the engine cancels what this run wants
-            if future.done():  # finished, but its result was not fetched
-                tries += 1
-                if tries >= FETCH_TRIES:
-                    return None, _one_line(exc)
-                time.sleep(LOOK_EVERY)
-        watch.check()  # not done: its result was lost and waits for a worker
+                raise watch.stopped() from None  # only the engine cancels what this run wants
+            tries += 1  # finished, but its result not fetched
+            if tries >= FETCH_TRIES:
+                return None, _one_line(exc)
+            time.sleep(LOOK_EVERY)
 
 
 @contextmanager
@@ -324,18 +318,25 @@ def run_each(
         return 0
     address = engine_address(scheduler)
     with _client(address, workers, connect_timeout) as client:
+        from distributed import as_completed
+
         futures = client.map(fn, list(items), pure=False)
         where = {future.key: k for k, future in enumerate(futures)}
-        watch = _Watch(client, address, len(futures))
         finished = 0
-        try:
-            for future in _as_finished(watch, futures):
-                k = where[future.key]
-                result, error = _outcome(watch, future)
-                on_done(Done(k, items[k], result, error))
-                finished += 1
-                watch.left -= 1
-        except (KeyboardInterrupt, InputError):
-            client.cancel([f for f in futures if not f.done()])
-            raise
+        with _Watch(client, address, futures) as watch:
+            try:
+                # On this client's own event loop: by default as_completed takes the
+                # current client's, which is the caller's where it runs inside ``with
+                # Client(...)``, and a result lost with its worker is then waited for on
+                # the wrong loop (a RuntimeError, the item reported failed) instead of
+                # being computed again.
+                for future in as_completed(futures, loop=client.loop):
+                    k = where[future.key]
+                    result, error = _outcome(watch, future)
+                    on_done(Done(k, items[k], result, error))
+                    finished += 1
+                    watch.left -= 1
+            except (KeyboardInterrupt, InputError):
+                client.cancel([f for f in futures if not f.done()])
+                raise
         return finished
