@@ -156,3 +156,20 @@ def test_run_logs_are_recordings_of_a_fleet(tmp_path: Path):
         value, se = o.figures["E_d"]
         assert value == pytest.approx(1.003, abs=max(4 * (se or 0.0), 3e-4))
         assert o.hours > 0.0
+
+
+@pytest.mark.slow
+def test_the_command_and_the_library_know_each_others_recordings(tmp_path: Path):
+    """The command passes every reading option's default, the library none: the same
+    options all the same, so a library run after a command's run does nothing again (it
+    redid every recording, and each calibration counted twice in the robot's course)."""
+    fleet = tmp_path / "fleet"
+    umbmark.simulate_fleet(fleet, fleet=1, days=2, minutes=0.5, seed=5)
+    history = tmp_path / "h.sqlite3"
+    proc = run_cli("fleet", str(fleet), "--robot-from", "{robot}/{date}/*", "--history",
+                   str(history), "--workers", "1", "--json", timeout=600)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["recordings_done"] == 2
+    again = umbmark.fleet(fleet, robot_from="{robot}/{date}/*", history=history, workers=1)
+    assert (len(again.done), again.skipped) == (0, 2)
+    assert [r.recordings for r in again.summary.robots] == [2]

@@ -143,6 +143,14 @@ def _tasks(
     return tasks
 
 
+def _default(name: str) -> object:
+    """A reading option's default (None for none, or an unknown name)."""
+    from umbmark.options.spec import READ
+
+    spec = READ.get(name)
+    return None if spec is None else spec.default
+
+
 def _options_key(task: RecordingTask, robot: str) -> str:
     """The key of the options ``task`` is read with as a recording of ``robot``."""
     from umbmark.store.fleet_recordings import options_key
@@ -229,8 +237,12 @@ def fleet(
 
     FLEET["workers"].check(workers)
     ReadOptions.of(dict(options))  # checked once, before anything is read
-    # The options given (None: not given, so a recording's own candidates are used).
-    reading: dict[str, Any] = {k: v for k, v in options.items() if v is not None}
+    # The options given. One not given (None), or at its default (the command line passes
+    # every default, the library none), leaves a recording's own candidates to be used (a
+    # namespaced /amr1/joint_states), and the same options make the same key either way.
+    reading: dict[str, Any] = {
+        k: v for k, v in options.items() if v is not None and v != _default(k)
+    }
     if wheelbase is not None:
         reading["wheelbase"] = wheelbase
     plan = OutputPlan.of(force=force, inputs=sources, report=report, output=output)
