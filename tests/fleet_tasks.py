@@ -4,6 +4,7 @@ process: ``tests/`` is on its path)."""
 from __future__ import annotations
 
 import os
+import sqlite3
 import time
 from pathlib import Path
 
@@ -72,3 +73,14 @@ def daily_outcomes(robot, days, rng, step_day=None, figure=None, jump=0.0):  # t
             )
         )  # fmt: skip
     return out
+
+
+def recorded_rows(history: Path) -> int:
+    """Rows in a history's recordings table (0 while it is being made)."""
+    if not history.exists():
+        return 0
+    try:
+        with sqlite3.connect(history) as db:
+            return int(db.execute("SELECT count(*) FROM recordings").fetchone()[0])
+    except sqlite3.OperationalError:  # the table is being made
+        return 0

@@ -23,6 +23,7 @@ from http.server import BaseHTTPRequestHandler, HTTPServer
 
 data = open(sys.argv[2], "rb").read()
 
+
 class Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.0"
 
@@ -40,6 +41,18 @@ class Handler(BaseHTTPRequestHandler):
 
 HTTPServer(("127.0.0.1", int(sys.argv[1])), Handler).serve_forever()
 """
+
+
+#: The start of a Python script in which fsspec cannot be imported (an import hook that
+#: finds it nowhere, as where it is not installed).
+WITHOUT_FSSPEC = (
+    "import sys\n"
+    "class Nowhere:\n"
+    "    def find_spec(self, name, path, target=None):\n"
+    "        if name.split('.')[0] == 'fsspec':\n"
+    "            raise ModuleNotFoundError(f'No module named {name!r}', name=name)\n"
+    "sys.meta_path.insert(0, Nowhere())\n"
+)
 
 
 def free_port() -> int:

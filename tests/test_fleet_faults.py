@@ -158,17 +158,6 @@ def test_a_worker_killed_mid_recording_loses_nothing(
     assert {o.path: _but_when(o.to_dict()) for o in report.done} == local
 
 
-def _recorded(history: Path) -> int:
-    """Rows in the history's recordings table (0 while it is being made)."""
-    if not history.exists():
-        return 0
-    try:
-        with sqlite3.connect(history) as db:
-            return int(db.execute("SELECT count(*) FROM recordings").fetchone()[0])
-    except sqlite3.OperationalError:  # the table is being made
-        return 0
-
-
 def _all_busy(watch: Client, workers: int) -> dict[str, str]:
     """Every worker calibrating a recording right now, by its own state: the recording's
     path by the worker's address (waits until all ``workers`` are)."""
@@ -191,7 +180,7 @@ def _killed_mid_run(
                             env=env)  # fmt: skip
     try:
         deadline = time.monotonic() + 300
-        while _recorded(history) < 1:
+        while fleet_tasks.recorded_rows(history) < 1:
             assert time.monotonic() < deadline, "no recording came back"
             assert proc.poll() is None, proc.communicate()
             time.sleep(0.05)

@@ -28,7 +28,7 @@ import umbmark
 
 from dask_cluster import Cluster
 from helpers import ROOT, run_cli
-from http_served import Served
+from http_served import WITHOUT_FSSPEC, Served
 
 PATTERN = "{robot}/{date}/*"
 
@@ -159,13 +159,8 @@ def test_without_fsspec_a_url_is_one_line_and_exit_2(tmp_path: Path):
     """fsspec made unimportable (an import hook that finds it nowhere): the command says
     what to install, exit status 2."""
     code = (
-        "import sys\n"
-        "class Nowhere:\n"
-        "    def find_spec(self, name, path, target=None):\n"
-        "        if name.split('.')[0] == 'fsspec':\n"
-        "            raise ModuleNotFoundError(f'No module named {name!r}', name=name)\n"
-        "sys.meta_path.insert(0, Nowhere())\n"
-        "sys.argv = ['umbmark', 'fleet', 'https://example.invalid/fleet/', '--history', "
+        WITHOUT_FSSPEC
+        + "sys.argv = ['umbmark', 'fleet', 'https://example.invalid/fleet/', '--history', "
         f"{str(tmp_path / 'h.sqlite3')!r}]\n"
         "from umbmark._entry import main\n"
         "main()\n"

@@ -13,6 +13,7 @@ import pytest
 
 pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
 
+from fleet_tasks import recorded_rows
 from helpers import run_cli
 
 ROBOTS, DAYS = 4, 6
@@ -69,7 +70,6 @@ def test_the_simulated_fleet_is_watched(fleet: Path, tmp_path: Path):
 @pytest.mark.slow
 def test_ctrl_c_keeps_what_finished_and_the_next_run_does_the_rest(fleet: Path, tmp_path: Path):
     import signal
-    import sqlite3
     import subprocess
     import time
 
@@ -80,23 +80,14 @@ def test_ctrl_c_keeps_what_finished_and_the_next_run_does_the_rest(fleet: Path, 
             "--history", str(history), "--workers", "1"]  # fmt: skip
     proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
-    def recorded() -> int:
-        if not history.exists():
-            return 0
-        try:
-            with sqlite3.connect(history) as db:
-                return int(db.execute("SELECT count(*) FROM recordings").fetchone()[0])
-        except sqlite3.OperationalError:  # the table is being made
-            return 0
-
     deadline = time.monotonic() + 300
-    while recorded() < 2 and time.monotonic() < deadline:
+    while recorded_rows(history) < 2 and time.monotonic() < deadline:
         time.sleep(0.1)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
     assert "Traceback" not in err
-    kept = recorded()
+    kept = recorded_rows(history)
     assert 2 <= kept < ROBOTS * DAYS
     # The next run does only what was not finished.
     again = run_cli("fleet", str(fleet), "--robot-from", "{robot}/{date}/*",

@@ -39,6 +39,29 @@ def _collect(fn, items, **kw) -> list[Done]:  # type: ignore[no-untyped-def]
 
 
 @pytest.mark.slow
+def _run_waiting_for_workers(cluster: Cluster, items, on_done) -> list[BaseException]:  # type: ignore[no-untyped-def]
+    """``run_each`` of ``slow_square`` on the cluster, Dask's ``no-workers-timeout`` 1 s, in
+    a thread of its own, so that waiting forever fails the test: what it raised."""
+    import threading
+
+    import dask
+
+    raised: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            with dask.config.set({"distributed.scheduler.no-workers-timeout": "1s"}):
+                run_each(fleet_tasks.slow_square, items, on_done, scheduler=cluster.address)
+        except BaseException as exc:  # handed to the test
+            raised.append(exc)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(timeout=120)
+    assert not thread.is_alive(), "the run waits for a worker forever"
+    return raised
+
+
 def test_a_local_cluster_returns_every_item_once_and_names_the_failed_one():
     items = [3, -1, 4, 0, 7]
     done = _collect(fleet_tasks.square_or_refuse, items, workers=2)
@@ -161,9 +184,6 @@ def test_a_cluster_left_with_no_worker_stops_the_run_with_one_line(
     """Both workers killed once the first item came back: the scheduler alone would wait
     for a worker forever; the run stops after Dask's ``no-workers-timeout`` (1 s here),
     having handed over what finished, and names the scheduler."""
-    import threading
-
-    import dask
 
     items = [(n, str(tmp_path), 0.0 if n == 0 else 2.0) for n in range(4)]
     done: list[Done] = []
@@ -176,19 +196,7 @@ def test_a_cluster_left_with_no_worker_stops_the_run_with_one_line(
                 raise AssertionError(f"worker {pid} did not die of SIGKILL")
         pids.clear()
 
-    raised: list[BaseException] = []
-
-    def run() -> None:  # in a thread of its own, so that waiting forever fails the test
-        try:
-            with dask.config.set({"distributed.scheduler.no-workers-timeout": "1s"}):
-                run_each(fleet_tasks.slow_square, items, on_done, scheduler=cluster.address)
-        except BaseException as exc:  # handed to the test
-            raised.append(exc)
-
-    thread = threading.Thread(target=run, daemon=True)
-    thread.start()
-    thread.join(timeout=120)
-    assert not thread.is_alive(), "the run waits for a worker forever"
+    raised = _run_waiting_for_workers(cluster, items, on_done)
     assert [d.index for d in done] == [0]
     assert [type(e) for e in raised] == [InputError]
     assert str(raised[0]) == (
@@ -206,9 +214,6 @@ def test_a_result_lost_with_the_last_worker_stops_the_run_with_one_line(
     is killed, before this process fetched it: its result waits to be computed again, for a
     worker that does not come; the run stops after Dask's ``no-workers-timeout`` (1 s here)
     as it does while no item finishes."""
-    import threading
-
-    import dask
 
     items = [(0, str(tmp_path), 0.0), (1, str(tmp_path), 0.5), (2, str(tmp_path), 5.0)]
     done: list[Done] = []
@@ -225,17 +230,7 @@ def test_a_result_lost_with_the_last_worker_stops_the_run_with_one_line(
             for pid in pids.values():
                 assert cluster.kill(pid) == -signal.SIGKILL
 
-        def run() -> None:  # in a thread of its own, so that waiting forever fails the test
-            try:
-                with dask.config.set({"distributed.scheduler.no-workers-timeout": "1s"}):
-                    run_each(fleet_tasks.slow_square, items, on_done, scheduler=cluster.address)
-            except BaseException as exc:  # handed to the test
-                raised.append(exc)
-
-        thread = threading.Thread(target=run, daemon=True)
-        thread.start()
-        thread.join(timeout=120)
-    assert not thread.is_alive(), "the run waits for a worker forever"
+        raised += _run_waiting_for_workers(cluster, items, on_done)
     assert [d.index for d in done] == [0]
     assert [type(e) for e in raised] == [InputError]
     assert str(raised[0]).startswith(

@@ -38,7 +38,7 @@ from umbmark.sources.remote import (
 )
 
 from helpers import ROOT
-from http_served import Served, Unsized, free_port
+from http_served import WITHOUT_FSSPEC, Served, Unsized, free_port
 
 #: The recordings of the tree below, by their path under ``fleet/``.
 RECORDINGS = ["amr1/2026-11-01/a.mcap", "amr1/2026-11-02/b.bag", "amr2/20261102/session"]
@@ -261,13 +261,7 @@ def test_without_fsspec_a_url_is_one_line_saying_what_to_install():
     """fsspec made unimportable in a Python of its own (an import hook that finds it
     nowhere, as where it is not installed): the URL, and what to install."""
     code = (
-        "import sys\n"
-        "class Nowhere:\n"
-        "    def find_spec(self, name, path, target=None):\n"
-        "        if name.split('.')[0] == 'fsspec':\n"
-        "            raise ModuleNotFoundError(f'No module named {name!r}', name=name)\n"
-        "sys.meta_path.insert(0, Nowhere())\n"
-        "from umbmark.core.errors import InputError\n"
+        WITHOUT_FSSPEC + "from umbmark.core.errors import InputError\n"
         "from umbmark.sources.remote import expand\n"
         "try:\n    expand('https://example.invalid/fleet/', 12)\n"
         "except InputError as exc:\n    print(exc)\n"

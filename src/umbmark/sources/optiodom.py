@@ -23,6 +23,7 @@ import datetime as dt
 import math
 import re
 from array import array
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +46,7 @@ __all__ = [
     "MAX_SAMPLES",
     "OptiOdomSession",
     "is_optiodom_session",
+    "is_session_listing",
     "read_optiodom",
     "session_start",
 ]
@@ -145,11 +147,14 @@ def _metadata_file(folder: Path) -> Path | None:
 
 def is_optiodom_session(path: Path) -> bool:
     """Whether ``path`` is a folder in the OptiOdom layout."""
-    return (
-        path.is_dir()
-        and _metadata_file(path) is not None
-        and any(_RUN.match(p.name) for p in path.iterdir())
-    )
+    return path.is_dir() and is_session_listing(p.name for p in path.iterdir())
+
+
+def is_session_listing(names: Iterable[str]) -> bool:
+    """Whether a folder's file names are an OptiOdom session's (``<id>_metadata.csv`` and
+    ``<id>_run-NN.csv``): for a folder listed elsewhere (at a URL) as for a local one."""
+    names = list(names)
+    return any(n.endswith("_metadata.csv") for n in names) and any(_RUN.match(n) for n in names)
 
 
 def read_optiodom(folder: str | Path) -> tuple[list[Recording], OptiOdomSession]:

@@ -47,6 +47,7 @@ from typing import Any
 from urllib.parse import unquote, urlsplit
 
 from umbmark.core.errors import InputError
+from umbmark.sources.optiodom import is_session_listing
 
 __all__ = [
     "CHUNK",
@@ -276,7 +277,7 @@ def _walk(fs: Any, path: str, depth: int, folder: bool | None, deepest: int) -> 
         raise _refused(fs.unstrip_protocol(path), exc) from None
     entries.sort(key=lambda e: _name(e["name"]))
     names = [_name(e["name"]) for e in entries if e.get("type") != "directory"]
-    if _FOLDER_MARK in names or _is_session(names):
+    if _FOLDER_MARK in names or is_session_listing(names):
         yield fs.unstrip_protocol(path)  # a ROS 2 bag's, run log's or session's folder
         return
     if depth >= deepest:
@@ -286,14 +287,6 @@ def _walk(fs: Any, path: str, depth: int, folder: bool | None, deepest: int) -> 
         if folder and entry.get("islink"):
             continue  # a link back up would loop (the local search skips them too)
         yield from _walk(fs, entry["name"], depth + 1, folder, deepest)
-
-
-def _is_session(names: list[str]) -> bool:
-    """Whether a folder's files are an OptiOdom session's (``<id>_metadata.csv`` and
-    ``<id>_run-NN.csv``, as :func:`umbmark.sources.optiodom.is_optiodom_session`)."""
-    return any(n.endswith("_metadata.csv") for n in names) and any(
-        re.search(r"_run-\d+\.csv$", n) for n in names
-    )
 
 
 def _files(fs: Any, path: str) -> list[tuple[str, PurePosixPath | None, dict[str, Any]]]:  # noqa: ANN401
