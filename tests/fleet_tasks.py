@@ -56,7 +56,8 @@ SE = {"E_d": 1e-4, "E_b": 3e-4, "E_s": 2e-4, "laser_x": 3e-4, "laser_y": 3e-4, "
 
 def daily_outcomes(robot, days, rng, step_day=None, figure=None, jump=0.0):  # type: ignore[no-untyped-def]
     """A robot's daily outcomes with known figures, ``figure`` stepped by ``jump`` from
-    ``step_day`` on (scan matching, 8 h a day)."""
+    ``step_day`` on (scan matching, 8 h a day, a nominal wheelbase of 0.34 m, nothing
+    active but the nominal)."""
     out = []
     truth = {"E_d": 1.003, "E_b": 0.98, "E_s": 1.0, "laser_x": 0.12, "laser_y": -0.04,
              "laser_yaw": 0.07}  # fmt: skip
@@ -69,7 +70,7 @@ def daily_outcomes(robot, days, rng, step_day=None, figure=None, jump=0.0):  # t
             RecordingOutcome(
                 f"{robot}/day{day:02d}.mcap", robot, T0 + day * DAY, 8.0, "0" * 64,
                 method="scan-matching", figures=figures, e_max_syst=0.1 + 0.001 * day,
-                multipliers=(0.98, 0.9985, 1.0015), verdict="apply",
+                multipliers=(0.98, 0.9985, 1.0015), verdict="apply", wheelbase=0.34,
             )
         )  # fmt: skip
     return out

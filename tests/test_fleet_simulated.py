@@ -63,8 +63,8 @@ def test_the_simulated_fleet_is_watched(fleet: Path, tmp_path: Path):
     assert knocked["rpy"][2] == pytest.approx(true_yaw, abs=1e-3)
     assert "correct the stated mounting" in knocked["verdict"]
     assert "nothing to change" in by["robot01"]["mounting"]["verdict"]
-    # What to apply is the latest calibration's overlay, keyed by the controller.
-    assert "ros__parameters" in by["robot02"]["latest"]["overlay"]
+    # What to apply is the present state's overlay, keyed by the controller.
+    assert "ros__parameters" in by["robot02"]["apply"]["overlay"]
 
 
 @pytest.mark.slow

@@ -44,8 +44,9 @@ def test_passes_on_corrected_odometry_are_no_drift(tmp_path: Path) -> None:
     reports = _passes(db)
     verdict = History(db).drift("R")
     assert verdict is not None
-    assert verdict.startswith("no drift between calibrations 1 and 3: robot E_d")
+    assert verdict.startswith("no drift: robot E_d")
     assert "robot E_b 0.97" in verdict
+    assert "over 3 calibrations (1 to 3)" in verdict
     records = History(db).calibrations("R")
     first = reports[0].calibration
     for record in records[1:]:
@@ -81,9 +82,13 @@ def test_a_robot_that_changed_is_drift_though_the_passes_look_alike(tmp_path: Pa
     _passes(db, later_E_b=TRUE_E_B * TRUE_E_B)
     verdict = History(db).drift("R")
     assert verdict is not None
-    assert verdict.startswith("drift between calibrations 1 and 3: robot E_b 0.97")
-    assert "-> 0.96" in verdict
-    assert "within noise between calibrations 1 and 3: robot E_d" in verdict
+    # Passes 2 and 3 agree on the changed robot: a step at pass 2, confirmed by pass 3.
+    assert verdict.startswith("drift: robot E_b stepped from 0.97")
+    after = float(verdict.split(" to ")[1].split()[0])
+    assert abs(after - TRUE_E_B * TRUE_E_B) < 2e-3  # two passes of se about 1e-3
+    assert "at calibration 2" in verdict
+    assert "confirmed by 2" in verdict
+    assert "within noise: robot E_d" in verdict
     records = History(db).calibrations("R")
     assert records[2].E_b == pytest.approx(records[0].E_b, abs=0.003)  # alike
     last = records[2]
@@ -132,7 +137,7 @@ def test_hand_built_history_is_composed(tmp_path: Path) -> None:
     )
     verdict = store.drift("H")
     assert verdict is not None
-    assert verdict.startswith("no drift between calibrations 1 and 3")
+    assert verdict.startswith("no drift: robot E_d")
     records = store.calibrations("H")
     assert [r.robot_E_d for r in records] == pytest.approx([1.004, 1.004, 1.0001 * 1.004])
     assert [r.robot_E_b for r in records] == pytest.approx([0.97, 0.97, 0.9998 * 0.97])
@@ -146,7 +151,8 @@ def test_hand_built_history_is_composed(tmp_path: Path) -> None:
     )
     verdict = changed.drift("H")
     assert verdict is not None
-    assert verdict.startswith("drift between calibrations 1 and 3: robot E_b 0.970000 -> 1.000000")
+    # E_b 0.97, then 1.0 twice: a step at calibration 2, confirmed by calibration 3.
+    assert verdict.startswith("drift: robot E_b stepped from 0.970000 to 1.000000")
 
 
 @pytest.mark.slow
@@ -172,7 +178,7 @@ def test_history_columns_say_what_they_compare(tmp_path: Path) -> None:
     for header in ("pass E_b (measured)", "robot E_b (composed)", "robot E_d (composed)"):
         assert header in text.stdout
     assert "robot E_b: what the robot is" in text.stdout
-    assert "no drift between calibrations 1 and 3: robot E_d" in text.stdout
+    assert "no drift: robot E_d" in text.stdout
     # The trend: the robot's values, and the passes' measured ones beside them.
     fig = umbmark.history("R", history=db).figure()
     for ax, name in zip(fig.axes[:2], ("E_d", "E_b"), strict=False):

@@ -88,7 +88,9 @@ def test_without_a_pattern_the_robot_is_named_by_its_description(tmp_path: Path)
 
 
 @pytest.mark.slow
-def test_a_recording_at_a_url_is_copied_calibrated_and_named_by_its_url(tmp_path: Path):
+def test_a_recording_at_a_url_is_copied_calibrated_and_named_by_its_url(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+):
     """A simulated ROS 2 bag (a folder, MCAP and SQLite), its MCAP file alone and a ROS 1
     bag, served over HTTP: the outcome of each is the local one's but for the path (the
     URL), with the local digest; a broken bag's reason names its URL, not the copy; a URL
@@ -112,7 +114,11 @@ def test_a_recording_at_a_url_is_copied_calibrated_and_named_by_its_url(tmp_path
     assert [p.suffix for p in recordings] == ["", "", ".bag", ".mcap"]
     assert {p.suffix for p in recordings[1].iterdir()} == {".db3", ".yaml"}
     (tmp_path / "f" / "broken.bag").write_bytes(b"#ROSBAG V2.0\n" + b"\0" * 100)
-    scratch = Path(tempfile.gettempdir())
+    # The copies go where tempfile puts them: a folder of this test's own (others on the
+    # machine make and delete theirs in the shared one meanwhile).
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
     before = {p.name for p in scratch.glob("umbmark-remote-*")}
     with Served(tmp_path / "f", tmp_path / "http.log") as server:
         for local in recordings:

@@ -81,28 +81,39 @@ def test_the_page_in_headless_chromium(tmp_path: Path):
         browser.close()
 
 
-def test_what_to_apply_is_offered_only_where_the_verdict_lets_it():
-    """The latest calibration's overlay where it may be applied; where its verdict is do
-    not apply, nothing but why. The laser's mounting, the fleet's estimate of it, in the
-    forms a user declares it (the outcomes' truth is 0.12 m forward, 22 mm off the 0.098 m
-    stated here: many standard errors)."""
+def test_what_to_apply_is_the_present_state_and_offered_only_where_the_verdicts_let_it():
+    """The overlay of the robot's present state (the mean of its steady calibrations: the
+    outcomes' truth is E_b 0.98), keyed by its controller; a newest calibration whose
+    verdict is do not apply is not part of the course and makes the rest "apply with
+    care", said why; a robot whose every calibration failed its checks is offered nothing.
+    The laser's mounting, the fleet's estimate of it, in the forms a user declares it (the
+    outcomes' truth is 0.12 m forward, 22 mm off the 0.098 m stated here)."""
+    import re
     from dataclasses import replace
 
     rng = np.random.default_rng(3)
     ok = daily_outcomes("ok", 4, rng)
     stated = {"x": 0.098, "y": 0.0, "yaw": 0.0, "lift": None, "source": "/tf_static"}
-    record = {"overlay": "diff_cont:\n  ros__parameters:\n    wheel_separation_multiplier: 0.98",
+    record = {"controller": {"key_path": ["diff_cont"], "named": True},
               "mounting": {"base_frame": "base_link", "laser_frame": "scan_link",
                            "stated": stated, "z_roll_pitch_stated": False}}  # fmt: skip
-    ok[-1] = replace(ok[-1], record=record)
+    ok = [replace(o, record=record) for o in ok]
     bad = daily_outcomes("bad", 4, rng)
     why = {"level": "do-not-apply", "reasons": ["the runs scatter more than they err"]}
     bad[-1] = replace(bad[-1], verdict="do-not-apply", record={"verdict": why})
-    summary = summarize([*ok, *bad])
+    worse = [replace(o, verdict="do-not-apply", record={"verdict": why})
+             for o in daily_outcomes("worse", 2, rng)]  # fmt: skip
+    summary = summarize([*ok, *bad, *worse])
     page = fleet_page(summary)
-    assert "wheel_separation_multiplier: 0.98" in page  # ok's overlay, as recorded
-    assert "not offered: do not apply (the runs scatter more than they err)" in page
-    assert page.count("ros__parameters") == 1  # none for bad
+    overlays = re.findall(r"<pre>(.*?)</pre>", page, flags=re.S)
+    (mine,) = [o for o in overlays if "diff_cont:" in o]
+    sep = float(re.search(r"wheel_separation_multiplier: ([0-9.]+)", mine)[1])  # type: ignore[index]
+    assert abs(sep - 0.98) < 4 * 3e-4 / 2  # the mean of four calibrations, se 3e-4 each
+    assert "the mean of 4 recordings" in mine
+    assert "failed its checks" in page  # bad's newest
+    assert page.count("ros__parameters") == 2  # ok's and bad's (from its first three)
+    assert "not used: bad/day03.mcap" in page
+    assert summary.unusable == ("worse",)
     forms = {r.robot: r.mounting for r in summary.robots}
     assert forms["ok"] is not None
     assert forms["ok"].fitted.frame == "scan_link"

@@ -5,11 +5,15 @@ and the worst E_max,syst. Outcomes made by hand with a known truth."""
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
+import pytest
 
+from umbmark.core.conventions import Direction
 from umbmark.fleets.outcome import RecordingOutcome
 from umbmark.fleets.summary import summarize
+from umbmark.model.square import square_run_end
 
 from fleet_tasks import T0, daily_outcomes
 
@@ -37,8 +41,16 @@ def test_the_changed_robots_are_flagged_at_their_day_and_the_steady_ones_are_not
     assert "since wheel/day12.mcap" in by["wheel"].flags[0]
     assert all(t.change.kind == "steady" for t in by["steady"].tracks.values())
     assert by["blind"].left_out[0][1] == "neither a laser scan nor an independent reference"
+    # The worst E_max,syst is the present state's: the wheel's E_d since its step (1.005)
+    # with E_b 0.98, on the 4 m square (its end in closed form, model.square).
     assert fleet.worst is not None
-    assert fleet.worst[1] == 0.1 + 0.001 * 19  # every robot's last day: the largest
+    truth = max(
+        math.hypot(*square_run_end(1.003 + 20e-4, 0.98, 1.0, 4.0, 0.34, d)[:2])
+        for d in (Direction.CW, Direction.CCW)
+    )
+    assert fleet.worst[0] == "wheel"
+    assert fleet.worst[1] == pytest.approx(truth, rel=0.02)
+    assert by["wheel"].e_max_syst == fleet.worst[1]
     assert fleet.line().startswith("4 robots: 2 changed beyond their intervals, 1 with no")
     data = json.loads(json.dumps(fleet.to_dict()))
     assert data["drifted"] == ["laser", "wheel"]
@@ -71,3 +83,87 @@ def test_a_changed_nominal_is_compared_on_the_latest_and_said():
         "are shown against the latest",
     )
     assert robot.to_dict()["notes"] == list(robot.notes)
+
+
+def _outcome(robot, day, E_d, E_b=0.99, *, active=None, path=None, verdict="apply"):  # type: ignore[no-untyped-def]
+    figures = {"E_d": (E_d, 1e-4), "E_b": (E_b, 3e-4), "E_s": (1.0, 2e-4)}
+    record = {"active": active or {}, "verdict": {"level": verdict, "reasons": []}}
+    return RecordingOutcome(path or f"{robot}/day{day}.mcap", robot, T0 + day * 86400.0, 8.0,
+                            None, method="scan-matching", figures=figures, verdict=verdict,
+                            wheelbase=0.34, record=record)  # fmt: skip
+
+
+def test_a_change_in_the_latest_recording_tells_one_story_that_morning():
+    """The issue's robot (E_d 1.002, 1.002, then 1.008 after its wheel was changed): the
+    flag, the figures, the E_max,syst, what to apply and the summary line all say the
+    newest recording alone, not a value pooled across the change."""
+    (robot,) = summarize(
+        [_outcome("amr", d, e) for d, e in enumerate((1.002, 1.002, 1.008))]
+    ).robots
+    fleet = summarize([_outcome("amr", d, e) for d, e in enumerate((1.002, 1.002, 1.008))])
+    track = robot.tracks["E_d"]
+    assert track.change.kind == "latest"
+    assert robot.flags == (
+        "E_d changed by +0.006000 ± 0.000240 in the latest recording, amr/day2.mcap "
+        "(2026-09-23), against 2 recordings before it: to be confirmed by the next",
+    )  # 1.96 x hypot(1e-4, 1e-4 / sqrt(2)) = 0.000240: the two before agree exactly
+    assert track.latest == (1.008, pytest.approx(1e-4))
+    truth = max(
+        math.hypot(*square_run_end(1.008, 0.99, 1.0, 4.0, 0.34, d)[:2])
+        for d in (Direction.CW, Direction.CCW)
+    )
+    assert robot.e_max_syst == pytest.approx(truth, rel=1e-9)
+    apply = robot.apply
+    assert apply is not None
+    sep, left, right = apply.multipliers
+    assert (sep, right / left) == (pytest.approx(0.99), pytest.approx(1.008))
+    assert (left + right) / 2 == pytest.approx(1.0)  # E_s 1: the mean diameter is right
+    assert apply.verdict == "care"
+    assert "the latest recording alone (2026-09-23)" in apply.basis
+    assert "confirm it with the next recording" in apply.overlay  # type: ignore[operator]
+    assert fleet.line().startswith(
+        "1 robots: 1 changed beyond their intervals (1 of them in its latest recording, to "
+        "be confirmed), 0 with no usable recording; worst E_max,syst"
+    )
+    assert fleet.to_dict()["unconfirmed"] == ["amr"]
+
+
+def test_the_next_recording_confirms_the_step_or_makes_it_a_one_off():
+    stepped = summarize([_outcome("amr", d, e) for d, e in enumerate((1.002, 1.002, 1.008, 1.008))])
+    (robot,) = stepped.robots
+    assert robot.flags[0].startswith("E_d stepped by +0.006000")
+    assert "confirmed by 2 recordings" in robot.flags[0]
+    assert robot.tracks["E_d"].latest[0] == pytest.approx(1.008)
+    assert robot.apply is not None
+    assert robot.apply.verdict == "apply"
+    back = summarize([_outcome("amr", d, e) for d, e in enumerate((1.002, 1.002, 1.008, 1.002))])
+    (robot,) = back.robots
+    assert robot.flags == ()
+    assert robot.tracks["E_d"].latest[0] == pytest.approx(1.002)
+    assert any(n.startswith("one-off: amr/day2.mcap (2026-09-23)") for n in robot.notes)
+    assert back.line().startswith("1 robots: 0 changed beyond their intervals, 0 with no")
+
+
+def test_a_correction_applied_between_recordings_is_no_change():
+    """After its second recording the robot's controller got the correction (c_R / c_L =
+    1.004, as the fleet offered): what the later recordings measure is near 1, what the
+    robot is stays 1.004."""
+    c_l, c_r = 2 / (1.004 + 1), 2 * 1.004 / (1.004 + 1)
+    corrected = {"c_L": c_l, "c_R": c_r, "wheel_separation_multiplier": 0.99}
+    outcomes = [_outcome("amr", d, 1.004) for d in range(2)]
+    outcomes += [_outcome("amr", d, 1.0, 1.0, active=corrected) for d in range(2, 5)]
+    (robot,) = summarize(outcomes).robots
+    assert robot.flags == ()
+    assert robot.tracks["E_d"].values == pytest.approx([1.004] * 5)
+    assert robot.tracks["E_b"].values == pytest.approx([0.99] * 5)
+    assert robot.e_max_syst == pytest.approx(0.0, abs=1e-9)  # nothing left to correct
+    assert robot.apply is not None
+    assert robot.apply.multipliers == pytest.approx((0.99, c_l, c_r))
+
+
+def test_a_recording_tried_again_counts_once():
+    failed = RecordingOutcome("amr/day1.mcap", "amr", None, 0.0, None, reason="cut", failed=True)
+    outcomes = [_outcome("amr", 0, 1.002), failed, _outcome("amr", 1, 1.002)]
+    (robot,) = summarize(outcomes).robots
+    assert robot.recordings == 2
+    assert robot.left_out == ()

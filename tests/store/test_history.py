@@ -54,7 +54,9 @@ def test_calibrate_records_and_api_lists(tmp_path: Path) -> None:
     last = store.last_applied("r1")
     assert last is not None
     assert last.id == 1
-    assert store.drift("r1") is None  # two calibrations are too few
+    # Two calibrations are compared on their intervals (the same runs: no drift).
+    assert store.drift("r1").startswith("no drift: robot E_d")  # type: ignore[union-attr]
+    assert "over 2 calibrations (1 to 2)" in store.drift("r1")  # type: ignore[operator]
     assert store.calibrations("nobody") == []
 
 
@@ -137,7 +139,9 @@ def test_drift_is_flagged(tmp_path: Path) -> None:
     raw.close()
     verdict = History(db).drift("r1")
     assert verdict is not None
-    assert verdict.startswith("drift between calibrations 1 and 3: robot E_b")
+    # The newest alone off the two before it: a change to be confirmed by the next.
+    assert verdict.startswith("drift: robot E_b changed in the latest calibration, 3")
+    assert "to be confirmed by the next" in verdict
 
 
 def test_a_changed_nominal_wheelbase_is_no_drift_and_time_orders_the_calibrations(
@@ -164,8 +168,9 @@ def test_a_changed_nominal_wheelbase_is_no_drift_and_time_orders_the_calibration
     ]  # fmt: skip
     verdict = store.drift("amr")
     assert verdict is not None
-    assert verdict.startswith("no drift between calibrations 2 and 1: robot E_d")
-    assert "robot E_b 0.983415 -> 0.983415" in verdict  # 0.2016 / 0.205 both
+    assert verdict.startswith("no drift: robot E_d")
+    assert "robot E_b 0.983415 ± " in verdict  # 0.2016 / 0.205 each time
+    assert "over 3 calibrations (2 to 1)" in verdict  # by time
 
 
 def _record_ten(table: str, db: str) -> None:
@@ -278,7 +283,10 @@ def test_trend_figure_draws_the_recorded_calibrations(tmp_path: Path) -> None:
     title = fig._suptitle.get_text()
     assert "wear-bot" in title
     assert "340.00 mm" in title  # the nominal wheelbase
-    assert "drift between calibrations 1 and 3" in title  # E_b moved by 0.02, ~40 se
+    # E_b moved by 0.01 (~15 se) each time, E_d by 0.002: the newest is off both before it
+    said = " ".join(title.split("\n")[1:])  # wrapped to the figure's width
+    assert said.startswith("drift: robot E_d changed in the latest")
+    assert "robot E_b changed in the latest calibration, 3" in said
 
 
 @pytest.mark.slow

@@ -143,20 +143,10 @@ def _render(report: Any, out: Any) -> None:
 
 def _to_apply(robot: RobotSummary) -> list[str]:
     """What to put into a changed robot's controller and to declare of its laser, from its
-    latest calibration: the overlay's multipliers in one line, the laser's URDF origin."""
-    latest = robot.latest
-    if latest is None or latest.multipliers is None:
-        return []
+    present state: the multipliers in one line, the laser's URDF origin."""
     lines = []
-    if latest.verdict == "do-not-apply":
-        lines.append("its latest calibration's verdict is do not apply: no overlay offered")
-    else:
-        sep, left, right = latest.multipliers
-        lines.append(
-            f"to apply: wheel_separation_multiplier {sep:.6f}, left_wheel_radius_multiplier "
-            f"{left:.6f}, right_wheel_radius_multiplier {right:.6f} (the overlay: --report, "
-            "--json)"
-        )
+    if robot.apply is not None:
+        lines.append(f"to apply: {robot.apply.line()} (the overlay: --report, --json)")
     forms = robot.mounting
     if forms is not None:
         lines.append(f"laser {forms.fitted.frame}: {forms.urdf_origin()} ({forms.verdict()})")

@@ -41,6 +41,7 @@ __all__ = [
     "RecordingOutcome",
     "RecordingTask",
     "calibrate_recording",
+    "e_max_on_standard_square",
 ]
 
 #: The figures a fleet follows per robot, in this order.
@@ -121,9 +122,10 @@ class RecordingOutcome:
         What the history records of the calibration (``calibrate --json``'s
         ``standard_errors``, ``active``, ``new``, ``verdict`` and the nominal wheel
         diameter), and what to apply: ``overlay``, the controller's parameter overlay
-        (YAML text; None where the verdict is do not apply), and ``mounting``, the laser's
-        (:meth:`umbmark.outputs.mounting.MountingForms.to_dict`; None without a laser);
-        empty when not calibrated.
+        (YAML text; None where the verdict is do not apply), ``mounting``, the laser's
+        (:meth:`umbmark.outputs.mounting.MountingForms.to_dict`; None without a laser), and
+        ``controller``, the controller's keys in the user's file (``key_path``) and whether
+        anything named it (``named``); empty when not calibrated.
     """
 
     path: str
@@ -225,8 +227,9 @@ def _start(info: Any, day: dt.date | None) -> float | None:  # noqa: ANN401 (Bag
     return None if info.start is None else float(info.start)
 
 
-def _projected(E_d: float, E_b: float, E_s: float, wheelbase: float) -> float | None:
-    """E_max,syst [m] of these errors on the standard square (the worse direction)."""
+def e_max_on_standard_square(E_d: float, E_b: float, E_s: float, wheelbase: float) -> float | None:
+    """E_max,syst [m] these errors make on the standard 4 m square driven by the odometry
+    (:func:`umbmark.model.square.square_run_end`, both directions, the worse)."""
     from umbmark.model.square import square_run_end
 
     worst = 0.0
@@ -365,7 +368,7 @@ def _calibrated(
         digest,
         method=method,
         figures=figures,
-        e_max_syst=_projected(figures["E_d"][0], figures["E_b"][0], E_s, wheelbase),
+        e_max_syst=e_max_on_standard_square(figures["E_d"][0], figures["E_b"][0], E_s, wheelbase),
         multipliers=(cal.new_separation_multiplier, cal.new_c_left, cal.new_c_right),
         verdict=result.verdict.level,
         wheelbase=wheelbase,
@@ -425,6 +428,10 @@ def _record(result: Any) -> dict[str, Any]:  # noqa: ANN401 (CalibrationResult)
         "wheel_diameter": result.calibration.active.wheel_diameter,
         "overlay": None if result.overlay_withheld else result.overlay_yaml(),
         "mounting": None if forms is None else forms.to_dict(),
+        "controller": {
+            "key_path": list(result.controller.key_path),
+            "named": bool(result.controller.named),
+        },
     }
 
 

@@ -11,7 +11,7 @@ import datetime as dt
 import math
 from html import escape
 
-from umbmark.fleets.changes import SECONDS_PER_WEEK
+from umbmark.calibration.changes import SECONDS_PER_WEEK
 from umbmark.fleets.summary import FIGURE_UNITS, Z95, FigureTrack, FleetSummary, RobotSummary
 
 __all__ = ["fleet_page"]
@@ -92,29 +92,20 @@ def _plot(track: FigureTrack) -> str:
 
 
 def _apply(robot: RobotSummary) -> str:
-    """What to put into the robot's controller and to declare of its laser: the latest
-    calibration's overlay and mounting, or why it is not offered."""
-    latest = robot.latest
-    if latest is None or latest.multipliers is None:
-        return ""
-    record = latest.record
-    verdict = dict(record.get("verdict") or {})
-    if latest.verdict == "do-not-apply":
-        reasons = "; ".join(verdict.get("reasons") or []) or "its checks failed"
-        said = f'<span class="flag">not offered: do not apply ({escape(reasons)})</span>'
+    """What to put into the robot's controller and to declare of its laser, from its
+    present state: the overlay and the mounting, or why none is offered."""
+    apply = robot.apply
+    if apply is None:
+        return _mounting(robot)
+    if not apply.offered:
+        why = escape("; ".join(apply.reasons))
+        said = f'<span class="flag">not offered: do not apply ({why})</span>'
         return said + _mounting(robot)
-    overlay = record.get("overlay")
-    if not overlay:  # recorded before the overlay was kept: the multipliers alone
-        sep, left, right = latest.multipliers
-        overlay = (
-            f"wheel_separation_multiplier: {sep:.6f}\nleft_wheel_radius_multiplier: "
-            f"{left:.6f}\nright_wheel_radius_multiplier: {right:.6f}"
+    said = f"<pre>{escape(str(apply.overlay).strip())}</pre>"
+    if apply.verdict == "care":
+        said += (
+            '<span class="note">apply with care: ' + escape("; ".join(apply.reasons)) + "</span>"
         )
-    said = f"<pre>{escape(str(overlay).strip())}</pre>"
-    if latest.verdict == "care":
-        said += '<span class="note">apply with care: ' + escape(
-            "; ".join(verdict.get("reasons") or [])
-        ) + "</span>"  # fmt: skip
     return said + _mounting(robot)
 
 
@@ -148,10 +139,7 @@ def _row(robot: RobotSummary, figures: list[str]) -> str:
         else '<span class="ok">within its intervals</span>'
     )
     said += "".join(f'<br><span class="note">{escape(n)}</span>' for n in robot.notes)
-    latest = robot.latest
-    e_max = (
-        "-" if latest is None or latest.e_max_syst is None else f"{latest.e_max_syst * 1000:.1f} mm"
-    )
+    e_max = "-" if robot.e_max_syst is None else f"{robot.e_max_syst * 1000:.1f} mm"
     cells.append(f"<td>{said}</td><td class='num'>{e_max}</td><td>{_apply(robot)}</td>")
     cls = ' class="changed"' if flags else ""
     return f"<tr{cls}>{''.join(cells)}</tr>"
@@ -196,7 +184,9 @@ def fleet_page(summary: FleetSummary, *, title: str = "umbmark fleet", made: str
         f"{head}<th>changes</th><th>E_max,syst on 4 m</th><th>to apply</th></tr></thead>"
         f"<tbody>{rows}</tbody></table></div>"
         + (f"<h2>No usable recording</h2><ul>{left}</ul>" if unusable else "")
-        + "<p>Each value is the latest the robot's course gives (the mean of a steady robot's "
-        "calibrations, the value after a step, a trend's line now) with its 95 % interval; "
-        "a flag is a change beyond five of its own standard errors.</p></body></html>"
+        + "<p>Each value is the robot's present state with its 95 % interval: the mean of a "
+        "steady robot's calibrations, the value since a step, a trend's line now, or the "
+        "latest recording alone where it disagrees with the course before it (a change to be "
+        "confirmed by the next); a flag is a change beyond five of its own standard errors, "
+        "scaled by the scatter of the calibrations.</p></body></html>"
     )

@@ -1,6 +1,6 @@
 """What a fleet's calibrations say, robot by robot: the latest figures with their
 intervals, each figure's course over time (steady, a step since a recording, a trend per
-week: :func:`umbmark.fleets.changes.change_of`), what to apply, and the robots with no
+week: :func:`umbmark.calibration.changes.change_of`), what to apply, and the robots with no
 usable recording and why.
 
 :func:`summarize` takes every recording's outcome (:class:`~umbmark.fleets.outcome.
@@ -14,17 +14,27 @@ import datetime as dt
 import itertools
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from umbmark.fleets.changes import Change, change_of
+from umbmark.calibration.changes import Change, change_of
 from umbmark.fleets.outcome import FIGURES, STANDARD_SIDE, RecordingOutcome
+from umbmark.fleets.present import (
+    UNCONFIRMED,
+    ToApply,
+    present_e_max_syst,
+    robot_terms,
+    to_apply,
+)
 from umbmark.model.scans import LaserMounting
 from umbmark.outputs.mounting import MountingForms
 
 __all__ = ["FIGURE_UNITS", "FigureTrack", "FleetSummary", "RobotSummary", "summarize"]
+
+#: The figures a robot's controller takes (the others are the laser's).
+WHEELS = ("E_d", "E_b", "E_s")
 
 #: How each figure is shown: (label, factor to the shown unit, unit, decimals).
 FIGURE_UNITS: dict[str, tuple[str, float, str, int]] = {
@@ -66,12 +76,20 @@ class FigureTrack:
 
     @property
     def latest(self) -> tuple[float, float]:
-        """The latest value and its standard error: the chosen model's (a steady robot's
-        mean of all its calibrations, the value after a step, the trend's line now)."""
+        """The robot's present value and its standard error: since its last change (the
+        mean of a steady robot's calibrations, the value since a step, a trend's line
+        now), or the latest calibration alone where it stands alone."""
         return self.change.value, self.change.se
 
+    @property
+    def present(self) -> tuple[int, ...]:
+        """The calibrations (indices) the present value rests on."""
+        change, n = self.change, len(self.values)
+        start = 0 if change.since is None else change.since
+        return tuple(i for i in range(start, n) if i not in change.one_offs)
+
     def shown(self, unit: bool = True) -> str:
-        """The latest value and its 95 % interval in the shown unit (``1.002034 ±
+        """The present value and its 95 % interval in the shown unit (``1.002034 ±
         0.000118``, ``100.18 ± 0.30 mm``; ``unit=False`` leaves the unit out, for a
         column that names it)."""
         _, factor, name, decimals = FIGURE_UNITS[self.name]
@@ -79,24 +97,43 @@ class FigureTrack:
         said = f"{value * factor:.{decimals}f} ± {Z95 * se * factor:.{decimals}f}"
         return f"{said} {name}" if unit and name else said
 
-    def flag(self) -> str | None:
-        """The change in words, or None when steady."""
+    def _size(self) -> str:
         _, factor, unit, decimals = FIGURE_UNITS[self.name]
         unit = f" {unit}" if unit else ""
         size, se = self.change.size * factor, self.change.size_se * factor
-        if self.change.kind == "step" and self.change.since is not None:
-            k = self.change.since
-            when = _day(self.times[k])
+        return f"{size:+.{decimals}f} ± {Z95 * se:.{decimals}f}{unit}"
+
+    def flag(self) -> str | None:
+        """The change in words, or None when steady."""
+        change = self.change
+        if change.kind == "latest" and change.since is not None:
+            k = change.since
             return (
-                f"{self.name} stepped by {size:+.{decimals}f} ± {Z95 * se:.{decimals}f}{unit} "
-                f"since {self.paths[k]} ({when})"
+                f"{self.name} changed by {self._size()} in the latest recording, "
+                f"{self.paths[k]} ({_day(self.times[k])}), against {_count(change.compared)} "
+                "before it: to be confirmed by the next"
             )
-        if self.change.kind == "trend":
+        if change.kind == "step" and change.since is not None:
+            k = change.since
             return (
-                f"{self.name} trends by {size:+.{decimals}f} ± {Z95 * se:.{decimals}f}{unit} "
-                "per week"
+                f"{self.name} stepped by {self._size()} since {self.paths[k]} "
+                f"({_day(self.times[k])}), confirmed by {_count(change.confirmed_by)}"
             )
+        if change.kind == "trend":
+            return f"{self.name} trends by {self._size()} per week over {_count(change.compared)}"
         return None
+
+    def course(self) -> str:
+        """The course in a few words: the flag, or how many calibrations agree."""
+        flag = self.flag()
+        if flag is not None:
+            return flag
+        n = self.change.compared
+        return f"{self.name} within its intervals ({_count(n)}{' compared' if n > 1 else ''})"
+
+
+def _count(n: int) -> str:
+    return f"{n} recording{'' if n == 1 else 's'}"
 
 
 @dataclass(frozen=True)
@@ -107,18 +144,25 @@ class RobotSummary:
     ----------
     robot : str
     recordings : int
-        Its recordings (calibrated, left out and failed).
+        Its recordings (calibrated, left out and failed; a recording tried again counts
+        once).
     hours : float
         Their length [h].
     tracks : dict of str to FigureTrack
-        Each figure it has calibrations of.
+        Each figure it has calibrations of (what the robot is, on its latest nominal).
     latest : RecordingOutcome or None
-        Its latest calibrated recording.
+        Its latest calibration that is part of its course.
     left_out : tuple of (str, str)
         Recordings not calibrated: path and reason.
     notes : tuple of str
         What else people should know: the robot's configured (nominal) geometry changed
-        between its recordings (``E_b`` and ``E_s`` are then shown against the latest).
+        between its recordings (``E_b`` and ``E_s`` are then shown against the latest),
+        one-offs left out, calibrations not used because their verdict is do not apply.
+    e_max_syst : float or None
+        E_max,syst [m] the robot's present errors make on the standard 4 m square, with
+        the parameters active in its latest recording.
+    apply : ToApply or None
+        What to set in its controller from its present state.
     """
 
     robot: str
@@ -128,6 +172,8 @@ class RobotSummary:
     latest: RecordingOutcome | None = None
     left_out: tuple[tuple[str, str], ...] = ()
     notes: tuple[str, ...] = ()
+    e_max_syst: float | None = None
+    apply: ToApply | None = None
 
     @property
     def flags(self) -> tuple[str, ...]:
@@ -139,16 +185,21 @@ class RobotSummary:
         return bool(self.flags)
 
     @property
+    def unconfirmed(self) -> bool:
+        """Whether a figure changed in the latest recording alone (to be confirmed)."""
+        return any(t.change.kind == "latest" for t in self.tracks.values())
+
+    @property
     def usable(self) -> bool:
-        """Whether any recording gave a calibration."""
+        """Whether any recording gave a calibration that is part of its course."""
         return self.latest is not None
 
     @property
     def mounting(self) -> MountingForms | None:
-        """The laser's mounting to declare: the fleet's latest estimate of it (every
-        calibration since its last change, :attr:`FigureTrack.latest`) in the forms a
-        user applies (a URDF origin, static transforms), against the mounting the latest
-        recording states; None without a laser."""
+        """The laser's mounting to declare: the fleet's present estimate of it (since its
+        last change, :attr:`FigureTrack.latest`) in the forms a user applies (a URDF
+        origin, static transforms), against the mounting the latest recording states;
+        None without a laser."""
         tracks = [self.tracks.get(name) for name in ("laser_x", "laser_y", "laser_yaw")]
         if self.latest is None or any(t is None for t in tracks):
             return None
@@ -164,42 +215,45 @@ class RobotSummary:
             "recordings": self.recordings,
             "hours": self.hours,
             "usable": self.usable,
-            "figures": {
-                name: {
-                    "value": track.latest[0],
-                    "standard_error": track.latest[1],
-                    "interval_95": [
-                        track.latest[0] - Z95 * track.latest[1],
-                        track.latest[0] + Z95 * track.latest[1],
-                    ],
-                    "change": track.change.kind,
-                    "since": None
-                    if track.change.since is None
-                    else track.paths[track.change.since],
-                    "size": track.change.size,
-                    "size_standard_error": track.change.size_se,
-                    "times": list(track.times),
-                    "values": list(track.values),
-                    "standard_errors": list(track.errors),
-                }
-                for name, track in self.tracks.items()
-            },
+            "figures": {name: _track_dict(track) for name, track in self.tracks.items()},
             "flags": list(self.flags),
+            "e_max_syst": self.e_max_syst,
+            "apply": None if self.apply is None else self.apply.to_dict(),
             "latest": None
             if latest is None
-            else {
+            else {  # the recording; what it says of the robot is in figures and apply
                 "path": latest.path,
                 "start": latest.start,
                 "method": latest.method,
-                "e_max_syst": latest.e_max_syst,
-                "multipliers": None if latest.multipliers is None else list(latest.multipliers),
                 "verdict": latest.verdict,
-                "overlay": latest.record.get("overlay"),
             },
             "mounting": None if self.mounting is None else self.mounting.to_dict(),
             "left_out": [{"path": p, "reason": r} for p, r in self.left_out],
             "notes": list(self.notes),
         }
+
+
+def _track_dict(track: FigureTrack) -> dict[str, Any]:
+    value, se = track.latest
+    change = track.change
+    return {
+        "value": value,
+        "standard_error": se,
+        "interval_95": [value - Z95 * se, value + Z95 * se],
+        "change": change.kind,
+        "since": None if change.since is None else track.paths[change.since],
+        "size": change.size,
+        "size_standard_error": change.size_se,
+        "birge": change.birge,
+        "compared": change.compared,
+        "confirmed_by": change.confirmed_by,
+        "steps": [track.paths[k] for k in change.steps],
+        "one_offs": [track.paths[k] for k in change.one_offs],
+        "times": list(track.times),
+        "values": list(track.values),
+        "standard_errors": list(track.errors),
+        "paths": list(track.paths),
+    }
 
 
 @dataclass(frozen=True)
@@ -216,8 +270,13 @@ class FleetSummary:
 
     @property
     def drifted(self) -> tuple[str, ...]:
-        """The robots with a figure that changed."""
+        """The robots with a figure that changed (in the latest recording too)."""
         return tuple(r.robot for r in self.robots if r.changed)
+
+    @property
+    def unconfirmed(self) -> tuple[str, ...]:
+        """The robots with a figure that changed in their latest recording alone."""
+        return tuple(r.robot for r in self.robots if r.unconfirmed)
 
     @property
     def unusable(self) -> tuple[str, ...]:
@@ -226,13 +285,9 @@ class FleetSummary:
 
     @property
     def worst(self) -> tuple[str, float] | None:
-        """The robot whose latest errors make the largest E_max,syst on the standard 4 m
+        """The robot whose present errors make the largest E_max,syst on the standard 4 m
         square, and that E_max,syst [m]."""
-        found = [
-            (r.robot, r.latest.e_max_syst)
-            for r in self.robots
-            if r.latest is not None and r.latest.e_max_syst is not None
-        ]
+        found = [(r.robot, r.e_max_syst) for r in self.robots if r.e_max_syst is not None]
         return max(found, key=lambda f: f[1]) if found else None
 
     def line(self) -> str:
@@ -244,9 +299,16 @@ class FleetSummary:
             else f"; worst E_max,syst on the {STANDARD_SIDE:g} m square: {worst[1] * 1000:.1f} "
             f"mm ({worst[0]})"
         )
+        pending = len(self.unconfirmed)
+        latest = (
+            f" ({pending} of them in {'its' if pending == 1 else 'their'} latest recording, "
+            "to be confirmed)"
+            if pending
+            else ""
+        )
         return (
-            f"{len(self.robots)} robots: {len(self.drifted)} changed beyond their intervals, "
-            f"{len(self.unusable)} with no usable recording{said}"
+            f"{len(self.robots)} robots: {len(self.drifted)} changed beyond their intervals"
+            f"{latest}, {len(self.unusable)} with no usable recording{said}"
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -254,6 +316,7 @@ class FleetSummary:
         return {
             "robots": [r.to_dict() for r in self.robots],
             "drifted": list(self.drifted),
+            "unconfirmed": list(self.unconfirmed),
             "unusable": list(self.unusable),
             "worst_e_max_syst": None if worst is None else {"robot": worst[0], "value": worst[1]},
             "standard_side": STANDARD_SIDE,
@@ -267,6 +330,7 @@ def _track(name: str, outcomes: Sequence[RecordingOutcome]) -> FigureTrack | Non
         if name in o.figures
         and o.figures[name][1] is not None
         and o.start is not None
+        and math.isfinite(o.figures[name][0])
         and math.isfinite(o.figures[name][1] or math.nan)
         and (o.figures[name][1] or 0.0) > 0.0
     ]
@@ -286,8 +350,20 @@ def _track(name: str, outcomes: Sequence[RecordingOutcome]) -> FigureTrack | Non
     )
 
 
+def _newest(outcomes: Sequence[RecordingOutcome]) -> list[RecordingOutcome]:
+    """One outcome per recording (its path): the newest tried, a calibration over a
+    failed try of the same recording."""
+    by_path: dict[str, RecordingOutcome] = {}
+    for o in outcomes:
+        kept = by_path.get(o.path)
+        if kept is None or o.calibrated or not kept.calibrated:
+            by_path[o.path] = o
+    return list(by_path.values())
+
+
 def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
-    """The fleet's robots from their recordings' outcomes (any order).
+    """The fleet's robots from their recordings' outcomes (any order, oldest tries
+    first where a recording was tried more than once).
 
     Parameters
     ----------
@@ -300,31 +376,88 @@ def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
     by_robot: dict[str, list[RecordingOutcome]] = {}
     for outcome in outcomes:
         by_robot.setdefault(outcome.robot, []).append(outcome)
-    robots = []
-    for name in sorted(by_robot):
-        mine = by_robot[name]
-        calibrated = sorted(
-            (o for o in mine if o.calibrated), key=lambda o: (o.start or 0.0, o.path)
+    return FleetSummary(tuple(_robot(name, _newest(by_robot[name])) for name in sorted(by_robot)))
+
+
+def _robot(name: str, mine: Sequence[RecordingOutcome]) -> RobotSummary:
+    """One robot from its recordings' outcomes (one each)."""
+    calibrated = sorted((o for o in mine if o.calibrated), key=lambda o: (o.start or 0.0, o.path))
+    used = [o for o in calibrated if o.verdict != "do-not-apply"]
+    latest = used[-1] if used else None
+    notes = list(_nominal_changes(calibrated))
+    notes += [_refused(o) for o in calibrated if o.verdict == "do-not-apply"]
+    left_out = tuple((o.path, o.reason or "") for o in mine if not o.calibrated)
+    hours = float(sum(o.hours for o in mine))
+    if latest is None:
+        return RobotSummary(name, len(mine), hours, {}, None, left_out, tuple(notes))
+    on_latest = [robot_terms(o, latest) for o in used]
+    tracks = {f: t for f in FIGURES if (t := _track(f, on_latest)) is not None}
+    notes += _one_offs(tracks)
+    present = {f: tracks[f].latest[0] for f in WHEELS if f in tracks}
+    by_path = {o.path: o for o in used}
+    rests_on = sorted(
+        {by_path[tracks[f].paths[i]].path for f in WHEELS if f in tracks for i in tracks[f].present}
+    )
+    wheels = [tracks[f] for f in WHEELS if f in tracks]
+    cautions = [UNCONFIRMED] if any(t.change.kind == "latest" for t in wheels) else []
+    if calibrated[-1] is not latest:
+        cautions.append(
+            f"the newest calibration, {calibrated[-1].path}, failed its checks (do not apply): "
+            "these values rest on the recordings before it"
         )
-        latest = calibrated[-1] if calibrated else None
-        on_latest = [_on_nominal(o, latest) for o in calibrated] if latest else []
-        tracks = {}
-        for figure in FIGURES:
-            track = _track(figure, on_latest)
-            if track is not None:
-                tracks[figure] = track
-        robots.append(
-            RobotSummary(
-                name,
-                len(mine),
-                float(sum(o.hours for o in mine)),
-                tracks,
-                latest,
-                tuple((o.path, o.reason or "") for o in mine if not o.calibrated),
-                _nominal_changes(calibrated),
-            )
-        )
-    return FleetSummary(tuple(robots))
+    apply = to_apply(present, [by_path[p] for p in rests_on], latest, basis=_basis(wheels),
+                     cautions=cautions)  # fmt: skip
+    return RobotSummary(
+        name, len(mine), hours, tracks, latest, left_out, tuple(notes),
+        present_e_max_syst(present, latest), apply,
+    )  # fmt: skip
+
+
+def _basis(wheels: Sequence[FigureTrack]) -> str:
+    """What the wheels' present figures rest on, for people."""
+    if not wheels:
+        return "no wheel figures"
+    said = []
+    for track in wheels:
+        change, present = track.change, track.present
+        first, last = _day(track.times[present[0]]), _day(track.times[present[-1]])
+        if change.kind == "latest":
+            what = f"the latest recording alone ({last}): a change to be confirmed"
+        elif change.kind == "step":
+            what = f"the {_count(len(present))} since its step on {first}"
+        elif change.kind == "trend":
+            what = f"its trend over {_count(len(present))}, at {last}"
+        elif len(present) == 1:
+            what = f"one recording ({last})"
+        else:
+            what = f"the mean of {_count(len(present))} from {first} to {last}"
+        said.append(f"{track.name}: {what}")
+    return "; ".join(said)
+
+
+def _one_offs(tracks: Mapping[str, FigureTrack]) -> list[str]:
+    """A note for each recording left out of some figure's course as a one-off."""
+    found: dict[str, list[str]] = {}
+    when: dict[str, float] = {}
+    for track in tracks.values():
+        for k in track.change.one_offs:
+            found.setdefault(track.paths[k], []).append(track.name)
+            when[track.paths[k]] = track.times[k]
+    return [
+        f"one-off: {path} ({_day(when[path])}) disagreed with the recordings around it in "
+        f"{', '.join(names)}, and later ones returned: left out of the figures"
+        for path, names in sorted(found.items(), key=lambda f: when[f[0]])
+    ]
+
+
+def _refused(outcome: RecordingOutcome) -> str:
+    """Why a calibrated recording is not part of the course."""
+    reasons = (outcome.record.get("verdict") or {}).get("reasons") or ["its checks failed"]
+    when = "" if outcome.start is None else f" ({_day(outcome.start)})"
+    return (
+        f"not used: {outcome.path}{when}: its calibration's verdict is do not apply "
+        f"({'; '.join(str(r) for r in reasons)})"
+    )
 
 
 def _mounting_forms(
@@ -362,25 +495,6 @@ def _nominal(outcome: RecordingOutcome) -> tuple[float | None, float | None]:
     """The nominal wheelbase and wheel diameter [m] a calibration was made against."""
     diameter = outcome.record.get("wheel_diameter")
     return outcome.wheelbase, None if diameter is None else float(diameter)
-
-
-def _ratio(ours: float | None, theirs: float | None) -> float:
-    return ours / theirs if ours and theirs else 1.0
-
-
-def _on_nominal(outcome: RecordingOutcome, latest: RecordingOutcome) -> RecordingOutcome:
-    """``outcome``'s figures against ``latest``'s nominal geometry: ``E_b`` (the actual
-    wheelbase over the nominal) times its nominal over the latest's, ``E_s`` (the actual
-    mean diameter over the nominal) likewise; the rest do not depend on it."""
-    (b, d), (b_latest, d_latest) = _nominal(outcome), _nominal(latest)
-    scale = {"E_b": _ratio(b, b_latest), "E_s": _ratio(d, d_latest)}
-    if scale["E_b"] == 1.0 and scale["E_s"] == 1.0:
-        return outcome
-    figures = {
-        name: (v * scale.get(name, 1.0), None if se is None else se * scale.get(name, 1.0))
-        for name, (v, se) in outcome.figures.items()
-    }
-    return replace(outcome, figures=figures)
 
 
 def _nominal_changes(calibrated: Sequence[RecordingOutcome]) -> tuple[str, ...]:

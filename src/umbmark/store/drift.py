@@ -11,25 +11,34 @@ calibrate`` makes for the new parameters (:class:`umbmark.calibration.compose.Ca
 - ``robot E_b = wheel_separation_multiplier,new = E_b x multiplier,active`` (Eq. 4.26),
   its effective wheelbase over the configured (nominal) one.
 
-:func:`drift_verdict` compares those of the first and the last calibration
+:func:`drift_verdict` follows those over every calibration, in time, with the course model
+the fleet uses (:func:`umbmark.calibration.changes.change_of`): steady, changed in the
+latest calibration (to be confirmed by the next), stepped at a calibration (confirmed),
+trending, and one-offs left out, every judgement counting the calibrations' own scatter
 (:attr:`CalibrationRecord.robot_E_d <umbmark.store.records.CalibrationRecord.robot_E_d>`).
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+import numpy as np
+
+from umbmark.calibration.changes import Z_CHANGE, Change, change_of
+
+#: z of a 95 % interval.
+Z95 = 1.959964
+
 if TYPE_CHECKING:
     from umbmark.store.records import CalibrationRecord
 
-__all__ = ["DEFINITIONS", "DRIFT_MIN_CALIBRATIONS", "DRIFT_SIGMAS", "drift_verdict"]
+__all__ = ["DEFINITIONS", "DRIFT_MIN_CALIBRATIONS", "drift_verdict"]
 
-#: Fewest calibrations the drift check needs.
-DRIFT_MIN_CALIBRATIONS = 3
-#: The change that counts as drift, in standard errors of the change.
-DRIFT_SIGMAS = 3.0
+#: Fewest calibrations the drift check needs (two are compared on their intervals).
+DRIFT_MIN_CALIBRATIONS = 2
 
 #: What a calibration's figures in the history mean (``history --json`` prints them).
 DEFINITIONS = {
@@ -42,61 +51,102 @@ DEFINITIONS = {
     "wheel_separation_multiplier (E_b x multiplier = the new multiplier), the robot's "
     "effective wheelbase over the nominal one",
     "robot_wheelbase": "the robot's effective wheelbase [m]: robot_E_b x nominal wheelbase",
-    "drift": f"robot_E_d and robot_E_b of the first and the last calibration compared (E_b on "
-    f"the last one's nominal wheelbase); a change over {DRIFT_SIGMAS:g} standard errors of it "
-    "is drift",
+    "drift": f"robot_E_d and robot_E_b followed over every calibration in time (E_b on the "
+    "last one's nominal wheelbase) as the fleet follows its figures: a change beyond "
+    f"{Z_CHANGE:g} of its standard errors, scaled by the calibrations' own scatter, is drift "
+    "(in the latest calibration alone: to be confirmed by the next)",
 }
 
 
-def drift_verdict(calibrations: Sequence[CalibrationRecord]) -> str | None:
-    """Whether the robot's ``E_d`` or ``E_b`` drifted between the first and the last
-    calibration.
+def _when(record: CalibrationRecord) -> float:
+    """A calibration's time [s since 1970, UTC]."""
+    when = dt.datetime.fromisoformat(record.time.replace("Z", "+00:00"))
+    if when.tzinfo is None:
+        when = when.replace(tzinfo=dt.timezone.utc)
+    return when.timestamp()
 
-    It compares what the robot is, :attr:`~umbmark.store.history.CalibrationRecord.robot_E_d`
+
+def _said(name: str, change: Change, ids: Sequence[int], days: Sequence[str]) -> str:
+    """One figure's course in words."""
+    ci = f"± {Z95 * change.size_se:.1e}"
+    if change.kind == "latest":
+        before = change.value - change.size
+        return (
+            f"robot {name} changed in the latest calibration, {ids[-1]} ({days[-1]}): "
+            f"{before:.6f} -> {change.value:.6f} ({change.size:+.2e} {ci}), against "
+            f"{change.compared} before it; to be confirmed by the next"
+        )
+    if change.kind == "step" and change.since is not None:
+        k = change.since
+        return (
+            f"robot {name} stepped from {change.value - change.size:.6f} to {change.value:.6f} "
+            f"({change.size:+.2e} {ci}) at calibration {ids[k]} ({days[k]}), confirmed by "
+            f"{change.confirmed_by}"
+        )
+    if change.kind == "trend":
+        return (
+            f"robot {name} trends by {change.size:+.2e} {ci} per week over {change.compared} "
+            f"calibrations, now {change.value:.6f}"
+        )
+    return (
+        f"robot {name} {change.value:.6f} ± {Z95 * change.se:.1e} over {change.compared} "
+        f"calibrations ({ids[0]} to {ids[-1]})"
+    )
+
+
+def drift_verdict(calibrations: Sequence[CalibrationRecord]) -> str | None:
+    """Whether the robot's ``E_d`` or ``E_b`` drifted over its calibrations.
+
+    It follows what the robot is, :attr:`~umbmark.store.history.CalibrationRecord.robot_E_d`
     and ``robot_E_b`` (each pass's measured errors composed with the parameters active
     during it), not what the passes measured: passes on corrected odometry measure what
-    the correction left. A change counts as drift when it exceeds :data:`DRIFT_SIGMAS`
-    times its standard error, ``sqrt(se_first^2 + se_last^2)`` from the two calibrations'
-    standard errors (the active parameters are exact). ``E_b`` of a robot whose nominal
-    wheelbase was changed between the two (a fleet's) is compared on the last nominal.
+    the correction left. Each is a series over the calibrations' times with their
+    standard errors (the active parameters are exact), judged by
+    :func:`umbmark.calibration.changes.change_of`; ``E_b`` of a robot whose nominal
+    wheelbase was changed between calibrations (a fleet's) is put on the last nominal.
 
     Parameters
     ----------
     calibrations : sequence of CalibrationRecord
-        A robot's calibrations, oldest first.
+        A robot's calibrations (any order: they are taken by time).
 
     Returns
     -------
     str or None
-        One line for people; None with fewer than :data:`DRIFT_MIN_CALIBRATIONS`.
+        One line for people, starting ``drift:`` where a figure changed and ``no drift:``
+        where none did; None with fewer than :data:`DRIFT_MIN_CALIBRATIONS`.
     """
     if len(calibrations) < DRIFT_MIN_CALIBRATIONS:
         return None
-    first, last = calibrations[0], calibrations[-1]
+    ordered = sorted(calibrations, key=_when)
+    times = np.array([_when(c) for c in ordered], dtype=np.float64)
+    ids = [c.id for c in ordered]
+    days = [dt.datetime.fromtimestamp(t, dt.timezone.utc).date().isoformat() for t in times]
+    last_nominal = float(ordered[-1].active["wheelbase"])
     drifted: list[str] = []
     steady: list[str] = []
     unknown: list[str] = []
+    one_offs: list[str] = []
     for name in ("E_d", "E_b"):
-        a, b = float(getattr(first, f"robot_{name}")), float(getattr(last, f"robot_{name}"))
-        se_a = first.robot_standard_errors.get(name)
-        se_b = last.robot_standard_errors.get(name)
-        if name == "E_b":  # on the last one's nominal wheelbase, where it was changed
-            scale = float(first.active["wheelbase"]) / float(last.active["wheelbase"])
-            a, se_a = a * scale, None if se_a is None else se_a * scale
-        if se_a is None or se_b is None or not math.isfinite(se_a + se_b):
+        values, errors = [], []
+        for c in ordered:
+            scale = float(c.active["wheelbase"]) / last_nominal if name == "E_b" else 1.0
+            se = c.robot_standard_errors.get(name)
+            values.append(float(getattr(c, f"robot_{name}")) * scale)
+            errors.append(math.nan if se is None else se * scale)
+        if not all(math.isfinite(e) and e > 0 for e in errors):
             unknown.append(f"robot {name}")
             continue
-        se = math.hypot(se_a, se_b)
-        change = b - a
-        text = f"robot {name} {a:.6f} -> {b:.6f} ({change:+.2e}, {DRIFT_SIGMAS:g} x se = "
-        text += f"{DRIFT_SIGMAS * se:.2e})"
-        (drifted if abs(change) > DRIFT_SIGMAS * se else steady).append(text)
-    span = f"between calibrations {first.id} and {last.id}"
+        change = change_of(times, np.array(values), np.array(errors))
+        (drifted if change.changed else steady).append(_said(name, change, ids, days))
+        one_offs += [f"calibration {ids[k]} in robot {name}" for k in change.one_offs]
     parts = []
     if drifted:
-        parts.append(f"drift {span}: {'; '.join(drifted)}")
+        parts.append(f"drift: {'; '.join(drifted)}")
     if steady:
-        parts.append(f"{'no drift' if not drifted else 'within noise'} {span}: {'; '.join(steady)}")
+        parts.append(f"{'within noise' if drifted else 'no drift'}: {'; '.join(steady)}")
+    if one_offs:
+        parts.append(f"one-off, left out: {', '.join(one_offs)}")
     if unknown:
         parts.append(f"no standard errors to judge {', '.join(unknown)}")
     return ". ".join(parts)

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 from umbmark.core.digest import path_sha256
 from umbmark.core.errors import InputError, option
-from umbmark.store.drift import DEFINITIONS, DRIFT_MIN_CALIBRATIONS, DRIFT_SIGMAS, drift_verdict
+from umbmark.store.drift import DEFINITIONS, DRIFT_MIN_CALIBRATIONS, drift_verdict
 from umbmark.store.records import CalibrationRecord, NewCalibration, RobotRecord
 
 if TYPE_CHECKING:
@@ -38,7 +38,6 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFINITIONS",
     "DRIFT_MIN_CALIBRATIONS",
-    "DRIFT_SIGMAS",
     "MIGRATIONS",
     "SCHEMA_VERSION",
     "CalibrationRecord",
