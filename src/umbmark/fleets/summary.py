@@ -107,7 +107,9 @@ class RobotSummary:
     ----------
     robot : str
     recordings : int
-        Its recordings (calibrated, left out and failed).
+        Its recordings (calibrated, left out and failed), each once: a recording
+        recorded more than once (tried again after a failure, read again with other
+        options) is the one outcome :func:`summarize` keeps of it.
     hours : float
         Their length [h].
     tracks : dict of str to FigureTrack
@@ -115,10 +117,12 @@ class RobotSummary:
     latest : RecordingOutcome or None
         Its latest calibrated recording.
     left_out : tuple of (str, str)
-        Recordings not calibrated: path and reason.
+        Recordings not calibrated: path and reason (those that failed too).
     notes : tuple of str
         What else people should know: the robot's configured (nominal) geometry changed
         between its recordings (``E_b`` and ``E_s`` are then shown against the latest).
+    failed : tuple of (str, str)
+        Those of ``left_out`` that could not be read: path and reason.
     """
 
     robot: str
@@ -128,6 +132,7 @@ class RobotSummary:
     latest: RecordingOutcome | None = None
     left_out: tuple[tuple[str, str], ...] = ()
     notes: tuple[str, ...] = ()
+    failed: tuple[tuple[str, str], ...] = ()
 
     @property
     def flags(self) -> tuple[str, ...]:
@@ -198,6 +203,7 @@ class RobotSummary:
             },
             "mounting": None if self.mounting is None else self.mounting.to_dict(),
             "left_out": [{"path": p, "reason": r} for p, r in self.left_out],
+            "failed": [{"path": p, "reason": r} for p, r in self.failed],
             "notes": list(self.notes),
         }
 
@@ -235,8 +241,16 @@ class FleetSummary:
         ]
         return max(found, key=lambda f: f[1]) if found else None
 
+    @property
+    def recordings(self) -> tuple[int, int, int]:
+        """The robots' recordings (each once): calibrated, left out, failed."""
+        failed = sum(len(r.failed) for r in self.robots)
+        left_out = sum(len(r.left_out) for r in self.robots) - failed
+        return sum(r.recordings for r in self.robots) - left_out - failed, left_out, failed
+
     def line(self) -> str:
-        """One line for people."""
+        """One line for people: the robots that changed and that have no usable
+        recording, the recordings calibrated, left out and failed, the worst E_max,syst."""
         worst = self.worst
         said = (
             ""
@@ -244,9 +258,18 @@ class FleetSummary:
             else f"; worst E_max,syst on the {STANDARD_SIDE:g} m square: {worst[1] * 1000:.1f} "
             f"mm ({worst[0]})"
         )
+        calibrated, left_out, failed = self.recordings
+        counts = ", ".join(
+            [f"{calibrated} calibrated"]
+            + ([f"{left_out} left out"] if left_out else [])
+            + ([f"{failed} failed"] if failed else [])
+        )
+        total = calibrated + left_out + failed
         return (
-            f"{len(self.robots)} robots: {len(self.drifted)} changed beyond their intervals, "
-            f"{len(self.unusable)} with no usable recording{said}"
+            f"{len(self.robots)} robot{'' if len(self.robots) == 1 else 's'}: "
+            f"{len(self.drifted)} changed beyond their intervals, "
+            f"{len(self.unusable)} with no usable recording; {total} "
+            f"recording{'' if total == 1 else 's'}: {counts}{said}"
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -302,7 +325,7 @@ def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
         by_robot.setdefault(outcome.robot, []).append(outcome)
     robots = []
     for name in sorted(by_robot):
-        mine = by_robot[name]
+        mine = _each_once(by_robot[name])
         calibrated = sorted(
             (o for o in mine if o.calibrated), key=lambda o: (o.start or 0.0, o.path)
         )
@@ -322,9 +345,27 @@ def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
                 latest,
                 tuple((o.path, o.reason or "") for o in mine if not o.calibrated),
                 _nominal_changes(calibrated),
+                tuple((o.path, o.reason or "") for o in mine if o.failed),
             )
         )
     return FleetSummary(tuple(robots))
+
+
+def _each_once(outcomes: Sequence[RecordingOutcome]) -> list[RecordingOutcome]:
+    """One outcome of each recording (by path), in the order given: of a recording given
+    more than once, the best (calibrated over left out over failed: a recording calibrated
+    after a failed try is calibrated), the last given among equals (the latest recorded,
+    as :func:`~umbmark.store.fleet_recordings.read_recordings` gives them)."""
+
+    def rank(o: RecordingOutcome) -> int:
+        return 2 if o.calibrated else 0 if o.failed else 1
+
+    kept: dict[str, RecordingOutcome] = {}
+    for outcome in outcomes:
+        before = kept.get(outcome.path)
+        if before is None or rank(outcome) >= rank(before):
+            kept[outcome.path] = outcome
+    return list(kept.values())
 
 
 def _mounting_forms(
