@@ -77,7 +77,10 @@ def test_a_fleet_is_calibrated_flagged_and_done_once(recordings: Path, tmp_path:
     # short recordings' trajectory fits each carry a bias of about 1e-4 at this dt).
     assert by["steady"]["figures"]["E_d"]["value"] == pytest.approx(1.002, abs=3e-4)
     assert by["wheel"]["figures"]["E_d"]["value"] == pytest.approx(0.996, abs=3e-4)
-    assert page.read_text(encoding="utf-8").count('class="changed"') == 1
+    shown = page.read_text(encoding="utf-8")
+    assert shown.count('<section class="robot changed"') == 1  # the wheel's row
+    assert "Failed recordings (1)" in shown
+    assert "1 with no usable recording; 13 recordings: 12 calibrated, 1 failed" in shown
     # Every calibration is in the history with the recording's time and digest.
     with sqlite3.connect(history) as db:
         rows = db.execute("SELECT time, inputs FROM calibrations WHERE robot = 'wheel'").fetchall()

@@ -13,6 +13,7 @@ import pytest
 
 pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
 
+from fleet_page_view import plot_of, rows_as_seen
 from fleet_tasks import recorded_rows
 from helpers import run_cli
 
@@ -33,12 +34,14 @@ def fleet(tmp_path_factory) -> Path:
 def test_the_simulated_fleet_is_watched(fleet: Path, tmp_path: Path):
     truth = json.loads((fleet / "truth.json").read_text())
     assert len(truth["recordings"]) == ROBOTS * DAYS
+    page = tmp_path / "fleet.html"
     proc = run_cli("fleet", str(fleet), "--robot-from", "{robot}/{date}/*",
                    "--history", str(tmp_path / "h.sqlite3"), "--workers", "2", "--json",
-                   timeout=900)  # fmt: skip
+                   "--report", str(page), timeout=900)  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     data = json.loads(proc.stdout)
     assert data["recordings_done"] == ROBOTS * DAYS
+    assert all(r["recordings"] == DAYS for r in data["robots"])
     assert data["drifted"] == ["robot02", "robot03", "robot04"]
     by = {r["robot"]: r for r in data["robots"]}
     assert all(f["change"] == "steady" for f in by["robot01"]["figures"].values())
@@ -65,6 +68,72 @@ def test_the_simulated_fleet_is_watched(fleet: Path, tmp_path: Path):
     assert "nothing to change" in by["robot01"]["mounting"]["verdict"]
     # What to apply is the present state's overlay, keyed by the controller.
     assert "ros__parameters" in by["robot02"]["apply"]["overlay"]
+    _check_the_page(page, tmp_path)
+
+
+def _check_the_page(page: Path, tmp_path: Path) -> None:
+    """The fleet's page as a person sees it (``fleet_page_view``): every robot one row in
+    view at a desk's and a phone's width; every plot from the first day (2026-11-02) to the
+    last (2026-11-07); the wheel's and the laser's steps marked at day 4 (2026-11-05),
+    nothing else marked but the steps (the tyres' trend has no day)."""
+    from test_report_command import Chromium
+
+    browser = Chromium(tmp_path / "profile")
+    try:
+        seen = rows_as_seen(browser, page)
+    finally:
+        browser.close()
+    for width, rows in seen.items():
+        assert [r["robot"] for r in rows] == [f"robot{k:02d}" for k in range(1, ROBOTS + 1)]
+        by = {r["robot"]: r for r in rows}
+        assert by["robot01"]["flags"] == []
+        for row in rows:
+            assert len(row["plots"]) == 6, width
+            for plot in row["plots"]:
+                assert plot["days"] == ["2026-11-02", "2026-11-07"], (width, plot)
+        for robot, label in (("robot02", "E_d"), ("robot03", "laser yaw")):
+            plot = plot_of(by[robot], label)
+            assert plot["since"] == ["2026-11-05"], (width, robot)
+            assert plot["since_x"][0] == pytest.approx(plot["points_x"][3], abs=0.2)
+        marked = sum(bool(p["since"]) for r in rows for p in r["plots"])
+        assert marked == 3, width  # robot02's E_d, robot03's laser forward and yaw
+
+
+@pytest.mark.slow
+def test_a_recording_that_failed_and_then_was_calibrated_counts_once(fleet: Path, tmp_path: Path):
+    """A recording that cannot be read (random bytes at its path) fails, and the page and
+    the summary line say so; once its real bytes are there the next run calibrates it, and
+    its robot has one recording, none failed."""
+    import shutil
+
+    folder = tmp_path / "fleet"
+    recording = folder / "robot09" / "2026-11-08" / "drive.mcap"
+    recording.parent.mkdir(parents=True)
+    recording.write_bytes(bytes(range(256)) * 16)
+    args = ["fleet", str(folder), "--robot-from", "{robot}/{date}/*", "--history",
+            str(tmp_path / "h.sqlite3"), "--workers", "1", "--json", "--report",
+            str(tmp_path / "fleet.html"), "--force"]  # fmt: skip
+    first = run_cli(*args, timeout=600)
+    assert first.returncode == 0, first.stderr
+    data = json.loads(first.stdout)
+    assert data["summary"] == (
+        "1 robot: 0 changed beyond their intervals, 1 with no usable recording; 1 recording: "
+        "0 calibrated, 1 failed"
+    )
+    page = (tmp_path / "fleet.html").read_text(encoding="utf-8")
+    assert "Failed recordings (1)" in page
+    assert f"{recording}: cannot read" in page
+    shutil.copy(fleet / "robot01" / "2026-11-07" / "drive" / "drive.mcap", recording)
+    again = run_cli(*args, timeout=600)
+    assert again.returncode == 0, again.stderr
+    data = json.loads(again.stdout)
+    (robot,) = data["robots"]
+    assert (robot["recordings"], robot["failed"], robot["usable"]) == (1, [], True)
+    assert data["summary"].startswith(
+        "1 robot: 0 changed beyond their intervals, 0 with no usable recording; 1 recording: "
+        "1 calibrated; worst E_max,syst"
+    )
+    assert "Failed recordings" not in (tmp_path / "fleet.html").read_text(encoding="utf-8")
 
 
 @pytest.mark.slow

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -122,8 +123,9 @@ def test_a_change_in_the_latest_recording_tells_one_story_that_morning():
     assert "the latest recording alone (2026-09-23)" in apply.basis
     assert "confirm it with the next recording" in apply.overlay  # type: ignore[operator]
     assert fleet.line().startswith(
-        "1 robots: 1 changed beyond their intervals (1 of them in its latest recording, to "
-        "be confirmed), 0 with no usable recording; worst E_max,syst"
+        "1 robot: 1 changed beyond their intervals (1 of them in its latest recording, to "
+        "be confirmed), 0 with no usable recording; 3 recordings: 3 calibrated; worst "
+        "E_max,syst"
     )
     assert fleet.to_dict()["unconfirmed"] == ["amr"]
 
@@ -141,7 +143,7 @@ def test_the_next_recording_confirms_the_step_or_makes_it_a_one_off():
     assert robot.flags == ()
     assert robot.tracks["E_d"].latest[0] == pytest.approx(1.002)
     assert any(n.startswith("one-off: amr/day2.mcap (2026-09-23)") for n in robot.notes)
-    assert back.line().startswith("1 robots: 0 changed beyond their intervals, 0 with no")
+    assert back.line().startswith("1 robot: 0 changed beyond their intervals, 0 with no")
 
 
 def test_a_correction_applied_between_recordings_is_no_change():
@@ -167,3 +169,37 @@ def test_a_recording_tried_again_counts_once():
     (robot,) = summarize(outcomes).robots
     assert robot.recordings == 2
     assert robot.left_out == ()
+
+
+def test_a_recording_is_counted_once_however_often_it_was_tried():
+    """Seven recordings of one robot, as the history gives them back: day04 failed, then
+    calibrated; day05 failed twice; day06 left out; day01 calibrated again with other
+    reading options (E_d 1.004 instead of 1.003). The robot has seven recordings, five
+    calibrated (day01 once, as read last), one left out, one failed; 7 x 8 h."""
+    rng = np.random.default_rng(5)
+    days = daily_outcomes("amr", 7, rng)
+    day01 = days[1]
+    again = replace(day01, figures={**day01.figures, "E_d": (1.004, 1e-4)})
+    failed = [
+        RecordingOutcome(days[4].path, "amr", None, 0.0, None, reason="cannot be read",
+                         failed=True),
+        RecordingOutcome(days[5].path, "amr", None, 0.0, None, reason="cannot be read",
+                         failed=True),
+    ]  # fmt: skip
+    left = replace(days[6], method=None, figures={}, reason="no laser and no reference")
+    outcomes = [*failed, days[0], day01, days[2], days[3], days[4], failed[1], left, again]
+    fleet = summarize(outcomes)
+    (robot,) = fleet.robots
+    assert robot.recordings == 7
+    assert robot.hours == 5 * 8.0 + 0.0 + 8.0  # day05 failed before its length was known
+    assert robot.failed == ((days[5].path, "cannot be read"),)
+    assert [p for p, _ in robot.left_out] == [days[5].path, days[6].path]
+    e_d = robot.tracks["E_d"]
+    assert e_d.paths == tuple(d.path for d in days[:5])  # each calibrated recording once
+    assert e_d.values[1] == 1.004  # day01 as read last
+    assert fleet.recordings == (5, 1, 1)
+    assert fleet.line().startswith(
+        "1 robot: 0 changed beyond their intervals, 0 with no usable recording; 7 "
+        "recordings: 5 calibrated, 1 left out, 1 failed; worst E_max,syst"
+    )
+    assert robot.to_dict()["failed"] == [{"path": days[5].path, "reason": "cannot be read"}]

@@ -104,3 +104,16 @@ def test_a_urls_identity_is_url_size_and_version_and_an_unreadable_one_matches_n
                               "why", {})  # fmt: skip
     record_recording(store, unreadable, None)
     assert set(done_recordings(store)) == {f"{gone}|1|2"}  # the empty identity: none
+
+
+def test_a_recording_read_again_with_other_options_comes_in_the_order_last_recorded(
+    tmp_path: Path,
+):
+    """One recording read with options A, then B, then A again (a robot's entry changed
+    and changed back): both rows are read back, the one recorded last (A's) after the
+    other, so that a summary keeping the last of a recording keeps the latest."""
+    store = History(tmp_path / "h.sqlite3")
+    a, b = options_key({"scan_topic": "/scan"}), options_key({"scan_topic": "/front/scan"})
+    for key in (a, b, a):
+        record_recording(store, _row("r.mcap", "left out", "d1", key, 5.0), None)
+    assert [r.options_key for r in read_recordings(store)] == [b, a]

@@ -144,8 +144,9 @@ class RobotSummary:
     ----------
     robot : str
     recordings : int
-        Its recordings (calibrated, left out and failed; a recording tried again counts
-        once).
+        Its recordings (calibrated, left out and failed), each once: a recording
+        recorded more than once (tried again after a failure, read again with other
+        options) is the one outcome :func:`summarize` keeps of it.
     hours : float
         Their length [h].
     tracks : dict of str to FigureTrack
@@ -153,7 +154,7 @@ class RobotSummary:
     latest : RecordingOutcome or None
         Its latest calibration that is part of its course.
     left_out : tuple of (str, str)
-        Recordings not calibrated: path and reason.
+        Recordings not calibrated: path and reason (those that failed too).
     notes : tuple of str
         What else people should know: the robot's configured (nominal) geometry changed
         between its recordings (``E_b`` and ``E_s`` are then shown against the latest),
@@ -163,6 +164,8 @@ class RobotSummary:
         the parameters active in its latest recording.
     apply : ToApply or None
         What to set in its controller from its present state.
+    failed : tuple of (str, str)
+        Those of ``left_out`` that could not be read: path and reason.
     """
 
     robot: str
@@ -174,6 +177,7 @@ class RobotSummary:
     notes: tuple[str, ...] = ()
     e_max_syst: float | None = None
     apply: ToApply | None = None
+    failed: tuple[tuple[str, str], ...] = ()
 
     @property
     def flags(self) -> tuple[str, ...]:
@@ -229,6 +233,7 @@ class RobotSummary:
             },
             "mounting": None if self.mounting is None else self.mounting.to_dict(),
             "left_out": [{"path": p, "reason": r} for p, r in self.left_out],
+            "failed": [{"path": p, "reason": r} for p, r in self.failed],
             "notes": list(self.notes),
         }
 
@@ -290,8 +295,16 @@ class FleetSummary:
         found = [(r.robot, r.e_max_syst) for r in self.robots if r.e_max_syst is not None]
         return max(found, key=lambda f: f[1]) if found else None
 
+    @property
+    def recordings(self) -> tuple[int, int, int]:
+        """The robots' recordings (each once): calibrated, left out, failed."""
+        failed = sum(len(r.failed) for r in self.robots)
+        left_out = sum(len(r.left_out) for r in self.robots) - failed
+        return sum(r.recordings for r in self.robots) - left_out - failed, left_out, failed
+
     def line(self) -> str:
-        """One line for people."""
+        """One line for people: the robots that changed and that have no usable
+        recording, the recordings calibrated, left out and failed, the worst E_max,syst."""
         worst = self.worst
         said = (
             ""
@@ -306,9 +319,18 @@ class FleetSummary:
             if pending
             else ""
         )
+        calibrated, left_out, failed = self.recordings
+        counts = ", ".join(
+            [f"{calibrated} calibrated"]
+            + ([f"{left_out} left out"] if left_out else [])
+            + ([f"{failed} failed"] if failed else [])
+        )
+        total = calibrated + left_out + failed
         return (
-            f"{len(self.robots)} robots: {len(self.drifted)} changed beyond their intervals"
-            f"{latest}, {len(self.unusable)} with no usable recording{said}"
+            f"{len(self.robots)} robot{'' if len(self.robots) == 1 else 's'}: "
+            f"{len(self.drifted)} changed beyond their intervals{latest}, "
+            f"{len(self.unusable)} with no usable recording; {total} "
+            f"recording{'' if total == 1 else 's'}: {counts}{said}"
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -350,17 +372,6 @@ def _track(name: str, outcomes: Sequence[RecordingOutcome]) -> FigureTrack | Non
     )
 
 
-def _newest(outcomes: Sequence[RecordingOutcome]) -> list[RecordingOutcome]:
-    """One outcome per recording (its path): the newest tried, a calibration over a
-    failed try of the same recording."""
-    by_path: dict[str, RecordingOutcome] = {}
-    for o in outcomes:
-        kept = by_path.get(o.path)
-        if kept is None or o.calibrated or not kept.calibrated:
-            by_path[o.path] = o
-    return list(by_path.values())
-
-
 def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
     """The fleet's robots from their recordings' outcomes (any order, oldest tries
     first where a recording was tried more than once).
@@ -376,7 +387,9 @@ def summarize(outcomes: Sequence[RecordingOutcome]) -> FleetSummary:
     by_robot: dict[str, list[RecordingOutcome]] = {}
     for outcome in outcomes:
         by_robot.setdefault(outcome.robot, []).append(outcome)
-    return FleetSummary(tuple(_robot(name, _newest(by_robot[name])) for name in sorted(by_robot)))
+    return FleetSummary(
+        tuple(_robot(name, _each_once(by_robot[name])) for name in sorted(by_robot))
+    )
 
 
 def _robot(name: str, mine: Sequence[RecordingOutcome]) -> RobotSummary:
@@ -387,9 +400,10 @@ def _robot(name: str, mine: Sequence[RecordingOutcome]) -> RobotSummary:
     notes = list(_nominal_changes(calibrated))
     notes += [_refused(o) for o in calibrated if o.verdict == "do-not-apply"]
     left_out = tuple((o.path, o.reason or "") for o in mine if not o.calibrated)
+    failed = tuple((o.path, o.reason or "") for o in mine if o.failed)
     hours = float(sum(o.hours for o in mine))
     if latest is None:
-        return RobotSummary(name, len(mine), hours, {}, None, left_out, tuple(notes))
+        return RobotSummary(name, len(mine), hours, {}, None, left_out, tuple(notes), failed=failed)
     on_latest = [robot_terms(o, latest) for o in used]
     tracks = {f: t for f in FIGURES if (t := _track(f, on_latest)) is not None}
     notes += _one_offs(tracks)
@@ -409,7 +423,7 @@ def _robot(name: str, mine: Sequence[RecordingOutcome]) -> RobotSummary:
                      cautions=cautions)  # fmt: skip
     return RobotSummary(
         name, len(mine), hours, tracks, latest, left_out, tuple(notes),
-        present_e_max_syst(present, latest), apply,
+        present_e_max_syst(present, latest), apply, failed,
     )  # fmt: skip
 
 
@@ -458,6 +472,23 @@ def _refused(outcome: RecordingOutcome) -> str:
         f"not used: {outcome.path}{when}: its calibration's verdict is do not apply "
         f"({'; '.join(str(r) for r in reasons)})"
     )
+
+
+def _each_once(outcomes: Sequence[RecordingOutcome]) -> list[RecordingOutcome]:
+    """One outcome of each recording (by path), in the order given: of a recording given
+    more than once, the best (calibrated over left out over failed: a recording calibrated
+    after a failed try is calibrated), the last given among equals (the latest recorded,
+    as :func:`~umbmark.store.fleet_recordings.read_recordings` gives them)."""
+
+    def rank(o: RecordingOutcome) -> int:
+        return 2 if o.calibrated else 0 if o.failed else 1
+
+    kept: dict[str, RecordingOutcome] = {}
+    for outcome in outcomes:
+        before = kept.get(outcome.path)
+        if before is None or rank(outcome) >= rank(before):
+            kept[outcome.path] = outcome
+    return list(kept.values())
 
 
 def _mounting_forms(

@@ -67,7 +67,8 @@ FLEET_OPTIONS: tuple[Spec, ...] = (
         ("--report",),
         OUTPUTS,
         "Write the fleet's page (.html): every robot's latest figures, their course over "
-        "time and its flags, what to apply, the robots with no usable recording.",
+        "time and its flags, what to apply, the failed recordings and the robots with no "
+        "usable recording.",
         kind="file",
     ),
     Spec(

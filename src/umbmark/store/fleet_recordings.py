@@ -164,7 +164,9 @@ def record_recording(
 
 def read_recordings(history: History, robots: Sequence[str] = ()) -> list[RecordingRow]:
     """The recordings of ``robots`` (all when empty), oldest first; of a recording
-    recorded more than once (tried again after a failure) the latest row."""
+    recorded more than once (tried again after a failure) the latest row. Rows of one
+    recording under other keys (a digest first unknown, other reading options) come in
+    the order they were last recorded."""
     query = (
         "SELECT robot, path, digest, identity, options_key, start, hours, status, reason, "
         "outcome, calibration FROM recordings"
@@ -190,5 +192,7 @@ def read_recordings(history: History, robots: Sequence[str] = ()) -> list[Record
             json.loads(r[9]),
             None if r[10] is None else int(r[10]),
         )
-        latest[(row.robot, row.digest or row.path, row.options_key)] = row
+        key = (row.robot, row.digest or row.path, row.options_key)
+        latest.pop(key, None)  # kept in the order last recorded
+        latest[key] = row
     return sorted(latest.values(), key=lambda row: (row.start or 0.0, row.path))
