@@ -13,7 +13,6 @@ import pytest
 
 pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
 
-from fleet_tasks import recorded_rows
 from helpers import run_cli
 
 ROBOTS, DAYS = 4, 6
@@ -65,34 +64,3 @@ def test_the_simulated_fleet_is_watched(fleet: Path, tmp_path: Path):
     assert "nothing to change" in by["robot01"]["mounting"]["verdict"]
     # What to apply is the latest calibration's overlay, keyed by the controller.
     assert "ros__parameters" in by["robot02"]["latest"]["overlay"]
-
-
-@pytest.mark.slow
-def test_ctrl_c_keeps_what_finished_and_the_next_run_does_the_rest(fleet: Path, tmp_path: Path):
-    import signal
-    import subprocess
-    import time
-
-    from helpers import umbmark_command
-
-    history = tmp_path / "h.sqlite3"
-    args = [umbmark_command(), "fleet", str(fleet), "--robot-from", "{robot}/{date}/*",
-            "--history", str(history), "--workers", "1"]  # fmt: skip
-    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-    deadline = time.monotonic() + 300
-    while recorded_rows(history) < 2 and time.monotonic() < deadline:
-        time.sleep(0.1)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=120)
-    assert proc.returncode == 130, err
-    assert "Traceback" not in err
-    kept = recorded_rows(history)
-    assert 2 <= kept < ROBOTS * DAYS
-    # The next run does only what was not finished.
-    again = run_cli("fleet", str(fleet), "--robot-from", "{robot}/{date}/*",
-                    "--history", str(history), "--workers", "1", "--json", timeout=900)  # fmt: skip
-    assert again.returncode == 0, again.stderr
-    data = json.loads(again.stdout)
-    assert (data["recordings_done"], data["recordings_skipped"]) == (ROBOTS * DAYS - kept, kept)
-    assert data["drifted"] == ["robot02", "robot03", "robot04"]
