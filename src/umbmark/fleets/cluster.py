@@ -22,7 +22,9 @@ in this process (the one writer of the history).
   the items not done as failed; Dask's client, which logs a lost scheduler's tracebacks,
   is kept quiet.
 - Ctrl-C (``KeyboardInterrupt``) cancels what has not finished and re-raises: what
-  finished has already been handed to the caller.
+  finished has already been handed to the caller. The local cluster's workers hear
+  nothing of a terminal's Ctrl-C (sent to the whole process group): they start with
+  SIGINT blocked and their engine logs quiet, and this process closes them.
 """
 
 from __future__ import annotations
