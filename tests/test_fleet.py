@@ -93,6 +93,11 @@ def test_a_fleet_is_calibrated_flagged_and_done_once(recordings: Path, tmp_path:
     # umbmark history reads the same records.
     listed = run_cli("history", "wheel", "--history", str(history), "--json")
     assert len(json.loads(listed.stdout)["calibrations"]) == DAYS
+    # ... and dates the robots by their recordings' days, not by the day the fleet ran.
+    robots = json.loads(run_cli("history", "--history", str(history), "--json").stdout)
+    dated = {r["name"]: (r["first_calibration"][:10], r["last_calibration"][:10])
+             for r in robots["robots"]}  # fmt: skip
+    assert dated == {"steady": (_day(0), _day(DAYS - 1)), "wheel": (_day(0), _day(DAYS - 1))}
 
 
 @pytest.mark.slow

@@ -14,7 +14,6 @@ import pytest
 pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
 
 from fleet_page_view import plot_of, rows_as_seen
-from fleet_tasks import recorded_rows
 from helpers import run_cli
 
 ROBOTS, DAYS = 4, 6
@@ -134,34 +133,3 @@ def test_a_recording_that_failed_and_then_was_calibrated_counts_once(fleet: Path
         "1 calibrated; worst E_max,syst"
     )
     assert "Failed recordings" not in (tmp_path / "fleet.html").read_text(encoding="utf-8")
-
-
-@pytest.mark.slow
-def test_ctrl_c_keeps_what_finished_and_the_next_run_does_the_rest(fleet: Path, tmp_path: Path):
-    import signal
-    import subprocess
-    import time
-
-    from helpers import umbmark_command
-
-    history = tmp_path / "h.sqlite3"
-    args = [umbmark_command(), "fleet", str(fleet), "--robot-from", "{robot}/{date}/*",
-            "--history", str(history), "--workers", "1"]  # fmt: skip
-    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-    deadline = time.monotonic() + 300
-    while recorded_rows(history) < 2 and time.monotonic() < deadline:
-        time.sleep(0.1)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=120)
-    assert proc.returncode == 130, err
-    assert "Traceback" not in err
-    kept = recorded_rows(history)
-    assert 2 <= kept < ROBOTS * DAYS
-    # The next run does only what was not finished.
-    again = run_cli("fleet", str(fleet), "--robot-from", "{robot}/{date}/*",
-                    "--history", str(history), "--workers", "1", "--json", timeout=900)  # fmt: skip
-    assert again.returncode == 0, again.stderr
-    data = json.loads(again.stdout)
-    assert (data["recordings_done"], data["recordings_skipped"]) == (ROBOTS * DAYS - kept, kept)
-    assert data["drifted"] == ["robot02", "robot03", "robot04"]

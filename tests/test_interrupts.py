@@ -8,7 +8,9 @@ afterwards, so that a worker process left running is seen.
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -249,3 +251,89 @@ def test_the_console_script_starts_at_the_guarded_entry():
 
     (script,) = [e for e in entry_points(group="console_scripts") if e.name == "umbmark"]
     assert script.value == "umbmark._entry:main"
+
+
+# --- a fleet run: what the history keeps, said in one line; the next run does the rest ---
+
+FLEET_ROBOTS, FLEET_DAYS = 2, 6
+FLEET_PATTERN = "{robot}/{date}/*"
+#: A plain progress line (stderr not a terminal): ``umbmark fleet``'s, each recording's.
+FLEET_PROGRESS = re.compile(
+    r"umbmark: progress: \d+ of 12 recordings, \d robots?, \d+(\.\d)? (s|min|h) recorded, "
+    r"\d+(\.\d)? (s|min|h) elapsed"
+)
+
+
+@pytest.fixture(scope="module")
+def small_fleet(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """12 recordings (2 robots, 6 days of 1.5 min: about a second each on a worker)."""
+    pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
+    folder = tmp_path_factory.mktemp("fleet") / "fleet"
+    umbmark.simulate_fleet(folder, fleet=FLEET_ROBOTS, days=FLEET_DAYS, minutes=1.5, seed=6)
+    return folder
+
+
+def _fleet_args(fleet: Path, history: Path) -> list[str]:
+    return ["fleet", str(fleet), "--robot-from", FLEET_PATTERN, "--history", str(history)]
+
+
+@pytest.mark.parametrize("whole_group", [False, True], ids=["process", "terminal"])
+def test_a_fleet_interrupted_says_what_it_kept_and_the_next_run_does_the_rest(
+    small_fleet: Path, tmp_path: Path, whole_group: bool
+) -> None:
+    """``umbmark fleet`` on the default local cluster (two worker processes), SIGINT once
+    two recordings are in the history: to the process, or to its whole process group as a
+    terminal's Ctrl-C (the workers get it too). stderr is the progress lines and one line
+    saying how many recordings the history keeps, where, and how to finish: no engine's
+    traceback, from this process or its workers; exit status 130, nothing left running. The
+    same command again does only the rest."""
+    from fleet_tasks import recorded_rows
+
+    history = tmp_path / "h.sqlite3"
+    total = FLEET_ROBOTS * FLEET_DAYS
+    proc = _start(*_fleet_args(small_fleet, history), "--workers", "2", cwd=tmp_path)
+    if not _wait_for(lambda: recorded_rows(history) >= 2 or proc.poll() is not None, 300.0):
+        os.killpg(proc.pid, signal.SIGKILL)
+        pytest.fail(f"no recording came back: {proc.communicate()}")
+    assert proc.poll() is None, proc.communicate()
+    code, err, took, left = _interrupt(proc, whole_group=whole_group)
+    kept = recorded_rows(history)
+    assert code == 130, err
+    assert left == [], f"processes left running: {left}"
+    assert took < 30.0
+    assert 2 <= kept < total, err
+    *progress, last = err.splitlines()
+    assert last == (
+        f"umbmark: error: interrupted: {kept} of the {total} recordings to do are done, "
+        f"recorded in the history ({history}); to finish, run the same command again: only "
+        f"the other {total - kept} are done"
+    ), err
+    assert progress, err  # the first recording's line at least
+    assert [line for line in progress if not FLEET_PROGRESS.fullmatch(line)] == [], err
+    assert err.endswith("\n")
+    assert not list(tmp_path.glob("*.html"))  # nothing written but the history
+    # The same command again: only what was not kept.
+    again = subprocess.run(
+        [umbmark_command(), *_fleet_args(small_fleet, history), "--workers", "2", "--json"],
+        capture_output=True, text=True, timeout=600, check=False, cwd=tmp_path,
+    )  # fmt: skip
+    assert again.returncode == 0, again.stderr
+    data = json.loads(again.stdout)
+    assert (data["recordings_done"], data["recordings_skipped"]) == (total - kept, kept)
+    assert data["failed"] == []
+    assert recorded_rows(history) == total
+
+
+def test_a_fleet_on_a_terminal_shows_its_bar_and_says_what_it_kept(
+    small_fleet: Path, tmp_path: Path
+) -> None:
+    """On a terminal: the bar (how many recordings of how many), and after Ctrl-C (to the
+    process group, with the workers) the bar taken away and the one line."""
+    args = [*_fleet_args(small_fleet, tmp_path / "h.sqlite3"), "--workers", "2"]
+    code, screen, left = _on_terminal(args, b"1 of 12 recordings", tmp_path, timeout=300.0)
+    assert code == 130, screen[-500:]
+    assert b"Traceback" not in screen
+    tail = screen.rsplit(b"\r\n", 2)[-2]
+    assert tail.startswith(b"umbmark: error: interrupted: "), screen[-500:]
+    assert b"recordings to do are done, recorded in the history" in tail
+    assert left == []

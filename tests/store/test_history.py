@@ -3,15 +3,20 @@ robot's parameters, the schema version, drift, and concurrent writers."""
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import multiprocessing
+import os
 import sqlite3
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 
 import umbmark
+from umbmark.cli.main import cli
 from umbmark.store.history import SCHEMA_VERSION, History, default_history_path
+from umbmark.store.records import NewCalibration
 
 from helpers import api_error, cli_error, cli_json, run_cli
 
@@ -339,3 +344,75 @@ def test_trend_figure_of_one_calibration(tmp_path: Path) -> None:
     lo, hi = fig.axes[2].get_xlim()
     assert hi - lo == pytest.approx(1.0)  # one instant: a day's span around it
     assert "drift" not in fig._suptitle.get_text()
+
+
+def _fleet_calibration(when: str) -> NewCalibration:
+    """A fleet's calibration of a recording made at ``when`` (UTC, ISO 8601)."""
+    time = dt.datetime.fromisoformat(when).replace(tzinfo=dt.timezone.utc)
+    return NewCalibration(time, "scan-matching", 1.002, 0.98, 1.0, 0.1, {"E_d": 1e-4},
+                          {}, {}, {}, 0.34, 0.15)  # fmt: skip
+
+
+def _recorded_in_march(db: Path) -> None:
+    """A fleet's run today over three recordings of March, recorded as they finished (not
+    in the order they were made)."""
+    store = History(db)
+    for when in ("2026-03-05T08:00:00", "2026-03-01T08:00:00", "2026-03-03T08:00:00"):
+        store.record("amr1", _fleet_calibration(when), same_nominal=False)
+
+
+def test_robots_are_dated_by_their_calibrations_not_by_the_day_they_were_recorded(tmp_path):
+    db = tmp_path / "h.sqlite3"
+    _recorded_in_march(db)
+    (robot,) = History(db).robots()
+    assert (robot.calibrations, robot.first, robot.last) == (
+        3, "2026-03-01T08:00:00.000000Z", "2026-03-05T08:00:00.000000Z"
+    )  # fmt: skip
+    assert not robot.created.startswith("2026-03")  # the day the history learnt of it
+    listed = umbmark.history(history=db).to_dict()["robots"][0]
+    assert (listed["first_calibration"], listed["last_calibration"]) == (robot.first, robot.last)
+    shown = CliRunner().invoke(cli, ["history", "--history", str(db)])
+    assert shown.exit_code == 0, shown.output
+    (row,) = [line.split() for line in shown.output.splitlines() if "amr1" in line]
+    assert row == ["amr1", "0.3400", "0.1500", "3", "2026-03-01", "2026-03-05"]
+    assert "first calibration (UTC)" in shown.output
+    assert robot.created[:10] not in shown.output
+
+
+ELSEWHERE = "a history written elsewhere (umbmark fleet ... --history FILE"
+
+
+def test_the_default_history_without_robots_says_where_another_is_read(tmp_path, monkeypatch):
+    """A fleet's records are in the file its --history named: the default history, missing
+    or without the robot, says to name that file (--history FILE); a history named already
+    does not."""
+    fleet = tmp_path / "fleet.sqlite3"
+    _recorded_in_march(fleet)
+    default = tmp_path / "default.sqlite3"
+    monkeypatch.setenv("UMBMARK_HISTORY", str(default))
+    (missing,) = umbmark.history().notes
+    assert missing.startswith(f"{default}: nothing is recorded yet")
+    assert ELSEWHERE in missing
+    assert missing.endswith("is read with umbmark history --history FILE")
+    assert "umbmark.history(history=file)" in api_error(umbmark.history, "amr1")
+    History(default).robots()  # the default history made, with no robot in it
+    (empty,) = umbmark.history().notes
+    assert empty.startswith(f"{default}: nothing is recorded yet")
+    assert ELSEWHERE in empty
+    assert "umbmark.history(history=file)" in api_error(umbmark.history, "amr1")
+    # Named: no hint of another file.
+    assert umbmark.history(history=default).notes == ()
+    assert ELSEWHERE not in api_error(umbmark.history, "amr1", history=default)
+    assert [r.name for r in umbmark.history(history=fleet).robots] == ["amr1"]
+
+
+@pytest.mark.slow
+def test_the_command_names_the_option_for_another_history(tmp_path):
+    env = {**os.environ, "UMBMARK_HISTORY": str(tmp_path / "none.sqlite3")}
+    listed = run_cli("history", env=env)
+    assert listed.returncode == 0, listed.stderr
+    assert listed.stderr.endswith("is read with umbmark history --history FILE\n")
+    asked = run_cli("history", "amr1", env=env)
+    assert asked.returncode == 2
+    assert asked.stderr.count("\n") == 1
+    assert asked.stderr.endswith("is read with umbmark history --history FILE\n")

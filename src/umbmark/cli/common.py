@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import math
 import shlex
 import sys
 import time
@@ -28,6 +29,7 @@ __all__ = [
     "input_error_line",
     "note",
     "progress_bar",
+    "progress_lines",
     "reading_bar",
     "warn",
     "working",
@@ -133,6 +135,25 @@ def progress_bar(description: str) -> Iterator[Callable[[float], None]]:
             yield lambda fraction: bar.update(task, completed=fraction)
         finally:
             _LIVE.remove(bar)
+
+
+def progress_lines(
+    every: float = 0.0, clock: Callable[[], float] = time.monotonic
+) -> Callable[[int, int, str], None]:
+    """Progress for logs (stderr not a terminal: cron, a log file, CI): a callback
+    ``(done, of, text)`` printing ``umbmark: progress: TEXT`` when ``done`` has grown, at
+    most one line every ``every`` seconds of ``clock`` (0: at each step), the last step
+    (``done`` reaching ``of``) always."""
+    said = {"done": 0, "at": -math.inf}
+
+    def line(done: int, of: int, text: str) -> None:
+        now = clock()
+        if done <= said["done"] or (done < of and now - said["at"] < every):
+            return
+        said.update(done=done, at=now)
+        note(f"progress: {text}")
+
+    return line
 
 
 @contextlib.contextmanager

@@ -68,22 +68,7 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
                 f"No robots in {report.path} yet (umbmark calibrate --robot NAME).", markup=False
             )
             return
-        robots = table(
-            f"Robots in {report.path}",
-            ["robot", "wheelbase [m]", "wheel diameter [m]", "calibrations", "since (UTC)"],
-            left=("robot", "since (UTC)"),
-        )
-        for r in report.robots:
-            diameter = "?" if r.wheel_diameter is None else f"{r.wheel_diameter:.4f}"
-            row(
-                robots,
-                r.name,
-                f"{r.wheelbase:.4f}",
-                diameter,
-                str(r.calibrations),
-                r.created[:10],
-            )
-        out.print(robots)
+        _robots(report, out)
         return
     grid = table(
         f"Calibrations of {report.robot}",
@@ -124,3 +109,21 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
         out.print(report.drift, markup=False)
     else:
         out.print("Drift: needs 3 calibrations or more.")
+
+
+def _robots(report: Any, out: Any) -> None:
+    """The robots of the history, each dated by its calibrations (a fleet's: its
+    recordings' days), not by the day the history learnt of it."""
+    from umbmark.cli.render import row, table
+
+    first, last = "first calibration (UTC)", "last calibration (UTC)"
+    robots = table(
+        f"Robots in {report.path}",
+        ["robot", "wheelbase [m]", "wheel diameter [m]", "calibrations", first, last],
+        left=("robot", first, last),
+    )
+    for r in report.robots:
+        diameter = "?" if r.wheel_diameter is None else f"{r.wheel_diameter:.4f}"
+        row(robots, r.name, f"{r.wheelbase:.4f}", diameter, str(r.calibrations),
+            (r.first or "-")[:10], (r.last or "-")[:10])  # fmt: skip
+    out.print(robots)

@@ -254,16 +254,14 @@ def _watching() -> Iterator[tuple[Progress, Callable[[RunsLeft], None]]]:
     from rich import progress as bars
     from rich.console import Console
 
-    from umbmark.cli.common import note
+    from umbmark.cli.common import progress_lines
 
     err = Console(stderr=True)
     if not err.is_terminal:
-        said = [0]
+        line = progress_lines()  # at each run's end
 
         def plain(left: RunsLeft) -> None:
-            if left.done > said[0]:
-                said[0] = left.done
-                note(f"progress: {left.text()}")
+            line(left.done, left.planned, left.text())
 
         yield (lambda label, k, direction, what: None), plain
         return

@@ -18,7 +18,7 @@ from collections.abc import Iterable, Sequence
 
 from umbmark.core.errors import with_flags
 
-__all__ = ["Blocking", "Info", "blocking", "info", "join_names", "split_messages"]
+__all__ = ["Blocking", "Info", "blocking", "duration_words", "info", "join_names", "split_messages"]
 
 
 class Info(str):
@@ -81,3 +81,13 @@ def join_names(names: Sequence[str], conjunction: str = "and") -> str:
     if len(names) < 2:
         return "".join(names)
     return ", ".join(names[:-1]) + f" {conjunction} " + names[-1]
+
+
+def duration_words(seconds: float) -> str:
+    """A wall time for people: ``20 s`` below 90 s, ``12 min`` below 90 min, else
+    ``1.5 h`` (what a progress line says of the time taken or left)."""
+    if seconds < 90.0:
+        return f"{max(seconds, 0.0):.0f} s"
+    if seconds < 5400.0:
+        return f"{seconds / 60.0:.0f} min"
+    return f"{seconds / 3600.0:.1f} h"

@@ -22,18 +22,21 @@ in this process (the one writer of the history).
   the items not done as failed; Dask's client, which logs a lost scheduler's tracebacks,
   is kept quiet.
 - Ctrl-C (``KeyboardInterrupt``) cancels what has not finished and re-raises: what
-  finished has already been handed to the caller.
+  finished has already been handed to the caller. The local cluster's workers hear
+  nothing of a terminal's Ctrl-C (sent to the whole process group): they start with
+  SIGINT blocked and their engine logs quiet, and this process closes them.
 """
 
 from __future__ import annotations
 
 import logging
 import os
+import signal
 import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
@@ -228,7 +231,7 @@ def _quiet(name: str) -> Iterator[None]:
 def _client(address: str | None, workers: int | None, timeout: float) -> Iterator[Any]:
     try:
         import dask
-        from distributed import Client, LocalCluster
+        from distributed import Client
     except ImportError:
         raise InputError(ENGINE_MISSING) from None
     settings = {
@@ -253,7 +256,57 @@ def _client(address: str | None, workers: int | None, timeout: float) -> Iterato
         n = workers if workers is not None else min(os.cpu_count() or 1, MAX_LOCAL_WORKERS)
         if not 1 <= n <= MAX_LOCAL_WORKERS:
             raise InputError(f"{option('workers', n)} must be 1 to {MAX_LOCAL_WORKERS}")
-        with tempfile.TemporaryDirectory(prefix="umbmark-dask-") as scratch:
+        with _local_client(n) as client:
+            yield client
+
+
+#: The engine's loggers a local worker keeps quiet (but for CRITICAL).
+WORKER_LOGGERS = ("distributed", "tornado")
+
+
+def dask_setup(worker: Any) -> None:  # noqa: ANN401 (Dask's hook: its Worker)
+    """Run by Dask in each worker process of the local cluster as it starts (this module
+    is the workers' preload; also when a worker is restarted): the engine's loggers kept
+    quiet but for CRITICAL. A worker closed while it calibrates (after a Ctrl-C) can log a
+    heartbeat cut short, with its traceback, on this process's stderr; what the run needs
+    to say, a failed item's reason, comes back with the item."""
+    for name in WORKER_LOGGERS:
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+@contextmanager
+def _deaf_to_ctrl_c() -> Iterator[None]:
+    """SIGINT blocked in this thread for the block: the threads started meanwhile (the local
+    cluster's event loop and those that start its worker processes, now and when a worker
+    is restarted) and the worker processes inherit the mask. A terminal's Ctrl-C goes to
+    the whole process group: so it reaches this process alone, which stops the cluster,
+    and not the workers, which each printed a traceback of their own.
+
+    Python's resource tracker, started first (the first process started would start it),
+    unblocks SIGINT in the thread that starts it; once it runs, it is left alone. A
+    SIGINT that came meanwhile is raised as the block ends."""
+    if not hasattr(signal, "pthread_sigmask"):  # not POSIX: no process groups to share it
+        yield
+        return
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
+@contextmanager
+def _local_client(n: int) -> Iterator[Any]:
+    """A client of a local cluster of ``n`` worker processes (one thread each), its
+    scratch space a temporary folder; all of it closed and removed after, also after a
+    Ctrl-C while it starts."""
+    from distributed import Client, LocalCluster
+
+    with tempfile.TemporaryDirectory(prefix="umbmark-dask-") as scratch, ExitStack() as stack:
+        with _deaf_to_ctrl_c():
             cluster = LocalCluster(
                 n_workers=n,
                 threads_per_worker=1,
@@ -263,13 +316,12 @@ def _client(address: str | None, workers: int | None, timeout: float) -> Iterato
                 dashboard_address=":0",
                 silence_logs=logging.ERROR,
                 local_directory=scratch,  # the workers' scratch space, removed after
+                preload=[__name__],  # dask_setup: each worker's engine logs quiet
             )
+            stack.callback(cluster.close)
             client = Client(cluster)
-            try:
-                yield client
-            finally:
-                client.close()
-                cluster.close()
+            stack.callback(client.close)
+        yield client
 
 
 def run_each(

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -28,7 +29,7 @@ from umbmark.runs.read_options import SourceOptions
 if TYPE_CHECKING:
     from typing_extensions import Unpack
 
-__all__ = ["FleetProgress", "FleetReport", "fleet"]
+__all__ = ["FleetProgress", "FleetReport", "FleetStopped", "fleet", "fleet_stopped"]
 
 
 @dataclass(frozen=True)
@@ -43,17 +44,65 @@ class FleetProgress:
         Robots with a recording finished.
     hours : float
         Hours of recordings finished.
+    elapsed : float
+        Wall time since the run began [s] (the engine's start included).
     """
 
     done: int
     total: int
     robots: int
     hours: float
+    elapsed: float = 0.0
+
+    def counts(self) -> str:
+        """``3 of 10 recordings, 2 robots, 16 h recorded``."""
+        from umbmark.core.messages import duration_words
+
+        robots = f"{self.robots} robot{'' if self.robots == 1 else 's'}"
+        recorded = duration_words(self.hours * 3600.0)
+        return f"{self.done} of {self.total} recordings, {robots}, {recorded} recorded"
 
     def text(self) -> str:
-        return (
-            f"{self.done} of {self.total} recordings, {self.robots} robots, {self.hours:.1f} h done"
+        """:meth:`counts` and the wall time since the run began: ``..., 25 s elapsed``."""
+        from umbmark.core.messages import duration_words
+
+        return f"{self.counts()}, {duration_words(self.elapsed)} elapsed"
+
+
+@dataclass(frozen=True)
+class FleetStopped:
+    """What a fleet run stopped mid-way (Ctrl-C) kept: every recording finished before is
+    in the history; the same run again does only the rest. It rides on the exception that
+    stopped the run (:func:`fleet_stopped`).
+
+    Attributes
+    ----------
+    done, total : int
+        Recordings finished and recorded, and to do in this run.
+    history : str
+        The history file they are in.
+    """
+
+    done: int
+    total: int
+    history: str
+
+    def text(self) -> str:
+        """What was kept and how to finish, without the cause."""
+        kept = (
+            f"{self.done} of the {self.total} recordings to do are done, recorded in the "
+            f"history ({self.history})"
         )
+        left = self.total - self.done
+        if left <= 0:
+            return f"{kept}; run the same command again for the summary (nothing is done again)"
+        return f"{kept}; to finish, run the same command again: only the other {left} are done"
+
+
+def fleet_stopped(exc: BaseException) -> FleetStopped | None:
+    """The :class:`FleetStopped` a fleet run left on the exception that stopped it."""
+    found = getattr(exc, "umbmark_fleet_stopped", None)
+    return found if isinstance(found, FleetStopped) else None
 
 
 @dataclass(frozen=True)
@@ -164,6 +213,15 @@ def _is_done(task: RecordingTask, seen: Mapping[str, str]) -> bool:
     return any(key == _options_key(task, task.robot or robot) for key, robot in seen.items())
 
 
+def _not_done(store: Any, tasks: Sequence[RecordingTask]) -> tuple[list[RecordingTask], int]:  # noqa: ANN401 (History)
+    """The tasks not done before (with the same options), and how many were."""
+    from umbmark.store.fleet_recordings import done_recordings, identity
+
+    seen = done_recordings(store)  # one look into the history
+    to_do = [t for t in tasks if not _is_done(t, seen.get(identity(t.path), {}))]
+    return to_do, len(tasks) - len(to_do)
+
+
 def fleet(
     *sources: str | os.PathLike[str],
     robot_from: str | None = None,
@@ -232,7 +290,6 @@ def fleet(
     from umbmark.outputs.files import OutputPlan
     from umbmark.runs.read_options import ReadOptions
     from umbmark.sources.robot_options import read_robot_options
-    from umbmark.store.fleet_recordings import done_recordings, identity
     from umbmark.store.history import History
 
     FLEET["workers"].check(workers)
@@ -249,15 +306,10 @@ def fleet(
     per_robot = read_robot_options(robot_options) if robot_options is not None else {}
     found = find_recordings(sources, robot_from)
     store = History(history)
-    tasks, skipped = [], 0
-    seen = done_recordings(store)  # one look into the history
-    for task in _tasks(found, reading, per_robot):
-        if _is_done(task, seen.get(identity(task.path), {})):
-            skipped += 1
-        else:
-            tasks.append(task)
+    tasks, skipped = _not_done(store, _tasks(found, reading, per_robot))
     done: list[RecordingOutcome] = []
     robots: set[str] = set()
+    began = time.monotonic()
 
     def record(finished: Any) -> None:  # noqa: ANN401 (Done)
         outcome = finished.result or RecordingOutcome(
@@ -269,15 +321,25 @@ def fleet(
         robots.add(outcome.robot)
         if progress is not None:
             hours = sum(o.hours for o in done)
-            progress(FleetProgress(len(done), len(tasks), len(robots), hours))
+            elapsed = time.monotonic() - began
+            progress(FleetProgress(len(done), len(tasks), len(robots), hours, elapsed))
 
-    run_each(calibrate_recording, tasks, record, scheduler=scheduler, workers=workers)
-    names = sorted({*(o.robot for o in done), *(f.robot for f in found if f.robot)})
-    result = FleetReport(
-        _summary(store, names), len(found), tuple(done), skipped, str(store.path),
-        command=command,
-    )  # fmt: skip
-    return _written(result, plan)
+    try:
+        run_each(calibrate_recording, tasks, record, scheduler=scheduler, workers=workers)
+        names = sorted({*(o.robot for o in done), *(f.robot for f in found if f.robot)})
+        result = FleetReport(
+            _summary(store, names), len(found), tuple(done), skipped, str(store.path),
+            command=command,
+        )  # fmt: skip
+        return _written(result, plan)
+    except KeyboardInterrupt as exc:  # what finished is recorded: said, on the exception
+        _mark_stopped(exc, FleetStopped(len(done), len(tasks), str(store.path)))
+        raise
+
+
+def _mark_stopped(exc: BaseException, stop: FleetStopped) -> None:
+    """Leave ``stop`` on ``exc`` for :func:`fleet_stopped`."""
+    exc.umbmark_fleet_stopped = stop  # type: ignore[attr-defined]
 
 
 def _recorded(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> RecordingOutcome:  # noqa: ANN401

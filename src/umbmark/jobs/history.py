@@ -39,6 +39,17 @@ _NOTHING_YET_PY = (
     "robot=name)) records each calibration in this file"
 )
 
+#: Where the default history holds no robot: a fleet's (or any) history given its own file
+#: is read by naming it.
+_ELSEWHERE = (
+    "a history written elsewhere (umbmark fleet ... --history FILE, calibrate --history "
+    "FILE) is read with umbmark history --history FILE"
+)
+_ELSEWHERE_PY = (
+    "a history written elsewhere (umbmark.fleet(..., history=file)) is read with "
+    "umbmark.history(history=file)"
+)
+
 __all__ = ["HistoryReport", "history"]
 
 
@@ -184,10 +195,10 @@ def history(
         raise InputError(_PLOT_NEEDS_NAME, python=_PLOT_NEEDS_NAME_PY)
     where = Path(history) if history is not None else default_history_path()
     if not where.exists() and not where.is_symlink():  # a read never creates the file
-        nothing = _NOTHING_YET.format(robot=option("robot", "NAME"))
+        nothing, python = _nothing_yet(default=history is None)
         if robot is None and applied is None:  # a fresh install: an empty list, said so
             return HistoryReport(path=str(where), notes=(f"{where}: {with_flags(nothing)}",))
-        raise InputError(nothing, source=where, python=_NOTHING_YET_PY)
+        raise InputError(nothing, source=where, python=python)
     store = History(history, read_only=True)  # a read never creates the file
     path = str(store.path)
     if plot is not None:  # the output is checked before a calibration is marked applied
@@ -195,11 +206,15 @@ def history(
     if robot is None:
         if applied is not None:
             raise InputError(f"{option('applied')} needs the robot's NAME")
-        return HistoryReport(path=path, robots=tuple(store.robots()))
+        return _listing(store, default=history is None)
     nominal = store.robot(robot)
     if nominal is None:
         known = ", ".join(r.name for r in store.robots()) or "none yet"
-        raise InputError(f"no robot {robot!r} in the history (robots: {known})", source=path)
+        unknown = f"no robot {robot!r} in the history (robots: {known})"
+        if history is None:
+            raise InputError(f"{unknown}; {_ELSEWHERE}", source=path,
+                             python=f"{unknown}; {_ELSEWHERE_PY}")  # fmt: skip
+        raise InputError(unknown, source=path)
     notes: tuple[str, ...] = ()
     if applied is not None:
         from umbmark.core.bounds import check_int_option
@@ -219,3 +234,23 @@ def history(
     if plot is not None:
         report.write(plot=plot, force=force)
     return report
+
+
+def _nothing_yet(*, default: bool) -> tuple[str, str]:
+    """That a history holds nothing yet and how to record, as the command line and as
+    Python say it; of the default history, also where another is read from (a fleet's
+    records are in the file its ``--history FILE`` named)."""
+    nothing, python = _NOTHING_YET.format(robot=option("robot", "NAME")), _NOTHING_YET_PY
+    if default:
+        return f"{nothing}; {_ELSEWHERE}", f"{python}; {_ELSEWHERE_PY}"
+    return nothing, python
+
+
+def _listing(store: History, *, default: bool) -> HistoryReport:
+    """The robots of ``store``; the default history holding none says so, and where
+    another history is read from."""
+    robots = tuple(store.robots())
+    notes: tuple[str, ...] = ()
+    if not robots and default:
+        notes = (f"{store.path}: {with_flags(_nothing_yet(default=True)[0])}",)
+    return HistoryReport(path=str(store.path), robots=robots, notes=notes)

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from umbmark.core.conventions import Direction
+from umbmark.core.messages import duration_words
 from umbmark.routines.record import return_error_words
 
 __all__ = ["Progress", "RunsLeft", "Stopped", "Watch", "stopped"]
@@ -46,21 +47,14 @@ class RunsLeft:
 
     def text(self) -> str:
         """``3 of 30 runs, about 12 min left``."""
-        left = "" if self.seconds_left is None else f", about {_duration(self.seconds_left)} left"
+        seconds = self.seconds_left
+        left = "" if seconds is None else f", about {duration_words(seconds)} left"
         return f"{self.done} of {self.planned} runs{left}"
 
 
 def _wall() -> float:
     """The wall clock the time left is estimated on [s]."""
     return time.monotonic()
-
-
-def _duration(seconds: float) -> str:
-    if seconds < 90.0:
-        return f"{max(seconds, 0.0):.0f} s"
-    if seconds < 5400.0:
-        return f"{seconds / 60.0:.0f} min"
-    return f"{seconds / 3600.0:.1f} h"
 
 
 @dataclass

@@ -421,10 +421,12 @@ class History:
                 )
 
     def robots(self) -> list[RobotRecord]:
-        """Every robot, by name, with its number of calibrations."""
+        """Every robot, by name, with its number of calibrations and their first and last
+        time."""
         with self._connect() as db:
             rows = db.execute(
-                "SELECT r.name, r.wheelbase, r.wheel_diameter, r.created, COUNT(c.id) "
+                "SELECT r.name, r.wheelbase, r.wheel_diameter, r.created, COUNT(c.id), "
+                "MIN(c.time), MAX(c.time) "
                 "FROM robots r LEFT JOIN calibrations c ON c.robot = r.name "
                 "GROUP BY r.name ORDER BY r.name"
             ).fetchall()

@@ -70,9 +70,13 @@ class RobotRecord:
     wheel_diameter : float or None
         Nominal wheel diameter [m], when known.
     created : str
-        When it was first recorded (UTC, ISO 8601).
+        When it was first recorded (UTC, ISO 8601): the day the history learnt of it (a
+        fleet's robot: the day the fleet first ran), not when it was calibrated.
     calibrations : int
         How many calibrations it has.
+    first, last : str or None
+        Its first and last calibration's time (UTC, ISO 8601: a fleet's are its
+        recordings' times); None without calibrations.
     """
 
     name: str
@@ -80,6 +84,8 @@ class RobotRecord:
     wheel_diameter: float | None
     created: str
     calibrations: int = 0
+    first: str | None = None
+    last: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (metres)."""
@@ -89,6 +95,8 @@ class RobotRecord:
             "wheel_diameter": self.wheel_diameter,
             "created": self.created,
             "calibrations": self.calibrations,
+            "first_calibration": self.first,
+            "last_calibration": self.last,
         }
 
 
