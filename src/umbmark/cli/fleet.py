@@ -56,11 +56,13 @@ def fleet(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     beyond its own intervals.
     """
     from umbmark import fleet as run_fleet
-    from umbmark.cli.common import command_line, console, note, wrote
+    from umbmark.cli.common import command_line, console, note, warn, wrote
 
     options["command"] = command_line(sys.argv)
     with _bar() as progress:
         report = run_fleet(*sources, progress=progress, **options)
+    for message in report.warnings:
+        warn(message)
     wrote(report.files)
     for outcome in report.failed:
         note(f"failed: {outcome.reason}")

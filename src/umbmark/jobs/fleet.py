@@ -21,12 +21,15 @@ from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
+from umbmark.fleets.naming import NO_ROBOT, UNNAMED
 from umbmark.fleets.outcome import RecordingOutcome, RecordingTask
 from umbmark.fleets.summary import FleetSummary
 from umbmark.runs.read_options import SourceOptions
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
+
+    from umbmark.fleets.recordings import FleetRecording
 
 __all__ = ["FleetProgress", "FleetReport", "fleet"]
 
@@ -74,6 +77,10 @@ class FleetReport(JsonText):
         The history file.
     files : tuple of str
         The files written (the page, the JSON).
+    warnings : tuple of str
+        What may be quietly wrong: a ``robot_from`` pattern that did not match every
+        recording, a ``robot_options`` entry for a robot not found
+        (:mod:`umbmark.fleets.naming`).
     """
 
     summary: FleetSummary
@@ -83,6 +90,7 @@ class FleetReport(JsonText):
     history: str
     files: tuple[str, ...] = ()
     command: str | None = field(default=None, compare=False)
+    warnings: tuple[str, ...] = ()
 
     @property
     def failed(self) -> tuple[RecordingOutcome, ...]:
@@ -99,6 +107,7 @@ class FleetReport(JsonText):
             "recordings_skipped": self.skipped,
             "failed": [{"path": o.path, "reason": o.reason} for o in self.failed],
             "history": self.history,
+            "warnings": list(self.warnings),
         }
 
 
@@ -158,10 +167,14 @@ def _options_key(task: RecordingTask, robot: str) -> str:
     return options_key(task.options_for(robot))
 
 
-def _is_done(task: RecordingTask, seen: Mapping[str, str]) -> bool:
-    """Whether a recording already in the history (``seen``: its options keys and the
-    robot each found) was read with the options it would be read with now."""
-    return any(key == _options_key(task, task.robot or robot) for key, robot in seen.items())
+def _done_as(task: RecordingTask, seen: Mapping[str, str]) -> str | None:
+    """The robot a recording already in the history (``seen``: its options keys and the
+    robot each found) was found to be, read with the options it would be read with now;
+    None where it was not."""
+    for key, robot in seen.items():
+        if key == _options_key(task, task.robot or robot):
+            return robot
+    return None
 
 
 def fleet(
@@ -249,13 +262,15 @@ def fleet(
     per_robot = read_robot_options(robot_options) if robot_options is not None else {}
     found = find_recordings(sources, robot_from)
     store = History(history)
-    tasks, skipped = [], 0
+    tasks, before = [], {}  # to do, and the robots of those done before
     seen = done_recordings(store)  # one look into the history
     for task in _tasks(found, reading, per_robot):
-        if _is_done(task, seen.get(identity(task.path), {})):
-            skipped += 1
-        else:
+        robot = _done_as(task, seen.get(identity(task.path), {}))
+        if robot is None:
             tasks.append(task)
+        else:
+            before[task.path] = robot
+    skipped = len(before)
     done: list[RecordingOutcome] = []
     robots: set[str] = set()
 
@@ -272,15 +287,94 @@ def fleet(
             progress(FleetProgress(len(done), len(tasks), len(robots), hours))
 
     run_each(calibrate_recording, tasks, record, scheduler=scheduler, workers=workers)
-    names = sorted({*(o.robot for o in done), *(f.robot for f in found if f.robot)})
+    named = _named(store, found, tasks, done, before)
+    names = sorted({*(o.robot for o in named), *before.values()} - {NO_ROBOT})
+    warnings = _naming_warnings(robot_from, robot_options, per_robot, found, named, before)
     result = FleetReport(
-        _summary(store, names), len(found), tuple(done), skipped, str(store.path),
-        command=command,
+        _summary(store, names), len(found), tuple(named), skipped, str(store.path),
+        command=command, warnings=warnings,
     )  # fmt: skip
     return _written(result, plan)
 
 
+def _unplaced(task: RecordingTask, outcome: RecordingOutcome) -> bool:
+    """A recording that could not be read and that no pattern named: its robot is known
+    only once every recording's is (:func:`_named`)."""
+    return outcome.failed and task.robot is None and outcome.robot == UNNAMED
+
+
+def _named(
+    store: Any,  # noqa: ANN401 (History)
+    found: Sequence[FleetRecording],
+    tasks: Sequence[RecordingTask],
+    done: Sequence[RecordingOutcome],
+    before: Mapping[str, str],
+) -> list[RecordingOutcome]:
+    """``done`` with each recording that could not be read and that no pattern named
+    given the robot its path names among the robots found (this run's, the pattern's and
+    those done before), else none (:data:`~umbmark.fleets.naming.NO_ROBOT`), and
+    recorded."""
+    from dataclasses import replace
+
+    from umbmark.fleets.naming import robot_in_path
+
+    by_path = {t.path: t for t in tasks}
+    parts = {f.path: f.parts for f in found}
+    robots = {*before.values(), *(f.robot for f in found if f.robot)}
+    robots |= {o.robot for o in done if not _unplaced(by_path[o.path], o)}
+    named = []
+    for outcome in done:
+        task = by_path[outcome.path]
+        if not _unplaced(task, outcome):
+            named.append(outcome)
+            continue
+        robot = robot_in_path(parts.get(outcome.path, ()), robots)
+        how = None if robot is None else "path"
+        placed = replace(outcome, robot=robot or NO_ROBOT, named_by=how)
+        named.append(_stored(store, task, placed))
+    return named
+
+
+def _naming_warnings(
+    robot_from: str | None,
+    robot_options: str | os.PathLike[str] | None,
+    per_robot: Mapping[str, Any],
+    found: Sequence[FleetRecording],
+    named: Sequence[RecordingOutcome],
+    before: Mapping[str, str],
+) -> tuple[str, ...]:
+    """The warnings of a pattern that did not match every recording and of per-robot
+    options for robots not found (:mod:`umbmark.fleets.naming`), as messages say them."""
+    from umbmark.core.messages import split_messages
+    from umbmark.fleets.naming import options_warning, pattern_warning
+
+    messages = []
+    robots = {*(o.robot for o in named), *before.values()} - {NO_ROBOT}
+    if robot_from is not None:
+        how = {o.path: "none" if o.robot == NO_ROBOT else o.named_by for o in named}
+        missed = [f for f in found if not f.matched]
+        ways: dict[str | None, int] = {}
+        for f in missed:
+            way = "history" if f.path in before else how.get(f.path, "none")
+            ways[way] = ways.get(way, 0) + 1
+        example = "/".join(missed[0].parts) if missed else ""
+        messages.append(
+            pattern_warning(robot_from, len(found), len(found) - len(missed), ways, example)
+        )
+    if per_robot:
+        messages.append(options_warning(per_robot, robots, os.fspath(robot_options or "")))
+    return split_messages(m for m in messages if m is not None)[1]
+
+
 def _recorded(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> RecordingOutcome:  # noqa: ANN401
+    """Record one outcome as it comes back (:func:`_stored`), but one whose robot is not
+    known yet (:func:`_unplaced`: recorded by :func:`_named`)."""
+    if _unplaced(task, outcome):
+        return outcome
+    return _stored(store, task, outcome)
+
+
+def _stored(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> RecordingOutcome:  # noqa: ANN401
     """Record one outcome (the one writer); a calibration the history refuses (a robot
     known with another nominal geometry) is recorded as failed with why."""
     from dataclasses import replace
@@ -311,7 +405,7 @@ def _summary(store: Any, robots: Sequence[str]) -> FleetSummary:  # noqa: ANN401
     from umbmark.fleets.summary import summarize
     from umbmark.store.fleet_recordings import read_recordings
 
-    rows = read_recordings(store, robots) if robots else read_recordings(store)
+    rows = read_recordings(store, robots) if robots else []
     return summarize([RecordingOutcome.of_dict(r.outcome) for r in rows])
 
 
