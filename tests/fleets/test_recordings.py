@@ -44,6 +44,25 @@ def test_globs_lists_and_no_pattern(tree: Path):
     assert len(find_recordings([tree, tree / "r2" / "20261102" / "c.bag"])) == 4
 
 
+def test_each_recording_says_whether_the_pattern_matched_and_its_path_below_the_folder(
+    tree: Path,
+):
+    """What names an unreadable recording's robot: its path's components below the folder
+    searched (a glob's folder before its wildcard), all of them for a recording given
+    itself; and whether the pattern matched it (a pattern without {robot} too)."""
+    found = find_recordings([tree, str(tree / "r2" / "*" / "c.bag")], "r1/{date}/*.mcap")
+    assert [(f.parts, f.matched, f.robot) for f in found] == [
+        (("r1", "2026-11-01", "a.mcap"), True, None),
+        (("r1", "2026-11-02", "b.mcap"), True, None),
+        (("r2", "20261102", "c.bag"), False, None),
+        (("r3", "2026-11-03", "session"), False, None),
+    ]
+    (only,) = find_recordings([str(tree / "r2" / "*" / "c.bag")])
+    assert (only.parts, only.matched) == (("20261102", "c.bag"), False)
+    (itself,) = find_recordings([tree / "r1" / "2026-11-01" / "a.mcap"])
+    assert itself.parts == tuple((tree / "r1" / "2026-11-01" / "a.mcap").parts[1:])
+
+
 def test_the_pattern_matches_the_end_of_the_path(tree: Path):
     found = find_recordings([tree], "{robot}/**/*.mcap")
     assert {f.robot for f in found if f.path.endswith(".mcap")} == {"r1"}

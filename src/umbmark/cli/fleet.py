@@ -56,7 +56,7 @@ def fleet(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     beyond its own intervals.
     """
     from umbmark import fleet as run_fleet
-    from umbmark.cli.common import command_line, console, note, wrote
+    from umbmark.cli.common import command_line, console, note, warn, wrote
 
     options["command"] = command_line(sys.argv)
     try:
@@ -65,6 +65,8 @@ def fleet(sources: tuple[str, ...], json_out: bool, **options: Any) -> None:
     except KeyboardInterrupt as exc:
         _interrupted(exc)
         raise
+    for message in report.warnings:
+        warn(message)
     for outcome in report.failed:
         note(f"failed: {outcome.reason}")
     if json_out:

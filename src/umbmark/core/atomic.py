@@ -9,12 +9,16 @@ The guarantees of every file umbmark writes:
 * a target that exists keeps its permission bits (a 0600 file stays 0600); a new file
   gets the usual mode (0666 less the umask);
 * on any exception, ``KeyboardInterrupt`` included, the temporary file is removed.
+
+A folder (a ROS 2 bag, a simulated fleet) is built the same way, whole in a hidden
+folder beside its target and renamed onto it at the end (:func:`atomic_tree`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import stat
 import tempfile
 from collections.abc import Iterator
@@ -22,7 +26,7 @@ from pathlib import Path
 
 from umbmark.core.errors import InputError
 
-__all__ = ["atomic_path", "atomic_write_text", "fsync"]
+__all__ = ["atomic_path", "atomic_tree", "atomic_write_text", "fsync"]
 
 
 def _new_mode(target: Path) -> int:
@@ -91,3 +95,54 @@ def atomic_write_text(target: str | Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``target`` atomically (see :func:`atomic_path`)."""
     with atomic_path(target) as tmp:
         tmp.write_text(text, encoding="utf-8")
+
+
+@contextlib.contextmanager
+def atomic_tree(target: str | Path) -> Iterator[Path]:
+    """Yield a path to build a file or a folder at, in a new hidden folder beside
+    ``target`` (the same file system); on success rename what was built there onto
+    ``target``.
+
+    The path is not made: the caller makes a folder, or a writer makes its file or
+    folder, there (named as ``target``, for writers whose files take their folder's
+    name). On success a folder at ``target`` is moved aside first (back again if the
+    rename fails) and deleted with all it holds; a link at ``target`` is followed, as by
+    :func:`atomic_path`. On any exception (``KeyboardInterrupt`` too) what was built is
+    removed and ``target`` is left as it was. Whether ``target`` may be replaced is the
+    caller's to check first.
+
+    Raises
+    ------
+    InputError
+        If ``target``'s folder cannot be written, or the rename fails.
+    """
+    shown = Path(target)
+    real = shown.resolve()
+    try:
+        scratch = Path(tempfile.mkdtemp(prefix=f".{real.name}.", dir=real.parent))
+    except OSError as exc:
+        raise InputError(f"cannot be written ({exc.strerror or exc})", source=shown) from None
+    try:
+        fresh = scratch / real.name
+        yield fresh
+        try:
+            _put(fresh, real, scratch)
+        except OSError as exc:
+            raise InputError(f"cannot be written ({exc.strerror or exc})", source=shown) from None
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _put(fresh: Path, target: Path, scratch: Path) -> None:
+    """Rename ``fresh`` onto ``target``; a folder there is moved into ``scratch`` first,
+    and back if the rename fails."""
+    if not target.is_dir():
+        os.replace(fresh, target)
+        return
+    old = scratch / ".replaced"
+    target.rename(old)
+    try:
+        fresh.rename(target)
+    except BaseException:
+        old.rename(target)
+        raise

@@ -33,6 +33,7 @@ from typing import Any
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, ProblemError
 from umbmark.estimators.registry import SCAN_MATCHING, TRAJECTORY
+from umbmark.fleets.naming import UNNAMED
 
 __all__ = [
     "FIGURES",
@@ -93,7 +94,9 @@ class RecordingOutcome:
     ----------
     path : str
     robot : str
-        The robot (the pattern's, else the recording's namespace, else ``unnamed``).
+        The robot (the pattern's, else the recording's namespace or robot description,
+        else ``unnamed``; of one that cannot be read, as :mod:`umbmark.fleets.naming`
+        says).
     start : float or None
         When the recording started [s since 1970, UTC]: the pattern's day at midnight
         where given, else the recording's first message.
@@ -118,6 +121,10 @@ class RecordingOutcome:
         It could not be read (``reason`` says why), as opposed to left out.
     wheelbase : float or None
         The nominal wheelbase [m] of the calibration.
+    named_by : str or None
+        How its robot was found: ``pattern``, ``namespace``, ``description``, ``path`` (a
+        recording that cannot be read, by a robot's name in its path:
+        :mod:`umbmark.fleets.naming`); None where nothing named it.
     record : dict
         What the history records of the calibration (``calibrate --json``'s
         ``standard_errors``, ``active``, ``new``, ``verdict`` and the nominal wheel
@@ -142,6 +149,7 @@ class RecordingOutcome:
     failed: bool = False
     wheelbase: float | None = None
     record: dict[str, Any] = field(default_factory=dict)
+    named_by: str | None = None
 
     @property
     def calibrated(self) -> bool:
@@ -169,6 +177,7 @@ class RecordingOutcome:
             "verdict": self.verdict,
             "reason": self.reason,
             "wheelbase": self.wheelbase,
+            "named_by": self.named_by,
             "record": self.record,
         }
 
@@ -191,6 +200,7 @@ class RecordingOutcome:
             failed=data.get("status") == "failed",
             wheelbase=data.get("wheelbase"),
             record=dict(data.get("record") or {}),
+            named_by=data.get("named_by"),
         )
 
 
@@ -205,20 +215,26 @@ def _keywords(flags: tuple[tuple[str, str], ...]) -> dict[str, str]:
 _NAMESPACE = re.compile(r"^/([^/]+)/")
 
 
-def _robot_of(info: Any, given: str | None) -> str:  # noqa: ANN401 (BagInfo)
-    """The robot: the pattern's, else the namespace most of the bag's topics share, else
-    the name in its robot description."""
+def _given(task: RecordingTask) -> tuple[str, str | None]:
+    """The robot the pattern gave a recording, and how it was named; ``unnamed`` and None
+    where it gave none."""
+    return (task.robot, "pattern") if task.robot else (UNNAMED, None)
+
+
+def _robot_of(info: Any, given: str | None) -> tuple[str, str | None]:  # noqa: ANN401 (BagInfo)
+    """The robot and how it was named: the pattern's, else the namespace most of the bag's
+    topics share, else the name in its robot description, else ``unnamed``."""
     if given:
-        return given
+        return given, "pattern"
     names: dict[str, int] = {}
     for topic in info.topics:
         match = _NAMESPACE.match(topic.name)
         if match is not None and match[1] not in ("tf", "tf_static", "rosout", "parameter_events"):
             names[match[1]] = names.get(match[1], 0) + 1
     if names and max(names.values()) * 2 > len(info.topics):
-        return max(names, key=lambda n: names[n])
+        return max(names, key=lambda n: names[n]), "namespace"
     described = "" if info.robot is None else str(getattr(info.robot, "name", ""))
-    return described or "unnamed"
+    return (described, "description") if described else (UNNAMED, None)
 
 
 def _start(info: Any, day: dt.date | None) -> float | None:  # noqa: ANN401 (BagInfo or None)
@@ -308,8 +324,9 @@ def _remote(task: RecordingTask) -> RecordingOutcome:
         with fetched(task.path) as (local, digest):
             outcome = _local(task, local, digest)
     except InputError as exc:
-        robot = task.robot or "unnamed"
-        return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
+        robot, how = _given(task)
+        return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True,
+                                named_by=how)  # fmt: skip
     url = task.path.rstrip("/")
     overlay = outcome.record.get("overlay")
     record = dict(outcome.record)
@@ -325,7 +342,7 @@ def _local(task: RecordingTask, path: Path, digest: str | None) -> RecordingOutc
     from umbmark.core.digest import path_sha256
     from umbmark.runs.load import detect_format
 
-    robot = task.robot or "unnamed"
+    robot, how = _given(task)
     try:
         digest = digest or path_sha256(path)
         kind = detect_format(path)
@@ -333,17 +350,20 @@ def _local(task: RecordingTask, path: Path, digest: str | None) -> RecordingOutc
             return _logged(task, path, digest, kind)
         info = _bag_info(path, kind)
     except (InputError, ProblemError, OSError) as exc:
-        return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True)
-    robot = _robot_of(info, task.robot)
+        return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True,
+                                named_by=how)  # fmt: skip
+    robot, how = _robot_of(info, task.robot)
     start, hours = _start(info, task.day), info.duration / 3600.0
     method, options, reason = _plan(info, task.options_for(robot))
     if method is None:
-        return RecordingOutcome(task.path, robot, start, hours, digest, reason=reason)
+        return RecordingOutcome(task.path, robot, start, hours, digest, reason=reason,
+                                named_by=how)  # fmt: skip
     try:
         result = _calibrate(path, method, options)
     except (InputError, ProblemError) as exc:
-        return RecordingOutcome(task.path, robot, start, hours, digest, reason=_line(exc))
-    return _calibrated(task.path, robot, start, hours, digest, method, result)
+        return RecordingOutcome(task.path, robot, start, hours, digest, reason=_line(exc),
+                                named_by=how)  # fmt: skip
+    return _calibrated(task.path, robot, start, hours, digest, method, result, how)
 
 
 def _calibrated(
@@ -354,6 +374,7 @@ def _calibrated(
     digest: str | None,
     method: str,
     result: Any,  # noqa: ANN401 (CalibrationResult)
+    named_by: str | None,
 ) -> RecordingOutcome:
     """The outcome of a recording that gave a calibration."""
     figures = _figures(result)
@@ -373,22 +394,24 @@ def _calibrated(
         verdict=result.verdict.level,
         wheelbase=wheelbase,
         record=_record(result),
+        named_by=named_by,
     )
 
 
 def _logged(task: RecordingTask, path: Path, digest: str | None, kind: str) -> RecordingOutcome:
     """A run log or an OptiOdom session at ``path`` (itself, or its local copy): wheels and
     motion capture, so a trajectory fit."""
-    robot = task.robot or "unnamed"
+    robot, how = _given(task)
     try:
         result = _calibrate(path, TRAJECTORY.name, task.options_for(robot))
     except (InputError, ProblemError) as exc:
         start = _start(None, task.day) if task.day else _logged_start(path, kind, ())
-        return RecordingOutcome(task.path, robot, start, 0.0, digest, reason=_line(exc))
+        return RecordingOutcome(task.path, robot, start, 0.0, digest, reason=_line(exc),
+                                named_by=how)  # fmt: skip
     logs = [r.log for r in result.runs if r.log is not None]
     start = _start(None, task.day) if task.day else _logged_start(path, kind, logs)
     hours = sum(float(log.time[-1] - log.time[0]) for log in logs) / 3600.0
-    return _calibrated(task.path, robot, start, hours, digest, TRAJECTORY.name, result)
+    return _calibrated(task.path, robot, start, hours, digest, TRAJECTORY.name, result, how)
 
 
 #: A run log's clock that reads after this [s since 1970] is a clock of days (ROS time).

@@ -16,7 +16,8 @@
   of the path (of a URL, its path: :func:`~umbmark.sources.remote.url_path`). ``{date}``
   takes ``YYYY-MM-DD`` or ``YYYYMMDD``. Without a pattern, or where it names no robot, the
   robot is None here and comes from the recording itself (its namespace or robot
-  description) when it is read.
+  description) when it is read, or, where it cannot be read, from its path
+  (:mod:`umbmark.fleets.naming`).
 """
 
 from __future__ import annotations
@@ -63,11 +64,20 @@ class FleetRecording:
         Its robot, from the pattern; None: from the recording when it is read.
     day : datetime.date or None
         Its day, from the pattern's ``{date}``; None: from the recording's own clock.
+    matched : bool
+        The pattern matched its path (it may still name no robot: a pattern without
+        ``{robot}``).
+    parts : tuple of str
+        Its path's components below the folder searched (all of them for a recording given
+        itself): where a robot's name is looked for if it cannot be read
+        (:func:`umbmark.fleets.naming.robot_in_path`).
     """
 
     path: str
     robot: str | None = None
     day: dt.date | None = None
+    matched: bool = False
+    parts: tuple[str, ...] = ()
 
 
 def path_pattern(pattern: str) -> re.Pattern[str]:
@@ -125,6 +135,17 @@ def match_path(regex: re.Pattern[str], path: str, base: str | None) -> re.Match[
         if found is not None:
             return found
     return None
+
+
+def _parts(text: str, base: str) -> tuple[str, ...]:
+    """The components of ``text`` below ``base``; all of them where it is not below."""
+    try:
+        rel = Path(text).relative_to(base).as_posix()
+    except ValueError:
+        rel = "."
+    if rel == ".":
+        rel = Path(text).as_posix()
+    return tuple(part for part in rel.split("/") if part)
 
 
 def _base(source: str) -> str:
@@ -244,7 +265,8 @@ def find_recordings(
                 robot = groups.get("robot")
                 if groups.get("date"):
                     day = _day(groups["date"], path)
-            found.append(FleetRecording(path, robot, day))
+            parts = _parts(text, base)
+            found.append(FleetRecording(path, robot, day, match is not None, parts))
     if not found:
         names = ", ".join(os.fspath(s) for s in sources)
         raise InputError(f"no recording (ROS bag, MCAP, run log) found in {names}")

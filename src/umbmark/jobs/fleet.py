@@ -22,12 +22,15 @@ from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError
 from umbmark.core.jsontext import JsonText
+from umbmark.fleets.naming import NO_ROBOT, UNNAMED
 from umbmark.fleets.outcome import RecordingOutcome, RecordingTask
 from umbmark.fleets.summary import FleetSummary
 from umbmark.runs.read_options import SourceOptions
 
 if TYPE_CHECKING:
     from typing_extensions import Unpack
+
+    from umbmark.fleets.recordings import FleetRecording
 
 __all__ = ["FleetProgress", "FleetReport", "FleetStopped", "fleet", "fleet_stopped"]
 
@@ -123,6 +126,10 @@ class FleetReport(JsonText):
         The history file.
     files : tuple of str
         The files written (the page, the JSON).
+    warnings : tuple of str
+        What may be quietly wrong: a ``robot_from`` pattern that did not match every
+        recording, a ``robot_options`` entry for a robot not found
+        (:mod:`umbmark.fleets.naming`).
     """
 
     summary: FleetSummary
@@ -132,6 +139,7 @@ class FleetReport(JsonText):
     history: str
     files: tuple[str, ...] = ()
     command: str | None = field(default=None, compare=False)
+    warnings: tuple[str, ...] = ()
 
     @property
     def failed(self) -> tuple[RecordingOutcome, ...]:
@@ -148,6 +156,7 @@ class FleetReport(JsonText):
             "recordings_skipped": self.skipped,
             "failed": [{"path": o.path, "reason": o.reason} for o in self.failed],
             "history": self.history,
+            "warnings": list(self.warnings),
         }
 
 
@@ -207,19 +216,33 @@ def _options_key(task: RecordingTask, robot: str) -> str:
     return options_key(task.options_for(robot))
 
 
-def _is_done(task: RecordingTask, seen: Mapping[str, str]) -> bool:
-    """Whether a recording already in the history (``seen``: its options keys and the
-    robot each found) was read with the options it would be read with now."""
-    return any(key == _options_key(task, task.robot or robot) for key, robot in seen.items())
+def _done_as(task: RecordingTask, seen: Mapping[str, str]) -> str | None:
+    """The robot a recording already in the history (``seen``: its options keys and the
+    robot each found) was found to be, read with the options it would be read with now;
+    None where it was not."""
+    for key, robot in seen.items():
+        if key == _options_key(task, task.robot or robot):
+            return robot
+    return None
 
 
-def _not_done(store: Any, tasks: Sequence[RecordingTask]) -> tuple[list[RecordingTask], int]:  # noqa: ANN401 (History)
-    """The tasks not done before (with the same options), and how many were."""
+def _not_done(
+    store: Any,  # noqa: ANN401 (History)
+    tasks: Sequence[RecordingTask],
+) -> tuple[list[RecordingTask], dict[str, str]]:
+    """The tasks not done before (with the same options), and the robot each of those
+    done before was found to be (by path)."""
     from umbmark.store.fleet_recordings import done_recordings, identity
 
+    to_do, before = [], {}
     seen = done_recordings(store)  # one look into the history
-    to_do = [t for t in tasks if not _is_done(t, seen.get(identity(t.path), {}))]
-    return to_do, len(tasks) - len(to_do)
+    for task in tasks:
+        robot = _done_as(task, seen.get(identity(task.path), {}))
+        if robot is None:
+            to_do.append(task)
+        else:
+            before[task.path] = robot
+    return to_do, before
 
 
 def fleet(
@@ -306,7 +329,8 @@ def fleet(
     per_robot = read_robot_options(robot_options) if robot_options is not None else {}
     found = find_recordings(sources, robot_from)
     store = History(history)
-    tasks, skipped = _not_done(store, _tasks(found, reading, per_robot))
+    tasks, before = _not_done(store, _tasks(found, reading, per_robot))
+    skipped = len(before)
     done: list[RecordingOutcome] = []
     robots: set[str] = set()
     began = time.monotonic()
@@ -326,15 +350,17 @@ def fleet(
 
     try:
         run_each(calibrate_recording, tasks, record, scheduler=scheduler, workers=workers)
-        names = sorted({*(o.robot for o in done), *(f.robot for f in found if f.robot)})
-        result = FleetReport(
-            _summary(store, names), len(found), tuple(done), skipped, str(store.path),
-            command=command,
-        )  # fmt: skip
-        return _written(result, plan)
     except KeyboardInterrupt as exc:  # what finished is recorded: said, on the exception
         _mark_stopped(exc, FleetStopped(len(done), len(tasks), str(store.path)))
         raise
+    named = _named(store, found, tasks, done, before)
+    names = sorted({*(o.robot for o in named), *before.values()} - {NO_ROBOT})
+    warnings = _naming_warnings(robot_from, robot_options, per_robot, found, named, before)
+    result = FleetReport(
+        _summary(store, names), len(found), tuple(named), skipped, str(store.path),
+        command=command, warnings=warnings,
+    )  # fmt: skip
+    return _written(result, plan)
 
 
 def _mark_stopped(exc: BaseException, stop: FleetStopped) -> None:
@@ -342,7 +368,84 @@ def _mark_stopped(exc: BaseException, stop: FleetStopped) -> None:
     exc.umbmark_fleet_stopped = stop  # type: ignore[attr-defined]
 
 
+def _unplaced(task: RecordingTask, outcome: RecordingOutcome) -> bool:
+    """A recording that could not be read and that no pattern named: its robot is known
+    only once every recording's is (:func:`_named`)."""
+    return outcome.failed and task.robot is None and outcome.robot == UNNAMED
+
+
+def _named(
+    store: Any,  # noqa: ANN401 (History)
+    found: Sequence[FleetRecording],
+    tasks: Sequence[RecordingTask],
+    done: Sequence[RecordingOutcome],
+    before: Mapping[str, str],
+) -> list[RecordingOutcome]:
+    """``done`` with each recording that could not be read and that no pattern named
+    given the robot its path names among the robots found (this run's, the pattern's and
+    those done before), else none (:data:`~umbmark.fleets.naming.NO_ROBOT`), and
+    recorded."""
+    from dataclasses import replace
+
+    from umbmark.fleets.naming import robot_in_path
+
+    by_path = {t.path: t for t in tasks}
+    parts = {f.path: f.parts for f in found}
+    robots = {*before.values(), *(f.robot for f in found if f.robot)}
+    robots |= {o.robot for o in done if not _unplaced(by_path[o.path], o)}
+    named = []
+    for outcome in done:
+        task = by_path[outcome.path]
+        if not _unplaced(task, outcome):
+            named.append(outcome)
+            continue
+        robot = robot_in_path(parts.get(outcome.path, ()), robots)
+        how = None if robot is None else "path"
+        placed = replace(outcome, robot=robot or NO_ROBOT, named_by=how)
+        named.append(_stored(store, task, placed))
+    return named
+
+
+def _naming_warnings(
+    robot_from: str | None,
+    robot_options: str | os.PathLike[str] | None,
+    per_robot: Mapping[str, Any],
+    found: Sequence[FleetRecording],
+    named: Sequence[RecordingOutcome],
+    before: Mapping[str, str],
+) -> tuple[str, ...]:
+    """The warnings of a pattern that did not match every recording and of per-robot
+    options for robots not found (:mod:`umbmark.fleets.naming`), as messages say them."""
+    from umbmark.core.messages import split_messages
+    from umbmark.fleets.naming import options_warning, pattern_warning
+
+    messages = []
+    robots = {*(o.robot for o in named), *before.values()} - {NO_ROBOT}
+    if robot_from is not None:
+        how = {o.path: "none" if o.robot == NO_ROBOT else o.named_by for o in named}
+        missed = [f for f in found if not f.matched]
+        ways: dict[str | None, int] = {}
+        for f in missed:
+            way = "history" if f.path in before else how.get(f.path, "none")
+            ways[way] = ways.get(way, 0) + 1
+        example = "/".join(missed[0].parts) if missed else ""
+        messages.append(
+            pattern_warning(robot_from, len(found), len(found) - len(missed), ways, example)
+        )
+    if per_robot:
+        messages.append(options_warning(per_robot, robots, os.fspath(robot_options or "")))
+    return split_messages(m for m in messages if m is not None)[1]
+
+
 def _recorded(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> RecordingOutcome:  # noqa: ANN401
+    """Record one outcome as it comes back (:func:`_stored`), but one whose robot is not
+    known yet (:func:`_unplaced`: recorded by :func:`_named`)."""
+    if _unplaced(task, outcome):
+        return outcome
+    return _stored(store, task, outcome)
+
+
+def _stored(store: Any, task: RecordingTask, outcome: RecordingOutcome) -> RecordingOutcome:  # noqa: ANN401
     """Record one outcome (the one writer); a calibration the history refuses (a robot
     known with another nominal geometry) is recorded as failed with why."""
     from dataclasses import replace
@@ -373,7 +476,7 @@ def _summary(store: Any, robots: Sequence[str]) -> FleetSummary:  # noqa: ANN401
     from umbmark.fleets.summary import summarize
     from umbmark.store.fleet_recordings import read_recordings
 
-    rows = read_recordings(store, robots) if robots else read_recordings(store)
+    rows = read_recordings(store, robots) if robots else []
     return summarize([RecordingOutcome.of_dict(r.outcome) for r in rows])
 
 

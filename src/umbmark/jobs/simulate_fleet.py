@@ -20,10 +20,12 @@ day is in each recording as well as in its path.
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import json
 import math
 import os
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,6 +44,10 @@ WHEEL_STEP = -0.006
 KNOCK = (0.01, math.radians(3.0))
 #: The wearing robot's loss of ``E_s`` a day.
 WEAR_PER_DAY = 0.0008
+#: The truth's file in the fleet's folder.
+TRUTH = "truth.json"
+#: A robot's folder (:func:`robot_name`).
+_ROBOT = re.compile(r"robot\d{2,}")
 #: The fleet's nominal wheels: wheelbase, diameter [m].
 NOMINAL = (0.34, 0.15)
 #: The missions' speed [m/s] and the simulation's period [s].
@@ -117,7 +123,7 @@ def _truths(
     out, events = [], {}
     half = days // 2
     for k in range(robots):
-        name = f"robot{k + 1:02d}"
+        name = robot_name(k)
         e_d = 1.0 + float(rng.normal(0.0, 0.002))
         e_b = 1.0 + float(rng.normal(0.0, 0.01))
         e_s = 1.0 + float(rng.normal(0.0, 0.003))
@@ -159,8 +165,10 @@ def simulate_fleet(
     Parameters
     ----------
     out : path
-        The folder to write into: new or empty (``force``: one holding an earlier fleet is
-        written into).
+        The folder to write: new or empty (``force``: one holding an earlier simulated fleet,
+        and nothing else, is replaced whole). It is written whole or not at all: built in
+        a hidden folder beside it and renamed onto it at the end, so a run that fails or
+        is interrupted leaves nothing (and an earlier fleet as it was).
     fleet, days : int
         How many robots, and days of one recording each.
     minutes : float
@@ -177,12 +185,13 @@ def simulate_fleet(
     Raises
     ------
     InputError
-        For counts out of range, a bad day or storage, or a folder that holds files
-        (without ``force``).
+        For counts out of range, a bad day or storage, a folder that holds files (without
+        ``force``; with it, files that are not a simulated fleet's), or a recording that
+        cannot be written.
     """
-    from umbmark.core.atomic import atomic_write_text
+    from umbmark.core.atomic import atomic_tree, atomic_write_text
     from umbmark.options.fleet import FLEET_SIMULATION
-    from umbmark.outputs.files import check_folder_output, check_new_folder
+    from umbmark.outputs.files import check_folder_output
 
     if fleet is None:
         raise InputError(f"{option('fleet')}: give how many robots")
@@ -197,37 +206,103 @@ def simulate_fleet(
         raise InputError(f"{option('first_day', repr(first_day))}: give YYYY-MM-DD") from None
     target = Path(out)
     check_folder_output(target)
-    if not force:
-        check_new_folder(target)
+    _check_replaceable(target, force)
     rng = np.random.default_rng(seed)
     truths, events = _truths(robots, days, rng)
+    made = _make_parents(target)
+    try:
+        with atomic_tree(target) as fresh:  # whole or not at all: renamed in at the end
+            fresh.mkdir()
+            written = _recordings(fresh, target, truths, start, bag_storage, minutes, seed,
+                                  progress)  # fmt: skip
+            result = FleetSimulation(str(target), written, events)
+            atomic_write_text(fresh / TRUTH, json.dumps(result.to_dict(), indent=1) + "\n")
+    except BaseException:
+        _remove_made(made)
+        raise
+    return result
+
+
+def _recordings(
+    fresh: Path,
+    target: Path,
+    truths: list[list[tuple[float, float, float, tuple[float, float, float]]]],
+    start: dt.date,
+    storage: str,
+    minutes: float,
+    seed: int,
+    progress: Callable[[float], None] | None,
+) -> tuple[FleetDay, ...]:
+    """Every robot's recording of every day written into ``fresh`` (the folder being
+    built), each named by where it will be (in ``target``)."""
     written: list[FleetDay] = []
-    total = robots * days
-    for k in range(robots):
-        for d in range(days):
+    total = sum(len(days) for days in truths)
+    for k, days in enumerate(truths):
+        name = robot_name(k)
+        for d, (e_d, e_b, e_s, laser) in enumerate(days):
             day = start + dt.timedelta(days=d)
-            e_d, e_b, e_s, laser = truths[k][d]
-            name = f"robot{k + 1:02d}"
-            where = target / name / day.isoformat()
-            path = where / ("drive.bag" if bag_storage == "ros1" else "drive")
-            where.mkdir(parents=True, exist_ok=True)
-            _record(
-                path,
-                bag_storage,
-                k,
-                day,
-                (e_d, e_b, e_s),
-                laser,
-                minutes,
-                seed * 10007 + k * 389 + d,
-                force,
-            )
-            written.append(FleetDay(name, day.isoformat(), str(path), e_d, e_b, e_s, laser))
+            where = Path(name, day.isoformat(), "drive.bag" if storage == "ros1" else "drive")
+            (fresh / where).parent.mkdir(parents=True)
+            seeded = seed * 10007 + k * 389 + d
+            _record(fresh / where, storage, k, day, (e_d, e_b, e_s), laser, minutes, seeded)
+            written.append(FleetDay(name, day.isoformat(), str(target / where), e_d, e_b, e_s,
+                                    laser))  # fmt: skip
             if progress is not None:
                 progress(len(written) / total)
-    result = FleetSimulation(str(target), tuple(written), events)
-    atomic_write_text(target / "truth.json", json.dumps(result.to_dict(), indent=1) + "\n")
-    return result
+    return tuple(written)
+
+
+def robot_name(k: int) -> str:
+    """The name of the fleet's robot ``k`` (from 0): ``robot01``, ``robot02``, ..."""
+    return f"robot{k + 1:02d}"
+
+
+def _check_replaceable(target: Path, force: bool) -> None:
+    """Refuse a folder that holds anything (without ``force``), or anything but an earlier
+    simulated fleet (with ``force``: its ``truth.json`` and robot folders, which are
+    replaced whole; never a user's other files)."""
+    if not target.is_dir():
+        return
+    held = sorted(p.name for p in target.iterdir())
+    if not held:
+        return
+    if not force:
+        raise InputError(
+            f"is not empty; choose a new or empty folder, or pass {option('force')} to replace "
+            "the simulated fleet it holds",
+            source=target,
+        )
+    others = [n for n in held if n != TRUTH and not _ROBOT.fullmatch(n)]
+    if TRUTH not in held or others:
+        shown = others[0] if others else f"no {TRUTH}"
+        raise InputError(
+            f"holds {shown}: not a simulated fleet's, which {option('force')} replaces whole; "
+            "choose a new or empty folder",
+            source=target,
+        )
+
+
+def _make_parents(target: Path) -> list[Path]:
+    """Make ``target``'s missing parent folders; those made, deepest first."""
+    made = []
+    parent = target.resolve().parent
+    while not parent.exists():
+        made.append(parent)
+        parent = parent.parent
+    for folder in reversed(made):
+        try:
+            folder.mkdir()
+        except OSError as exc:
+            _remove_made(made)
+            raise InputError(f"cannot be made ({exc.strerror or exc})", source=folder) from None
+    return made
+
+
+def _remove_made(made: list[Path]) -> None:
+    """Remove the parent folders :func:`_make_parents` made (deepest first), where empty."""
+    for folder in made:
+        with contextlib.suppress(OSError):
+            folder.rmdir()
 
 
 def _record(
@@ -239,9 +314,8 @@ def _record(
     laser: tuple[float, float, float],
     minutes: float,
     seed: int,
-    force: bool,
 ) -> None:
-    """One robot's recording of one day."""
+    """One robot's recording of one day, at ``path`` (new)."""
     from umbmark.core.conventions import Direction
     from umbmark.model.kinematics import WheelParams
     from umbmark.robot.base import Pose2D
@@ -272,8 +346,8 @@ def _record(
     stated = (FLEET_LIDAR.mount.x, FLEET_LIDAR.mount.y, FLEET_LIDAR.mount.theta)
     epoch = dt.datetime(day.year, day.month, day.day, 8, tzinfo=dt.timezone.utc).timestamp()
     write_bag(
-        bag_target(path, None if storage == "ros1" else storage, force=force),
+        bag_target(path, None if storage == "ros1" else storage),
         session.wheels, session.odometry, session.truth, scans=sweeps, laser_pose=stated,
-        description=robot_urdf(NOMINAL[0], NOMINAL[1], stated, name=f"robot{k + 1:02d}"),
+        description=robot_urdf(NOMINAL[0], NOMINAL[1], stated, name=robot_name(k)),
         start_epoch=epoch + 60.0 * k,
     )  # fmt: skip

@@ -31,12 +31,9 @@ give the readers' one line (:func:`umbmark.sources.bag.reader.missing_rosbags`).
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
-import shutil
-import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar, Literal, Protocol
@@ -45,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.arrays import FloatArray
-from umbmark.core.atomic import fsync
+from umbmark.core.atomic import atomic_tree, fsync
 from umbmark.core.errors import InputError, option
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.model.scans import ScanSeries
@@ -250,15 +247,12 @@ def write_bag(
     from rosbags.rosbag1 import WriterError as Ros1WriterError
     from rosbags.rosbag2 import WriterError as Ros2WriterError
 
-    real = shown.resolve()
     try:
-        with _temporary_beside(real) as scratch:
-            fresh = scratch / real.name
+        with atomic_tree(shown) as fresh:
             _write(fresh, target.format, store, names, wheels, odometry, truth, start_epoch,
                    progress, scans, laser_pose, description)  # fmt: skip
             for file in [fresh] if fresh.is_file() else sorted(fresh.iterdir()):
                 fsync(file)
-            _put(fresh, real, scratch)
     except OSError as err:
         raise InputError(f"cannot be written ({err.strerror or err})", source=shown) from None
     except (sqlite3.Error, Ros1WriterError, Ros2WriterError) as err:
@@ -266,31 +260,6 @@ def write_bag(
     if progress is not None:
         progress(1.0)
     return shown
-
-
-def _put(fresh: Path, target: Path, scratch: Path) -> None:
-    """Rename the bag ``fresh`` onto ``target``; a folder there (a ROS 2 bag replaced) is
-    moved into ``scratch`` first, and back if the rename fails."""
-    if not target.is_dir():
-        os.replace(fresh, target)
-        return
-    old = scratch / ".replaced"
-    target.rename(old)
-    try:
-        fresh.rename(target)
-    except BaseException:
-        old.rename(target)
-        raise
-
-
-@contextlib.contextmanager
-def _temporary_beside(target: Path) -> Iterator[Path]:
-    """A new hidden folder beside ``target``, removed with all it holds when left."""
-    scratch = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
-    try:
-        yield scratch
-    finally:
-        shutil.rmtree(scratch, ignore_errors=True)
 
 
 def _stamps(time: FloatArray, start_epoch: float) -> NDArray[np.int64]:
