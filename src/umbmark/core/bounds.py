@@ -37,6 +37,7 @@ __all__ = [
     "finite_float",
     "in_metres",
     "option_float",
+    "smallest_side",
 ]
 
 #: Largest plausible square side [m]: beyond, a unit slip is likelier.
@@ -216,6 +217,12 @@ def _whole(bound: float) -> str:
     return str(int(bound)) if math.isfinite(bound) and bound == int(bound) else format(bound, "g")
 
 
+def smallest_side(wheelbase: float) -> float:
+    """The side [m] a square must exceed for a robot of ``wheelbase`` [m] (the odometry's):
+    twice the wheelbase (:func:`check_square_geometry`)."""
+    return 2.0 * wheelbase
+
+
 def check_square_geometry(
     side_length: float | None,
     wheelbase: float,
@@ -223,15 +230,18 @@ def check_square_geometry(
     multiplier: float = 1.0,
 ) -> None:
     """Refuse a wheelbase [m] (the odometry's: the configured one times ``multiplier``)
-    that is not smaller than the square's side [m].
+    that is not below half the square's side [m] (:func:`smallest_side`).
 
-    A robot whose wheelbase reaches half the side cannot drive the square as UMBmark
-    assumes (its wheels would cross the square's centre on the turns): the usual cause is
-    swapped or mistyped ``--side-length`` and ``--wheelbase``. ``origins`` says where the
-    values came from (``wheelbase``, ``separation_multiplier``, ``side_length``; options
-    where not said); the message names those.
+    The rule is a plausibility check of the two numbers, not a limit of the robot or of
+    the estimators (the virtual robot, its wheelbase 0.34 m, drives and calibrates 0.5 m
+    squares with the rule left out): a wheelbase of
+    half the side or more is usually swapped or mistyped ``--side-length`` and
+    ``--wheelbase``, and on so small a square ``E_d`` bends the legs little (``beta``
+    grows with ``L / b``). ``origins`` says where the values came from (``wheelbase``,
+    ``separation_multiplier``, ``side_length``; options where not said); the message
+    names those.
     """
-    if side_length is None or wheelbase < side_length / 2:
+    if side_length is None or side_length > smallest_side(wheelbase):
         return
     b_from, side_from, m_from, source = geometry_origins(origins, multiplier)
     if b_from.file is None and side_from.file is None and m_from is None:
