@@ -21,6 +21,7 @@ from typing import cast
 from umbmark.core.errors import InputError, given, option
 
 __all__ = [
+    "DIAMETER_PER_WHEELBASE",
     "ENCODER_RESOLUTION_RANGE",
     "GEAR_RATIO_RANGE",
     "LENGTH_RANGE",
@@ -48,6 +49,12 @@ MAX_WHEELBASE = 10.0
 MIN_LENGTH = 0.001
 #: Bounds of a plausible configured wheelbase or wheel diameter [m].
 LENGTH_RANGE = (MIN_LENGTH, MAX_WHEELBASE)
+#: Bounds of a plausible wheel diameter over the wheelbase: 0.23 (TurtleBot3 Waffle) to
+#: 0.6 (Husky) on the usual robots, 0.1 on a wide AGV with small wheels, 1.1 on a
+#: wheelchair's drive wheels, under 2 on a balancing robot's. A diameter given ten times
+#: too large or too small leaves it on a LabMate (0.15 / 0.34 m: 0.44), a Pioneer (0.51)
+#: or a Kobuki (0.30).
+DIAMETER_PER_WHEELBASE = (0.06, 2.0)
 #: Bounds of a plausible wheel factor or multiplier (skid-steer wheelbases reach about 2).
 MULTIPLIER_RANGE = (0.2, 5.0)
 #: Encoder pulses per motor revolution.
