@@ -101,6 +101,13 @@ def test_the_ground_truths_path_against_the_odometrys_is_the_scale(given, scale)
     # sampled every 0.5 s (0.1 m), at most 0.04 x 2 mm^2 ... under 1 %
     noisy = observed_scale([_straight(given, jitter=0.002)], params)
     assert noisy == pytest.approx(scale, rel=0.01)
+    # a truth known at fewer than half the samples (at the stops only) says nothing
+    sparse = _straight(given)
+    assert sparse.log is not None
+    sparse.log.truth[1:-1:3] = np.nan  # one in three unknown: still two in three known
+    assert observed_scale([sparse], params) == pytest.approx(scale, rel=1e-9)
+    sparse.log.truth[1:-1] = np.nan  # the ends only
+    assert observed_scale([sparse], params) is None
 
 
 # --- square tests: a runs table ------------------------------------------------------------

@@ -118,27 +118,26 @@ OBSERVED_TOLERANCE = 0.25
 
 def observed_scale(runs: Sequence[Run], params: WheelParams) -> float | None:
     """How far the ground truth moved over how far the wheels' odometry (with ``params``)
-    says, along the runs, sampled every :data:`_SCALE_STEP` where the truth is known
-    (None where it moved less than 0.1 m): about the wheels' true mean diameter over the
-    one given, whatever their headings; a reference known only at the stops shortens it."""
+    says, along the runs, sampled every :data:`_SCALE_STEP` where the truth is known:
+    about the wheels' true mean diameter over the one given, whatever their headings.
+    None where it says little: the truth moved less than 0.1 m, or is known at fewer than
+    half the wheel samples (a reference at the stops only cuts the path's corners)."""
     truth_path = odometry_path = 0.0
+    samples = matched = 0
     for run in runs:
         log = run.log
         if log is None:
             continue
-        odometry = log.odometry(params)
         known = np.flatnonzero(np.all(np.isfinite(log.truth[:, :2]), axis=1))
+        samples, matched = samples + len(log.time), matched + known.size
         if known.size < 2:
             continue
+        odometry = log.odometry(params)
         steps = np.floor((log.time[known] - log.time[known[0]]) / _SCALE_STEP)
         kept = known[np.flatnonzero(np.diff(steps, prepend=-1.0) > 0)]
-        for poses, path in ((log.truth, "truth"), (odometry, "odometry")):
-            length = float(np.sum(np.hypot(*np.diff(poses[kept, :2], axis=0).T)))
-            if path == "truth":
-                truth_path += length
-            else:
-                odometry_path += length
-    if truth_path < 0.1 or not odometry_path > 0.0:
+        truth_path += float(np.sum(np.hypot(*np.diff(log.truth[kept, :2], axis=0).T)))
+        odometry_path += float(np.sum(np.hypot(*np.diff(odometry[kept, :2], axis=0).T)))
+    if truth_path < 0.1 or not odometry_path > 0.0 or 2 * matched < samples:
         return None
     return truth_path / odometry_path
 
