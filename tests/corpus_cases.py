@@ -5,6 +5,7 @@ the checks of its outputs."""
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 import json
 import math
@@ -23,7 +24,7 @@ import yaml
 
 from corpus_inputs import bag_step, umbmark
 
-__all__ = ["CHECKS", "Case", "Outcome", "corpus", "run_step", "text"]
+__all__ = ["CHECKS", "Case", "Outcome", "corpus", "digest", "run_step", "text"]
 
 #: The case files.
 CORPUS = Path(__file__).with_name("corpus")
@@ -31,13 +32,16 @@ CORPUS = Path(__file__).with_name("corpus")
 
 @dataclass
 class Outcome:
-    """What one case did: exit status (None: timed out), output, time [s]."""
+    """What one case did: exit status (None: timed out), output, time [s], and the
+    SHA-256 of each file of the case's folder as the setup left it (relative path to hex
+    digest: what :func:`unchanged` compares with)."""
 
     returncode: int | None
     stdout: str
     stderr: str
     seconds: float
     peak_mib: float | None = None
+    before: dict[str, str] = field(default_factory=dict)
 
 
 Check = Callable[[Path, Outcome], "str | None"]
@@ -51,7 +55,8 @@ class Case:
     ``argv`` follows ``python -m umbmark``; ``{d}`` is the case's folder, ``{b}`` the
     folder of the valid inputs. ``expect``: ``any`` (a result or one clean error),
     ``error`` (must be refused), ``warn`` (refused, or exit 0 with a warning holding one
-    of ``warn``, any warning when empty), ``ok`` (a valid input: must succeed).
+    of ``warn``, any warning when empty), ``ok`` (a valid input: must succeed),
+    ``do-not-apply`` (a result whose verdict is "do not apply": exit status 4).
     ``stdout``: ``pipe``, ``full`` (/dev/full) or ``head`` (closed after 10 bytes).
     """
 
@@ -71,13 +76,22 @@ class Case:
 # --- output checks (``check: [name, args...]`` in a case file) ------------------------
 
 
+def digest(path: Path) -> str:
+    """The SHA-256 of a file's bytes (hex)."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
 def unchanged(rel: str) -> Check:
-    """``rel`` (a runs table) was not overwritten."""
-    return lambda d, out: (
-        None
-        if (d / rel).read_text(errors="replace").lstrip().startswith("#")
-        else f"{rel} was overwritten"
-    )
+    """``rel`` holds the bytes the setup left in it (:attr:`Outcome.before`)."""
+
+    def check(d: Path, out: Outcome) -> str | None:
+        if rel not in out.before:
+            return f"{rel} was not made by the setup"
+        if not (d / rel).is_file() or digest(d / rel) != out.before[rel]:
+            return f"{rel} was overwritten"
+        return None
+
+    return check
 
 
 def still_link(rel: str) -> Check:

@@ -14,7 +14,8 @@ under a wall-time limit and a 1 GB address-space limit, and its outcome is class
 * ``hang``: the wall-time limit ran out;
 * ``memory``: a ``MemoryError`` / "out of memory" under the 1 GB limit, or killed;
 * ``wrong-result``: a case with a known-wrong outcome ended with exit 0 without the
-  warning that names its cause (or an output check failed);
+  warning that names its cause, a case that must end "do not apply" did not exit 4, or
+  an output check failed (after a refusal too);
 * ``unclean``: any other stderr text (click's usage block, numpy warnings, ...);
 * ``refused-valid``: a valid input that was refused.
 
@@ -49,7 +50,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from corpus_cases import Case, Outcome, corpus, run_step
+from corpus_cases import Case, Outcome, corpus, digest, run_step
 from corpus_inputs import build_base
 
 __all__ = ["Case", "Outcome", "build_base", "classify", "corpus", "run_case", "run_corpus"]
@@ -105,8 +106,11 @@ def classify(case: Case, out: Outcome, case_dir: Path | None = None) -> tuple[st
     if out.returncode in (2, 3):
         if len(errors) != 1 or err[-1] != errors[0]:
             return "unclean", f"{len(errors)} error line(s) on exit {out.returncode}"
-        if case.expect == "ok":
+        if case.expect in ("ok", "do-not-apply"):
             return "refused-valid", errors[0][:160]
+        problem = case.check(case_dir, out) if case.check and case_dir is not None else None
+        if problem:  # a refusal must leave the files as they were, too
+            return "wrong-result", problem
         return "clean-error", errors[0][:160]
     if errors:
         return "unclean", "an error line on exit 0"
@@ -117,7 +121,9 @@ def classify(case: Case, out: Outcome, case_dir: Path | None = None) -> tuple[st
         if problem:
             return "wrong-result", f"--json output: {problem}"
     if case.expect == "error":
-        return "wrong-result", "accepted (exit 0); it must be refused"
+        return "wrong-result", f"accepted (exit {out.returncode}); it must be refused"
+    if case.expect == "do-not-apply" and out.returncode != 4:
+        return "wrong-result", f"exit {out.returncode}; a result not to apply exits 4"
     if case.expect == "warn":
         warnings = [line.lower() for line in err if line.startswith("umbmark: warning: ")]
         wanted = [w.lower() for w in case.warn]
@@ -213,6 +219,11 @@ def run_case(case: Case, root: Path, base: Path, timeout: float) -> Verdict:
     except Exception as exc:  # a broken case, not a finding
         out = Outcome(0, "", "", 0.0)
         return Verdict(case, "setup-failed", f"{type(exc).__name__}: {exc}", out, command)
+    before = {  # the files the checks name lie in the case's folder itself
+        f.name: digest(f)
+        for f in case_dir.iterdir()
+        if f.is_file() and not f.is_symlink() and os.access(f, os.R_OK)
+    }
     env = {**os.environ, "COLUMNS": "80", "OPENBLAS_NUM_THREADS": "1", **case.env}
     env.pop("UMBMARK_HISTORY", None)
     env.setdefault("UMBMARK_HISTORY", str(case_dir / "history.sqlite3"))
@@ -262,7 +273,7 @@ def run_case(case: Case, root: Path, base: Path, timeout: float) -> Verdict:
         peak = int(text) / 1024 if text.isdigit() else None
         rss_file.unlink()
     decoded = [(s or b"").decode("utf-8", "replace") for s in (stdout, err)]
-    out = Outcome(code, *decoded, seconds, peak)
+    out = Outcome(code, *decoded, seconds, peak, before)
     klass, detail = classify(case, out, case_dir)
     _restore_modes(case_dir)
     return Verdict(case, klass, detail, out, command)

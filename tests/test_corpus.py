@@ -80,6 +80,13 @@ def _case(expect: str = "any", argv: tuple[str, ...] = ("calibrate", "x.csv"), *
         ),
         (_case("warn"), Outcome(2, "", "umbmark: error: x.csv: refused\n", 0.1), "clean-error"),
         (_case("ok"), Outcome(2, "", "umbmark: error: x.csv: refused\n", 0.1), "refused-valid"),
+        (_case("do-not-apply"), Outcome(4, "Verdict: do not apply: ...\n", "", 0.1), "ok-result"),
+        (_case("do-not-apply"), Outcome(0, "Verdict: apply.\n", "", 0.1), "wrong-result"),
+        (
+            _case("do-not-apply"),
+            Outcome(2, "", "umbmark: error: x.bag: refused\n", 0.1),
+            "refused-valid",
+        ),
         (_case(argv=("simulate", "--json")), Outcome(0, '{"E_d": NaN}', "", 0.1), "wrong-result"),
         (_case(argv=("simulate", "--json")), Outcome(0, '{"E_d": 1.0}', "", 0.1), "ok-result"),
         (_case(stdout="head"), Outcome(1, "", "", 0.1), "ok-result"),
@@ -106,6 +113,18 @@ def test_output_checks_make_a_wrong_result(tmp_path):
     (tmp_path / "link.json").unlink()
     (tmp_path / "link.json").write_text("{}")
     assert classify(kept, Outcome(0, "", "", 0.1), tmp_path)[0] == "wrong-result"
+
+
+def test_a_refusal_that_changed_a_file_is_a_wrong_result(tmp_path):
+    # the bytes the setup left, by their digest: a JSON result kept as it was (the check
+    # once took any file not starting with "#" for overwritten, and never ran on refusals)
+    (tmp_path / "r.json").write_text("{}")
+    before = {"r.json": corpus_cases.digest(tmp_path / "r.json")}
+    case = _case("error", check=corpus_cases.unchanged("r.json"))
+    refused = Outcome(2, "", "umbmark: error: r.json: exists already\n", 0.1, before=before)
+    assert classify(case, refused, tmp_path)[0] == "clean-error"
+    (tmp_path / "r.json").write_text('{"E_d": 1.0}')
+    assert classify(case, refused, tmp_path)[0] == "wrong-result"
 
 
 def test_the_corpus_covers_every_reader_and_command():

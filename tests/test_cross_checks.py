@@ -80,17 +80,21 @@ def test_reported_factors_are_positive_and_finite(runs_csv: Path) -> None:
 def test_negative_factors_are_refused_not_reported(tmp_path: Path) -> None:
     """Runs whose return errors ask for a negative wheel (E_d <= 0) are refused."""
     from umbmark.calibration.compose import Calibration, check_calibration
+    from umbmark.estimators.base import ErrorEstimate
     from umbmark.model.active import ActiveParams
 
-    class Estimate:
-        E_d = -2.3
-        E_b = 1.0
-        E_s = None
-
-    calibration = Calibration(Estimate(), ActiveParams(wheelbase=0.34))  # type: ignore[arg-type]
+    estimate = ErrorEstimate("exact", 0.0, 0.0, -2.3, 1.0)
+    calibration = Calibration(estimate, ActiveParams(wheelbase=0.34))
     message = api_error(check_calibration, calibration)
     assert "E_d = -2.3" in message
     assert "check --side-length, --wheelbase and the runs' units" in message
+    # Where no square was driven (scan matching, a trajectory fit) its side is not named.
+    for method in ("scan-matching", "trajectory"):
+        driven = Calibration(ErrorEstimate(method, 0.0, 0.0, -2.3, 1.0), calibration.active)
+        message = api_error(check_calibration, driven)
+        assert message.startswith("the recording gives E_d = -2.3, which no robot can have")
+        assert "side" not in message
+        assert "check --wheelbase, --wheel-diameter and the wheels' readings" in message
     # Parameters a run log's metadata gave are named by field and file, not as options.
     from umbmark.core.bounds import Origin
 

@@ -199,3 +199,50 @@ def test_robots_within_ten_percent_are_all_taken_and_recovered(tmp_path):
         assert report.estimate.E_d == pytest.approx(E_d, abs=5e-4)
         assert report.estimate.E_b == pytest.approx(E_b, abs=3e-3)
     assert beyond >= 5  # the draw holds tables a unit hint used to refuse
+
+
+# --- the unit is judged before the frame (issue 35, item 5) -------------------------------
+
+
+def _mm_table_odometry_off(tmp_path):
+    """The robot of :func:`_mm_table` (spread 6 mm) measured with a tape in mm, its
+    odometry ends all at (0.3, 0.4) mm: 0.5 mm from the start, as a controller's odometry
+    stops. Read as metres the odometry's ends are 500 mm from the start, 12.5 % of the
+    4 m side, all at one point, and the measured ends lie on the other side of the start
+    (cw centre (-60, -60), ccw (20, -20): both dot (0.3, 0.4) < 0), which is what odometry
+    in the odom frame looks like; but the measured ends are then 85 m out."""
+    cgs = {d: (1000 * x, 1000 * y) for d, (x, y) in linear_cgs(0.0025, 0.005, 4.0).items()}
+    rows = [(d, xa, ya, 0.3, 0.4) for d, xa, ya, _, _ in runs_around(cgs, 6.0)]
+    return write_table(tmp_path / "runs.csv", rows, "direction,x_abs,y_abs,x_odo,y_odo")
+
+
+def test_a_tape_table_in_mm_without_unit_is_told_its_unit_not_the_odom_frame(tmp_path):
+    # Return errors (true minus odometry) about the centres (-60.3, -60.4) and
+    # (19.7, -20.4) mm: E_max,syst = sqrt(60.3^2 + 60.4^2) = 85.35 mm as mm, 853.5 mm as cm.
+    path = _mm_table_odometry_off(tmp_path)
+    message = api_error(umbmark.calibrate, path, side_length=4, wheelbase=0.34)
+    assert "odom frame" not in message
+    assert "offset" not in message
+    assert "is larger than the square's side (4 m)" in message
+    assert 'E_max,syst 85.35 mm (unit="mm")' in message
+    assert 'E_max,syst 853.5 mm (unit="cm")' in message
+    line = cli_error("calibrate", str(path), "-L", "4", "-b", "0.34")
+    assert "odom frame" not in line
+    assert "(--unit mm)" in line
+    # In its unit the table is a robot's: no frame, no unit doubt.
+    report = umbmark.calibrate(path, side_length=4, wheelbase=0.34, unit="mm")
+    assert report.e_max_syst == pytest.approx(math.hypot(0.0603, 0.0604), abs=1e-9)
+    assert _unit_notes(report) == []
+
+
+def test_odometry_in_the_odom_frame_is_still_named_in_the_right_unit(tmp_path):
+    # The same runs with the odometry's ends 1000 times farther, (300, 400) mm, given in
+    # mm: the measured ends lie within the side (85 mm), so the frame is judged: one
+    # point 500 mm from the start, 12.5 % of the side.
+    cgs = {d: (1000 * x, 1000 * y) for d, (x, y) in linear_cgs(0.0025, 0.005, 4.0).items()}
+    rows = [(d, xa, ya, 300, 400) for d, xa, ya, _, _ in runs_around(cgs, 6.0)]
+    path = write_table(tmp_path / "runs.csv", rows, "direction,x_abs,y_abs,x_odo,y_odo")
+    message = api_error(umbmark.calibrate, path, side_length=4, wheelbase=0.34, unit="mm")
+    assert "(300, 400) mm" in message
+    assert "500 mm from the start" in message
+    assert "odom frame" in message

@@ -24,8 +24,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from umbmark.core.bounds import Origin, geometry_origins
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.estimators.base import ErrorEstimate
+from umbmark.estimators.registry import SQUARE
 from umbmark.model.active import ActiveParams
 from umbmark.model.systematic import correction_factors
 
@@ -104,7 +105,18 @@ def check_calibration(
     """
     active = calibration.active
     b_from, side_from, m_from, _ = geometry_origins(origins, active.separation_multiplier)
-    named = [side_from.named(), b_from.named(), *([m_from.named()] if m_from else [])]
+    named = [b_from.named(), *([m_from.named()] if m_from else [])]
+    square = calibration.estimate.method in SQUARE
+    if square:  # a square driven: its side counts
+        gives = "the runs give"
+        causes = f"{', '.join([side_from.named(), *named])} and the runs' units and directions"
+    else:  # ordinary driving, a trajectory fit: no square, its wheels and their geometry
+        gives = "the recording gives"
+        d_from = (origins or {}).get("wheel_diameter", Origin(option("wheel_diameter")))
+        causes = (
+            f"{', '.join([*named, d_from.named()])} and the wheels' readings (which joint is "
+            "left, their signs, the encoder resolution)"
+        )
     for name, value in (
         ("E_d", calibration.estimate.E_d),
         ("E_b", calibration.estimate.E_b),
@@ -115,6 +127,5 @@ def check_calibration(
     ):
         if not (math.isfinite(value) and value > 0):
             raise InputError(
-                f"the runs give {name} = {value:.6g}, which no robot can have: check "
-                f"{', '.join(named)} and the runs' units and directions"
+                f"{gives} {name} = {value:.6g}, which no robot can have: check {causes}"
             )

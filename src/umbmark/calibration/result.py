@@ -252,7 +252,7 @@ class CalibrationResult(JsonText):
             path_length=mean_path(logs, self.params) if logged and self.params else None,
             warnings=(*self.input_warnings, *self.estimate.warnings),
             nominal_best=self.nominal_best,
-            wheel_diameter=None if self.params is None else self.params.wheel_diameter,
+            wheel_diameter=(self.params or self.calibration.active).wheel_diameter,
             returns=None if bench is None else (bench.e_max_syst, bench.second_pass_threshold),
         )
 

@@ -35,7 +35,7 @@ from umbmark.runs.read_options import ReadOptions
 from umbmark.sources.params.reader import ControllerParams
 
 if TYPE_CHECKING:
-    from umbmark.scans.intervals import OdometryGuess
+    from umbmark.scans.intervals import IntervalReport, OdometryGuess
 
 __all__ = ["IntervalSource", "calibrate_intervals", "calibrate_scan_bags", "read_intervals"]
 
@@ -236,6 +236,7 @@ def calibrate_scan_bags(
             tf_mounting=True,
         )
         notes += report.notes
+        notes += _guess_given_up(name, topic, report)
         stated = stated or report.stated
         kept = len(report.intervals)
         dropped = ", ".join(f"{n} {why}" for why, n in sorted(report.left_out.items()))
@@ -265,6 +266,22 @@ def calibrate_scan_bags(
         if error.source is None and where is not None:
             raise InputError(error.problem, source=where) from None
         raise
+
+
+def _guess_given_up(name: str, topic: str, report: IntervalReport) -> list[str]:
+    """The warning where the matches' first guess, the nominal geometry, was given up
+    (:attr:`~umbmark.scans.intervals.IntervalReport.guess_off`)."""
+    if report.guess_off is None or report.lost is None:
+        return []
+    straight, turning = report.guess_off
+    lost, moving = report.lost
+    return [
+        f"{name} {topic}: the matches started from the nominal geometry lost {lost} of "
+        f"{moving} moving intervals; matched from the sweeps alone, the laser moves "
+        f"{straight:.3g} times as far per wheel rotation as the nominal wheel diameter "
+        f"says, and turns {turning:.3g} times as far as it and the nominal wheelbase say: "
+        "the nominal geometry is far off (the figures below are against it)"
+    ]
 
 
 def _bag_guess(

@@ -13,12 +13,22 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
+from umbmark.calibration.diameter import diameter_warnings
 from umbmark.calibration.estimate import calibrate_runs, sessions_disagree
 from umbmark.calibration.result import CalibrationResult, Without
 from umbmark.core.bounds import check_square_geometry
 from umbmark.core.errors import InputError, ProblemError, option
 from umbmark.estimators.plausibility import judge_table
-from umbmark.estimators.registry import AUTO, CHOICES, DEFAULT, INTERVALS, NAMES, find, names
+from umbmark.estimators.registry import (
+    AUTO,
+    CHOICES,
+    DEFAULT,
+    INTERVALS,
+    NAMES,
+    SQUARE,
+    find,
+    names,
+)
 from umbmark.estimators.rows import FarRow, far_rows
 from umbmark.runs.active import read_each
 from umbmark.runs.read import (
@@ -201,7 +211,8 @@ def _calibrate_runs(
         from umbmark.calibration.auto import auto_method
 
         chosen, note, nominal_best = auto_method(each, read)
-    warned = replace(read, notes=(*read.notes, *(row.warning() for row in far)))
+    wheels = diameter_warnings(read) if chosen in SQUARE else []  # E_s unobserved
+    warned = replace(read, notes=(*read.notes, *(row.warning() for row in far), *wheels))
     result = calibrate_runs(warned, chosen, fit_truth_offset=fit_truth_offset)
     if far:
         result = replace(result, without=_without(read, far, chosen))

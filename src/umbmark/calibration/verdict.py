@@ -32,7 +32,10 @@ threshold here and the reason for it:
   :mod:`umbmark.runs.reproduced`), or a simulation without noise. Apply with care.
 - **Too few runs** (:data:`MIN_RUNS`): apply with care.
 - **Implausible errors** (:data:`PLAUSIBLE_E_D`, :data:`PLAUSIBLE_E_B`,
-  :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry.
+  :data:`PLAUSIBLE_E_S`): apply with care, and check the nominal geometry. An ``E_s``
+  near a power of ten (:func:`umbmark.estimators.scale.unit_slip`: 10, 100, 0.1, 0.01)
+  is a wheel diameter given in another unit or with its decimal point slipped, and its
+  multipliers of about that factor no robot's: do not apply, naming the diameter meant.
 - **The input is wrong as read**: a warning that the table's numbers are in another unit
   than it says (no robot scatters by less than a tape measure resolves) or that a row
   lies far outside its cluster (a typo) (:class:`umbmark.core.messages.Blocking`, from
@@ -56,7 +59,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from umbmark.core.errors import with_flags
+from umbmark.core.errors import option, with_flags
 from umbmark.core.messages import Blocking
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.estimators.registry import INTERVALS
@@ -220,8 +223,9 @@ class Evidence:
         ``--method auto`` found no estimator that predicts held-out runs better than the
         nominal parameters.
     wheel_diameter : float, optional
-        The nominal wheel diameter [m] recorded runs were integrated with (a scale error
-        of about 2 or 1/2 names it: a radius given for a diameter).
+        The nominal wheel diameter [m] recorded runs were integrated with, or motion
+        intervals calibrated against (a scale error of about 2 or 1/2 names it: a radius
+        given for a diameter; of a power of ten, a unit slip).
     returns : tuple of (float, float), optional
         The runs' ``E_max,syst`` and ``3 x SEM`` [m] (squares driven both ways).
     """
@@ -404,7 +408,7 @@ def _few_runs(evidence: Evidence) -> list[_Finding]:
 
 
 def _implausible(estimate: ErrorEstimate, diameter: float | None) -> list[_Finding]:
-    from umbmark.estimators.scale import diameter_mixup
+    from umbmark.estimators.scale import diameter_mixup, meant_diameter, slipped_words, unit_slip
 
     found: list[_Finding] = []
     check = "check the nominal wheelbase and wheel diameter, the encoder resolution and gear ratio"
@@ -429,6 +433,13 @@ def _implausible(estimate: ErrorEstimate, diameter: float | None) -> list[_Findi
         )
     if estimate.E_s is not None and abs(estimate.E_s - 1.0) > PLAUSIBLE_E_S:
         said = f"E_s = {estimate.E_s:.4f}: the wheels' mean diameter over the one given"
+        slip = unit_slip(estimate.E_s)
+        if slip is not None and diameter is not None:  # a mistake: multipliers of 10, 100
+            meant = option("wheel_diameter", meant_diameter(diameter, slip))
+            why = f"{slipped_words(diameter, slip, said)}; multipliers so far off are no robot's"
+            again = f"calibrate again with {meant}, the diameter in metres"
+            found.append(("do-not-apply", with_flags(why), with_flags(again)))
+            return found
         mixup = diameter_mixup(estimate.E_s, diameter, said)
         mixup = with_flags(mixup) if mixup is not None else None  # a reason, not an error
         found.append(

@@ -329,7 +329,7 @@ def _again(stop: Stopped, folder: Path) -> str:
             skip = True
         elif not a.startswith("--out=") and a != "--force":
             kept.append(a)
-    new = fresh_folder(folder) if stop.passes else folder
+    new = fresh_folder(folder)  # a folder holding an earlier try is refused
     command = shlex.join([*kept, "--out", str(new)])
     return f"to run it again from what the controller holds: umbmark selfcal {command}"
 

@@ -21,6 +21,7 @@ from typing import cast
 from umbmark.core.errors import InputError, given, option
 
 __all__ = [
+    "DIAMETER_PER_WHEELBASE",
     "ENCODER_RESOLUTION_RANGE",
     "GEAR_RATIO_RANGE",
     "LENGTH_RANGE",
@@ -37,6 +38,7 @@ __all__ = [
     "finite_float",
     "in_metres",
     "option_float",
+    "smallest_side",
 ]
 
 #: Largest plausible square side [m]: beyond, a unit slip is likelier.
@@ -47,6 +49,12 @@ MAX_WHEELBASE = 10.0
 MIN_LENGTH = 0.001
 #: Bounds of a plausible configured wheelbase or wheel diameter [m].
 LENGTH_RANGE = (MIN_LENGTH, MAX_WHEELBASE)
+#: Bounds of a plausible wheel diameter over the wheelbase: 0.23 (TurtleBot3 Waffle) to
+#: 0.6 (Husky) on the usual robots, 0.1 on a wide AGV with small wheels, 1.1 on a
+#: wheelchair's drive wheels, under 2 on a balancing robot's. A diameter given ten times
+#: too large or too small leaves it on a LabMate (0.15 / 0.34 m: 0.44), a Pioneer (0.51)
+#: or a Kobuki (0.30).
+DIAMETER_PER_WHEELBASE = (0.06, 2.0)
 #: Bounds of a plausible wheel factor or multiplier (skid-steer wheelbases reach about 2).
 MULTIPLIER_RANGE = (0.2, 5.0)
 #: Encoder pulses per motor revolution.
@@ -216,6 +224,12 @@ def _whole(bound: float) -> str:
     return str(int(bound)) if math.isfinite(bound) and bound == int(bound) else format(bound, "g")
 
 
+def smallest_side(wheelbase: float) -> float:
+    """The side [m] a square must exceed for a robot of ``wheelbase`` [m] (the odometry's):
+    twice the wheelbase (:func:`check_square_geometry`)."""
+    return 2.0 * wheelbase
+
+
 def check_square_geometry(
     side_length: float | None,
     wheelbase: float,
@@ -223,15 +237,18 @@ def check_square_geometry(
     multiplier: float = 1.0,
 ) -> None:
     """Refuse a wheelbase [m] (the odometry's: the configured one times ``multiplier``)
-    that is not smaller than the square's side [m].
+    that is not below half the square's side [m] (:func:`smallest_side`).
 
-    A robot whose wheelbase reaches half the side cannot drive the square as UMBmark
-    assumes (its wheels would cross the square's centre on the turns): the usual cause is
-    swapped or mistyped ``--side-length`` and ``--wheelbase``. ``origins`` says where the
-    values came from (``wheelbase``, ``separation_multiplier``, ``side_length``; options
-    where not said); the message names those.
+    The rule is a plausibility check of the two numbers, not a limit of the robot or of
+    the estimators (the virtual robot, its wheelbase 0.34 m, drives and calibrates 0.5 m
+    squares with the rule left out): a wheelbase of
+    half the side or more is usually swapped or mistyped ``--side-length`` and
+    ``--wheelbase``, and on so small a square ``E_d`` bends the legs little (``beta``
+    grows with ``L / b``). ``origins`` says where the values came from (``wheelbase``,
+    ``separation_multiplier``, ``side_length``; options where not said); the message
+    names those.
     """
-    if side_length is None or wheelbase < side_length / 2:
+    if side_length is None or side_length > smallest_side(wheelbase):
         return
     b_from, side_from, m_from, source = geometry_origins(origins, multiplier)
     if b_from.file is None and side_from.file is None and m_from is None:

@@ -42,6 +42,14 @@ __all__ = ["Estimated", "estimate_errors", "estimate_runs", "estimate_square_tes
 #: Runs read with another wheel diameter are taken for the right reading when their
 #: E_max,syst is within this fraction of the side (the paper's uncalibrated robots: 7 %).
 _IDENTIFIED = 0.25
+#: ... or, fitted, when the fit holds: its rms residual within these [m, rad] (the
+#: refusal floors of ``calibration.verdict``: MISFIT_FLOOR, HEADING_REFUSE); a fit that
+#: stayed at its start, missing the ground truth by metres, gives E_s = 1 and says nothing.
+_FIT_HOLDS = (0.1, math.radians(8.0))
+#: The factors a wheel diameter is tried with where runs cannot be estimated, likeliest
+#: first: a radius given for a diameter (or the reverse), a unit or decimal-point slip
+#: (``umbmark.estimators.scale.UNIT_SLIPS``).
+_MIXUPS = (2.0, 0.5, 10.0, 0.1, 100.0, 0.01)
 
 
 def estimate_errors(
@@ -267,13 +275,17 @@ def _diameter_mixup(
     fit_truth_offset: bool,
 ) -> str | None:
     """Where recorded runs cannot be estimated, whether they can with the wheel diameter
-    doubled or halved (a radius given for a diameter, or the reverse): the cause and the
-    fix (:func:`umbmark.estimators.scale.diameter_mixup`), or None."""
-    from umbmark.estimators.scale import diameter_mixup
+    doubled or halved (a radius given for a diameter, or the reverse) or a power of ten
+    off (a unit slip): the cause and the fix
+    (:func:`umbmark.estimators.scale.diameter_mixup`), or None."""
+    from umbmark.estimators.scale import OBSERVED_TOLERANCE, diameter_mixup, observed_scale
 
     if params is None or not runs or any(run.log is None for run in runs):
         return None
-    for factor in (2.0, 0.5):
+    observed = observed_scale(runs, params)
+    for factor in _MIXUPS:
+        if observed is not None and abs(observed / factor - 1.0) > OBSERVED_TOLERANCE:
+            continue  # the ground truth's own path says it is not this factor
         scaled = replace(params, wheel_diameter=params.wheel_diameter * factor)
         try:
             again = [run.reintegrated(scaled) for run in runs]
@@ -282,12 +294,16 @@ def _diameter_mixup(
         except (ValueError, InputError):
             continue
         bench, E_s = found.benchmark, found.estimate.E_s
+        comp = found.estimate.components
+        holds = comp.get("rms_position", 0.0) <= _FIT_HOLDS[0]
+        holds = holds and comp.get("rms_heading", 0.0) <= _FIT_HOLDS[1]
         if bench is not None and bench.e_max_syst <= _IDENTIFIED * found.test.side_length:
             how = f"the runs are squares a robot drives: E_max,syst {bench.e_max_syst * 1e3:.0f} mm"
-        elif bench is None and E_s is not None and abs(E_s - 1.0) <= _IDENTIFIED:
+        elif bench is None and E_s is not None and abs(E_s - 1.0) <= _IDENTIFIED and holds:
             how = f"the runs are fitted with E_s = {E_s:.3f}"
         else:
             continue
-        said = f"read with {'twice' if factor > 1 else 'half'} that, {how}"
+        times = {2.0: "twice", 0.5: "half"}.get(factor, f"{factor:g} times")
+        said = f"read with {times} that, {how}"
         return diameter_mixup(factor, params.wheel_diameter, said)
     return None

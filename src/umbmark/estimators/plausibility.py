@@ -520,8 +520,25 @@ def judge_table(read: SourceRuns, unit: str, angle_unit: str, side: float | None
     like other units than it says (:func:`unit_hints`) added to its notes."""
     name, runs = read.sources[0], list(read.runs)
     wheelbase = read.active.effective_wheelbase
-    hints = [
-        *check_columns(runs, side, name),
-        *unit_hints(runs, unit, angle_unit, side, wheelbase, name),
-    ]
+    if _beyond_the_side(runs, side):  # the unit first: the frame's premise does not hold
+        units = unit_hints(runs, unit, angle_unit, side, wheelbase, name)
+        hints = [*check_columns(runs, side, name), *units]
+    else:
+        hints = [
+            *check_columns(runs, side, name),
+            *unit_hints(runs, unit, angle_unit, side, wheelbase, name),
+        ]
     return replace(read, notes=(*read.notes, *hints))
+
+
+def _beyond_the_side(runs: Sequence[Run], side: float | None) -> bool:
+    """Whether the measured end points lie farther than the side from the start (median):
+    no robot comes back from the square that far, so the odometry's columns are not
+    judged (in another frame, swapped) before the table's unit is: a tape-measure table in
+    mm read as m puts the ends tens of metres out, and its odometry, within a millimetre of
+    the start, some hundreds of millimetres off it, which the frame's check would take for
+    the odom frame."""
+    squares = [run for run in runs if run.kind == "square"]
+    if side is None or not squares:
+        return False
+    return statistics.median(math.hypot(r.true_end.x, r.true_end.y) for r in squares) > side

@@ -58,9 +58,7 @@ from umbmark.routines.measure import (
 from umbmark.routines.outputs import check_outputs, write_outputs
 from umbmark.routines.passes import Home, corner_truth
 from umbmark.routines.preflight import preflight
-from umbmark.routines.record import (
-    clear_selfcal,
-)
+from umbmark.routines.record import clear_selfcal, recorded_passes
 from umbmark.routines.resume import SelfCalState, pending_problem, read_state, write_state
 from umbmark.routines.setup import Routine, SelfcalSetup
 from umbmark.routines.watch import Progress, RunsLeft, Stopped, Watch, mark_stopped
@@ -417,7 +415,13 @@ def _stopped(robot: Robot, passes: list[PassResult], drive: PassDriver) -> Stopp
         holds = holds_of(passes, params).words()
     except Exception as exc:  # a robot gone with the stop: say so, keep the stop's cause
         holds = f"what the controller holds could not be read ({exc})"
-    return Stopped(holds, tuple(p.label for p in passes), drive.folder if drive.kept else None)
+    if not drive.kept:
+        return Stopped(holds, tuple(p.label for p in passes), None)
+    finished = {p.folder for p in passes}
+    unfinished = tuple(
+        (where, n) for where, n in recorded_passes(drive.folder) if where not in finished and n > 0
+    )
+    return Stopped(holds, tuple(p.label for p in passes), drive.folder, unfinished)
 
 
 def locals_settings(

@@ -17,6 +17,7 @@ from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
 from umbmark.routines.drive import DriveLimits
 from umbmark.routines.measure import Measure
 from umbmark.routines.passes import Home, drive_pass, strays
+from umbmark.routines.preflight import check_side
 from umbmark.routines.record import MeasuredRun, pass_folder, record_pass, return_error
 from umbmark.routines.resume import SelfCalState
 from umbmark.routines.watch import Watch
@@ -70,6 +71,7 @@ class PassDriver:
         from umbmark.store.calibrations import calibrate_recorded
 
         params = self.robot.drive_params()
+        check_side(self.side, params)  # a correction applied may have moved the limit
 
         def said(k: int, direction: Direction, what: str) -> None:
             self.watch.status(label, k, direction, what)

@@ -9,14 +9,15 @@ from collections.abc import Callable
 
 import numpy as np
 
+from umbmark.core.bounds import smallest_side
 from umbmark.core.errors import InputError, option
 from umbmark.options.selfcal import SQUARE_SIDE_RANGE
-from umbmark.robot.base import Robot
+from umbmark.robot.base import DriveParams, Robot
 from umbmark.routines.clearance import path_blocked, scan_points
 from umbmark.routines.drive import DriveLimits
 from umbmark.routines.measure import Measure
 
-__all__ = ["free_floor", "preflight", "square_paths"]
+__all__ = ["check_side", "free_floor", "preflight", "square_paths"]
 
 
 def square_paths(side: float) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
@@ -53,6 +54,36 @@ def _advice(points: np.ndarray, side: float, limits: DriveLimits) -> str:
             ways.append(f"use {option('side_length', round(float(shorter), 1), 'm')}")
             break
     return "; or ".join(ways) if ways else "clear the floor, or place the robot elsewhere"
+
+
+def check_side(side: float, params: DriveParams) -> None:
+    """Refuse squares of ``side`` [m] that a robot of the controller's ``params`` would
+    drive only to have the pass refused: the calibration takes a side not above twice the
+    odometry's wheelbase for swapped or mistyped options
+    (:func:`umbmark.core.bounds.check_square_geometry`). Checked before moving and before
+    every pass (a pass's correction changes the wheelbase multiplier).
+
+    Raises
+    ------
+    InputError
+        Naming the side, the wheelbase it is judged by and the smallest side that works
+        (the next 0.1 m above twice the wheelbase).
+    """
+    wheelbase = params.wheelbase
+    limit = smallest_side(wheelbase)
+    if side > limit:
+        return
+    enough = math.floor(limit * 10.0 + 1.0 + 1e-9) / 10.0  # the next 0.1 m strictly above
+    multiplier = params.wheel_separation_multiplier
+    times = f" times wheel_separation_multiplier {multiplier:g}" if multiplier != 1.0 else ""
+    raise InputError(
+        f"{option('side_length', side, 'm')} is too short for this robot: the squares' side "
+        f"must be more than twice the odometry's wheelbase, {wheelbase:g} m (the controller's "
+        f"wheel_separation {params.wheel_separation:g} m{times}), so more than {limit:g} m; "
+        "squares this small would be driven and their pass then refused by the calibration, "
+        "which takes a wheelbase of half the side or more for swapped or mistyped options: "
+        f"the smallest side that works is {option('side_length', enough, 'm')}"
+    )
 
 
 def free_floor(robot: Robot, side: float, limits: DriveLimits | None = None) -> str:
@@ -122,6 +153,7 @@ def preflight(
         f"{params.wheel_radius:g} m, multipliers {params.wheel_separation_multiplier:g}, "
         f"{params.left_wheel_radius_multiplier:g}, {params.right_wheel_radius_multiplier:g}"
     )
+    check_side(side, params)
     velocity_note = getattr(robot, "velocity_note", None)  # a ROS 2 robot's velocity topic
     said = velocity_note() if callable(velocity_note) else None
     if isinstance(said, str):

@@ -41,6 +41,7 @@ __all__ = [
     "clear_selfcal",
     "pass_folder",
     "record_pass",
+    "recorded_passes",
     "return_error",
     "return_error_words",
 ]
@@ -51,11 +52,27 @@ REPORT_FILE = "report.html"
 OVERLAY_FILE = "overlay.yaml"
 #: Its passes' run-log folders: ``pass-1``, ``pass-2``, ..., ``verification``.
 _PASS_FOLDER = re.compile(r"pass-\d+|verification")
+#: A pass's run files: ``run-01-cw.csv``, ``run-06-ccw.csv`` (:func:`record_pass`).
+_RUN_FILE = re.compile(r"run-\d+-c?cw\.csv")
 
 
 def pass_folder(folder: Path, label: str) -> Path:
     """The run-log folder of pass ``label`` (``pass 1``: ``folder/pass-1``)."""
     return folder / label.replace(" ", "-")
+
+
+def recorded_passes(folder: Path) -> list[tuple[Path, int]]:
+    """The passes' run-log folders in ``folder`` (``pass-1``, ..., ``verification``), each
+    with the number of run files it holds (``run-NN-cw.csv``, ``run-NN-ccw.csv``); none
+    where ``folder`` is no folder. Only looks: nothing is read or created."""
+    if not folder.is_dir():
+        return []
+    found = []
+    for entry in sorted(folder.iterdir()):
+        if entry.is_dir() and not entry.is_symlink() and _PASS_FOLDER.fullmatch(entry.name):
+            runs = [f for f in entry.iterdir() if _RUN_FILE.fullmatch(f.name) and f.is_file()]
+            found.append((entry, len(runs)))
+    return found
 
 
 def clear_selfcal(folder: Path, *, remove: bool) -> None:

@@ -143,11 +143,15 @@ class Stopped:
         The labels of the passes recorded on disk.
     folder : Path or None
         Where they are (None: the routine was given no folder, nothing was kept).
+    unfinished : tuple of (Path, int)
+        The run-log folders of passes driven but not finished (their runs recorded, the
+        calibration not done), with the number of runs each holds.
     """
 
     holds: str
     passes: tuple[str, ...]
     folder: Path | None
+    unfinished: tuple[tuple[Path, int], ...] = ()
 
     def text(self) -> str:
         """``the controller holds ...; on disk: pass 1 in DIR``, without the command."""
@@ -155,10 +159,16 @@ class Stopped:
         holds = holds[:1].lower() + holds[1:]
         if self.folder is None:
             disk = "no pass kept (no folder was given)"
-        elif not self.passes:
+        elif not self.passes and not self.unfinished:
             disk = f"no pass finished, nothing in {self.folder}"
         else:
-            disk = f"{', '.join(self.passes)} in {self.folder}"
+            disk = f"{', '.join(self.passes)} in {self.folder}" if self.passes else ""
+            driven = [
+                f"{n} run{'s' if n != 1 else ''} of a pass not calibrated in {where} (umbmark "
+                f"calibrate {where} reads them)"
+                for where, n in self.unfinished
+            ]
+            disk = "; ".join(([disk] if disk else ["no pass finished"]) + driven)
         return f"{holds}; on disk: {disk}"
 
 

@@ -338,8 +338,8 @@ def _given_wins(
 def _given_origins(
     options: ReadOptions, wheelbase: float | None, file: ControllerParams
 ) -> dict[str, Origin]:
-    """Where the wheelbase and its multiplier come from when an option or the parameter
-    file gives them."""
+    """Where the wheelbase, its multiplier and the wheel diameter come from when an option
+    or the parameter file gives them."""
     params = os.fspath(options.current_params or "")
     # A previous result gives its active wheelbase and its new multiplier.
     result = bool(params) and is_result_file(params)
@@ -348,6 +348,10 @@ def _given_origins(
         origins["wheelbase"] = Origin(option("wheelbase"))
     elif file.wheel_separation is not None:
         origins["wheelbase"] = Origin("active.wheelbase" if result else "wheel_separation", params)
+    if options.wheel_diameter is not None:
+        origins["wheel_diameter"] = Origin(option("wheel_diameter"))
+    elif file.wheel_radius is not None:
+        origins["wheel_diameter"] = Origin("wheel_radius", params)
     if options.current_separation_multiplier is not None:
         origins["separation_multiplier"] = Origin(option("current_separation_multiplier"))
     elif params:

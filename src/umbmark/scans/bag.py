@@ -170,7 +170,15 @@ def _joined(reports: list[IntervalReport]) -> IntervalReport:
             left[why] = left.get(why, 0) + n
     intervals = MotionIntervals.concatenate(kept) if kept else reports[0].intervals
     rms = np.concatenate([r.rms for r in reports])
-    return IntervalReport(intervals, left, rms)
+    off = [r for r in reports if r.guess_off is not None]  # the first window given up says
+    first = off[0] if off else None
+    return IntervalReport(
+        intervals,
+        left,
+        rms,
+        guess_off=None if first is None else first.guess_off,
+        lost=None if first is None else first.lost,
+    )
 
 
 def _mounting(path: str | Path, frame: str, bag: BagOptions) -> LaserMounting | None:

@@ -22,7 +22,11 @@ The guess: with the nominal geometry (:class:`OdometryGuess`), the wheels' rotat
 the interval is integrated into the robot's motion (an arc between every two wheel
 samples) and moved into the scanner's frame by its nominal mounting; without it, the
 match starts from no motion, which holds for slow driving and fast sweeps only (rolling
-sweeps, below, are matched a second time from the fitted motion).
+sweeps, below, are matched a second time from the fitted motion). A guess that loses
+most moving intervals (far from it, or not converged from it) is checked against the
+sweeps alone: where their own motion per wheel rotation is far from the guess's (a wheel
+diameter or wheelbase in another unit), the guess is given up and the intervals are
+those matched from the sweeps alone (:attr:`IntervalReport.guess_off` says by how much).
 
 The motion during a sweep: a rotating scanner measures its beams one after the other
 (``ScanSeries.time_increment``), so a sweep taken while turning is bent; matched as it
@@ -143,6 +147,13 @@ class IntervalReport:
     stated : LaserMounting or None
         The laser's mounting as the recording states it (``/tf_static``, the robot
         description), where it does.
+    guess_off : tuple of float, optional
+        Where the guess was given up (:func:`match_intervals`): the scanner's motion per
+        wheel rotation as its sweeps alone measure it, over the guess's, driving straight
+        (the wheels' mean radius) and turning on the spot (radius over wheelbase); the
+        intervals are then those matched from the sweeps alone.
+    lost : tuple of int, optional
+        With ``guess_off``: the moving intervals the guess's matches lost, of how many.
     """
 
     intervals: MotionIntervals
@@ -151,6 +162,8 @@ class IntervalReport:
     guess: OdometryGuess | None = None
     notes: tuple[str, ...] = ()
     stated: LaserMounting | None = None
+    guess_off: tuple[float, float] | None = None
+    lost: tuple[int, int] | None = None
 
     @property
     def tried(self) -> int:
@@ -236,7 +249,8 @@ def match_intervals(
     options : IntervalOptions
     """
     if options.guess is not None:
-        return _matched(scans, wheels, options, jacobian(options.guess), check=True)
+        guessed = _matched(scans, wheels, options, jacobian(options.guess), check=True)
+        return _checked_guess(guessed, scans, wheels, options)
     if scans.time_increment * scans.beams <= 0.0:
         return _matched(scans, wheels, options, None, check=False)
     first = _matched(dataclasses.replace(scans, time_increment=0.0), wheels, options, None)
@@ -244,6 +258,49 @@ def match_intervals(
     if jac is None:
         return first
     return _matched(scans, wheels, options, jac, check=False)
+
+
+#: Reasons an interval is left out that say nothing of the guess (no motion, no data).
+_NOT_MATCHED = ("standing still", "gap in the scans", "no wheel data")
+#: A guess whose matches lose more than this share of the moving intervals (far from the
+#: guess, or not converged from it) is checked against the sweeps alone; a right guess
+#: loses a few (a match slid along a wall; none on the simulated room's bags) ...
+_DOUBTFUL_LOSS = 1.0 / 3.0
+#: ... and given up where the sweeps' own motion per wheel rotation differs from it by
+#: more than this factor, straight or turning: a wheel diameter or wheelbase in another
+#: unit, a radius given for a diameter. The matches then started far from the motion
+#: (ten times a leg's length, or a turn's), so most failed and the rest are biased.
+_GUESS_FACTOR = 1.5
+
+
+def _checked_guess(
+    guessed: IntervalReport, scans: ScanSeries, wheels: WheelSeries, options: IntervalOptions
+) -> IntervalReport:
+    """``guessed`` (matched from ``options.guess``), or where it lost most moving intervals
+    and the sweeps alone measure a motion per wheel rotation far from the guess's, the
+    intervals matched from the sweeps alone, with :attr:`IntervalReport.guess_off`."""
+    assert options.guess is not None
+    moving = len(guessed.intervals) + sum(
+        n for why, n in guessed.left_out.items() if why not in _NOT_MATCHED
+    )
+    lost = moving - len(guessed.intervals)
+    if lost <= _DOUBTFUL_LOSS * moving:
+        return guessed
+    alone = match_intervals(scans, wheels, dataclasses.replace(options, guess=None))
+    fitted = fit_jacobian(alone.intervals)
+    if fitted is None:
+        return guessed
+    nominal = jacobian(options.guess)
+    ratios = []
+    for row, wheels_turned in ((slice(0, 2), (1.0, 1.0)), (slice(2, 3), (-1.0, 1.0))):
+        turned = np.asarray(wheels_turned)
+        ratios.append(
+            float(np.linalg.norm(fitted[row] @ turned) / np.linalg.norm(nominal[row] @ turned))
+        )
+    straight, turning = ratios
+    if all(1.0 / _GUESS_FACTOR <= r <= _GUESS_FACTOR for r in ratios if math.isfinite(r)):
+        return guessed
+    return dataclasses.replace(alone, guess_off=(straight, turning), lost=(lost, moving))
 
 
 def _matched(
