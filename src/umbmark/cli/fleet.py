@@ -199,5 +199,5 @@ def _to_apply(robot: RobotSummary) -> list[str]:
         lines.append(f"to apply: {robot.apply.line()} (the overlay: --report, --json)")
     forms = robot.mounting
     if forms is not None:
-        lines.append(f"laser {forms.fitted.frame}: {forms.urdf_origin()} ({forms.verdict()})")
+        lines.append(f"laser ({forms.fitted.frame}): {forms.urdf_origin()} ({forms.verdict()})")
     return lines

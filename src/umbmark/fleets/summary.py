@@ -431,7 +431,7 @@ def _basis(wheels: Sequence[FigureTrack]) -> str:
     """What the wheels' present figures rest on, for people."""
     if not wheels:
         return "no wheel figures"
-    said = []
+    said: list[tuple[str, str]] = []
     for track in wheels:
         change, present = track.change, track.present
         first, last = _day(track.times[present[0]]), _day(track.times[present[-1]])
@@ -445,8 +445,11 @@ def _basis(wheels: Sequence[FigureTrack]) -> str:
             what = f"one recording ({last})"
         else:
             what = f"the mean of {_count(len(present))} from {first} to {last}"
-        said.append(f"{track.name}: {what}")
-    return "; ".join(said)
+        said.append((track.name, what))
+    grouped: dict[str, list[str]] = {}
+    for name, what in said:  # figures that rest on the same recordings, said once
+        grouped.setdefault(what, []).append(name)
+    return "; ".join(f"{', '.join(names)}: {what}" for what, names in grouped.items())
 
 
 def _one_offs(tracks: Mapping[str, FigureTrack]) -> list[str]:
