@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+import os
 from collections.abc import Callable
 from html import escape
 
@@ -229,8 +230,8 @@ def _apply(robot: RobotSummary, key: str) -> str:
     )
     said = (
         f'{head}: <span class="num">separation {sep:.6f}, left radius {left:.6f}, right '
-        f'radius {right:.6f}</span> <span class="note">({escape(apply.basis)})</span>'
-    )
+        f"radius {right:.6f}</span>"
+    )  # what they rest on heads the overlay, folded
     said += (
         "<details><summary>the overlay for the controller (YAML)</summary>"
         f"{_copyable(str(apply.overlay).strip(), f'{key}-overlay')}</details>"
@@ -267,7 +268,27 @@ def _figure(track: FigureTrack) -> str:
     )
 
 
-def _row(robot: RobotSummary, figures: list[str], key: str) -> str:
+def _root(summary: FleetSummary) -> str:
+    """The folder (or URL) every recording of the page lies below, with its ``/``: the
+    page names recordings below it; empty where they share none, or there is one."""
+    paths = [
+        p
+        for r in summary.robots
+        for p in {*(x for t in r.tracks.values() for x in t.paths), *(x for x, _ in r.left_out)}
+    ]
+    if len(paths) < 2:
+        return ""
+    common = os.path.commonprefix(paths)  # noqa: RUF071 (by character: URLs too, cut at a "/")
+    root = common[: common.rfind("/") + 1]
+    return root if root.strip("/") and not root.endswith("://") else ""
+
+
+def _short(text: str, root: str) -> str:
+    """``text`` with every recording named below ``root``."""
+    return text.replace(root, "") if root else text
+
+
+def _row(robot: RobotSummary, figures: list[str], key: str, root: str = "") -> str:
     calibrated = robot.recordings - len(robot.left_out)
     counts = f"{robot.recordings} recording{'' if robot.recordings == 1 else 's'}"
     parts = [f"{len(robot.failed)} failed"] if robot.failed else []
@@ -282,10 +303,10 @@ def _row(robot: RobotSummary, figures: list[str], key: str) -> str:
         f'<span class="note">{counts}, {robot.hours:.1f} h{when}</span></div>'
     )
     flags = robot.flags
-    said = "".join(f'<li class="flag">{escape(f)}</li>' for f in flags) or (
+    said = "".join(f'<li class="flag">{escape(_short(f, root))}</li>' for f in flags) or (
         '<li class="ok">within its intervals</li>'
     )
-    said += "".join(f'<li class="note">{escape(n)}</li>' for n in robot.notes)
+    said += "".join(f'<li class="note">{escape(_short(n, root))}</li>' for n in robot.notes)
     e_max = "-" if robot.e_max_syst is None else f"{robot.e_max_syst * 1000:.1f} mm"
     cells = (
         f'{who}<ul class="flags">{said}</ul>'
@@ -359,7 +380,8 @@ def fleet_page(summary: FleetSummary, *, title: str = "umbmark fleet", made: str
     """
     usable = [r for r in summary.robots if r.usable]
     figures = [name for name in FIGURE_UNITS if any(name in r.tracks for r in usable)]
-    rows = "".join(_row(r, figures, f"r{k}") for k, r in enumerate(usable))
+    root = _root(summary)
+    rows = "".join(_row(r, figures, f"r{k}", root) for k, r in enumerate(usable))
     failed, unusable = _failed(summary), _unusable(summary)
     jump = (
         "".join(
@@ -388,7 +410,8 @@ def fleet_page(summary: FleetSummary, *, title: str = "umbmark fleet", made: str
         f'<p class="note">{escape(made or "made from Python")}; {stamp}; {hours:.1f} h of '
         "recordings.</p>"
         f"<p class='summary'>{escape(summary.line())}.</p>"
-        f'<p class="jump note">{jump}</p>'
+        + (f'<p class="note">Recordings are named below {escape(root)}</p>' if root else "")
+        + f'<p class="jump note">{jump}</p>'
         f'<h2 id="robots">Robots</h2>{head}{rows}'
         f"{failed}{unusable}"
         "<p class='note'>Each value is the robot's present state with its 95 % interval: "
