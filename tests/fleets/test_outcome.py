@@ -227,3 +227,21 @@ def test_a_truth_topic_not_in_the_recording_is_its_reason_for_being_left_out(two
         "(geometry_msgs/msg/PoseStamped), /odom (nav_msgs/msg/Odometry), "
     ), wrong.reason
     assert "/scan (sensor_msgs/msg/LaserScan)" in wrong.reason
+
+
+@pytest.mark.slow
+def test_a_reference_given_is_fitted_where_the_look_found_none_independent(tmp_path: Path):
+    """A Husky's recording (``tests/robot_bags.husky_bag``): its GNSS fixes scatter by
+    0.5 m and its other pose topic is robot_localization's fused odometry, so the look
+    finds no independent reference and leaves it out; the user who names the fused topic
+    as the reference (knowing what it holds: here the IMU's heading) gets it fitted."""
+    from robot_bags import HUSKY, drive, husky_bag
+
+    bag = husky_bag(tmp_path / "husky", "mcap", drive(HUSKY, *MINE), gps_sigma=0.5)
+    geometry = {"wheelbase": 0.555, "wheel_diameter": 0.33}
+    alone = calibrate_recording(RecordingTask(str(bag), options=geometry))
+    assert (alone.calibrated, alone.failed) == (False, False)
+    assert alone.reason == "neither a laser scan nor an independent reference (motion capture)"
+    given = {**geometry, "truth_topic": "/odometry/filtered"}
+    out = calibrate_recording(RecordingTask(str(bag), options=given))
+    assert (out.method, out.reason) == ("trajectory", None)
