@@ -20,6 +20,9 @@ rates of their stock configurations):
   0.033 m radius; optionally a ``p3d`` ground truth ``/ground_truth/odom``.
 - :func:`nav2_bag`: the same robot under Nav2: AMCL's ``/amcl_pose`` (2 Hz) and
   ``map -> odom`` transform, with the odometry.
+- :func:`two_bodies_bag`: the TurtleBot3's wheels and odometry in a motion-capture lab
+  that tracks two robots: ``/mocap/amr0/pose`` (another robot) and ``/mocap/amr1/pose``
+  (this one; also as the mocap bridge's TF ``world -> amr1``), 100 Hz.
 
 The motion comes from umbmark's simulator (:func:`drive`): a robot with known ``E_d``
 and ``E_b`` drives squares by its own odometry, so the truth is known and differs from
@@ -58,6 +61,7 @@ IMU = "sensor_msgs/msg/Imu"
 FIX = "sensor_msgs/msg/NavSatFix"
 POINT = "geometry_msgs/msg/PointStamped"
 POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
+POSE = "geometry_msgs/msg/PoseStamped"
 STRING = "std_msgs/msg/String"
 MODEL_STATES = "gazebo_msgs/msg/ModelStates"
 
@@ -510,4 +514,31 @@ def nav2_bag(
         tf = bag.transform(t, "map", "odom", (tx, ty, 0.0), yaw_quaternion(dth))
         if map_tf:
             bag.add("/tf", TF, t + 1e-4, bag.tf([tf]))
+    return bag.write(path)
+
+
+def two_bodies_bag(path: Path, fmt: str, mine: Drive, other: Drive) -> Path:
+    """The TurtleBot3 ``mine`` (joint states, ``/odom``, its description) recorded where
+    motion capture tracks it and ``other``, a second robot driving the same squares:
+    ``/mocap/amr0/pose`` is ``other``'s truth (first by name, so what a look into the bag
+    suggests), ``/mocap/amr1/pose`` and the TF ``world -> amr1`` are ``mine``'s (100 Hz)."""
+    bag = BagWriter(fmt)
+    n = min(mine.time.size, other.time.size)
+    odo = mine.odometry
+    names = ("wheel_left_joint", "wheel_right_joint")
+    for k in range(0, n, 3):  # 33 Hz
+        t = float(mine.time[k])
+        bag.add("/joint_states", JS, t, bag.joint_state(t, names, mine.angles[k]))
+        x, y, th = odo[k]
+        bag.add("/odom", ODOM, t, bag.odometry(t, "odom", "base_footprint", x, y, th))
+    for k in range(n):
+        t = float(mine.time[k])
+        for topic, motion in (("/mocap/amr0/pose", other), ("/mocap/amr1/pose", mine)):
+            gx, gy, gth = motion.truth[k]
+            msg = bag.T(POSE)(header=bag.header(t, "world"), pose=bag.pose(gx, gy, gth))
+            bag.add(topic, POSE, t, msg)
+        gx, gy, gth = mine.truth[k]
+        tf = bag.transform(t, "world", "amr1", (gx, gy, 0.0), yaw_quaternion(gth))
+        bag.add("/tf", TF, t, bag.tf([tf]))
+    bag.add("/robot_description", STRING, 0.0, bag.T(STRING)(data=TB3_URDF))
     return bag.write(path)

@@ -8,7 +8,8 @@ What is checked: a worker killed with SIGKILL (by its PID) while it calibrates a
 loses nothing: the recording is redone on the other worker, every recording is done
 exactly once in the run's report and in the history, none failed, the figures are those
 of a local run of the same recordings (``workers=1``, no scheduler) to the last bit, and
-the killed worker's process is dead. Both workers killed mid-run, or the scheduler: the
+the killed worker's process is dead; the same for a worker of the local cluster the job
+starts itself (no scheduler given). Both workers killed mid-run, or the scheduler: the
 job does not wait forever but stops with one line, keeping what finished (and recording
 nothing as failed), and the next run does the rest, losing nothing either.
 """
@@ -155,6 +156,102 @@ def test_a_worker_killed_mid_recording_loses_nothing(
     assert [o.status for o in report.done] == ["calibrated"] * len(expected)
     assert _history(history) == (Counter(expected), Counter(expected), len(expected))
     # The figures, and all else each recording gave, are the local run's.
+    assert {o.path: _but_when(o.to_dict()) for o in report.done} == local
+
+
+def _children() -> set[int]:
+    """This process's child processes, by their PIDs (Linux's ``/proc``)."""
+    found = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:  # gone meanwhile
+            continue
+        if int(fields[1]) == os.getpid():
+            found.add(int(stat.parent.name))
+    return found
+
+
+def _within(seconds: float, holds: Callable[[], bool]) -> bool:
+    """Whether ``holds()`` comes true within ``seconds`` (processes end a while after they
+    are told to, later on a loaded machine)."""
+    deadline = time.monotonic() + seconds
+    while not holds():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.05)
+    return True
+
+
+def _dead(pid: int, within: float = 30.0) -> bool:
+    """Whether process ``pid`` is gone (reaped by its parent) within ``within`` seconds."""
+
+    def gone() -> bool:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        return False
+
+    return _within(within, gone)
+
+
+@pytest.mark.slow
+def test_a_worker_of_the_default_local_cluster_killed_mid_recording_loses_nothing(
+    recordings: Path, expected: set[str], local: dict[str, Any], tmp_path: Path
+):
+    """No scheduler given: the job starts its own local cluster (two worker processes,
+    each under a nanny that starts another in its place: ``umbmark.fleets.cluster``). The
+    kill comes from the job's ``progress`` callback as above, through the job's own client
+    (``distributed.default_client()``: the client the job made is its process's default),
+    and the proof that it lands mid-recording is the same: the worker says it is executing
+    recording P's task just before the SIGKILL, the scheduler's record of its removal
+    lists that task as processing (taken at the later callbacks, before the job closes its
+    cluster), and P comes back once, after the kill, from another worker. Nothing lost or
+    twice, in the report and the history, the local run's figures to the last bit, and
+    no worker left running after the job."""
+    from distributed import default_client
+
+    history = tmp_path / "h.sqlite3"
+    kill: dict[str, Any] = {}
+    removed: list[dict[str, Any]] = []
+    workers: set[int] = set()
+
+    def progress(p: umbmark.FleetProgress) -> None:
+        watch = default_client()
+        pids = watch.run(os.getpid)  # each worker's PID, by its address
+        workers.update(pids.values())
+        if not kill:
+            address, key, path = _busy_worker(watch)
+            kill.update(address=address, key=key, path=path, after=p.done, pid=pids[address])
+            os.kill(pids[address], signal.SIGKILL)
+        elif not removed:
+            events = [e for _, e in watch.get_events(kill["address"])]
+            removed.extend(e for e in events if e["action"] == "remove-worker")
+
+    before = _children()
+    report = umbmark.fleet(recordings, robot_from=PATTERN, history=history, workers=2,
+                           progress=progress)  # fmt: skip
+
+    # The worker was killed mid-recording, and is dead; so is every worker once the job
+    # has closed its cluster, and no process it started is left.
+    assert kill["path"] in expected
+    assert kill["after"] == 1
+    assert _dead(kill["pid"])
+    assert [kill["key"] in e["processing-tasks"] for e in removed] == [True], (kill, removed)
+    assert [e["expected"] for e in removed] == [False]
+    assert len(workers) >= 2
+    assert all(_dead(pid) for pid in workers)
+    assert _within(30.0, lambda: _children() <= before), _children() - before
+    paths = [o.path for o in report.done]
+    assert kill["path"] not in paths[: kill["after"]]
+    assert kill["path"] in paths[kill["after"] :]
+    # Nothing lost, nothing twice, nothing failed.
+    assert Counter(paths) == Counter(expected)
+    assert report.failed == ()
+    assert [o.status for o in report.done] == ["calibrated"] * len(expected)
+    assert _history(history) == (Counter(expected), Counter(expected), len(expected))
+    # The figures, and all else each recording gave, are the local run's of one worker.
     assert {o.path: _but_when(o.to_dict()) for o in report.done} == local
 
 

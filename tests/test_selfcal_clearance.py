@@ -246,4 +246,4 @@ def test_the_footprint_is_the_option_else_the_robots_else_the_default():
 def test_the_width_option_is_bounded():
     proc = run_cli("selfcal", "--sim", "--robot-width", "3")
     assert proc.returncode == 2
-    assert proc.stderr.strip() == "umbmark: error: --robot-width must be 0.1 to 2, got 3"
+    assert proc.stderr.strip() == "umbmark: error: --robot-width must be 0.1 to 2 m, got 3 m"

@@ -85,6 +85,7 @@ def test_a_misspelt_keyword_is_refused_naming_the_close_one(misspelt: str, meant
         ("runs", 1, ("--runs", "1"), "runs must be 2 to 20, got 1"),
         ("side_length", 0.1, ("-L", "0.1"), "side_length must be 0.5 to 20 m, got 0.1 m"),
         ("max_passes", 9, ("--max-passes", "9"), "max_passes must be 1 to 5, got 9"),
+        ("robot_width", 3, ("--robot-width", "3"), "robot_width must be 0.1 to 2 m, got 3 m"),
     ],
 )
 def test_a_value_is_refused_alike_by_the_command_and_by_python(

@@ -7,7 +7,6 @@ import contextlib
 import shlex
 import sys
 from collections.abc import Callable, Iterator
-from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -184,7 +183,6 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     )
     options.pop("laser_mount")
     sim = {k: options.pop(k) for k in ("E_d", "E_b", "E_s", "slip", "seed")}
-    from umbmark.routines.clearance import robot_footprint
     from umbmark.routines.drive import DriveLimits
 
     limits = DriveLimits(
@@ -201,7 +199,6 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         corner_side=options["corner_side"],
         **sim,
     )
-    limits = replace(limits, footprint=robot_footprint(robot, options.pop("robot_width")))
     if options["out"] is None:  # the command's own folder; a new one beside an earlier run's
         options["out"] = fresh_folder(default_folder(options["robot"] or robot.name))
     ask = _ask_person if options["measure"] == "tape" else None

@@ -13,7 +13,9 @@ description) and calibrates it through the calls ``umbmark calibrate`` makes
 - else it is **left out**, with the reason.
 
 The reading options the user gave (``--truth-topic``, ``-b``, ...) win over what the look
-into the recording suggests. What comes back, :class:`RecordingOutcome`, is a small value
+into the recording suggests: a reference given replaces the suggested one whole
+(:data:`REFERENCE`), and a ``truth_topic`` the recording does not hold leaves it out,
+whichever way it would be calibrated. What comes back, :class:`RecordingOutcome`, is a small value
 (picklable: the engine's workers send it back), with each figure and its standard error,
 E_max,syst projected on the standard 4 m square, the multipliers to configure, and the
 recording's robot, start, length and digest. A recording that cannot be read comes back
@@ -38,6 +40,7 @@ from umbmark.fleets.naming import UNNAMED
 __all__ = [
     "FIGURES",
     "LOGGED",
+    "REFERENCE",
     "STANDARD_SIDE",
     "RecordingOutcome",
     "RecordingTask",
@@ -255,22 +258,47 @@ def e_max_on_standard_square(E_d: float, E_b: float, E_s: float, wheelbase: floa
     return worst if math.isfinite(worst) else None
 
 
+#: The reading options that name a recording's reference (a pose topic, or a TF pair):
+#: one given, the reference the look into the recording suggests is not used at all (its
+#: options would mix with the user's: a topic beside the user's TF pair).
+REFERENCE = ("truth_topic", "tf_parent", "tf_child")
+
+
 def _plan(info: Any, options: Mapping[str, Any]) -> tuple[str | None, dict[str, Any], str]:  # noqa: ANN401
-    """How to calibrate the bag: the method, its reading options, and a reason."""
+    """How to calibrate the bag: the method, its reading options, and a reason. The
+    user's reading options win over what the look suggests; a reference the user gave is
+    a trajectory fit's where the bag holds no laser, whatever the look made of it."""
     inputs = info.wheels[:1] or info.odometry[:1]
     reading: dict[str, Any] = {}
     if inputs:
         reading.update(_keywords(inputs[0].options))
+    missing = _missing_truth(info, options.get("truth_topic"))
+    if missing is not None:
+        return None, {}, missing
     if info.laser_scans and inputs:
         reading["scan_topic"] = info.laser_scans[0]
         return SCAN_MATCHING.name, {**reading, **options}, ""
+    given = any(options.get(name) is not None for name in REFERENCE)
     truth = [c for c in info.truth if c.warning is None]
-    if truth and inputs and info.independent:
-        reading.update(_keywords(truth[0].options))
+    if inputs and (given or (truth and info.independent)):
+        if not given:
+            reading.update(_keywords(truth[0].options))
         return TRAJECTORY.name, {**reading, **options}, ""
     if not inputs:
         return None, {}, "no wheels or controller odometry found"
     return None, {}, "neither a laser scan nor an independent reference (motion capture)"
+
+
+def _missing_truth(info: Any, topic: str | None) -> str | None:  # noqa: ANN401 (BagInfo)
+    """The reason to leave the bag out where the user's truth topic is not in it (as the
+    reader says it: the topics there), whichever way it is calibrated; None where it is,
+    none was given, or the look listed only some of the bag's topics."""
+    names = {t.name: t.msgtype for t in info.topics}
+    if topic is None or topic in names or info.topics_not_listed:
+        return None
+    from umbmark.sources.bag.reader import missing_topic
+
+    return _line(missing_topic(topic, "ground truth", names, info.path))
 
 
 def _figures(result: Any) -> dict[str, tuple[float, float | None]]:  # noqa: ANN401

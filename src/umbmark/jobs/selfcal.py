@@ -135,6 +135,7 @@ def selfcal(
     if routine == "anywhere":
         square_only(**SelfcalSetup.square_options(setup, changes))
     chosen = replace(setup or SelfcalSetup(), **changes)  # type: ignore[arg-type]
+    chosen = replace(chosen, limits=chosen.drive_limits(robot))
     if routine == "anywhere":
         g = chosen
         return selfcal_anywhere(

@@ -298,7 +298,7 @@ def _free_floor(scan: ScanSweep, limits: DriveLimits) -> None:
     angles = scan.angles()[ok] + scan.mount.theta
     x = scan.mount.x + ranges[ok] * np.cos(angles)
     y = scan.mount.y + ranges[ok] * np.sin(angles)
-    reach = PATTERN_REACH + limits.footprint.reach
+    reach = PATTERN_REACH + limits.outline.reach
     near = np.hypot(x, y) < reach
     if near.any():
         k = int(np.argmin(np.hypot(x[near], y[near])))

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -102,9 +102,11 @@ class DriveLimits:
         The robot's clock (sim time where ``/clock`` runs) going backwards, or forward by
         more than this [s] between two control steps, stops the robot (a restarted or
         stalled simulation, a clock stepped under a running robot).
-    footprint : Footprint
+    footprint : Footprint, optional
         The robot's outline: the band it sweeps is what the watch looks at
-        (:mod:`umbmark.routines.clearance`).
+        (:mod:`umbmark.routines.clearance`) [default: :meth:`outline`'s 0.4 m square;
+        :func:`umbmark.selfcal` puts the robot's own there, ``robot_width`` else its
+        description: :meth:`umbmark.routines.setup.SelfcalSetup.drive_limits`].
     closing_time : float
         Closing in, the speed (turn rate) is at most the remaining distance (angle) over
         this [s]: an approach with this time constant, which a command arriving a few
@@ -142,7 +144,7 @@ class DriveLimits:
     margin: float = 0.5
     time_factor: float = 2.0
     closing_time: float = 0.2
-    footprint: Footprint = field(default_factory=Footprint)
+    footprint: Footprint | None = None
 
     def __post_init__(self) -> None:
         bounds = {
@@ -161,6 +163,12 @@ class DriveLimits:
         }
         for name, (low, high) in bounds.items():
             check_range(option(name), getattr(self, name), (low, high))
+
+    @property
+    def outline(self) -> Footprint:
+        """The footprint the watch and the checks before moving keep clear: ``footprint``,
+        else the default :class:`~umbmark.routines.clearance.Footprint`."""
+        return Footprint() if self.footprint is None else self.footprint
 
     def stop_distance(self, speed: float) -> float:
         """How near [m] an obstacle ahead may come at ``speed`` [m/s] before the robot is
@@ -339,7 +347,7 @@ class _Driver:
                 "went silent, and nothing watches for obstacles",
             )
         points = scan_points(scan)
-        half = self.limits.footprint.half_width
+        half = self.limits.outline.half_width
         if radius is None:
             distance = straight_band(points, half, heading, backward)
         else:

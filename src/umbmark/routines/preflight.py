@@ -32,7 +32,7 @@ def square_paths(side: float) -> tuple[list[tuple[float, float]], list[tuple[flo
 def _blocked(points: np.ndarray, side: float, limits: DriveLimits) -> np.ndarray:
     found = np.zeros(len(points), dtype=bool)
     for path in square_paths(side):
-        found |= path_blocked(points, path, limits.footprint, limits.obstacle_margin)
+        found |= path_blocked(points, path, limits.outline, limits.obstacle_margin)
     return found
 
 
@@ -109,7 +109,7 @@ def free_floor(robot: Robot, side: float, limits: DriveLimits | None = None) -> 
         near = points[blocked]
         k = int(np.argmin(np.hypot(near[:, 0], near[:, 1])))
         px, py = float(near[k, 0]), float(near[k, 1])
-        fp = limits.footprint
+        fp = limits.outline
         raise InputError(
             f"something stands on the squares' path at x = {px:.2f} m, y = {py:.2f} m of the "
             f"robot ({int(blocked.sum())} laser returns in the band a {fp.width:g} m wide robot "
@@ -178,7 +178,7 @@ def preflight(
         stop = limits.stop_distance(limits.speed)
         lines.append(
             f"the laser watches for obstacles: at {limits.speed:g} m/s the robot stops for "
-            f"one {stop:.2f} m ahead or nearer on its path ({limits.footprint.width:g} m wide "
+            f"one {stop:.2f} m ahead or nearer on its path ({limits.outline.width:g} m wide "
             "plus room each side)"
         )
     return list(lines)

@@ -12,11 +12,20 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Literal
 
-from umbmark.options.selfcal import APPLY, CORNER_SIDE, MAX_PASSES, MEASURE, RUNS, SQUARE_SIDE
-from umbmark.robot.base import ApplyMethod
+from umbmark.options.selfcal import (
+    APPLY,
+    CORNER_SIDE,
+    MAX_PASSES,
+    MEASURE,
+    ROBOT_WIDTH,
+    RUNS,
+    SQUARE_SIDE,
+)
+from umbmark.robot.base import ApplyMethod, Robot
+from umbmark.routines.clearance import robot_footprint
 from umbmark.routines.drive import DriveLimits
 from umbmark.routines.measure import CornerChoice, MeasureMethod
 
@@ -65,6 +74,11 @@ class SelfcalSetup:
         ``out``].
     limits : DriveLimits, optional
         Speeds, accelerations and safety limits.
+    robot_width : float, optional
+        The robot's width [m] (0.1 to 2): its footprint taken as a square this wide around
+        the axle centre, the band the watch and the check before moving keep clear
+        [default: ``limits.footprint`` where given, else the robot's own (its description's
+        base link, ``robot.footprint()``), else 0.4 m: :meth:`drive_limits`].
     tape_marks : six floats, optional
         For ``tape``: ``x1, y1, x2, y2, x3, y3`` [m] on the robot, measured from (two to
         the wall behind, one to the side wall) [default: the robot's ``tape_marks()``].
@@ -106,6 +120,7 @@ class SelfcalSetup:
     out: str | os.PathLike[str] | None = None
     report: str | os.PathLike[str] | None = None
     limits: DriveLimits | None = None
+    robot_width: float | None = ROBOT_WIDTH.default
     tape_marks: Sequence[float] | None = None
     coarse: bool = True
     force: bool = False
@@ -115,7 +130,7 @@ class SelfcalSetup:
     command: str | None = None
 
     def __post_init__(self) -> None:
-        for spec in (SQUARE_SIDE, RUNS, MAX_PASSES, MEASURE):
+        for spec in (SQUARE_SIDE, RUNS, MAX_PASSES, MEASURE, ROBOT_WIDTH):
             spec.check(getattr(self, spec.name))
         if not isinstance(self.apply, bool):
             APPLY.check(self.apply)
@@ -127,6 +142,15 @@ class SelfcalSetup:
         if isinstance(self.apply, bool):
             return "reconfigure" if self.apply else "none"
         return self.apply
+
+    def drive_limits(self, robot: Robot) -> DriveLimits:
+        """``limits`` with the footprint the routine keeps clear: ``robot_width``'s square
+        where given, else the footprint ``limits`` give, else the robot's own, else the
+        default (:func:`umbmark.routines.clearance.robot_footprint`)."""
+        limits = self.limits or DriveLimits()
+        if self.robot_width is None and limits.footprint is not None:
+            return limits
+        return replace(limits, footprint=robot_footprint(robot, self.robot_width))
 
     @classmethod
     def square_options(

@@ -13,7 +13,7 @@ read under way (:mod:`umbmark.sources.progress`).
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
@@ -31,6 +31,7 @@ __all__ = [
     "message_count",
     "messages",
     "missing_rosbags",
+    "missing_topic",
     "one_line",
     "open_bag",
     "raw_messages",
@@ -192,6 +193,14 @@ def topic_types(reader: AnyReader) -> dict[str, str]:
     return out
 
 
+def missing_topic(topic: str, what: str, topics: Mapping[str, str], src: str) -> InputError:
+    """The error for ``topic`` (``what`` it is for) not in the bag at ``src``, listing the
+    ``topics`` present (name to message type)."""
+    present = [f"{name} ({typ})" for name, typ in topics.items()]
+    listed = f"topics present: {listing(present)}" if present else "the bag has no topics"
+    return InputError(f"no topic {topic} ({what}) in the bag; {listed}", source=src)
+
+
 def topic_connections(
     reader: AnyReader,
     topics: dict[str, str],
@@ -224,9 +233,7 @@ def topic_connections(
         type not in ``allowed``.
     """
     if topic not in topics:
-        present = [f"{name} ({typ})" for name, typ in topics.items()]
-        listed = f"topics present: {listing(present)}" if present else "the bag has no topics"
-        raise InputError(f"no topic {topic} ({what}) in the bag; {listed}", source=src)
+        raise missing_topic(topic, what, topics, src)
     msgtype = topics[topic]
     if msgtype not in allowed:
         raise InputError(
