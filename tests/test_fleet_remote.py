@@ -71,6 +71,27 @@ def _by_recording(report: umbmark.FleetReport, prefix: str) -> dict:  # type: ig
     return out
 
 
+def _every_figure(data: dict, prefix: str) -> dict:  # type: ignore[type-arg]
+    """Each robot's figures as the JSON gives them (``data``: ``fleet --json``'s, or a
+    report's ``to_dict()``), its recordings' paths below ``prefix``."""
+
+    def below(path: str | None) -> str | None:
+        return None if path is None else path.removeprefix(prefix).strip("/")
+
+    out = {}
+    for r in data["robots"]:
+        if not r["usable"]:
+            continue
+        figures = {}
+        for name, given in r["figures"].items():
+            f = {**given, "since": below(given.get("since"))}
+            if "paths" in f:
+                f["paths"] = [below(p) for p in f["paths"]]
+            figures[name] = f
+        out[r["robot"]] = figures
+    return out
+
+
 def _figures(report: umbmark.FleetReport) -> dict:  # type: ignore[type-arg]
     return {
         r["robot"]: {n: (f["value"], f["change"]) for n, f in r["figures"].items()}
@@ -139,7 +160,7 @@ def test_file_urls_give_the_local_figures(fleet: Path, local: umbmark.FleetRepor
 
 @pytest.mark.slow
 def test_the_command_reads_a_url_and_refuses_one_that_matches_nothing(
-    served: str, local: umbmark.FleetReport, tmp_path: Path
+    fleet: Path, served: str, local: umbmark.FleetReport, tmp_path: Path
 ):
     history = str(tmp_path / "h.sqlite3")
     proc = run_cli("fleet", f"{served}/fleet/", "--robot-from", PATTERN, "--history", history,
@@ -147,9 +168,7 @@ def test_the_command_reads_a_url_and_refuses_one_that_matches_nothing(
     assert proc.returncode == 0, proc.stderr
     data = json.loads(proc.stdout)
     assert (data["recordings_done"], data["failed"]) == (4, [])
-    assert {r["robot"]: r["figures"] for r in data["robots"]} == {
-        r["robot"]: r["figures"] for r in local.to_dict()["robots"]
-    }
+    assert _every_figure(data, f"{served}/fleet/") == _every_figure(local.to_dict(), str(fleet))
     nothing = f"{served}/fleet/*/1999-*"
     refused = run_cli("fleet", nothing, "--history", history, "--workers", "1")
     assert refused.returncode == 2
@@ -227,9 +246,7 @@ def test_a_fleet_behind_a_password_is_read_and_the_password_is_shown_nowhere(
     listed = run_cli("history", "robot01", "--history", str(history))
     assert first.returncode == 0, first.stderr
     data = json.loads(first.stdout)
-    assert {r["robot"]: r["figures"] for r in data["robots"] if r["usable"]} == {
-        r["robot"]: r["figures"] for r in local.to_dict()["robots"]
-    }
+    assert _every_figure(data, f"{shown}/fleet/") == _every_figure(local.to_dict(), str(fleet))
     failed = {
         f"{shown}{gone}": f"{shown}{gone}: cannot be read (HTTP 404 File not found)",
         f"{shown}{refused}": f"{shown}{refused}: cannot be read (HTTP 401 Unauthorized)",
