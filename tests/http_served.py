@@ -5,6 +5,8 @@ this machine, for the tests of recordings at URLs; ended by their PIDs.
   ``Content-Length`` and ``Last-Modified`` for files, no range requests).
 - :class:`Unsized`: a server that answers every path with one file's bytes and no
   ``Content-Length`` (the size is known only once it is read).
+- :class:`Guarded`: Python's own server of a folder behind HTTP basic authentication (a
+  user and password; 401 without them).
 """
 
 from __future__ import annotations
@@ -40,6 +42,38 @@ class Handler(BaseHTTPRequestHandler):
         pass
 
 HTTPServer(("127.0.0.1", int(sys.argv[1])), Handler).serve_forever()
+"""
+
+#: ``python -m http.server``'s handler (index pages, files) behind HTTP basic
+#: authentication: 401 to any request without the user and password given.
+_GUARDED = """
+import base64, functools, sys
+from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
+
+expected = "Basic " + base64.b64encode(sys.argv[3].encode()).decode()
+
+
+class Handler(SimpleHTTPRequestHandler):
+    def allowed(self):
+        if self.headers.get("Authorization") == expected:
+            return True
+        self.send_response(401)
+        self.send_header("WWW-Authenticate", 'Basic realm="fleet"')
+        self.send_header("Content-Length", "0")
+        self.end_headers()
+        return False
+
+    def do_GET(self):
+        if self.allowed():
+            super().do_GET()
+
+    def do_HEAD(self):
+        if self.allowed():
+            super().do_HEAD()
+
+
+handler = functools.partial(Handler, directory=sys.argv[2])
+ThreadingHTTPServer(("127.0.0.1", int(sys.argv[1])), handler).serve_forever()
 """
 
 
@@ -113,3 +147,13 @@ class Unsized(_Server):
     def __init__(self, file: Path, log: Path) -> None:
         port = free_port()
         super().__init__([sys.executable, "-c", _UNSIZED, str(port), str(file)], port, log)
+
+
+class Guarded(_Server):
+    """``folder`` served as :class:`Served` serves it, to ``user:password`` only (HTTP basic
+    authentication); :attr:`url` is without them."""
+
+    def __init__(self, folder: Path, log: Path, user: str, password: str) -> None:
+        port = free_port()
+        args = [sys.executable, "-c", _GUARDED, str(port), str(folder), f"{user}:{password}"]
+        super().__init__(args, port, log)

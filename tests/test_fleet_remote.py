@@ -4,13 +4,16 @@ same folder as ``file://``, give the figures the local run gives; the nightly ru
 every recording (known by the server's size and Last-Modified); a URL that 404s is a failed
 recording with one line while the others go on; the workers' temporary copies are gone; the
 command exits 0, and 2 with one line for a URL that matches nothing or when fsspec is
-missing; and an existing cluster's workers stream the recordings themselves."""
+missing; an existing cluster's workers stream the recordings themselves; a fleet behind a
+password in its URL is read with it and the password is in no line, history, page or
+JSON; recordings at signed URLs are known again when signed again."""
 
 from __future__ import annotations
 
 import json
 import os
 import re
+import sqlite3
 import subprocess
 import sys
 import threading
@@ -28,7 +31,7 @@ import umbmark
 
 from dask_cluster import Cluster
 from helpers import ROOT, run_cli
-from http_served import WITHOUT_FSSPEC, Served
+from http_served import WITHOUT_FSSPEC, Guarded, Served
 
 PATTERN = "{robot}/{date}/*"
 
@@ -65,6 +68,27 @@ def _by_recording(report: umbmark.FleetReport, prefix: str) -> dict:  # type: ig
             said = data["record"]["overlay"].replace(prefix.rstrip("/"), "FLEET")
             data["record"]["overlay"] = re.sub(r" on \S+Z from ", " on TIME from ", said)
         out[rel] = data
+    return out
+
+
+def _every_figure(data: dict, prefix: str) -> dict:  # type: ignore[type-arg]
+    """Each robot's figures as the JSON gives them (``data``: ``fleet --json``'s, or a
+    report's ``to_dict()``), its recordings' paths below ``prefix``."""
+
+    def below(path: str | None) -> str | None:
+        return None if path is None else path.removeprefix(prefix).strip("/")
+
+    out = {}
+    for r in data["robots"]:
+        if not r["usable"]:
+            continue
+        figures = {}
+        for name, given in r["figures"].items():
+            f = {**given, "since": below(given.get("since"))}
+            if "paths" in f:
+                f["paths"] = [below(p) for p in f["paths"]]
+            figures[name] = f
+        out[r["robot"]] = figures
     return out
 
 
@@ -136,7 +160,7 @@ def test_file_urls_give_the_local_figures(fleet: Path, local: umbmark.FleetRepor
 
 @pytest.mark.slow
 def test_the_command_reads_a_url_and_refuses_one_that_matches_nothing(
-    served: str, local: umbmark.FleetReport, tmp_path: Path
+    fleet: Path, served: str, local: umbmark.FleetReport, tmp_path: Path
 ):
     history = str(tmp_path / "h.sqlite3")
     proc = run_cli("fleet", f"{served}/fleet/", "--robot-from", PATTERN, "--history", history,
@@ -144,9 +168,7 @@ def test_the_command_reads_a_url_and_refuses_one_that_matches_nothing(
     assert proc.returncode == 0, proc.stderr
     data = json.loads(proc.stdout)
     assert (data["recordings_done"], data["failed"]) == (4, [])
-    assert {r["robot"]: r["figures"] for r in data["robots"]} == {
-        r["robot"]: r["figures"] for r in local.to_dict()["robots"]
-    }
+    assert _every_figure(data, f"{served}/fleet/") == _every_figure(local.to_dict(), str(fleet))
     nothing = f"{served}/fleet/*/1999-*"
     refused = run_cli("fleet", nothing, "--history", history, "--workers", "1")
     assert refused.returncode == 2
@@ -200,3 +222,93 @@ def test_real_sessions_over_http_give_their_local_figures(tmp_path: Path):
         remote = umbmark.fleet(server.url + "/", history=tmp_path / "r.sqlite3", workers=1)
     assert len(local.done) == 2
     assert _by_recording(remote, server.url) == _by_recording(local, str(BUNDLED_OPTIODOM))
+
+
+@pytest.mark.slow
+def test_a_fleet_behind_a_password_is_read_and_the_password_is_shown_nowhere(
+    fleet: Path, local: umbmark.FleetReport, tmp_path: Path
+):
+    """The fleet behind HTTP basic authentication, its URL holding the user and password:
+    read with them (the local figures), and neither in any line printed, the history (its
+    rows and its file's bytes), the page or the JSON: the URL is shown as
+    ``http://***@host/...``, and known again by that on the next run."""
+    user, password, wrong = "fleet-reader", "Pa55-w0rd-xyzzy", "not-it-qwerty"
+    history, page, out = tmp_path / "h.sqlite3", tmp_path / "fleet.html", tmp_path / "fleet.json"
+    gone, refused = "/fleet/robot09/2026-11-02/gone.mcap", "/fleet/robot08/2026-11-02/x.mcap"
+    with Guarded(fleet.parent, tmp_path / "http.log", user, password) as server:
+        host = server.url.removeprefix("http://")
+        given, shown = f"http://{user}:{password}@{host}", f"http://***@{host}"
+        sources = [f"{given}/fleet/", f"{given}{gone}", f"http://{user}:{wrong}@{host}{refused}"]
+        options = ["--robot-from", PATTERN, "--history", str(history)]
+        first = run_cli("fleet", *sources, *options, "--workers", "2", "--report", str(page),
+                        "-o", str(out), "--json", timeout=600)  # fmt: skip
+        again = run_cli("fleet", *sources, *options, "--workers", "1", timeout=600)
+    listed = run_cli("history", "robot01", "--history", str(history))
+    assert first.returncode == 0, first.stderr
+    data = json.loads(first.stdout)
+    assert _every_figure(data, f"{shown}/fleet/") == _every_figure(local.to_dict(), str(fleet))
+    failed = {
+        f"{shown}{gone}": f"{shown}{gone}: cannot be read (HTTP 404 File not found)",
+        f"{shown}{refused}": f"{shown}{refused}: cannot be read (HTTP 401 Unauthorized)",
+    }
+    assert {f["path"]: f["reason"] for f in data["failed"]} == failed
+    assert sorted(line for line in first.stderr.splitlines() if "failed" in line) == [
+        f"umbmark: failed: {reason}" for reason in sorted(failed.values())
+    ]
+    # The nightly run: the recordings known again by their redacted URLs; the failed ones
+    # tried again (and shown as such on the terminal).
+    assert again.returncode == 0, again.stderr
+    assert again.stdout.startswith("6 recordings found: 2 done now, 4 done before")
+    assert f"robot08: no usable recording ({failed[shown + refused]})" in again.stdout
+    with sqlite3.connect(history) as db:
+        kept = "\n".join(db.iterdump())
+        paths = {row[0] for row in db.execute("SELECT path FROM recordings")}
+    assert paths == {f"{shown}{p}" for p in (gone, refused)} | {
+        f"{shown}/fleet/{rel}/" for rel in _by_recording(local, str(fleet))
+    }
+    seen = {
+        "first's stdout": first.stdout, "first's stderr": first.stderr,
+        "again's stdout": again.stdout, "again's stderr": again.stderr,
+        "history's lines": listed.stdout + listed.stderr,
+        "page": page.read_text(encoding="utf-8"), "JSON": out.read_text(encoding="utf-8"),
+        "history's rows": kept, "history's bytes": history.read_bytes().decode("latin-1"),
+    }  # fmt: skip
+    assert shown in seen["page"]  # its command line, redacted
+    for secret in (user, password, wrong):
+        assert [name for name, text in seen.items() if secret in text] == [], secret
+
+
+@pytest.mark.slow
+def test_recordings_at_signed_urls_are_known_again_when_signed_again(
+    fleet: Path, served: str, tmp_path: Path
+):
+    """Each recording's MCAP at a URL signed as S3 signs it (the server ignores the
+    query): the second night's URLs, signed again (another signature, credential date and
+    expiry), are the same recordings, none done again; no signature is kept."""
+    files = sorted(fleet.glob("*/*/drive/drive.mcap"))
+
+    def signed(night: int) -> list[str]:
+        query = (
+            f"?X-Amz-Algorithm=AWS4-HMAC-SHA256&X-Amz-Credential=AKIAEXAMPLEKEY%2F2026110"
+            f"{night}%2Feu-west-1%2Fs3%2Faws4_request&X-Amz-Date=2026110{night}T020000Z"
+            f"&X-Amz-Expires={3600 * night}&X-Amz-SignedHeaders=host"
+            f"&X-Amz-Signature=night{night}signature"
+        )
+        return [f"{served}/{p.relative_to(fleet.parent).as_posix()}{query}" for p in files]
+
+    history = tmp_path / "h.sqlite3"
+    pattern = "{robot}/{date}/drive/*.mcap"
+    first = umbmark.fleet(*signed(2), robot_from=pattern, history=history, workers=2)
+    second = umbmark.fleet(*signed(3), robot_from=pattern, history=history, workers=1)
+    assert len(first.done) == 4
+    assert [o for o in first.done if o.failed] == []  # each read (calibrated or left out)
+    assert (second.done, second.skipped) == ((), 4)
+    masked = (
+        "?X-Amz-Algorithm=***&X-Amz-Credential=***&X-Amz-Date=***&X-Amz-Expires=***"
+        "&X-Amz-SignedHeaders=***&X-Amz-Signature=***"
+    )
+    assert sorted(o.path for o in first.done) == sorted(
+        f"{served}/{p.relative_to(fleet.parent).as_posix()}{masked}" for p in files
+    )
+    kept = history.read_bytes().decode("latin-1")
+    assert [s for s in ("night2signature", "AKIAEXAMPLEKEY", "20261102T") if s in kept] == []

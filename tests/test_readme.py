@@ -438,8 +438,9 @@ OTHER_PROGRAMS = {
     "--align_origin", "--once", "--list", "--filter", "--strict",
     # ROS 2's static_transform_publisher, in the laser mounting's forms
     "--roll", "--pitch", "--yaw", "--frame-id", "--child-frame-id",
-    # Dask's scheduler and workers, in docs/fleet.md's cluster
-    "--port", "--nworkers", "--nthreads",
+    # Dask's scheduler and workers, in docs/fleet.md's cluster (over TLS too)
+    "--port", "--nworkers", "--nthreads", "--protocol", "--tls-ca-file", "--tls-cert",
+    "--tls-key",
 }  # fmt: skip
 
 

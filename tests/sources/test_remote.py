@@ -3,7 +3,10 @@ server that keeps the size to itself, started as processes), ``file://`` and ``m
 folders listed as the local search lists them, globs, each copy streamed chunk by chunk
 into a private folder with the digest the local file has, bounded in size and deleted
 whatever happens, every read error one line naming the URL, and the identity that tells a
-recording seen before."""
+recording seen before; a URL's credentials masked (``redacted``), on URLs written by hand
+(a user and password, signed queries as S3, Google Cloud Storage, CloudFront and Azure
+sign them, tokens), each expected form written out, and the identity of a URL signed
+again."""
 
 from __future__ import annotations
 
@@ -32,6 +35,7 @@ from umbmark.sources.remote import (
     has_wildcard,
     identity,
     is_url,
+    redacted,
     searched,
     url_path,
     walk,
@@ -280,3 +284,149 @@ def test_a_link_back_up_is_not_followed(tmp_path: Path):
     (tmp_path / "fleet" / "amr1" / "again").symlink_to(tmp_path / "fleet")
     found = list(walk(f"file://{tmp_path}/fleet", 12))
     assert found == [f"file://{tmp_path}/fleet/amr1/a.mcap"]
+
+
+#: An S3 GET URL presigned with Signature V4 (the shape boto3 gives), on two nights.
+S3_NIGHT_1 = (
+    "https://fleet-bags.s3.eu-west-1.amazonaws.com/amr1/2026-11-02/drive.mcap"
+    "?X-Amz-Algorithm=AWS4-HMAC-SHA256"
+    "&X-Amz-Credential=AKIAIOSFODNN7EXAMPLE%2F20261102%2Feu-west-1%2Fs3%2Faws4_request"
+    "&X-Amz-Date=20261102T020000Z&X-Amz-Expires=3600&X-Amz-SignedHeaders=host"
+    "&X-Amz-Security-Token=IQoJb3JpZ2luX2VjEXAMPLE"
+    "&X-Amz-Signature=fe5f80f77d5fa3beca038a248ff027d0445342fe2855ddc963176630326f1024"
+)
+S3_NIGHT_2 = (
+    "https://fleet-bags.s3.eu-west-1.amazonaws.com/amr1/2026-11-02/drive.mcap"
+    "?X-Amz-Algorithm=AWS4-HMAC-SHA256"
+    "&X-Amz-Credential=AKIAIOSFODNN7EXAMPLE%2F20261103%2Feu-west-1%2Fs3%2Faws4_request"
+    "&X-Amz-Date=20261103T020000Z&X-Amz-Expires=7200&X-Amz-SignedHeaders=host"
+    "&X-Amz-Security-Token=IQoJb3JpZ2luX2VjOTHER"
+    "&X-Amz-Signature=0a1b2c3d4e5f60718293a4b5c6d7e8f90a1b2c3d4e5f60718293a4b5c6d7e8f9"
+)
+S3_SHOWN = (
+    "https://fleet-bags.s3.eu-west-1.amazonaws.com/amr1/2026-11-02/drive.mcap"
+    "?X-Amz-Algorithm=***&X-Amz-Credential=***&X-Amz-Date=***&X-Amz-Expires=***"
+    "&X-Amz-SignedHeaders=***&X-Amz-Security-Token=***&X-Amz-Signature=***"
+)
+
+
+@pytest.mark.parametrize(
+    ("url", "shown"),
+    [
+        ("http://user:password@host/fleet/a.mcap", "http://***@host/fleet/a.mcap"),
+        ("https://reader:s3cr%40t@bags.example.com:8443/fleet/",
+         "https://***@bags.example.com:8443/fleet/"),
+        ("https://ghp_token123@host/x.bag", "https://***@host/x.bag"),
+        # A password with an unescaped "?" or "#": masked up to the last "@" before the path.
+        ("https://u:pa?ss#w@host/x.mcap", "https://***@host/x.mcap"),
+        ("s3://AKIAEXAMPLE:wJalrXUtnFEMI@fleet-bags/amr1/x.mcap",
+         "s3://***@fleet-bags/amr1/x.mcap"),
+        (S3_NIGHT_1, S3_SHOWN),
+        # Signature V2 (S3), and Google Cloud Storage's V2: the key id, expiry, signature.
+        ("https://b.s3.amazonaws.com/x.bag?AWSAccessKeyId=AKIAEX&Expires=1793000000"
+         "&Signature=vjbyPxybdZaNmGa%2ByT272YEAiv4%3D",
+         "https://b.s3.amazonaws.com/x.bag?AWSAccessKeyId=***&Expires=***&Signature=***"),
+        ("https://storage.googleapis.com/b/x.mcap?GoogleAccessId=sa@p.iam.gserviceaccount.com"
+         "&Expires=1793000000&Signature=BCl2Zz%2F",
+         "https://storage.googleapis.com/b/x.mcap?GoogleAccessId=***&Expires=***"
+         "&Signature=***"),
+        # Google Cloud Storage V4, lower case as gsutil gives it.
+        ("https://storage.googleapis.com/b/x.mcap?x-goog-algorithm=GOOG4-RSA-SHA256"
+         "&x-goog-credential=sa%40p.iam.gserviceaccount.com%2F20261102%2Fauto%2Fstorage"
+         "%2Fgoog4_request&x-goog-date=20261102T020000Z&x-goog-expires=3600"
+         "&x-goog-signedheaders=host&x-goog-signature=7a4b",
+         "https://storage.googleapis.com/b/x.mcap?x-goog-algorithm=***&x-goog-credential=***"
+         "&x-goog-date=***&x-goog-expires=***&x-goog-signedheaders=***&x-goog-signature=***"),
+        # CloudFront: Policy, Signature, Key-Pair-Id.
+        ("https://d111111abcdef8.cloudfront.net/x.mcap?Policy=eyJTdGF0ZW1lbnQi"
+         "&Signature=Nql641NHEUkUaXQH&Key-Pair-Id=K2JCJMDEHXQW5F",
+         "https://d111111abcdef8.cloudfront.net/x.mcap?Policy=***&Signature=***"
+         "&Key-Pair-Id=***"),
+        # Azure: the signature, and its start and expiry (which change each time it is
+        # signed); what it grants (sp, sr, sv, spr) kept.
+        ("https://acct.blob.core.windows.net/fleet/x.mcap?sv=2022-11-02&sp=r"
+         "&st=2026-11-02T02:00:00Z&se=2026-11-02T08:00:00Z&spr=https&sr=b"
+         "&sig=Z%2FRHIX5Xcg0Mq2rqI3OlWTjEg2tYkboXr1P9ZUXDtkk%3D",
+         "https://acct.blob.core.windows.net/fleet/x.mcap?sv=2022-11-02&sp=r&st=***&se=***"
+         "&spr=https&sr=b&sig=***"),
+        # Generic tokens and keys, in the query or the fragment; other parameters kept.
+        ("https://host/x.mcap?versionId=3&token=abc123&part=2",
+         "https://host/x.mcap?versionId=3&token=***&part=2"),
+        ("https://host/x.mcap?access_token=a&api_key=b&apiKey=c&signature=d&password=e",
+         "https://host/x.mcap?access_token=***&api_key=***&apiKey=***&signature=***"
+         "&password=***"),
+        ("https://host/x.mcap?my-upload-token=q&client_secret=w",
+         "https://host/x.mcap?my-upload-token=***&client_secret=***"),
+        ("https://host/x.mcap#access_token=zz&x=1", "https://host/x.mcap#access_token=***&x=1"),
+    ],
+)  # fmt: skip
+def test_credentials_are_masked(url: str, shown: str):
+    assert redacted(url) == shown
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "https://host/fleet/amr1/2026-11-02/drive.mcap",
+        "https://host/x.mcap?versionId=7&sp=r&st=2026",  # Azure's st only with its sig
+        "https://host/fleet/?page=2",
+        "s3://bucket/amr?/2026-11-0[12]/*.mcap",  # a glob's "?" and "[", no parameter
+        "https://host/x.mcap?X-Amz-Signature",  # a name alone: no value to mask
+        "file:///data/fleet/a.mcap",
+        "/data/fleet/amr1/2026-11-02/drive.mcap",
+        "recordings/amr1: no usable recording (neither a laser scan nor a reference)",
+        "",
+    ],
+)
+def test_what_holds_no_secret_is_kept_as_written(text: str):
+    assert redacted(text) == text
+
+
+def test_urls_inside_a_text_are_masked_and_the_rest_kept():
+    line = (
+        "failed: http://u:pw@h:8000/fleet/x.mcap: cannot be read (Cannot connect to host "
+        "h:8000 ssl:default [see 'http://u:pw@h:8000/fleet/x.mcap'])"
+    )
+    assert redacted(line) == (
+        "failed: http://***@h:8000/fleet/x.mcap: cannot be read (Cannot connect to host "
+        "h:8000 ssl:default [see 'http://***@h:8000/fleet/x.mcap'])"
+    )
+    command = (
+        "umbmark fleet 'https://reader:hunter2@bags.example.com/fleet/' "
+        "https://h/one.mcap?sig=AbC --robot-from '{robot}/{date}/*' --history h.sqlite3"
+    )
+    assert redacted(command) == (
+        "umbmark fleet 'https://***@bags.example.com/fleet/' "
+        "https://h/one.mcap?sig=*** --robot-from '{robot}/{date}/*' --history h.sqlite3"
+    )
+
+
+def test_a_url_signed_again_is_redacted_alike_and_its_path_holds_no_user():
+    """What a recording is known again by holds no secret and does not change when its
+    URL is signed again the next night (another signature, credential date and expiry)."""
+    assert S3_NIGHT_1 != S3_NIGHT_2
+    assert redacted(S3_NIGHT_1) == redacted(S3_NIGHT_2) == S3_SHOWN
+    # The path a --robot-from pattern is matched against: never the user or password.
+    assert url_path("s3://KEY:SECRET@bucket/amr1/x.mcap") == "/bucket/amr1/x.mcap"
+    assert url_path("https://u:p@h/fleet/amr1/x.mcap?sig=1") == "/fleet/amr1/x.mcap"
+
+
+def test_a_served_recording_is_known_and_refused_without_its_credentials(served: str):
+    """Against a real server (which ignores the query and any user): the identity of a
+    URL holding a user and password, or signed on two nights, holds neither and is the
+    same each night; a read error names the URL redacted."""
+    host = served.removeprefix("http://")
+    plain = identity(f"{served}/changing.mcap")
+    with_user = identity(f"http://reader:hunter2@{host}/changing.mcap")
+    assert with_user == plain.replace(served, f"http://***@{host}")
+    nights = [
+        identity(f"{served}/changing.mcap?X-Amz-Date=2026110{n}T020000Z&X-Amz-Signature=s{n}x")
+        for n in (2, 3)
+    ]
+    assert nights[0] == nights[1]
+    assert nights[0].startswith(f"{served}/changing.mcap?X-Amz-Date=***&X-Amz-Signature=***|")
+    with pytest.raises(InputError) as raised:
+        expand(f"http://reader:hunter2@{host}/nothing/", 12)
+    assert (
+        str(raised.value) == f"http://***@{host}/nothing/: cannot be read (HTTP 404 File not found)"
+    )

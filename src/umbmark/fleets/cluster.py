@@ -10,7 +10,10 @@ in this process (the one writer of the history).
   worker, one thread each: the work is numpy and Python), no set-up needed; with
   ``scheduler`` (``--scheduler ADDRESS``, else Dask's own ``DASK_SCHEDULER_ADDRESS``) it
   sends the same work to an existing cluster, whose workers must have umbmark installed
-  and see the files.
+  and see the files. A ``tls://`` scheduler is connected to with the security Dask's own
+  configuration gives (``distributed.comm.tls.*``; :func:`_security`), its certificates
+  checked and one handshake tried first (:mod:`umbmark.fleets.tls`), so that a cluster
+  that does not let this client in says so, and why, in one line.
 - A worker that dies mid-item has the item redone on another worker (the scheduler does
   this, up to :data:`ALLOWED_FAILURES` deaths per item); an item whose function raises is
   reported as failed with its one-line reason, and the others go on.
@@ -65,6 +68,8 @@ ALLOWED_FAILURES = 3
 MAX_LOCAL_WORKERS = 64
 #: Seconds to wait for an existing scheduler to answer.
 CONNECT_TIMEOUT = 30.0
+#: A scheduler's port where its address names none (Dask's).
+DEFAULT_PORT = 8786
 #: Seconds a run waits while the cluster has no worker and items are not done, before it
 #: stops (Dask's ``distributed.scheduler.no-workers-timeout`` instead, where set): time for
 #: a worker to be restarted, not forever.
@@ -227,8 +232,102 @@ def _quiet(name: str) -> Iterator[None]:
         logger.setLevel(level)
 
 
+def _security(address: str, timeout: float, notes: list[str] | None) -> Any:  # noqa: ANN401
+    """The security Dask's own configuration gives a client of ``address``, as Dask's
+    client takes it (``distributed.client.security-loader``'s, where set, else a
+    ``Security`` of the ``distributed.comm.tls.*`` keys), checked before connecting.
+
+    A ``tls://`` address: its files checked and one TLS handshake tried
+    (:mod:`umbmark.fleets.tls`); a ``tcp://`` one where Dask's configuration requires
+    encryption is refused, and one while it gives a client certificate warns (in
+    ``notes``): the connection would not be encrypted.
+
+    Raises
+    ------
+    InputError
+        In one line: no certificate set for ``tls://``, a file that cannot be read or
+        used, the scheduler's or this client's certificate refused, a scheduler that does
+        not speak TLS, encryption required on ``tcp://``, a bad setting.
+    """
+    import dask
+    from distributed.comm.addressing import parse_address, parse_host_port
+    from distributed.security import Security
+    from distributed.utils import import_term
+
+    from umbmark.fleets import tls
+
+    try:
+        loader = dask.config.get("distributed.client.security-loader", None)
+        security = import_term(loader)({"address": address}) if loader else None
+        security = security or Security()
+        scheme, location = parse_address(address)
+    except Exception as exc:  # a bad setting (tls.min-version), a loader that fails
+        raise InputError(
+            f"Dask's security settings cannot be used ({_one_line(exc)})", source=address
+        ) from None
+    if scheme != "tls":
+        if scheme == "tcp" and security.require_encryption:
+            raise InputError(
+                f"Dask's configuration requires encryption ({tls.REQUIRE_ENCRYPTION}), and "
+                "tcp:// is not encrypted: give the scheduler's tls:// address",
+                source=address,
+            )
+        if scheme == "tcp" and security.tls_client_cert and notes is not None:
+            notes.append(tls.unencrypted(address, _pem_or_path(security.tls_client_cert)))
+        return security
+    files = {
+        tls.CA_FILE: security.tls_ca_file,
+        tls.CLIENT_CERT: security.tls_client_cert,
+        tls.CLIENT_KEY: security.tls_client_key,
+    }
+    tls.check_files(address, files)
+    shown = {key: None if value is None else _pem_or_path(value) for key, value in files.items()}
+    try:
+        context = security.get_connection_args("client")["ssl_context"]
+        host, port = parse_host_port(location, DEFAULT_PORT)
+    except (OSError, ValueError) as exc:  # ssl.SSLError is an OSError
+        raise tls.unusable(address, shown, exc) from None
+    tls.handshake(address, host, int(port), context, shown, timeout)
+    return security
+
+
+def _pem_or_path(value: str) -> str:
+    """A TLS setting as it is named: its path, or ``(PEM text)`` where it is the text."""
+    return "(PEM text)" if "\n" in value else value
+
+
+def _unanswered(address: str, exc: BaseException) -> InputError:
+    """No scheduler answers at ``address``; a ``tcp://`` connection reset is said as what
+    it likely is, a scheduler that takes TLS."""
+    seen: BaseException | None = exc
+    for _ in range(8):  # the exception's causes
+        if seen is None:
+            break
+        if address.startswith("tcp://") and (
+            isinstance(seen, ConnectionResetError) or "ConnectionResetError" in str(seen)
+        ):
+            return InputError(
+                f"the Dask scheduler at {address} reset the connection, as one that takes TLS "
+                "does: give its tls:// address, with Dask's TLS settings (docs/fleet.md)",
+                source=address,
+            )
+        seen = seen.__cause__ or seen.__context__
+    return InputError(f"no Dask scheduler answers at {address} ({_one_line(exc)})", source=address)
+
+
+def _local_security() -> Any:  # noqa: ANN401
+    """The local cluster's security: Dask's configuration, but never requiring encryption
+    (``distributed.comm.require-encryption`` is for connections off this machine; the
+    local cluster's scheduler and workers listen on 127.0.0.1 only)."""
+    from distributed.security import Security
+
+    return Security(require_encryption=False)
+
+
 @contextmanager
-def _client(address: str | None, workers: int | None, timeout: float) -> Iterator[Any]:
+def _client(
+    address: str | None, workers: int | None, timeout: float, notes: list[str] | None = None
+) -> Iterator[Any]:
     try:
         import dask
         from distributed import Client
@@ -241,13 +340,11 @@ def _client(address: str | None, workers: int | None, timeout: float) -> Iterato
     }
     with dask.config.set(settings), _quiet("distributed.client"):
         if address is not None:
+            security = _security(address, timeout, notes)
             try:
-                client = Client(address, timeout=timeout)
+                client = Client(address, timeout=timeout, security=security)
             except (OSError, TimeoutError) as exc:
-                raise InputError(
-                    f"no Dask scheduler answers at {address} ({_one_line(exc)})",
-                    source=address,
-                ) from None
+                raise _unanswered(address, exc) from None
             try:
                 yield client
             finally:
@@ -317,6 +414,7 @@ def _local_client(n: int) -> Iterator[Any]:
                 silence_logs=logging.ERROR,
                 local_directory=scratch,  # the workers' scratch space, removed after
                 preload=[__name__],  # dask_setup: each worker's engine logs quiet
+                security=_local_security(),
             )
             stack.callback(cluster.close)
             client = Client(cluster)
@@ -332,6 +430,7 @@ def run_each(
     scheduler: str | None = None,
     workers: int | None = None,
     connect_timeout: float = CONNECT_TIMEOUT,
+    notes: list[str] | None = None,
 ) -> int:
     """Run ``fn`` on every item on the engine; hand each outcome to ``on_done`` as it
     finishes, in this process.
@@ -351,6 +450,9 @@ def run_each(
         Workers of the local cluster (default: this machine's cores).
     connect_timeout : float
         Seconds to wait for an existing scheduler to answer.
+    notes : list of str, optional
+        Warnings are appended to it (a ``tcp://`` scheduler while Dask's configuration
+        gives TLS certificates).
 
     Returns
     -------
@@ -360,7 +462,9 @@ def run_each(
     Raises
     ------
     InputError
-        Dask is not installed, or no scheduler answers at the address, or the cluster has
+        Dask is not installed, or no scheduler answers at the address, or a ``tls://``
+        scheduler and this client do not take each other's certificates (or none is
+        configured: :func:`_security`), or the cluster has
         had no worker for :data:`NO_WORKERS_TIMEOUT` seconds, or its scheduler was lost
         (after cancelling what had not finished).
     KeyboardInterrupt
@@ -369,7 +473,7 @@ def run_each(
     if not items:
         return 0
     address = engine_address(scheduler)
-    with _client(address, workers, connect_timeout) as client:
+    with _client(address, workers, connect_timeout, notes) as client:
         from distributed import as_completed
 
         futures = client.map(fn, list(items), pure=False)

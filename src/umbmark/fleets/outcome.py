@@ -330,7 +330,7 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
     RecordingOutcome
         Calibrated, left out (``reason``) or failed (``failed``, ``reason``): never an
         exception for a recording that cannot be read. A recording at a URL is copied
-        first (:func:`_remote`); its outcome keeps the URL.
+        first (:func:`_remote`); its outcome keeps the URL, redacted.
     """
     from umbmark.sources.remote import is_url
 
@@ -342,26 +342,28 @@ def calibrate_recording(task: RecordingTask) -> RecordingOutcome:
 def _remote(task: RecordingTask) -> RecordingOutcome:
     """A recording at a URL streamed into a private temporary folder
     (:func:`umbmark.sources.remote.fetched`: its SHA-256 taken on the way), calibrated
-    there, and the copy deleted whatever happens; the outcome (its reason, the overlay's
-    provenance) names the URL, never the copy."""
+    there, and the copy deleted whatever happens; the outcome (its path, its reason, the
+    overlay's provenance) names the URL redacted (:func:`~umbmark.sources.remote.redacted`:
+    no user, password or signature), never the copy: the URL as given is only read."""
     from dataclasses import replace
 
-    from umbmark.sources.remote import fetched
+    from umbmark.sources.remote import fetched, redacted
 
+    shown = redacted(task.path)
     try:
         with fetched(task.path) as (local, digest):
             outcome = _local(task, local, digest)
     except InputError as exc:
         robot, how = _given(task)
-        return RecordingOutcome(task.path, robot, None, 0.0, None, reason=_line(exc), failed=True,
-                                named_by=how)  # fmt: skip
-    url = task.path.rstrip("/")
+        return RecordingOutcome(shown, robot, None, 0.0, None, reason=redacted(_line(exc)),
+                                failed=True, named_by=how)  # fmt: skip
+    url = shown.rstrip("/")
     overlay = outcome.record.get("overlay")
     record = dict(outcome.record)
     if overlay:
-        record["overlay"] = overlay.replace(str(local), url)
-    reason = None if outcome.reason is None else outcome.reason.replace(str(local), url)
-    return replace(outcome, reason=reason, record=record)
+        record["overlay"] = redacted(overlay.replace(str(local), url))
+    reason = None if outcome.reason is None else redacted(outcome.reason.replace(str(local), url))
+    return replace(outcome, path=shown, reason=reason, record=record)
 
 
 def _local(task: RecordingTask, path: Path, digest: str | None) -> RecordingOutcome:

@@ -222,6 +222,13 @@ def _found(source: str) -> Iterator[tuple[str, str, str, str]]:
             yield str(path), str(path.resolve()), path.as_posix(), base
 
 
+def _shown(path: str) -> str:
+    """A path as it is shown: a URL redacted (no user, password or signature)."""
+    from umbmark.sources.remote import redacted
+
+    return redacted(path)
+
+
 def find_recordings(
     sources: Sequence[str | os.PathLike[str]], robot_from: str | None = None
 ) -> list[FleetRecording]:
@@ -237,7 +244,9 @@ def find_recordings(
     Returns
     -------
     list of FleetRecording
-        In the order found (sources in order, each folder's entries by name), each once.
+        In the order found (sources in order, each folder's entries by name), each once;
+        a URL as given, to be read (show it redacted:
+        :func:`umbmark.sources.remote.redacted`).
 
     Raises
     ------
@@ -257,17 +266,18 @@ def find_recordings(
                 continue
             seen.add(key)
             if len(found) >= MAX_RECORDINGS:
-                raise InputError(f"more than {MAX_RECORDINGS} recordings", source=os.fspath(source))
+                raise InputError(f"more than {MAX_RECORDINGS} recordings",
+                                 source=_shown(os.fspath(source)))  # fmt: skip
             robot, day = None, None
             match = match_path(regex, text, base) if regex is not None else None
             if match is not None:
                 groups = match.groupdict()
                 robot = groups.get("robot")
                 if groups.get("date"):
-                    day = _day(groups["date"], path)
+                    day = _day(groups["date"], _shown(path))
             parts = _parts(text, base)
             found.append(FleetRecording(path, robot, day, match is not None, parts))
     if not found:
-        names = ", ".join(os.fspath(s) for s in sources)
+        names = ", ".join(_shown(os.fspath(s)) for s in sources)
         raise InputError(f"no recording (ROS bag, MCAP, run log) found in {names}")
     return found

@@ -129,7 +129,8 @@ class FleetReport(JsonText):
     warnings : tuple of str
         What may be quietly wrong: a ``robot_from`` pattern that did not match every
         recording, a ``robot_options`` entry for a robot not found
-        (:mod:`umbmark.fleets.naming`).
+        (:mod:`umbmark.fleets.naming`), a ``tcp://`` scheduler while Dask's configuration
+        gives TLS certificates.
     """
 
     summary: FleetSummary
@@ -287,7 +288,7 @@ def fleet(
     force : bool
         Replace ``report`` and ``output`` if they exist.
     command : str, optional
-        The command line that ran (shown on the page).
+        The command line that ran (shown on the page, its URLs redacted).
     progress : callable, optional
         Called with a :class:`FleetProgress` after each recording.
     wheelbase : float, optional
@@ -312,6 +313,7 @@ def fleet(
     from umbmark.options.fleet import FLEET
     from umbmark.outputs.files import OutputPlan
     from umbmark.runs.read_options import ReadOptions
+    from umbmark.sources.remote import redacted
     from umbmark.sources.robot_options import read_robot_options
     from umbmark.store.history import History
 
@@ -336,10 +338,7 @@ def fleet(
     began = time.monotonic()
 
     def record(finished: Any) -> None:  # noqa: ANN401 (Done)
-        outcome = finished.result or RecordingOutcome(
-            finished.item.path, finished.item.robot or "unnamed", None, 0.0, None,
-            reason=finished.error, failed=True,
-        )  # fmt: skip
+        outcome = finished.result or _engine_failed(finished)
         outcome = _recorded(store, finished.item, outcome)
         done.append(outcome)
         robots.add(outcome.robot)
@@ -348,8 +347,10 @@ def fleet(
             elapsed = time.monotonic() - began
             progress(FleetProgress(len(done), len(tasks), len(robots), hours, elapsed))
 
+    engine: list[str] = []  # the engine's warnings
     try:
-        run_each(calibrate_recording, tasks, record, scheduler=scheduler, workers=workers)
+        run_each(calibrate_recording, tasks, record, scheduler=scheduler, workers=workers,
+                 notes=engine)  # fmt: skip
     except KeyboardInterrupt as exc:  # what finished is recorded: said, on the exception
         _mark_stopped(exc, FleetStopped(len(done), len(tasks), str(store.path)))
         raise
@@ -358,9 +359,22 @@ def fleet(
     warnings = _naming_warnings(robot_from, robot_options, per_robot, found, named, before)
     result = FleetReport(
         _summary(store, names), len(found), tuple(named), skipped, str(store.path),
-        command=command, warnings=warnings,
+        command=None if command is None else redacted(command),
+        warnings=(*engine, *warnings),
     )  # fmt: skip
     return _written(result, plan)
+
+
+def _engine_failed(finished: Any) -> RecordingOutcome:  # noqa: ANN401 (Done)
+    """The outcome of a recording whose task the engine could not run (it raised, or lost
+    its workers): failed with the engine's one line, its URL and the line redacted."""
+    from umbmark.sources.remote import redacted
+
+    task = finished.item
+    return RecordingOutcome(
+        redacted(task.path), task.robot or UNNAMED, None, 0.0, None,
+        reason=None if finished.error is None else redacted(finished.error), failed=True,
+    )  # fmt: skip
 
 
 def _mark_stopped(exc: BaseException, stop: FleetStopped) -> None:
@@ -388,9 +402,11 @@ def _named(
     from dataclasses import replace
 
     from umbmark.fleets.naming import robot_in_path
+    from umbmark.sources.remote import redacted
 
-    by_path = {t.path: t for t in tasks}
-    parts = {f.path: f.parts for f in found}
+    # An outcome names its recording redacted (a URL without its credentials).
+    by_path = {redacted(t.path): t for t in tasks}
+    parts = {redacted(f.path): f.parts for f in found}
     robots = {*before.values(), *(f.robot for f in found if f.robot)}
     robots |= {o.robot for o in done if not _unplaced(by_path[o.path], o)}
     named = []
@@ -418,6 +434,7 @@ def _naming_warnings(
     options for robots not found (:mod:`umbmark.fleets.naming`), as messages say them."""
     from umbmark.core.messages import split_messages
     from umbmark.fleets.naming import options_warning, pattern_warning
+    from umbmark.sources.remote import redacted
 
     messages = []
     robots = {*(o.robot for o in named), *before.values()} - {NO_ROBOT}
@@ -426,7 +443,7 @@ def _naming_warnings(
         missed = [f for f in found if not f.matched]
         ways: dict[str | None, int] = {}
         for f in missed:
-            way = "history" if f.path in before else how.get(f.path, "none")
+            way = "history" if f.path in before else how.get(redacted(f.path), "none")
             ways[way] = ways.get(way, 0) + 1
         example = "/".join(missed[0].parts) if missed else ""
         messages.append(

@@ -13,9 +13,9 @@ them a URL is one line saying what to install.
   server only where it answers a folder's URL with an index page of links (as ``python -m
   http.server`` and nginx's ``autoindex`` do). A URL named as a recording (``.bag``,
   ``.mcap``) is taken without a look: if it cannot be read, it fails as a recording.
-- **Known again**: :func:`identity`, the URL, the size and what the filesystem says of the
-  version (ETag, last modification, generation, ...): what tells a recording seen before
-  without reading its bytes.
+- **Known again**: :func:`identity`, the URL redacted, the size and what the filesystem
+  says of the version (ETag, last modification, generation, ...): what tells a recording
+  seen before without reading its bytes.
 - **Copied**: the bag readers read local files only, so :func:`fetched` streams a
   recording (a file, or a ROS 2 bag folder's files) into a private temporary folder in
   chunks of :data:`CHUNK` (never the whole file in memory), taking its SHA-256 on the way,
@@ -29,7 +29,16 @@ them a URL is one line saying what to install.
 
 Credentials and other settings of a filesystem come from fsspec's own configuration (its
 environment variables ``FSSPEC_<PROTOCOL>_<OPTION>``, its config files) and the backend's
-(``AWS_PROFILE``, ...).
+(``AWS_PROFILE``, ...), or from the URL itself: a user and password
+(``https://user:password@host/...``) or a signed query (``?X-Amz-Signature=...``).
+
+- **Redacted**: :func:`redacted` is the one place a URL's secrets are masked. The URL as
+  given is what is read (the worker needs it); everything that is shown or kept (an error
+  line, the outcome, the history, the page, the JSON, the command line on the page)
+  carries its redacted form: the user and password as ``***@``, and as ``***`` the values
+  of the query's secret parameters (the signature, the credential, a token, a key) and of
+  those that change each time a URL is signed (its date, its expiry), so that a
+  recording signed again tomorrow is known again by the same text (:func:`identity`).
 """
 
 from __future__ import annotations
@@ -60,6 +69,7 @@ __all__ = [
     "has_wildcard",
     "identity",
     "is_url",
+    "redacted",
     "searched",
     "url_path",
     "walk",
@@ -92,11 +102,91 @@ _VERSION_KEYS = (
     "mtime", "modify",
 )  # fmt: skip
 _SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.-]*)://")
+#: A URL inside a text (an error line, a command line): up to a space or a quote.
+_URL_IN_TEXT = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*://[^\s'\"<>]+")
+#: What masks a secret.
+MASK = "***"
+#: Query parameters (by their name, any case) whose values are masked: secrets (a
+#: signature, a key, a token, a password) and the parts of a signed URL that change each
+#: time it is signed (S3's and CloudFront's, Google Cloud Storage's V2, generic ones).
+_SECRET_NAMES = frozenset({
+    "sig", "signature", "token", "access_token", "id_token", "refresh_token", "auth",
+    "authorization", "password", "passwd", "pwd", "pass", "secret", "client_secret", "key",
+    "apikey", "api_key", "access_key", "accesskey", "credential", "credentials", "session",
+    "sessiontoken", "code", "policy", "expires", "googleaccessid", "awsaccesskeyid",
+    "key-pair-id",
+})  # fmt: skip
+#: Query parameters whose names hold one of these are masked too.
+_SECRET_PARTS = ("signature", "token", "secret", "password", "credential")
+#: Prefixes of signing parameters, all masked (AWS Signature V4, Google's V4).
+_SIGNING_PREFIXES = ("x-amz-", "x-goog-")
+#: An Azure shared access signature's parameters that change each time it is signed (its
+#: start, expiry and signing key's), masked where the query has its ``sig``.
+_AZURE_SIGNED = frozenset({
+    "se", "st", "skoid", "sktid", "skt", "ske", "sks", "skv", "saoid", "suoid", "scid",
+    "sduoid",
+})  # fmt: skip
 
 
 def is_url(text: str) -> bool:
     """Whether ``text`` is a URL (``scheme://...``) rather than a local path."""
     return _SCHEME.match(text) is not None
+
+
+def redacted(text: str) -> str:
+    """``text`` (a URL, or any text holding URLs: an error line, a command line) with every
+    URL's credentials masked: its user and password (``https://***@host/...``) and the
+    values of its query's secret and signing parameters (``?X-Amz-Signature=***``,
+    ``sig=***``, ``token=***``: the module says which). Anything else is kept as written;
+    a text without a URL (a local path) is itself.
+
+    The one function that masks a URL's secrets: what is read is the URL as given, what is
+    shown or kept is this."""
+    if "://" not in text:
+        return text
+    return _URL_IN_TEXT.sub(lambda found: _redacted_url(found[0]), text)
+
+
+def _redacted_url(url: str) -> str:
+    scheme, rest = url.split("://", 1)
+    host = _after_user(rest)
+    if host:
+        rest = f"{MASK}@{rest[host:]}"
+    before, hash_, fragment = rest.partition("#")
+    path, question, query = before.partition("?")
+    if question:
+        path += "?" + _redacted_query(query)
+    if hash_:
+        path += "#" + _redacted_query(fragment)
+    return f"{scheme}://{path}"
+
+
+def _after_user(rest: str) -> int:
+    """Where the host starts in a URL after its ``scheme://``: after the last "@" before
+    the path (a password holding "?" or "#" unescaped counts as one, where a parser would
+    have taken it for the host); 0 without a user."""
+    slash = rest.find("/")
+    authority = rest if slash < 0 else rest[:slash]
+    return authority.rindex("@") + 1 if "@" in authority else 0
+
+
+def _redacted_query(query: str) -> str:
+    """A query (or a fragment) with the values of its secret and signing parameters
+    masked; its other parts as written."""
+    parts = query.split("&")
+    names = [unquote(p.partition("=")[0]).lower() for p in parts]
+    azure = "sig" in names
+    out = []
+    for part, name in zip(parts, names, strict=True):
+        key, equals, _ = part.partition("=")
+        secret = (
+            name in _SECRET_NAMES
+            or name.startswith(_SIGNING_PREFIXES)
+            or any(word in name for word in _SECRET_PARTS)
+            or (azure and name in _AZURE_SIGNED)
+        )
+        out.append(f"{key}={MASK}" if equals and secret else part)
+    return "&".join(out)
 
 
 def _scheme(url: str) -> str:
@@ -120,10 +210,12 @@ def has_wildcard(url: str) -> bool:
 def url_path(url: str) -> str:
     """The path of a URL, as ``robot_from`` patterns are matched against it: the URL's path
     for HTTP (``/fleet/amr1/2026-11-02/drive.mcap``), else everything after ``scheme://``
-    (``s3://bucket/amr1/...``: ``/bucket/amr1/...``; ``file:///data/x``: ``/data/x``)."""
+    (``s3://bucket/amr1/...``: ``/bucket/amr1/...``; ``file:///data/x``: ``/data/x``); never
+    its user or password."""
     if _http(url):
         return unquote(urlsplit(url).path) or "/"
-    return "/" + unquote(url.split("://", 1)[1]).lstrip("/")
+    rest = url.split("://", 1)[1]
+    return "/" + unquote(rest[_after_user(rest) :]).lstrip("/")
 
 
 def searched(url: str) -> str:
@@ -161,7 +253,7 @@ def _why(exc: BaseException) -> str:
         if isinstance(e, TimeoutError) or "timeout" in type(e).__name__.lower():
             return f"timed out ({e})" if str(e).strip() else "timed out"
     for e in chain:
-        text = " ".join(str(e).split())
+        text = redacted(" ".join(str(e).split()))  # masked before it is cut short
         if not text or (isinstance(e, FileNotFoundError) and " " not in text):
             continue  # fsspec's FileNotFoundError(path): the path alone says nothing
         return text if len(text) < 300 else text[:297] + "..."
@@ -171,7 +263,9 @@ def _why(exc: BaseException) -> str:
 
 
 def _refused(url: str, exc: BaseException) -> InputError:
-    return InputError(f"cannot be read ({_why(exc)})", source=url)
+    """The one line of a URL that cannot be read, its credentials masked (in the URL, and
+    in any URL the reason repeats)."""
+    return InputError(redacted(f"cannot be read ({_why(exc)})"), source=redacted(url))
 
 
 def _options(url: str, read_timeout: float) -> dict[str, Any]:
@@ -212,8 +306,8 @@ def _filesystem(url: str, read_timeout: float = READ_TIMEOUT) -> tuple[Any, str]
         return fs, str(path)
     except ImportError as exc:
         if (exc.name or "").split(".")[0] in ("fsspec", "aiohttp"):
-            raise InputError(REMOTE_MISSING, source=url) from None
-        raise InputError(f"cannot be read ({_why(exc)})", source=url) from None
+            raise InputError(REMOTE_MISSING, source=redacted(url)) from None
+        raise _refused(url, exc) from None
     except Exception as exc:  # an unknown protocol, a bad option: fsspec's own errors
         raise _refused(url, exc) from None
 
@@ -238,7 +332,7 @@ def expand(source: str, max_depth: int) -> list[str]:
         except Exception as exc:
             raise _refused(source, exc) from None
         if not found:
-            raise InputError("matches no file or folder", source=source)
+            raise InputError("matches no file or folder", source=redacted(source))
         return [fs.unstrip_protocol(p) for p in found]
     if _is_recording_name(source):
         return [source]  # read by the worker: if it cannot be, it fails as a recording
@@ -308,9 +402,10 @@ def _files(fs: Any, path: str) -> list[tuple[str, PurePosixPath | None, dict[str
 
 
 def identity(url: str) -> str:
-    """The URL, its size and what its filesystem says of its version (ETag, last
-    modification, generation, ...; a folder's: of its files) as one text: what tells a
-    recording seen before without reading its bytes.
+    """The URL redacted (:func:`redacted`), its size and what its filesystem says of its
+    version (ETag, last modification, generation, ...; a folder's: of its files) as one
+    text: what tells a recording seen before without reading its bytes. It holds no
+    secret, and a URL signed again (another signature, date and expiry) gives the same.
 
     Raises
     ------
@@ -331,7 +426,7 @@ def identity(url: str) -> str:
             said = {"created": str(keys["created"])}
         facts.append([str(rel or ""), said])
     version = hashlib.sha256(json.dumps(facts, sort_keys=True).encode()).hexdigest()[:16]
-    return f"{url}|{size}|{version}"
+    return f"{redacted(url)}|{size}|{version}"
 
 
 @contextmanager
@@ -365,14 +460,14 @@ def fetched(
     if known > limit:
         raise InputError(
             f"is {_size(known)}, more than the {_size(limit)} a recording may have to be copied",
-            source=url,
+            source=redacted(url),
         )
     with tempfile.TemporaryDirectory(prefix="umbmark-remote-", dir=folder) as scratch:
         free = shutil.disk_usage(scratch).free
         if known > free:
             raise InputError(
                 f"is {_size(known)}; the temporary folder {scratch} has {_size(free)} free",
-                source=url,
+                source=redacted(url),
             )
         local = Path(scratch) / (_name(path) or "recording")
         digest = _copy(fs, url, files, local, limit)
@@ -413,7 +508,7 @@ def _copy(
                     if copied > limit:
                         raise InputError(
                             f"is more than the {_size(limit)} a recording may have to be copied",
-                            source=url,
+                            source=redacted(url),
                         )
                     digest.update(chunk)
                     out.write(chunk)

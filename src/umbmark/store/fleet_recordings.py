@@ -21,7 +21,7 @@ from typing import Any, Literal
 
 from umbmark.core.errors import InputError
 from umbmark.sources.remote import identity as remote_identity
-from umbmark.sources.remote import is_url
+from umbmark.sources.remote import is_url, redacted
 from umbmark.store.history import History
 from umbmark.store.records import NewCalibration
 
@@ -48,7 +48,7 @@ class RecordingRow:
     digest : str or None
         SHA-256 of its bytes.
     identity : str
-        Its path, size and modification time, or its URL, size and version
+        Its path, size and modification time, or its URL (redacted), size and version
         (:func:`identity`): a recording seen before is known by it without reading its
         bytes again.
     options_key : str
@@ -123,16 +123,18 @@ def done_recordings(history: History) -> dict[str, dict[str, str]]:
 def record_recording(
     history: History, row: RecordingRow, calibration: NewCalibration | None
 ) -> int | None:
-    """Record one recording, and its calibration (with the recording as its input, its
-    digest not read again) when it gave one; a calibration whose nominal geometry is not
-    the robot's first is recorded all the same (the fleet's summary compares it on the
-    robot's latest nominal, and says the configuration changed).
+    """Record one recording (a URL's credentials masked: :func:`_redacted`), and its
+    calibration (with the recording as its input, its digest not read again) when it gave
+    one; a calibration whose nominal geometry is not the robot's first is recorded all the
+    same (the fleet's summary compares it on the robot's latest nominal, and says the
+    configuration changed).
 
     Returns
     -------
     int or None
         The calibration's id in the history.
     """
+    row = _redacted(row)
     id = None
     if calibration is not None:
         digests = {row.path: row.digest}
@@ -160,6 +162,34 @@ def record_recording(
             ),
         )
     return id
+
+
+def _redacted(row: RecordingRow) -> RecordingRow:
+    """The row as it is kept: a URL's credentials masked in its path, identity, reason and
+    outcome (:func:`umbmark.sources.remote.redacted`; the fleet's outcomes come so already:
+    this is the last line before the file)."""
+    from dataclasses import replace
+
+    where = row.identity.rsplit("|", 2)  # the path or URL, its size, its version
+    return replace(
+        row,
+        path=redacted(row.path),
+        identity="|".join([redacted(where[0]), *where[1:]]),
+        reason=None if row.reason is None else redacted(row.reason),
+        outcome=_redacted_values(row.outcome),
+    )
+
+
+def _redacted_values(value: Any) -> Any:  # noqa: ANN401 (JSON-ready)
+    """Every text in a JSON-ready value redacted (not its JSON text: a URL there runs on
+    into the escapes after it)."""
+    if isinstance(value, str):
+        return redacted(value)
+    if isinstance(value, dict):
+        return {k: _redacted_values(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_redacted_values(v) for v in value]
+    return value
 
 
 def read_recordings(history: History, robots: Sequence[str] = ()) -> list[RecordingRow]:
