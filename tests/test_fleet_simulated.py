@@ -185,3 +185,66 @@ def test_a_recording_that_failed_and_then_was_calibrated_counts_once(fleet: Path
         "1 calibrated; worst E_max,syst"
     )
     assert "Failed recordings" not in (tmp_path / "fleet.html").read_text(encoding="utf-8")
+
+
+@pytest.mark.slow
+def test_the_morning_after_a_change_and_the_morning_it_is_confirmed(fleet: Path, tmp_path: Path):
+    """The fleet watched night by night: the morning after the wheel was changed and the
+    laser knocked (day 4 of the recordings, 2026-11-05) both are flagged as changes in the
+    latest recording, to be confirmed, and the robots' figures, E_max,syst and what to
+    apply are that recording's alone; the next morning they are steps, confirmed by two."""
+    import math
+
+    from umbmark.core.conventions import Direction
+    from umbmark.model.square import square_run_end
+
+    truth = json.loads((fleet / "truth.json").read_text())
+    history = tmp_path / "h.sqlite3"
+
+    def night(last_day: int) -> dict:  # type: ignore[type-arg]
+        proc = run_cli("fleet", f"{fleet}/*/2026-11-0[2-{last_day}]/*", "--robot-from",
+                       "{robot}/{date}/*", "--history", str(history), "--workers", "2",
+                       "--json", timeout=900)  # fmt: skip
+        assert proc.returncode == 0, proc.stderr
+        return json.loads(proc.stdout)  # type: ignore[no-any-return]
+
+    morning = night(5)
+    by = {r["robot"]: r for r in morning["robots"]}
+    assert {"robot02", "robot03"} <= set(morning["unconfirmed"])
+    assert "robot01" not in morning["drifted"]
+    assert "in their latest recording, to be confirmed" in morning["summary"]
+    wheel = by["robot02"]
+    e_d = wheel["figures"]["E_d"]
+    assert e_d["change"] == "latest"
+    assert "2026-11-05" in e_d["since"]
+    day4 = {r["robot"]: r for r in truth["recordings"] if r["day"] == "2026-11-05"}
+    low, high = e_d["interval_95"]
+    assert low <= day4["robot02"]["E_d"] <= high  # that recording's, never pooled
+    assert e_d["value"] == e_d["values"][-1]
+    assert e_d["size"] == pytest.approx(-0.006, abs=5 * e_d["size_standard_error"])
+    # E_max,syst and what to apply are of the same present state (the square's end in
+    # closed form, model.square, with the figures the report shows).
+    present = {n: wheel["figures"][n]["value"] for n in ("E_d", "E_b", "E_s")}
+    e_max = max(
+        math.hypot(
+            *square_run_end(present["E_d"], present["E_b"], present["E_s"], 4.0, 0.34, d)[:2]
+        )
+        for d in (Direction.CW, Direction.CCW)
+    )
+    assert wheel["e_max_syst"] == pytest.approx(e_max, rel=1e-9)
+    apply = wheel["apply"]
+    ratio = apply["right_wheel_radius_multiplier"] / apply["left_wheel_radius_multiplier"]
+    assert ratio == pytest.approx(present["E_d"], rel=1e-9)
+    assert apply["verdict"] == "care"
+    assert any("latest recording alone" in r for r in apply["reasons"])
+    assert by["robot03"]["figures"]["laser_yaw"]["change"] == "latest"
+    # The next morning: both confirmed, as steps since 2026-11-05.
+    confirmed = night(6)
+    by = {r["robot"]: r for r in confirmed["robots"]}
+    for robot, figure in (("robot02", "E_d"), ("robot03", "laser_yaw")):
+        step = by[robot]["figures"][figure]
+        assert step["change"] == "step", (robot, step["change"])
+        assert "2026-11-05" in step["since"]
+        assert step["confirmed_by"] == 2
+    assert confirmed["recordings_skipped"] == ROBOTS * 4
+    assert not any("latest recording alone" in r for r in by["robot02"]["apply"]["reasons"])
