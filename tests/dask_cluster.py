@@ -114,6 +114,16 @@ class Cluster:
         os.kill(pid, signal.SIGKILL)
         return proc.wait(timeout=30)
 
+    def kill_all(self, pids: list[int]) -> list[int]:
+        """SIGKILL several of its processes at once (every signal sent before any is
+        waited for: none has the time to finish what it does while another dies), wait
+        until all are dead; their exit statuses, in order."""
+        procs = [p for pid in pids for p in [*self.workers, self.scheduler] if p.pid == pid]
+        assert len(procs) == len(pids), pids
+        for pid in pids:
+            os.kill(pid, signal.SIGKILL)
+        return [proc.wait(timeout=30) for proc in procs]
+
     def _start(self, *args: str) -> subprocess.Popen[bytes]:
         log = open(self.logs / f"{args[0]}-{time.monotonic_ns()}.log", "wb")  # noqa: SIM115
         self.files.append(log)

@@ -358,7 +358,8 @@ def test_all_workers_killed_mid_run_stop_the_job_with_one_line_and_lose_nothing(
 
         def kill() -> dict[str, tuple[str, int]]:
             busy = _all_busy(watch, len(pids))
-            return {a: (path, cluster.kill(pids[a])) for a, path in busy.items()}
+            statuses = cluster.kill_all([pids[a] for a in busy])
+            return {a: (path, s) for (a, path), s in zip(busy.items(), statuses, strict=True)}
 
         killed, status, out, err = _killed_mid_run(args, history, kill, env)
     assert [s for _, s in killed.values()] == [-signal.SIGKILL] * len(pids)
