@@ -44,6 +44,8 @@ def test_every_estimator_function_takes_its_kinds_calling_convention(entry):
         signature.bind(None, **keywords)
     elif entry.needs == "intervals":
         signature.bind(None, None, None, **dict(entry.options))
+    elif entry.needs == "imu":
+        signature.bind(None, None, None, reference=None, scale_tolerance=0.03, **dict(entry.options))
     else:
         keywords = dict(entry.options)
         if entry.trajectories:
