@@ -153,8 +153,10 @@ def gyro_estimate(
     values, se = cal.values, cal.standard_errors
     E_d, E_b, E_s = values.get("E_d", 1.0), values.get("E_b", 1.0), values.get("E_s")
     warnings = list(cal.warnings)
+    errors: dict[str, float] = {n: se[n] for n in ("E_d", "E_b", "E_s") if n in se}
     if E_b <= 0.0:  # a gyro that reads backwards (a blocking warning says so)
         E_b = 1.0
+        errors.pop("E_b", None)
     for name in ("E_d", "E_b"):
         if name in cal.undetermined:
             warnings.append(
@@ -165,7 +167,6 @@ def gyro_estimate(
         warnings.append(blocking(reason, reason, cal.undetermined.get("E_d")))
     names = {"k_g": "gyro_scale", "bias": "gyro_bias", "E_b_k_g": "E_b_gyro"}
     components = {names[n]: values[n] for n in names if n in values}
-    errors: dict[str, float] = {n: se[n] for n in ("E_d", "E_b", "E_s") if n in se}
     errors.update({names[n]: se[n] for n in names if n in values})
     for name, value in cal.extra.items():
         components[name] = value

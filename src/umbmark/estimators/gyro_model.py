@@ -5,12 +5,14 @@ the motion determines and why not, and the calibration they make."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from umbmark.core.arrays import FloatArray
+from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.messages import blocking
-from umbmark.estimators.gyro_fit import DRIVING, REFERENCE, REST, LinearFit, Rows
+from umbmark.estimators.gyro_fit import DRIVING, REFERENCE, REST, LinearFit, Rows, fit_rows
 from umbmark.estimators.gyro_fit import _antiderivative as antiderivative
 from umbmark.estimators.gyro_mounting import gyro_mounting
 from umbmark.estimators.gyro_result import FIGURES, GyroCalibration
@@ -111,11 +113,72 @@ def _figures(
     return out
 
 
-def _why(name: str, found: Excitation, n_rests: int, reference: bool) -> str:
+#: An interval turns when the odometry turns it by this much [rad] ...
+_TURN = 0.05
+#: ... and drives when its wheels' forward rotation, in radians of heading, is this much.
+_DRIVE = 0.05
+
+
+@dataclass(frozen=True)
+class _Held:
+    """What the recording holds, for what it determines: intervals turning left and
+    right, driving forward and backward, rests, the reference's stretches (and those
+    turning)."""
+
+    left: int
+    right: int
+    forward: int
+    backward: int
+    rests: int
+    reference: int = 0
+    reference_turns: int = 0
+
+    @classmethod
+    def of(
+        cls, theta: FloatArray, drive: FloatArray, rest: BoolArray, reference: GyroReference | None
+    ) -> _Held:
+        moving = ~rest
+        return cls(
+            left=int((moving & (theta >= _TURN)).sum()),
+            right=int((moving & (theta <= -_TURN)).sum()),
+            forward=int((moving & (drive >= _DRIVE)).sum()),
+            backward=int((moving & (drive <= -_DRIVE)).sum()),
+            rests=int(rest.sum()),
+            reference=0 if reference is None else len(reference),
+            reference_turns=0 if reference is None else int((np.abs(reference.yaw) >= _TURN).sum()),
+        )
+
+    @property
+    def driving(self) -> int:
+        return self.forward + self.backward
+
+    def open(self) -> set[int]:
+        """The unknowns (0: ``S``, 1: ``D``, 2: ``s``, -1: the bias's level) that what is
+        held leaves open, whatever the numbers: the bias is pinned by rests, a reference,
+        turns both ways or driving both ways (each at least twice); ``S`` needs turns and
+        the bias pinned, ``D`` driving and the bias pinned, ``s`` the reference turning."""
+        pinned = (
+            self.rests >= 2
+            or self.reference >= 2
+            or (self.left >= 2 and self.right >= 2)
+            or (self.forward >= 2 and self.backward >= 2)
+        )
+        out = set() if pinned else {-1}
+        if self.left + self.right == 0 or not pinned:
+            out.add(0)
+        if self.driving == 0 or not pinned:
+            out.add(1)
+        if self.reference_turns < 2:
+            out.add(2)
+        return out
+
+
+def _why(name: str, held: _Held) -> str:
     """What to drive for an undetermined figure."""
-    turning = found.n_spot + found.n_arc
-    rest = "rest the robot still for a few seconds between" if not n_rests else "rest more between"
-    if name in ("E_b_k_g", "E_b") and turning == 0:
+    rest = (
+        "rest the robot still for a few seconds between" if not held.rests else "rest more between"
+    )
+    if name in ("E_b_k_g", "E_b") and held.left + held.right == 0:
         return "no turns: drive turns on the spot or arcs"
     if name == "k_g":
         return "the reference saw no turn: turn while it measures"
@@ -124,15 +187,15 @@ def _why(name: str, found: Excitation, n_rests: int, reference: bool) -> str:
             "no rest, and nothing else fixes the gyro's bias: rest the robot still for a few "
             "seconds now and then"
         )
-    if name == "E_d" and found.n_straight + found.n_arc == 0:
+    if name == "E_d" and held.forward + held.backward == 0:
         return "no straights: drive straights"
     if name == "E_d":
         return (
             f"the straights' heading drift cannot be told from the gyro's bias: {rest} "
             "straights, or drive them at different speeds"
         )
-    side = "left" if found.n_right == 0 else "right"
-    one_way = found.n_left == 0 or found.n_right == 0
+    one_way = held.left == 0 or held.right == 0
+    side = "left" if held.right == 0 else "right"
     said = f"every turn is to the {side}" if one_way else "the turns"
     return f"{said}: they cannot be told from the gyro's bias: {rest} turns, or turn both ways"
 
@@ -140,51 +203,61 @@ def _why(name: str, found: Excitation, n_rests: int, reference: bool) -> str:
 def _determine(
     fit: LinearFit,
     figures: dict[str, tuple[float, FloatArray, tuple[int, ...]]],
-    found: Excitation,
-    n_rests: int,
-    reference: bool,
+    held: _Held,
+    first_order: Callable[[], tuple[float, float] | None],
 ) -> tuple[dict[str, float], dict[str, float], dict[str, str]]:
     """The determined figures' values and standard errors, and why the others are not.
 
-    A figure is determined where its gradient lies clear of the combinations the rows
-    leave open (:meth:`LinearFit.determined`) and its standard error is within
-    :data:`_LOOSE`. ``E_d`` without turns (the turning gain open, the straights' drift
-    known) is given to first order, the gain taken as 1 and its standard error widened
-    by a fifth of ``E_d - 1`` (a wheelbase and a gyro scale within 20 %)."""
+    A figure is determined where what the recording holds leaves none of its unknowns
+    open (:meth:`_Held.open`), its gradient lies clear of the combinations the rows leave
+    open (:meth:`LinearFit.determined`) and its standard error is within :data:`_LOOSE`.
+    ``E_d`` without turns (the turning gain ``S`` open, the straights' drift known) is the
+    ratio where the rows fix it (straights the robot drove truly straight: ``E_d`` does
+    not depend on ``S`` then) or ``first_order()``, whichever is the tighter."""
     values, errors, undetermined = {}, {}, {}
-    k = fit.coefficients.size
-    for name, (value, gradient, _) in figures.items():
+    open_ = held.open()
+    names = {0: "E_b_k_g", 1: "E_d", 2: "k_g", -1: "bias"}
+    for name, (value, gradient, needs) in figures.items():
         se = math.sqrt(fit.variance(gradient))
-        if fit.determined(gradient) and math.isfinite(se) and se <= _LOOSE[name]:
+        numeric = fit.determined(gradient) and math.isfinite(se) and se <= _LOOSE[name]
+        structural = [i for i in needs if i in open_]
+        if name == "E_d" and structural == [0]:  # no turns, the straights' drift known
+            first = first_order()
+            found = (value, se) if numeric else first
+            if first is not None and numeric and first[1] < se:
+                found = first
+            if found is not None:
+                values[name], errors[name] = found
+                continue
+        if numeric and not structural:
             values[name], errors[name] = value, se
             continue
-        why = "E_b_k_g" if name == "E_b" else name
-        if name == "E_d" and not fit.determined(_unit(0, k, fit)):
-            first = _first_order(fit, k)
-            if first is not None:
-                values[name], errors[name] = first
-                continue
-            why = "E_b_k_g"
-        if name == "E_d" and not fit.determined(_unit(1, k, fit)):
-            why = "E_d"
-        said = _why(why, found, n_rests, reference)
-        if fit.determined(gradient):
+        why = names[structural[0]] if structural else ("E_b_k_g" if name == "E_b" else name)
+        said = _why(why, held)
+        if not structural and fit.determined(gradient):
             said += f" (its standard error would be {se:.3g})"
         undetermined[name] = said
     return values, errors, undetermined
 
 
-def _first_order(fit: LinearFit, k: int) -> tuple[float, float] | None:
-    """``E_d`` from the straights' drift ``D`` alone, the turning gain taken as 1."""
-    g = _unit(1, k, fit)
-    if not fit.determined(g):
+def _first_order(rows: Rows, spacing: float) -> tuple[float, float] | None:
+    """``E_d`` without turns, to first order: the turning gain ``S`` taken as 1 (the
+    rows refitted with it fixed), its standard error widened by what a gain within 20 %
+    (a wheelbase and a gyro scale that far off) makes of it, ``0.4 |lambda|``, with
+    ``lambda`` the straights' heading drift per radian of wheel rotation."""
+    theta, drive = rows.x[:, 0], rows.x[:, 1]
+    fixed = replace(rows, y=rows.y - theta, x=rows.x[:, 1:])
+    fit = fit_rows(fixed, spacing)
+    g = np.zeros(fit.coefficients.size + fit.knots.size)
+    g[0] = 1.0
+    D = float(fit.coefficients[0])
+    se = math.sqrt(fit.variance(g))
+    if not fit.determined(g) or abs(D) >= 0.5 or not se <= _LOOSE["E_d"]:
         return None
-    D = float(fit.coefficients[1])
-    if abs(D) >= 1.0:
-        return None
+    driving = rows.kind == DRIVING
+    c = float(theta[driving] @ drive[driving]) / max(float(drive[driving] @ drive[driving]), 1e-300)
     E_d = (1.0 + D) / (1.0 - D)
-    se = 2.0 / (1.0 - D) ** 2 * math.sqrt(fit.variance(g))
-    return E_d, math.hypot(se, 0.2 * abs(E_d - 1.0))
+    return E_d, math.hypot(2.0 * se / (1.0 - D) ** 2, 0.4 * abs(D + c))
 
 
 def _unit(index: int, k: int, fit: LinearFit) -> FloatArray:
@@ -213,8 +286,11 @@ def calibration_of(
     found = excitation(intervals.phi_left[moving], intervals.phi_right[moving])
     n_rests = int(intervals.rest.sum())
     span = (float(intervals.start.min()), float(intervals.end.max()))
+    theta, forward, _ = odometry_turns(intervals, active)
+    held = _Held.of(theta, forward, intervals.rest, reference)
+    spacing = float(fit.knots[1] - fit.knots[0])
     values, errors, undetermined = _determine(
-        fit, _figures(fit, k, span), found, n_rests, reference is not None
+        fit, _figures(fit, k, span), held, lambda: _first_order(rows, spacing)
     )
     own: dict[str, float] = {}
     for name, (value, se) in (extra or {}).items():
