@@ -194,8 +194,10 @@ def _cut(
     rests: list[tuple[float, float]] = []
     left: Counter[str] = Counter()
     for a, b in _true_runs(still):
-        begin = max(float(time[a]), low) + options.rest_margin
-        end = min(float(time[b]), high) - options.rest_margin
+        # no margin where the stop begins or ends the recording: nothing moves there
+        begin, end = max(float(time[a]), low), min(float(time[b]), high)
+        begin += options.rest_margin if begin > low else 0.0
+        end -= options.rest_margin if end < high else 0.0
         if end - begin >= options.min_rest:
             rests.append((begin, end))
         elif end > begin:
