@@ -45,7 +45,8 @@ def test_every_estimator_function_takes_its_kinds_calling_convention(entry):
     elif entry.needs == "intervals":
         signature.bind(None, None, None, **dict(entry.options))
     elif entry.needs == "imu":
-        signature.bind(None, None, None, reference=None, scale_tolerance=0.03, **dict(entry.options))
+        keywords = {"reference": None, "scale_tolerance": 0.03, **dict(entry.options)}
+        signature.bind(None, None, None, **keywords)
     else:
         keywords = dict(entry.options)
         if entry.trajectories:
