@@ -95,11 +95,13 @@ def _tilt_matrix(tilt: tuple[float, float]) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Segment:
-    """``length`` [m] and ``turn`` [rad] over ``duration`` [s] (0, 0: a rest)."""
+    """``length`` [m] and ``turn`` [rad] over ``duration`` [s] (0, 0: a rest), its speed
+    ramped up and down over ``ramp`` seconds (None: the motion's)."""
 
     duration: float
     length: float = 0.0
     turn: float = 0.0
+    ramp: float | None = None
 
 
 def rest(seconds: float) -> Segment:
@@ -171,7 +173,8 @@ class Motion:
             if seg.length == 0.0 and seg.turn == 0.0:
                 u = rate = np.zeros(int(rows.sum()))
             else:
-                u, rate = _profile(t[rows] - self.starts[i], seg.duration, self.ramp)
+                ramp = self.ramp if seg.ramp is None else seg.ramp
+                u, rate = _profile(t[rows] - self.starts[i], seg.duration, ramp)
             out["x"][rows], out["y"][rows] = _advance(x0, y0, th0, seg.length, seg.turn, u)
             out["theta"][rows] = th0 + seg.turn * u
             out["s"][rows] = s0 + seg.length * u
