@@ -120,9 +120,9 @@ def arc(length: float, turn: float, speed: float = 0.25, ramp: float = 0.5) -> S
     return Segment(abs(length) / speed + ramp, length, turn)
 
 
-def _profile(t: np.ndarray, duration: float, ramp: float) -> tuple[np.ndarray, np.ndarray]:
-    """The normalised profile ``u(t)`` and ``du/dt`` of a segment (trapezoid of speed)."""
-    ramp = min(ramp, 0.5 * duration)
+def _profile(t: np.ndarray, duration, ramp) -> tuple[np.ndarray, np.ndarray]:  # type: ignore[no-untyped-def]
+    """The normalised profile ``u(t)`` and ``du/dt`` of segments (trapezoids of speed)."""
+    ramp = np.maximum(np.minimum(ramp, 0.5 * duration), 1e-9)
     peak = 1.0 / (duration - ramp)
     t = np.clip(t, 0.0, duration)
     up, down = t < ramp, t > duration - ramp
@@ -149,7 +149,7 @@ class Motion:
         for seg in self.segments:
             starts.append(t)
             poses.append((x, y, th, s))
-            x, y = _advance(x, y, th, seg.length, seg.turn, 1.0)
+            x, y = (float(v) for v in _advance(x, y, th, seg.length, seg.turn, 1.0))
             th, s, t = th + seg.turn, s + seg.length, t + seg.duration
         starts.append(t)
         poses.append((x, y, th, s))
@@ -164,31 +164,31 @@ class Motion:
         """``x, y, theta, s`` (path length), ``v``, ``omega`` at times ``t``."""
         t = np.asarray(t, dtype=float)
         k = np.clip(np.searchsorted(self.starts, t, side="right") - 1, 0, len(self.segments) - 1)
-        out = {name: np.zeros_like(t) for name in ("x", "y", "theta", "s", "v", "omega")}
-        for i, seg in enumerate(self.segments):
-            rows = k == i
-            if not rows.any():
-                continue
-            x0, y0, th0, s0 = self.poses[i]
-            if seg.length == 0.0 and seg.turn == 0.0:
-                u = rate = np.zeros(int(rows.sum()))
-            else:
-                ramp = self.ramp if seg.ramp is None else seg.ramp
-                u, rate = _profile(t[rows] - self.starts[i], seg.duration, ramp)
-            out["x"][rows], out["y"][rows] = _advance(x0, y0, th0, seg.length, seg.turn, u)
-            out["theta"][rows] = th0 + seg.turn * u
-            out["s"][rows] = s0 + seg.length * u
-            out["v"][rows] = seg.length * rate
-            out["omega"][rows] = seg.turn * rate
-        return out
+        seg = self.segments
+        duration = np.array([g.duration for g in seg])[k]
+        length = np.array([g.length for g in seg])[k]
+        turn = np.array([g.turn for g in seg])[k]
+        ramp = np.array([self.ramp if g.ramp is None else g.ramp for g in seg])[k]
+        x0, y0, th0, s0 = (np.array(p)[k] for p in zip(*self.poses[:-1], strict=True))
+        u, rate = _profile(t - np.array(self.starts)[k], duration, ramp)
+        resting = (length == 0.0) & (turn == 0.0)
+        u, rate = np.where(resting, 0.0, u), np.where(resting, 0.0, rate)
+        x, y = _advance(x0, y0, th0, length, turn, u)
+        return {
+            "x": x, "y": y, "theta": th0 + turn * u, "s": s0 + length * u,
+            "v": length * rate, "omega": turn * rate,
+        }  # fmt: skip
 
 
 def _advance(x, y, th, length, turn, u):  # type: ignore[no-untyped-def]
-    if abs(turn) < 1e-12:
-        return x + length * u * math.cos(th), y + length * u * math.sin(th)
-    radius = length / turn
+    """Where a constant-curvature segment from ``(x, y, th)`` is after the share ``u``."""
+    straight = np.abs(turn) < 1e-12
+    safe = np.where(straight, 1.0, turn)
+    radius = length / safe
     th1 = th + turn * u
-    return x + radius * (np.sin(th1) - math.sin(th)), y - radius * (np.cos(th1) - math.cos(th))
+    ax = np.where(straight, length * u * np.cos(th), radius * (np.sin(th1) - np.sin(th)))
+    ay = np.where(straight, length * u * np.sin(th), -radius * (np.cos(th1) - np.cos(th)))
+    return x + ax, y + ay
 
 
 # --- the sensors --------------------------------------------------------------------------

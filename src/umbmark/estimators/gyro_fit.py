@@ -41,6 +41,7 @@ from umbmark.core.arrays import BoolArray, FloatArray, IntArray
 
 __all__ = [
     "DRIVING",
+    "MAX_KNOTS",
     "OUTLIER",
     "REFERENCE",
     "REST",
@@ -55,6 +56,8 @@ __all__ = [
     "whiten",
 ]
 
+#: The bias's knots at most.
+MAX_KNOTS = 400
 #: Row kinds.
 REST, DRIVING, REFERENCE = 0, 1, 2
 #: The bias's random-walk intensity searched [rad/s/sqrt(s)]: from a gyro steadier than
@@ -121,8 +124,10 @@ class Rows:
 
 def knots_for(start: FloatArray, end: FloatArray, spacing: float) -> FloatArray:
     """The knots of the bias [s]: every ``spacing`` from the first start past the last end
-    (two at least)."""
+    (two at least), further apart where that would make more than :data:`MAX_KNOTS`
+    (recordings over an hour at 10 s: the rows' bias basis stays linear in the length)."""
     low, high = float(np.min(start)), float(np.max(end))
+    spacing = max(spacing, (high - low) / (MAX_KNOTS - 1))
     count = max(2, math.ceil((high - low) / spacing - 1e-9) + 1)
     return np.asarray(low + spacing * np.arange(count), dtype=np.float64)
 
