@@ -69,6 +69,7 @@ def gyro_rows(
         kind=np.concatenate([kind, np.full(m, REFERENCE, dtype=np.int64)]),
         wheel=np.concatenate([np.where(intervals.rest, 0.0, wheel), np.zeros(m)]),
         given=np.concatenate([np.full(n, np.nan), reference.variance]),
+        noisy=2,
     )
 
 
@@ -246,7 +247,8 @@ def _first_order(rows: Rows, spacing: float) -> tuple[float, float] | None:
     (a wheelbase and a gyro scale that far off) makes of it, ``0.4 |lambda|``, with
     ``lambda`` the straights' heading drift per radian of wheel rotation."""
     theta, drive = rows.x[:, 0], rows.x[:, 1]
-    fixed = replace(rows, y=rows.y - theta, x=rows.x[:, 1:])
+    noisy = None if rows.noisy is None else rows.noisy - 1
+    fixed = replace(rows, y=rows.y - theta, x=rows.x[:, 1:], noisy=noisy)
     fit = fit_rows(fixed, spacing)
     g = np.zeros(fit.coefficients.size + fit.knots.size)
     g[0] = 1.0

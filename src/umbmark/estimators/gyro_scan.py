@@ -28,6 +28,7 @@ from umbmark.estimators.gyro_fit import (
     OUTLIER,
     LinearFit,
     _prior,
+    attenuation,
     bias_basis,
     fit_rows,
     whiten,
@@ -132,6 +133,8 @@ def fit_gyro_scan(
     full_prior[:n_lin, :n_lin] = prior
     normal_lin = np.zeros((size, size))
     normal_lin[:n_lin, :n_lin] = white.T @ white
+    attenuated = attenuation(linear.variances, linear.own)
+    normal_lin[2, 2] -= attenuated
     for _ in range(_STEPS):
         w_t = np.tile(1.0 / noise**2, int(moving.sum()))
         r_lin = rows.y - design @ theta[:n_lin]
@@ -141,6 +144,7 @@ def fit_gyro_scan(
         total[np.ix_(columns, columns)] += jac.T @ (jac * w_t[:, None])
         grad = np.zeros(size)
         grad[:n_lin] = white.T @ whiten(r_lin, linear.variances, linear.lag)
+        grad[2] += attenuated * theta[2]  # the corrected normal equations' fixed point
         grad -= full_prior @ theta
         grad[columns] += jac.T @ (w_t * r_t)
         inverse, _, _ = _pseudo_inverse(total)
@@ -161,7 +165,8 @@ def fit_gyro_scan(
     fit = LinearFit(
         coefficients=theta[:k], knots=linear.knots, bias=theta[k:n_lin],
         covariance=covariance[:n_lin, :n_lin], null=null[:n_lin], scale=scale[:n_lin],
-        walk=linear.walk, variances=linear.variances, lag=linear.lag, kept=linear.kept,
+        walk=linear.walk, variances=linear.variances, own=linear.own, lag=linear.lag,
+        kept=linear.kept,
         residual=rows.y - design @ theta[:n_lin],
         noise={**linear.noise, "scan_x": float(noise[0]), "scan_y": float(noise[1])},
     )  # fmt: skip
