@@ -7,7 +7,7 @@ straights, spins and arcs with rests, calibrated without a reference, with a hea
 reference (0.2 deg a second) and with scan matching (2 mm, 0.3 deg a second). For each
 figure: the share of robots whose 95 % interval holds the truth, and the mean and spread
 of the standardised errors (estimate less truth, over the standard error).
-``tests/estimators/test_gyro_coverage.py`` asserts them; this prints them
+``tests/estimators/test_gyro_fit.py`` asserts them; this prints them
 (``docs/estimators.md``).
 
     PYTHONPATH=src python tools/gyro_coverage.py [ROBOTS]
