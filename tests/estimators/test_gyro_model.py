@@ -292,3 +292,24 @@ def test_too_few_intervals_are_refused():
     assert len(iv) < 10
     with pytest.raises(ValueError, match="needs at least 10"):
         fit_gyro(iv, ACTIVE)
+
+
+@pytest.mark.slow
+def test_an_hour_with_a_bias_that_wanders_is_followed_throughout():
+    """An hour of driving, the bias wandering five times faster than the others' (0.0025
+    deg/s/sqrt(s): 0.15 deg/s over the hour, 0.008 deg/s between two knots), with a
+    heading reference: the bias at the knots within 0.005 deg/s rms and each within 4.5 of
+    its standard errors, ``k_g`` within 0.1 %."""
+    truth = replace(TRUTH, bias_walk=math.radians(0.0025))
+    rec = record(mixed_program(60.0), truth, seed=8)
+    assert np.ptp(np.degrees(rec.bias)) > 0.05  # it does wander
+    iv = gyro_intervals(rec.wheels, rec.gyro)
+    start, end, yaw = heading_reference(rec)
+    cal = fit_gyro(
+        iv, ACTIVE, reference=gyro_reference(rec.gyro, HeadingReference(start, end, yaw))
+    )
+    off = cal.bias_values - rec.bias_at(cal.bias_times)
+    assert math.degrees(float(np.sqrt(np.mean(off**2)))) < 0.005
+    assert np.abs(off / cal.bias_errors).max() < 4.5
+    assert abs(cal.values["k_g"] / truth.k_z - 1) < 1e-3
+    assert cal.bias_walk == pytest.approx(truth.bias_walk, rel=0.5)
