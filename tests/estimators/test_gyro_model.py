@@ -313,3 +313,27 @@ def test_an_hour_with_a_bias_that_wanders_is_followed_throughout():
     assert np.abs(off / cal.bias_errors).max() < 4.5
     assert abs(cal.values["k_g"] / truth.k_z - 1) < 1e-3
     assert cal.bias_walk == pytest.approx(truth.bias_walk, rel=0.5)
+
+
+@pytest.mark.parametrize(
+    ("rates", "words"),
+    [
+        (lambda r: np.tile(r[:1], (len(r), 1)), "frozen, its yaw not on the base's z axis"),
+        (lambda r: r * 180.0 / math.pi, "in degrees per second, read as radians per second"),
+    ],
+    ids=["frozen", "degrees per second"],
+)
+def test_a_gyro_that_does_not_read_the_turns_as_a_gyro_can_is_not_applied(mixed, rates, words):
+    rec, _ = mixed
+    bad = replace(rec.gyro, rate=rates(rec.gyro.rate))
+    estimate, _ = gyro_estimate(gyro_intervals(rec.wheels, bad), ACTIVE)
+    blocking = [w for w in estimate.warnings if isinstance(w, Blocking)]
+    assert any(words in w for w in blocking), estimate.warnings
+
+
+def test_a_robot_that_never_moves_has_nothing_to_apply():
+    rec = record(program([straight(0.0)], 1, rests=60.0), TRUTH)
+    estimate, cal = gyro_estimate(gyro_intervals(rec.wheels, rec.gyro), ACTIVE)
+    assert cal.values["bias"] == pytest.approx(TRUTH.bias, abs=math.radians(0.01))
+    assert {"E_d", "E_b"} <= set(cal.undetermined)
+    assert any(isinstance(w, Blocking) and "nothing to apply" in w for w in estimate.warnings)

@@ -16,7 +16,7 @@ from umbmark.estimators.gyro_fit import DRIVING, REFERENCE, REST, LinearFit, Row
 from umbmark.estimators.gyro_fit import _antiderivative as antiderivative
 from umbmark.estimators.gyro_mounting import gyro_mounting
 from umbmark.estimators.gyro_result import FIGURES, GyroCalibration
-from umbmark.estimators.scan_excitation import Excitation, excitation
+from umbmark.estimators.scan_excitation import excitation
 from umbmark.estimators.scan_matching import ScanCalibration
 from umbmark.model.kinematics import WheelParams
 from umbmark.scans.gyro_intervals import GyroIntervals, GyroReference
@@ -28,8 +28,9 @@ __all__ = ["calibration_of", "gyro_rows", "odometry_turns"]
 _LOOSE = {
     "E_d": 0.05, "E_b_k_g": 0.2, "E_b": 0.2, "E_s": 0.2, "k_g": 0.2, "bias": math.radians(1.0),
 }  # fmt: skip
-#: k_g within this of -1 (or E_b k_g negative): an IMU upside down.
-_REVERSED = 0.0
+#: The gyro's turning gain ``S = E_s / (E_b k_g)`` a robot's gyro can have: a wheelbase
+#: and a gyro scale within a third of the nominal.
+_GAIN = (0.6, 1.6)
 
 
 # --- the rows ----------------------------------------------------------------------------
@@ -99,16 +100,20 @@ def _figures(
             g[{"S": 0, "D": 1, "s": 2}[name]] = value
         return g
 
+    nan, none = math.nan, np.zeros(size)  # where the solution makes no figure (S = 0)
     diff = S - D
     if diff != 0.0 and S != 0.0:
         out["E_d"] = ((S + D) / diff, grad(S=-2 * D / diff**2, D=2 * S / diff**2), (0, 1))
         out["E_b_k_g"] = (1.0 / S, grad(S=-1.0 / S**2), (0,))
+    else:
+        out["E_d"], out["E_b_k_g"] = (nan, none, (0, 1)), (nan, none, (0,))
     if k == 3:
         s = float(c[2])
-        if s != 0.0:
-            out["k_g"] = (1.0 / s, grad(s=-1.0 / s**2), (2,))
+        out["k_g"] = (1.0 / s, grad(s=-1.0 / s**2), (2,)) if s != 0.0 else (nan, none, (2,))
         if S != 0.0:
             out["E_b"] = (s / S, grad(S=-s / S**2, s=1.0 / S), (0, 2))
+        else:
+            out["E_b"] = (nan, none, (0, 2))
     g = _bias_gradient(fit, k, *span)
     out["bias"] = (float(g @ np.concatenate([c, fit.bias])), g, (-1,))
     return out
@@ -220,7 +225,8 @@ def _determine(
     names = {0: "E_b_k_g", 1: "E_d", 2: "k_g", -1: "bias"}
     for name, (value, gradient, needs) in figures.items():
         se = math.sqrt(fit.variance(gradient))
-        numeric = fit.determined(gradient) and math.isfinite(se) and se <= _LOOSE[name]
+        numeric = math.isfinite(value) and fit.determined(gradient)
+        numeric = numeric and math.isfinite(se) and se <= _LOOSE[name]
         structural = [i for i in needs if i in open_]
         if name == "E_d" and structural == [0]:  # no turns, the straights' drift known
             first = first_order()
@@ -235,7 +241,7 @@ def _determine(
             continue
         why = names[structural[0]] if structural else ("E_b_k_g" if name == "E_b" else name)
         said = _why(why, held)
-        if not structural and fit.determined(gradient):
+        if not structural and math.isfinite(value) and fit.determined(gradient):
             said += f" (its standard error would be {se:.3g})"
         undetermined[name] = said
     return values, errors, undetermined
@@ -320,7 +326,7 @@ def calibration_of(
                 )
         elif "E_b_k_g" in undetermined:
             undetermined["E_b"] = undetermined["E_b_k_g"]
-    warnings += _reversed(values, fit, found)
+    warnings += _implausible(fit, held, values)
     mounting = gyro_mounting(intervals, odometry_turns(intervals, active)[0], stated)
     warnings += mounting.notes(intervals.frame)
     times = fit.knots
@@ -355,24 +361,37 @@ def calibration_of(
     )
 
 
-def _reversed(values: dict[str, float], fit: LinearFit, found: Excitation) -> list[str]:
-    """A gyro that reads the turns backwards: never for applying."""
+def _implausible(fit: LinearFit, held: _Held, values: dict[str, float]) -> list[str]:
+    """A gyro that reads the turns backwards, or not as a gyro of a robot's turns can
+    (frozen, another axis, another unit): never for applying.
+
+    Where the robot turned, the gyro's turning gain ``S = E_s / (E_b k_g)`` is within
+    :data:`_GAIN` of 1 for any wheelbase and gyro scale a robot has; ``180 / pi`` times
+    that is a rate in degrees per second read as radians."""
     k_g = values.get("k_g")
-    product = values.get("E_b_k_g")
-    if (k_g is not None and k_g < _REVERSED) or (
-        k_g is None and product is not None and product < 0
-    ):
-        said = f"k_g = {k_g:.4f}" if k_g is not None else f"E_b k_g = {product:.4f}"
+    gain = float(fit.coefficients[0])
+    turned = 0 not in held.open() and fit.determined(_unit(0, fit.coefficients.size, fit))
+    fix = (
+        "fix the IMU frame's transform (turned 180 deg about its x axis for an IMU upside "
+        "down) and calibrate again"
+    )
+    if (k_g is not None and k_g < 0.0) or (turned and gain < 0.0):
+        said = f"k_g = {k_g:.4f}" if k_g is not None else f"E_b k_g = {1.0 / gain:.4f}"
         reason = (
             f"the gyro reads the turns backwards ({said}): the IMU is mounted upside down, or "
             "its z axis reversed, and its stated transform does not say so"
         )
-        return [
-            blocking(
-                reason,
-                reason,
-                "fix the IMU frame's transform (turned 180 deg about its x axis for an IMU "
-                "upside down) and calibrate again",
-            )
-        ]
-    return []
+        return [blocking(reason, reason, fix)]
+    if not turned or _GAIN[0] <= gain <= _GAIN[1]:
+        return []
+    if abs(gain * math.pi / 180.0 - 1.0) <= 0.1:
+        why = "its rates are in degrees per second, read as radians per second"
+    elif abs(gain * 180.0 / math.pi - 1.0) <= 0.1:
+        why = "its rates are in radians per second, read as degrees per second"
+    else:
+        why = "frozen, its yaw not on the base's z axis, or its rates in another unit"
+    reason = (
+        f"the gyro reads {gain:.3g} times the turns the wheels make, which no gyro scale and "
+        f"wheelbase explain: {why}"
+    )
+    return [blocking(reason, reason, "check the IMU's topic, its frame's transform and units")]
