@@ -189,6 +189,7 @@ def commands(folder: Path) -> dict[str, Command]:
         choice_opt("--format", "auto", "table", "log", "optiodom", "bag", "csv"),
         number_opt("--wheel-diameter", real(0.01, 1.0)),
         number_opt("--ticks-per-rev", real(100.0, 1e5)),
+        number_opt("--gyro-scale-tolerance", real(0.0, 0.2)),
     ]
     logged = [
         number_opt("--max-gap", real(0.01, 60.0)),
@@ -218,6 +219,7 @@ def commands(folder: Path) -> dict[str, Command]:
                 choice_opt("--angle-unit", "rad", "deg", "grad"),
                 choice_opt("--method", "paper", "exact", "heading", "endpose", "auto", "best"),
                 choice_opt("--format", "auto", "table", "log", "csv"),
+                number_opt("--gyro-scale-tolerance", real(0.0, 0.2)),
             ],
         ),
         "calibrate-logs": Command(

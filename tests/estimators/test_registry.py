@@ -44,6 +44,9 @@ def test_every_estimator_function_takes_its_kinds_calling_convention(entry):
         signature.bind(None, **keywords)
     elif entry.needs == "intervals":
         signature.bind(None, None, None, **dict(entry.options))
+    elif entry.needs == "imu":
+        keywords = {"reference": None, "scale_tolerance": 0.03, **dict(entry.options)}
+        signature.bind(None, None, None, **keywords)
     else:
         keywords = dict(entry.options)
         if entry.trajectories:

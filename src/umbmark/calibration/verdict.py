@@ -62,7 +62,7 @@ import numpy as np
 from umbmark.core.errors import option, with_flags
 from umbmark.core.messages import Blocking
 from umbmark.estimators.base import ErrorEstimate, SquareTest
-from umbmark.estimators.registry import INTERVALS
+from umbmark.estimators.registry import GYROS, INTERVALS
 from umbmark.returns.clusters import NO_RETURN_ERROR
 from umbmark.sources.bag.truth.independence import REFERENCES
 
@@ -271,7 +271,7 @@ _Finding = tuple[Level, str, "str | None"]
 
 def _intervals(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
     found: list[_Finding] = []
-    scans = estimate.method in INTERVALS  # ordinary driving: no square, no runs
+    scans = estimate.method in (*INTERVALS, *GYROS)  # ordinary driving: no square, no runs
     more = _MORE_DRIVING if scans else _MORE_RUNS
     where = (
         f"over {test.side_length:g} m of driving"

@@ -236,6 +236,12 @@ def _estimate(
             "against a laser's scan matching), not runs",
             source=where,
         )
+    if entry.needs == "imu":
+        raise InputError(
+            f"the {method} method needs a recording's wheels and its gyro (a bag with "
+            f"{option('imu_topic')}), not runs",
+            source=where,
+        )
     require_headings(entry, runs, where)
     if entry.needs == "square":
         squares = any(run.kind == "square" for run in runs)

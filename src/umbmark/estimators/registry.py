@@ -23,6 +23,12 @@ an estimator needs (:attr:`Estimator.needs`):
   of a bag's laser): ``function(intervals, params, side_length, **options)`` returns the
   estimate and the calibration (wheels and sensor mounting). No runs: the dispatch of
   runs, ``validate`` and ``--method auto`` leave these estimators out (:data:`RUNS`).
+- ``"imu"``, a recording's wheels against its gyro
+  (:class:`~umbmark.scans.gyro_intervals.GyroIntervals`, with an absolute heading
+  reference or not): ``function(intervals, params, side_length, *, reference=None,
+  scale_tolerance=..., **options)`` returns the estimate and the gyro's calibration
+  (:class:`~umbmark.estimators.gyro.GyroCalibration`). No runs either: ``validate`` and
+  ``--method auto`` leave them out (:data:`GYROS`).
 """
 
 from __future__ import annotations
@@ -40,6 +46,8 @@ __all__ = [
     "ENDPOSE",
     "ESTIMATORS",
     "EXACT",
+    "GYRO",
+    "GYROS",
     "HEADING",
     "INTERVALS",
     "LOGGED",
@@ -73,14 +81,16 @@ Method = Literal[
     "trajectory",
     "trajectory-scrub",
     "scan-matching",
+    "gyro",
 ]
-Needs = Literal["square", "logs", "intervals"]
+Needs = Literal["square", "logs", "intervals", "imu"]
 Reach = Literal["side", "path"]
 #: How ``--help`` introduces the estimators of each kind.
 _KINDS: dict[Needs, str] = {
     "square": "Square tests",
     "logs": "Recorded runs of any shape",
     "intervals": "Wheels against a laser's scan matching (tuple files)",
+    "imu": "Wheels against a gyro (a recording's IMU)",
 }
 
 
@@ -96,10 +106,11 @@ class Estimator:
         What it is, for people (the title of the summary's table of errors).
     summary : str
         What it does, in a phrase, for ``--help``.
-    needs : {"square", "logs", "intervals"}
+    needs : {"square", "logs", "intervals", "imu"}
         A square test's end points (runs tables too; the square's side is required),
-        recorded runs (time series: run logs, OptiOdom sessions, bags), or motion
-        intervals (the wheels against a sensor's scan-matched motion).
+        recorded runs (time series: run logs, OptiOdom sessions, bags), motion
+        intervals (the wheels against a sensor's scan-matched motion), or a recording's
+        wheels and gyro.
     function : str
         ``"module:function"``, called as the module's documentation says.
     headings : bool
@@ -228,6 +239,15 @@ SCAN_MATCHING = Estimator(
     function="umbmark.estimators.scan_matching:scan_matching_estimate",
 )
 
+GYRO = Estimator(
+    name="gyro",
+    label="wheels and gyro together (the gyro's scale and bias, E_d, E_b)",
+    summary="E_d, and E_b relative to the gyro; with a heading reference, the gyro's scale "
+    "and bias too",
+    needs="imu",
+    function="umbmark.estimators.gyro:gyro_estimate",
+)
+
 #: Every estimator, in the order the documentation and ``--help`` list them.
 ESTIMATORS: tuple[Estimator, ...] = (
     PAPER,
@@ -238,6 +258,7 @@ ESTIMATORS: tuple[Estimator, ...] = (
     TRAJECTORY,
     TRAJECTORY_SCRUB,
     SCAN_MATCHING,
+    GYRO,
 )
 
 _BY_NAME: dict[str, Estimator] = {e.name: e for e in ESTIMATORS}
@@ -249,6 +270,8 @@ SQUARE: tuple[Method, ...] = tuple(e.name for e in ESTIMATORS if e.needs == "squ
 LOGGED: tuple[Method, ...] = tuple(e.name for e in ESTIMATORS if e.needs == "logs")
 #: ... of motion intervals (the wheels against a sensor's own motion) ...
 INTERVALS: tuple[Method, ...] = tuple(e.name for e in ESTIMATORS if e.needs == "intervals")
+#: ... of a recording's wheels against its gyro ...
+GYROS: tuple[Method, ...] = tuple(e.name for e in ESTIMATORS if e.needs == "imu")
 #: ... and of runs, square tests or recordings (what ``validate`` and ``auto`` compare).
 RUNS: tuple[Method, ...] = SQUARE + LOGGED
 #: The estimator used unless another is asked for: chosen by the evidence of

@@ -58,6 +58,7 @@ __all__ = [
     "fit_intervals",
     "predicted_motion",
     "scan_matching_estimate",
+    "second_step",
     "solve_intervals",
 ]
 
@@ -169,7 +170,7 @@ def _first_step(phi_left: FloatArray, phi_right: FloatArray, yaw: FloatArray) ->
     return solution
 
 
-def _second_step(
+def second_step(
     phi_left: FloatArray, phi_right: FloatArray, motion: FloatArray, j21: float, j22: float
 ) -> FloatArray:
     """``(5,)`` ``x = (b, l_x, l_y, cos l_theta, sin l_theta)``, ``b > 0``."""
@@ -208,7 +209,7 @@ def solve_intervals(intervals: MotionIntervals, rows: BoolArray | None = None) -
     if problem is not None:
         raise ValueError(problem)
     j21, j22 = (float(v) for v in _first_step(pl, pr, motion[:, 2]))
-    x = _second_step(pl, pr, motion, j21, j22)
+    x = second_step(pl, pr, motion, j21, j22)
     b = float(x[0])
     return np.array([-j21 * b, j22 * b, b, x[1], x[2], math.atan2(x[4], x[3])])
 

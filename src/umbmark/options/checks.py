@@ -7,12 +7,38 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection
-from typing import cast
+from dataclasses import dataclass
+from typing import Literal, cast
 
 from umbmark.core.bounds import check_positive_option, check_range
 from umbmark.core.errors import InputError, given
 
-__all__ = ["check_bounded", "check_list"]
+__all__ = ["Bound", "check_bounded", "check_list"]
+
+
+@dataclass(frozen=True)
+class Bound:
+    """The values an option's number may take.
+
+    Attributes
+    ----------
+    kind : {"factor", "positive", "length", "offset", "range", "ratio"}
+        ``factor``: a wheel factor or multiplier
+        (:data:`umbmark.core.bounds.MULTIPLIER_RANGE`); ``positive``: above 0 and, with
+        ``high``, at most ``high``; ``length``: a plausible length up to ``high`` [m];
+        ``offset``: every number within ``high`` of 0; ``range``: ``low`` to ``high``,
+        both included (a whole number for an ``integer`` option), refused as ``--runs must
+        be 2 to 20, got 1`` (:func:`umbmark.core.bounds.check_range`); ``ratio``: above 0
+        and strictly between ``low`` and ``high`` (a true-over-nominal ratio).
+    high : float or None
+        The largest value, in the option's unit.
+    low : float or None
+        The smallest value of a ``range`` or ``ratio``.
+    """
+
+    kind: Literal["factor", "positive", "length", "offset", "range", "ratio"]
+    high: float | None = None
+    low: float | None = None
 
 
 def check_list(named: str, value: object, most: int, source: str | None = None) -> list[object]:

@@ -24,7 +24,7 @@ from umbmark.core.bounds import (
     finite_float,
 )
 from umbmark.core.errors import InputError, option
-from umbmark.options.checks import check_bounded, check_list
+from umbmark.options.checks import Bound, check_bounded, check_list
 
 __all__ = [
     "BAGS",
@@ -69,31 +69,6 @@ LONGEST_REST = 600.0
 MAX_TRUTH_OFFSET = 5.0
 
 Kind = Literal["text", "number", "integer", "choice", "file", "folder", "flag"]
-
-
-@dataclass(frozen=True)
-class Bound:
-    """The values an option's number may take.
-
-    Attributes
-    ----------
-    kind : {"factor", "positive", "length", "offset", "range", "ratio"}
-        ``factor``: a wheel factor or multiplier
-        (:data:`umbmark.core.bounds.MULTIPLIER_RANGE`); ``positive``: above 0 and, with
-        ``high``, at most ``high``; ``length``: a plausible length up to ``high`` [m];
-        ``offset``: every number within ``high`` of 0; ``range``: ``low`` to ``high``,
-        both included (a whole number for an ``integer`` option), refused as ``--runs must
-        be 2 to 20, got 1`` (:func:`umbmark.core.bounds.check_range`); ``ratio``: above 0
-        and strictly between ``low`` and ``high`` (a true-over-nominal ratio).
-    high : float or None
-        The largest value, in the option's unit.
-    low : float or None
-        The smallest value of a ``range`` or ``ratio``.
-    """
-
-    kind: Literal["factor", "positive", "length", "offset", "range", "ratio"]
-    high: float | None = None
-    low: float | None = None
 
 
 @dataclass(frozen=True)
@@ -593,6 +568,17 @@ READ_OPTIONS: tuple[Spec, ...] = (
         kind="choice",
         default="header",
         choices=("header", "bag"),
+    ),
+    Spec(
+        "gyro_scale_tolerance",
+        ("--gyro-scale-tolerance",),
+        BAGS,
+        "With an IMU and no heading reference: how far the gyro's scale may be off, as a "
+        "fraction (MEMS datasheets: 0.03 for +-3 % at 25 C); E_b is then relative to the gyro "
+        "and its interval is widened by this.",
+        kind="number",
+        default=0.03,
+        bound=Bound("range", low=0.0, high=0.2),
     ),
 )
 

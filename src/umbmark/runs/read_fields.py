@@ -61,6 +61,7 @@ class SourceOptions(TypedDict, total=False):
     tf_child: str | None
     truth_offset: tuple[float, float] | None
     time_source: Literal["header", "bag"]
+    gyro_scale_tolerance: float
 
 
 @dataclass(frozen=True)
@@ -161,6 +162,10 @@ class ReadFields:
         return error.
     time_source : Literal["header", "bag"]
         Message header stamps (where they have them) or bag receive times.
+    gyro_scale_tolerance : float
+        With an IMU and no heading reference: how far the gyro's scale may be off, as a fraction
+        (MEMS datasheets: 0.03 for +-3 % at 25 C); E_b is then relative to the gyro and its interval
+        is widened by this.
     """
 
     unit: Literal["m", "cm", "mm"] = READ["unit"].default
@@ -196,3 +201,4 @@ class ReadFields:
     tf_child: str | None = None
     truth_offset: tuple[float, float] | None = None
     time_source: Literal["header", "bag"] = READ["time_source"].default
+    gyro_scale_tolerance: float = READ["gyro_scale_tolerance"].default
