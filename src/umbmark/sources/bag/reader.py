@@ -13,7 +13,7 @@ read under way (:mod:`umbmark.sources.progress`).
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Generator, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
@@ -35,6 +35,7 @@ __all__ = [
     "one_line",
     "open_bag",
     "raw_messages",
+    "time_windows",
     "topic_connections",
     "topic_types",
 ]
@@ -182,6 +183,28 @@ def open_bag(path: Path, src: str, window: tuple[int, int] | None = None) -> Ite
         reader.close()
 
 
+def time_windows(path: Path, src: str, seconds: float) -> list[tuple[int, int] | None]:
+    """The bag's time cut into windows of ``seconds`` [ns, from and before], the windows
+    every reader of a long recording reads one at a time (:func:`open_bag`): one, None,
+    for a bag no longer than that.
+
+    Raises
+    ------
+    ValueError
+        ``seconds`` is not a positive time.
+    InputError
+        The bag cannot be opened.
+    """
+    if not seconds > 0.0:
+        raise ValueError("a window must be a positive time")
+    with open_bag(path, src) as reader:
+        first, last = int(reader.start_time), int(reader.end_time)
+    step = int(seconds * 1e9)
+    if last - first <= step:
+        return [None]
+    return [(a, min(a + step, last + 1)) for a in range(first, last + 1, step)]
+
+
 def topic_types(reader: AnyReader) -> dict[str, str]:
     """Topic name to message type, sorted by topic; several types joined by ``", "``."""
     out: dict[str, str] = {}
@@ -289,10 +312,10 @@ def raw_messages(
     src: str,
     start: int | None = None,
     stop: int | None = None,
-) -> Iterator[tuple[int, bytes]]:
+) -> Generator[tuple[int, bytes], None, None]:
     """``(bag time [ns], raw message)`` of ``conns`` (from ``start`` [ns] on and before
     ``stop``, if given), uncounted; read errors become InputError. The stream is closed
-    when left early."""
+    when left early (and the generator's ``close()`` closes it at once)."""
     stream = reader.messages(connections=conns, start=start, stop=stop)
     try:
         while True:
