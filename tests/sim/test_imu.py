@@ -25,7 +25,9 @@ DEG = math.pi / 180.0
 def _spin(omega: float, seconds: float = 20.0, dt: float = 0.01) -> PoseSeries:
     """The true poses of a robot turning on the spot at ``omega`` [rad/s]."""
     time = np.arange(0.0, seconds + dt / 2, dt)
-    return PoseSeries(time, np.column_stack([np.zeros(time.size), np.zeros(time.size), omega * time]))
+    return PoseSeries(
+        time, np.column_stack([np.zeros(time.size), np.zeros(time.size), omega * time])
+    )
 
 
 def test_a_spin_reads_its_rate_over_the_scale_plus_the_bias_and_the_lever_arms_force():
@@ -129,7 +131,9 @@ def test_the_recorded_gyro_gives_each_runs_true_heading_change(tmp_path: Path, c
     # each run from the rest before it to the rest after it (the robot still at both)
     start = session.windows[:, 0] - 0.5 * REST
     end = session.windows[:, 1] + 0.5 * REST
-    turned = np.interp(end, session.truth.time, heading) - np.interp(start, session.truth.time, heading)
+    turned = np.interp(end, session.truth.time, heading) - np.interp(
+        start, session.truth.time, heading
+    )
     read_turn = read.gyro.yaw_change(start + START_EPOCH, end + START_EPOCH)
     expected = turned / 0.975 + yaw_bias * (end - start)
     assert np.all(np.abs(turned) > 6.0)  # a square: four quarter turns each

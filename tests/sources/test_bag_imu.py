@@ -314,7 +314,9 @@ def test_a_saturating_gyro_is_named_with_its_stretch(tmp_path):
     rates[210:240, 2] = full_scale  # ... clipped at 250 deg/s for 0.3 s
     read = read_imu(imu_bag(tmp_path / "b", "ros1", rates), OPTIONS)
     (note,) = read.notes
-    assert "/imu: the gyro saturates: an axis held at its extreme reading (up to 250.0 deg/s)" in note
+    assert (
+        "/imu: the gyro saturates: an axis held at its extreme reading (up to 250.0 deg/s)" in note
+    )
     assert "(3.10 to 3.39 s of the recording)" in note
     np.testing.assert_allclose(read.saturated, [[T0 + 3.1, T0 + 3.39]], atol=1e-6)
     assert read.usable(np.array([T0 + 2.0, T0 + 3.0]), np.array([T0 + 3.0, T0 + 3.2])).tolist() == [
@@ -345,7 +347,9 @@ def test_no_topic_the_wrong_type_no_option(tmp_path):
     assert "topic /tf_static has messages of type tf2_msgs/msg/TFMessage; an IMU's readings" in (
         api_error(read_imu, path, BagOptions(imu_topic="/tf_static"))
     )
-    assert "reading a gyro needs --imu-topic: a sensor_msgs/Imu topic" in api_error(read_imu, path, BagOptions())
+    assert "reading a gyro needs --imu-topic: a sensor_msgs/Imu topic" in api_error(
+        read_imu, path, BagOptions()
+    )
 
 
 def test_one_read_is_bounded(tmp_path, monkeypatch):

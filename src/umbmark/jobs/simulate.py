@@ -396,7 +396,7 @@ def _imu_setup(imu: object) -> ImuSetup | None:
         return ImuSetup()
     if isinstance(imu, ImuSetup):
         return imu
-    raise InputError(f"{option('imu')} must be True, False or an ImuSetup, not {imu!r:.40}")
+    raise InputError(f"{option('imu', repr(imu)[:40])}: give True, False or an ImuSetup")
 
 
 def _read_imu(result: SimResult, robot: SimRobot, setup: ImuSetup, seed: int) -> SimulatedImu:
