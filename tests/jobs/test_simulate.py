@@ -56,7 +56,9 @@ def test_the_imus_truth_and_its_mounting_beside_the_lasers(tmp_path: Path):
     path = tmp_path / "b.bag"
     report = umbmark.simulate(**SMALL, bag=path, imu=setup, scan=True)
     truth = report.to_dict()["imu"]
-    assert truth["k_g"] == 0.98 and truth["rate"] == 50.0 and truth["topic"] == "/imu"
+    assert truth["k_g"] == 0.98
+    assert truth["rate"] == 50.0
+    assert truth["topic"] == "/imu"
     assert truth["mounting"]["rpy"] == [0.0, -2.0 * DEG, 180.0 * DEG]
     with bag_reader.open_bag(path, str(path)) as reader:
         topics = bag_reader.topic_types(reader)
@@ -75,6 +77,7 @@ def test_the_imus_truth_and_its_mounting_beside_the_lasers(tmp_path: Path):
     c, s = math.cos(2.0 * DEG), math.sin(2.0 * DEG)
     np.testing.assert_allclose(rotation, [[-c, 0, s], [0, -1, 0], [s, 0, c]], atol=1e-12)
     described, _ = bag_robot_description(path)
-    assert described is not None and described.wheelbase == pytest.approx(0.34)
+    assert described is not None
+    assert described.wheelbase == pytest.approx(0.34)
     done = run_cli("info", str(path), "--json")
     assert json.loads(done.stdout)["suggested_options"].endswith("--imu-topic /imu")

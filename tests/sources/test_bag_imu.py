@@ -118,7 +118,8 @@ def test_the_readings_come_out_in_the_base_frame(tmp_path, fmt, mounted):
     path = imu_bag(tmp_path / "b", fmt, rates, static=(("base_link", "imu_link", _quat(rotation)),))
     read = read_imu(path, OPTIONS)
     assert read.notes == ()
-    assert read.mounting.base == "base_link" and read.mounting.source == "/tf_static"
+    assert read.mounting.base == "base_link"
+    assert read.mounting.source == "/tf_static"
     np.testing.assert_allclose(read.gyro.rate, rotation.apply(rates), atol=1e-12)
     np.testing.assert_allclose(read.gyro.accel, rotation.apply(np.tile([0, 0, 9.81], (300, 1))))
     np.testing.assert_allclose(read.gyro.time, T0 + 1.0 + np.arange(300) / RATE, atol=1e-6)
@@ -256,7 +257,8 @@ def test_repeated_and_out_of_order_stamps(tmp_path):
     stamps[60], stamps[61] = stamps[61], stamps[60]  # two swapped
     read = read_imu(imu_bag(tmp_path / "b", "mcap", rates, stamps=stamps), OPTIONS)
     assert len(read.gyro) == 97
-    assert read.dropped["repeated"] == 3 and read.dropped["reordered"] == 1
+    assert read.dropped["repeated"] == 3
+    assert read.dropped["reordered"] == 1
     notes = " | ".join(read.notes)
     assert "3 of 100 messages repeat an earlier message's stamp: dropped" in notes
     assert "1 of 100 messages arrive out of order" in notes
@@ -304,7 +306,8 @@ def test_a_frozen_imu_is_said_and_named_against_turning_wheels(tmp_path):
 def test_an_imu_frozen_from_first_to_last_is_refused(tmp_path):
     rates = _frozen(_rates(300), 0, 300)
     line = api_error(read_imu, imu_bag(tmp_path / "b", "sqlite3", rates), OPTIONS)
-    assert "/imu: every reading is the same" in line and "a frozen IMU" in line
+    assert "/imu: every reading is the same" in line
+    assert "a frozen IMU" in line
 
 
 def test_a_saturating_gyro_is_named_with_its_stretch(tmp_path):

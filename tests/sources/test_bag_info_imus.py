@@ -38,7 +38,8 @@ def test_a_simulated_imu_is_found_with_its_mounting_and_suggested(simulated: Pat
     (imu,) = report.bag.imus
     assert (imu.topic, imu.frame, imu.gyro, imu.problem) == ("/imu", "imu_link", True, None)
     assert imu.rate == pytest.approx(50.0, rel=0.01)
-    assert imu.mounting.base == "base_link" and imu.mounting.source == "/tf_static"
+    assert imu.mounting.base == "base_link"
+    assert imu.mounting.source == "/tf_static"
     np.testing.assert_allclose(imu.mounting.rpy, [DEG, 0.0, 90.0 * DEG], atol=1e-9)
     assert report.suggested_options == f"--truth-topic /mocap/robot/pose {WHEELS} --imu-topic /imu"
     data = report.to_dict()
