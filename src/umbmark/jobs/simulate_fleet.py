@@ -7,7 +7,8 @@ day each, as a fleet records them: ``FOLDER/ROBOT/DATE/drive`` (ROS 2 MCAP, or R
 (``/imu`` at :data:`IMU_RATE`, a MEMS gyro of the robot's own scale, bias and tilt,
 mounted likewise: :mod:`umbmark.sim.imu`) and the motion capture's truth, driving
 ordinary missions in a warehouse (:func:`umbmark.sim.missions.mission`: corridors,
-quarter turns at shelves, whole turns now and then; not squares). Each robot has errors of its own; some change:
+quarter turns at shelves, whole turns now and then; not squares). Each robot has errors
+of its own; some change:
 
 - robot 2's right wheel is changed halfway (``E_d`` steps by :data:`WHEEL_STEP`);
 - robot 3's laser is knocked the same day (:data:`KNOCK`: 10 mm forward, 3 degrees);
