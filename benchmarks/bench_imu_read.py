@@ -8,10 +8,12 @@ message by message with rosbags. Then, each in a fresh process (so that its peak
 memory is its own), side by side on the same bag:
 
 (a) the IMU read whole: ``read_imu(bag, BagOptions(imu_topic="/imu"))``;
-(b) the IMU read in windows of ``--window`` seconds (default 300, ``scans.bag.WINDOW``):
-    ``time_windows`` and ``read_imu(..., window=w)`` for each, keeping only each window's
-    yaw integral (as a calibration that matches intervals window by window does);
-(c) the wheels read whole (``read_recording``), the other half of what the calibration
+(b) the IMU read in windows of ``--window`` seconds (default 300, ``scans.bag.WINDOW``),
+    the bag opened once: ``read_imu_windows``, keeping only each window's yaw integral (as
+    a calibration that matches intervals window by window does);
+(c) the same windows, the bag opened again for each: ``time_windows`` and
+    ``read_imu(..., window=w)`` (what opening a bag costs: it reads its index);
+(d) the wheels read whole (``read_recording``), the other half of what the calibration
     reads.
 
 The times leave out Python's start and the imports (rosbags' too), which a command pays
@@ -66,7 +68,7 @@ def generate(folder: Path, fmt: str, minutes: float) -> Path:
         writer = Writer2(path, version=9, storage_plugin=plugin)
         serialize = ts.serialize_cdr
 
-    def header(ns: int, frame: str):  # noqa: ANN202
+    def header(ns: int, frame: str):
         sec, nsec = divmod(ns, 1_000_000_000)
         stamp = T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec)
         if fmt == "ros1":
@@ -118,13 +120,13 @@ def generate(folder: Path, fmt: str, minutes: float) -> Path:
 
 def child(mode: str, path: str, window: float) -> None:
     """One measurement in this process: prints seconds and peak memory [MB] as JSON."""
+    import rosbags.highlevel
+    import rosbags.typesys  # noqa: F401
+
     from umbmark.sources.bag.bag_options import BagOptions
-    from umbmark.sources.bag.imu import read_imu
+    from umbmark.sources.bag.imu import read_imu, read_imu_windows
     from umbmark.sources.bag.reader import time_windows
     from umbmark.sources.bag.recording import read_recording
-
-    import rosbags.highlevel  # noqa: F401  (imported by the first read: not its cost)
-    import rosbags.typesys  # noqa: F401
 
     options = BagOptions(imu_topic="/imu")
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -133,6 +135,12 @@ def child(mode: str, path: str, window: float) -> None:
         gyro = read_imu(path, options).gyro
         samples, total = len(gyro), float(gyro.yaw_change(gyro.time[:1], gyro.time[-1:])[0])
     elif mode == "windows":
+        samples, total = 0, 0.0
+        for read in read_imu_windows(path, options, window):
+            gyro = read.gyro
+            samples += len(gyro)
+            total += float(gyro.yaw_change(gyro.time[:1], gyro.time[-1:])[0])
+    elif mode == "reopened":
         samples, total = 0, 0.0
         for span in time_windows(Path(path), path, window):
             gyro = read_imu(path, options, window=span).gyro
@@ -168,20 +176,25 @@ def main() -> None:
           f"{args.window:g} s; each read in a fresh process, memory: peak RSS over its "
           "imports")  # fmt: skip
     print(f"{'min':>4} {'IMU msgs':>9} | {'whole s':>8} {'MB':>6} | {'windows s':>9} {'MB':>6} | "
-          f"{'wheels s':>8} | {'win/whole time':>14} {'win/whole MB':>12} {'IMU/wheels':>10}")  # fmt: skip
+          f"{'reopened s':>10} | {'wheels s':>8} | {'win/whole time':>14} {'win/whole MB':>12} "
+          f"{'reopened/win':>12} {'IMU/wheels':>10}")  # fmt: skip
     with tempfile.TemporaryDirectory() as folder:
         for minutes in (float(m) for m in args.minutes.split(",")):
             path = generate(Path(folder), args.format, minutes)
             whole = measure("whole", path, args.window)
             windows = measure("windows", path, args.window)
+            reopened = measure("reopened", path, args.window)
             wheels = measure("wheels", path, args.window)
             assert whole["samples"] == windows["samples"] == round(60 * minutes * IMU_RATE)
+            assert reopened["samples"] == windows["samples"]
             assert math.isclose(whole["yaw"], windows["yaw"], rel_tol=1e-2, abs_tol=1e-2)
             print(
                 f"{minutes:4g} {int(whole['samples']):9d} | {whole['seconds']:8.2f} "
                 f"{whole['peak']:6.0f} | {windows['seconds']:9.2f} {windows['peak']:6.0f} | "
-                f"{wheels['seconds']:8.2f} | {windows['seconds'] / whole['seconds']:14.2f} "
+                f"{reopened['seconds']:10.2f} | {wheels['seconds']:8.2f} | "
+                f"{windows['seconds'] / whole['seconds']:14.2f} "
                 f"{windows['peak'] / max(whole['peak'], 1.0):12.2f} "
+                f"{reopened['seconds'] / windows['seconds']:12.2f} "
                 f"{whole['seconds'] / wheels['seconds']:10.2f}"
             )
             for p in sorted(path.glob("*")) if path.is_dir() else [path]:

@@ -23,7 +23,7 @@ from robot_bags import FORMATS, IMU, STRING, T0, TF, BagWriter
 from umbmark.model.recording import WheelSeries
 from umbmark.sources.bag import imu as imu_reader
 from umbmark.sources.bag.bag_options import BagOptions
-from umbmark.sources.bag.imu import check_against_wheels, read_gyro, read_imu
+from umbmark.sources.bag.imu import check_against_wheels, read_gyro, read_imu, read_imu_windows
 from umbmark.sources.bag.reader import time_windows
 
 from helpers import api_error
@@ -68,17 +68,18 @@ def imu_bag(
     *,
     frame: str = "imu_link",
     stamps: np.ndarray | None = None,
+    received: np.ndarray | None = None,
     covariance: np.ndarray | None = None,
     static: tuple = (("base_link", "imu_link", (0.0, 0.0, 0.0, 1.0)),),
     dynamic: tuple = (),
     description: str | None = None,
 ) -> Path:
-    """A bag with ``/imu`` (``rates`` in ``frame``, received at ``RATE``, stamped
-    ``stamps`` [s from T0], default the receive times), ``/tf_static`` with ``static``
+    """A bag with ``/imu`` (``rates`` in ``frame``, received at ``received`` [s from T0],
+    default at ``RATE`` from 1 s, stamped ``stamps``, default the receive times), ``/tf_static`` with ``static``
     ``(parent, child, quaternion xyzw)``, ``/tf`` with ``dynamic`` (each repeated at 10 Hz
     for 2 s) and a ``/robot_description``."""
     bag = BagWriter(fmt)
-    received = np.arange(len(rates)) / RATE + 1.0
+    received = np.arange(len(rates)) / RATE + 1.0 if received is None else received
     stamps = received if stamps is None else stamps
     for k, rate in enumerate(rates):
         cov = 0.0 if covariance is None else float(covariance[k])
@@ -372,3 +373,18 @@ def test_windows_read_the_whole_reads_readings(tmp_path, fmt):
     parts = [read_imu(path, OPTIONS, window=w).gyro for w in windows]
     np.testing.assert_array_equal(np.concatenate([p.time for p in parts]), whole.time)
     np.testing.assert_array_equal(np.concatenate([p.rate for p in parts]), whole.rate)
+    # the same windows from the bag opened once, each holding one window's readings
+    once = [read.gyro for read in read_imu_windows(path, OPTIONS, 3.0)]
+    assert [len(p) for p in once] == [len(p) for p in parts]
+    assert max(len(p) for p in once) <= 3.0 * RATE
+    np.testing.assert_array_equal(np.concatenate([p.rate for p in once]), whole.rate)
+
+
+def test_a_window_without_readings_is_a_pause_passed_over(tmp_path):
+    rates = _rates(600)
+    keep = np.r_[0:200, 500:600]  # no readings from 3 s to 6 s
+    times = (np.arange(600) / RATE + 1.0)[keep]
+    path = imu_bag(tmp_path / "b", "mcap", rates[keep], received=times)
+    reads = list(read_imu_windows(path, OPTIONS, 1.0))
+    # 0-1 s holds only /tf_static, 3-6 s nothing: passed over
+    assert [len(r.gyro) for r in reads] == [100, 100, 100]

@@ -70,6 +70,7 @@ __all__ = [
     "read_gyro",
     "read_imu",
     "read_imu_topic",
+    "read_imu_windows",
 ]
 
 #: Readings held at most in one read (2.2 hours at 1 kHz, 11 hours at 200 Hz): more, and
@@ -147,17 +148,61 @@ def read_imu(
         messages hold no gyro readings (one line naming the bag, the topic and why).
     """
     src = str(path)
+    topic = _imu_topic(options, src)
+    with bag_reader.open_bag(Path(path), src, window) as reader:
+        topics = bag_reader.topic_types(reader)
+        return read_imu_topic(reader, topics, topic, src, header=options.time_source == "header")
+
+
+def _imu_topic(options: BagOptions, src: str) -> str:
+    """The IMU topic the options name; none is one line."""
     if options.imu_topic is None:
         raise InputError(
             f"reading a gyro needs {option('imu_topic')}: a sensor_msgs/Imu topic (umbmark "
             "info lists the bag's)",
             source=src,
         )
-    with bag_reader.open_bag(Path(path), src, window) as reader:
+    return options.imu_topic
+
+
+def read_imu_windows(path: str | Path, options: BagOptions, seconds: float) -> Iterator[ImuRead]:
+    """:func:`read_imu` of each window of ``seconds`` of the bag
+    (:func:`~umbmark.sources.bag.reader.reader_windows`), the bag opened once: the memory
+    of one window, the time of one read. A window with no readings (a pause in the
+    recording) is passed over; the error of the first such window is raised where no
+    window has any.
+
+    Raises
+    ------
+    InputError
+        As :func:`read_imu`.
+    """
+    src = str(path)
+    topic = _imu_topic(options, src)
+    header = options.time_source == "header"
+    failed: InputError | None = None
+    read_any = False
+    with bag_reader.open_bag(Path(path), src) as reader:
         topics = bag_reader.topic_types(reader)
-        return read_imu_topic(
-            reader, topics, options.imu_topic, src, header=options.time_source == "header"
-        )
+        windows = bag_reader.reader_windows(reader, seconds)
+        for window in windows:
+            try:
+                read = read_imu_topic(bag_reader.windowed(reader, window), topics, topic, src,
+                                      header=header)  # fmt: skip
+            except InputError as err:
+                if len(windows) == 1 or not _paused(err):
+                    raise
+                failed = failed or err
+                continue
+            read_any = True
+            yield read
+    if not read_any and failed is not None:
+        raise failed
+
+
+def _paused(err: InputError) -> bool:
+    """Whether a window's error is a pause: no readings, or too few, in it."""
+    return err.problem.endswith("has no messages") or "fewer than 2 readings" in err.problem
 
 
 def read_gyro(
