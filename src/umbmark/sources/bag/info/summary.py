@@ -309,6 +309,42 @@ def _storage(path: Path) -> str:
     return "sqlite3"
 
 
+def _contents(
+    scanned: Sequence[ScannedTopic],
+) -> tuple[list[JointStateInfo], list[ModelStatesInfo]]:
+    """The joints of the joint-state topics and the models of the model-state topics."""
+    joint_states: list[JointStateInfo] = []
+    model_states: list[ModelStatesInfo] = []
+    for topic in scanned:
+        if topic.msgtype == MODEL_STATES and topic.content is not None:
+            models = topic.content.model_motion()
+            model_states.append(
+                ModelStatesInfo(
+                    topic.name,
+                    tuple(models[:MAX_LISTED]),
+                    max(len(models) - MAX_LISTED, 0),
+                    topic.content.decoded,
+                )
+            )
+        if topic.msgtype == JOINT_STATE and topic.content is not None:
+            joints = [
+                JointInfo(
+                    name, s.samples, s.position_range, s.max_speed[0], s.moving, s.max_speed[1]
+                )
+                for name, s in topic.content.joints.items()
+            ]
+            joint_states.append(
+                JointStateInfo(
+                    topic.name,
+                    tuple(joints[:MAX_LISTED]),
+                    max(len(joints) - MAX_LISTED, 0),
+                    topic.content.decoded,
+                    topic.scan.complete,
+                )
+            )
+    return joint_states, model_states
+
+
 def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> BagInfo:
     """What is in a bag, and the options to read it with (see the module docstring).
 
@@ -353,35 +389,7 @@ def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> B
         )
     if robot_problem is not None:
         notes.append(robot_problem)
-    joint_states = []
-    model_states = []
-    for topic in scanned:
-        if topic.msgtype == MODEL_STATES and topic.content is not None:
-            models = topic.content.model_motion()
-            model_states.append(
-                ModelStatesInfo(
-                    topic.name,
-                    tuple(models[:MAX_LISTED]),
-                    max(len(models) - MAX_LISTED, 0),
-                    topic.content.decoded,
-                )
-            )
-        if topic.msgtype == JOINT_STATE and topic.content is not None:
-            joints = [
-                JointInfo(
-                    name, s.samples, s.position_range, s.max_speed[0], s.moving, s.max_speed[1]
-                )
-                for name, s in topic.content.joints.items()
-            ]
-            joint_states.append(
-                JointStateInfo(
-                    topic.name,
-                    tuple(joints[:MAX_LISTED]),
-                    max(len(joints) - MAX_LISTED, 0),
-                    topic.content.decoded,
-                    topic.scan.complete,
-                )
-            )
+    joint_states, model_states = _contents(scanned)
     empty = []
     for topic in scanned:
         content = topic.content
