@@ -75,9 +75,9 @@ def imu_bag(
     description: str | None = None,
 ) -> Path:
     """A bag with ``/imu`` (``rates`` in ``frame``, received at ``received`` [s from T0],
-    default at ``RATE`` from 1 s, stamped ``stamps``, default the receive times), ``/tf_static`` with ``static``
-    ``(parent, child, quaternion xyzw)``, ``/tf`` with ``dynamic`` (each repeated at 10 Hz
-    for 2 s) and a ``/robot_description``."""
+    default at ``RATE`` from 1 s, stamped ``stamps``, default the receive times),
+    ``/tf_static`` with ``static`` ``(parent, child, quaternion xyzw)``, ``/tf`` with
+    ``dynamic`` (each repeated at 10 Hz for 2 s) and a ``/robot_description``."""
     bag = BagWriter(fmt)
     received = np.arange(len(rates)) / RATE + 1.0 if received is None else received
     stamps = received if stamps is None else stamps
