@@ -24,6 +24,7 @@ ORDER = {
     "bag_options": 2,
     "reader": 3,
     "writer": 3,
+    "imu_writer": 3,
     "fastpath": 4,
     "samples": 4,
     "custom": 4,
@@ -32,6 +33,8 @@ ORDER = {
     "truth": 5,
     "recording": 6,
     "urdf": 7,
+    "imu_frames": 7,
+    "imu": 7,
     "info": 8,
 }
 #: What the bag may use of the rest of umbmark: the layers below sources/, and the two

@@ -55,7 +55,8 @@ def test_the_truth_topic_given_is_every_recordings_reference(tmp_path: Path):
     assert left["path"] == str(lab / "robot01" / "drive")
     assert left["reason"].startswith(
         f"{lab / 'robot01' / 'drive'}: no topic /mocap/amr1/pose (ground truth) in the bag; "
-        "topics present: /joint_states (sensor_msgs/msg/JointState), /mocap/robot/pose "
+        "topics present: /imu (sensor_msgs/msg/Imu), /joint_states (sensor_msgs/msg/JointState), "
+        "/mocap/robot/pose "
         "(geometry_msgs/msg/PoseStamped), "
     ), left["reason"]
     assert "1 with no usable recording" in data["summary"]

@@ -374,6 +374,37 @@ def commands(folder: Path) -> dict[str, Command]:
                 number_opt("--robot-width", real(0.2, 0.5)),
             ],
         ),
+        # The IMU of a small bag (its options do nothing without --imu and --bag).
+        "simulate-imu": Command(
+            [
+                "simulate",
+                "-L",
+                "0.5",
+                "--speed",
+                "1",
+                "--dt",
+                "0.05",
+                "--runs",
+                "2",
+                "--bag",
+                str(folder / "imu"),
+                "--bag-storage",
+                "mcap",
+                "--imu",
+                "--force",
+            ],
+            [
+                number_opt("--imu-rate", real(10.0, 1000.0)),
+                number_opt("--gyro-scale", real(0.8, 1.25)),
+                number_opt("--gyro-bias", real(-10.0, 10.0)),
+                number_opt("--gyro-bias-walk", real(0.0, 0.05)),
+                number_opt("--gyro-noise", real(0.0, 0.5)),
+                number_opt("--gyro-range", real(30.0, 4000.0)),
+                number_opt("--imu-roll", real(-180.0, 180.0)),
+                number_opt("--imu-pitch", real(-90.0, 90.0)),
+                number_opt("--imu-yaw", real(-180.0, 180.0)),
+            ],
+        ),
         "simulate-fleet": Command(
             [
                 "simulate",
@@ -518,13 +549,15 @@ NAMES = [
     "report",
     "selfcal",
     "simulate-fleet",
+    "simulate-imu",
     "fleet",
 ]
 
 
 #: The commands whose examples take seconds each (a demo, a self-calibration, a study, the
 #: reproductions, a report page): fuzzed in the full run only.
-SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study", "table1", "report", "simulate-fleet"}
+SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study", "table1", "report", "simulate-fleet",
+                 "simulate-imu"}  # fmt: skip
 
 
 @pytest.mark.parametrize(

@@ -7,6 +7,8 @@ fail with one line.
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
 import json
 import math
 import os
@@ -265,6 +267,9 @@ def test_a_runs_table_calibration_loads_no_heavy_library(table):
 
 # Options whose command-line unit differs from the library's SI keyword.
 _CONVERTED = {("simulate", "turn_angle"), ("fig4", "leg_bend"), ("table1", "tape_thickness")}
+#: Options a command gathers into one keyword's value, a dataclass whose fields they are
+#: (in its units: ``ImuSetup.of_options``): simulate's IMU is ``imu=ImuSetup(...)``.
+_GATHERED = {"simulate": ("imu", "umbmark.sim.imu.ImuSetup")}
 _RENDERING = {"json_out", "help"}
 
 
@@ -294,8 +299,16 @@ def test_every_option_is_a_keyword_of_the_library_function(name, command, functi
     keywords = set(taken)
     if name == "simulate":  # simulate --fleet N is umbmark.simulate_fleet(fleet=N, ...)
         keywords |= set(keywords_of(umbmark.simulate_fleet) or ())
+    gathered: set[str] = set()
+    if name in _GATHERED:
+        keyword, where = _GATHERED[name]
+        assert keyword in keywords
+        module, _, cls = where.rpartition(".")
+        gathered = {
+            f.name for f in dataclasses.fields(getattr(importlib.import_module(module), cls))
+        }
     for param in command.params:
-        if param.name in _RENDERING or (name, param.name) in _CONVERTED:
+        if param.name in _RENDERING or (name, param.name) in _CONVERTED or param.name in gathered:
             continue
         if isinstance(param, click.Argument):
             assert param.name in keywords or param.nargs == -1, (name, param.name)

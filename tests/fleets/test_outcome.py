@@ -223,7 +223,7 @@ def test_a_truth_topic_not_in_the_recording_is_its_reason_for_being_left_out(two
     assert wrong.reason is not None
     assert wrong.reason.startswith(
         f"{laser}: no topic /mocap/amr2 (ground truth) in the bag; topics present: "
-        "/joint_states (sensor_msgs/msg/JointState), /mocap/robot/pose "
+        "/imu (sensor_msgs/msg/Imu), /joint_states (sensor_msgs/msg/JointState), /mocap/robot/pose "
         "(geometry_msgs/msg/PoseStamped), /odom (nav_msgs/msg/Odometry), "
     ), wrong.reason
     assert "/scan (sensor_msgs/msg/LaserScan)" in wrong.reason

@@ -11,6 +11,7 @@ import subprocess
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import umbmark
@@ -130,3 +131,35 @@ def test_ctrl_c_midway_through_the_command_leaves_nothing(tmp_path: Path):
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1] == "umbmark: interrupted"
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_every_robot_records_an_imu_and_one_gyros_scale_changes(tmp_path: Path):
+    """truth.json holds each robot's gyro per day; robot05's ``k_g`` steps by
+    ``GYRO_STEP`` on the second day, the others' stay; each bag's IMU is mounted as its
+    truth says (read back by the reader)."""
+    import math
+
+    from umbmark.sources.bag.bag_options import BagOptions
+    from umbmark.sources.bag.imu import read_imu
+
+    target = tmp_path / "fleet"
+    sf.simulate_fleet(target, fleet=5, days=2, minutes=0.2, seed=2)
+    truth = json.loads((target / "truth.json").read_text(encoding="utf-8"))
+    assert truth["events"]["robot05"] == "gyro scale changed on day 2: k_g +0.015"
+    by = {(r["robot"], r["day"]): r["gyro"] for r in truth["recordings"]}
+    for robot in ("robot01", "robot02", "robot03", "robot04", "robot05"):
+        first, second = by[(robot, "2026-11-02")], by[(robot, "2026-11-03")]
+        assert 0.97 <= first["k_g"] <= 1.03
+        assert abs(first["bias"][2]) <= math.radians(0.5)
+        assert all(abs(a) <= math.radians(1.0) for a in first["mounting"]["rpy"][:2])
+        assert first["rate"] == sf.IMU_RATE
+        assert first["topic"] == "/imu"
+        step = second["k_g"] - first["k_g"]
+        assert step == pytest.approx(sf.GYRO_STEP if robot == "robot05" else 0.0, abs=1e-12)
+    path = target / "robot05" / "2026-11-03" / "drive"
+    read = read_imu(path, BagOptions(imu_topic="/imu"))
+    roll, pitch, yaw = read.mounting.rpy
+    want = by[("robot05", "2026-11-03")]["mounting"]["rpy"]
+    np.testing.assert_allclose([roll, pitch, yaw], want, atol=1e-9)
+    assert read.gyro.time.size == by[("robot05", "2026-11-03")]["readings"]

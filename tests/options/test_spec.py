@@ -87,7 +87,7 @@ def test_the_spec_holds_the_documented_values() -> None:
     assert SIDE_LENGTH.flags == ("--side-length", "-L")
     # one entry per keyword, flags the keyword with "-" for "_"
     assert READ["gyro_scale_tolerance"].default == 0.03  # MPU-6050: +-3 % at 25 C
-    assert len(READ) == len(READ_OPTIONS) == 34
+    assert len(READ) == len(READ_OPTIONS) == 35
     for spec in READ_OPTIONS:
         assert spec.flag == "--" + spec.name.replace("_", "-")
 

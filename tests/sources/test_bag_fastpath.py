@@ -1,7 +1,8 @@
 """The byte-level decoder of ``umbmark.sources.bag.fastpath`` equals rosbags' deserializer.
 
 Hypothesis draws batches of random messages of every type the decoder has a layout for
-(``sensor_msgs/JointState``, the three pose types, the eight ``std_msgs`` numbers),
+(``sensor_msgs/JointState``, the three pose types, ``sensor_msgs/Imu``, the eight
+``std_msgs`` numbers),
 serializes them with rosbags as ROS 1 (Noetic store) or as CDR (latest store; little- and
 big-endian mixed in one batch), and reads them with ``fastpath.decode_messages``. The
 stamps, values and kinds must equal, bit for bit (NaN equal to NaN), what this test picks
@@ -50,6 +51,7 @@ POSE = "geometry_msgs/msg/PoseStamped"
 POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
 ODOM = "nav_msgs/msg/Odometry"
 POSE_TYPES = [POSE, POSE_COV, ODOM]
+IMU = "sensor_msgs/msg/Imu"
 # std_msgs numbers: the range of ``data``
 INTS = {
     "std_msgs/msg/Int16": (-(2**15), 2**15 - 1),
@@ -60,7 +62,7 @@ INTS = {
     "std_msgs/msg/UInt64": (0, 2**64 - 1),
 }
 FLOATS = {"std_msgs/msg/Float32": 32, "std_msgs/msg/Float64": 64}
-TYPES = [JS, *POSE_TYPES, *INTS, *FLOATS]
+TYPES = [JS, *POSE_TYPES, IMU, *INTS, *FLOATS]
 
 # rosbags' Time has an int32 ``sec`` in both stores; ROS 1 sends an uint32: drawing every
 # int32 draws every bit pattern, so ROS 1 seconds >= 2^31 are covered as their int32 bits.
@@ -127,11 +129,17 @@ def reference(msg: Any, typ: str, joints: tuple[str, str]) -> list[Sample]:
         stamp = msg.header.stamp
         values = (float(p.x), float(p.y), float(q.x), float(q.y), float(q.z), float(q.w))
         return [(int(stamp.sec), int(stamp.nanosec), values, fastpath.POSITION)]
+    if typ == IMU:
+        w, a, stamp = msg.angular_velocity, msg.linear_acceleration, msg.header.stamp
+        values = (float(w.x), float(w.y), float(w.z), float(msg.angular_velocity_covariance[0]),
+                  float(a.x), float(a.y), float(a.z), float(msg.linear_acceleration_covariance[0]),
+                  float(msg.orientation_covariance[0]))  # fmt: skip
+        return [(int(stamp.sec), int(stamp.nanosec), values, fastpath.POSITION)]
     return [(0, 0, (float(msg.data),), fastpath.POSITION)]
 
 
 def width_of(typ: str) -> int:
-    return 2 if typ == JS else 6 if typ in POSE_TYPES else 1
+    return 2 if typ == JS else 6 if typ in POSE_TYPES else 9 if typ == IMU else 1
 
 
 # --- drawing messages ------------------------------------------------------------------
@@ -190,8 +198,35 @@ class PoseShape:
 
 
 @st.composite
+def imu_message(draw: st.DrawFn, shape: PoseShape, ros2: bool) -> object:
+    """``sensor_msgs/Imu``: every field drawn (the covariances' first elements -1 at times)."""
+    ts = store(ros2)
+    vector, quaternion = (
+        ts.types["geometry_msgs/msg/Vector3"],
+        ts.types["geometry_msgs/msg/Quaternion"],
+    )
+    w = draw(st.lists(F64, min_size=3, max_size=3))
+    a = draw(st.lists(F64, min_size=3, max_size=3))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    covariances = [rng.standard_normal(9) for _ in range(3)]
+    for cov in covariances:
+        cov[0] = draw(st.sampled_from([-1.0, 0.0])) if draw(st.booleans()) else draw(F64)
+    return ts.types[IMU](
+        header=make_header(ros2, draw(SEQ), draw(SEC), draw(NSEC), shape.frame),
+        orientation=quaternion(x=rng.standard_normal(), y=0.0, z=0.0, w=1.0),
+        orientation_covariance=covariances[0],
+        angular_velocity=vector(x=w[0], y=w[1], z=w[2]),
+        angular_velocity_covariance=covariances[1],
+        linear_acceleration=vector(x=a[0], y=a[1], z=a[2]),
+        linear_acceleration_covariance=covariances[2],
+    )
+
+
+@st.composite
 def pose_message(draw: st.DrawFn, typ: str, shape: PoseShape, ros2: bool) -> object:
     ts = store(ros2)
+    if typ == IMU:
+        return draw(imu_message(shape, ros2))
     x, y, z, qx, qy, qz, qw = draw(st.lists(F64, min_size=7, max_size=7))
     pose = ts.types["geometry_msgs/msg/Pose"](
         position=ts.types["geometry_msgs/msg/Point"](x=x, y=y, z=z),
@@ -271,7 +306,7 @@ def batch(draw: st.DrawFn, typ: str, ros2: bool, joints: tuple[str, str]) -> lis
         for _ in range(draw(st.integers(0, 4))):
             other = draw(joint_shape(joints, template=False))
             add(draw(joint_state(other, ros2)), "other", draw(any_order))
-    elif typ in POSE_TYPES:
+    elif typ in (*POSE_TYPES, IMU):
         shape = PoseShape(draw(TEXT), draw(TEXT) if typ == ODOM else "")
         add(draw(pose_message(typ, shape, ros2)), "template")
         for _ in range(siblings):

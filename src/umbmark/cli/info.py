@@ -54,7 +54,8 @@ def info(source: str, json_out: bool, **options: Any) -> None:
     wheelbase and wheel diameter of a recorded robot_description, or which of them are
     still needed; the candidates for the wheels, the controller's odometry and the ground
     truth (ranked, with their rates and the --max-gap they need; never the odometry
-    itself, and a warning when no independent reference is recorded); and the options to
+    itself, and a warning when no independent reference is recorded); the IMUs
+    (sensor_msgs/Imu) with their mounting in the base frame; and the options to
     calibrate with. Only a bounded number of messages per topic is looked into
     (--max-messages).
     """
@@ -180,6 +181,7 @@ def _render_bag(report: InfoReport, bag: BagInfo, out: Console) -> None:
     _render_candidates("Ground truth", bag.truth, out)
     if not bag.independent:
         out.print(Text("  No ground truth independent of the odometry (see the warning)."))
+    _render_imus(bag, out)
     _render_geometry(bag, out)
     if bag.suggested_options is not None:
         out.print(Text(f"Suggested options: {bag.suggested_options}", style="bold"))
@@ -222,6 +224,21 @@ def _render_candidates(title: str, candidates: tuple[Candidate, ...], out: Conso
         out.print(Text(f"  {candidate.label}{rate}{needs}{moves}{options}"))
         if candidate.warning is not None:
             out.print(Text(f"    not suggested: {candidate.warning}"))
+
+
+def _render_imus(bag: BagInfo, out: Console) -> None:
+    """The IMUs: each with its rate and mounting, the option that reads it or why not."""
+    from rich.text import Text
+
+    if not bag.imus:
+        out.print(Text("IMU: none found"))
+        return
+    out.print(Text("IMU:"))
+    for imu in bag.imus:
+        options = "".join(f"   {flag} {value}" for flag, value in imu.options)
+        out.print(Text(f"  {imu.describe()}{options}"))
+        if imu.problem is not None:
+            out.print(Text(f"    not suggested: {imu.problem}"))
 
 
 def _render_geometry(bag: BagInfo, out: Console) -> None:

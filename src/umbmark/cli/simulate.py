@@ -9,7 +9,7 @@ import click
 
 from umbmark.cli.click_options import Command, apply, force_option, option, spec_option
 from umbmark.options.fleet import FLEET_SIMULATION_OPTIONS
-from umbmark.options.simulate import SIMULATE_OPTIONS
+from umbmark.options.simulate import IMU_OPTIONS, SIMULATE_OPTIONS
 from umbmark.options.spec import OUTPUTS
 
 __all__ = ["simulate"]
@@ -36,6 +36,11 @@ __all__ = ["simulate"]
                "(360 beams, 1 cm noise), its mounting (0.1 m ahead of the axle) on /tf_static "
                "and in /robot_description with the nominal wheels, for calibrate --scan-topic "
                "/scan."),
+        option("--imu", section=OUTPUTS, is_flag=True,
+               help="With --bag: an IMU too (a MEMS gyro and accelerometer): /imu "
+               "(sensor_msgs/Imu in imu_link, its mounting on /tf_static and in "
+               "/robot_description), as the options of 'The IMU' say; its truth in --json."),
+        *(spec_option(spec) for spec in IMU_OPTIONS),
         force_option("A --logs folder's run log is replaced whole (its older runs are "
                      "removed, never mixed with the new ones; a folder holding another "
                      ".csv is refused all the same)."),
@@ -56,13 +61,23 @@ def simulate(json_out: bool, turn_angle: float, **options: Any) -> None:
     from umbmark.cli.common import console, progress_bar, wrote
 
     fleet = {k: options.pop(k) for k in ("fleet", "days", "minutes", "out")}
+    imu = _imu(options)
     if fleet["fleet"] is not None:
+        if imu is not False:
+            from umbmark.core.errors import InputError, option
+
+            raise InputError(
+                f"{option('fleet')} records an IMU on every robot, each with errors of its own "
+                f"(truth.json): leave out {option('imu')} and its options"
+            )
         _fleet(json_out, fleet, options)
         return
     runs = options["runs"] * (2 if options["direction"] == "both" else 1)
     bag = f", writing {options['bag']}" if options["bag"] else ""
     with progress_bar(f"simulating {runs} runs{bag}") as progress:
-        report = run_simulation(turn_angle=math.radians(turn_angle), progress=progress, **options)
+        report = run_simulation(
+            turn_angle=math.radians(turn_angle), progress=progress, imu=imu, **options
+        )
     wrote(options[key] for key in ("output", "logs", "bag") if options[key])
     summary = report.to_dict()
     if json_out:
@@ -102,6 +117,39 @@ def simulate(json_out: bool, turn_angle: float, **options: Any) -> None:
     shift = summary.get("centre_shift")
     if isinstance(shift, float):
         out.print(f"sideways shift of the centre: {shift * 1000:.3f} mm")
+    if report.imu is not None:
+        out.print(_imu_truth(report.imu.truth()), markup=False)
+
+
+def _imu(options: dict[str, Any]) -> Any:
+    """The IMU asked for: ``--imu`` with the IMU's options (refused without it)."""
+    from umbmark.core.errors import InputError
+    from umbmark.core.errors import option as named
+    from umbmark.options.simulate import IMU
+
+    values = {name: options.pop(name) for name in IMU}
+    wanted = options.pop("imu")
+    if not wanted:
+        changed = [name for name, value in values.items() if value != IMU[name].default]
+        if changed:
+            raise InputError(f"{named(changed[0])} sets the IMU of {named('imu')}: give it too")
+        return False
+    from umbmark.sim.imu import ImuSetup
+
+    return ImuSetup.of_options(values)
+
+
+def _imu_truth(truth: dict[str, Any]) -> str:
+    """The IMU's truth in a line (degrees, deg/s)."""
+    roll, pitch, yaw = (math.degrees(a) for a in truth["mounting"]["rpy"])
+    return (
+        f"IMU {truth['topic']} ({truth['frame']}, {truth['rate']:g} Hz, {truth['readings']} "
+        f"readings): k_g = {truth['k_g']:.6f}, yaw bias {math.degrees(truth['yaw_bias']):.4f} "
+        f"deg/s at the start and {math.degrees(truth['yaw_bias_end']):.4f} deg/s at the end, "
+        f"noise {math.degrees(truth['noise_density']):.4g} deg/s/sqrt(Hz), mounted at roll "
+        f"{roll:.2f}, pitch {pitch:.2f}, yaw {yaw:.2f} deg"
+        + (f"; {truth['clipped']} readings clipped at the full scale" if truth["clipped"] else "")
+    )
 
 
 def _fleet(json_out: bool, fleet: dict[str, Any], options: dict[str, Any]) -> None:
@@ -110,7 +158,7 @@ def _fleet(json_out: bool, fleet: dict[str, Any], options: dict[str, Any]) -> No
     from umbmark.cli.common import console, progress_bar, wrote
     from umbmark.core.errors import InputError, option
 
-    for name in ("output", "logs", "bag", "scan"):
+    for name in ("output", "logs", "bag", "scan"):  # its IMU is every robot's
         if options.get(name):
             raise InputError(
                 f"{option('fleet')} writes its recordings into {option('out')}, not {option(name)}"

@@ -24,6 +24,12 @@ __all__ = [
     "DIAMETER_PER_WHEELBASE",
     "ENCODER_RESOLUTION_RANGE",
     "GEAR_RATIO_RANGE",
+    "GYRO_BIAS_RANGE",
+    "GYRO_BIAS_WALK_RANGE",
+    "GYRO_FULL_SCALE_RANGE",
+    "GYRO_NOISE_RANGE",
+    "GYRO_SCALE_RANGE",
+    "IMU_RATE_RANGE",
     "LENGTH_RANGE",
     "MAX_SIDE_LENGTH",
     "MAX_WHEELBASE",
@@ -61,6 +67,20 @@ MULTIPLIER_RANGE = (0.2, 5.0)
 ENCODER_RESOLUTION_RANGE = (1.0, 1e7)
 #: Motor revolutions per wheel revolution.
 GEAR_RATIO_RANGE = (1e-3, 1e4)
+#: An IMU's readings a second [Hz] (ROS drivers publish 50 to 1000).
+IMU_RATE_RANGE = (10.0, 1000.0)
+#: A gyro's scale factor ``k_g`` (``omega_true = k_g (omega_read - bias)``): MEMS parts
+#: are within a few per cent; 20 % off is a gyro set to another range than its driver
+#: assumes.
+GYRO_SCALE_RANGE = (0.8, 1.25)
+#: A gyro's bias [deg/s] (MEMS parts: within 0.5 to 3; beyond 10, a broken part).
+GYRO_BIAS_RANGE = (-10.0, 10.0)
+#: A gyro bias's random walk [deg/s/sqrt(s)] (MEMS parts: about 1e-4 to 1e-3).
+GYRO_BIAS_WALK_RANGE = (0.0, 0.05)
+#: A gyro's white-noise density [deg/s/sqrt(Hz)] (MEMS parts: 0.004 to 0.02).
+GYRO_NOISE_RANGE = (0.0, 0.5)
+#: A gyro's full scale [deg/s] (MEMS parts: 125 to 2000, some 4000).
+GYRO_FULL_SCALE_RANGE = (30.0, 4000.0)
 
 Source = str | Path | None
 

@@ -3,7 +3,7 @@
 :func:`info` is what ``umbmark info`` does. For a ROS bag: every topic with its type,
 count, rate and duration, the joints of the joint-state topics and which of them move,
 the transforms and their chains, the candidates for the wheels, the controller's
-odometry and the ground truth, and the options they suggest
+odometry and the ground truth, the IMUs and their mountings, and the options they suggest
 (:mod:`umbmark.sources.bag.info.summary`). For a run log or an OptiOdom session: its files, runs,
 duration and wheel parameters. A runs table has nothing to look into and is refused.
 """
@@ -190,7 +190,9 @@ class InfoReport(JsonText):
         ``right_joints``, ``topic``; or None), ``robot_description_problem``, ``needs``
         (the options still needed for the wheel geometry), ``independent_reference``,
         ``suggested_options``, ``laser_scans`` (the ``sensor_msgs/LaserScan`` topics),
-        ``scan_options`` (the options of ``calibrate --scan-topic``, or None), ``notes``,
+        ``scan_options`` (the options of ``calibrate --scan-topic``, or None), ``imus``
+        (``topic``, ``rate``, ``frame``, ``gyro``, ``mounting``: ``base``, ``rpy``,
+        ``source``; ``problem``), ``notes``,
         ``warnings``; for run logs and OptiOdom sessions
         ``files``, ``runs``, ``duration``, ``wheel_parameters``, ``side_length``, ``notes``,
         ``warnings``.

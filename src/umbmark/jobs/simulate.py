@@ -25,6 +25,7 @@ from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
 from umbmark.model.run import Run
 from umbmark.outputs.files import OutputPlan
+from umbmark.sim.imu import ImuSetup, SimulatedImu
 from umbmark.sim.result import SimResult
 from umbmark.sim.robot import SimRobot
 from umbmark.sim.setup import DIRECTIONS, MAX_RUNS, PATHS, SEED_RANGE, SimSetup
@@ -71,6 +72,8 @@ class SimulationReport(JsonText):
     configured_wheelbase : float or None
         The odometry's configured wheelbase [m] before a calibration's
         ``wheel_separation_multiplier``, recorded with the active parameters in the files.
+    imu : SimulatedImu or None
+        The IMU the bag records (``simulate(imu=...)``), with its truth.
     """
 
     robot: SimRobot
@@ -81,6 +84,7 @@ class SimulationReport(JsonText):
     result: SimResult
     runs: tuple[Run, ...]
     configured_wheelbase: float | None = None
+    imu: SimulatedImu | None = None
 
     def __repr__(self) -> str:
         truth = self.true_errors
@@ -134,6 +138,8 @@ class SimulationReport(JsonText):
             self.robot, self.result, self.path_name, self.path, self.nominal_wheelbase
         )
         out["seed"] = self.seed
+        if self.imu is not None:
+            out["imu"] = self.imu.truth()
         return out
 
     @python_api
@@ -152,7 +158,7 @@ class SimulationReport(JsonText):
         runs as one recording in a ROS bag (``bag``: ``NAME.bag`` for ROS 1, a folder for
         ROS 2 with ``bag_storage`` sqlite3 or mcap; with ``scan``, a 2D laser's ``/scan``
         in a room around the runs, its mounting on ``/tf_static`` and in a
-        ``/robot_description``).
+        ``/robot_description``; with the report's ``imu``, its ``/imu`` likewise).
 
         Without ``force`` no file is replaced: ``output`` and ``bag`` must be new paths,
         ``logs`` a new or empty folder. With ``force`` they are replaced, and the run log in
@@ -197,22 +203,30 @@ class SimulationReport(JsonText):
         from umbmark.sources.bag.writer import write_bag
 
         session = continuous_session(self.result, self.robot.odometry.radians_per_pulse)
-        if not scan:
+        if not scan and self.imu is None:
             return write_bag(
                 target, session.wheels, session.odometry, session.truth, progress=progress
             )
         from umbmark.robot.world import SCAN_LIDAR, room_around, sweeps_along
+        from umbmark.sim.imu import IMU_TRANSLATION
         from umbmark.sources.bag.urdf import robot_urdf
 
-        room = room_around(session.truth.poses[:, :2])
-        sweeps = sweeps_along(room, session.truth, SCAN_RATE, np.random.default_rng([self.seed, 1]))
-        mount = SCAN_LIDAR.mount
-        pose = (mount.x, mount.y, mount.theta)
+        sweeps, pose = None, None
+        if scan:
+            room = room_around(session.truth.poses[:, :2])
+            rng = np.random.default_rng([self.seed, 1])
+            sweeps = sweeps_along(room, session.truth, SCAN_RATE, rng)
+            pose = (SCAN_LIDAR.mount.x, SCAN_LIDAR.mount.y, SCAN_LIDAR.mount.theta)
+        imu = None if self.imu is None else self.imu.track
+        mounted = None
+        if self.imu is not None:
+            setup = self.imu.setup
+            mounted = (IMU_TRANSLATION, (setup.imu_roll, setup.imu_pitch, setup.imu_yaw))
         odometry = self.robot.odometry
-        description = robot_urdf(self.nominal_wheelbase, odometry.wheel_diameter, pose)
+        description = robot_urdf(self.nominal_wheelbase, odometry.wheel_diameter, pose, imu=mounted)
         return write_bag(
             target, session.wheels, session.odometry, session.truth, progress=progress,
-            scans=sweeps, laser_pose=pose, description=description,
+            scans=sweeps, laser_pose=pose or (0.0, 0.0, 0.0), description=description, imu=imu,
         )  # fmt: skip
 
     def _write_logs(self, folder: Path) -> list[Path]:
@@ -269,6 +283,7 @@ def simulate(
     bag_storage: str | None = None,
     progress: Callable[[float], None] | None = None,
     scan: bool = False,
+    imu: bool | ImuSetup = False,
     **changes: float | str | bool,
 ) -> SimulationReport:
     """Drive a virtual robot with known errors around a path, steering by its own odometry.
@@ -305,6 +320,12 @@ def simulate(
         :data:`SCAN_RATE`, 360 beams, 1 cm noise; its mounting 0.1 m ahead of the axle on
         ``/tf_static`` and, with the nominal wheels, in ``/robot_description``), for
         ``calibrate BAG --scan-topic /scan``.
+    imu : bool or ImuSetup
+        With ``bag``: an IMU too (``/imu``, ``sensor_msgs/Imu`` in ``imu_link``, its
+        mounting on ``/tf_static`` and in ``/robot_description``): True for a MEMS part's
+        defaults, or an :class:`umbmark.sim.imu.ImuSetup` (its rate, the gyro's scale,
+        bias, bias walk, noise, full scale, the mounting); its truth goes into the report
+        (``report.imu``, ``to_dict()["imu"]``).
     **changes
         Fields of ``setup`` to change, or of the default one (``E_d=1.01, runs=10``).
 
@@ -314,10 +335,13 @@ def simulate(
         For an option out of range.
     """
     chosen = _setup(setup, changes)
-    if scan and bag is None:
-        raise InputError(
-            f"{option('scan')} writes a laser into {option('bag')}: give {option('bag')} too"
-        )
+    for flag, what in ((scan, "a laser"), (imu, "an IMU")):
+        if flag is not False and bag is None:
+            name = "scan" if what == "a laser" else "imu"
+            raise InputError(
+                f"{option(name)} writes {what} into {option('bag')}: give {option('bag')} too"
+            )
+    imu_setup = _imu_setup(imu)
     inputs = [params] if isinstance(params, (str, os.PathLike)) else []
     _plan(chosen.path, output, logs, bag, bag_storage, force, inputs)
 
@@ -352,6 +376,7 @@ def simulate(
         result=result,
         runs=tuple(_runs_with_logs(result, odometry) if recorded else result.runs()),
         configured_wheelbase=chosen.wheelbase,
+        imu=None if imu_setup is None else _read_imu(result, robot, imu_setup, chosen.seed),
     )
     report.write(
         output=output, logs=logs, force=force, bag=bag, bag_storage=bag_storage,
@@ -361,6 +386,26 @@ def simulate(
 
 
 simulate.__keyword_fields__ = SimSetup  # type: ignore[attr-defined]  # its **changes
+
+
+def _imu_setup(imu: object) -> ImuSetup | None:
+    """The IMU asked for: None (False), the defaults (True), or the setup given."""
+    if imu is False:
+        return None
+    if imu is True:
+        return ImuSetup()
+    if isinstance(imu, ImuSetup):
+        return imu
+    raise InputError(f"{option('imu', repr(imu)[:40])}: give True, False or an ImuSetup")
+
+
+def _read_imu(result: SimResult, robot: SimRobot, setup: ImuSetup, seed: int) -> SimulatedImu:
+    """The IMU read along the runs as one recording (its own random numbers)."""
+    from umbmark.sim.imu import simulate_imu
+    from umbmark.sim.session import continuous_session
+
+    session = continuous_session(result, robot.odometry.radians_per_pulse)
+    return simulate_imu(session.truth, setup, np.random.default_rng([seed, 2]))
 
 
 def _setup(setup: SimSetup | None, changes: Mapping[str, float | str | bool]) -> SimSetup:

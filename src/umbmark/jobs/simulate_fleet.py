@@ -3,18 +3,23 @@
 :func:`simulate_fleet` writes the recordings of ``N`` virtual robots over ``D`` days, one a
 day each, as a fleet records them: ``FOLDER/ROBOT/DATE/drive`` (ROS 2 MCAP, or ROS 1
 ``drive.bag``), each with the wheels (``/joint_states``), the odometry, a 2D laser
-(``/scan``, its stated mounting on ``/tf_static`` and in ``/robot_description``) and the
-motion capture's truth, driving ordinary missions in a warehouse
-(:func:`umbmark.sim.missions.mission`: corridors, quarter turns at shelves, whole turns
-now and then; not squares). Each robot has errors of its own; some change:
+(``/scan``, its stated mounting on ``/tf_static`` and in ``/robot_description``), an IMU
+(``/imu`` at :data:`IMU_RATE`, a MEMS gyro of the robot's own scale, bias and tilt,
+mounted likewise: :mod:`umbmark.sim.imu`) and the motion capture's truth, driving
+ordinary missions in a warehouse (:func:`umbmark.sim.missions.mission`: corridors,
+quarter turns at shelves, whole turns now and then; not squares). Each robot has errors
+of its own; some change:
 
 - robot 2's right wheel is changed halfway (``E_d`` steps by :data:`WHEEL_STEP`);
 - robot 3's laser is knocked the same day (:data:`KNOCK`: 10 mm forward, 3 degrees);
 - robot 4's tyres wear (``E_s`` falls by :data:`WEAR_PER_DAY` a day);
+- robot 5's gyro changes its scale the same day (``k_g`` steps by :data:`GYRO_STEP`: a
+  replaced IMU, or one set to another range);
 - the others stay as they are.
 
-``FOLDER/truth.json`` holds every robot's true errors and laser mounting per day, and
-the events, beside the recordings. The recordings' clocks start on their days, so the
+``FOLDER/truth.json`` holds every robot's true errors, laser mounting and gyro
+(:meth:`umbmark.sim.imu.SimulatedImu.truth`) per day, and the events, beside the
+recordings. The recordings' clocks start on their days, so the
 day is in each recording as well as in its path.
 """
 
@@ -29,14 +34,18 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 
-__all__ = ["KNOCK", "WEAR_PER_DAY", "WHEEL_STEP", "FleetDay", "FleetSimulation", "simulate_fleet"]
+if TYPE_CHECKING:
+    from umbmark.sim.imu import ImuSetup
+
+__all__ = ["GYRO_STEP", "IMU_RATE", "KNOCK", "WEAR_PER_DAY", "WHEEL_STEP", "FleetDay"]
+__all__ += ["FleetSimulation", "simulate_fleet"]
 
 #: The changed wheel's step in ``E_d``.
 WHEEL_STEP = -0.006
@@ -44,6 +53,10 @@ WHEEL_STEP = -0.006
 KNOCK = (0.01, math.radians(3.0))
 #: The wearing robot's loss of ``E_s`` a day.
 WEAR_PER_DAY = 0.0008
+#: The changed gyro's step in ``k_g``.
+GYRO_STEP = 0.015
+#: The robots' IMU rate [Hz].
+IMU_RATE = 100.0
 #: The truth's file in the fleet's folder.
 TRUTH = "truth.json"
 #: A robot's folder (:func:`robot_name`).
@@ -69,6 +82,9 @@ class FleetDay:
         The robot's true errors that day.
     laser : (float, float, float)
         The laser's true mounting ``x, y, yaw`` [m, m, rad] (stated: 0.1, 0, 0).
+    gyro : dict or None
+        The IMU's truth that day (:meth:`umbmark.sim.imu.SimulatedImu.truth`: ``k_g``,
+        the bias at the start and the end, its walk, the noise, the mounting; SI units).
     """
 
     robot: str
@@ -78,6 +94,7 @@ class FleetDay:
     E_b: float
     E_s: float
     laser: tuple[float, float, float]
+    gyro: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -110,6 +127,7 @@ class FleetSimulation(JsonText):
                     "E_b": r.E_b,
                     "E_s": r.E_s,
                     "laser": list(r.laser),
+                    "gyro": r.gyro,
                 }
                 for r in self.recordings
             ],
@@ -144,8 +162,29 @@ def _truths(
             2: f"laser knocked on day {half + 1}: {KNOCK[0] * 1000:g} mm forward, "
             f"{math.degrees(KNOCK[1]):g} deg",
             3: f"tyres wearing: E_s {-WEAR_PER_DAY * 7:+g} a week",
+            4: f"gyro scale changed on day {half + 1}: k_g {GYRO_STEP:+g}",
         }.get(k, "steady")
     return out, events
+
+
+def _gyros(robots: int, days: int, rng: np.random.Generator) -> list[list[ImuSetup]]:
+    """Every robot's gyro per day: a MEMS part's scale (``k_g`` within 3 %), bias (up to
+    0.5 deg/s), tilt (up to 1 degree each way), the default noise and bias walk; robot
+    5's scale steps by :data:`GYRO_STEP` halfway."""
+    from umbmark.sim.imu import ImuSetup
+
+    out = []
+    for k in range(robots):
+        k_g = 1.0 + float(rng.uniform(-0.03, 0.03))
+        bias = math.radians(float(rng.uniform(-0.5, 0.5)))
+        roll, pitch = (math.radians(float(rng.uniform(-1.0, 1.0))) for _ in range(2))
+        made = [
+            ImuSetup(imu_rate=IMU_RATE, gyro_scale=k_g + (GYRO_STEP if k == 4 and d >= days // 2
+                     else 0.0), gyro_bias=bias, imu_roll=roll, imu_pitch=pitch)
+            for d in range(days)
+        ]  # fmt: skip
+        out.append(made)
+    return out
 
 
 def simulate_fleet(
@@ -209,12 +248,13 @@ def simulate_fleet(
     _check_replaceable(target, force)
     rng = np.random.default_rng(seed)
     truths, events = _truths(robots, days, rng)
+    gyros = _gyros(robots, days, np.random.default_rng([seed, 3]))
     made = _make_parents(target)
     try:
         with atomic_tree(target) as fresh:  # whole or not at all: renamed in at the end
             fresh.mkdir()
-            written = _recordings(fresh, target, truths, start, bag_storage, minutes, seed,
-                                  progress)  # fmt: skip
+            written = _recordings(fresh, target, truths, gyros, start, bag_storage, minutes,
+                                  seed, progress)  # fmt: skip
             result = FleetSimulation(str(target), written, events)
             atomic_write_text(fresh / TRUTH, json.dumps(result.to_dict(), indent=1) + "\n")
     except BaseException:
@@ -227,6 +267,7 @@ def _recordings(
     fresh: Path,
     target: Path,
     truths: list[list[tuple[float, float, float, tuple[float, float, float]]]],
+    gyros: list[list[ImuSetup]],
     start: dt.date,
     storage: str,
     minutes: float,
@@ -244,9 +285,10 @@ def _recordings(
             where = Path(name, day.isoformat(), "drive.bag" if storage == "ros1" else "drive")
             (fresh / where).parent.mkdir(parents=True)
             seeded = seed * 10007 + k * 389 + d
-            _record(fresh / where, storage, k, day, (e_d, e_b, e_s), laser, minutes, seeded)
+            gyro = _record(fresh / where, storage, k, day, (e_d, e_b, e_s), laser, gyros[k][d],
+                           minutes, seeded)  # fmt: skip
             written.append(FleetDay(name, day.isoformat(), str(target / where), e_d, e_b, e_s,
-                                    laser))  # fmt: skip
+                                    laser, gyro))  # fmt: skip
             if progress is not None:
                 progress(len(written) / total)
     return tuple(written)
@@ -312,16 +354,18 @@ def _record(
     day: dt.date,
     errors: tuple[float, float, float],
     laser: tuple[float, float, float],
+    gyro: ImuSetup,
     minutes: float,
     seed: int,
-) -> None:
-    """One robot's recording of one day, at ``path`` (new)."""
+) -> dict[str, Any]:
+    """One robot's recording of one day, at ``path`` (new); its IMU's truth."""
     from umbmark.core.conventions import Direction
     from umbmark.model.kinematics import WheelParams
     from umbmark.robot.base import Pose2D
     from umbmark.robot.warehouse import FLEET_LIDAR, warehouse_world
     from umbmark.robot.world import sweeps_along
     from umbmark.sim.engine import simulate as run_simulation
+    from umbmark.sim.imu import IMU_TRANSLATION, simulate_imu
     from umbmark.sim.missions import Warehouse, mission
     from umbmark.sim.robot import ControlConfig, NoiseModel, SimRobot
     from umbmark.sim.session import continuous_session
@@ -344,10 +388,14 @@ def _record(
     world = warehouse_world(warehouse, Pose2D(*laser))
     sweeps = sweeps_along(world, session.truth, 5.0, rng)
     stated = (FLEET_LIDAR.mount.x, FLEET_LIDAR.mount.y, FLEET_LIDAR.mount.theta)
+    imu = simulate_imu(session.truth, gyro, np.random.default_rng([seed, 2]))
+    mounted = (IMU_TRANSLATION, (gyro.imu_roll, gyro.imu_pitch, gyro.imu_yaw))
     epoch = dt.datetime(day.year, day.month, day.day, 8, tzinfo=dt.timezone.utc).timestamp()
     write_bag(
         bag_target(path, None if storage == "ros1" else storage),
         session.wheels, session.odometry, session.truth, scans=sweeps, laser_pose=stated,
-        description=robot_urdf(NOMINAL[0], NOMINAL[1], stated, name=robot_name(k)),
-        start_epoch=epoch + 60.0 * k,
+        description=robot_urdf(NOMINAL[0], NOMINAL[1], stated, name=robot_name(k),
+                               imu=mounted),
+        start_epoch=epoch + 60.0 * k, imu=imu.track,
     )  # fmt: skip
+    return imu.truth()

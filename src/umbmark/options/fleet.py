@@ -93,9 +93,10 @@ FLEET_SIMULATION_OPTIONS: tuple[Spec, ...] = (
         ("--fleet",),
         A_FLEET,
         "Write the recordings of this many virtual robots driving ordinary missions in a "
-        "warehouse (corridors, turns at shelves, whole turns now and then), wheels and a "
-        "laser, one a day each, into --out ROBOT/DATE/drive; one wheel changed, one laser "
-        "knocked, one robot's tyres wearing; truth.json beside them.",
+        "warehouse (corridors, turns at shelves, whole turns now and then), wheels, a laser "
+        "and an IMU, one a day each, into --out ROBOT/DATE/drive; one wheel changed, one "
+        "laser knocked, one robot's tyres wearing, one gyro's scale changed; truth.json "
+        "beside them.",
         kind="integer",
         bound=Bound("range", 200, 1),
     ),

@@ -18,6 +18,12 @@ from typing import Literal
 from umbmark.core.bounds import (
     ENCODER_RESOLUTION_RANGE,
     GEAR_RATIO_RANGE,
+    GYRO_BIAS_RANGE,
+    GYRO_BIAS_WALK_RANGE,
+    GYRO_FULL_SCALE_RANGE,
+    GYRO_NOISE_RANGE,
+    GYRO_SCALE_RANGE,
+    IMU_RATE_RANGE,
     MAX_SIDE_LENGTH,
     MAX_WHEELBASE,
 )
@@ -29,6 +35,9 @@ __all__ = [
     "DRIVE",
     "DT_RANGE",
     "GRID",
+    "IMU",
+    "IMU_OPTIONS",
+    "IMU_SECTION",
     "MAX_BUMP_RATE",
     "MAX_BUMP_SIZE",
     "MAX_GRID_VALUES",
@@ -62,6 +71,7 @@ ROBOT = "The robot"
 DRIVE = "What it drives"
 NOISE = "Non-systematic errors"
 ROBOTS = "The robots"
+IMU_SECTION = "The IMU (with --bag --imu)"
 OTHER = "Other options"
 
 # --- bounds -----------------------------------------------------------------------------
@@ -311,6 +321,114 @@ SIMULATE_OPTIONS: tuple[Spec, ...] = (
 
 #: The options of ``simulate`` by keyword.
 SIMULATE: dict[str, Spec] = {spec.name: spec for spec in SIMULATE_OPTIONS}
+
+# --- the IMU of simulate --bag --imu ------------------------------------------------
+
+
+def _range(low_high: tuple[float, float]) -> Bound:
+    return Bound("range", low=low_high[0], high=low_high[1])
+
+
+#: The IMU a simulated bag records (:class:`umbmark.sim.imu.ImuSetup`, which holds them in
+#: SI units: rad, rad/s), in the order ``--help`` lists them; the defaults are a MEMS
+#: part's (MPU-6050, BMI088 class: docs/simulator.md#the-imu).
+IMU_OPTIONS: tuple[Spec, ...] = (
+    Spec(
+        "imu_rate",
+        ("--imu-rate",),
+        IMU_SECTION,
+        "Readings a second [Hz].",
+        kind="number",
+        default=200.0,
+        unit="Hz",
+        bound=_range(IMU_RATE_RANGE),
+    ),
+    Spec(
+        "gyro_scale",
+        ("--gyro-scale",),
+        IMU_SECTION,
+        "The factor k_g that corrects the gyro, omega_true = k_g (omega_read - bias): 1.02 "
+        "is a gyro that reads 2 % low.",
+        kind="number",
+        default=1.02,
+        bound=_range(GYRO_SCALE_RANGE),
+    ),
+    Spec(
+        "gyro_bias",
+        ("--gyro-bias",),
+        IMU_SECTION,
+        "The gyro's bias about its z axis at the start [deg/s] (its x and y axes get one "
+        "of up to that size, drawn).",
+        kind="number",
+        default=0.3,
+        unit="deg/s",
+        bound=_range(GYRO_BIAS_RANGE),
+    ),
+    Spec(
+        "gyro_bias_walk",
+        ("--gyro-bias-walk",),
+        IMU_SECTION,
+        "The bias's random walk [deg/s/sqrt(s)] (2e-4: a bias instability of about 7 deg/h).",
+        kind="number",
+        default=2e-4,
+        unit="deg/s/sqrt(s)",
+        bound=_range(GYRO_BIAS_WALK_RANGE),
+    ),
+    Spec(
+        "gyro_noise",
+        ("--gyro-noise",),
+        IMU_SECTION,
+        "The gyro's white-noise density [deg/s/sqrt(Hz)].",
+        kind="number",
+        default=0.005,
+        unit="deg/s/sqrt(Hz)",
+        bound=_range(GYRO_NOISE_RANGE),
+    ),
+    Spec(
+        "gyro_range",
+        ("--gyro-range",),
+        IMU_SECTION,
+        "The gyro's full scale [deg/s]: faster rates read as it (saturated).",
+        kind="number",
+        default=2000.0,
+        unit="deg/s",
+        bound=_range(GYRO_FULL_SCALE_RANGE),
+    ),
+    Spec(
+        "imu_roll",
+        ("--imu-roll",),
+        IMU_SECTION,
+        "The IMU's mounting in base_link: roll [deg] (180: upside down); stated on "
+        "/tf_static and in /robot_description.",
+        kind="number",
+        default=0.0,
+        unit="deg",
+        bound=_range((-180.0, 180.0)),
+    ),
+    Spec(
+        "imu_pitch",
+        ("--imu-pitch",),
+        IMU_SECTION,
+        "... pitch [deg].",
+        kind="number",
+        default=0.0,
+        unit="deg",
+        bound=_range((-90.0, 90.0)),
+    ),
+    Spec(
+        "imu_yaw",
+        ("--imu-yaw",),
+        IMU_SECTION,
+        "... and yaw [deg] (90: its x axis points left).",
+        kind="number",
+        default=0.0,
+        unit="deg",
+        bound=_range((-180.0, 180.0)),
+    ),
+)
+
+#: The IMU's options by keyword.
+IMU: dict[str, Spec] = {spec.name: spec for spec in IMU_OPTIONS}
 
 # --- study ------------------------------------------------------------------------------
 

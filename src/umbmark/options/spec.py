@@ -26,29 +26,10 @@ from umbmark.core.bounds import (
 from umbmark.core.errors import InputError, option
 from umbmark.options.checks import Bound, check_bounded, check_list
 
-__all__ = [
-    "BAGS",
-    "FORCE",
-    "HISTORY",
-    "LOGS",
-    "LONGEST_GAP",
-    "LONGEST_REST",
-    "MAX_TRUTH_OFFSET",
-    "OUTPUTS",
-    "OVERRIDE_VERDICT",
-    "PARAMETERS",
-    "READ",
-    "READ_OPTIONS",
-    "SIDE_LENGTH",
-    "TABLE",
-    "TEST",
-    "TUM_TIME",
-    "WHEELBASE",
-    "Bound",
-    "Spec",
-    "check_choice",
-    "check_pairs",
-]
+__all__ = ["BAGS", "FORCE", "HISTORY", "LOGS", "LONGEST_GAP", "LONGEST_REST", "MAX_TRUTH_OFFSET"]
+__all__ += ["OUTPUTS", "OVERRIDE_VERDICT", "PARAMETERS", "READ", "READ_OPTIONS", "SIDE_LENGTH"]
+__all__ += ["TABLE", "TEST", "TUM_TIME", "WHEELBASE", "Bound", "Spec", "check_choice"]
+__all__ += ["check_pairs"]
 
 # --- the sections of --help -----------------------------------------------------------
 
@@ -516,6 +497,14 @@ READ_OPTIONS: tuple[Spec, ...] = (
         "A sensor_msgs/LaserScan topic (calibrate only): the wheels are calibrated against the "
         "laser's scan matching (--method scan-matching: both wheel diameters, the wheelbase "
         "and the laser's mounting from ordinary driving; no ground truth needed).",
+        metavar="TOPIC",
+    ),
+    Spec(
+        "imu_topic",
+        ("--imu-topic",),
+        BAGS,
+        "A sensor_msgs/Imu topic: the gyro, its rates put into the base frame by its frame's "
+        "mounting (/tf_static, /tf or the robot description).",
         metavar="TOPIC",
     ),
     Spec(

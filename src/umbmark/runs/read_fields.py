@@ -55,6 +55,7 @@ class SourceOptions(TypedDict, total=False):
     left_wheel_frame: str | None
     right_wheel_frame: str | None
     scan_topic: str | None
+    imu_topic: str | None
     truth_topic: str | None
     truth_model: str | None
     tf_parent: str | None
@@ -144,6 +145,9 @@ class ReadFields:
         A sensor_msgs/LaserScan topic (calibrate only): the wheels are calibrated against the
         laser's scan matching (``method`` scan-matching: both wheel diameters, the wheelbase and the
         laser's mounting from ordinary driving; no ground truth needed).
+    imu_topic : str | None
+        A sensor_msgs/Imu topic: the gyro, its rates put into the base frame by its frame's mounting
+        (/tf_static, /tf or the robot description).
     truth_topic : str | None
         Ground truth: geometry_msgs/PoseStamped, PoseWithCovarianceStamped, nav_msgs/Odometry or
         gazebo_msgs/ModelStates; or positions only: geometry_msgs/PointStamped,
@@ -195,6 +199,7 @@ class ReadFields:
     left_wheel_frame: str | None = None
     right_wheel_frame: str | None = None
     scan_topic: str | None = None
+    imu_topic: str | None = None
     truth_topic: str | None = None
     truth_model: str | None = None
     tf_parent: str | None = None

@@ -28,8 +28,9 @@ from umbmark.scans.intervals import (
     match_intervals,
 )
 from umbmark.sources.bag.bag_options import BagOptions
+from umbmark.sources.bag.reader import time_windows
 from umbmark.sources.bag.recording import read_recording
-from umbmark.sources.bag.scans import MAX_SCANS, bag_span, read_scan_bag, scan_mounting
+from umbmark.sources.bag.scans import MAX_SCANS, read_scan_bag, scan_mounting
 
 __all__ = ["PAD", "WINDOW", "intervals_from_bag", "scan_intervals_from_bag"]
 
@@ -148,15 +149,9 @@ def _padded(span: tuple[int, int] | None) -> tuple[int, int] | None:
 
 
 def _windows(path: str | Path, window: float) -> list[tuple[int, int] | None]:
-    """The bag's time cut into windows of ``window`` seconds [ns]: one, None, for a bag
-    no longer than that."""
-    if not window > 0.0:
-        raise ValueError("a window must be a positive time")
-    first, last = bag_span(path)
-    step = int(window * 1e9)
-    if last - first <= step:
-        return [None]
-    return [(a, min(a + step, last + 1)) for a in range(first, last + 1, step)]
+    """The bag's time cut into windows of ``window`` seconds [ns]
+    (:func:`~umbmark.sources.bag.reader.time_windows`)."""
+    return time_windows(Path(path), str(path), window)
 
 
 def _joined(reports: list[IntervalReport]) -> IntervalReport:

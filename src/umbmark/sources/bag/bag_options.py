@@ -43,6 +43,9 @@ ignored). The pose is ``x, y`` of the position and the yaw of the orientation,
 (:func:`umbmark.core.geometry.quaternion_yaw`). A ground truth
 that is the odometry the wheels are read from is refused
 (:mod:`umbmark.sources.bag.truth.independence`).
+
+The gyro, optional: ``imu_topic`` (``sensor_msgs/Imu``), read on its own by
+:func:`umbmark.sources.bag.imu.read_imu`.
 """
 
 from __future__ import annotations
@@ -117,6 +120,9 @@ class BagOptions:
     left_wheel_frame, right_wheel_frame : str or None
         Instead of joint states: the child frames of the wheels' transforms on ``/tf``
         (both or neither).
+    imu_topic : str or None
+        A ``sensor_msgs/Imu`` topic: the gyro (:mod:`umbmark.sources.bag.imu`); the
+        wheels' readers leave it alone.
     """
 
     wheel_topic: str = READ["wheel_topic"].default
@@ -138,6 +144,7 @@ class BagOptions:
     truth_model: str | None = None
     left_wheel_frame: str | None = None
     right_wheel_frame: str | None = None
+    imu_topic: str | None = None
 
     @property
     def left_joints(self) -> tuple[str, ...]:

@@ -24,6 +24,8 @@ What it reads
 - ``geometry_msgs/PoseStamped``, ``geometry_msgs/PoseWithCovarianceStamped`` and
   ``nav_msgs/Odometry``: position ``x, y`` and orientation ``x, y, z, w`` of the pose;
 - the ``std_msgs`` numbers ``Int16`` ... ``UInt64``, ``Float32``, ``Float64``: ``data``;
+- ``sensor_msgs/Imu``: the angular velocity, the linear acceleration and the first
+  element of each covariance (:data:`IMU_VALUES`);
 
 each with its ``header.stamp`` where it has one, from ROS 1 messages or from ROS 2 CDR
 (little- or big-endian). Messages of other types are all deserialized.
@@ -84,9 +86,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from umbmark.core.arrays import FloatArray, IntArray
-from umbmark.sources.bag.msgtypes import JOINT_STATE, ODOMETRY, TICK_TYPES, TRUTH_TYPES
+from umbmark.sources.bag.msgtypes import IMU, JOINT_STATE, ODOMETRY, TICK_TYPES, TRUTH_TYPES
 
 __all__ = [
+    "IMU_VALUES",
     "POSITION",
     "VELOCITY",
     "Decoded",
@@ -107,6 +110,10 @@ Sample = tuple[int, int, tuple[float, ...], int]
 """A sample read from one message: header stamp ``sec``, ``nanosec`` (zeros for messages
 without a header), the values, and the kind (:data:`POSITION` or :data:`VELOCITY`)."""
 
+#: What a ``sensor_msgs/Imu`` sample holds, in order (``_cov``: the first element of the
+#: covariance, -1 where the message has no such data).
+IMU_VALUES = ("wx", "wy", "wz", "angular_velocity_cov", "ax", "ay", "az",
+              "linear_acceleration_cov", "orientation_cov")  # fmt: skip
 _BATCH = 1 << 16  # raw messages stacked per vectorized read
 _LAYOUT_ATTEMPTS = 8  # messages tried for a fast layout before giving up on one
 
@@ -331,13 +338,24 @@ def _number_layout(code: str) -> LayoutOf:
     return layout_of
 
 
-def _pose_layout(msgtype: str) -> LayoutOf:
-    """The three pose types: ``pose.position`` / ``pose.pose.position`` and orientation.
+#: The float64s read after the header (counted from the first), and how many follow it:
+#: the pose types' ``x, y`` and quaternion; ``sensor_msgs/Imu``'s angular velocity and its
+#: covariance's first element, linear acceleration and its, and orientation covariance's.
+_FLOATS = {
+    **dict.fromkeys(TRUTH_TYPES, ((0, 1, 3, 4, 5, 6), 7)),
+    IMU: ((13, 14, 15, 16, 25, 26, 27, 28, 4), 37),
+}
+
+
+def _floats_layout(msgtype: str) -> LayoutOf:
+    """A header then float64s (:data:`_FLOATS`): the three pose types and
+    ``sensor_msgs/Imu``.
 
     Checked: the ``frame_id`` length and, for ``nav_msgs/Odometry``, the
-    ``child_frame_id`` length; the pose follows them (in the covariance types its
+    ``child_frame_id`` length; the floats follow them (in the covariance types the
     ``pose`` comes first).
     """
+    read, count = _FLOATS[msgtype]
 
     def layout_of(raw: bytes, ros2: bool) -> Layout:
         cur = _Cursor(raw, ros2)
@@ -346,9 +364,8 @@ def _pose_layout(msgtype: str) -> LayoutOf:
             cur.string(same=False)  # child_frame_id
         cur.align(8)
         at = cur.pos
-        cur.pos += 7 * 8
-        fields = (at, at + 8, at + 24, at + 32, at + 40, at + 48)
-        return cur.layout(stamp, fields, "f8")
+        cur.pos += count * 8
+        return cur.layout(stamp, tuple(at + 8 * i for i in read), "f8")
 
     return layout_of
 
@@ -369,15 +386,16 @@ def fast_layout(msgtype: str, joints: tuple[str, ...] | None = None) -> LayoutOf
     LayoutOf or None
         For ``decode_messages(layout_of=...)``. The samples it reads are:
         ``sensor_msgs/JointState``: one value per joint, its position or velocity;
-        pose types: width 6, ``x, y`` and quaternion ``x, y, z, w``; ``std_msgs``
-        numbers: width 1, ``data``, no stamp (zeros). None for other types.
+        pose types: width 6, ``x, y`` and quaternion ``x, y, z, w``;
+        ``sensor_msgs/Imu``: width 9 (:data:`IMU_VALUES`); ``std_msgs`` numbers: width 1,
+        ``data``, no stamp (zeros). None for other types.
     """
     if msgtype == JOINT_STATE:
         if joints is None:
             raise ValueError("the layout of sensor_msgs/JointState needs the joint names")
         return _joint_state_layout(joints)
-    if msgtype in TRUTH_TYPES:
-        return _pose_layout(msgtype)
+    if msgtype in _FLOATS:
+        return _floats_layout(msgtype)
     if msgtype in TICK_TYPES:
         return _number_layout(TICK_TYPES[msgtype][0])
     return None

@@ -44,6 +44,7 @@ def unstamped(msgtype: str | None) -> bool:
 
 STRING = "std_msgs/msg/String"
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
+IMU = "sensor_msgs/msg/Imu"
 
 # std_msgs number types: numpy type code of ``data`` and bits of a counter that wraps
 # (None: no wrap).
@@ -208,3 +209,16 @@ class LaserScan(Stamped, Protocol):
     range_min: float
     range_max: float
     ranges: NDArray[np.float32]
+
+
+class Imu(Stamped, Protocol):
+    """``sensor_msgs/Imu``: rates [rad/s] and accelerations [m/s^2] in ``header.frame_id``;
+    each covariance shape (9,), row-major, its first element -1 where the message has no
+    such data."""
+
+    orientation: Quaternion
+    orientation_covariance: NDArray[np.float64]
+    angular_velocity: Vector
+    angular_velocity_covariance: NDArray[np.float64]
+    linear_acceleration: Vector
+    linear_acceleration_covariance: NDArray[np.float64]

@@ -13,7 +13,7 @@ read under way (:mod:`umbmark.sources.progress`).
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Generator, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
@@ -35,8 +35,11 @@ __all__ = [
     "one_line",
     "open_bag",
     "raw_messages",
+    "reader_windows",
+    "time_windows",
     "topic_connections",
     "topic_types",
+    "windowed",
 ]
 
 _LISTED = 25  # names listed in an error message at most
@@ -177,9 +180,53 @@ def open_bag(path: Path, src: str, window: tuple[int, int] | None = None) -> Ite
             problem += " (a recording that was cut short needs `rosbag reindex` first)"
         raise InputError(problem, source=src) from None
     try:
-        yield reader if window is None else cast("AnyReader", _Windowed(reader, window))
+        yield windowed(reader, window)
     finally:
         reader.close()
+
+
+def time_windows(path: Path, src: str, seconds: float) -> list[tuple[int, int] | None]:
+    """The bag's time cut into windows of ``seconds`` (:func:`reader_windows`), the bag
+    opened for it.
+
+    Raises
+    ------
+    ValueError
+        ``seconds`` is not a positive time.
+    InputError
+        The bag cannot be opened.
+    """
+    if not seconds > 0.0:
+        raise ValueError("a window must be a positive time")
+    with open_bag(path, src) as reader:
+        return reader_windows(reader, seconds)
+
+
+def reader_windows(reader: AnyReader, seconds: float) -> list[tuple[int, int] | None]:
+    """The open bag's time cut into windows of ``seconds`` [ns, from and before], the
+    windows every reader of a long recording reads one at a time (:func:`open_bag`,
+    :func:`windowed`): one, None, for a bag no longer than that.
+
+    Raises
+    ------
+    ValueError
+        ``seconds`` is not a positive time.
+    """
+    if not seconds > 0.0:
+        raise ValueError("a window must be a positive time")
+    first, last = int(reader.start_time), int(reader.end_time)
+    step = int(seconds * 1e9)
+    if last - first <= step:
+        return [None]
+    return [(a, min(a + step, last + 1)) for a in range(first, last + 1, step)]
+
+
+def windowed(reader: AnyReader, window: tuple[int, int] | None) -> AnyReader:
+    """The open bag as a reader of the messages of ``window`` only (bag times [ns], from
+    and before; :data:`LATCHED` topics whole), as :func:`open_bag` gives it: several
+    windows of one bag read without opening it again (opening a long bag reads its index:
+    0.3 s for half an hour of 200 Hz). None: the whole bag."""
+    return reader if window is None else cast("AnyReader", _Windowed(reader, window))
 
 
 def topic_types(reader: AnyReader) -> dict[str, str]:
@@ -289,10 +336,10 @@ def raw_messages(
     src: str,
     start: int | None = None,
     stop: int | None = None,
-) -> Iterator[tuple[int, bytes]]:
+) -> Generator[tuple[int, bytes], None, None]:
     """``(bag time [ns], raw message)`` of ``conns`` (from ``start`` [ns] on and before
     ``stop``, if given), uncounted; read errors become InputError. The stream is closed
-    when left early."""
+    when left early (and the generator's ``close()`` closes it at once)."""
     stream = reader.messages(connections=conns, start=start, stop=stop)
     try:
         while True:

@@ -49,7 +49,9 @@ __all__ = [
     "RobotDescription",
     "bag_robot_description",
     "described_geometry",
+    "description_text",
     "description_topics",
+    "fixed_joints",
     "parse_robot_description",
     "read_description",
     "robot_urdf",
@@ -177,6 +179,52 @@ def _radius(link: ET.Element) -> float | None:
     return None
 
 
+def _parse(text: str) -> ET.Element:
+    """The URDF's ``<robot>`` element, parsed within the bounds (module notes)."""
+    if len(text) > MAX_URDF_CHARS:
+        raise ValueError(f"is longer than {MAX_URDF_CHARS:,} characters")
+    if _DECLARATION.search(text):
+        raise ValueError("declares a document type or entities, which are not read")
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as err:
+        raise ValueError(f"is not valid XML: {err}") from None
+    if root.tag != "robot":
+        raise ValueError(f"is not a URDF (its root element is <{root.tag:.40}>, not <robot>)")
+    return root
+
+
+def _joints(root: ET.Element) -> dict[str, _Joint]:
+    """Every joint of the URDF by name, with its origin."""
+    joints: dict[str, _Joint] = {}
+    for element in root.findall("joint"):
+        origin = element.find("origin")
+        name = element.get("name", "")
+        parent, child = element.find("parent"), element.find("child")
+        joints[name] = _Joint(
+            name=name,
+            kind=element.get("type", ""),
+            parent="" if parent is None else parent.get("link", ""),
+            child="" if child is None else child.get("link", ""),
+            xyz=_numbers(None if origin is None else origin.get("xyz"), 3, f"joint {name} xyz"),
+            rpy=_numbers(None if origin is None else origin.get("rpy"), 3, f"joint {name} rpy"),
+        )
+    return joints
+
+
+def fixed_joints(text: str) -> dict[str, tuple[str, FloatArray]]:
+    """The links a ``fixed`` joint holds to another, each with that parent link and its
+    rotation there, shape (3, 3) (its axes in the parent's: the joint's ``rpy``).
+
+    Raises
+    ------
+    ValueError
+        The text is too long, declares entities, or is no URDF.
+    """
+    joints = _joints(_parse(text)).values()
+    return {j.child: (j.parent, _rotation(j.rpy)) for j in joints if j.kind == "fixed"}
+
+
 def parse_robot_description(
     text: str,
     left: tuple[str, ...] = (),
@@ -200,30 +248,9 @@ def parse_robot_description(
         The text is too long, declares entities, is no URDF, or its wheels cannot be
         told (the message says why).
     """
-    if len(text) > MAX_URDF_CHARS:
-        raise ValueError(f"is longer than {MAX_URDF_CHARS:,} characters")
-    if _DECLARATION.search(text):
-        raise ValueError("declares a document type or entities, which are not read")
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as err:
-        raise ValueError(f"is not valid XML: {err}") from None
-    if root.tag != "robot":
-        raise ValueError(f"is not a URDF (its root element is <{root.tag:.40}>, not <robot>)")
+    root = _parse(text)
     links = {link.get("name", ""): link for link in root.findall("link")}
-    joints: dict[str, _Joint] = {}
-    for element in root.findall("joint"):
-        origin = element.find("origin")
-        name = element.get("name", "")
-        parent, child = element.find("parent"), element.find("child")
-        joints[name] = _Joint(
-            name=name,
-            kind=element.get("type", ""),
-            parent="" if parent is None else parent.get("link", ""),
-            child="" if child is None else child.get("link", ""),
-            xyz=_numbers(None if origin is None else origin.get("xyz"), 3, f"joint {name} xyz"),
-            rpy=_numbers(None if origin is None else origin.get("rpy"), 3, f"joint {name} rpy"),
-        )
+    joints = _joints(root)
     left, right = _wheel_joints(joints, links, left, right)
     by_child = {j.child: j for j in joints.values()}
 
@@ -336,6 +363,14 @@ def read_description(
         return None, f"the robot description on {found[0]} {err}"
 
 
+def description_text(reader: AnyReader, topics: dict[str, str], src: str) -> tuple[str, str] | None:
+    """The bag's robot description: its topic and text (the last non-empty one, bounded),
+    or None where it holds none."""
+    found = description_topics(topics)
+    text = None if not found else _read_text(reader, topics, found[0], src)
+    return None if text is None else (found[0], text)
+
+
 def _read_text(reader: AnyReader, topics: dict[str, str], topic: str, src: str) -> str | None:
     """The last non-empty description on ``topic`` (bounded), or None."""
     conns = [c for c in reader.connections if c.topic == topic]
@@ -433,18 +468,21 @@ def described_geometry(
 def robot_urdf(
     wheelbase: float,
     wheel_diameter: float,
-    laser_pose: tuple[float, float, float],
+    laser_pose: tuple[float, float, float] | None,
     joints: tuple[str, str] = ("left_wheel_joint", "right_wheel_joint"),
     laser_frame: str = "laser",
     name: str = "umbmark_simulated",
+    imu: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None,
+    imu_frame: str = "imu_link",
 ) -> str:
     """A differential-drive robot's URDF, as a bag's ``/robot_description`` holds it: the
     wheels ``joints`` (left, right) ``wheelbase`` [m] apart with cylinders of
-    ``wheel_diameter`` [m], and the laser ``laser_frame`` at ``laser_pose`` ``x, y, yaw``
-    [m, m, rad] on ``base_link`` (the wheels and mounting :func:`parse_robot_description`
-    reads back); the robot called ``name``."""
+    ``wheel_diameter`` [m], the laser ``laser_frame`` at ``laser_pose`` ``x, y, yaw``
+    [m, m, rad] on ``base_link`` (none where None), and the IMU ``imu_frame`` at ``imu``
+    ``(xyz [m], rpy [rad])`` where given (the wheels and mountings
+    :func:`parse_robot_description` and :func:`fixed_joints` read back); the robot called
+    ``name``."""
     half, radius = 0.5 * wheelbase, 0.5 * wheel_diameter
-    x, y, yaw = laser_pose
     links = [name.removesuffix("_joint") + "_link" for name in joints]
     wheels = "".join(
         f'<joint name="{name}" type="continuous"><parent link="base_link"/>'
@@ -453,10 +491,19 @@ def robot_urdf(
         f'<cylinder length="0.02" radius="{radius!r}"/></geometry></collision></link>\n'
         for name, link, side in zip(joints, links, (1.0, -1.0), strict=True)
     )
+    mounted = []
+    if laser_pose is not None:
+        x, y, yaw = laser_pose
+        mounted.append((laser_frame, (x, y, 0.2), (0.0, 0.0, yaw)))
+    if imu is not None:
+        mounted.append((imu_frame, *imu))
+    fixed = "".join(
+        f'<joint name="{frame}_joint" type="fixed"><parent link="base_link"/>'
+        f'<child link="{frame}"/><origin xyz="{" ".join(map(repr, map(float, xyz)))}" '
+        f'rpy="{" ".join(map(repr, map(float, rpy)))}"/></joint><link name="{frame}"/>\n'
+        for frame, xyz, rpy in mounted
+    )
     return (
         f'<?xml version="1.0"?>\n<robot name="{name}">\n<link name="base_link"/>\n'
-        f"{wheels}"
-        f'<joint name="{laser_frame}_joint" type="fixed"><parent link="base_link"/>'
-        f'<child link="{laser_frame}"/><origin xyz="{x!r} {y!r} 0.2" rpy="0 0 {yaw!r}"/></joint>'
-        f'<link name="{laser_frame}"/>\n</robot>\n'
+        f"{wheels}{fixed}</robot>\n"
     )

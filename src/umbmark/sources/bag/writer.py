@@ -13,6 +13,9 @@ differential-drive robot with motion capture publishes (names in :class:`BagTopi
 * with ``scans``: ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``), the sweeps as
   given, and ``/tf_static`` with the mounting ``base_link -> laser`` (``laser_pose``,
   rolled by 180 degrees for a scanner mounted upside down);
+* with ``imu``: ``/imu`` (``sensor_msgs/Imu``, frame ``imu_link``), its readings
+  (:mod:`umbmark.sources.bag.imu_writer`), and its mounting ``base_link -> imu_link`` on
+  ``/tf_static`` (one message with the laser's, where both are written);
 * with ``description``: ``/robot_description`` (``std_msgs/String``), a URDF, once at
   the start (:func:`umbmark.sources.bag.urdf.robot_urdf` writes one).
 
@@ -46,7 +49,9 @@ from umbmark.core.atomic import atomic_tree, fsync
 from umbmark.core.errors import InputError, option
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.model.scans import ScanSeries
+from umbmark.sources.bag.imu_writer import ImuTrack, imu_maker
 from umbmark.sources.bag.msgtypes import (
+    IMU,
     JOINT_STATE,
     LASER_SCAN,
     ODOMETRY,
@@ -194,6 +199,7 @@ def write_bag(
     scans: ScanSeries | None = None,
     laser_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
     description: str | None = None,
+    imu: ImuTrack | None = None,
 ) -> Path:
     """Write the wheels, the odometry and the ground truth as a ROS bag (module notes).
 
@@ -219,6 +225,8 @@ def write_bag(
         The laser's mounting ``x, y, yaw`` [m, m, rad] in ``base_link`` (``/tf_static``).
     description : str, optional
         A URDF, written once at the start as ``/robot_description`` (``std_msgs/String``).
+    imu : ImuTrack, optional
+        An IMU's readings, on the wheels' clock, written as its topic with its mounting.
 
     Returns
     -------
@@ -250,7 +258,7 @@ def write_bag(
     try:
         with atomic_tree(shown) as fresh:
             _write(fresh, target.format, store, names, wheels, odometry, truth, start_epoch,
-                   progress, scans, laser_pose, description)  # fmt: skip
+                   progress, scans, laser_pose, description, imu)  # fmt: skip
             for file in [fresh] if fresh.is_file() else sorted(fresh.iterdir()):
                 fsync(file)
     except OSError as err:
@@ -284,6 +292,16 @@ def _body_twist(odometry: PoseSeries) -> FloatArray:
     return np.column_stack([d[:, 0] * np.cos(mid) + d[:, 1] * np.sin(mid), d[:, 2]])
 
 
+def _laser_mounting(
+    pose: tuple[float, float, float], upside_down: bool
+) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    """The laser's translation and quaternion ``x, y, z, w`` in ``base_link``: yawed by
+    ``pose``'s yaw, then (upside down) rolled by pi about the new x (``q_yaw q_roll``)."""
+    x, y, yaw = pose
+    c, s = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+    return (x, y, 0.0), ((c, s, 0.0, 0.0) if upside_down else (0.0, 0.0, s, c))
+
+
 def _write(
     path: Path,
     fmt: BagFormat,
@@ -297,6 +315,7 @@ def _write(
     scans: ScanSeries | None = None,
     laser_pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
     description: str | None = None,
+    imu: ImuTrack | None = None,
 ) -> None:
     """Write the bag at ``path`` (which does not exist yet)."""
     from rosbags.rosbag1 import Writer as Writer1
@@ -310,11 +329,21 @@ def _write(
         (names.tf, TF_MESSAGE, odometry.time, messages.transform(odometry)),
         (names.truth, POSE_STAMPED, truth.time, messages.truth(truth)),
     ]
+    mounted: list[tuple[str, tuple[float, ...], tuple[float, ...]]] = []
+    earliest = [float(wheels.time[0])]
     if scans is not None:
-        at_start = np.array([min(float(wheels.time[0]), float(scans.times[0]))])
-        mount = messages.mounting(laser_pose, upside_down=scans.upside_down)
-        series.append((TF_STATIC_TOPIC, TF_MESSAGE, at_start, mount))
+        mounted.append((names.laser_frame, *_laser_mounting(laser_pose, scans.upside_down)))
+        earliest.append(float(scans.times[0]))
         series.append((names.scan, LASER_SCAN, scans.times, messages.scan(scans)))
+    if imu is not None:
+        mounted.append((imu.frame, imu.translation, imu.rotation))
+        earliest.append(float(imu.time[0]))
+        make_imu = imu_maker(messages.t, messages.header, imu)
+        series.append((imu.topic, IMU, imu.time, make_imu))  # type: ignore[arg-type]
+    if mounted:
+        at_start = np.array([min(earliest)])
+        static = (TF_STATIC_TOPIC, TF_MESSAGE, at_start, messages.mounting(mounted))
+        series.insert(4, static)  # before the sensors' first messages of the same stamp
     if description is not None:
         text = store.types[STRING](data=description)
         once = np.array([float(wheels.time[0])])
@@ -464,25 +493,25 @@ class _Messages:
 
         return make
 
-    def mounting(self, pose: tuple[float, float, float], *, upside_down: bool) -> _Make:
-        """``/tf_static``: ``base_link -> laser`` (rolled by 180 degrees if upside down)."""
+    def mounting(self, mounted: list[tuple[str, tuple[float, ...], tuple[float, ...]]]) -> _Make:
+        """``/tf_static``: ``base_link -> frame`` of every ``(frame, translation [m],
+        quaternion x, y, z, w)``, in one message."""
         t, names = self.t, self.names
-        x, y, yaw = pose
-        c, s = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
-        # yaw about z, then (upside down) roll by pi about the new x: q_yaw * q_roll
-        q = (c, s, 0.0, 0.0) if upside_down else (0.0, 0.0, s, c)  # x, y, z, w
-        rotation = t["geometry_msgs/msg/Quaternion"](x=q[0], y=q[1], z=q[2], w=q[3])
 
         def make(i: int, stamp: int) -> _Msg:
             return t[TF_MESSAGE](
                 transforms=[
                     t["geometry_msgs/msg/TransformStamped"](
                         header=self.header(stamp, names.base_frame, TF_STATIC_TOPIC),
-                        child_frame_id=names.laser_frame,
+                        child_frame_id=frame,
                         transform=t["geometry_msgs/msg/Transform"](
-                            translation=self.vector(x, y, 0.0), rotation=rotation
+                            translation=self.vector(*xyz),
+                            rotation=t["geometry_msgs/msg/Quaternion"](
+                                x=q[0], y=q[1], z=q[2], w=q[3]
+                            ),
                         ),
                     )
+                    for frame, xyz, q in mounted
                 ]
             )
 

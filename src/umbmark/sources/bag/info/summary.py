@@ -37,7 +37,7 @@ least one count; a Gazebo model's position range over
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -59,7 +59,9 @@ from umbmark.sources.bag.info.frames import (
     tf_chains,
     transform_infos,
 )
+from umbmark.sources.bag.info.imus import ImuInfo, imu_infos
 from umbmark.sources.bag.info.scan import ScannedTopic, inspect_topics
+from umbmark.sources.bag.info.topics import JointInfo, JointStateInfo, ModelStatesInfo, TopicInfo
 from umbmark.sources.bag.msgtypes import (
     JOINT_STATE,
     LASER_SCAN,
@@ -69,7 +71,6 @@ from umbmark.sources.bag.msgtypes import (
     TF_STATIC_TOPIC,
     TF_TOPIC,
 )
-from umbmark.sources.bag.truth.references import ModelMotion
 from umbmark.sources.bag.urdf import RobotDescription, read_description
 
 __all__ = [
@@ -77,6 +78,7 @@ __all__ = [
     "MAX_CHAINS",
     "MAX_LISTED",
     "BagInfo",
+    "ImuInfo",
     "JointInfo",
     "JointStateInfo",
     "ModelStatesInfo",
@@ -94,150 +96,6 @@ MAX_CHAINS = 20
 
 
 # --- what the report holds -------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class TopicInfo:
-    """One topic of a bag.
-
-    Attributes
-    ----------
-    name, msgtype : str
-        Topic and message type (``sensor_msgs/msg/JointState``; several joined by ``", "``).
-    count : int
-        Messages in the bag.
-    duration : float or None
-        Receive time from the first to the last message [s]; None without messages.
-    rate : float or None
-        ``(count - 1) / duration`` [Hz]; None with fewer than two distinct times.
-    scanned : int
-        Messages deserialized to look into them (0 for types not looked into).
-    """
-
-    name: str
-    msgtype: str
-    count: int
-    duration: float | None
-    rate: float | None
-    scanned: int = 0
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: ``name``, ``type``, ``count``, ``rate`` [Hz], ``duration`` [s] and
-        ``scanned``."""
-        return {
-            "name": self.name,
-            "type": self.msgtype,
-            "count": self.count,
-            "rate": self.rate,
-            "duration": self.duration,
-            "scanned": self.scanned,
-        }
-
-
-@dataclass(frozen=True)
-class JointInfo:
-    """One joint of a ``sensor_msgs/JointState`` topic, in the messages read.
-
-    Attributes
-    ----------
-    name : str
-    samples : int
-        Messages read that carry it.
-    position_range : float or None
-        ``max - min`` of its finite positions [rad, or m for prismatic joints]; None
-        without positions.
-    max_speed : float or None
-        Largest ``|velocity|`` [rad/s]; without velocities, the largest change of its
-        position over time between consecutive messages read (header stamps, else bag
-        times); None without either.
-    moving : bool
-        ``position_range > MOVING_ANGLE`` or ``max_speed > MOVING_SPEED``.
-    speed_from : {"velocity", "positions"} or None
-        Where ``max_speed`` comes from.
-    """
-
-    name: str
-    samples: int
-    position_range: float | None
-    max_speed: float | None
-    moving: bool
-    speed_from: str | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: the attributes by name."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
-
-
-@dataclass(frozen=True)
-class JointStateInfo:
-    """The joints of a ``sensor_msgs/JointState`` topic.
-
-    Attributes
-    ----------
-    topic : str
-    joints : tuple of JointInfo
-        In order of first appearance, at most :data:`MAX_LISTED`.
-    not_listed : int
-        Joints found beyond those listed.
-    scanned : int
-        Messages read.
-    complete : bool
-        Every message of the topic was read.
-    """
-
-    topic: str
-    joints: tuple[JointInfo, ...]
-    not_listed: int
-    scanned: int
-    complete: bool
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: ``topic``, ``scanned``, ``complete``, ``joints``, ``joints_not_listed``."""
-        return {
-            "topic": self.topic,
-            "scanned": self.scanned,
-            "complete": self.complete,
-            "joints": [joint.to_dict() for joint in self.joints],
-            "joints_not_listed": self.not_listed,
-        }
-
-
-@dataclass(frozen=True)
-class ModelStatesInfo:
-    """The models of a ``gazebo_msgs/ModelStates`` topic, in the messages read.
-
-    Attributes
-    ----------
-    topic : str
-    models : tuple of ModelMotion
-        In order of first appearance, at most :data:`MAX_LISTED`.
-    not_listed : int
-    scanned : int
-        Messages read.
-    """
-
-    topic: str
-    models: tuple[ModelMotion, ...]
-    not_listed: int
-    scanned: int
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: ``topic``, ``scanned``, ``models`` (``name``, ``samples``,
-        ``position_range`` [m], ``moving``), ``models_not_listed``."""
-        return {
-            "topic": self.topic,
-            "scanned": self.scanned,
-            "models": [
-                {
-                    "name": m.name,
-                    "samples": m.samples,
-                    "position_range": m.position_range,
-                    "moving": m.moving,
-                }
-                for m in self.models
-            ],
-            "models_not_listed": self.not_listed,
-        }
 
 
 @dataclass(frozen=True)
@@ -285,6 +143,8 @@ class BagInfo:
         Whether a ground-truth candidate without a warning was found.
     laser_scans : tuple of str
         The ``sensor_msgs/LaserScan`` topics.
+    imus : tuple of ImuInfo
+        The ``sensor_msgs/Imu`` topics (:mod:`umbmark.sources.bag.info.imus`).
     """
 
     path: str
@@ -312,6 +172,7 @@ class BagInfo:
     robot_problem: str | None = None
     independent: bool = True
     laser_scans: tuple[str, ...] = ()
+    imus: tuple[ImuInfo, ...] = ()
 
     @property
     def suggested_options(self) -> str | None:
@@ -322,8 +183,9 @@ class BagInfo:
         The ground truth is the first candidate without a warning, with the ``--max-gap``
         it needs where that is more than the default. Options that equal the defaults are
         left out; ``--time-source bag`` is added when a chosen topic's header stamps are
-        empty or the ground truth has no header (Gazebo's model states). None when the bag
-        has neither.
+        empty or the ground truth has no header (Gazebo's model states); ``--imu-topic``
+        the first IMU with a gyro and a mounting. None when the bag has neither wheels nor
+        ground truth.
         """
         inputs = self.wheels[:1] or self.odometry[:1]
         truth = tuple(c for c in self.truth if c.warning is None)[:1]
@@ -344,6 +206,7 @@ class BagInfo:
             c.kind == "model" for c in truth
         ):
             parts.append("--time-source bag")
+        parts += [f"{f} {v}" for imu in self.imus[:1] for f, v in imu.options]
         return " ".join(parts) or None
 
     @property
@@ -397,6 +260,7 @@ class BagInfo:
             "suggested_options": self.suggested_options,
             "laser_scans": list(self.laser_scans),
             "scan_options": self.scan_options,
+            "imus": [imu.to_dict() for imu in self.imus],
             "notes": list(self.notes),
             "warnings": list(self.warnings),
         }
@@ -445,6 +309,42 @@ def _storage(path: Path) -> str:
     return "sqlite3"
 
 
+def _contents(
+    scanned: Sequence[ScannedTopic],
+) -> tuple[list[JointStateInfo], list[ModelStatesInfo]]:
+    """The joints of the joint-state topics and the models of the model-state topics."""
+    joint_states: list[JointStateInfo] = []
+    model_states: list[ModelStatesInfo] = []
+    for topic in scanned:
+        if topic.msgtype == MODEL_STATES and topic.content is not None:
+            models = topic.content.model_motion()
+            model_states.append(
+                ModelStatesInfo(
+                    topic.name,
+                    tuple(models[:MAX_LISTED]),
+                    max(len(models) - MAX_LISTED, 0),
+                    topic.content.decoded,
+                )
+            )
+        if topic.msgtype == JOINT_STATE and topic.content is not None:
+            joints = [
+                JointInfo(
+                    name, s.samples, s.position_range, s.max_speed[0], s.moving, s.max_speed[1]
+                )
+                for name, s in topic.content.joints.items()
+            ]
+            joint_states.append(
+                JointStateInfo(
+                    topic.name,
+                    tuple(joints[:MAX_LISTED]),
+                    max(len(joints) - MAX_LISTED, 0),
+                    topic.content.decoded,
+                    topic.scan.complete,
+                )
+            )
+    return joint_states, model_states
+
+
 def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> BagInfo:
     """What is in a bag, and the options to read it with (see the module docstring).
 
@@ -473,6 +373,7 @@ def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> B
             reader, topics, src, max_messages, wanted=lambda t, m: True, notes=notes
         )
         robot, robot_problem = read_description(reader, topics, src)
+        imus = sorted(imu_infos(reader, topics, scanned, src), key=lambda i: i.problem is not None)
     transforms = transform_infos(scanned)
     chains = tf_chains(transforms)
     truth, instead = _rank(scanned, transforms, chains)
@@ -488,35 +389,7 @@ def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> B
         )
     if robot_problem is not None:
         notes.append(robot_problem)
-    joint_states = []
-    model_states = []
-    for topic in scanned:
-        if topic.msgtype == MODEL_STATES and topic.content is not None:
-            models = topic.content.model_motion()
-            model_states.append(
-                ModelStatesInfo(
-                    topic.name,
-                    tuple(models[:MAX_LISTED]),
-                    max(len(models) - MAX_LISTED, 0),
-                    topic.content.decoded,
-                )
-            )
-        if topic.msgtype == JOINT_STATE and topic.content is not None:
-            joints = [
-                JointInfo(
-                    name, s.samples, s.position_range, s.max_speed[0], s.moving, s.max_speed[1]
-                )
-                for name, s in topic.content.joints.items()
-            ]
-            joint_states.append(
-                JointStateInfo(
-                    topic.name,
-                    tuple(joints[:MAX_LISTED]),
-                    max(len(joints) - MAX_LISTED, 0),
-                    topic.content.decoded,
-                    topic.scan.complete,
-                )
-            )
+    joint_states, model_states = _contents(scanned)
     empty = []
     for topic in scanned:
         content = topic.content
@@ -563,6 +436,7 @@ def bag_info(path: str | Path, *, max_messages: int = DEFAULT_MAX_MESSAGES) -> B
         robot_problem=robot_problem,
         independent=instead is None and any(c.warning is None for c in truth),
         laser_scans=tuple(t.name for t in scanned if t.msgtype == LASER_SCAN),
+        imus=tuple(imus[:MAX_LISTED]),
     )
 
 
