@@ -79,8 +79,8 @@ and the estimate warns that those standard errors are too small
 (:func:`~umbmark.estimators.trajectory_fit.pinned_alone_warning`). Such an estimate from
 ``G`` runs has about ``G - 1`` degrees of freedom, which the estimate carries
 (``ErrorEstimate.dof``): its 95 % intervals are Student-t intervals (with 3 runs 2.2 times
-wider than the normal ones, with 6 runs 1.3 times). A single run is cut into its two halves, taken as the clusters (wide
-but, in simulations, still honest intervals).
+wider than the normal ones, with 6 runs 1.3 times). A single run is cut into its two
+halves, taken as the clusters (wide but, in simulations, still honest intervals).
 
 Assumptions: the effective radii and wheelbase(s) are constant over the runs (wear,
 load and floor do not change them; random slip is allowed and is what the standard
