@@ -134,6 +134,7 @@ def test_a_reset_in_a_pause_of_the_recording_starts_a_new_run(
     assert abs(estimate.E_b - E_B) <= 3 * se["E_b"] + 1e-3, (estimate.E_b, se)
 
 
+@pytest.mark.slow
 def test_the_command_finds_the_four_runs(tmp_path, session):
     bag = _write(tmp_path / "world", "mcap", session, odom_resets=True)
     data = cli_json("calibrate", str(bag), *OPTIONS, "--split", "none")

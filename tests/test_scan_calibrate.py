@@ -267,6 +267,7 @@ def test_a_bag_turning_on_the_spot_only_is_refused(tmp_path: Path) -> None:
     assert "drive more straights" in message
 
 
+@pytest.mark.slow
 def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
     line = cli_error("calibrate", str(bag), "--scan-topic", "/laser", *NOMINAL)
     assert line.startswith(f"umbmark: error: {bag}: no topic /laser (laser scans)")
@@ -287,6 +288,7 @@ def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
         umbmark.replay(bag, scan_topic="/scan", **kw)
 
 
+@pytest.mark.slow
 def test_without_the_nominal_parameters_the_bag_gives_absolute_figures(bag: Path) -> None:
     # no --wheelbase, --wheel-diameter, no robot description: the matches start from the
     # scans alone and the radii, wheelbase and mounting come out absolute (each true
