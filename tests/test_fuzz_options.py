@@ -426,8 +426,8 @@ def commands(folder: Path) -> dict[str, Command]:
                 number_opt("--minutes", real(0.2, 0.3)),
             ],
         ),
-        # An empty folder: every option is checked before the recordings are looked for
-        # (and no engine is started for none).
+        # The run logs: a valid value starts the engine (a local cluster, seconds each). On
+        # an empty folder the reading options are not checked before "no recording found".
         "fleet": Command(
             ["fleet", str(folder), "--history", str(folder / "fleet.sqlite3")],
             [
@@ -560,9 +560,9 @@ NAMES = [
 
 
 #: The commands whose examples take seconds each (a demo, a self-calibration, a study, the
-#: reproductions, a report page): fuzzed in the full run only.
+#: reproductions, a report page, a fleet on its local cluster): fuzzed in the full run only.
 SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study", "table1", "report", "simulate-fleet",
-                 "simulate-imu"}  # fmt: skip
+                 "simulate-imu", "fleet"}  # fmt: skip
 
 
 @pytest.mark.parametrize(
