@@ -106,7 +106,11 @@ def test_the_recording_in_memory_gives_four_runs(session, split):
 
 @pytest.mark.parametrize(
     ("fmt", "odom_resets", "wheels"),
-    [("sqlite3", False, "joints"), ("ros1", True, "joints"), ("mcap", True, "odom")],
+    [
+        ("sqlite3", False, "joints"),
+        pytest.param("ros1", True, "joints", marks=pytest.mark.slow),
+        ("mcap", True, "odom"),
+    ],
 )
 @pytest.mark.parametrize("split", ["rests", "none"])
 def test_a_reset_in_a_pause_of_the_recording_starts_a_new_run(

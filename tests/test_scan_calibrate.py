@@ -140,7 +140,10 @@ def test_the_library_pipeline_is_the_jobs(bag: Path, result: umbmark.Calibration
         assert ours[key] == theirs[key]
 
 
-@pytest.mark.parametrize(("storage", "upside_down"), [("sqlite3", False), ("mcap", True)])
+@pytest.mark.parametrize(
+    ("storage", "upside_down"),
+    [pytest.param("sqlite3", False, marks=pytest.mark.slow), ("mcap", True)],
+)
 def test_ros2_bags_recover_the_truth(tmp_path: Path, storage: str, upside_down: bool) -> None:
     # the same drive in a ROS 2 bag (sweeps at irregular rates, with NaN and inf ranges);
     # turned over, the scanner's sweeps are mirrored and /tf_static says so: the mounting
