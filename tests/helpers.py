@@ -6,6 +6,8 @@ inputs (files, run end points) from first principles.
 
 from __future__ import annotations
 
+import ast
+import functools
 import math
 import os
 from collections.abc import Sequence
@@ -23,6 +25,28 @@ BUNDLED_OPTIODOM = ROOT / "src" / "umbmark" / "data" / "optiodom"
 OPTIODOM = (
     SHARED / "data" / "optiodom" if (SHARED / "data" / "optiodom").is_dir() else BUNDLED_OPTIODOM
 )
+
+
+def parsed(path: Path) -> ast.Module:
+    """The syntax tree of the Python file ``path``, parsed once for each text it has: the
+    checks of the architecture and of the docs read every module of the package (one
+    parse of them all costs about a second). Do not change the tree."""
+    return _parse(path.read_text(encoding="utf-8"))
+
+
+def walked(path: Path) -> tuple[ast.AST, ...]:
+    """Every node of :func:`parsed` ``(path)``, in :func:`ast.walk`'s order (once each)."""
+    return _walk(path.read_text(encoding="utf-8"))
+
+
+@functools.cache
+def _parse(text: str) -> ast.Module:
+    return ast.parse(text)
+
+
+@functools.cache
+def _walk(text: str) -> tuple[ast.AST, ...]:
+    return tuple(ast.walk(_parse(text)))
 
 
 def turtle_square(

@@ -12,7 +12,7 @@ import ast
 import sys
 from pathlib import Path
 
-from helpers import ROOT
+from helpers import ROOT, parsed, walked
 
 SRC = ROOT / "src"
 PACKAGE = SRC / "umbmark"
@@ -63,7 +63,7 @@ def _imports(name: str, path: Path, modules: dict[str, Path]) -> list[tuple[str,
     """The umbmark modules ``name`` imports, with the line of each import statement."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     out: list[tuple[str, int]] = []
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in walked(path):
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package.split(".")[: len(package.split(".")) - node.level + 1]
@@ -176,7 +176,7 @@ def job_classes_not_values(root: Path = PACKAGE) -> list[str]:
     for name, path in _modules(root).items():
         if not name.startswith("umbmark.jobs."):
             continue
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in walked(path):
             if not isinstance(node, ast.ClassDef):
                 continue
             frozen = any(
@@ -197,7 +197,7 @@ def long_functions(root: Path = PACKAGE) -> list[str]:
     """Every function or method over :data:`MAX_FUNCTION_LINES` lines."""
     out = []
     for name, path in _modules(root).items():
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in walked(path):
             if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
                 lines = (node.end_lineno or node.lineno) - node.lineno + 1
                 if lines > MAX_FUNCTION_LINES:
@@ -227,7 +227,7 @@ def public_class_names_defined_twice(root: Path = PACKAGE) -> list[str]:
     """Every public class name (no leading underscore) defined in more than one module."""
     where: dict[str, list[str]] = {}
     for name, path in _modules(root).items():
-        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        for node in parsed(path).body:
             if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
                 where.setdefault(node.name, []).append(name)
     return [f"{cls}: {', '.join(mods)}" for cls, mods in sorted(where.items()) if len(mods) > 1]
@@ -327,7 +327,7 @@ def test_the_array_types_are_named_once():
     """``FloatArray``, ``IntArray`` and ``BoolArray`` are assigned in ``core/arrays`` only."""
     where = []
     for name, path in _modules().items():
-        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        for node in parsed(path).body:
             targets = node.targets if isinstance(node, ast.Assign) else []
             for target in targets:
                 alias = getattr(target, "id", "")
@@ -399,7 +399,7 @@ def edge_import_violations(root: Path = PACKAGE) -> list[str]:
     allowed."""
     bad = []
     for name, path in _modules(root).items():
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in walked(path):
             if isinstance(node, ast.ImportFrom) and not node.level:
                 names = [node.module or ""]
             elif isinstance(node, ast.Import):

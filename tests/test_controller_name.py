@@ -55,6 +55,7 @@ def _page_overlay(page: str) -> dict[str, object]:
     return loaded
 
 
+@pytest.mark.slow
 def test_the_controller_travels_through_a_first_passs_result(tmp_path: Path) -> None:
     params = tmp_path / "my_controllers.yaml"
     params.write_text(CONTROLLERS)
@@ -150,6 +151,7 @@ def test_with_nothing_naming_it_the_default_is_said(tmp_path: Path) -> None:
     assert f"# {said}" in overlay.read_text()
 
 
+@pytest.mark.slow
 def test_the_command_line_says_the_default_where_it_writes_an_overlay(tmp_path: Path) -> None:
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))

@@ -23,8 +23,15 @@ from helpers import ROOT, umbmark_command
 
 DOCS = ROOT / "docs"
 #: Pages whose examples take more than a few seconds (self-calibrations, simulations, a
-#: fleet on its local cluster, scan matching).
-SLOW_PAGES = {"selfcal.md", "commands.md", "recorded.md", "fleet.md", "scan-matching.md"}
+#: fleet on its local cluster, scan matching, a simulated bag with an IMU read back).
+SLOW_PAGES = {
+    "selfcal.md",
+    "commands.md",
+    "recorded.md",
+    "fleet.md",
+    "scan-matching.md",
+    "recordings.md",
+}
 
 
 def _runnable(page: Path) -> list[Block]:

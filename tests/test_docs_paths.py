@@ -22,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+from helpers import parsed
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "src" / "umbmark"
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -38,7 +40,7 @@ _DOTTED = re.compile(r"^(?:umbmark\.)?([a-z_]+(?:\.[A-Za-z_]\w*)+)$")
 @cache
 def _defined(module: Path) -> frozenset[str]:
     """Top-level names a module defines (functions, classes, assignments, imports)."""
-    tree = ast.parse(module.read_text(encoding="utf-8"))
+    tree = parsed(module)
     names: set[str] = set()
     for node in tree.body:
         if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
@@ -64,7 +66,7 @@ def _module_file(parts: list[str]) -> Path | None:
 
 
 def _class_attribute(module: Path, cls: str, attr: str) -> bool:
-    for node in ast.parse(module.read_text(encoding="utf-8")).body:
+    for node in parsed(module).body:
         if isinstance(node, ast.ClassDef) and node.name == cls:
             for item in ast.walk(node):
                 if isinstance(item, ast.FunctionDef | ast.AsyncFunctionDef) and item.name == attr:
@@ -106,7 +108,7 @@ def _mentions(text: str) -> list[str]:
 def _docstrings() -> list[tuple[Path, str]]:
     found = []
     for module in sorted(PACKAGE.rglob("*.py")):
-        doc = ast.get_docstring(ast.parse(module.read_text(encoding="utf-8")))
+        doc = ast.get_docstring(parsed(module))
         if doc:
             found.append((module, doc))
     return found

@@ -112,7 +112,7 @@ def test_a_gap_between_samples_is_no_wheel_jump():
         check_motion("drive.bag", time, angles, truth)
 
 
-@pytest.mark.parametrize("fmt", ["ros1", "mcap"])
+@pytest.mark.parametrize("fmt", [pytest.param("ros1", marks=pytest.mark.slow), "mcap"])
 def test_dropped_odom_is_bridged_on_a_straight_and_leaves_a_turning_run_out(tmp_path, session, fmt):
     straight = _cruise(session, 1, GAP + 1.5) + 0.6  # in square 2, at cruise speed
     turning = _turn(session, 2) - 0.5  # square 3: stopping, then turning
@@ -237,6 +237,7 @@ def test_a_gap_in_odom_is_no_sign_of_a_filtered_odometry(tmp_path):
     assert "no /odom message for 4.05 s from " in left
 
 
+@pytest.mark.slow
 def test_a_recorders_hiccup_while_the_robot_speeds_up_is_bridged(tmp_path, session):
     # A quarter second without /joint_states as the robot sets off on a leg, and as it
     # starts a spot turn: the speeds change across it, but the robot barely turns while
@@ -328,3 +329,6 @@ def test_a_gap_in_a_drive_of_any_shape_splits_it_into_two_runs(tmp_path):
     # the robot's errors, from the two runs' whole trajectories
     assert report.estimate.E_d == pytest.approx(1.002, abs=3e-4)
     assert report.estimate.E_b == pytest.approx(1.01, abs=3e-3)
+    # Only the second run turns: the wheelbase rests on it alone, on any machine, and its
+    # interval is said to be too narrow (tests/estimators/test_trajectory_fit.py).
+    assert [w for w in report.warnings if "wheelbase is pinned by one of the 2 runs alone" in w]

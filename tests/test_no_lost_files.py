@@ -99,6 +99,7 @@ def test_every_writing_command_refuses_to_replace(
     assert _snapshot(target) == before
 
 
+@pytest.mark.slow
 def test_simulate_o_keeps_the_hand_typed_table_and_force_replaces_it(tmp_path: Path) -> None:
     """The README's runs.csv is a hand-typed table: simulate -o refuses it byte for byte;
     --force replaces it with the simulated runs (a table calibrate reads: 2 x 2 runs)."""
@@ -256,6 +257,7 @@ def test_the_readme_first_command_writes_no_tracked_file() -> None:
         assert ignored.returncode == 0, f"{name} is not ignored by git"
 
 
+@pytest.mark.slow
 def test_history_on_a_fresh_install_says_nothing_is_recorded(tmp_path: Path) -> None:
     """A fresh install (no $UMBMARK_HISTORY, an empty data folder): ``umbmark history``
     exits 0 saying that nothing is recorded yet and how to record, and creates nothing."""

@@ -50,14 +50,8 @@ def _poses(wheels: WheelSeries, r_left: float, r_right: float, b: float) -> Pose
     return PoseSeries(time=wheels.time, poses=poses)
 
 
-@pytest.mark.parametrize(
-    "storage",
-    [
-        None,
-        pytest.param("sqlite3", marks=pytest.mark.slow),
-        pytest.param("mcap", marks=pytest.mark.slow),
-    ],
-)
+@pytest.mark.slow
+@pytest.mark.parametrize("storage", [None, "sqlite3", "mcap"])
 def test_a_noise_free_reference_of_other_geometry_is_accepted(
     tmp_path: Path, wheels: WheelSeries, storage: str | None
 ) -> None:

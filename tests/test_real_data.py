@@ -93,6 +93,7 @@ def test_other_estimators_also_help_on_circles(tmp_path, method):
     assert replay.mean_end_error < 0.6 * replay.mean_end_error_nominal
 
 
+@pytest.mark.slow
 def test_trajectory_method_reports_the_scale_error_with_standard_errors():
     data = umbmark.calibrate(CIRCLE, method="trajectory").to_dict()
     assert data["method"] == "trajectory"

@@ -89,6 +89,7 @@ def test_second_pass_from_the_table_composes_to_the_truth(passes):
     assert "wheelbase = 0.34 m" in note
 
 
+@pytest.mark.slow
 def test_second_pass_from_the_run_log_composes_to_the_truth(passes):
     report = umbmark.calibrate(passes / "logs2", method="exact")
     c_l, c_r, multiplier = _new(report)

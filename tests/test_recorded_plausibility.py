@@ -98,6 +98,7 @@ def test_a_run_without_motion(tmp_path: Path, session) -> None:  # type: ignore[
     )
 
 
+@pytest.mark.slow
 def test_return_error_larger_than_the_side_of_logged_runs(tmp_path: Path, session) -> None:  # type: ignore[no-untyped-def]
     # a wrong wheelbase in the metadata (0.25 m for 0.34 m): the odometry turns a third
     # too far and ends over a side from the truth

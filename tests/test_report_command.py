@@ -524,6 +524,7 @@ _BOXES = """
 """
 
 
+@pytest.mark.slow
 def test_every_table_fits_1200_px_without_scrolling(
     browser: Chromium, session: Path, tmp_path: Path
 ) -> None:

@@ -106,7 +106,11 @@ def test_the_recording_in_memory_gives_four_runs(session, split):
 
 @pytest.mark.parametrize(
     ("fmt", "odom_resets", "wheels"),
-    [("sqlite3", False, "joints"), ("ros1", True, "joints"), ("mcap", True, "odom")],
+    [
+        ("sqlite3", False, "joints"),
+        pytest.param("ros1", True, "joints", marks=pytest.mark.slow),
+        ("mcap", True, "odom"),
+    ],
 )
 @pytest.mark.parametrize("split", ["rests", "none"])
 def test_a_reset_in_a_pause_of_the_recording_starts_a_new_run(
@@ -134,6 +138,7 @@ def test_a_reset_in_a_pause_of_the_recording_starts_a_new_run(
     assert abs(estimate.E_b - E_B) <= 3 * se["E_b"] + 1e-3, (estimate.E_b, se)
 
 
+@pytest.mark.slow
 def test_the_command_finds_the_four_runs(tmp_path, session):
     bag = _write(tmp_path / "world", "mcap", session, odom_resets=True)
     data = cli_json("calibrate", str(bag), *OPTIONS, "--split", "none")

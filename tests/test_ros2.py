@@ -239,6 +239,7 @@ def stamped(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, str]
     node.close()
 
 
+@pytest.mark.slow
 def test_reads_sim_time_odometry_scan_and_the_urdf(stamped: dict[str, str]) -> None:
     """ROS time is the node's /clock (from 1000 s, 8x the wall clock); the odometry and
     scan carry it; the laser's mounting comes from /tf_static where tf2_msgs is built

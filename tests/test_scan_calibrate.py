@@ -140,7 +140,10 @@ def test_the_library_pipeline_is_the_jobs(bag: Path, result: umbmark.Calibration
         assert ours[key] == theirs[key]
 
 
-@pytest.mark.parametrize(("storage", "upside_down"), [("sqlite3", False), ("mcap", True)])
+@pytest.mark.parametrize(
+    ("storage", "upside_down"),
+    [pytest.param("sqlite3", False, marks=pytest.mark.slow), ("mcap", True)],
+)
 def test_ros2_bags_recover_the_truth(tmp_path: Path, storage: str, upside_down: bool) -> None:
     # the same drive in a ROS 2 bag (sweeps at irregular rates, with NaN and inf ranges);
     # turned over, the scanner's sweeps are mirrored and /tf_static says so: the mounting
@@ -267,6 +270,7 @@ def test_a_bag_turning_on_the_spot_only_is_refused(tmp_path: Path) -> None:
     assert "drive more straights" in message
 
 
+@pytest.mark.slow
 def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
     line = cli_error("calibrate", str(bag), "--scan-topic", "/laser", *NOMINAL)
     assert line.startswith(f"umbmark: error: {bag}: no topic /laser (laser scans)")
@@ -287,6 +291,7 @@ def test_bad_topics_and_methods_are_one_line(bag: Path) -> None:
         umbmark.replay(bag, scan_topic="/scan", **kw)
 
 
+@pytest.mark.slow
 def test_without_the_nominal_parameters_the_bag_gives_absolute_figures(bag: Path) -> None:
     # no --wheelbase, --wheel-diameter, no robot description: the matches start from the
     # scans alone and the radii, wheelbase and mounting come out absolute (each true

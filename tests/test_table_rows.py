@@ -141,6 +141,7 @@ def test_a_dropped_minus_is_named_with_its_row_and_the_result_without_it(tmp_pat
     }
 
 
+@pytest.mark.slow
 def test_swapped_digits_are_named_and_the_terminal_shows_the_result_beside(tmp_path):
     # Line 11 typed 213.5 for 231.5 (x_abs): 18 mm only, inside the scatter: unnamed.
     assert _calibrate(_table(tmp_path, _with((9, 1), "213.5"))).without is None

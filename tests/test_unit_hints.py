@@ -30,6 +30,7 @@ def test_millimetres_as_millimetres_say_nothing():
     assert _unit_notes(report) == []
 
 
+@pytest.mark.slow
 def test_millimetres_as_centimetres_are_refused_naming_the_unit():
     # Read as cm the ccw cluster sits 3.07 m out, and no robot of the exact geometry ends
     # at both centres (they are the mm table's, ten times larger: the exact inversion

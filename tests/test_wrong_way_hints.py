@@ -58,6 +58,7 @@ def test_a_radius_given_as_the_diameter_is_named_before_the_turning(logs: Path) 
     assert umbmark.calibrate(logs, wheel_diameter=DIAMETER).verdict.level == "apply"
 
 
+@pytest.mark.slow
 def test_the_command_line_names_it_too(logs: Path) -> None:
     line = cli_error("calibrate", str(logs), "--wheel-diameter", f"{RADIUS:g}")
     assert f"pass --wheel-diameter {DIAMETER:g}, twice it" in line
@@ -117,6 +118,7 @@ def test_wheelbase_inf_on_the_command_line_and_in_python(tmp_path: Path) -> None
 # --- a ROS 2 bag's metadata.yaml --------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_a_ros2_bags_metadata_is_read_as_the_bag(bag: Path) -> None:
     given = {
         "wheelbase": 0.34,

@@ -181,6 +181,7 @@ def _linear_misfit(table: Path) -> float:
     return float(np.max(np.hypot(*(observed - design @ fitted).reshape(2, 2).T)))
 
 
+@pytest.mark.slow
 def test_the_example_with_cw_and_ccw_swapped_is_not_applied(tmp_path: Path):
     table = tmp_path / "runs.csv"
     umbmark.example(str(table))

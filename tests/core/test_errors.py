@@ -13,6 +13,8 @@ import pytest
 
 from umbmark.core.errors import InputError, Keyword, option, option_names
 
+from helpers import walked
+
 PACKAGE = Path(__file__).resolve().parents[2] / "src" / "umbmark"
 #: Where flags are the text itself: the command line, and the option spec's help texts.
 FLAG_HOMES = ("cli", "options")
@@ -97,9 +99,8 @@ def _problem_texts(call: ast.Call) -> list[ast.AST]:
 
 
 def _flags_written(module: Path, known: set[str], root: Path = PACKAGE) -> list[str]:
-    tree = ast.parse(module.read_text(encoding="utf-8"))
     found = []
-    for call in ast.walk(tree):
+    for call in walked(module):
         if not isinstance(call, ast.Call):
             continue
         name = getattr(call.func, "id", None) or getattr(call.func, "attr", None)

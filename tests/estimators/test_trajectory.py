@@ -275,8 +275,9 @@ def test_cluster_covariance_is_the_jackknife_over_runs():
     dev = left_out - full
     expected = dev.T @ dev * 4 / 5
     # Residuals of the weighted problem are model minus data; the Jacobian is the design.
-    got = _cluster_covariance(design, design @ full - y, groups, 5)
+    got, alone = _cluster_covariance(design, design @ full - y, groups, 5)
     np.testing.assert_allclose(got, expected, rtol=1e-9)
+    assert alone == ()  # every parameter is pinned by the clusters left in
 
 
 def test_too_little_motion_is_refused():

@@ -214,6 +214,7 @@ def rolling():  # type: ignore[no-untyped-def]
     return simulate(ramped(PATTERN), sweep_time=0.1)
 
 
+@pytest.mark.slow
 def test_the_motion_during_a_sweep_is_undone(rolling) -> None:  # type: ignore[no-untyped-def]
     assert rolling.scans.time_increment == pytest.approx(0.1 / 360)
     # taken as measured at once, the turns come out bent: short by the sweep's share of

@@ -72,11 +72,15 @@ covariance is cluster-robust with the runs as clusters, in its jackknife form (C
 leaving run ``g`` out moves the solution by ``d_g = (A - A_g)^-1 s_g`` (``A = J^T J``,
 ``A_g = J_g^T J_g``, ``s_g = J_g^T r_g`` the run's score) and ``cov = (G - 1)/G sum_g d_g
 d_g^T``. It holds whatever the correlation within a run, and unlike the plain sandwich
-it does not shrink when a few runs dominate. Such an estimate from ``G`` runs has about
-``G - 1`` degrees of freedom, which the estimate carries (``ErrorEstimate.dof``): its 95 %
-intervals are Student-t intervals (with 3 runs 2.2 times wider than the normal ones, with
-6 runs 1.3 times). A single run is cut into its two halves, taken as the clusters (wide
-but, in simulations, still honest intervals).
+it does not shrink when a few runs dominate. A direction that the runs left in do not pin
+(one run alone pins the wheelbase: the others do not turn) gets no step, decided with a
+margin over the numerical Jacobian's own error (so on any machine and last bits alike),
+and the estimate warns that those standard errors are too small
+(:func:`~umbmark.estimators.trajectory_fit.pinned_alone_warning`). Such an estimate from
+``G`` runs has about ``G - 1`` degrees of freedom, which the estimate carries
+(``ErrorEstimate.dof``): its 95 % intervals are Student-t intervals (with 3 runs 2.2 times
+wider than the normal ones, with 6 runs 1.3 times). A single run is cut into its two
+halves, taken as the clusters (wide but, in simulations, still honest intervals).
 
 Assumptions: the effective radii and wheelbase(s) are constant over the runs (wear,
 load and floor do not change them; random slip is allowed and is what the standard
@@ -105,7 +109,12 @@ from umbmark.estimators.motions import (
     motion_coverage,
 )
 from umbmark.estimators.registry import TRAJECTORY, TRAJECTORY_SCRUB
-from umbmark.estimators.trajectory_fit import TrajectoryFit, fit_trajectories, scrub_term_problem
+from umbmark.estimators.trajectory_fit import (
+    TrajectoryFit,
+    fit_trajectories,
+    pinned_alone_warning,
+    scrub_term_problem,
+)
 from umbmark.estimators.trajectory_model import MODELS, StartPose, TrajectoryModel
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.recording import RunLog
@@ -210,19 +219,8 @@ def trajectory_estimate(
         )
         for key in ("truth_offset_x", "truth_offset_y"):
             standard_errors[key] = single.standard_errors[key]
-    fit = single
     method = (TRAJECTORY_SCRUB if model == "scrub" else TRAJECTORY).name
-    problem = motion_coverage(logs, active).scrub_problem() if model == "scrub" else None
-    advice = SCRUB_ADVICE
-    if model == "scrub" and problem is None:
-        advice = SCRUB_MORE
-        try:
-            scrub = fit_trajectories(logs, active, model="scrub", check_coverage=False, **options)
-        except ValueError as exc:  # a wheelbase not pinned at all: no turn-rate term either
-            problem = f"the scrub model's turn-rate term is not identified: {exc}"
-        else:
-            problem = scrub_term_problem(scrub)
-            fit = single if problem is not None else scrub
+    fit, problem = _scrub(logs, active, options, single) if model == "scrub" else (single, None)
     if fit.spot_wheelbase is not None:
         components.update(
             arc_wheelbase=fit.wheelbase,
@@ -246,9 +244,32 @@ def trajectory_estimate(
         components=components,
         standard_errors=standard_errors,
         dof=float(single.clusters - 1),
-        warnings=() if problem is None else (f"{problem}; {SCRUB_FALLBACK}; {advice}",),
+        warnings=tuple(
+            dict.fromkeys(
+                w for w in (pinned_alone_warning(single), pinned_alone_warning(fit), problem) if w
+            )
+        ),
     )
     return estimate, fit
+
+
+def _scrub(
+    logs: Sequence[RunLog], active: WheelParams, options: dict[str, Any], single: TrajectoryFit
+) -> tuple[TrajectoryFit, str | None]:
+    """The scrub model's fit, or ``single`` with the warning why its turn-rate term is
+    not identified."""
+    problem = motion_coverage(logs, active).scrub_problem()
+    if problem is not None:
+        return single, f"{problem}; {SCRUB_FALLBACK}; {SCRUB_ADVICE}"
+    try:
+        scrub = fit_trajectories(logs, active, model="scrub", check_coverage=False, **options)
+    except ValueError as exc:  # a wheelbase not pinned at all: no turn-rate term either
+        problem = f"the scrub model's turn-rate term is not identified: {exc}"
+    else:
+        problem = scrub_term_problem(scrub)
+        if problem is None:
+            return scrub, None
+    return single, f"{problem}; {SCRUB_FALLBACK}; {SCRUB_MORE}"
 
 
 def _single_set(

@@ -42,6 +42,7 @@ __all__ = [
     "MIN_OFFSET_TURN",
     "TrajectoryFit",
     "fit_trajectories",
+    "pinned_alone_warning",
     "scrub_term_problem",
 ]
 
@@ -54,6 +55,13 @@ MIN_OFFSET_TURN = math.radians(30.0)
 _ONE_RUN_PIECES = 2
 #: Largest condition number of the scaled normal matrix: beyond, a parameter is not pinned.
 _MAX_CONDITION = 1e12
+#: Smallest singular value of the Jacobian of the runs left in by the jackknife (its
+#: columns scaled by the whole Jacobian's lengths, to 1) that pins a direction: the same
+#: bound as :data:`_MAX_CONDITION`. A direction those runs do not see at all shows at
+#: 1e-8 to 4e-8, the error of the numerical Jacobian itself, which moves with the last
+#: bits of the input and the machine (``tests/estimators/test_trajectory_fit.py``): the
+#: bound stays 25 times above it.
+_MIN_LEFT_IN = _MAX_CONDITION**-0.5
 
 
 @dataclass(frozen=True)
@@ -108,6 +116,10 @@ class TrajectoryFit:
         and to the left of the axle centre; 0 when not fitted.
     truth_offset_fitted : bool
         Whether the tracked-point offset was fitted.
+    pinned_alone : tuple of str
+        The parameters (names as in ``parameters``) that one cluster alone pins: the
+        jackknife that leaves it out sees nothing of them, so their standard errors do not
+        see that run's own scatter (:func:`pinned_alone_warning`).
     """
 
     model: TrajectoryModel
@@ -131,6 +143,7 @@ class TrajectoryFit:
     truth_offset_x: float = 0.0
     truth_offset_y: float = 0.0
     truth_offset_fitted: bool = False
+    pinned_alone: tuple[str, ...] = ()
 
     def params(self, base: WheelParams) -> WheelParams:
         """The fitted model as odometry parameters, for replays.
@@ -153,6 +166,24 @@ class TrajectoryFit:
             wheelbase=self.wheelbase,
             spot_wheelbase=self.spot_wheelbase,
         )
+
+
+def pinned_alone_warning(fit: TrajectoryFit) -> str | None:
+    """The warning for a fit some of whose parameters one run alone pins (None if none):
+    their standard errors come from the other runs' pull only, not from the spread
+    between runs that each see them, and are too small."""
+    if not fit.pinned_alone:
+        return None
+    shown = [name.replace("_", " ") for name in fit.pinned_alone]
+    what = shown[0] if len(shown) == 1 else ", ".join(shown[:-1]) + " and " + shown[-1]
+    one = "one half of the run" if fit.runs == 1 else f"one of the {fit.runs} runs"
+    if len(shown) == 1:
+        said = f"the {what} is pinned by {one} alone (leaving it out leaves it free): its "
+        said += "standard error cannot see that run's own scatter and is too small"
+    else:
+        said = f"the {what} are pinned by {one} alone (leaving it out leaves them free): "
+        said += "their standard errors cannot see that run's own scatter and are too small"
+    return f"{said}; record more runs that drive and turn"
 
 
 def scrub_term_problem(fit: TrajectoryFit) -> str | None:
@@ -212,13 +243,19 @@ def _clusters(data: RunsData) -> tuple[IndexArray, int]:
 
 def _cluster_covariance(
     jac: FloatArray, res: FloatArray, cluster: IndexArray, clusters: int
-) -> FloatArray:
+) -> tuple[FloatArray, tuple[int, ...]]:
     """Cluster-robust covariance (CR3, one-step jackknife) of the solver's ``x``.
+
+    Each step is solved on the Jacobian with its columns scaled to unit length, from the
+    singular values of the rows left in (not by subtracting ``A_g`` from ``A``, which
+    loses the digits of a direction the rest barely sees). A direction the runs left in
+    do not pin (a singular value below :data:`_MIN_LEFT_IN`) gets no step: leaving the
+    only run that pins it out says nothing of where it would go.
 
     Parameters
     ----------
     jac : array, shape (N, k)
-        Jacobian of the weighted residuals at the solution.
+        Jacobian of the weighted residuals at the solution, no column zero.
     res : array, shape (N,)
         Weighted residuals at the solution.
     cluster : array of int, shape (N,)
@@ -228,18 +265,30 @@ def _cluster_covariance(
 
     Returns
     -------
-    array, shape (k, k)
+    cov : array, shape (k, k)
         ``(G - 1)/G sum_g d_g d_g^T`` with ``d_g = (A - A_g)^-1 J_g^T r_g`` (module
         documentation).
+    alone : tuple of int
+        The parameters (column indices) that one cluster alone pins: those of the
+        directions that leaving it out leaves free, each direction by its components of
+        at least half the largest's square.
     """
-    info = jac.T @ jac
+    norms = np.linalg.norm(jac, axis=0)
+    scaled = jac / norms
     steps = []
+    alone: set[int] = set()
     for g in range(clusters):
         rows = cluster == g
-        j_g = jac[rows]
-        steps.append(np.linalg.pinv(info - j_g.T @ j_g) @ (j_g.T @ res[rows]))
+        _, sv, vt = np.linalg.svd(scaled[~rows], full_matrices=False)
+        pinned = sv >= _MIN_LEFT_IN
+        free = vt[~pinned]  # (m, k): the directions the rest leaves free
+        for v in free**2:  # each named by its large components
+            alone.update(int(i) for i in np.flatnonzero(v >= 0.5 * v.max()))
+        score = scaled[rows].T @ res[rows]
+        basis = vt[pinned]
+        steps.append(basis.T @ ((basis @ score) / sv[pinned] ** 2) / norms)
     step = np.array(steps)
-    return np.asarray(step.T @ step * ((clusters - 1) / clusters))
+    return np.asarray(step.T @ step * ((clusters - 1) / clusters)), tuple(sorted(alone))
 
 
 def _check_pinned(jac: FloatArray, names: Sequence[str]) -> None:
@@ -394,7 +443,7 @@ def fit_trajectories(
     if fit_truth_offset:  # before the check of the Jacobian, which a bound flattens
         _check_truth_offset_inside(truth_offset, max_truth_offset)
     _check_pinned(fit.jac, names)
-    cov, standard_errors, clusters = _uncertainty(problem, fit, data, names)
+    cov, standard_errors, clusters, alone = _uncertainty(problem, fit, data, names)
     r_left, r_right, b, b_spot, delta = problem.unpack(fit.x)
     _check_physical(
         {"r_left": r_left, "r_right": r_right, "wheelbase": b, "spot_wheelbase": b_spot},
@@ -423,6 +472,7 @@ def fit_trajectories(
         truth_offset_x=truth_offset[0],
         truth_offset_y=truth_offset[1],
         truth_offset_fitted=fit_truth_offset,
+        pinned_alone=alone,
     )
     loose = scrub_term_problem(result) if check_coverage else None
     if loose is not None:
@@ -467,18 +517,19 @@ def _unknowns(
 
 def _uncertainty(
     problem: Problem, fit: _Solution, data: RunsData, names: Sequence[str]
-) -> tuple[FloatArray, dict[str, float], int]:
+) -> tuple[FloatArray, dict[str, float], int, tuple[str, ...]]:
     """The covariance of the physical unknowns (clustered by run), their standard errors
-    (zero for offsets not fitted), and the number of clusters."""
+    (zero for offsets not fitted), the number of clusters, and the unknowns one cluster
+    alone pins."""
     cluster, clusters = _clusters(data)
-    cov_x = _cluster_covariance(fit.jac, fit.residuals, np.repeat(cluster, 3), clusters)
+    cov_x, alone = _cluster_covariance(fit.jac, fit.residuals, np.repeat(cluster, 3), clusters)
     _, slopes = problem.physical(fit.x)
     cov = cov_x * np.outer(slopes, slopes)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     standard_errors = {name: float(v) for name, v in zip(names, se, strict=True)}
     for name in ("time_offset", "truth_offset_x", "truth_offset_y"):
         standard_errors.setdefault(name, 0.0)
-    return cov, standard_errors, clusters
+    return cov, standard_errors, clusters, tuple(names[i] for i in alone)
 
 
 def _two_passes(

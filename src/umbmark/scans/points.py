@@ -14,12 +14,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from umbmark.core.arrays import FloatArray
 from umbmark.model.scans import ScanSeries
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 __all__ = ["PreparedScan", "prepare", "scan_points", "series_points"]
 
@@ -153,5 +156,7 @@ def prepare(
     with np.errstate(invalid="ignore", divide="ignore"):
         good = (count >= 3) & (big > 0) & (small <= line_ratio * big)
     line_points, normals = pts[good], normals[good]
+    from scipy.spatial import cKDTree  # imported by the matching alone: a second at start
+
     tree = cKDTree(line_points) if line_points.shape[0] >= 3 else None
     return PreparedScan(pts, line_points, normals, tree)

@@ -49,6 +49,8 @@ Other keys (``notes``, ...) are kept as they are and otherwise ignored.
 from __future__ import annotations
 
 import csv
+import io
+import itertools
 import math
 from array import array
 from collections.abc import Iterator, Mapping
@@ -348,47 +350,105 @@ def _read_samples(
     wheel: list[array[float]] = [array("d") for _ in range(3)]
     truth: list[array[float]] = [array("d") for _ in range(4)]
     samples = 0
-    for number, line in lines:
-        samples += 1
-        if samples > MAX_SAMPLES:
-            raise InputError(
-                f"has more than {MAX_SAMPLES} samples: umbmark reads at most {MAX_SAMPLES} "
-                "rows of a run file (split the recording into runs)",
-                source=path,
-                row=number,
-            )
-        cells = next(csv.reader([line]))
-        if len(cells) < len(header):
-            raise InputError(
-                f"has {len(cells)} cells, the header has {len(header)}", source=path, row=number
-            )
-        values = []
-        for name, i in zip(LOG_COLUMNS, index, strict=True):
-            text = cells[i].strip()
-            if not text:
-                values.append(math.nan)
-                continue
-            try:
-                value = float(text)
-            except ValueError:
-                shown = repr(text) if len(text) <= 40 else repr(text[:40]) + "..."
+    while chunk := list(itertools.islice(lines, _CHUNK)):
+        if samples + len(chunk) <= MAX_SAMPLES and _whole_chunk(
+            chunk, index, len(header), scale, wheel, truth
+        ):
+            samples += len(chunk)
+            continue
+        for number, line in chunk:
+            samples += 1
+            if samples > MAX_SAMPLES:
                 raise InputError(
-                    f"{name} {shown} is not a number", source=path, row=number
-                ) from None
-            if not math.isfinite(value):
-                raise InputError(f"{name} is {text[:40]}", source=path, row=number)
-            values.append(value)
-        t, x, y, theta, left, right = values
-        if math.isnan(t):
-            raise InputError("time is empty", source=path, row=number)
-        has_wheels = not (math.isnan(left) or math.isnan(right))
-        has_truth = not (math.isnan(x) or math.isnan(y) or math.isnan(theta))
-        if not has_wheels and not has_truth:
-            raise InputError("has neither wheel data nor ground truth", source=path, row=number)
-        if has_wheels:
-            for column, value in zip(wheel, (t, left * scale, right * scale), strict=True):
-                column.append(value)
-        if has_truth:
-            for column, value in zip(truth, (t, x, y, theta), strict=True):
-                column.append(value)
+                    f"has more than {MAX_SAMPLES} samples: umbmark reads at most {MAX_SAMPLES} "
+                    "rows of a run file (split the recording into runs)",
+                    source=path,
+                    row=number,
+                )
+            _read_row(path, number, line, index, len(header), scale, wheel, truth)
     return wheel, truth
+
+
+#: Rows read at a time: each block is parsed whole (numpy's parser, in C) where every row
+#: has all six numbers, finite, and no quoting; else row by row, as :func:`_read_row` says.
+_CHUNK = 4096
+
+
+def _whole_chunk(
+    chunk: list[tuple[int, str]],
+    index: list[int],
+    cells: int,
+    scale: float,
+    wheel: list[array[float]],
+    truth: list[array[float]],
+) -> bool:
+    """Append the rows of ``chunk`` to ``wheel`` and ``truth`` if every one has ``cells``
+    cells, no quotes, and a finite number in each of the columns ``index`` (the rows then
+    read exactly as :func:`_read_row` reads them); False, appending nothing, otherwise."""
+    texts = [line for _, line in chunk]
+    commas = cells - 1
+    if any(t.count(",") != commas or '"' in t for t in texts):
+        return False
+    try:
+        values = np.loadtxt(
+            io.StringIO("\n".join(texts)),
+            dtype=np.float64,
+            delimiter=",",
+            comments=None,
+            usecols=index,
+            ndmin=2,
+        )
+    except ValueError:  # an empty cell, a word, a digit Python reads and numpy does not
+        return False
+    if values.shape != (len(texts), len(index)) or not np.all(np.isfinite(values)):
+        return False
+    t, x, y, theta, left, right = values.T
+    for column, data in zip(wheel, (t, left * scale, right * scale), strict=True):
+        column.frombytes(np.ascontiguousarray(data).tobytes())
+    for column, data in zip(truth, (t, x, y, theta), strict=True):
+        column.frombytes(np.ascontiguousarray(data).tobytes())
+    return True
+
+
+def _read_row(
+    path: Path,
+    number: int,
+    line: str,
+    index: list[int],
+    width: int,
+    scale: float,
+    wheel: list[array[float]],
+    truth: list[array[float]],
+) -> None:
+    """Append row ``number`` (``line``) of a run file to ``wheel`` and ``truth`` (see
+    :func:`_read_samples`), or refuse it naming the row and the problem."""
+    cells = next(csv.reader([line]))
+    if len(cells) < width:
+        raise InputError(f"has {len(cells)} cells, the header has {width}", source=path, row=number)
+    values = []
+    for name, i in zip(LOG_COLUMNS, index, strict=True):
+        text = cells[i].strip()
+        if not text:
+            values.append(math.nan)
+            continue
+        try:
+            value = float(text)
+        except ValueError:
+            shown = repr(text) if len(text) <= 40 else repr(text[:40]) + "..."
+            raise InputError(f"{name} {shown} is not a number", source=path, row=number) from None
+        if not math.isfinite(value):
+            raise InputError(f"{name} is {text[:40]}", source=path, row=number)
+        values.append(value)
+    t, x, y, theta, left, right = values
+    if math.isnan(t):
+        raise InputError("time is empty", source=path, row=number)
+    has_wheels = not (math.isnan(left) or math.isnan(right))
+    has_truth = not (math.isnan(x) or math.isnan(y) or math.isnan(theta))
+    if not has_wheels and not has_truth:
+        raise InputError("has neither wheel data nor ground truth", source=path, row=number)
+    if has_wheels:
+        for column, value in zip(wheel, (t, left * scale, right * scale), strict=True):
+            column.append(value)
+    if has_truth:
+        for column, value in zip(truth, (t, x, y, theta), strict=True):
+            column.append(value)
