@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.model.recording import WheelSeries
 

@@ -17,7 +17,7 @@ import pytest
 from gyro_sim import Truth, heading_reference, mixed_program, record, scan_reference
 from umbmark.calibration.gyro import calibrate_gyro, gyro_lines
 from umbmark.core.errors import InputError
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.runs.read_options import ReadOptions
 from umbmark.scans.gyro_intervals import HeadingReference
 

@@ -15,7 +15,7 @@ import pytest
 
 from gyro_sim import Truth, program, record, rest, scan_reference, spin, straight
 from umbmark.core.errors import InputError
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.model.recording import WheelSeries
 from umbmark.scans.gyro_intervals import (
     HeadingReference,

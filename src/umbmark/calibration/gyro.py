@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from umbmark.calibration.verdict import Verdict
     from umbmark.core.arrays import FloatArray
     from umbmark.estimators.gyro import GyroCalibration
-    from umbmark.model.gyro import GyroSeries
+    from umbmark.model.gyro_series import GyroSeries
     from umbmark.model.motion_intervals import MotionIntervals
     from umbmark.model.recording import WheelSeries
     from umbmark.model.scans import LaserMounting

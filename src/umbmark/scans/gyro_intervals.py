@@ -1,7 +1,7 @@
 """Motion intervals of the wheels against a gyro: what the gyro estimator compares.
 
 A recording's wheels (:class:`~umbmark.model.recording.WheelSeries`) and its gyro
-(:class:`~umbmark.model.gyro.GyroSeries`, rates in the base frame) are cut into short
+(:class:`~umbmark.model.gyro_series.GyroSeries`, rates in the base frame) are cut into short
 intervals, each with the wheels' rotation over it and the gyro's integrated rates:
 
 - **rests**: the wheels stand still (:func:`umbmark.runs.rests.still_intervals`, the
@@ -40,7 +40,7 @@ import numpy as np
 
 from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.errors import InputError
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.model.recording import WheelSeries, gap_mask
 from umbmark.runs.rests import still_intervals

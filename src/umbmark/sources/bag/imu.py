@@ -1,5 +1,5 @@
 """Reading an IMU's gyro from a bag: ``sensor_msgs/Imu`` into a
-:class:`umbmark.model.gyro.GyroSeries` in the robot's base frame.
+:class:`umbmark.model.gyro_series.GyroSeries` in the robot's base frame.
 
 :func:`read_imu` reads the topic ``BagOptions.imu_topic`` (``--imu-topic``) of a ROS 1
 bag, a ROS 2 bag folder (sqlite3 or MCAP) or an MCAP file, within a window of the
@@ -47,7 +47,7 @@ import numpy as np
 
 from umbmark.core.arrays import BoolArray, FloatArray, IntArray
 from umbmark.core.errors import InputError, option
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.model.recording import WheelSeries, gap_mask
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.bag_options import BagOptions

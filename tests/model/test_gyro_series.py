@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 
 
 def test_the_yaw_change_of_a_constant_and_a_ramp_is_their_integral():
