@@ -325,8 +325,10 @@ def main() -> int:
             rows.append(row(done))
             said += [f"{rec.repository} {rec.path}: {rec.robot}"]
             said += [f"  {line}" for line in done.gyro.result.warnings]
+            warned = " ".join(done.gyro.result.warnings)
             for name, why in done.gyro.gyro.undetermined.items():
-                said.append(f"  {name} not determined: {why}")
+                if f"{name} is not determined" not in warned:
+                    said.append(f"  {name} not determined: {why}")
     print(table(rows))
     print()
     print("\n".join(said))
