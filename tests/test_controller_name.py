@@ -78,6 +78,7 @@ def test_the_controller_travels_through_a_first_passs_result(tmp_path: Path) -> 
     assert not any("no controller named" in n for n in second.notes)
 
 
+@pytest.mark.slow
 def test_a_namespaced_controller_keys_the_overlays_by_its_namespace(tmp_path: Path) -> None:
     pass1, overlay = tmp_path / "pass1.json", tmp_path / "overlay.yaml"
     first = umbmark.calibrate(

@@ -125,6 +125,7 @@ def test_a_tls_address_without_certificates_or_with_bad_files_is_one_line(
     assert time.monotonic() - start < 10  # not a connection waited for
 
 
+@pytest.mark.slow
 def test_the_command_without_certificates_is_one_line_and_exit_2(tmp_path: Path):
     """Before any recording is read (the one found here is not even a bag inside)."""
     address = f"tls://127.0.0.1:{free_port()}"

@@ -216,6 +216,7 @@ def test_windows_leave_a_corrupt_stretch_out(tmp_path, session):
         assert run.true_end.y == pytest.approx(session.ends[k][1], abs=2e-6)
 
 
+@pytest.mark.slow
 def test_a_gap_in_odom_is_no_sign_of_a_filtered_odometry(tmp_path):
     # Two squares of 8 m; 4 s without /odom from the end of a leg through a corner turn.
     # One arc across the gap cannot follow the corner: 0.49 m sideways, 31 mm per metre

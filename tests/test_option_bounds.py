@@ -165,6 +165,7 @@ def _help(*path: str) -> str:
     return " ".join(proc.stdout.split())
 
 
+@pytest.mark.slow
 def test_help_states_the_bounds() -> None:
     assert f"(2 to {simulate.MAX_RUNS})" in _help("demo")
     assert f"(1 to {simulate.MAX_RUNS};" in _help("simulate")

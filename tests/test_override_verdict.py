@@ -63,6 +63,7 @@ def test_force_replaces_the_result_but_writes_no_overlay(swapped: Path, tmp_path
     assert f"wrote {overlay}" not in proc.stderr
 
 
+@pytest.mark.slow
 def test_the_override_writes_the_overlay(swapped: Path, tmp_path: Path):
     result, overlay = tmp_path / "result.json", tmp_path / "overlay.yaml"
     proc = run_cli("calibrate", str(swapped), *ARGS, "--override-verdict", "-o", str(result),

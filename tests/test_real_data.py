@@ -85,6 +85,7 @@ def test_a_report_replays_like_its_result_file(tmp_path):
     assert from_report.mean_end_error == from_file.mean_end_error
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["exact", "heading", "trajectory"])
 def test_other_estimators_also_help_on_circles(tmp_path, method):
     result = tmp_path / f"{method}.json"

@@ -101,6 +101,7 @@ def _self_contained(text: str) -> None:
             assert value is None or value.startswith("#"), (tag, key, value)
 
 
+@pytest.mark.slow
 def test_two_passes_page_states_each_pass(two_passes: tuple[Path, Path], tmp_path: Path) -> None:
     before, after = two_passes
     # Each pass calibrated on its own, as a user would with two calibrate commands.
@@ -500,6 +501,7 @@ def test_real_page_in_headless_chromium(browser: Chromium, validated: tuple[Path
     assert "predicted after (replayed)" in out.read_text(encoding="utf-8")
 
 
+@pytest.mark.slow
 def test_browser_check_catches_a_broken_page(browser: Chromium, tmp_path: Path) -> None:
     """The checks above can fail: a page with an error and a wide table fails them."""
     bad = tmp_path / "bad.html"

@@ -210,6 +210,7 @@ def test_a_reset_farther_than_a_corrupt_jump_splits_the_runs(tmp_path):
         assert session.stops[k] - 0.05 <= end <= session.stops[k] + REST
 
 
+@pytest.mark.slow
 def test_the_json_gives_each_runs_start_and_end_on_the_recordings_clock(tmp_path):
     session = squares(SimRobot.with_errors(TB3, E_d=1.002, E_b=1.01), DIRS, rest=REST)
     folder = tmp_path / "log"
@@ -232,6 +233,7 @@ def test_the_json_gives_each_runs_start_and_end_on_the_recordings_clock(tmp_path
         assert session.stops[k] - 0.05 <= end <= session.stops[k] + REST
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pause", [0.3, 0.05])
 def test_a_simulators_world_reset_between_squares_splits_them(tmp_path, pause):
     """A simulator's world reset: put back at the start between squares with no rest (a

@@ -44,6 +44,7 @@ def _close(estimate) -> None:
     assert abs(estimate.E_b - E_B) <= 3 * se["E_b"] + 1e-4, (estimate.E_b, se)
 
 
+@pytest.mark.slow
 def test_the_trajectory_fit_uses_the_motion_left_out_of_the_runs(tmp_path):
     # Squares 1 to 3 chained by the lost messages, square 4 after a rest: one run.
     bag = _bag(tmp_path, [2.0, 0.3, 0.3, 2.0, 2.0], chained=(0, 1))
@@ -59,6 +60,7 @@ def test_the_trajectory_fit_uses_the_motion_left_out_of_the_runs(tmp_path):
     _close(report.estimate)
 
 
+@pytest.mark.slow
 def test_with_no_run_left_the_stretches_are_the_runs_of_a_trajectory_fit(tmp_path):
     bag = _bag(tmp_path, [2.0, 0.3, 0.3, 0.3, 2.0], chained=(0, 1, 2))
     message = api_error(umbmark.calibrate, bag, **KEYWORDS, method="exact")

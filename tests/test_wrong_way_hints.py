@@ -46,6 +46,7 @@ def bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
 # --- a radius given as the diameter -----------------------------------------------------
 
 
+@pytest.mark.slow
 def test_a_radius_given_as_the_diameter_is_named_before_the_turning(logs: Path) -> None:
     # Read with half the diameter the odometry turns 45 deg where the robot turned 90: the
     # square test cannot identify that, and used to answer "calibrate the turning coarsely".

@@ -262,6 +262,7 @@ def test_plan_agrees_with_the_study_monte_carlo(side, wheelbase, trials, reading
         assert mc.spread_E_b / tape.se_E_b > 1.12
 
 
+@pytest.mark.slow
 def test_the_command_and_its_refusals():
     printed = cli_json("plan", "--scatter", "0.01", "-L", "4", "--runs", "5")
     assert {"se_E_d", "se_E_b", "threshold_3_sem", "noise"} <= set(printed)

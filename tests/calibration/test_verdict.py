@@ -454,6 +454,7 @@ def test_auto_finding_the_nominal_parameters_best_is_not_applied(tmp_path: Path)
     assert "warning: method auto" not in proc.stderr
 
 
+@pytest.mark.slow
 def test_a_fit_that_diverges_says_why_and_what_to_try(tmp_path: Path):
     """A robot on a stand: its wheels turn, the motion capture sees it stay put."""
     logs = drive_sim.squares(drive_sim.NO_SCRUB, 5, runs=4)
@@ -522,6 +523,7 @@ def test_the_verdict_is_printed_first_and_is_json_s_first_key(tmp_path: Path):
     assert suggested == ["history", "r", "--history", str(db), "--applied", "1"]
 
 
+@pytest.mark.slow
 def test_runs_without_error_and_without_scatter_are_not_applied(tmp_path: Path):
     # Every run came back exactly where its odometry says: E_max,syst = 0.0 mm and
     # 3 x SEM = 0.0 mm, what a ground truth that is the odometry gives (or a noise-free

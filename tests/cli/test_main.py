@@ -35,6 +35,7 @@ def _rows():
     return runs_around(linear_cgs(ALPHA, BETA, L), 0.025)
 
 
+@pytest.mark.slow
 def test_summary_states_every_figure_with_its_unit(table):
     args = ["calibrate", str(table(_rows())), "--side-length", "4", "--wheelbase", "0.34"]
     proc = run_cli(*args, "--method", "paper")
@@ -319,6 +320,7 @@ def test_every_option_is_a_keyword_of_the_library_function(name, command, functi
             assert keyword in keywords
 
 
+@pytest.mark.slow
 def test_a_full_disk_is_one_line_with_its_own_exit_status(tmp_path):
     if not os.path.exists("/dev/full"):
         pytest.skip("no /dev/full on this system")
@@ -336,6 +338,7 @@ def test_a_full_disk_is_one_line_with_its_own_exit_status(tmp_path):
     assert proc.stderr == "umbmark: error: No space left on device\n"
 
 
+@pytest.mark.slow
 def test_an_ascii_only_terminal_gets_escapes_not_a_traceback(tmp_path):
     table = tmp_path / "runs.csv"
     umbmark.example(table)

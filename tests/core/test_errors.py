@@ -117,6 +117,7 @@ def _flags_written(module: Path, known: set[str], root: Path = PACKAGE) -> list[
     return found
 
 
+@pytest.mark.slow
 def test_library_errors_name_options_by_keyword_not_by_flag():
     known = _known_options()
     assert {"side_length", "unit", "force", "previous"} <= known

@@ -52,6 +52,7 @@ def test_the_active_parameters_a_header_records_are_a_note(second_pass: Path):
     assert data["warnings"] == []
 
 
+@pytest.mark.slow
 def test_a_conflict_with_the_header_stays_a_warning(second_pass: Path):
     proc = run_cli("calibrate", str(second_pass), "-L", "4", "--current-c-l", "1")
     assert proc.returncode == 0, proc.stderr

@@ -165,6 +165,7 @@ def _end_error(logs, params: WheelParams) -> float:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("robot", ["scrub", "no scrub"])
 def test_squares_alone_do_not_identify_the_turn_rate_term(sims, robot):
     squares = sims[robot, "squares"]
@@ -206,6 +207,7 @@ def test_the_unidentified_term_costs_a_robot_without_scrub_on_circles(sims):
     assert _end_error(circles, fit.params(NOMINAL)) == _end_error(circles, single.params(NOMINAL))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("robot", ["scrub", "no scrub"])
 def test_squares_and_circles_identify_it(sims, robot):
     logs = sims[robot, "squares"] + sims[robot, "circles"]
@@ -258,6 +260,7 @@ def test_squares_alone_do_not_pin_the_term_either(sims):
 MIXED_SHARES = (0.25, 0.3, 0.35)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("robot", ["scrub", "no scrub"])
 def test_circles_with_a_few_squares_identify_the_scrub_model(robot):
     """Issue 21: a calibration from circles and a few squares (turns on the spot) holds

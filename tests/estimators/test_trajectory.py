@@ -141,6 +141,7 @@ def test_fit_recovers_the_simulated_robot(session, start_pose, rel):
         assert math.hypot(*end.return_error) < 2e-4
 
 
+@pytest.mark.slow
 def test_errors_relative_to_the_active_parameters():
     sim = umbmark.simulate(E_d=1.002, E_b=1.01, E_s=1.005, runs=2, side_length=1.0,
                            noise_free=True, record=True, seed=1)  # fmt: skip

@@ -62,6 +62,7 @@ def _run_waiting_for_workers(cluster: Cluster, items, on_done) -> list[BaseExcep
     return raised
 
 
+@pytest.mark.slow
 def test_a_local_cluster_returns_every_item_once_and_names_the_failed_one():
     items = [3, -1, 4, 0, 7]
     done = _collect(fleet_tasks.square_or_refuse, items, workers=2)

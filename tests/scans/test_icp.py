@@ -186,6 +186,7 @@ def test_gaps_standstill_and_missing_wheels_are_left_out(drive) -> None:  # type
     assert report.left_out["standing still"] >= 4
 
 
+@pytest.mark.slow
 def test_a_guess_from_the_wheels_agrees_and_catches_a_slipped_match(drive) -> None:  # type: ignore[no-untyped-def]
     # nominal geometry a little off, as a robot's is before calibration
     guess = OdometryGuess(0.05, 0.05, 0.35, (0.1, 0.0, 0.0))
