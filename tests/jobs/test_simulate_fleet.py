@@ -147,7 +147,7 @@ def test_every_robot_records_an_imu_and_one_gyros_scale_changes(tmp_path: Path):
     sf.simulate_fleet(target, fleet=5, days=2, minutes=0.2, seed=2)
     truth = json.loads((target / "truth.json").read_text(encoding="utf-8"))
     assert truth["events"]["robot05"] == "gyro scale changed on day 2: k_g +0.015"
-    by = {(r["robot"], r["day"]): r["gyro"] for r in truth["recordings"]}
+    by = {(r["robot"], r["day"]): r["imu"] for r in truth["recordings"]}
     for robot in ("robot01", "robot02", "robot03", "robot04", "robot05"):
         first, second = by[(robot, "2026-11-02")], by[(robot, "2026-11-03")]
         assert 0.97 <= first["k_g"] <= 1.03

@@ -82,7 +82,7 @@ class FleetDay:
         The robot's true errors that day.
     laser : (float, float, float)
         The laser's true mounting ``x, y, yaw`` [m, m, rad] (stated: 0.1, 0, 0).
-    gyro : dict or None
+    imu : dict or None
         The IMU's truth that day (:meth:`umbmark.sim.imu.SimulatedImu.truth`: ``k_g``,
         the bias at the start and the end, its walk, the noise, the mounting; SI units).
     """
@@ -94,7 +94,7 @@ class FleetDay:
     E_b: float
     E_s: float
     laser: tuple[float, float, float]
-    gyro: dict[str, Any] | None = None
+    imu: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -127,7 +127,7 @@ class FleetSimulation(JsonText):
                     "E_b": r.E_b,
                     "E_s": r.E_s,
                     "laser": list(r.laser),
-                    "gyro": r.gyro,
+                    "imu": r.imu,
                 }
                 for r in self.recordings
             ],

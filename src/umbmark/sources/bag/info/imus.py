@@ -67,14 +67,14 @@ class ImuInfo:
         return () if self.problem is not None else (("--imu-topic", self.topic),)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: ``topic``, ``rate`` [Hz], ``frame``, ``gyro``, ``mounting``
+        """JSON-ready: ``topic``, ``rate`` [Hz], ``frame``, ``has_gyro``, ``mounting``
         (``base``, ``rpy`` [rad], ``source``; or None) and ``problem``."""
         mounted = self.mounting
         return {
             "topic": self.topic,
             "rate": self.rate,
             "frame": self.frame,
-            "gyro": self.gyro,
+            "has_gyro": self.gyro,
             "mounting": None
             if mounted is None
             else {"base": mounted.base, "rpy": list(mounted.rpy), "source": mounted.source},
