@@ -52,8 +52,13 @@ _domains = itertools.count()
 
 
 def ros2_env(tmp: Path) -> dict[str, str]:
-    """A private ROS 2 graph on this machine: a domain from the PID, Fast DDS, logs in tmp."""
-    domain = 1 + (os.getpid() * 7 + next(_domains)) % 100
+    """A private ROS 2 graph on this machine: a domain from the PID, Fast DDS, logs in tmp.
+
+    Under pytest-xdist each worker (``gw0``...``gw3``) has its own quarter of the domains
+    1-100, so two workers' robots never share a graph."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    quarter = int(worker[2:]) % 4 if worker.startswith("gw") else os.getpid() % 4
+    domain = 1 + quarter * 25 + (os.getpid() * 7 + next(_domains)) % 25
     env = {
         **os.environ,
         "ROS_DOMAIN_ID": str(domain),
