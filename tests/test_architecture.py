@@ -34,6 +34,7 @@ LAYERS = (
     "outputs",
     "robot",
     "routines",
+    "monitor",
     "fleets",
     "jobs",
     "cli",
