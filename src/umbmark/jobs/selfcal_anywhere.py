@@ -44,7 +44,7 @@ from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.estimators.registry import SCAN_MATCHING
 from umbmark.options.spec import READ
-from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot, ScanSweep
 from umbmark.routines.anywhere import (
     GYRO_PATTERN,
     GYRO_REST,
@@ -296,8 +296,9 @@ def selfcal_anywhere(
     try:
         settle(robot, limits)
         imu = robot.imu()
-        laser = first_scan(robot, limits) is not None
-        checks = _checks(robot, limits, imu is not None and not laser, laser)
+        scan = first_scan(robot, limits)
+        laser = scan is not None
+        checks = _checks(robot, limits, imu is not None, scan)
         if imu is not None:
             checks.append(f"gyro: {imu.describe()}")
         with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
@@ -343,14 +344,14 @@ def selfcal_anywhere(
     return replace(report, files=(*report.files, folder / REPORT_FILE))
 
 
-def _checks(robot: Robot, limits: DriveLimits, gyro_only: bool, laser: bool) -> list[str]:
-    """The checks of the scene before moving: the laser's (:func:`check_scene`); without
-    a laser, a robot with an IMU is calibrated against it alone, said, and one with
-    neither refused."""
-    if laser:
-        check_scene(robot, limits)
+def _checks(robot: Robot, limits: DriveLimits, gyro: bool, scan: ScanSweep | None) -> list[str]:
+    """The checks of the scene before moving: the laser's (:func:`check_scene`, from its
+    sweep ``scan``); without a laser, a robot with an IMU (``gyro``) is calibrated against
+    it alone, said, and one with neither refused."""
+    if scan is not None:
+        check_scene(robot, limits, scan)
         return ["the laser sees a scene with structure: scan matching can measure motion"]
-    if not gyro_only:
+    if not gyro:
         check_scene(robot, limits)  # refuses: no laser scan, and no IMU
     reach = PATTERN_REACH + limits.outline.reach
     return [

@@ -325,16 +325,19 @@ def first_scan(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep | N
     return first
 
 
-def check_scene(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep:
+def check_scene(
+    robot: Robot, limits: DriveLimits | None = None, first: ScanSweep | None = None
+) -> ScanSweep:
     """Refuse, before anything moves, a robot without a laser, a scene where two sweeps
     taken standing still do not match as a scene with structure (open space, a corridor:
     the routine needs walls or furniture in view in more than one direction), or
-    something on the pattern's floor. The first sweep."""
+    something on the pattern's floor. The first sweep (``first``: the one
+    :func:`first_scan` took)."""
     from umbmark.scans.icp import DEFAULT_SETTINGS, match
     from umbmark.scans.points import prepare, series_points
 
     limits = limits or DriveLimits()
-    first = first_scan(robot, limits)
+    first = first or first_scan(robot, limits)
     if first is None:
         raise InputError(
             "the robot has no laser scan and no IMU: the anywhere routine matches the "
