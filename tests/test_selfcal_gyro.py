@@ -52,7 +52,8 @@ def test_with_the_laser_the_gyro_is_calibrated_too() -> None:
     report = umbmark.selfcal(robot, routine="anywhere", verify=False)
     assert isinstance(report, AnywhereReport)
     gyro = report.calibration.gyro
-    assert gyro is not None and gyro.reference == "scan matching"
+    assert gyro is not None
+    assert gyro.reference == "scan matching"
     raw = robot.imu_readings(-math.inf)
     assert raw is not None
     yaw_bias = float((setup.rotation @ raw.bias[-1])[2])
@@ -67,8 +68,11 @@ def test_with_the_laser_the_gyro_is_calibrated_too() -> None:
     assert est.method == "gyro"
     assert abs(est.E_d - E_D) < TOL_E_D
     assert abs(est.E_b - E_B) < TOL_E_B
-    assert est.E_s is not None and abs(est.E_s - E_S) < TOL_E_S
-    assert report.laser and report.imu is not None and "/imu" in report.imu
+    assert est.E_s is not None
+    assert abs(est.E_s - E_S) < TOL_E_S
+    assert report.laser
+    assert report.imu is not None
+    assert "/imu" in report.imu
     data = report.to_dict()
     assert data["calibrated_against"].startswith("the laser's scan matching and the gyro")
     assert data["gyro_calibration"]["values"]["k_g"] == gyro.values["k_g"]
@@ -88,14 +92,17 @@ def test_without_a_laser_the_wheels_are_relative_to_the_gyro(tmp_path) -> None: 
     assert proc.returncode == 0, proc.stderr
     data = json.loads(proc.stdout)
     gyro = data["gyro_calibration"]
-    assert data["laser"] is False and gyro["reference"] == "no reference"
+    assert data["laser"] is False
+    assert gyro["reference"] == "no reference"
     assert "the gyro alone" in data["calibrated_against"]
     low, high = gyro["intervals_95"]["E_d"]
-    assert low < E_D < high and abs(gyro["values"]["E_d"] - E_D) < TOL_E_D
+    assert low < E_D < high
+    assert abs(gyro["values"]["E_d"] - E_D) < TOL_E_D
     product = E_B * k_g / E_S  # what wheels and gyro alone identify
     low, high = gyro["intervals_95"]["E_b_k_g"]
     assert low < product < high, (low, high, product)
-    assert "k_g" not in gyro["values"] and gyro["relative_to_gyro"] == ["E_b"]
+    assert "k_g" not in gyro["values"]
+    assert gyro["relative_to_gyro"] == ["E_b"]
     # at best with care: E_b k_g's interval, widened by the 3 % tolerance, holds 1
     assert data["verdict"]["level"] == "care"
     assert any("gyro alone" in w for w in data["warnings"])
@@ -108,7 +115,8 @@ def test_without_a_laser_the_wheels_are_relative_to_the_gyro(tmp_path) -> None: 
     page = unescape((tmp_path / "t" / "report.html").read_text(encoding="utf-8"))
     gyro_section = page.split('<section id="gyro">', 1)[1].split("</section>", 1)[0]
     assert "the gyro alone (no laser)" in gyro_section
-    assert "E_b k_g" in gyro_section and "no laser" in gyro_section
+    assert "E_b k_g" in gyro_section
+    assert "no laser" in gyro_section
     assert "The robot has no laser: no mounting was fitted." in page
 
 
@@ -116,7 +124,8 @@ def test_without_a_laser_the_wheels_are_relative_to_the_gyro(tmp_path) -> None: 
 def test_the_imu_options_of_the_virtual_robot_are_checked(tmp_path) -> None:  # type: ignore[no-untyped-def]
     proc = run_cli("selfcal", "--sim", "--sim-gyro-scale", "3", cwd=tmp_path)
     assert proc.returncode == 2
-    assert "--sim-gyro-scale" in proc.stderr and "Traceback" not in proc.stderr
+    assert "--sim-gyro-scale" in proc.stderr
+    assert "Traceback" not in proc.stderr
     proc = run_cli("selfcal", "--sim", "--no-imu", "--imu-topic", "/imu", cwd=tmp_path)
     assert proc.returncode == 2
     assert "--imu-topic and --no-imu" in proc.stderr
@@ -127,7 +136,9 @@ def test_the_robots_imu_as_connect_makes_it() -> None:
     from umbmark.robot.connect import connect
 
     with_imu = connect("sim", imu=ImuSetup(gyro_scale=0.98), room=True)
-    assert with_imu.imu() is not None and with_imu.scan() is not None
+    assert with_imu.imu() is not None
+    assert with_imu.scan() is not None
     bare = connect("sim", laser=False)
-    assert bare.imu() is None and bare.scan() is None
+    assert bare.imu() is None
+    assert bare.scan() is None
     np.testing.assert_allclose(with_imu.imu().mounting.rotation, np.eye(3))  # type: ignore[union-attr]

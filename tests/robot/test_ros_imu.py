@@ -43,7 +43,8 @@ def test_the_graphs_imu_is_taken_a_filtered_one_before_a_raw_one():
              ("/camera/imu", IMU2)]  # fmt: skip
     topic, how = pick_imu(graph, "")  # type: ignore[misc]
     assert topic == "/imu/data"  # not raw; as deep as /camera/imu, and shorter
-    assert "/imu/data_raw" in how and "/camera/imu" in how
+    assert "/imu/data_raw" in how
+    assert "/camera/imu" in how
     assert pick_imu([("/imu", IMU1)], "") == ("/imu", "found on the graph")
     assert pick_imu([("/odom", "nav_msgs/Odometry")], "") is None
     # given: taken where the graph has it as an IMU, else why not
@@ -51,7 +52,8 @@ def test_the_graphs_imu_is_taken_a_filtered_one_before_a_raw_one():
     assert pick_imu(graph, "/odom") is None
     assert "carries nav_msgs/msg/Odometry, not sensor_msgs/Imu" in imu_problem(graph, "/odom")
     said = imu_problem(graph, "/gyro")
-    assert "nobody publishes" in said and "/imu/data" in said
+    assert "nobody publishes" in said
+    assert "/imu/data" in said
 
 
 def test_readings_in_order_the_ones_without_a_gyro_left_out():
@@ -102,7 +104,9 @@ def test_an_imu_without_a_gyro_is_one_line(messages, said):
     for m in messages:
         buffer.put(m)
     problem = gyro_problem(buffer, "/imu")
-    assert problem is not None and said in problem and "--no-imu" in problem
+    assert problem is not None
+    assert said in problem
+    assert "--no-imu" in problem
 
 
 def test_the_mounting_through_tf_static_and_the_robot_description():
@@ -120,7 +124,8 @@ def test_the_mounting_through_tf_static_and_the_robot_description():
     edges = imu_edges(static, urdf)
     found = imu_mounting_of(edges, "imu_link", "base_link", "/imu")
     np.testing.assert_allclose(found.rotation, [[0, 1, 0], [1, 0, 0], [0, 0, -1]], atol=1e-12)
-    assert found.upside_down and found.source == "/tf_static"
+    assert found.upside_down
+    assert found.source == "/tf_static"
     pitched = imu_mounting_of(edges, "gyro", "base_link", "/imu")
     c, s = math.cos(math.radians(1.0)), math.sin(math.radians(1.0))
     np.testing.assert_allclose(pitched.rotation, [[c, 0, s], [0, 1, 0], [-s, 0, c]], atol=1e-12)

@@ -36,7 +36,8 @@ def test_the_gyro_reads_the_true_turn_over_its_scale_plus_its_bias():
     start = robot.now() - 0.5  # at rest: the readings' trapezoids hold the whole turn
     _turned(robot, 0.9, 4.0)
     gyro = robot.gyro(start)
-    assert gyro is not None and gyro.time[0] > start
+    assert gyro is not None
+    assert gyro.time[0] > start
     start = float(gyro.time[0])
     raw = robot.imu_readings(start - 0.1)
     assert raw is not None
@@ -50,7 +51,8 @@ def test_the_gyro_reads_the_true_turn_over_its_scale_plus_its_bias():
     np.testing.assert_allclose(gyro.rate[:, :2], np.tile((setup.rotation @ raw.bias[-1])[:2],
                                (len(gyro), 1)), atol=1e-12)  # fmt: skip
     imu = robot.imu()
-    assert imu is not None and imu.topic == "/imu"
+    assert imu is not None
+    assert imu.topic == "/imu"
     np.testing.assert_allclose(imu.mounting.rotation, setup.rotation)
 
 
@@ -62,8 +64,10 @@ def test_the_readings_are_its_rate_and_held_for_a_minute():
     assert gyro.time[-1] == pytest.approx(robot.now())
     assert robot.now() - gyro.time[0] <= IMU_HELD + 5.0  # older ones dropped
     np.testing.assert_allclose(np.diff(gyro.time), 0.01, atol=1e-9)
-    assert robot.gyro(robot.now()) is not None and len(robot.gyro(robot.now())) == 0  # type: ignore[arg-type]
-    assert VirtualRobot().gyro(0.0) is None and VirtualRobot().imu() is None
+    assert robot.gyro(robot.now()) is not None
+    assert len(robot.gyro(robot.now())) == 0
+    assert VirtualRobot().gyro(0.0) is None
+    assert VirtualRobot().imu() is None
 
 
 def test_the_rest_of_the_simulation_is_the_same_with_or_without_an_imu():

@@ -30,5 +30,6 @@ def test_the_gyro_measures_the_turns_with_its_bias_removed(E_b, k_g, needed):
     assert check.gyro_bias == pytest.approx(0.5 * DEG, abs=0.01 * DEG)
     assert check.rest == pytest.approx(4 * COARSE_REST, abs=0.1)
     words = check.words()
-    assert "by the gyro (the IMU on /imu" in words and "known to +-3 %" in words
+    assert "by the gyro (the IMU on /imu" in words
+    assert "known to +-3 %" in words
     assert check.to_dict()["measured_by"] == "gyro"
