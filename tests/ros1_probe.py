@@ -6,7 +6,8 @@ process, and its own code warns (``notifyAll``, unclosed sockets) from those thr
 any time: in pytest's process, with warnings as errors, that would break later tests.
 
 Usage: ``python ros1_probe.py CHECK [PARAMS_FILE]`` with ``ROS_MASTER_URI`` set; CHECK is
-one of ``read``, ``reconfigure``, ``outside``, ``stale``, ``held``, ``watch``.
+one of ``read``, ``reconfigure``, ``outside``, ``stale``, ``held``, ``watch``, ``imu``
+(:func:`robot_node_imu.imu_probe`; ``imu --no-imu``: the adapter told to use none).
 """
 
 from __future__ import annotations
@@ -149,6 +150,15 @@ def main() -> None:
 
         held = Client("/diff_drive_controller", timeout=10).get_configuration(timeout=10)
         out = {k: v for k, v in held.items() if k.endswith("multiplier")}
+    elif check == "imu":
+        from robot_node_imu import imu_probe
+
+        given = None if "--no-imu" in sys.argv[2:] else ""
+        robot = Ros1Robot(RosOptions(timeout=10.0, imu=given))
+        try:
+            out = imu_probe(robot, lambda: _true_pose()[2])
+        finally:
+            robot.close()
     else:
         params_file = sys.argv[2] if len(sys.argv) > 2 else None
         robot = Ros1Robot(RosOptions(params_file=params_file, timeout=10.0))

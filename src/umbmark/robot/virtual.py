@@ -281,6 +281,22 @@ class VirtualRobot:
             clipped=sum(c.clipped for c in chunks),
         )  # fmt: skip
 
+    def imu_truth(self) -> dict[str, object] | None:
+        """The IMU's truth now, JSON-ready (None: no IMU): its scale ``k_g``, its bias
+        [rad/s] on its own axes and about the base's z (``yaw_bias``, ``(R b)_z``), its
+        walk, noise, rate, mounting (``rotation``, ``base <- imu``, and the quaternion
+        ``x, y, z, w``), topic and frame."""
+        if self._imu is None:
+            return None
+        s, bias = self._imu.setup, self._imu.bias
+        return {
+            "k_g": s.gyro_scale, "bias": bias.tolist(),
+            "yaw_bias": float((s.rotation @ bias)[2]), "bias_walk": s.gyro_bias_walk,
+            "noise_density": s.gyro_noise, "rate": s.imu_rate,
+            "rotation": s.rotation.tolist(), "quaternion": list(s.quaternion),
+            "topic": IMU_TOPIC, "frame": IMU_FRAME,
+        }  # fmt: skip
+
     def _pull(self) -> None:
         """The readings the motion so far makes, held for :data:`IMU_HELD` seconds."""
         assert self._imu is not None
