@@ -245,6 +245,7 @@ def main() -> None:
 
         given = sys.argv[2] if len(sys.argv) > 2 else ""
         robot = Ros2Robot(RosOptions(timeout=10.0, truth="/ground_truth", imu=given))
+
         def heading() -> float:  # the node's /ground_truth is its true pose
             truth = robot.ground_truth()
             assert truth is not None

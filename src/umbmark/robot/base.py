@@ -17,7 +17,7 @@ import numpy as np
 from umbmark.core.arrays import FloatArray
 
 if TYPE_CHECKING:
-    from umbmark.model.gyro import GyroSeries
+    from umbmark.model.gyro_series import GyroSeries
     from umbmark.sources.bag.imu_frames import ImuMounting
 
 __all__ = [

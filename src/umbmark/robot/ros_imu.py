@@ -31,7 +31,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from umbmark.core.errors import InputError, option
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.robot.base import IMU_HELD
 from umbmark.robot.ros_common import stamp_seconds
 from umbmark.sources.bag.imu_frames import Edges, ImuMounting, mounting_in, quaternion_matrix

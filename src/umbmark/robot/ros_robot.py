@@ -19,7 +19,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError, SafetyError, option
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.robot.base import ImuSource, RangeReading, ScanSweep, StampedPose
 from umbmark.robot.ros_common import (
     Latest,

@@ -55,7 +55,7 @@ from umbmark.sim.robot import NoiseModel
 from umbmark.sim.robot import SimRobot as RobotTruth
 
 if TYPE_CHECKING:
-    from umbmark.model.gyro import GyroSeries
+    from umbmark.model.gyro_series import GyroSeries
     from umbmark.robot.world import World
     from umbmark.sim.imu import ImuReadings, ImuSetup, ImuStream
 
@@ -249,7 +249,7 @@ class VirtualRobot:
     def gyro(self, since: float) -> GyroSeries | None:
         """The IMU's readings after ``since`` (the last :data:`IMU_HELD` seconds), their
         rates in the base frame (None: no IMU)."""
-        from umbmark.model.gyro import GyroSeries
+        from umbmark.model.gyro_series import GyroSeries
 
         read = self.imu_readings(since)
         if read is None or self._imu is None:

@@ -44,7 +44,7 @@ import numpy as np
 
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, option
-from umbmark.model.gyro import GyroSeries
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.model.kinematics import OdometryGeometry
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.model.scans import LaserMounting, ScanSeries
