@@ -179,7 +179,7 @@ def test_selfcal_end_to_end_over_ros1(tmp_path: Path) -> None:
         # the coarse turning check turned by the node's gyro (its /imu/data found on the
         # master): the odometry's turn over the gyro's, E_b k_g (the gyro reads 1 / k_g)
         coarse = report["coarse"]
-        assert coarse["measured_by"] == "gyro"
+        assert coarse["measured_by"] == "imu"
         assert "/imu/data" in coarse["imu"]
         assert coarse["ratio"] == pytest.approx(0.97 * K_G, abs=0.004)
         assert coarse["gyro_bias"] == pytest.approx(math.radians(GYRO_BIAS), abs=math.radians(0.01))

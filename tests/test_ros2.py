@@ -152,7 +152,7 @@ def test_selfcal_end_to_end_over_ros2_with_a_controller_restart(tmp_path: Path) 
     report = json.loads(first.stdout)
     # the coarse check turned by the node's gyro (/imu on the graph): E_b k_g, within 5 %
     coarse = report["coarse"]
-    assert coarse["measured_by"] == "gyro"
+    assert coarse["measured_by"] == "imu"
     assert coarse["ratio"] == pytest.approx(E_B * K_G, abs=0.004)
     assert coarse["needed"] is False
     assert [p["label"] for p in report["passes"]] == ["pass 1"]

@@ -113,7 +113,7 @@ def test_without_a_laser_the_wheels_are_relative_to_the_gyro(tmp_path) -> None: 
     assert re.search(r"E_b k_g = 0\.97\d+ \+- 0\.000\d+: the wheelbase relative to the gyro",
                      text.stdout), text.stdout  # fmt: skip
     page = unescape((tmp_path / "t" / "report.html").read_text(encoding="utf-8"))
-    gyro_section = page.split('<section id="gyro">', 1)[1].split("</section>", 1)[0]
+    gyro_section = page.split('<section id="imu">', 1)[1].split("</section>", 1)[0]
     assert "the gyro alone (no laser)" in gyro_section
     assert "E_b k_g" in gyro_section
     assert "no laser" in gyro_section

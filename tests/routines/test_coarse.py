@@ -24,7 +24,7 @@ def test_the_gyro_measures_the_turns_with_its_bias_removed(E_b, k_g, needed):
     setup = ImuSetup(gyro_scale=k_g, gyro_bias=0.5 * DEG)
     robot = VirtualRobot(E_d=1.003, E_b=E_b, E_s=1.005, slip=0.0004, seed=2, imu=setup)
     check = coarse_turning(robot, Measure("lidar"), DriveLimits(), scale_tolerance=0.03)
-    assert check.measured_by == "gyro"
+    assert check.measured_by == "imu"
     assert check.ratio == pytest.approx(E_b * k_g / 1.005, abs=0.002)
     assert check.needed is needed
     assert check.gyro_bias == pytest.approx(0.5 * DEG, abs=0.01 * DEG)
@@ -32,4 +32,4 @@ def test_the_gyro_measures_the_turns_with_its_bias_removed(E_b, k_g, needed):
     words = check.words()
     assert "by the gyro (the IMU on /imu" in words
     assert "known to +-3 %" in words
-    assert check.to_dict()["measured_by"] == "gyro"
+    assert check.to_dict()["measured_by"] == "imu"

@@ -118,7 +118,7 @@ def _intervals(page: AnywherePage) -> str:
         return (
             "<p>The robot has no laser: no motion intervals were scan matched. The drive "
             "was cut into intervals of rest and driving, the wheels against the gyro "
-            '(below, <a href="#gyro">the gyro</a>).</p>\n'
+            '(below, <a href="#imu">the gyro</a>).</p>\n'
         )
     rows = []
     for one in (page.calibration, page.verification):
@@ -325,7 +325,7 @@ def anywhere_html(page: AnywherePage) -> str:
         ("intervals", "Motion intervals used and left out", _intervals(page)),
         ("fit", "The fit: estimates and 95 % intervals", _fit(page)),
         ("mounting", "The laser's mounting", _mounting(page)),
-        *([("gyro", "The gyro", _gyro(page))] if page.imu is not None else []),
+        *([("imu", "The gyro", _gyro(page))] if page.imu is not None else []),
         ("before-after", "Before and after", _before_after(page)),
         ("messages", "Checks, figures of the fit, warnings and notes", _messages(page)),
         ("overlay", "ros2_control overlay", _overlay(page)),

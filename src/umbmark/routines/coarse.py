@@ -60,8 +60,8 @@ class CoarseTurning:
         ``odometry_angle / true_angle``: the factor for ``wheel_separation_multiplier``.
     needed : bool
         Whether the ratio is off by more than :data:`COARSE_THRESHOLD`.
-    measured_by : {"corner fixes", "gyro"}
-        What measured the true turns.
+    measured_by : {"corner fixes", "imu"}
+        What measured the true turns (``imu``: its gyro).
     imu : str or None
         The gyro's IMU (its topic and mounting), where it measured.
     gyro_bias : float or None
@@ -199,6 +199,6 @@ def _by_gyro(
         rested += (before[1] - before[0]) + (after[1] - after[0])
     ratio = _ratio(odometry_angle, true_angle)
     return CoarseTurning(
-        odometry_angle, true_angle, ratio, abs(ratio - 1.0) > COARSE_THRESHOLD, "gyro",
+        odometry_angle, true_angle, ratio, abs(ratio - 1.0) > COARSE_THRESHOLD, "imu",
         imu.describe(), float(np.mean(biases)), rested, scale_tolerance,
     )  # fmt: skip
