@@ -15,13 +15,14 @@ from __future__ import annotations
 import json
 import math
 import re
+from dataclasses import replace
 from html import unescape
 
 import numpy as np
 import pytest
 
 import umbmark
-from umbmark.jobs.selfcal_anywhere import AnywhereReport
+from umbmark.jobs.selfcal_anywhere import AnywhereReport, selfcal_anywhere
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import ROOM_LASER, room_world
 from umbmark.sim.imu import ImuSetup
@@ -142,3 +143,54 @@ def test_the_robots_imu_as_connect_makes_it() -> None:
     assert bare.imu() is None
     assert bare.scan() is None
     np.testing.assert_allclose(with_imu.imu().mounting.rotation, np.eye(3))  # type: ignore[union-attr]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("fault", "said"), [("silent", "fell silent"), ("frozen", "froze")])
+def test_a_gyro_failing_mid_pattern_is_left_out_for_the_laser(fault, said) -> None:  # type: ignore[no-untyped-def]
+    """The IMU's driver fails 20 s into the pattern (driven once): the routine goes on with
+    the laser's scan matching alone, warned, the gyro's figures absent; E_d and E_b are
+    the laser's (within the routine's promise of the truth), not bent by a dead gyro."""
+    from faulty_imu import FaultyImu
+
+    robot = FaultyImu(fault, 20.0, E_d=E_D, E_b=E_B, E_s=E_S, slip=0.0004, seed=3,
+                      world=room_world(), imu=ImuSetup(gyro_scale=0.97),
+                      laser_pose=(ROOM_LASER.x, ROOM_LASER.y, ROOM_LASER.theta))  # fmt: skip
+    report = selfcal_anywhere(robot, verify=False, repeats=1)
+    assert isinstance(report, AnywhereReport)
+    assert report.calibration.gyro is None
+    est = report.calibration.report.estimate
+    assert est.method == "scan-matching"
+    assert abs(est.E_d - E_D) < TOL_E_D
+    assert abs(est.E_b - E_B) < TOL_E_B
+    warned = [w for w in report.calibration.report.warnings if f"the IMU on /imu {said}" in w]
+    assert len(warned) == 1
+    assert "the gyro is left out" in warned[0]
+    data = report.to_dict()
+    assert data["gyro_calibration"] is None
+    assert data["calibrated_against"].startswith("the laser's scan matching alone")
+
+
+@pytest.mark.slow
+def test_without_a_laser_a_gyro_falling_silent_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """No laser, and the IMU silent from 20 s into the pattern: nothing else measured the
+    turns, so one line (the routine's InputError: exit 2 on the command line), nothing
+    calibrated, nothing recorded."""
+    from faulty_imu import FaultyImu
+    from umbmark.core.errors import InputError
+    from umbmark.robot.world import corner_world
+
+    robot = FaultyImu("silent", 20.0, E_d=E_D, E_b=E_B, seed=3, imu=ImuSetup(),
+                      world=replace(corner_world(), lidar=None))  # fmt: skip
+    with pytest.raises(InputError) as caught:
+        selfcal_anywhere(robot, verify=False, repeats=1, out=tmp_path / "o")
+    line = str(caught.value)
+    # silent from 20 s of the robot's clock: the drive began after the robot settled
+    found = re.search(
+        r"the IMU on /imu fell silent (\d+\.\d) s into the (\d+\.\d) s the robot", line
+    )
+    assert found is not None, line
+    assert 17.0 < float(found[1]) < 20.0 < float(found[2])
+    assert "nothing calibrated, nothing applied" in line
+    assert "\n" not in line
+    assert robot.drive_params().wheel_separation_multiplier == 1.0

@@ -160,6 +160,8 @@ class AnywhereReport(JsonText):
         """What the wheels were calibrated against, for people and the JSON."""
         if self.imu is None:
             return "the laser's scan matching"
+        if self.laser and self.calibration.gyro is None:
+            return "the laser's scan matching alone (the IMU left out: see the warnings)"
         if self.laser:
             return "the laser's scan matching and the gyro together (the gyro calibrated too)"
         return "the gyro alone (no laser): E_b relative to the gyro's scale"
@@ -422,7 +424,7 @@ class _Pass:
         left_out = tuple(sorted(matched.left_out.items()))
         note = intervals_note(matched)
         p = recording.params
-        if self.gyro:
+        if self.gyro and recording.gyro is not None:
             from umbmark.routines.anywhere_gyro import calibrate_pattern_gyro
 
             both = calibrate_pattern_gyro(
@@ -436,10 +438,16 @@ class _Pass:
         return self._scan_only(label, recording, matched, where, path)
 
     def _gyro_only(self, label: str, recording: PatternRecording, where: Path) -> AnywherePass:
-        """A drive calibrated against the gyro alone (no laser)."""
+        """A drive calibrated against the gyro alone (no laser); refused where the gyro
+        fell silent or froze (nothing else measured the turns)."""
         from umbmark.outputs.calibration import CalibrationReport
         from umbmark.routines.anywhere_gyro import calibrate_pattern_gyro
 
+        if recording.gyro_trouble is not None:
+            raise InputError(
+                f"{recording.gyro_trouble}: without a laser nothing else measured the turns; "
+                "nothing calibrated, nothing applied (drive again once the IMU reads)"
+            )
         found = calibrate_pattern_gyro(
             recording, None, tolerance=self.tolerance, robot=self.record_as,
             history=self.history, controller=self.controller,
@@ -459,7 +467,8 @@ class _Pass:
         where: Path,
         path: Path,
     ) -> AnywherePass:
-        """A drive calibrated against the laser's scan matching alone (no IMU)."""
+        """A drive calibrated against the laser's scan matching alone (no IMU, or its
+        readings left out, warned)."""
         from umbmark.outputs.calibration import CalibrationReport
         from umbmark.store.calibrations import calibrate_recorded
 
@@ -478,7 +487,13 @@ class _Pass:
             robot=self.record_as,
             history=self.history,
         )
-        report = CalibrationReport.of(replace(found, stated_mounting=recording.stated))
+        left = () if recording.gyro_trouble is None else (
+            f"{recording.gyro_trouble}: the gyro is left out, the wheels calibrated by the "
+            "laser's scan matching alone (nothing of the gyro calibrated or applied)",
+        )  # fmt: skip
+        found = replace(found, stated_mounting=recording.stated,
+                        input_warnings=(*found.input_warnings, *left))  # fmt: skip
+        report = CalibrationReport.of(found)
         left_out = tuple(sorted(matched.left_out.items()))
         note = intervals_note(matched)
         return AnywherePass(label, where, report, p, note, tried=matched.tried, left_out=left_out)

@@ -195,13 +195,13 @@ class Recorder:
         self._gyro_since = robot.now() if self._imu is not None else math.inf
 
     def gyro_series(self) -> GyroSeries | None:
-        """The IMU's readings recorded (None: the robot has no IMU)."""
+        """The IMU's readings recorded (None: the robot has no IMU, or none came)."""
         if self._imu is None:
             return None
         self._fetch_gyro()
         parts = [p for p in self.gyro_parts if len(p)]
         if not parts:
-            raise InputError(f"{self._imu.topic}: the IMU gave no readings while the robot drove")
+            return None
         accel = [p.accel for p in parts]
         return GyroSeries(
             time=np.concatenate([p.time for p in parts]),
@@ -299,9 +299,13 @@ class PatternRecording:
     stated : LaserMounting or None
         The stated mounting with its height, tilt and frames, for the report.
     gyro : GyroSeries or None
-        The IMU's readings, rates in the base frame (None: the robot has no IMU).
+        The IMU's readings, rates in the base frame (None: the robot has no IMU, or they
+        cannot be used: ``gyro_trouble``).
     imu : ImuSource or None
         The IMU they came from, with its frame's mounting.
+    gyro_trouble : str or None
+        Why the IMU's readings are left out (:func:`umbmark.routines.gyro_watch.gyro_trouble`:
+        it fell silent or froze while the robot drove); None: they are used, or no IMU.
     """
 
     scans: ScanSeries | None
@@ -313,6 +317,7 @@ class PatternRecording:
     stated: LaserMounting | None = None
     gyro: GyroSeries | None = None
     imu: ImuSource | None = None
+    gyro_trouble: str | None = None
 
 
 def first_scan(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep | None:
@@ -492,9 +497,15 @@ def _recording(
         )
         series = PoseSeries(time=o[:, 0], poses=o[:, 1:])
         wheels = wheels_from_odometry(series, geometry, "the odometry", name).wheels
-    gyro, imu = recorder.gyro_series(), recorder.imu()
+    gyro, imu, trouble = recorder.gyro_series(), recorder.imu(), None
+    if imu is not None:
+        from umbmark.routines.gyro_watch import gyro_trouble
+
+        trouble = gyro_trouble(gyro, float(wheels.time[0]), float(wheels.time[-1]), imu.topic)
+        gyro = None if trouble is not None else gyro
     if not laser:
-        return PatternRecording(None, wheels, params, Pose2D(), start, end, None, gyro, imu)
+        return PatternRecording(None, wheels, params, Pose2D(), start, end, None, gyro, imu,
+                                trouble)  # fmt: skip
     first = recorder.scans[0]
     stated = LaserMounting(
         first.mount.x, first.mount.y, first.mount.theta, first.lift,
@@ -510,6 +521,7 @@ def _recording(
         stated=stated,
         gyro=gyro,
         imu=imu,
+        gyro_trouble=trouble,
     )
 
 

@@ -19,18 +19,20 @@ needed, so the check also runs with range sensors): the robot stands
 bias, removed from its integral over the turn. The gyro's scale is taken as 1: a MEMS
 gyro's is good to a few percent (``scale_tolerance``, the calibration's
 ``--gyro-scale-tolerance``), and so is the ratio, which the words say; the UMBmark passes
-that follow measure ``E_b`` against the corner.
+that follow measure ``E_b`` against the corner. Where the gyro fell silent or froze
+over a turn (:func:`umbmark.routines.gyro_watch.gyro_trouble`), the robot turns back and
+the check is made by the fixes, the words saying why: nothing is corrected from such a
+gyro.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from umbmark.core.conventions import wrap_angle
-from umbmark.core.errors import InputError
 from umbmark.robot.base import ImuSource, Pose2D, Robot
 from umbmark.routines.drive import DriveLimits, move_to, settle
 from umbmark.routines.measure import Measure, take_fix
@@ -70,6 +72,9 @@ class CoarseTurning:
         How long the robot stood for it [s], all rests together.
     scale_tolerance : float or None
         How far the gyro's scale, taken as 1, may be off (a fraction): the ratio's too.
+    gyro_left_out : str or None
+        Why the robot's IMU did not measure (it fell silent or froze during a turn:
+        :func:`umbmark.routines.gyro_watch.gyro_trouble`), the fixes measuring instead.
     """
 
     odometry_angle: float
@@ -81,6 +86,7 @@ class CoarseTurning:
     gyro_bias: float | None = None
     rest: float | None = None
     scale_tolerance: float | None = None
+    gyro_left_out: str | None = None
 
     def words(self) -> str:
         """One sentence: how far the robot turned against its odometry, and what was done."""
@@ -93,6 +99,8 @@ class CoarseTurning:
                 f"its mean over {self.rest or 0.0:.1f} s of rest, removed; its scale taken as "
                 f"1, known to +-{tol:g} %, so the ratio to +-{tol:g} %)"
             )
+        if self.gyro_left_out is not None:
+            how = f" by {self.measured_by} (the gyro left out: {self.gyro_left_out})"
         return (
             f"Coarse turning check{how}: the robot turned {math.degrees(self.true_angle):.1f} "
             f"deg while its odometry turned {math.degrees(self.odometry_angle):.1f} deg "
@@ -111,6 +119,7 @@ class CoarseTurning:
             "gyro_bias": self.gyro_bias,
             "rest": self.rest,
             "scale_tolerance": self.scale_tolerance,
+            "gyro_left_out": self.gyro_left_out,
         }
 
 
@@ -119,7 +128,9 @@ def coarse_turning(
 ) -> CoarseTurning:
     """Turn a quarter turn left by the odometry and back, measuring the true turns: by
     the gyro where the robot has an IMU (the module's documentation; ``scale_tolerance``:
-    how far its scale may be off), else by corner fixes.
+    how far its scale may be off), else by corner fixes; by the fixes too where the gyro
+    fell silent or froze during a turn (the robot turned back first; said in
+    :attr:`CoarseTurning.gyro_left_out`).
 
     The fixes are taken without a prior (the odometry cannot be trusted to predict the
     heading: that is what is checked), so the corner must be the plainest L in view.
@@ -130,12 +141,18 @@ def coarse_turning(
         The corner was not found after a turn.
     ValueError
         A ratio outside 1/2 to 2.
-    InputError
-        The gyro gave no readings over a turn.
     """
     imu = robot.imu()
     if imu is not None:
-        return _by_gyro(robot, imu, limits, scale_tolerance)
+        by_gyro = _by_gyro(robot, imu, limits, scale_tolerance)
+        if isinstance(by_gyro, CoarseTurning):
+            return by_gyro
+        return replace(_by_fixes(robot, how, limits), gyro_left_out=by_gyro)
+    return _by_fixes(robot, how, limits)
+
+
+def _by_fixes(robot: Robot, how: Measure, limits: DriveLimits) -> CoarseTurning:
+    """The quarter turns measured by fixes taken without a prior."""
     odometry_angle = true_angle = 0.0
     for sign in (1.0, -1.0):
         odom_before = settle(robot, limits).pose
@@ -174,8 +191,12 @@ def _stand(robot: Robot, seconds: float, limits: DriveLimits) -> tuple[float, fl
 
 def _by_gyro(
     robot: Robot, imu: ImuSource, limits: DriveLimits, scale_tolerance: float
-) -> CoarseTurning:
-    """The quarter turns measured by the gyro, its bias over the rests removed."""
+) -> CoarseTurning | str:
+    """The quarter turns measured by the gyro, its bias over the rests removed; where it
+    fell silent or froze over a turn, the robot turned back to its start heading and the
+    line saying so."""
+    from umbmark.routines.gyro_watch import gyro_trouble
+
     odometry_angle = true_angle = 0.0
     biases, rested = [], 0.0
     for sign in (1.0, -1.0):
@@ -185,10 +206,11 @@ def _by_gyro(
         odom_after = settle(robot, limits).pose
         after = _stand(robot, COARSE_REST, limits)
         gyro = robot.gyro(before[0])
-        if gyro is None or len(gyro) < 2 or gyro.time[0] > before[1] or gyro.time[-1] < after[0]:
-            raise InputError(
-                f"{imu.topic}: the IMU gave no readings over the coarse turning check's turn"
-            )
+        trouble = gyro_trouble(gyro, before[0], after[1], imu.topic)
+        if trouble is not None or gyro is None:
+            if sign > 0:  # turned left: back to the heading the fixes start from
+                move_to(robot, Pose2D(0.0, 0.0, -COARSE_TURN), limits)
+            return str(trouble)
         yaw = gyro.rate[:, 2]
         rests = [(gyro.time >= a) & (gyro.time <= b) for a, b in (before, after)]
         bias = float(np.mean(yaw[rests[0] | rests[1]]))
