@@ -21,6 +21,38 @@ def imu_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--imu-roll", type=float, default=1.0, help="its mounting's roll [deg]")
     parser.add_argument("--imu-truth", default=None, help="write the IMU's truth here (JSON)")
     parser.add_argument("--no-laser", action="store_true", help="the robot has no laser")
+    parser.add_argument(
+        "--imu-frame",
+        default="imu_link",
+        help="the messages' frame (another than imu_link: none is mounted)",
+    )
+
+
+class ImuFault:
+    """What the node publishes of its IMU's readings: all of them, until told on
+    ``/sim/control`` (tests/ros1_robot_node.py): ``mute_imu``, none (a driver that died);
+    ``freeze_imu``, the rates of its next reading in every later one, the stamps going on
+    (a driver that lost its sensor); ``mend_imu``, all of them again."""
+
+    def __init__(self) -> None:
+        self.mode: str | None = None
+        self.held: list[float] | None = None
+
+    def control(self, command: str) -> None:
+        """A ``/sim/control`` message (others are not the IMU's)."""
+        if command in ("mute_imu", "freeze_imu", "mend_imu"):
+            self.mode = None if command == "mend_imu" else command
+            self.held = None
+
+    def rows(self, time: list[float], rate: list[list[float]], accel: list[list[float]]
+             ) -> list[tuple[float, list[float], list[float]]]:  # fmt: skip
+        """The readings to publish, each (stamp, rates, accelerations)."""
+        if self.mode == "mute_imu":
+            return []
+        if self.mode == "freeze_imu" and time:
+            self.held = self.held or rate[0]
+            rate = [self.held] * len(time)
+        return list(zip(time, rate, accel, strict=True))
 
 
 def imu_setup(args: argparse.Namespace) -> ImuSetup | None:

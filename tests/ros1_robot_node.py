@@ -28,8 +28,10 @@ Run it with ``ROS_MASTER_URI`` set; it prints ``ready`` on stdout once everythin
   ros_controllers' ``DiffDriveController.cfg`` (0.5 to 1.5, the server clamps), and keeps
   ``wheel_separation``, ``wheel_radius`` and the multipliers on the parameter server;
 - ``/sim/control`` (``std_msgs/String``): ``mute_odom`` stops the odometry (the clock goes
-  on), ``unmute_odom`` starts it again; ``/sim/true_pose`` (``geometry_msgs/Pose2D``) is the
-  robot's true pose in the world, for checks.
+  on), ``unmute_odom`` starts it again, ``mute_imu``, ``freeze_imu`` and ``mend_imu``
+  make its IMU's driver fall silent, freeze, read again (tests/robot_node_imu.py);
+  ``/sim/true_pose`` (``geometry_msgs/Pose2D``) is the robot's true pose in the world, for
+  checks.
 """
 
 from __future__ import annotations
@@ -54,7 +56,7 @@ from sensor_msgs.msg import Imu, LaserScan
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
-from robot_node_imu import imu_arguments, imu_setup
+from robot_node_imu import ImuFault, imu_arguments, imu_setup
 from umbmark.robot.base import Pose2D
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import LCorner, Lidar, World, corner_world
@@ -169,7 +171,7 @@ class SimNode:
             E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed,
             world=world, acceleration=args.acceleration, imu=imu_setup(args),
         )  # fmt: skip
-        self.imu_since = -1.0
+        self.imu_since, self.imu_fault, self.imu_frame = -1.0, ImuFault(), args.imu_frame
         if args.imu_truth:
             with open(args.imu_truth, "w", encoding="utf-8") as f:
                 json.dump(self.robot.imu_truth(), f)
@@ -239,10 +241,10 @@ class SimNode:
         if read is None or not read.time.size:
             return
         self.imu_since = float(read.time[-1])
-        for t, w, a in zip(read.time.tolist(), read.rate.tolist(), read.accel.tolist(),
-                           strict=True):  # fmt: skip
+        for t, w, a in self.imu_fault.rows(read.time.tolist(), read.rate.tolist(),
+                                           read.accel.tolist()):  # fmt: skip
             msg = Imu()
-            msg.header.stamp, msg.header.frame_id = _stamp(t), "imu_link"
+            msg.header.stamp, msg.header.frame_id = _stamp(t), self.imu_frame
             msg.orientation_covariance = [-1.0] + [0.0] * 8  # no orientation, as a driver
             v, f = msg.angular_velocity, msg.linear_acceleration
             v.x, v.y, v.z = w
@@ -263,6 +265,7 @@ class SimNode:
 
     def _on_control(self, msg: String) -> None:
         self.mute_odom = {"mute_odom": True, "unmute_odom": False}.get(msg.data, self.mute_odom)
+        self.imu_fault.control(msg.data)
 
     def _publish(self, step: int) -> None:
         robot = self.robot

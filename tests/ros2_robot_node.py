@@ -97,7 +97,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu, LaserScan
 from std_msgs.msg import String
 
-from robot_node_imu import imu_arguments, imu_setup
+from robot_node_imu import ImuFault, imu_arguments, imu_setup
 from umbmark.robot.base import DriveParams, Pose2D
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import Lidar, corner_world
@@ -430,7 +430,7 @@ class SimNode:
             command_timeout=60.0, imu=imu_setup(args),
             params=DriveParams(**{k: v for k, v in configured.items() if k != "cmd_vel_timeout"}),
         )  # fmt: skip
-        self.imu_since = -1.0
+        self.imu_since, self.imu_fault, self.imu_frame = -1.0, ImuFault(), args.imu_frame
         if args.imu_truth:
             Path(args.imu_truth).write_text(json.dumps(self.robot.imu_truth()), encoding="utf-8")
         self.imu = node.create_publisher(Imu, "/imu", 100)
@@ -609,11 +609,11 @@ class SimNode:
         if read is None or not read.time.size:
             return
         self.imu_since = float(read.time[-1])
-        for t, w, a in zip(read.time.tolist(), read.rate.tolist(), read.accel.tolist(),
-                           strict=True):  # fmt: skip
+        for t, w, a in self.imu_fault.rows(read.time.tolist(), read.rate.tolist(),
+                                           read.accel.tolist()):  # fmt: skip
             msg = Imu()
             msg.header.stamp.sec, msg.header.stamp.nanosec = _stamp(t)
-            msg.header.frame_id = "imu_link"
+            msg.header.frame_id = self.imu_frame
             msg.orientation_covariance[0] = -1.0  # no orientation, as a plain IMU driver
             v = msg.angular_velocity
             v.x, v.y, v.z = w
