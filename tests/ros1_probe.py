@@ -6,7 +6,9 @@ process, and its own code warns (``notifyAll``, unclosed sockets) from those thr
 any time: in pytest's process, with warnings as errors, that would break later tests.
 
 Usage: ``python ros1_probe.py CHECK [PARAMS_FILE]`` with ``ROS_MASTER_URI`` set; CHECK is
-one of ``read``, ``reconfigure``, ``outside``, ``stale``, ``held``, ``watch``.
+one of ``read``, ``reconfigure``, ``outside``, ``stale``, ``held``, ``watch``, ``imu``
+(:func:`robot_node_imu.imu_probe`; ``imu --no-imu``: the adapter told to use none),
+``coarse-fault FAULT`` (the coarse turning check, the IMU failing: :func:`coarse_fault`).
 """
 
 from __future__ import annotations
@@ -93,6 +95,25 @@ def apply(robot: Ros1Robot, separation: float, left: float, right: float) -> dic
     }
 
 
+def coarse_fault(robot: Ros1Robot, fault: str) -> dict[str, Any]:
+    """The coarse turning check, the node's IMU told to ``fault`` (``mute_imu``,
+    ``freeze_imu``) a wall second in (its first rest or turn), mended after."""
+    from umbmark.routines.coarse import coarse_turning
+    from umbmark.routines.measure import Measure
+
+    control = rospy.Publisher("/sim/control", String, queue_size=1, latch=True)
+    time.sleep(0.5)  # connections
+    timer = threading.Timer(1.0, control.publish, [String(fault)])
+    timer.start()
+    try:
+        check = coarse_turning(robot, Measure("lidar"), DriveLimits())
+    finally:
+        timer.join()
+        control.publish(String("mend_imu"))
+        time.sleep(0.3)
+    return check.to_dict()
+
+
 def stale(robot: Ros1Robot) -> dict[str, Any]:
     heard: list[Any] = []
     sub = rospy.Subscriber("/cmd_vel", Twist, heard.append, tcp_nodelay=True)
@@ -149,6 +170,21 @@ def main() -> None:
 
         held = Client("/diff_drive_controller", timeout=10).get_configuration(timeout=10)
         out = {k: v for k, v in held.items() if k.endswith("multiplier")}
+    elif check == "coarse-fault":
+        robot = Ros1Robot(RosOptions(timeout=10.0))
+        try:
+            out = coarse_fault(robot, sys.argv[2])
+        finally:
+            robot.close()
+    elif check == "imu":
+        from robot_node_imu import imu_probe
+
+        given = None if "--no-imu" in sys.argv[2:] else ""
+        robot = Ros1Robot(RosOptions(timeout=10.0, imu=given))
+        try:
+            out = imu_probe(robot, lambda: _true_pose()[2])
+        finally:
+            robot.close()
     else:
         params_file = sys.argv[2] if len(sys.argv) > 2 else None
         robot = Ros1Robot(RosOptions(params_file=params_file, timeout=10.0))

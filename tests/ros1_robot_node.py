@@ -17,17 +17,27 @@ Run it with ``ROS_MASTER_URI`` set; it prints ``ready`` on stdout once everythin
   ``--stated-laser x,y,yaw`` that mounting stated, while the beams are cast from the true
   one); the corner behind the
   start on its right, or ``--corner-side left``;
+- publishes its IMU as a robot's driver does (unless ``--no-imu``): ``/imu/data``
+  (``sensor_msgs/Imu``, frame ``imu_link``, its rates and accelerations in that frame, no
+  orientation) at ``--imu-rate``, read from the robot's own motion by the virtual robot's
+  IMU (:class:`umbmark.sim.imu.ImuSetup`: ``--gyro-scale`` k_g, ``--gyro-bias`` [deg/s]
+  with ``--gyro-bias-walk``, mounted ``--imu-roll`` [deg]), its mounting on ``/tf_static``
+  beside the laser's; ``--imu-truth FILE``: its truth written there at the start;
+  ``--no-laser``: no laser (no ``/scan``);
 - serves dynamic_reconfigure at ``/diff_drive_controller`` with the three multipliers of
   ros_controllers' ``DiffDriveController.cfg`` (0.5 to 1.5, the server clamps), and keeps
   ``wheel_separation``, ``wheel_radius`` and the multipliers on the parameter server;
 - ``/sim/control`` (``std_msgs/String``): ``mute_odom`` stops the odometry (the clock goes
-  on), ``unmute_odom`` starts it again; ``/sim/true_pose`` (``geometry_msgs/Pose2D``) is the
-  robot's true pose in the world, for checks.
+  on), ``unmute_odom`` starts it again, ``mute_imu``, ``freeze_imu`` and ``mend_imu``
+  make its IMU's driver fall silent, freeze, read again (tests/robot_node_imu.py);
+  ``/sim/true_pose`` (``geometry_msgs/Pose2D``) is the robot's true pose in the world, for
+  checks.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import threading
 import time
@@ -42,10 +52,11 @@ from geometry_msgs.msg import Pose2D as Pose2DMsg
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import LaserScan
+from sensor_msgs.msg import Imu, LaserScan
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
+from robot_node_imu import ImuFault, imu_arguments, imu_setup
 from umbmark.robot.base import Pose2D
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import LCorner, Lidar, World, corner_world
@@ -155,11 +166,15 @@ class SimNode:
             corner = LCorner(vertex=(-0.45, -1.4), heading=0.0, x_length=3.0, y_length=3.4)
             world = World.build(np.zeros((0, 4)), (), corner, lidar=world.lidar)
         self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
-        world = replace(world, lidar=self.lidar)
+        world = replace(world, lidar=None if args.no_laser else self.lidar)
         self.robot = VirtualRobot(
             E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed,
-            world=world, acceleration=args.acceleration,
+            world=world, acceleration=args.acceleration, imu=imu_setup(args),
         )  # fmt: skip
+        self.imu_since, self.imu_fault, self.imu_frame = -1.0, ImuFault(), args.imu_frame
+        if args.imu_truth:
+            with open(args.imu_truth, "w", encoding="utf-8") as f:
+                json.dump(self.robot.imu_truth(), f)
         stated = args.stated_laser
         self.stated = (
             (args.laser_x, 0.0, 0.0) if stated is None else tuple(map(float, stated.split(",")))
@@ -184,7 +199,11 @@ class SimNode:
         self.true_pose = rospy.Publisher("/sim/true_pose", Pose2DMsg, queue_size=2)
         self.tf = rospy.Publisher("/tf", TFMessage, queue_size=10)
         self.tf_static = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
-        self.tf_static.publish(TFMessage([self._laser_transform()]))
+        self.imu = rospy.Publisher("/imu/data", Imu, queue_size=200)
+        mounts = [self._laser_transform()]
+        if self.robot.imu() is not None:
+            mounts.append(self._imu_transform())
+        self.tf_static.publish(TFMessage(mounts))
         self.server = Server(diff_drive_config(), self._reconfigure, namespace=CONTROLLER)
         rospy.Subscriber("/cmd_vel", Twist, self._on_cmd, queue_size=10, tcp_nodelay=True)
         rospy.Subscriber("/sim/control", String, self._on_control, queue_size=10)
@@ -201,6 +220,37 @@ class SimNode:
         r.x, r.y, r.z, r.w = q
         return t
 
+    def _imu_transform(self) -> TransformStamped:
+        """``base_link -> imu_link``: where the IMU sits, its rotation as mounted."""
+        from umbmark.sim.imu import IMU_TRANSLATION
+
+        truth = self.robot.imu_truth()
+        assert truth is not None
+        t = TransformStamped()
+        t.header.stamp = _stamp(0.0)
+        t.header.frame_id, t.child_frame_id = "base_link", str(truth["frame"])
+        tr = t.transform.translation
+        tr.x, tr.y, tr.z = IMU_TRANSLATION
+        r = t.transform.rotation
+        r.x, r.y, r.z, r.w = truth["quaternion"]  # type: ignore[misc]
+        return t
+
+    def _publish_imu(self) -> None:
+        """The IMU's readings since the last published, each its message."""
+        read = self.robot.imu_readings(self.imu_since)
+        if read is None or not read.time.size:
+            return
+        self.imu_since = float(read.time[-1])
+        for t, w, a in self.imu_fault.rows(read.time.tolist(), read.rate.tolist(),
+                                           read.accel.tolist()):  # fmt: skip
+            msg = Imu()
+            msg.header.stamp, msg.header.frame_id = _stamp(t), self.imu_frame
+            msg.orientation_covariance = [-1.0] + [0.0] * 8  # no orientation, as a driver
+            v, f = msg.angular_velocity, msg.linear_acceleration
+            v.x, v.y, v.z = w
+            f.x, f.y, f.z = a
+            self.imu.publish(msg)
+
     def _reconfigure(self, config: dict[str, float], level: int) -> dict[str, float]:
         with self.lock:
             old = self.robot.drive_params()
@@ -215,6 +265,7 @@ class SimNode:
 
     def _on_control(self, msg: String) -> None:
         self.mute_odom = {"mute_odom": True, "unmute_odom": False}.get(msg.data, self.mute_odom)
+        self.imu_fault.control(msg.data)
 
     def _publish(self, step: int) -> None:
         robot = self.robot
@@ -238,6 +289,7 @@ class SimNode:
             tf.transform.translation.x, tf.transform.translation.y = pose.x, pose.y
             tf.transform.rotation = p.orientation
             self.tf.publish(TFMessage([tf]))
+        self._publish_imu()
         if step % self.scan_every == 0:
             self._publish_sensors(stamp)
 
@@ -314,6 +366,7 @@ def main() -> None:
         action="store_true",
         help="wheel_separation and wheel_radius only in robot_description",
     )
+    imu_arguments(parser)
     args = parser.parse_args()
     import rosgraph
 

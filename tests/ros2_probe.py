@@ -12,7 +12,9 @@ Run it with the ROS 2 wheels' Python (``.venv-ros2``) and the node's ROS_DOMAIN_
 - ``graph``: the subscribers of the controller's two velocity topics (node, type);
 - ``lifecycle``: the subscribers of the controller's two velocity topics (node, type) on the
   graph, active as the node starts, then after each call to the controller manager:
-  deactivate, cleanup, configure, activate (1 s of discovery after each).
+  deactivate, cleanup, configure, activate (1 s of discovery after each);
+- ``imu [TOPIC]``: the IMU found on the graph (or TOPIC), its mounting and readings over
+  a turn (:func:`robot_node_imu.imu_probe`).
 """
 
 from __future__ import annotations
@@ -238,6 +240,21 @@ def main() -> None:
         out = lifecycle()
     elif what == "plan":
         out = plan("--reload" in sys.argv[2:])
+    elif what == "imu":
+        from robot_node_imu import imu_probe
+
+        given = sys.argv[2] if len(sys.argv) > 2 else ""
+        robot = Ros2Robot(RosOptions(timeout=10.0, truth="/ground_truth", imu=given))
+
+        def heading() -> float:  # the node's /ground_truth is its true pose
+            truth = robot.ground_truth()
+            assert truth is not None
+            return truth.pose.theta
+
+        try:
+            out = imu_probe(robot, heading)
+        finally:
+            robot.close()
     else:
         raise SystemExit(f"unknown probe {what!r}")
     print(json.dumps(out), flush=True)

@@ -63,7 +63,14 @@ The controller's interfaces as ros2_controllers has them (``diff_drive_controlle
   ``--stated-laser x,y,yaw`` both state that mounting, while the beams are cast from the
   true one (a description that is off);
 - ``/scan`` (``sensor_msgs/LaserScan``, frame ``laser``, sensor-data QoS) every
-  ``--scan-every`` periods; ``/ground_truth`` (``geometry_msgs/PoseStamped``, the true pose).
+  ``--scan-every`` periods (none with ``--no-laser``); ``/ground_truth``
+  (``geometry_msgs/PoseStamped``, the true pose);
+- its IMU as a robot's driver publishes it (unless ``--no-imu``): ``/imu``
+  (``sensor_msgs/Imu``, frame ``imu_link``, rates and accelerations in that frame, no
+  orientation) at ``--imu-rate``, read from the robot's own motion by the virtual robot's
+  IMU (``--gyro-scale``, ``--gyro-bias``, ``--gyro-bias-walk``, ``--imu-roll``:
+  tests/robot_node_imu.py), its mounting a fixed joint of the URDF and on ``/tf_static``;
+  ``--imu-truth FILE``: its truth written there at the start.
 """
 
 from __future__ import annotations
@@ -87,9 +94,10 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import LaserScan
+from sensor_msgs.msg import Imu, LaserScan
 from std_msgs.msg import String
 
+from robot_node_imu import ImuFault, imu_arguments, imu_setup
 from umbmark.robot.base import DriveParams, Pose2D
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import Lidar, corner_world
@@ -152,9 +160,11 @@ def urdf(
     upside_down: bool,
     laser: bool = True,
     stated: tuple[float, float, float] | None = None,
+    imu_roll: float | None = None,
 ) -> str:
     """The robot's description: base_link, two wheels, the laser (``laser``: in it) at
-    ``laser_x`` ahead, or where ``stated`` (x, y, yaw) says."""
+    ``laser_x`` ahead, or where ``stated`` (x, y, yaw) says; the IMU rolled ``imu_roll``
+    [rad] (None: no IMU)."""
     roll = math.pi if upside_down else 0.0
     x, y, yaw = stated or (laser_x, 0.0, 0.0)
 
@@ -174,9 +184,19 @@ def urdf(
     <origin xyz="{x} {y} 0.2" rpy="{roll} 0 {yaw}"/>
   </joint>"""
     wheels = wheel("left", separation / 2) + wheel("right", -separation / 2)
+    imu = (
+        ""
+        if imu_roll is None
+        else f"""
+  <link name="imu_link"/>
+  <joint name="imu_joint" type="fixed">
+    <parent link="base_link"/><child link="imu_link"/>
+    <origin xyz="-0.05 0.02 0.12" rpy="{imu_roll} 0 0"/>
+  </joint>"""
+    )
     return f"""<?xml version="1.0"?>
 <robot name="sim_robot">
-  <link name="base_link"/>{wheels}{mounted if laser else ""}
+  <link name="base_link"/>{wheels}{mounted if laser else ""}{imu}
 </robot>
 """
 
@@ -406,9 +426,14 @@ class SimNode:
         self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
         self.robot = VirtualRobot(
             E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed,
-            world=replace(world, lidar=self.lidar), command_timeout=60.0,
+            world=replace(world, lidar=None if args.no_laser else self.lidar),
+            command_timeout=60.0, imu=imu_setup(args),
             params=DriveParams(**{k: v for k, v in configured.items() if k != "cmd_vel_timeout"}),
         )  # fmt: skip
+        self.imu_since, self.imu_fault, self.imu_frame = -1.0, ImuFault(), args.imu_frame
+        if args.imu_truth:
+            Path(args.imu_truth).write_text(json.dumps(self.robot.imu_truth()), encoding="utf-8")
+        self.imu = node.create_publisher(Imu, "/imu", 100)
         self.upside_down = args.upside_down
         self.rate, self.scan_every = args.rate, args.scan_every
         self.lock = threading.Lock()
@@ -427,6 +452,7 @@ class SimNode:
                 data=urdf(
                     configured["wheel_separation"], configured["wheel_radius"], args.laser_x,
                     args.upside_down, laser=not args.laser_only_in_tf, stated=self._stated(),
+                    imu_roll=None if args.no_imu else math.radians(args.imu_roll),
                 )
             )
         )  # fmt: skip
@@ -478,6 +504,16 @@ class SimNode:
             r = tf.transform.rotation  # a roll or a turn, never both
             r.x, r.y = math.sin(roll / 2), 0.0
             r.z, r.w = math.sin(turn / 2), math.cos(roll / 2) * math.cos(turn / 2)
+            out.append(tf)
+        truth = self.robot.imu_truth()
+        if truth is not None:  # as robot_state_publisher puts the URDF's fixed joint
+            tf = TransformStamped()
+            tf.header.stamp.sec, tf.header.stamp.nanosec = _stamp(0.0)
+            tf.header.frame_id, tf.child_frame_id = "base_link", str(truth["frame"])
+            t = tf.transform.translation
+            t.x, t.y, t.z = -0.05, 0.02, 0.12
+            r = tf.transform.rotation
+            r.x, r.y, r.z, r.w = truth["quaternion"]
             out.append(tf)
         return out
 
@@ -563,8 +599,27 @@ class SimNode:
                 self.restarts.append([pose.x, pose.y, pose.theta])
             if self.tf is not None:
                 self._publish_tf(msg)
+        self._publish_imu()
         if step % self.scan_every == 0:
             self._publish_sensors(sec, nanosec)
+
+    def _publish_imu(self) -> None:
+        """The IMU's readings since the last published, each its message."""
+        read = self.robot.imu_readings(self.imu_since)
+        if read is None or not read.time.size:
+            return
+        self.imu_since = float(read.time[-1])
+        for t, w, a in self.imu_fault.rows(read.time.tolist(), read.rate.tolist(),
+                                           read.accel.tolist()):  # fmt: skip
+            msg = Imu()
+            msg.header.stamp.sec, msg.header.stamp.nanosec = _stamp(t)
+            msg.header.frame_id = self.imu_frame
+            msg.orientation_covariance[0] = -1.0  # no orientation, as a plain IMU driver
+            v = msg.angular_velocity
+            v.x, v.y, v.z = w
+            f = msg.linear_acceleration
+            f.x, f.y, f.z = a
+            self.imu.publish(msg)
 
     def _publish_tf(self, odom: Odometry) -> None:
         from geometry_msgs.msg import TransformStamped
@@ -658,6 +713,7 @@ def main() -> None:
         "--fail-configure", action="store_true",
         help="configure_controller fails (on_configure returns FAILURE) after the start",
     )  # fmt: skip
+    imu_arguments(parser)
     args = parser.parse_args()
     # SIGINT is KeyboardInterrupt even where the node was started with it ignored (a
     # background job of a shell), so that closing it takes no 10 s time-out

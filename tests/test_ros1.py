@@ -26,6 +26,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from umbmark.robot.ros_common import master_problem
@@ -65,6 +66,10 @@ RATE = 5.0
 T0 = 1000.0
 #: The node's laser: 0.1 m ahead of the robot's centre.
 LASER_X = 0.1
+#: The node's IMU (tests/robot_node_imu.py's defaults): k_g, its bias at the start
+#: [deg/s], its rate [Hz] and noise density [deg/s/sqrt(Hz)] (simulate --imu's), its
+#: mounting rolled 1 deg about x on /tf_static.
+K_G, GYRO_BIAS, IMU_RATE, GYRO_NOISE, IMU_ROLL = 1.02, 0.3, 100.0, 0.005, math.radians(1.0)
 
 
 def _free_port() -> int:
@@ -77,6 +82,7 @@ class RosGraph:
     """A master and a simulated robot node on a free port, ended by their PIDs."""
 
     def __init__(self, tmp: Path, *node_args: str) -> None:
+        self.imu_truth = tmp / "imu.json"  # where --imu-truth writes the IMU's truth
         self.uri = f"http://127.0.0.1:{_free_port()}"
         self.env = {
             **os.environ,
@@ -170,6 +176,14 @@ def test_selfcal_end_to_end_over_ros1(tmp_path: Path) -> None:
                         "1", "--out", str(tmp_path / "out"), "--json")  # fmt: skip
         assert done.returncode == 0, done.stderr
         report = json.loads(done.stdout)
+        # the coarse turning check turned by the node's gyro (its /imu/data found on the
+        # master): the odometry's turn over the gyro's, E_b k_g (the gyro reads 1 / k_g)
+        coarse = report["coarse"]
+        assert coarse["measured_by"] == "imu"
+        assert "/imu/data" in coarse["imu"]
+        assert coarse["ratio"] == pytest.approx(0.97 * K_G, abs=0.004)
+        assert coarse["gyro_bias"] == pytest.approx(math.radians(GYRO_BIAS), abs=math.radians(0.01))
+        assert "gyro: the IMU on /imu/data" in done.stderr
         before, after = report["e_max_syst_before"], report["e_max_syst_after"]
         assert 0.10 < before < 0.25
         assert after < before / 5.0
@@ -211,7 +225,8 @@ def test_selfcal_anywhere_over_ros1(tmp_path: Path) -> None:
     recovered within the routine's promise, not what TF states, and what the reconfigure
     server holds is what the report applied."""
     stated = (0.08, -0.02, math.radians(-3.0))
-    g = RosGraph(tmp_path, "--E-s", "0.99", "--stated-laser", ",".join(map(str, stated)))
+    g = RosGraph(tmp_path, "--E-s", "0.99", "--stated-laser", ",".join(map(str, stated)),
+                 "--imu-truth", str(tmp_path / "imu.json"))  # fmt: skip
     try:
         done = _umbmark(g.env, "selfcal", "--ros1", "--routine", "anywhere", "--no-verify",
                         "--out", str(tmp_path / "out"), "--json", timeout=400.0)  # fmt: skip
@@ -221,6 +236,18 @@ def test_selfcal_anywhere_over_ros1(tmp_path: Path) -> None:
     finally:
         g.close()
     assert report["routine"] == "anywhere"
+    # the node's IMU (/imu/data, found on the master) calibrated with the wheels: k_g
+    # within its interval and issue 36's 0.1 %, the bias (walking: 0.003 deg/s over the
+    # drive) within its 0.01 deg/s
+    assert report["method"] == "gyro"
+    gyro = report["gyro_calibration"]
+    assert gyro["reference"] == "scan matching"
+    low, high = gyro["intervals_95"]["k_g"]
+    assert low < K_G < high
+    assert abs(gyro["values"]["k_g"] / K_G - 1.0) < 1e-3
+    truth = _imu_truth(tmp_path / "imu.json")
+    assert abs(gyro["values"]["bias"] - truth["yaw_bias"]) < math.radians(0.01)
+    assert "/imu/data" in report["imu"]
     assert abs(report["E_d"] - 1.004) < 5e-4
     assert abs(report["E_b"] - 0.97) < 0.002
     assert abs(report["E_s"] - 0.99) < 0.002
@@ -240,13 +267,41 @@ def test_selfcal_anywhere_over_ros1(tmp_path: Path) -> None:
         assert held[name] == pytest.approx(value, rel=1e-9)
 
 
+@pytest.mark.slow
+def test_selfcal_anywhere_without_a_laser_over_ros1(tmp_path: Path) -> None:
+    """A robot with no laser and its IMU (E_d 1.004, E_b 0.97, k_g 1.02): ``selfcal --ros1
+    --routine anywhere`` calibrates the wheels against the gyro alone: E_d and E_b k_g
+    (E_s 1) within their intervals of the node's truth, said so, not better than "apply
+    with care"."""
+    g = RosGraph(tmp_path, "--no-laser")
+    try:
+        done = _umbmark(g.env, "selfcal", "--ros1", "--routine", "anywhere", "--no-verify",
+                        "--out", str(tmp_path / "out"), "--json", timeout=400.0)  # fmt: skip
+    finally:
+        g.close()
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert "no laser: the wheels are calibrated against the gyro alone" in done.stderr
+    assert report["laser"] is False
+    assert "the gyro alone" in report["calibrated_against"]
+    gyro = report["gyro_calibration"]
+    for name, truth in (("E_d", 1.004), ("E_b_k_g", 0.97 * K_G)):
+        low, high = gyro["intervals_95"][name]
+        assert low < truth < high, (name, low, high, truth)
+    assert "k_g" not in gyro["values"]
+    assert report["verdict"]["level"] != "apply"
+    assert any("gyro alone" in w for w in report["warnings"])
+
+
 # --- a shared master and robot -----------------------------------------------------------
 
 
 @pytest.fixture(scope="module")
 def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RosGraph]:
-    """The master and node the probes and command lines share."""
-    g = RosGraph(tmp_path_factory.mktemp("ros1"))
+    """The master and node the probes and command lines share (its IMU's truth in
+    ``imu.json`` beside its logs)."""
+    tmp = tmp_path_factory.mktemp("ros1")
+    g = RosGraph(tmp, "--imu-truth", str(tmp / "imu.json"))
     yield g
     g.close()
 
@@ -276,6 +331,81 @@ def test_reads_odometry_scan_and_sim_time(graph: RosGraph) -> None:
     assert seen["mount"] == pytest.approx([LASER_X, 0.0, 0.0])
     x = seen["true"][0]
     assert seen["ahead"] == pytest.approx(6.0 - x - LASER_X, abs=0.03)
+
+
+def _imu_truth(path: Path) -> dict[str, Any]:
+    truth: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+    return truth
+
+
+@pytest.mark.slow
+def test_the_imu_on_the_graph_its_mounting_and_readings(graph: RosGraph, tmp_path: Path) -> None:
+    """The node's /imu/data (sensor_msgs/Imu in imu_link) is found on the master; its
+    mounting, Rx(1 deg), comes from /tf_static; its rates are put in the base frame: at
+    rest the yaw rate is the gyro's yaw bias (the node's truth, within 4 standard errors
+    of the mean of its white noise), and over a turn on the spot the yaw rate less that
+    bias integrates to the true turn (the node's /ground_truth) over k_g. --no-imu: none."""
+    seen = _probe(graph, "imu")
+    imu = seen["imu"]
+    assert imu["topic"] == "/imu/data"
+    assert imu["chosen"] == "found on the graph"
+    assert (imu["frame"], imu["base"], imu["source"]) == ("imu_link", "base_link", "TF")
+    c, s = math.cos(IMU_ROLL), math.sin(IMU_ROLL)
+    np.testing.assert_allclose(imu["rotation"], [[1, 0, 0], [0, c, -s], [0, s, c]], atol=1e-9)
+    assert seen["period"] == pytest.approx(1.0 / IMU_RATE, rel=1e-6)
+    truth = _imu_truth(graph.imu_truth)
+    assert truth["k_g"] == K_G
+    noise = math.radians(GYRO_NOISE) * math.sqrt(IMU_RATE) / math.sqrt(seen["rest_readings"])
+    assert abs(seen["rest_yaw_rate"] - truth["yaw_bias"]) < 4.0 * noise
+    turned = seen["integral"] - seen["rest_yaw_rate"] * seen["span"]
+    assert seen["true_turn"] > 1.0, seen  # 2.4 rad asked; a late command stops it
+    assert turned == pytest.approx(seen["true_turn"] / K_G, abs=3e-3)
+    assert seen["accel_z"] == pytest.approx(9.80665, abs=0.05)
+    assert _probe(graph, "imu", "--no-imu") == {"imu": None}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("fault", "said"), [("mute_imu", "fell silent"), ("freeze_imu", "froze")])
+def test_an_imu_failing_in_the_coarse_check_leaves_it_to_the_corner(
+    graph: RosGraph, fault: str, said: str
+) -> None:
+    """The node's IMU driver dies (no message) or freezes (the same rates, stamps going
+    on) in the coarse turning check's first turn: the robot turns back and the corner
+    fixes measure, E_b / E_s (0.97, E_s 1) within their 0.5 %, not the gyro's E_b k_g
+    (0.989); the line says why."""
+    check = _probe(graph, "coarse-fault", fault)
+    assert check["measured_by"] == "corner fixes"
+    assert check["gyro_bias"] is None
+    assert f"the IMU on /imu/data {said}" in check["gyro_left_out"]
+    assert check["ratio"] == pytest.approx(0.97, rel=0.005)
+
+
+@pytest.mark.slow
+def test_an_imu_topic_not_on_the_graph_is_one_line(graph: RosGraph, tmp_path: Path) -> None:
+    """Before anything moves: exit 2, the line naming the topic and the graph's IMU."""
+    done = _umbmark(graph.env, "selfcal", "--ros1", "--imu-topic", "/gyro", "--out",
+                    str(tmp_path / "o"), timeout=60.0)  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert "nobody publishes --imu-topic /gyro: the graph's IMU topics: /imu/data" in lines[-1]
+    assert "Traceback" not in done.stderr
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_an_imu_frame_without_a_transform_is_one_line(tmp_path: Path) -> None:
+    """The node's IMU reads in a frame nothing mounts: exit 2 before the robot moves, the
+    line naming the topic, the frame and what to publish; nothing written."""
+    g = RosGraph(tmp_path, "--imu-frame", "imu_unmounted")
+    try:
+        done = _umbmark(g.env, "selfcal", "--ros1", "--out", str(tmp_path / "o"), timeout=120.0)
+    finally:
+        g.close()
+    assert done.returncode == 2, done.stderr
+    line = done.stderr.strip().splitlines()[-1]
+    assert "the IMU on /imu/data reads in imu_unmounted, which has no transform to" in line
+    assert "publish its mounting on /tf_static" in line
+    assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.slow

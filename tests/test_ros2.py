@@ -24,6 +24,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,6 +39,9 @@ T0 = 1000.0
 LASER_X = 0.1
 #: The node's robot: E_d and E_b (ros2_robot_node's defaults).
 E_D, E_B = 1.004, 0.97
+#: The node's IMU (tests/robot_node_imu.py's defaults): k_g, its rate [Hz] and noise
+#: density [deg/s/sqrt(Hz)] (simulate --imu's), its mounting rolled 1 deg about x.
+K_G, IMU_RATE, GYRO_NOISE, IMU_ROLL = 1.02, 100.0, 0.005, math.radians(1.0)
 
 if not PYTHON.exists():
     if os.environ.get("CI") == "true":
@@ -152,6 +156,11 @@ def test_selfcal_end_to_end_over_ros2_with_a_controller_restart(tmp_path: Path) 
     said = first.stderr
     assert said.index("stops after the first pass") < said.index("stopped for a controller restart")
     report = json.loads(first.stdout)
+    # the coarse check turned by the node's gyro (/imu on the graph): E_b k_g, within 5 %
+    coarse = report["coarse"]
+    assert coarse["measured_by"] == "imu"
+    assert coarse["ratio"] == pytest.approx(E_B * K_G, abs=0.004)
+    assert coarse["needed"] is False
     assert [p["label"] for p in report["passes"]] == ["pass 1"]
     assert report["passes"][0]["applied"] is False
     assert report["applied"]["wheel_separation_multiplier"] == 1.0  # nothing applied live
@@ -200,7 +209,8 @@ def test_selfcal_anywhere_over_ros2(tmp_path: Path) -> None:
     env = ros2_env(tmp_path)
     out = tmp_path / "out"
     stated = (0.08, 0.02, math.radians(3.0))
-    node = Robot2(env, "--E-s", "1.01", "--stated-laser", ",".join(map(str, stated)))
+    node = Robot2(env, "--E-s", "1.01", "--stated-laser", ",".join(map(str, stated)),
+                  "--imu-truth", str(tmp_path / "imu.json"))  # fmt: skip
     try:
         done = _umbmark(env, "selfcal", "--ros2", "--routine", "anywhere", "--out", str(out),
                         "--json", timeout=400.0)  # fmt: skip
@@ -209,6 +219,15 @@ def test_selfcal_anywhere_over_ros2(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr[-3000:]
     report = json.loads(done.stdout)
     assert report["routine"] == "anywhere"
+    # the node's IMU (/imu, found on the graph) calibrated with the wheels and the laser
+    assert report["method"] == "gyro"
+    gyro = report["gyro_calibration"]
+    assert gyro["reference"] == "scan matching"
+    low, high = gyro["intervals_95"]["k_g"]
+    assert low < K_G < high
+    assert abs(gyro["values"]["k_g"] / K_G - 1.0) < 1e-3
+    truth = json.loads((tmp_path / "imu.json").read_text(encoding="utf-8"))
+    assert abs(gyro["values"]["bias"] - truth["yaw_bias"]) < math.radians(0.01)
     assert abs(report["E_d"] - E_D) < 5e-4
     assert abs(report["E_b"] - E_B) < 0.002
     assert abs(report["E_s"] - 1.01) < 0.002
@@ -230,6 +249,64 @@ def test_selfcal_anywhere_over_ros2(tmp_path: Path) -> None:
     assert report["verification"] is None
     overlay = (out / "overlay.yaml").read_text()
     assert f"{report['new']['wheel_separation_multiplier']:.6f}"[:7] in overlay
+
+
+@pytest.mark.slow
+def test_selfcal_anywhere_without_a_laser_over_ros2(tmp_path: Path) -> None:
+    """A robot with no laser and its IMU (E_d 1.004, E_b 0.97, k_g 1.02): the wheels
+    against the gyro alone, E_d and E_b k_g (E_s 1) within their intervals of the node's
+    truth, said so, not better than "apply with care"."""
+    env = ros2_env(tmp_path)
+    node = Robot2(env, "--no-laser")
+    try:
+        done = _umbmark(env, "selfcal", "--ros2", "--routine", "anywhere", "--out",
+                        str(tmp_path / "out"), "--json", timeout=400.0)  # fmt: skip
+    finally:
+        node.close()
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout)
+    assert "no laser: the wheels are calibrated against the gyro alone" in done.stderr
+    assert report["laser"] is False
+    gyro = report["gyro_calibration"]
+    for name, truth in (("E_d", E_D), ("E_b_k_g", E_B * K_G)):
+        low, high = gyro["intervals_95"][name]
+        assert low < truth < high, (name, low, high, truth)
+    assert report["verdict"]["level"] != "apply"
+
+
+@pytest.mark.slow
+def test_the_imu_on_the_graph_its_mounting_and_readings(tmp_path: Path) -> None:
+    """The node's /imu (sensor_msgs/Imu in imu_link) is found on the graph, its mounting
+    Rx(1 deg) from /tf_static; at rest the yaw rate is the gyro's yaw bias (the node's
+    truth, within 4 standard errors of its white noise's mean), and over a turn the yaw
+    rate less that bias integrates to the true turn over k_g. A topic given that nobody
+    publishes is one line naming the graph's IMU."""
+    env = ros2_env(tmp_path)
+    node = Robot2(env, "--imu-truth", str(tmp_path / "imu.json"))
+    try:
+        seen = _probe(env, "imu")
+        missing = subprocess.run(
+            [str(PYTHON), "-m", "umbmark", "selfcal", "--ros2", "--imu-topic", "/gyro",
+             "--out", str(tmp_path / "o")], env=env, capture_output=True, text=True,
+            timeout=120, check=False,
+        )  # fmt: skip
+    finally:
+        node.close()
+    imu = seen["imu"]
+    assert (imu["topic"], imu["chosen"]) == ("/imu", "found on the graph")
+    assert (imu["frame"], imu["base"], imu["source"]) == ("imu_link", "base_link", "/tf_static")
+    c, s = math.cos(IMU_ROLL), math.sin(IMU_ROLL)
+    np.testing.assert_allclose(imu["rotation"], [[1, 0, 0], [0, c, -s], [0, s, c]], atol=1e-9)
+    assert seen["period"] == pytest.approx(1.0 / IMU_RATE, rel=1e-6)
+    truth = json.loads((tmp_path / "imu.json").read_text(encoding="utf-8"))
+    noise = math.radians(GYRO_NOISE) * math.sqrt(IMU_RATE) / math.sqrt(seen["rest_readings"])
+    assert abs(seen["rest_yaw_rate"] - truth["yaw_bias"]) < 4.0 * noise
+    turned = seen["integral"] - seen["rest_yaw_rate"] * seen["span"]
+    assert seen["true_turn"] > 1.0, seen  # 2.4 rad asked; a late command stops it
+    assert turned == pytest.approx(seen["true_turn"] / K_G, abs=3e-3)
+    assert missing.returncode == 2, missing.stderr
+    line = missing.stderr.strip().splitlines()[-1]
+    assert "nobody publishes --imu-topic /gyro: the graph's IMU topics: /imu" in line
 
 
 # --- a shared node ------------------------------------------------------------------------

@@ -337,9 +337,17 @@ def test_cli_end_to_end(tmp_path) -> None:  # type: ignore[no-untyped-def]
     proc = run_cli(*args, "--json")
     assert proc.returncode == 0, proc.stderr
     data = json.loads(proc.stdout)
-    # the command's virtual robot: its defaults (E_d 1.004, E_b 0.97) and ROOM_LASER
+    # the command's virtual robot: its defaults (E_d 1.004, E_b 0.97), ROOM_LASER and the
+    # IMU of simulate --imu (k_g 1.02, bias 0.3 deg/s at the start), calibrated with them
     assert data["routine"] == "anywhere"
-    assert data["method"] == "scan-matching"
+    assert data["method"] == "gyro"
+    gyro = data["gyro_calibration"]
+    assert gyro["reference"] == "scan matching"
+    low, high = gyro["intervals_95"]["k_g"]
+    assert low < 1.02 < high
+    assert abs(gyro["values"]["k_g"] / 1.02 - 1.0) < 1e-3  # issue 36: within 0.1 %
+    # the bias walks (2e-4 deg/s/sqrt(s): 0.003 deg/s over the drive): issue 36's 0.01
+    assert abs(math.degrees(gyro["values"]["bias"]) - 0.3) < 0.01
     assert abs(data["E_d"] - 1.004) < TOL_E_D
     assert abs(data["E_b"] - 0.97) < TOL_E_B
     assert abs(data["E_s"] - 1.01) < TOL_E_S
@@ -349,11 +357,20 @@ def test_cli_end_to_end(tmp_path) -> None:  # type: ignore[no-untyped-def]
     assert data["applied"] is True
     assert abs(data["after"]["E_d"] - 1.0) < TOL_E_D
     assert (out / "overlay.yaml").is_file()
-    text = run_cli("selfcal", "--sim", "--routine", "anywhere", "--out", str(tmp_path / "o2"))
+    said = run_cli(*args[:-2], "--out", str(tmp_path / "o1"))
+    assert said.returncode == 0, said.stderr
+    for words in ("Gyro: the IMU on /imu", "gyro scale k_g = 1.0", "gyro bias = 0.",
+                  "the laser's scan matching and the gyro together"):  # fmt: skip
+        assert words in said.stdout
+    # --no-imu: the laser's scan matching alone, as before the IMU
+    text = run_cli("selfcal", "--sim", "--routine", "anywhere", "--no-imu", "--out",
+                   str(tmp_path / "o2"))  # fmt: skip
     assert text.returncode == 0, text.stderr
     for words in ("laser position, forward", "laser yaw", "left wheel diameter", "E_s",
                   "Applied (reconfigure)", "before", "after", "verification"):  # fmt: skip
         assert words in text.stdout
+    assert "Gyro:" not in text.stdout
+    assert "gyro" not in text.stderr
 
 
 @pytest.mark.slow

@@ -5,7 +5,9 @@ how each correction was applied, and a pass measured after a coarse turning corr
 has its E_b marked as the residual on the corrected wheelbase.
 
 The robot: the virtual one with E_b 1.1 (its wheelbase 10 % longer than its controller
-believes: the coarse turning check corrects it before UMBmark, by about x1.1).
+believes: the coarse turning check corrects it before UMBmark) and the command's IMU, whose
+gyro reads 1/1.02 of the turns (``--sim-gyro-scale`` 1.02, the default): the coarse check
+turns by the gyro, so it corrects by 1.1 x 1.02, and pass 1 finds the residual 1/1.02.
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ import pytest
 from helpers import run_cli
 
 TRUE_E_B = 1.1
+#: The virtual robot's gyro scale k_g (selfcal --sim's default --sim-gyro-scale).
+GYRO_SCALE = 1.02
 
 _RUN_LINE = re.compile(
     r"umbmark: (pass \d|verification), run (\d) of \d+ \((?:cw|ccw) \d of \d\): return error "
@@ -94,12 +98,14 @@ def test_the_applied_method_is_named(ran):
 def test_the_e_b_after_a_coarse_correction_is_the_residual(ran):
     _, stdout, stderr, page, _ = ran
     ratio = float(re.search(r"\(ratio (\d\.\d+)\): corrected", stderr)[1])
-    assert ratio == pytest.approx(TRUE_E_B, abs=0.01)
+    # by the gyro: the odometry's turn over the gyro's, which reads 1 / k_g of the true one
+    assert "Coarse turning check by the gyro" in stderr
+    assert ratio == pytest.approx(TRUE_E_B * GYRO_SCALE, abs=0.01)
     # the terminal: pass 1's E_b residual, composed beside it; pass 2's not marked
     found = re.search(r"(\d\.\d{6}) residual, (\d\.\d{6}) composed", stdout)
     assert found, stdout
     residual, composed = float(found[1]), float(found[2])
-    assert residual == pytest.approx(1.0, abs=0.01)
+    assert residual == pytest.approx(1.0 / GYRO_SCALE, abs=0.01)
     assert composed == pytest.approx(residual * ratio, abs=6e-5)  # the ratio printed to 4 digits
     assert composed == pytest.approx(TRUE_E_B, abs=0.005)
     assert len(re.findall(r"\d residual, ", stdout)) == 1  # pass 1 only

@@ -147,3 +147,27 @@ def test_the_recorded_gyro_gives_each_runs_true_heading_change(tmp_path: Path, c
     rest = read.gyro.time < read.gyro.time[0] + 1.0
     assert read.gyro.accel is not None
     np.testing.assert_allclose(read.gyro.accel[rest].mean(axis=0), [0, 0, GRAVITY], atol=0.01)
+
+
+def test_the_imu_read_as_the_motion_goes_on_is_the_one_read_at_once():
+    """:class:`ImuStream` given the motion a sample at a time, read in pieces, gives the
+    readings :func:`simulate_imu` gives of the whole (without noise and walk, exactly: the
+    same model; the draws of a stream come in other pieces)."""
+    from umbmark.sim.imu import ImuStream, _travel
+
+    t = np.arange(0.0, 12.0 + 1e-9, 0.02)
+    poses = np.column_stack([0.3 * np.sin(0.5 * t), 0.2 * t, 0.8 * np.sin(0.7 * t)])
+    setup = ImuSetup(gyro_noise=0.0, gyro_bias_walk=0.0, imu_rate=100.0, imu_roll=2.0 * DEG)
+    whole = simulate_imu(PoseSeries(t, poses), setup, np.random.default_rng(9))
+    stream = ImuStream(setup, np.random.default_rng(9), float(t[0]))
+    travel = _travel(poses)
+    pieces = []
+    for k in range(t.size):
+        stream.add(float(t[k]), float(poses[k, 2]), float(travel[k]))
+        if k % 37 == 0 or k == t.size - 1:
+            pieces.append(stream.read())
+    time = np.concatenate([p.time for p in pieces])
+    rate = np.concatenate([p.rate for p in pieces])
+    np.testing.assert_allclose(time, whole.track.time, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(rate, whole.track.rate, rtol=0, atol=1e-12)
+    assert stream.pending < 10  # only what the next readings look back to is kept

@@ -24,13 +24,18 @@ from umbmark.options.selfcal import (
     ROBOT_WIDTH,
     ROUTINE,
     RUNS,
+    SIM_IMU_OPTIONS,
     SQUARE_SIDE,
     TAPE_MARKS,
 )
 from umbmark.options.spec import HISTORY, OUTPUTS, READ, TEST
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
+    from umbmark.jobs.selfcal_anywhere import AnywhereReport
     from umbmark.routines.watch import Progress, RunsLeft, Stopped
+    from umbmark.sim.imu import ImuSetup
 
 __all__ = ["selfcal"]
 
@@ -70,6 +75,16 @@ ROS = "ROS robots (--ros1, --ros2)"
                show_default=True, help="With --sim: the virtual robot's wheel slip [m^0.5]."),
         option("--seed", section=ROBOT, type=click.IntRange(0, 2**63 - 1), default=1,
                show_default=True, help="Seed of the virtual robot's slip and sensor noise."),
+        option("--sim-laser/--sim-no-laser", "sim_laser", section=ROBOT, default=True,
+               help="With --sim: the virtual robot has a laser (--sim-no-laser: none; "
+               "--routine anywhere then calibrates against its gyro alone)."),
+        *(spec_option(spec, section=ROBOT) for spec in SIM_IMU_OPTIONS),
+        option("--imu/--no-imu", "use_imu", section=ROBOT, default=True,
+               help="Use the robot's IMU where it has one: ROS, the sensor_msgs/Imu topic "
+               "on the graph (--imu-topic), its frame's mounting from /tf_static or the "
+               "robot description; --sim, the virtual robot's (--sim-gyro-scale, ...). "
+               "--routine anywhere calibrates the gyro too, and the coarse turning check "
+               "measures the turns with it."),
         spec_option(ROUTINE),
         spec_option(SQUARE_SIDE),
         spec_option(RUNS),
@@ -83,6 +98,11 @@ ROS = "ROS robots (--ros1, --ros2)"
                help="Drive a last pass on the final parameters (--no-verify: leave it out)."),
         option("--coarse/--no-coarse", section=TEST, default=True,
                help="Check first that the robot turns as its odometry believes."),
+        spec_option(READ["gyro_scale_tolerance"], section=TEST,
+                    help="How far the gyro's scale may be off, a fraction (MEMS datasheets: "
+                    "0.03 for +-3 % at 25 C): the coarse check's ratio by the gyro is known "
+                    "to it, and --routine anywhere without a laser widens E_b's interval "
+                    "by it (E_b is then relative to the gyro)."),
         option("--speed", section=DRIVING, type=float, default=0.2, show_default=True,
                help="Cruise speed on the legs [m/s] (0.01 to 1)."),
         option("--acceleration", section=DRIVING, type=float, default=0.3, show_default=True,
@@ -103,6 +123,10 @@ ROS = "ROS robots (--ros1, --ros2)"
                "[default: from the URDF on /robot_description]."),
         option("--scan-topic", section=ROS, default="/scan", show_default=True,
                help="Laser scan topic (sensor_msgs/LaserScan); its mounting from TF."),
+        spec_option(READ["imu_topic"], section=ROS,
+                    help="The IMU's topic (sensor_msgs/Imu), its frame's mounting from "
+                    "/tf_static or the robot description [default: the one on the graph; "
+                    "of several, a check line names them and the one taken]."),
         option("--range-topics", section=ROS, default=None,
                help="Three sensor_msgs/Range topics, comma-separated (--measure ranges)."),
         option("--truth-topic", section=ROS, default=None,
@@ -168,6 +192,10 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
 
     if backend is None:
         raise InputError("choose the robot: --sim, --ros1 or --ros2")
+    use_imu, imu_topic = options.pop("use_imu"), options.pop("imu_topic")
+    if imu_topic is not None and not use_imu:
+        raise InputError("--imu-topic and --no-imu: give one of them")
+    imu = _sim_imu({spec.name: options.pop(spec.name) for spec in SIM_IMU_OPTIONS})
     ranges = options.pop("range_topics")
     ros = RosOptions(
         cmd_vel=options.pop("cmd_vel"),
@@ -180,6 +208,7 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         params_file=options.pop("params_file"),
         reload=options.pop("reload"),
         laser_mount=None if options["laser_mount"] is None else laser_mount(options["laser_mount"]),
+        imu=(imu_topic or "") if use_imu else None,
     )
     options.pop("laser_mount")
     sim = {k: options.pop(k) for k in ("E_d", "E_b", "E_s", "slip", "seed")}
@@ -197,6 +226,8 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         ros=ros,
         room=anywhere,
         corner_side=options["corner_side"],
+        imu=imu if use_imu else None,
+        laser=options.pop("sim_laser"),
         **sim,
     )
     if options["out"] is None:  # the command's own folder; a new one beside an earlier run's
@@ -225,11 +256,14 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
     if isinstance(report, AnywhereReport):
         for line in report.checks:
             note(line)
+        for line in report.calibration.report.warnings:
+            warn(line)
         wrote(report.files)
         if json_out:
             click.echo(report.to_json(), nl=False)
         else:
             render_anywhere(report, console())
+            _render_gyro(report, console())
         return
     for p in report.passes:
         for line in p.warnings:
@@ -241,6 +275,32 @@ def selfcal(backend: str | None, json_out: bool, **options: Any) -> None:
         click.echo(report.to_json(), nl=False)
         return
     render_selfcal(report, console())
+
+
+def _sim_imu(values: dict[str, Any]) -> ImuSetup:
+    """The virtual robot's IMU of ``--sim-imu-rate``, ``--sim-gyro-scale``, ... (checked
+    by their own options, so that a bad one is named as given)."""
+    from umbmark.sim.imu import ImuSetup
+
+    for spec in SIM_IMU_OPTIONS:
+        spec.check(values[spec.name])
+    return ImuSetup.of_options({k.removeprefix("sim_"): v for k, v in values.items()})
+
+
+def _render_gyro(report: AnywhereReport, screen: Console) -> None:
+    """The gyro's part of the anywhere routine: the IMU used, what the wheels were
+    calibrated against, the gyro's scale and bias (:func:`gyro_lines`)."""
+    from umbmark.calibration.gyro import gyro_lines
+
+    gyro = report.calibration.gyro
+    if gyro is None or report.imu is None:
+        return
+    screen.print(
+        f"Gyro: {report.imu}; the wheels calibrated against {report.against}.",
+        markup=False, highlight=False,
+    )  # fmt: skip
+    for line in gyro_lines(gyro):
+        screen.print(f"  {line}", markup=False, highlight=False)
 
 
 @contextlib.contextmanager

@@ -142,6 +142,7 @@ def selfcal(
             robot, apply=g.apply_method, verify=g.verify, robot_name=g.robot_name,
             history=g.history, out=g.out, progress=progress, limits=g.limits, force=g.force,
             controller=robot_controller(robot, g.controller),
+            gyro_scale_tolerance=g.gyro_scale_tolerance,
         )  # fmt: skip
     return _squares(robot, chosen, _Calls(progress, ask, notify, runs_left))
 
@@ -206,7 +207,7 @@ def _squares(robot: Robot, g: SelfcalSetup, calls: _Calls) -> SelfCalReport:
             history=g.history, kept=folder is not None, controller=controller,
         )  # fmt: skip
         found = _calibrate(
-            drive, method, g.verify, g.max_passes, g.coarse,
+            drive, method, g.verify, g.max_passes, (g.coarse, g.gyro_scale_tolerance),
             folder if g.force and state is None else None,
             _Restart(restart_note, calls.notify, prior),
         )  # fmt: skip
@@ -310,7 +311,7 @@ def _calibrate(
     method: ApplyMethod,
     verify: bool,
     max_passes: int,
-    coarse: bool,
+    coarse: tuple[bool, float],
     replacing: Path | None,
     restart: _Restart,
 ) -> _Found:
@@ -340,9 +341,11 @@ def _calibrate(
         if replacing is not None:
             clear_selfcal(replacing, remove=True)
         coarse_check, coarse_applied, pending = None, None, None
-        if coarse and method != "none" and how.method in ("lidar", "truth"):
+        gyro = robot.imu() is not None  # it measures the turns: no fix needed for them
+        measured = ("lidar", "truth", "ranges") if gyro else ("lidar", "truth")
+        if coarse[0] and method != "none" and how.method in measured:
             watch.status("coarse", 0, None, "turning check")
-            coarse_check = coarse_turning(robot, how, limits)
+            coarse_check = coarse_turning(robot, how, limits, coarse[1])
             watch.say(coarse_check.words())
             if coarse_check.needed:
                 params = robot.drive_params()

@@ -1,16 +1,22 @@
 """The self-calibration anywhere (``umbmark selfcal --routine anywhere``): the robot drives
 a short excitation pattern on about 2 x 2 m of floor, calibrates its wheels and its
-laser's mounting from the laser's own motion (:mod:`umbmark.routines.anywhere`), applies
-the result through the same paths as the UMBmark routine, and verifies by driving the
+laser's mounting from the laser's own motion (:mod:`umbmark.routines.anywhere`), and its
+gyro with them where it has an IMU (:mod:`umbmark.routines.anywhere_gyro`), applies the
+result through the same paths as the UMBmark routine, and verifies by driving the
 pattern again.
 
-1. checks before anything moves: the odometry settles, the robot has a laser, and the
-   laser sees a scene with structure (no open space, no corridor);
-2. the pattern, ``repeats`` times in a row, recorded (wheels and sweeps);
+1. checks before anything moves: the odometry settles, the robot has a laser or an IMU,
+   its IMU's frame has a mounting, and the laser sees a scene with structure (no open
+   space, no corridor);
+2. the pattern, ``repeats`` times in a row, recorded (wheels, sweeps, the gyro; with a
+   gyro each repetition between rests);
 3. its motion intervals, written as a tuple file in ``out/pass-1`` (or a temporary folder
    without ``out``), calibrated by :func:`umbmark.calibrate` with the scan-matching
    estimator and the parameters active during the drive (the verdict, the history entry
-   under ``robot_name``);
+   under ``robot_name``); with an IMU, by the ``gyro`` estimator on the wheels, the gyro
+   and those intervals together (the gyro's scale and bias too), or without a laser on
+   the wheels and the gyro alone (``E_d``, and ``E_b`` relative to the gyro: apply with
+   care at best);
 4. applied (``robot.apply``) unless its verdict is "do not apply" or ``apply`` is
    ``none``; the history marks it applied, ``out/overlay.yaml`` holds it (also where the
    controller takes it only on a restart: a ROS 2 controller without the controller
@@ -37,11 +43,17 @@ from typing import TYPE_CHECKING, Any
 from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.estimators.registry import SCAN_MATCHING
-from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot
+from umbmark.options.spec import READ
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams, Robot, ScanSweep
 from umbmark.routines.anywhere import (
+    GYRO_PATTERN,
+    GYRO_REST,
     PATTERN,
+    PATTERN_REACH,
+    Move,
     check_scene,
     drive_pattern,
+    first_scan,
     intervals_note,
     pattern_intervals,
 )
@@ -49,7 +61,10 @@ from umbmark.routines.drive import DriveLimits, settle
 from umbmark.routines.record import OVERLAY_FILE, pass_folder
 
 if TYPE_CHECKING:
+    from umbmark.estimators.gyro_result import GyroCalibration
     from umbmark.outputs.calibration import CalibrationReport
+    from umbmark.routines.anywhere import PatternRecording
+    from umbmark.scans.intervals import IntervalReport
 
 __all__ = ["AnywherePass", "AnywhereReport", "selfcal_anywhere", "square_only"]
 
@@ -86,6 +101,9 @@ class AnywherePass:
         The motion intervals cut from the drive.
     left_out : tuple of (str, int)
         The intervals that could not be scan matched, by reason.
+    gyro : GyroCalibration or None
+        The gyro's calibration (its scale, bias, the figures relative to it), where the
+        robot has an IMU.
     """
 
     label: str
@@ -96,6 +114,7 @@ class AnywherePass:
     applied: ApplyResult | None = None
     tried: int = 0
     left_out: tuple[tuple[str, int], ...] = ()
+    gyro: GyroCalibration | None = None
 
     def errors(self) -> dict[str, float | None]:
         """``E_d``, ``E_b``, ``E_s`` against the parameters active during the drive."""
@@ -120,6 +139,11 @@ class AnywhereReport(JsonText):
         What the checks before moving found.
     files : tuple of Path
         Files written.
+    imu : str or None
+        The IMU used, its topic and its frame's mounting (None: none).
+    laser : bool
+        Whether the laser's motion was a reference (False: calibrated against the gyro
+        alone).
     """
 
     robot: str
@@ -128,6 +152,19 @@ class AnywhereReport(JsonText):
     final: DriveParams
     checks: tuple[str, ...] = ()
     files: tuple[Path, ...] = field(default=(), compare=False)
+    imu: str | None = None
+    laser: bool = True
+
+    @property
+    def against(self) -> str:
+        """What the wheels were calibrated against, for people and the JSON."""
+        if self.imu is None:
+            return "the laser's scan matching"
+        if self.laser and self.calibration.gyro is None:
+            return "the laser's scan matching alone (the IMU left out: see the warnings)"
+        if self.laser:
+            return "the laser's scan matching and the gyro together (the gyro calibrated too)"
+        return "the gyro alone (no laser): E_b relative to the gyro's scale"
 
     @property
     def applied(self) -> ApplyResult | None:
@@ -141,7 +178,7 @@ class AnywhereReport(JsonText):
         def shown(one: AnywherePass | None) -> PatternPass | None:
             if one is None:
                 return None
-            return PatternPass(one.label, one.report, one.tried, dict(one.left_out))
+            return PatternPass(one.label, one.report, one.tried, dict(one.left_out), one.gyro)
 
         first = shown(self.calibration)
         assert first is not None
@@ -153,6 +190,9 @@ class AnywhereReport(JsonText):
                 applied=self.applied_words(),
                 final=_multipliers(self.final),
                 checks=self.checks,
+                against=self.against,
+                imu=self.imu,
+                laser=self.laser,
             )
         )
 
@@ -186,12 +226,26 @@ class AnywhereReport(JsonText):
                 "after": None if self.verification is None else self.verification.errors(),
                 "verification": None
                 if self.verification is None
-                else self.verification.report.to_dict(),
+                else _pass_dict(self.verification),
                 "final": _multipliers(self.final),
                 "files": [str(f) for f in self.files],
+                "calibrated_against": self.against,
+                "laser": self.laser,
+                "imu": self.imu,
+                "gyro_calibration": None
+                if self.calibration.gyro is None
+                else self.calibration.gyro.to_dict(),
             }
         )
         return out
+
+
+def _pass_dict(one: AnywherePass) -> dict[str, Any]:
+    """A pass's calibration as JSON, with its gyro's."""
+    out = one.report.to_dict()
+    if one.gyro is not None:
+        out["gyro_calibration"] = one.gyro.to_dict()
+    return out
 
 
 def _multipliers(params: DriveParams) -> dict[str, float]:
@@ -216,21 +270,26 @@ def selfcal_anywhere(
     force: bool = False,
     repeats: int = 4,
     controller: str | None = None,
+    gyro_scale_tolerance: float = READ["gyro_scale_tolerance"].default,
 ) -> AnywhereReport:
     """Calibrate ``robot`` anywhere (the module's documentation); the options as
     :func:`umbmark.selfcal`'s (``apply`` as a method). ``repeats``: how often the pattern
     is driven in a row for one calibration (1 to :data:`MAX_REPEATS`). ``controller``:
     the controller the overlay and the history are keyed by (None: the default).
+    ``gyro_scale_tolerance``: without a laser, how far the gyro's scale may be off (a
+    fraction): ``E_b``'s interval is widened by it.
 
     Raises
     ------
     InputError
-        No laser, a scene without structure, too few intervals matched, bad options.
+        Neither a laser nor an IMU, a scene without structure, too few intervals matched,
+        an IMU frame without a mounting, bad options.
     umbmark.core.errors.SafetyError
         The robot was stopped for safety (a zero velocity was the last command).
     """
     if not (1 <= repeats <= MAX_REPEATS):
         raise InputError(f"repeats {repeats!r}: give 1 to {MAX_REPEATS}")
+    READ["gyro_scale_tolerance"].check(gyro_scale_tolerance)
     limits = limits or DriveLimits()
     folder = None if out is None else Path(out)
     _check_folder(folder, force)
@@ -238,11 +297,16 @@ def selfcal_anywhere(
     kept = contextlib.nullcontext(str(folder))
     try:
         settle(robot, limits)
-        check_scene(robot, limits)
-        checks = ("the laser sees a scene with structure: scan matching can measure motion",)
+        imu = robot.imu()
+        scan = first_scan(robot, limits)
+        laser = scan is not None
+        checks = _checks(robot, limits, imu is not None, scan)
+        if imu is not None:
+            checks.append(f"gyro: {imu.describe()}")
         with kept if folder is not None else tempfile.TemporaryDirectory(prefix="umbmark-") as logs:
             drive = _Pass(robot, Path(logs), limits, progress, repeats, robot_name, history,
-                          force, controller)  # fmt: skip
+                          force, controller, laser, imu is not None,
+                          gyro_scale_tolerance)  # fmt: skip
             first = drive("pass 1")
             first = _apply(robot, first, apply)
             if first.applied is not None and first.applied.active and robot_name is not None:
@@ -257,7 +321,8 @@ def selfcal_anywhere(
     files: list[Path] = []
     passes = [p for p in (first, verification) if p is not None]
     if folder is not None:
-        files += [p.folder / INTERVALS_FILE for p in passes if p.folder is not None]
+        folder.mkdir(parents=True, exist_ok=True)  # without a laser no pass wrote into it
+        files += [p.folder / INTERVALS_FILE for p in passes if p.folder is not None and laser]
         if first.applied is not None:  # applied, or waiting for a controller restart
             files += first.report.write(yaml=folder / OVERLAY_FILE, force=force)
     else:
@@ -268,8 +333,10 @@ def selfcal_anywhere(
         calibration=first,
         verification=verification,
         final=robot.drive_params(),
-        checks=checks,
+        checks=tuple(checks),
         files=tuple(files),
+        imu=None if imu is None else imu.describe(),
+        laser=laser,
     )
     if folder is None:
         return report
@@ -277,6 +344,24 @@ def selfcal_anywhere(
 
     atomic_write_text(folder / REPORT_FILE, report.html())
     return replace(report, files=(*report.files, folder / REPORT_FILE))
+
+
+def _checks(robot: Robot, limits: DriveLimits, gyro: bool, scan: ScanSweep | None) -> list[str]:
+    """The checks of the scene before moving: the laser's (:func:`check_scene`, from its
+    sweep ``scan``); without a laser, a robot with an IMU (``gyro``) is calibrated against
+    it alone, said, and one with neither refused."""
+    if scan is not None:
+        check_scene(robot, limits, scan)
+        return ["the laser sees a scene with structure: scan matching can measure motion"]
+    if not gyro:
+        check_scene(robot, limits)  # refuses: no laser scan, and no IMU
+    reach = PATTERN_REACH + limits.outline.reach
+    return [
+        "no laser: the wheels are calibrated against the gyro alone (E_d, and E_b relative "
+        "to the gyro's scale: E_b k_g)",
+        f"no laser watches for obstacles: keep {2 * reach:.1f} x {2 * reach:.1f} m around "
+        "the robot clear",
+    ]
 
 
 def _check_folder(folder: Path | None, force: bool) -> None:
@@ -310,21 +395,83 @@ class _Pass:
     history: str | os.PathLike[str] | None
     force: bool
     controller: str | None = None
+    laser: bool = True
+    gyro: bool = False
+    tolerance: float = READ["gyro_scale_tolerance"].default
+
+    @property
+    def moves(self) -> tuple[Move, ...]:
+        """The pattern ``repeats`` times; with a gyro, each between rests."""
+        if not self.gyro:
+            return PATTERN * self.repeats
+        return (*(GYRO_PATTERN * self.repeats), Move("rest", GYRO_REST))
 
     def __call__(self, label: str) -> AnywherePass:
         from umbmark.outputs.calibration import CalibrationReport
         from umbmark.sources.tuples import write_tuples
-        from umbmark.store.calibrations import calibrate_recorded
 
         def said(k: int, what: str) -> None:
             if self.progress is not None:
                 self.progress(label, k, None, what)
 
-        recording = drive_pattern(self.robot, self.limits, said, PATTERN * self.repeats)
-        matched = pattern_intervals(recording)
+        recording = drive_pattern(self.robot, self.limits, said, self.moves, laser=self.laser)
         where = pass_folder(self.folder, label)
+        if not self.laser:
+            return self._gyro_only(label, recording, where)
+        matched = pattern_intervals(recording)
         where.mkdir(parents=True, exist_ok=True)
         path = write_tuples(where / INTERVALS_FILE, matched.intervals, force=self.force)
+        left_out = tuple(sorted(matched.left_out.items()))
+        note = intervals_note(matched)
+        p = recording.params
+        if self.gyro and recording.gyro is not None:
+            from umbmark.routines.anywhere_gyro import calibrate_pattern_gyro
+
+            both = calibrate_pattern_gyro(
+                recording, matched, tolerance=self.tolerance, source=path,
+                robot=self.record_as, history=self.history, controller=self.controller,
+            )  # fmt: skip
+            return AnywherePass(
+                label, where, CalibrationReport.of(both.result), p, note, tried=matched.tried,
+                left_out=left_out, gyro=both.gyro,
+            )  # fmt: skip
+        return self._scan_only(label, recording, matched, where, path)
+
+    def _gyro_only(self, label: str, recording: PatternRecording, where: Path) -> AnywherePass:
+        """A drive calibrated against the gyro alone (no laser); refused where the gyro
+        fell silent or froze (nothing else measured the turns)."""
+        from umbmark.outputs.calibration import CalibrationReport
+        from umbmark.routines.anywhere_gyro import calibrate_pattern_gyro
+
+        if recording.gyro_trouble is not None:
+            raise InputError(
+                f"{recording.gyro_trouble}: without a laser nothing else measured the turns; "
+                "nothing calibrated, nothing applied (drive again once the IMU reads)"
+            )
+        found = calibrate_pattern_gyro(
+            recording, None, tolerance=self.tolerance, robot=self.record_as,
+            history=self.history, controller=self.controller,
+        )  # fmt: skip
+        g = found.gyro
+        note = f"{g.n_intervals} intervals of the wheels against the gyro ({g.n_rests} rests)" + (
+            f", {g.n_outliers} dropped as outliers" if g.n_outliers else ""
+        )
+        return AnywherePass(label, None, CalibrationReport.of(found.result), recording.params,
+                            note, tried=g.n_intervals, gyro=g)  # fmt: skip
+
+    def _scan_only(
+        self,
+        label: str,
+        recording: PatternRecording,
+        matched: IntervalReport,
+        where: Path,
+        path: Path,
+    ) -> AnywherePass:
+        """A drive calibrated against the laser's scan matching alone (no IMU, or its
+        readings left out, warned)."""
+        from umbmark.outputs.calibration import CalibrationReport
+        from umbmark.store.calibrations import calibrate_recorded
+
         p = recording.params
         found = calibrate_recorded(
             [path],
@@ -340,7 +487,13 @@ class _Pass:
             robot=self.record_as,
             history=self.history,
         )
-        report = CalibrationReport.of(replace(found, stated_mounting=recording.stated))
+        left = () if recording.gyro_trouble is None else (
+            f"{recording.gyro_trouble}: the gyro is left out, the wheels calibrated by the "
+            "laser's scan matching alone (nothing of the gyro calibrated or applied)",
+        )  # fmt: skip
+        found = replace(found, stated_mounting=recording.stated,
+                        input_warnings=(*found.input_warnings, *left))  # fmt: skip
+        report = CalibrationReport.of(found)
         left_out = tuple(sorted(matched.left_out.items()))
         note = intervals_note(matched)
         return AnywherePass(label, where, report, p, note, tried=matched.tried, left_out=left_out)

@@ -7,6 +7,9 @@ options are made from them."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+from umbmark.options.simulate import IMU_OPTIONS
 from umbmark.options.spec import TEST, Bound, Spec
 
 __all__ = [
@@ -24,6 +27,8 @@ __all__ = [
     "ROUTINE",
     "ROUTINE_SECTION",
     "RUNS",
+    "SIM_IMU_OPTIONS",
+    "SIM_SECTION",
     "SQUARE_SIDE",
     "SQUARE_SIDE_RANGE",
     "STOP_LATENCY",
@@ -170,4 +175,24 @@ MAX_PASSES = Spec(
     kind="integer",
     default=3,
     bound=Bound("range", MAX_SELFCAL_PASSES, 1),
+)
+
+#: The section of ``umbmark selfcal --help`` listing the robot: ``--sim`` and its options.
+SIM_SECTION = "The robot"
+
+#: The virtual robot's IMU (``selfcal --sim``): the options of ``simulate --imu``
+#: (:data:`umbmark.options.simulate.IMU_OPTIONS`: their defaults, units and bounds) as
+#: ``--sim-gyro-scale``, ``--sim-imu-rate``, ..., keywords ``sim_gyro_scale``, ...
+SIM_IMU_OPTIONS: tuple[Spec, ...] = tuple(
+    replace(
+        spec,
+        name=f"sim_{spec.name}",
+        flags=(f"--sim-{spec.flags[0].removeprefix('--')}",),
+        section=SIM_SECTION,
+        help="With --sim: the virtual robot's IMU: "
+        + f"{spec.help[0].lower()}{spec.help[1:]}".replace(
+            "; stated on /tf_static and in /robot_description", ""
+        ),
+    )
+    for spec in IMU_OPTIONS
 )

@@ -8,9 +8,11 @@ motion intervals of each drive of the pattern, matched and left out (by reason),
 the fit and dropped as outliers, and the motion they hold; the fit (E_d, E_b, E_s, alpha,
 beta, the wheels and the laser's mounting with their 95 % intervals, the correction);
 the laser's mounting in the forms a user applies (:mod:`umbmark.outputs.mounting`) with
-its difference from the stated one and a top view of both (inline SVG); the errors
-before and after (the verification's drive); the fit's figures, warnings and notes; the
-ros2_control overlay; the provenance. Every text is escaped.
+its difference from the stated one and a top view of both (inline SVG); the gyro, where
+the robot has an IMU (what the wheels were calibrated against, its scale ``k_g`` and
+bias with their intervals, ``E_b k_g`` without a laser, what is not determined); the
+errors before and after (the verification's drive); the fit's figures, warnings and
+notes; the ros2_control overlay; the provenance. Every text is escaped.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from umbmark.outputs.html_parts import CSS, document, num, sentence, table
 
 if TYPE_CHECKING:
     from umbmark.calibration.result import CalibrationResult
+    from umbmark.estimators.gyro_result import GyroCalibration
 
 __all__ = ["AnywherePage", "PatternPass", "anywhere_html"]
 
@@ -44,12 +47,15 @@ class PatternPass:
         Motion intervals cut from the drive.
     left_out : mapping of str to int
         Intervals that could not be scan matched, by reason.
+    gyro : GyroCalibration or None
+        The gyro's calibration (None: the robot has no IMU).
     """
 
     label: str
     result: CalibrationResult
     tried: int
     left_out: Mapping[str, int] = field(default_factory=dict)
+    gyro: GyroCalibration | None = None
 
 
 @dataclass(frozen=True)
@@ -71,6 +77,12 @@ class AnywherePage:
         What the checks before moving found.
     command : str or None
         The command line (None: made from Python).
+    against : str
+        What the wheels were calibrated against, for people.
+    imu : str or None
+        The IMU used, its topic and mounting (None: none).
+    laser : bool
+        Whether the robot has a laser (False: calibrated against the gyro alone).
     """
 
     robot: str
@@ -81,6 +93,9 @@ class AnywherePage:
     checks: tuple[str, ...] = ()
     command: str | None = None
     created: dt.datetime = field(default_factory=lambda: dt.datetime.now(dt.timezone.utc))
+    against: str = "the laser's scan matching"
+    imu: str | None = None
+    laser: bool = True
 
 
 def _apply(page: AnywherePage) -> str:
@@ -99,6 +114,12 @@ def _apply(page: AnywherePage) -> str:
 
 
 def _intervals(page: AnywherePage) -> str:
+    if not page.laser:
+        return (
+            "<p>The robot has no laser: no motion intervals were scan matched. The drive "
+            "was cut into intervals of rest and driving, the wheels against the gyro "
+            '(below, <a href="#imu">the gyro</a>).</p>\n'
+        )
     rows = []
     for one in (page.calibration, page.verification):
         if one is None:
@@ -129,10 +150,16 @@ def _intervals(page: AnywherePage) -> str:
 def _fit(page: AnywherePage) -> str:
     from umbmark.outputs.html_estimates import estimate_section
 
+    what = "the scan-matching calibration of Censi et al. 2013"
+    if page.imu is not None:
+        what = (
+            "the wheels and the gyro against the laser's scan matching, together"
+            if page.laser
+            else "the wheels against the gyro alone: E_b is E_b k_g, relative to the gyro"
+        )
     return (
-        "<p>The first drive's fit (the scan-matching calibration of Censi et al. 2013), "
-        "against the parameters the controller ran with:</p>\n"
-        + estimate_section(page.calibration.result)
+        f"<p>The first drive's fit ({escape(what)}), against the parameters the controller "
+        "ran with:</p>\n" + estimate_section(page.calibration.result)
     )
 
 
@@ -140,9 +167,60 @@ def _mounting(page: AnywherePage) -> str:
     from umbmark.outputs.mounting import mounting_forms, mounting_html
 
     forms = mounting_forms(page.calibration.result)
-    if forms is None:  # pragma: no cover - a calibration from intervals has a mounting
-        return "<p>No mounting was fitted.</p>\n"
+    if forms is None:  # without a laser: a calibration from intervals has a mounting
+        return "<p>The robot has no laser: no mounting was fitted.</p>\n"
     return mounting_html(forms)
+
+
+def _gyro(page: AnywherePage) -> str:
+    """The gyro: what was used, its scale and bias, and what the wheels are relative to."""
+    import math
+
+    passes = [p for p in (page.calibration, page.verification) if p is not None and p.gyro]
+    relative = not page.laser  # E_b k_g: what the wheels and the gyro alone give
+    unknown = any(p.gyro is not None and p.gyro.undetermined for p in passes)
+    head = ["drive", "k_g", "95 % interval", "bias [deg/s]", "95 % interval",
+            *(["E_b k_g", "95 % interval"] if relative else []), "intervals (rests)",
+            *(["not determined"] if unknown else [])]  # fmt: skip
+    rows = []
+    for one in passes:
+        g = one.gyro
+        assert g is not None
+
+        def shown(name: str, fmt: str, scale: float = 1.0, g: GyroCalibration = g) -> list[str]:
+            value, interval = g.get(name), g.interval(name)
+            if value is None or interval is None:
+                return ["no laser" if name == "k_g" and relative else "–", "–"]
+            low, high = (scale * v for v in interval)
+            return [format(scale * value, fmt), f"{low:{fmt}} to {high:{fmt}}"]
+
+        rows.append([
+            one.label, *shown("k_g", ".5f"), *shown("bias", ".4f", math.degrees(1.0)),
+            *(shown("E_b_k_g", ".5f") if relative else []), f"{g.n_intervals} ({g.n_rests})",
+            *(["; ".join(f"{n}: {why}" for n, why in g.undetermined.items()) or "none"]
+              if unknown else []),
+        ])  # fmt: skip
+    first = page.calibration.gyro
+    said = ""
+    if first is not None and not page.laser:
+        said = (
+            f"<p>Without a laser the gyro's scale is not known: the wheelbase is relative to "
+            f"it (E_b k_g), its interval widened by the gyro scale tolerance, "
+            f"+-{100 * first.scale_tolerance:g} %. E_d does not depend on the gyro's scale. "
+            "Apply with care at best; a laser (or motion capture) separates the two.</p>\n"
+        )
+    notes = [] if first is None else list(first.warnings)  # its mounting's notes among them
+    wrap = {len(head) - 1} if unknown else set()
+    return (
+        f'<p id="gyro-used">The wheels were calibrated against {escape(page.against)}. '
+        f"{escape(sentence(page.imu or 'no IMU'))}.</p>\n"
+        + said
+        + "<p>k_g is the factor that corrects the gyro, omega_true = k_g (omega_read - "
+        "bias) (a driver's gyro scale); the bias is its mean over the drive, to subtract "
+        "from the yaw rate (a driver's gyro offset).</p>\n"
+        + f'<div id="gyro-table">{table(head, rows, wrap=wrap)}</div>'
+        + "".join(f"<p>{escape(sentence(n))}.</p>\n" for n in notes)
+    )
 
 
 def _before_after(page: AnywherePage) -> str:
@@ -247,6 +325,7 @@ def anywhere_html(page: AnywherePage) -> str:
         ("intervals", "Motion intervals used and left out", _intervals(page)),
         ("fit", "The fit: estimates and 95 % intervals", _fit(page)),
         ("mounting", "The laser's mounting", _mounting(page)),
+        *([("imu", "The gyro", _gyro(page))] if page.imu is not None else []),
         ("before-after", "Before and after", _before_after(page)),
         ("messages", "Checks, figures of the fit, warnings and notes", _messages(page)),
         ("overlay", "ros2_control overlay", _overlay(page)),

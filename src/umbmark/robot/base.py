@@ -10,17 +10,23 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
 from umbmark.core.arrays import FloatArray
 
+if TYPE_CHECKING:
+    from umbmark.model.gyro_series import GyroSeries
+    from umbmark.sources.bag.imu_frames import ImuMounting
+
 __all__ = [
     "APPLY_METHODS",
+    "IMU_HELD",
     "AppliedBy",
     "ApplyResult",
     "DriveParams",
+    "ImuSource",
     "Pose2D",
     "RangeReading",
     "Robot",
@@ -125,6 +131,36 @@ class RangeReading:
     mounts: tuple[Pose2D, ...]
 
 
+#: How long a robot holds its IMU's readings [s] (:meth:`Robot.gyro`): ask more often.
+IMU_HELD = 60.0
+
+
+@dataclass(frozen=True)
+class ImuSource:
+    """The robot's IMU: where its readings come from and how its frame is mounted.
+
+    Attributes
+    ----------
+    topic : str
+        Its ``sensor_msgs/Imu`` topic (the virtual robot: what it would publish on).
+    mounting : ImuMounting
+        Its frame's rotation into the base frame, and where that was stated (TF, the
+        robot's description): what its rates are put into the base frame with.
+    chosen : str
+        How the topic was chosen, for people (found on the graph, given, the virtual
+        robot's).
+    """
+
+    topic: str
+    mounting: ImuMounting
+    chosen: str = ""
+
+    def describe(self) -> str:
+        """``the IMU on /imu (imu_link in base_link (/tf_static): roll 1.00, ...)``."""
+        how = f"; {self.chosen}" if self.chosen else ""
+        return f"the IMU on {self.topic} ({self.mounting.describe()}{how})"
+
+
 @dataclass(frozen=True)
 class DriveParams:
     """The odometry's parameters as a ``diff_drive_controller`` holds them.
@@ -211,6 +247,17 @@ class Robot(Protocol):
 
     def ground_truth(self) -> StampedPose | None:
         """The latest ground-truth pose (motion capture), if there is one."""
+        ...
+
+    def imu(self) -> ImuSource | None:
+        """The robot's IMU, with its frame's mounting (None: it has none, or none is
+        used); a ROS robot waits for its first reading to know its frame."""
+        ...
+
+    def gyro(self, since: float) -> GyroSeries | None:
+        """The IMU's readings stamped after ``since`` [s] (the robot's clock), their rates
+        in the base frame as read (scale error and bias in them), the last
+        :data:`IMU_HELD` seconds at most; None: the robot has no IMU."""
         ...
 
     def drive_params(self) -> DriveParams:

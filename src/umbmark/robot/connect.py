@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from dataclasses import replace
+from typing import TYPE_CHECKING, Literal
 
 from umbmark.core.errors import InputError, option
 from umbmark.robot.base import Robot
 from umbmark.robot.ros_common import RosOptions
+
+if TYPE_CHECKING:
+    from umbmark.sim.imu import ImuSetup
 
 __all__ = ["BACKENDS", "Backend", "connect"]
 
@@ -25,14 +29,17 @@ def connect(
     ros: RosOptions | None = None,
     room: bool = False,
     corner_side: Literal["auto", "right", "left"] = "right",
+    imu: ImuSetup | None = None,
+    laser: bool = True,
 ) -> Robot:
     """The robot to calibrate.
 
     ``sim``: a :class:`~umbmark.robot.virtual.VirtualRobot` (LabMate-sized, 4 m squares'
     room, the corner behind the start on ``corner_side``) with errors ``E_d``, ``E_b``,
-    ``E_s`` and wheel slip ``slip`` [m^(1/2)]; ``ros1`` / ``ros2``: the robot behind the
-    topics and controller of ``ros``. ``room``: the virtual robot stands in an ordinary
-    room (:func:`umbmark.robot.world.room_world`) with its laser off its centre
+    ``E_s`` and wheel slip ``slip`` [m^(1/2)], the IMU ``imu`` (None: none) and a laser
+    (``laser`` False: none); ``ros1`` / ``ros2``: the robot behind the topics and
+    controller of ``ros`` (its IMU: ``ros.imu``). ``room``: the virtual robot stands in an
+    ordinary room (:func:`umbmark.robot.world.room_world`) with its laser off its centre
     (:data:`umbmark.robot.world.ROOM_LASER`), for the routine that calibrates anywhere;
     else at the corner of the UMBmark routine.
 
@@ -54,11 +61,13 @@ def connect(
         if room:
             from umbmark.robot.world import ROOM_LASER, room_world
 
-            laser = (ROOM_LASER.x, ROOM_LASER.y, ROOM_LASER.theta)
-            return VirtualRobot(E_d, E_b, E_s, slip=slip, seed=seed, world=room_world(),
-                                laser_pose=laser)  # fmt: skip
-        world = corner_world(side="left" if corner_side == "left" else "right")
-        return VirtualRobot(E_d=E_d, E_b=E_b, E_s=E_s, slip=slip, seed=seed, world=world)
+            world, pose = room_world(), (ROOM_LASER.x, ROOM_LASER.y, ROOM_LASER.theta)
+        else:
+            world, pose = corner_world(side="left" if corner_side == "left" else "right"), None
+        if not laser:
+            world, pose = replace(world, lidar=None), None
+        return VirtualRobot(E_d, E_b, E_s, slip=slip, seed=seed, world=world, laser_pose=pose,
+                            imu=imu)  # fmt: skip
     if backend == "ros1":
         from umbmark.robot.ros1 import Ros1Robot
 

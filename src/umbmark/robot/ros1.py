@@ -3,8 +3,10 @@
 - Velocity out: ``geometry_msgs/Twist`` on ``options.cmd_vel``.
 - In: ``nav_msgs/Odometry`` (``options.odom``), ``sensor_msgs/LaserScan``
   (``options.scan``), three ``sensor_msgs/Range`` (``options.ranges``), a ground-truth
-  ``geometry_msgs/PoseStamped`` (``options.truth``); each sensor's mounting from TF
-  (``/tf``, ``/tf_static``, a ``tf2_ros.Buffer``) as ``base_frame <- sensor frame``.
+  ``geometry_msgs/PoseStamped`` (``options.truth``), the ``sensor_msgs/Imu`` topic the
+  master lists (``options.imu``: :func:`umbmark.robot.ros_imu.pick_imu`); each sensor's
+  mounting from TF (``/tf``, ``/tf_static``, a ``tf2_ros.Buffer``) as ``base_frame <-
+  sensor frame``, the IMU's else from the ``robot_description`` parameter's fixed joints.
 - Time is ROS time, so ``/use_sim_time`` works: :meth:`Ros1Robot.wait` sleeps on the ROS
   clock and refuses to hang when it stops.
 - Parameters: ``apply(..., "reconfigure")`` calls the diff_drive_controller's
@@ -47,6 +49,7 @@ from umbmark.robot.ros_common import (
     write_params,
 )
 from umbmark.robot.ros_robot import RosRobot
+from umbmark.sources.bag.imu_frames import ImuMounting
 
 __all__ = ["ROS1_MODULES", "ROS1_PACKAGES", "Ros1Robot", "ros1_problem"]
 
@@ -157,8 +160,8 @@ class Ros1Robot(RosRobot):
         rospy = _rospy()
         from geometry_msgs.msg import PoseStamped, Twist
         from nav_msgs.msg import Odometry
+        from sensor_msgs.msg import Imu, Range
         from sensor_msgs.msg import LaserScan as ScanMsg
-        from sensor_msgs.msg import Range
 
         self._rospy = rospy
         options = default_topics(options, ros2=False)
@@ -202,6 +205,10 @@ class Ros1Robot(RosRobot):
             self._wait_connected(
                 self._cmd.get_num_connections, "geometry_msgs/Twist", "nav_msgs/Odometry"
             )
+            imu = self._find_imu(lambda: [(n, t) for n, t in rospy.get_published_topics()], 0.0)
+            if imu is not None:
+                subs.append(rospy.Subscriber(imu, Imu, self._imu_buffer.put, queue_size=500,
+                                             tcp_nodelay=True))  # fmt: skip
         except BaseException:
             self.close()
             raise
@@ -211,6 +218,26 @@ class Ros1Robot(RosRobot):
         return self._tf.lookup_transform(
             base, frame, rospy.Time(0), rospy.Duration.from_sec(self.options.timeout)
         )
+
+    def _imu_mounting(self, frame: str, topic: str) -> ImuMounting:
+        """The IMU frame's mounting: TF (``base_frame <- frame``), else the
+        ``robot_description`` parameter's fixed joints."""
+        from umbmark.robot.ros_imu import imu_edges, imu_mounting_of
+        from umbmark.sources.bag.imu_frames import quaternion_matrix
+
+        base = self.options.base_frame
+        if frame:
+            try:
+                q = self._lookup(base, frame).transform.rotation
+            except Exception:  # tf2's LookupException, ...: try the robot description
+                pass
+            else:
+                rotation = quaternion_matrix(float(q.x), float(q.y), float(q.z), float(q.w))
+                if rotation is not None:
+                    return ImuMounting(frame.lstrip("/"), base, rotation, "TF")
+        text = self._rospy.get_param("robot_description", None)
+        edges = imu_edges(None, text if isinstance(text, str) else None)
+        return imu_mounting_of(edges, frame, base, topic)
 
     def _clock(self) -> threading.Condition:
         from rospy.rostime import get_rostime_cond

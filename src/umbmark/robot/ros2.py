@@ -17,7 +17,10 @@ install ".[ros2]"``); ``controller_manager_msgs`` for ``--reload`` (no wheel:
   robot moves.
 - In: ``nav_msgs/msg/Odometry``, ``sensor_msgs/msg/LaserScan`` (sensor-data QoS), three
   ``sensor_msgs/msg/Range``, a ground-truth ``geometry_msgs/msg/PoseStamped``, the URDF on
-  ``/robot_description`` (transient local, as robot_state_publisher latches it).
+  ``/robot_description`` (transient local, as robot_state_publisher latches it), the
+  ``sensor_msgs/msg/Imu`` topic found on the graph (``options.imu``:
+  :func:`umbmark.robot.ros_imu.pick_imu`; best effort, deep enough for 1 kHz), its
+  frame's mounting from ``/tf_static``, else the URDF's fixed joints.
 - Mountings: ``options.laser_mount`` (``--laser-mount``) where given, else from
   ``/tf_static`` where ``tf2_msgs`` is importable (the static transforms chained without a
   tf2 buffer: :func:`umbmark.robot.urdf.static_mount`), else from the URDF
@@ -51,7 +54,7 @@ import threading
 import time
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError, SafetyError, option
 from umbmark.robot.base import AppliedBy, ApplyMethod, ApplyResult, DriveParams
@@ -69,6 +72,9 @@ from umbmark.robot.ros_common import (
 )
 from umbmark.robot.ros_robot import RosRobot
 from umbmark.robot.urdf import static_mount, urdf_footprint, urdf_geometry, urdf_mount
+
+if TYPE_CHECKING:
+    from umbmark.sources.bag.imu_frames import ImuMounting
 
 __all__ = ["Ros2Robot"]
 
@@ -202,6 +208,7 @@ class Ros2Robot(RosRobot):
         self._wait_connected(self._cmd.get_subscription_count, kind, "nav_msgs/msg/Odometry")
         # the odometry came: the robot's node is discovered, and with it its /clock
         self._use_sim = node.count_publishers("/clock") > 0
+        self._subscribe_imu()
         deadline = time.monotonic() + options.timeout
         with self._ticks:
             while self._use_sim and self._sim_time is None:
@@ -210,6 +217,39 @@ class Ros2Robot(RosRobot):
                         f"/clock is published but said nothing in {options.timeout:g} s"
                     )
                 self._ticks.wait(0.01)
+
+    def _subscribe_imu(self) -> None:
+        """The IMU topic found on the graph (a second for discovery), subscribed."""
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import Imu
+
+        def graph() -> list[tuple[str, str]]:
+            names = self._node.get_topic_names_and_types()
+            return [(name, kind) for name, kinds in names for kind in kinds]
+
+        topic = self._find_imu(graph, min(1.0, self.options.timeout))
+        if topic is not None:
+            deep = QoSProfile(depth=500, reliability=ReliabilityPolicy.BEST_EFFORT)
+            self._node.create_subscription(Imu, topic, self._imu_buffer.put, deep)
+
+    def _imu_mounting(self, frame: str, topic: str) -> ImuMounting:
+        """The IMU frame's mounting: ``/tf_static``, else the URDF's fixed joints."""
+        from umbmark.robot.ros_imu import imu_edges, imu_mounting_of
+        from umbmark.sources.bag.imu_frames import mounting_in
+
+        base = self.options.base_frame
+        deadline = time.monotonic() + min(1.0, self.options.timeout)
+        while True:  # the latched /tf_static may come a moment after the connection
+            with self._ticks:
+                static = self._static
+            found = mounting_in(imu_edges(static), frame, (base.lstrip("/"),)) if frame else None
+            if found is not None or time.monotonic() > deadline:
+                break
+            time.sleep(0.02)
+        if found is not None:
+            return found
+        text = self._description.wait(min(1.0, self.options.timeout))
+        return imu_mounting_of(imu_edges(static, text), frame, base, topic)
 
     def _velocity_topic(self, options: RosOptions, given: bool) -> tuple[str, str, str]:
         """The velocity topic, its twist type and the node subscribing it, from the graph:

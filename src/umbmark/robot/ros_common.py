@@ -109,6 +109,9 @@ class RosOptions:
         How long to wait for the first message of each topic and for services [s].
     laser_mount : Pose2D or None
         The laser's mounting in the base frame, where neither TF nor the URDF gives it.
+    imu : str or None
+        The IMU's topic (``sensor_msgs/Imu``); empty: the one found on the graph
+        (:func:`umbmark.robot.ros_imu.pick_imu`), where there is one; None: no IMU used.
     """
 
     cmd_vel: str = ""
@@ -124,6 +127,7 @@ class RosOptions:
     reload: bool = False
     timeout: float = 5.0
     laser_mount: Pose2D | None = None
+    imu: str | None = ""
 
 
 def default_topics(options: RosOptions, *, ros2: bool) -> RosOptions:

@@ -1,8 +1,9 @@
 """What a ROS 1 and a ROS 2 robot share behind the :class:`~umbmark.robot.base.Robot`
 interface, written once and exercised through the ROS 1 adapter (tested against a real
-master): the latest odometry, scan, ranges and ground truth; the velocity out and the zero
-velocity that stops the robot; the sensors' mountings, looked up in TF once; waiting for
-the connection; sleeping on the robot's clock.
+master): the latest odometry, scan, ranges and ground truth; the IMU's readings (its topic
+found on the graph, its frame's mounting looked up once: :mod:`umbmark.robot.ros_imu`);
+the velocity out and the zero velocity that stops the robot; the sensors' mountings,
+looked up in TF once; waiting for the connection; sleeping on the robot's clock.
 
 :mod:`umbmark.robot.ros1` and :mod:`umbmark.robot.ros2` add what differs: the node, its
 clock, how a transform is looked up, how parameters are read and applied.
@@ -15,10 +16,11 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError, SafetyError, option
-from umbmark.robot.base import RangeReading, ScanSweep, StampedPose
+from umbmark.model.gyro_series import GyroSeries
+from umbmark.robot.base import ImuSource, RangeReading, ScanSweep, StampedPose
 from umbmark.robot.ros_common import (
     Latest,
     Mount,
@@ -30,6 +32,10 @@ from umbmark.robot.ros_common import (
     stamp_seconds,
     wait_on_clock,
 )
+from umbmark.robot.ros_imu import ImuBuffer, gyro_problem, imu_problem, pick_imu
+
+if TYPE_CHECKING:
+    from umbmark.sources.bag.imu_frames import ImuMounting
 
 __all__ = ["RosRobot"]
 
@@ -39,10 +45,12 @@ class RosRobot:
 
     A subclass calls :meth:`_start` with its velocity publisher and the ``Twist`` type,
     subscribes its topics to :meth:`_on_odom`, :meth:`_on_truth` and the :class:`Latest`
-    holders, and provides :meth:`now`, :meth:`_clock` and :meth:`_lookup`.
+    holders, the IMU topic :meth:`_find_imu` gives to :attr:`_imu_buffer`, and provides
+    :meth:`now`, :meth:`_clock`, :meth:`_lookup` and :meth:`_imu_mounting`.
     """
 
     options: RosOptions
+    name: str
 
     def _start(self, options: RosOptions, twist: type[Any], cmd: Any) -> None:  # noqa: ANN401
         """The shared state: ``cmd`` publishes ``twist`` messages on ``options.cmd_vel``."""
@@ -54,6 +62,9 @@ class RosRobot:
         self._truth: Latest[StampedPose] = Latest()
         self._ranges: list[Latest[Any]] = [Latest() for _ in options.ranges]
         self._mounts: dict[str, Mount] = {}
+        self._imu_buffer = ImuBuffer()
+        self._imu_topic: tuple[str, str] | None = None
+        self._imu_source: ImuSource | None = None
 
     # --- what a subclass provides -------------------------------------------------------
 
@@ -69,6 +80,39 @@ class RosRobot:
         """The transform from ``base`` to ``frame``, waiting ``options.timeout``; raises
         whatever tf2 raises."""
         raise NotImplementedError
+
+    def _imu_mounting(self, frame: str, topic: str) -> ImuMounting:
+        """The IMU frame's mounting in the base frame (:mod:`umbmark.robot.ros_imu`);
+        raises :class:`InputError` where there is none."""
+        raise NotImplementedError
+
+    # --- the IMU --------------------------------------------------------------------------
+
+    def _find_imu(self, graph: Callable[[], list[tuple[str, str]]], grace: float) -> str | None:
+        """The IMU topic to subscribe (:func:`~umbmark.robot.ros_imu.pick_imu`), the graph
+        asked again for ``grace`` wall seconds where it shows none yet (discovery), for
+        ``options.timeout`` where one was given; None: none used, or none on the graph.
+
+        Raises
+        ------
+        InputError
+            The topic given is not an IMU on the graph.
+        """
+        given = self.options.imu
+        if given is None:
+            return None
+        deadline = time.monotonic() + (self.options.timeout if given else grace)
+        while True:
+            topics = graph()
+            found = pick_imu(topics, given)
+            if found is not None or time.monotonic() > deadline:
+                break
+            time.sleep(0.05)
+        if found is None and given:
+            self._stop()
+            raise InputError(imu_problem(topics, given))
+        self._imu_topic = found
+        return None if found is None else found[0]
 
     # --- callbacks ------------------------------------------------------------------------
 
@@ -165,6 +209,39 @@ class RosRobot:
     def ground_truth(self) -> StampedPose | None:
         """The latest ground-truth pose (None: no truth topic, or no message yet)."""
         return self._truth.get()
+
+    def imu(self) -> ImuSource | None:
+        """The IMU found on the graph (None: none, or ``--no-imu``), its frame's mounting
+        looked up once its first messages came.
+
+        Raises
+        ------
+        InputError
+            Its messages say nothing, or carry no gyro, or its frame has no mounting.
+        """
+        if self._imu_topic is None:
+            return None
+        if self._imu_source is None:
+            topic, how = self._imu_topic
+            frame = self._imu_buffer.wait_first(self.options.timeout)
+            problem = gyro_problem(self._imu_buffer, topic)
+            if problem is not None:
+                self._stop()
+                raise InputError(problem)
+            try:
+                mounting = self._imu_mounting(frame or "", topic)
+            except InputError:
+                self._stop()
+                raise
+            self._imu_source = ImuSource(topic, mounting, how)
+        return self._imu_source
+
+    def gyro(self, since: float) -> GyroSeries | None:
+        """The IMU's readings stamped after ``since``, in the base frame (None: no IMU)."""
+        source = self.imu()
+        if source is None:
+            return None
+        return self._imu_buffer.series(since, source.mounting, f"{self.name} {source.topic}")
 
     def _velocity(self, linear: float, angular: float) -> Any:  # noqa: ANN401 (a message)
         """The velocity message: a ``Twist`` (a ROS 2 subclass may stamp it)."""

@@ -21,23 +21,31 @@ Each control period (``period``, 20 ms by default: a 50 Hz ``diff_drive_controll
    run's start from the odometry after that.
 
 The sensors (a planar laser, range sensors, motion capture) see a world of walls and
-clutter (:mod:`umbmark.robot.world`) from the true pose.
+clutter (:mod:`umbmark.robot.world`) from the true pose. Where given an IMU
+(:class:`umbmark.sim.imu.ImuSetup`: the simulator's MEMS model, its scale error, bias and
+walk, noise, full scale, mounting and rate), it reads the true motion of every period
+(:class:`umbmark.sim.imu.ImuStream`, its own random numbers: the rest of the simulation
+is the same with or without it), and states its mounting as it is.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import WheelParams
 from umbmark.robot.base import (
+    IMU_HELD,
     ApplyMethod,
     ApplyResult,
     DriveParams,
+    ImuSource,
     Pose2D,
     RangeReading,
     ScanSweep,
@@ -47,7 +55,9 @@ from umbmark.sim.robot import NoiseModel
 from umbmark.sim.robot import SimRobot as RobotTruth
 
 if TYPE_CHECKING:
+    from umbmark.model.gyro_series import GyroSeries
     from umbmark.robot.world import World
+    from umbmark.sim.imu import ImuReadings, ImuSetup, ImuStream
 
 __all__ = ["ERROR_RANGE", "MAX_SLIP", "VirtualRobot"]
 
@@ -58,6 +68,10 @@ MAX_SLIP = 0.01
 
 #: The longest stretch of robot time one :meth:`VirtualRobot.wait` may simulate [s].
 LONGEST_WAIT = 3600.0
+#: The virtual robot's IMU: its topic and frame, as a robot's driver names them.
+IMU_TOPIC, IMU_FRAME = "/imu", "imu_link"
+#: The IMU's readings are made at least every this many control periods.
+_IMU_BATCH = 250
 
 
 class VirtualRobot:
@@ -104,6 +118,8 @@ class VirtualRobot:
         it is not obeyed at once (default: a stiff base, 5 m/s^2 being the largest
         ``--acceleration``; give the acceleration limit to brake as the obstacle stop's
         formula assumes).
+    imu : ImuSetup, optional
+        The robot's IMU (None: it has none): :meth:`gyro` gives its readings.
     """
 
     name = "virtual robot"
@@ -129,6 +145,7 @@ class VirtualRobot:
         stated_laser_lift: tuple[float, float, float] | None = None,
         acceleration: float = 5.0,
         turn_acceleration: float = 20.0,
+        imu: ImuSetup | None = None,
     ) -> None:
         _check_arguments(E_d, E_b, E_s, wheelbase, wheel_diameter, slip, command_timeout)
         nominal = WheelParams(
@@ -174,6 +191,9 @@ class VirtualRobot:
         self._odom_time = 0.0
         #: Every velocity command sent, with its time: ``(t, linear, angular)``.
         self.commands: list[tuple[float, float, float]] = []
+        self._travel = 0.0  # the distance driven forward [m]
+        self._imu = None if imu is None else _imu_stream(imu, seed, self._pose.theta)
+        self._held: deque[ImuReadings] = deque()
 
     # --- the Robot interface ------------------------------------------------------------
 
@@ -216,6 +236,75 @@ class VirtualRobot:
     def ground_truth(self) -> StampedPose | None:
         """The true pose in the world's frame (as motion capture would give it)."""
         return self.world.truth(self._pose, self._time, self._rng)
+
+    def imu(self) -> ImuSource | None:
+        """The IMU (None: the robot has none), its mounting stated as it is."""
+        if self._imu is None:
+            return None
+        from umbmark.sources.bag.imu_frames import ImuMounting
+
+        mounting = ImuMounting(IMU_FRAME, "base_link", self._imu.setup.rotation, "as mounted")
+        return ImuSource(IMU_TOPIC, mounting, "the virtual robot's IMU")
+
+    def gyro(self, since: float) -> GyroSeries | None:
+        """The IMU's readings after ``since`` (the last :data:`IMU_HELD` seconds), their
+        rates in the base frame (None: no IMU)."""
+        from umbmark.model.gyro_series import GyroSeries
+
+        read = self.imu_readings(since)
+        if read is None or self._imu is None:
+            return None
+        rotation = self._imu.setup.rotation
+        return GyroSeries(
+            time=read.time, rate=read.rate @ rotation.T, accel=read.accel @ rotation.T,
+            frame=IMU_FRAME, source="the virtual robot's IMU",
+        )  # fmt: skip
+
+    def imu_readings(self, since: float) -> ImuReadings | None:
+        """The IMU's readings after ``since`` as it gives them, in its own frame, with
+        the true bias of each (for its publisher and for checks); None: no IMU."""
+        if self._imu is None:
+            return None
+        from umbmark.sim.imu import ImuReadings
+
+        self._pull()
+        chunks = [c for c in self._held if c.time.size and c.time[-1] > since]
+        if not chunks:
+            return ImuReadings(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
+        rows = np.concatenate([c.time for c in chunks]) > since
+
+        def joined(name: str) -> FloatArray:
+            return np.asarray(np.concatenate([getattr(c, name) for c in chunks])[rows])
+
+        return ImuReadings(
+            joined("time"), joined("rate"), joined("accel"), joined("bias"),
+            clipped=sum(c.clipped for c in chunks),
+        )  # fmt: skip
+
+    def imu_truth(self) -> dict[str, object] | None:
+        """The IMU's truth now, JSON-ready (None: no IMU): its scale ``k_g``, its bias
+        [rad/s] on its own axes and about the base's z (``yaw_bias``, ``(R b)_z``), its
+        walk, noise, rate, mounting (``rotation``, ``base <- imu``, and the quaternion
+        ``x, y, z, w``), topic and frame."""
+        if self._imu is None:
+            return None
+        s, bias = self._imu.setup, self._imu.bias
+        return {
+            "k_g": s.gyro_scale, "bias": bias.tolist(),
+            "yaw_bias": float((s.rotation @ bias)[2]), "bias_walk": s.gyro_bias_walk,
+            "noise_density": s.gyro_noise, "rate": s.imu_rate,
+            "rotation": s.rotation.tolist(), "quaternion": list(s.quaternion),
+            "topic": IMU_TOPIC, "frame": IMU_FRAME,
+        }  # fmt: skip
+
+    def _pull(self) -> None:
+        """The readings the motion so far makes, held for :data:`IMU_HELD` seconds."""
+        assert self._imu is not None
+        read = self._imu.read()
+        if read.time.size:
+            self._held.append(read)
+        while self._held and self._held[0].time[-1] < self._time - IMU_HELD:
+            self._held.popleft()
 
     def wheel_angles(self) -> tuple[float, float, float]:
         """The wheels' encoder angles now: ``time`` [s], left, right [rad] (whole pulses;
@@ -319,11 +408,16 @@ class VirtualRobot:
         x, y, theta = self._pose.x, self._pose.y, self._pose.theta
         x, y, theta = _arc(x, y, theta, travel_left, travel_right, truth.wheelbase)
         self._pose = Pose2D(x, y, theta)
+        self._travel += 0.5 * (travel_left + travel_right)
         self._angle[0] += turn_left
         self._angle[1] += turn_right
         per_radian = self._pulses / (2.0 * math.pi)
         self._counts = [math.floor(a * per_radian) for a in self._angle]
         self._time += dt
+        if self._imu is not None:
+            self._imu.add(self._time, theta, self._travel)
+            if self._imu.pending > _IMU_BATCH:
+                self._pull()
         # diff_drive_controller::Odometry::update
         current = self._wheel_positions()
         moved_left, moved_right = current[0] - self._old[0], current[1] - self._old[1]
@@ -331,6 +425,16 @@ class VirtualRobot:
         x, y, theta = self._odom
         self._odom = list(_arc(x, y, theta, moved_left, moved_right, separation))
         self._odom_time = self._time
+
+
+def _imu_stream(setup: ImuSetup, seed: int | None, heading: float) -> ImuStream:
+    """The IMU's reading of the motion from time 0, on random numbers of its own."""
+    from umbmark.sim.imu import ImuStream
+
+    rng = np.random.default_rng(None if seed is None else [seed, 3])
+    stream = ImuStream(setup, rng, 0.0)
+    stream.add(0.0, heading, 0.0)
+    return stream
 
 
 def _with_laser(world: World, pose: tuple[float, float, float]) -> World:

@@ -13,14 +13,20 @@ ending where it began, so the robot comes back to its start. Meanwhile it record
   (:func:`umbmark.sources.bag.wheels.odometry.wheels_from_odometry`: the same inverse
   the bags with odometry and no joint states use); a robot that gives its wheels'
   angles itself (``wheel_angles()``, as the virtual robot does) is read directly;
-- every new laser sweep (at most one each ``scan_period``), with its mounting from TF.
+- every new laser sweep (at most one each ``scan_period``), with its mounting from TF;
+- the IMU's readings, where the robot has one (:meth:`Robot.gyro`, fetched every
+  :data:`GYRO_PERIOD`), its rates in the base frame: the pattern then begins and ends
+  each repetition with a rest of :data:`GYRO_REST` (:data:`GYRO_PATTERN`), over which
+  the gyro reads its bias alone.
 
 The recording is cut into motion intervals and scan matched as a bag's would be
 (:func:`umbmark.scans.intervals.match_intervals`, the first guess from the nominal
 geometry and the mounting), and calibrated by the scan-matching estimator
 (:func:`umbmark.calibration.scan.calibrate_intervals`, through :func:`umbmark.calibrate`
 on the intervals' tuple file, so that the verdict and the history are the same as for
-any calibration).
+any calibration); with the gyro, :mod:`umbmark.routines.anywhere_gyro` calibrates it
+and the wheels against the laser's motion together, or, without a laser, the wheels
+against the gyro alone.
 
 Before anything moves: the robot must have a laser (:func:`check_scene`), and two
 sweeps taken standing still must match as a scene with structure (no open space, no
@@ -38,6 +44,7 @@ import numpy as np
 
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, option
+from umbmark.model.gyro_series import GyroSeries
 from umbmark.model.kinematics import OdometryGeometry
 from umbmark.model.recording import PoseSeries, WheelSeries
 from umbmark.model.scans import LaserMounting, ScanSeries
@@ -45,6 +52,7 @@ from umbmark.robot.base import (
     ApplyMethod,
     ApplyResult,
     DriveParams,
+    ImuSource,
     Pose2D,
     RangeReading,
     Robot,
@@ -55,12 +63,15 @@ from umbmark.routines.drive import DriveLimits, Driver
 from umbmark.scans.intervals import IntervalOptions, IntervalReport, OdometryGuess, match_intervals
 
 __all__ = [
+    "GYRO_PATTERN",
+    "GYRO_REST",
     "PATTERN",
     "Move",
     "PatternRecording",
     "Recorder",
     "check_scene",
     "drive_pattern",
+    "first_scan",
     "intervals_note",
     "pattern_intervals",
 ]
@@ -85,17 +96,17 @@ class Move:
 
     Attributes
     ----------
-    kind : {"turn", "straight", "arc"}
+    kind : {"turn", "straight", "arc", "rest"}
     amount : float
         A turn's or an arc's change of heading [rad] (ccw positive); a straight's length
-        [m] (negative: backward).
+        [m] (negative: backward); a rest's duration [s].
     radius : float
         An arc's radius [m].
     backward : bool
         An arc driven backward (it undoes the forward arc of the same radius).
     """
 
-    kind: Literal["turn", "straight", "arc"]
+    kind: Literal["turn", "straight", "arc", "rest"]
     amount: float
     radius: float = 0.0
     backward: bool = False
@@ -104,6 +115,8 @@ class Move:
         """For progress lines: ``turn +120 deg``, ``straight -0.60 m``, ..."""
         if self.kind == "straight":
             return f"straight {self.amount:+.2f} m"
+        if self.kind == "rest":
+            return f"rest {self.amount:.1f} s"
         way = " backward" if self.backward else ""
         deg = math.degrees(self.amount)
         if self.kind == "turn":
@@ -131,11 +144,23 @@ PATTERN: tuple[Move, ...] = (
 )
 
 
+#: With a gyro: a rest this long [s] begins and ends each repetition of the pattern (the
+#: odometry settled first): 2 s less the gyro intervals' margins, 1.6 s of its bias alone.
+GYRO_REST = 2.0
+#: The pattern a robot with a gyro drives: :data:`PATTERN` between rests.
+GYRO_PATTERN: tuple[Move, ...] = (Move("rest", GYRO_REST), *PATTERN)
+#: The IMU's readings are fetched from the robot this often [s] of its time (it holds
+#: :data:`umbmark.robot.base.IMU_HELD`).
+GYRO_PERIOD = 0.5
+
+
 def _expected_time(moves: tuple[Move, ...], limits: DriveLimits) -> float:
     """The pattern's driving time without stops [s] (ramps counted once per move)."""
     total = 0.0
     for m in moves:
-        if m.kind == "turn":
+        if m.kind == "rest":
+            total += m.amount + limits.settle_time
+        elif m.kind == "turn":
             total += abs(m.amount) / limits.turn_rate + limits.turn_rate / limits.turn_acceleration
         else:
             length = abs(m.amount) * (m.radius if m.kind == "arc" else 1.0)
@@ -151,7 +176,8 @@ def _expected_time(moves: tuple[Move, ...], limits: DriveLimits) -> float:
 class Recorder:
     """A :class:`~umbmark.robot.base.Robot` that records what it passes on: after every
     :meth:`wait`, the odometry (each new reading), the wheels' angles where the robot
-    gives them, and the latest laser sweep (a new one at most each ``scan_period`` [s])."""
+    gives them, the latest laser sweep (a new one at most each ``scan_period`` [s]), and
+    the IMU's readings where it has one (fetched each :data:`GYRO_PERIOD`)."""
 
     def __init__(self, robot: Robot, scan_period: float = 0.1) -> None:
         self.robot = robot
@@ -160,9 +186,37 @@ class Recorder:
         self.odometry_samples: list[tuple[float, float, float, float]] = []
         self.wheel_samples: list[tuple[float, float, float]] = []
         self.scans: list[ScanSweep] = []
+        self.gyro_parts: list[GyroSeries] = []
         self._angles: Callable[[], tuple[float, float, float] | None] | None = getattr(
             robot, "wheel_angles", None
         )
+        self._imu = robot.imu()
+        self._gyro_asked = -math.inf
+        self._gyro_since = robot.now() if self._imu is not None else math.inf
+
+    def gyro_series(self) -> GyroSeries | None:
+        """The IMU's readings recorded (None: the robot has no IMU, or none came)."""
+        if self._imu is None:
+            return None
+        self._fetch_gyro()
+        parts = [p for p in self.gyro_parts if len(p)]
+        if not parts:
+            return None
+        accel = [p.accel for p in parts]
+        return GyroSeries(
+            time=np.concatenate([p.time for p in parts]),
+            rate=np.concatenate([p.rate for p in parts]),
+            accel=None if any(a is None for a in accel) else np.concatenate(accel),  # type: ignore[arg-type]
+            frame=parts[0].frame,
+            source=f"{self.name}'s IMU on {self._imu.topic}",
+        )
+
+    def _fetch_gyro(self) -> None:
+        new = self.robot.gyro(self._gyro_since)
+        self._gyro_asked = self.robot.now()
+        if new is not None and len(new):
+            self.gyro_parts.append(new)
+            self._gyro_since = float(new.time[-1])
 
     def sample(self) -> None:
         """Record what is new."""
@@ -178,6 +232,8 @@ class Recorder:
                 not self.wheel_samples or angles[0] > self.wheel_samples[-1][0]
             ):
                 self.wheel_samples.append(angles)
+        if self._imu is not None and self.robot.now() - self._gyro_asked >= GYRO_PERIOD:
+            self._fetch_gyro()
         last = self.scans[-1].time if self.scans else -math.inf
         if self.robot.now() - last >= self.scan_period - 1e-9:
             scan = self.robot.scan()
@@ -208,6 +264,12 @@ class Recorder:
     def ground_truth(self) -> StampedPose | None:
         return self.robot.ground_truth()
 
+    def imu(self) -> ImuSource | None:
+        return self._imu
+
+    def gyro(self, since: float) -> GyroSeries | None:
+        return self.robot.gyro(since)
+
     def drive_params(self) -> DriveParams:
         return self.robot.drive_params()
 
@@ -224,7 +286,8 @@ class PatternRecording:
 
     Attributes
     ----------
-    scans : ScanSeries
+    scans : ScanSeries or None
+        The laser's sweeps (None: the robot has no laser).
     wheels : WheelSeries
         The wheels' cumulative rotation [rad] on the robot's clock.
     params : DriveParams
@@ -235,34 +298,56 @@ class PatternRecording:
         The settled odometry before and after.
     stated : LaserMounting or None
         The stated mounting with its height, tilt and frames, for the report.
+    gyro : GyroSeries or None
+        The IMU's readings, rates in the base frame (None: the robot has no IMU, or they
+        cannot be used: ``gyro_trouble``).
+    imu : ImuSource or None
+        The IMU they came from, with its frame's mounting.
+    gyro_trouble : str or None
+        Why the IMU's readings are left out (:func:`umbmark.routines.gyro_watch.gyro_trouble`:
+        it fell silent or froze while the robot drove); None: they are used, or no IMU.
     """
 
-    scans: ScanSeries
+    scans: ScanSeries | None
     wheels: WheelSeries
     params: DriveParams
     mount: Pose2D
     start: StampedPose
     end: StampedPose
     stated: LaserMounting | None = None
+    gyro: GyroSeries | None = None
+    imu: ImuSource | None = None
+    gyro_trouble: str | None = None
 
 
-def check_scene(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep:
-    """Refuse, before anything moves, a robot without a laser, a scene where two sweeps
-    taken standing still do not match as a scene with structure (open space, a corridor:
-    the routine needs walls or furniture in view in more than one direction), or
-    something on the pattern's floor. The first sweep."""
-    from umbmark.scans.icp import DEFAULT_SETTINGS, match
-    from umbmark.scans.points import prepare, series_points
-
+def first_scan(robot: Robot, limits: DriveLimits | None = None) -> ScanSweep | None:
+    """The robot's laser sweep now, or after ``stale_scan`` (None: it has no laser)."""
     limits = limits or DriveLimits()
     first = robot.scan()
     if first is None:
         robot.wait(limits.stale_scan)
         first = robot.scan()
+    return first
+
+
+def check_scene(
+    robot: Robot, limits: DriveLimits | None = None, first: ScanSweep | None = None
+) -> ScanSweep:
+    """Refuse, before anything moves, a robot without a laser, a scene where two sweeps
+    taken standing still do not match as a scene with structure (open space, a corridor:
+    the routine needs walls or furniture in view in more than one direction), or
+    something on the pattern's floor. The first sweep (``first``: the one
+    :func:`first_scan` took)."""
+    from umbmark.scans.icp import DEFAULT_SETTINGS, match
+    from umbmark.scans.points import prepare, series_points
+
+    limits = limits or DriveLimits()
+    first = first or first_scan(robot, limits)
     if first is None:
         raise InputError(
-            "the robot has no laser scan: the anywhere routine matches the laser's sweeps "
-            f"(give the scan topic, or use {option('routine', 'umbmark')} with a corner)"
+            "the robot has no laser scan and no IMU: the anywhere routine matches the "
+            "laser's sweeps, or turns against the gyro (give the scan topic or the IMU's, "
+            f"or use {option('routine', 'umbmark')} with a corner)"
         )
     robot.wait(limits.stale_scan / 2)
     second = robot.scan() or first
@@ -339,12 +424,15 @@ def drive_pattern(
     limits: DriveLimits | None = None,
     progress: Callable[[int, str], None] | None = None,
     moves: tuple[Move, ...] = PATTERN,
+    *,
+    laser: bool = True,
 ) -> PatternRecording:
     """Drive ``moves`` by the odometry from where the robot stands (the safety stops of
     :mod:`umbmark.routines.drive`: stale odometry or scans, obstacles in the direction of
     travel, the odometry farther than :data:`PATTERN_REACH` plus ``margin`` from the
-    start, more than ``time_factor`` times the expected time), recording the wheels and
-    the sweeps. ``progress``: called with the move's number (from 1) and its text.
+    start, more than ``time_factor`` times the expected time), recording the wheels, the
+    sweeps (``laser``: the robot has one) and the IMU's readings (where the robot has
+    one). ``progress``: called with the move's number (from 1) and its text.
 
     Raises
     ------
@@ -367,7 +455,11 @@ def drive_pattern(
             if progress is not None:
                 progress(k, move.describe())
             here = driver.read()
-            if move.kind == "turn":
+            if move.kind == "rest":
+                driver.settle()
+                for _ in range(max(1, round(move.amount / limits.period))):
+                    driver.command(0.0, 0.0)
+            elif move.kind == "turn":
                 driver.turn(here.theta + move.amount)
             elif move.kind == "straight":
                 driver.leg(here, abs(move.amount), backward=move.amount < 0)
@@ -378,14 +470,14 @@ def drive_pattern(
     except BaseException:
         robot.send_velocity(0.0, 0.0)
         raise
-    return _recording(recorder, params, start, end)
+    return _recording(recorder, params, start, end, laser)
 
 
 def _recording(
-    recorder: Recorder, params: DriveParams, start: StampedPose, end: StampedPose
+    recorder: Recorder, params: DriveParams, start: StampedPose, end: StampedPose, laser: bool
 ) -> PatternRecording:
-    """The recorder's samples as scans and wheels."""
-    if len(recorder.scans) < 10:
+    """The recorder's samples as scans, wheels and the gyro."""
+    if laser and len(recorder.scans) < 10:
         raise InputError(
             f"only {len(recorder.scans)} laser sweeps came while driving the pattern: is the "
             "laser publishing?"
@@ -405,6 +497,15 @@ def _recording(
         )
         series = PoseSeries(time=o[:, 0], poses=o[:, 1:])
         wheels = wheels_from_odometry(series, geometry, "the odometry", name).wheels
+    gyro, imu, trouble = recorder.gyro_series(), recorder.imu(), None
+    if imu is not None:
+        from umbmark.routines.gyro_watch import gyro_trouble
+
+        trouble = gyro_trouble(gyro, float(wheels.time[0]), float(wheels.time[-1]), imu.topic)
+        gyro = None if trouble is not None else gyro
+    if not laser:
+        return PatternRecording(None, wheels, params, Pose2D(), start, end, None, gyro, imu,
+                                trouble)  # fmt: skip
     first = recorder.scans[0]
     stated = LaserMounting(
         first.mount.x, first.mount.y, first.mount.theta, first.lift,
@@ -418,6 +519,9 @@ def _recording(
         start=start,
         end=end,
         stated=stated,
+        gyro=gyro,
+        imu=imu,
+        gyro_trouble=trouble,
     )
 
 
@@ -430,6 +534,8 @@ def pattern_intervals(recording: PatternRecording) -> IntervalReport:
     InputError
         No interval could be matched: what the scene lacks (open space, a corridor).
     """
+    if recording.scans is None:
+        raise InputError("the robot has no laser: no motion intervals can be scan matched")
     p = recording.params
     m = recording.mount
     guess = OdometryGuess(

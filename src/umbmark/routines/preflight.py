@@ -165,6 +165,9 @@ def preflight(
         raise InputError(f"{option('measure', how.method)}: the robot gives no {names[how.method]}")
     if how.method == "lidar":
         lines.append(free_floor(robot, side, limits))
+    imu = robot.imu()  # a ROS robot: its frame's mounting found here, before moving
+    if imu is not None:
+        lines.append(f"gyro: {imu.describe()}")
     apply_note = getattr(robot, "apply_note", None)  # a ROS 2 controller manager's way
     note = apply_note() if callable(apply_note) else None
     if isinstance(note, str):

@@ -24,6 +24,7 @@ from umbmark.options.selfcal import (
     RUNS,
     SQUARE_SIDE,
 )
+from umbmark.options.spec import READ
 from umbmark.robot.base import ApplyMethod, Robot
 from umbmark.routines.clearance import robot_footprint
 from umbmark.routines.drive import DriveLimits
@@ -83,7 +84,8 @@ class SelfcalSetup:
         For ``tape``: ``x1, y1, x2, y2, x3, y3`` [m] on the robot, measured from (two to
         the wall behind, one to the side wall) [default: the robot's ``tape_marks()``].
     coarse : bool
-        Check first that the robot turns as its odometry believes (lidar or truth).
+        Check first that the robot turns as its odometry believes (lidar or truth; with
+        an IMU, ranges too: the gyro measures the turns).
     force : bool
         Replace an earlier self-calibration in ``out`` and a ``report`` file that exists.
     resume : path, optional
@@ -102,6 +104,10 @@ class SelfcalSetup:
     command : str, optional
         The command line that runs it (``umbmark selfcal ...``), shown on the page
         (None: "made from Python").
+    gyro_scale_tolerance : float
+        How far the gyro's scale may be off, a fraction (0 to 0.2; MEMS datasheets: 0.03):
+        the coarse check's ratio by the gyro is known to it, and without a laser the
+        anywhere routine's ``E_b`` interval is widened by it.
 
     Raises
     ------
@@ -128,10 +134,12 @@ class SelfcalSetup:
     corner_side: CornerChoice = CORNER_SIDE.default
     controller: str | None = None
     command: str | None = None
+    gyro_scale_tolerance: float = READ["gyro_scale_tolerance"].default
 
     def __post_init__(self) -> None:
         for spec in (SQUARE_SIDE, RUNS, MAX_PASSES, MEASURE, ROBOT_WIDTH):
             spec.check(getattr(self, spec.name))
+        READ["gyro_scale_tolerance"].check(self.gyro_scale_tolerance)
         if not isinstance(self.apply, bool):
             APPLY.check(self.apply)
         CORNER_SIDE.check(self.corner_side)

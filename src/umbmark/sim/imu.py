@@ -44,7 +44,9 @@ __all__ = [
     "GRAVITY",
     "IMU_TRANSLATION",
     "MAX_IMU_READINGS",
+    "ImuReadings",
     "ImuSetup",
+    "ImuStream",
     "SimulatedImu",
     "simulate_imu",
 ]
@@ -224,7 +226,66 @@ def simulate_imu(truth: PoseSeries, setup: ImuSetup, rng: np.random.Generator) -
     if count < 2:
         raise InputError("the recording is too short for two IMU readings")
     time = np.asarray(float(t[0]) + period * np.arange(1, count + 1), dtype=np.float64)
-    heading, travel = poses[:, 2], _travel(poses)
+    start = _start_bias(rng, setup)
+    read = _read(setup, rng, time, (t, poses[:, 2], _travel(poses)), start, first=True)
+    track = ImuTrack(
+        time=time,
+        rate=read.rate,
+        accel=read.accel,
+        translation=IMU_TRANSLATION,
+        rotation=setup.quaternion,
+        rate_variance=(setup.gyro_noise**2) * setup.imu_rate,
+        accel_variance=(ACCEL_NOISE**2) * setup.imu_rate,
+    )
+    return SimulatedImu(setup, track, start, read.bias[-1].copy(), read.clipped)
+
+
+@dataclass(frozen=True)
+class ImuReadings:
+    """Readings of the simulated IMU, in its own frame, with the bias in each.
+
+    Attributes
+    ----------
+    time : array, shape (k,)
+        Reading times [s].
+    rate : array, shape (k, 3)
+        The gyro's rates about the IMU's axes [rad/s], as read.
+    accel : array, shape (k, 3)
+        The specific force along them [m/s^2].
+    bias : array, shape (k, 3)
+        The gyro's true bias in each reading [rad/s] (the truth, for checks).
+    clipped : int
+        Readings with an axis clipped at the full scale.
+    """
+
+    time: FloatArray
+    rate: FloatArray
+    accel: FloatArray
+    bias: FloatArray
+    clipped: int = 0
+
+
+def _start_bias(rng: np.random.Generator, setup: ImuSetup) -> FloatArray:
+    """The bias at the first reading: the z axis' given one, x and y drawn up to it."""
+    return np.array([_drawn(rng, setup.gyro_bias), _drawn(rng, setup.gyro_bias), setup.gyro_bias])
+
+
+def _read(
+    setup: ImuSetup,
+    rng: np.random.Generator,
+    time: FloatArray,
+    truth: tuple[FloatArray, FloatArray, FloatArray],
+    bias: FloatArray,
+    *,
+    first: bool,
+) -> ImuReadings:
+    """The readings at ``time`` (shape (k,)) along ``truth`` (times, unwrapped headings and
+    the distance driven forward, each shape (n,), joined by straight lines), the bias
+    walking on from ``bias`` (its value at the reading before; ``first``: it is the first
+    reading's own, no step taken to it)."""
+    t, heading, travel = truth
+    count = time.size
+    period = 1.0 / setup.imu_rate
 
     def mean_rate(values: FloatArray, back: int) -> FloatArray:
         """The mean rate of ``values`` over the reading period ending ``back`` periods
@@ -245,25 +306,81 @@ def simulate_imu(truth: PoseSeries, setup: ImuSetup, rng: np.random.Generator) -
     )
     rotation = setup.rotation
     true_rate = np.column_stack([np.zeros(count), np.zeros(count), omega]) @ rotation
-    start = np.array([_drawn(rng, setup.gyro_bias), _drawn(rng, setup.gyro_bias), setup.gyro_bias])
     steps = rng.normal(0.0, setup.gyro_bias_walk * math.sqrt(period), (count, 3))
-    steps[0] = 0.0
-    bias = start + np.cumsum(steps, axis=0)
+    if first and count:
+        steps[0] = 0.0
+    walked = bias + np.cumsum(steps, axis=0)
     noise = rng.normal(0.0, setup.gyro_noise * math.sqrt(setup.imu_rate), (count, 3))
-    rate = true_rate / setup.gyro_scale + bias + noise
+    rate = true_rate / setup.gyro_scale + walked + noise
     clipped = int(np.count_nonzero(np.any(np.abs(rate) > setup.gyro_range, axis=1)))
     rate = np.clip(rate, -setup.gyro_range, setup.gyro_range)
     accel = force @ rotation + rng.normal(0.0, ACCEL_NOISE * math.sqrt(setup.imu_rate), (count, 3))
-    track = ImuTrack(
-        time=time,
-        rate=rate,
-        accel=accel,
-        translation=IMU_TRANSLATION,
-        rotation=setup.quaternion,
-        rate_variance=(setup.gyro_noise**2) * setup.imu_rate,
-        accel_variance=(ACCEL_NOISE**2) * setup.imu_rate,
-    )
-    return SimulatedImu(setup, track, start, bias[-1].copy(), clipped)
+    return ImuReadings(time, rate, accel, walked, clipped)
+
+
+class ImuStream:
+    """The same IMU read along a motion that goes on (the virtual robot's, as it drives):
+    the true motion is given as it happens (:meth:`add`), the readings are made when asked
+    for (:meth:`read`), each one as :func:`simulate_imu` makes it, its bias walking on
+    from the one before; a reading is made once the motion up to its time is known.
+
+    Parameters
+    ----------
+    setup : ImuSetup
+    rng : numpy.random.Generator
+    start : float
+        The time of the motion's first sample [s]; the first reading is one period later.
+    """
+
+    def __init__(self, setup: ImuSetup, rng: np.random.Generator, start: float = 0.0) -> None:
+        self.setup = setup
+        self._rng = rng
+        self._origin = float(start)
+        self._next = 1  # the index of the next reading
+        self._bias = _start_bias(rng, setup)
+        self._first = True
+        self._samples: list[tuple[float, float, float]] = []
+
+    @property
+    def bias(self) -> FloatArray:
+        """The gyro's bias now (at the last reading made; the first's before it) [rad/s],
+        shape (3,)."""
+        return np.asarray(self._bias.copy())
+
+    @property
+    def pending(self) -> int:
+        """Samples of the motion held for readings still to make."""
+        return len(self._samples)
+
+    def add(self, time: float, heading: float, travel: float) -> None:
+        """The true motion at ``time`` [s]: heading [rad, unwrapped] and the distance
+        driven forward since the start [m], times increasing."""
+        self._samples.append((float(time), float(heading), float(travel)))
+
+    def read(self) -> ImuReadings:
+        """The readings whose times the motion given so far covers, not read before."""
+        if not self._samples:
+            return _no_readings()
+        rate = self.setup.imu_rate
+        last = math.floor((self._samples[-1][0] - self._origin) * rate + 1e-9)
+        if last < self._next:
+            return _no_readings()
+        period = 1.0 / rate
+        time = np.asarray(self._origin + period * np.arange(self._next, last + 1), np.float64)
+        t, heading, travel = (np.asarray(c, np.float64) for c in zip(*self._samples, strict=True))
+        read = _read(self.setup, self._rng, time, (t, heading, travel), self._bias,
+                     first=self._first)  # fmt: skip
+        self._first = False
+        self._bias = read.bias[-1].copy()
+        self._next = last + 1
+        # keep what the next readings look back to: two periods before the next one
+        keep = np.searchsorted(t, self._origin + period * (self._next - 2), side="right") - 1
+        del self._samples[: max(int(keep), 0)]
+        return read
+
+
+def _no_readings() -> ImuReadings:
+    return ImuReadings(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
 
 
 def _drawn(rng: np.random.Generator, size: float) -> float:

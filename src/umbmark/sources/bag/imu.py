@@ -67,6 +67,7 @@ __all__ = [
     "SATURATED_RUN",
     "ImuRead",
     "check_against_wheels",
+    "frozen_stretches",
     "read_gyro",
     "read_imu",
     "read_imu_topic",
@@ -252,7 +253,7 @@ def read_imu_topic(
     origin = float(reader.start_time) * 1e-9
     origin = origin if abs(float(time[0]) - origin) < 86_400.0 else 0.0
     rates = values[:, :3]
-    frozen = _frozen(time, rates)
+    frozen = frozen_stretches(time, rates)
     if frozen.shape[0] == 1 and frozen[0, 0] == time[0] and frozen[0, 1] == time[-1]:
         raise InputError(
             f"{topic}: every reading is the same ({_rates(rates[0])}) from the first to the "
@@ -369,7 +370,7 @@ def _runs(mask: BoolArray) -> tuple[IntArray, IntArray]:
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
-def _frozen(time: FloatArray, rates: FloatArray) -> FloatArray:
+def frozen_stretches(time: FloatArray, rates: FloatArray) -> FloatArray:
     """Stretches ``[start, end]`` [s] of exactly the same three rates, at least
     :data:`FROZEN` long and :data:`_FROZEN_READINGS` readings, shape (k, 2)."""
     same = np.all(rates[1:] == rates[:-1], axis=1)

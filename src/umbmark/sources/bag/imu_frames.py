@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -39,16 +40,24 @@ from umbmark.sources.bag.urdf import description_text, fixed_joints
 if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
 
-__all__ = ["MAX_TF_MESSAGES", "ImuMounting", "imu_mounting", "quaternion_matrix"]
+__all__ = [
+    "MAX_TF_MESSAGES",
+    "Edges",
+    "ImuMounting",
+    "imu_mounting",
+    "mounting_in",
+    "quaternion_matrix",
+]
 
 #: ``/tf`` messages looked into at most for transforms that do not move.
 MAX_TF_MESSAGES = 5000
 #: Frames held at most (a robot with many links has hundreds).
 _MAX_FRAMES = 10_000
 
-#: A transform ``(parent, child)``: the child's axes in the parent's, shape (3, 3), and
-#: where it was stated.
-_Edges = dict[tuple[str, str], tuple[FloatArray, str]]
+#: Transforms by ``(parent, child)``: the child's axes in the parent's, shape (3, 3), and
+#: where it was stated (``/tf_static``, a topic, the robot description).
+Edges = dict[tuple[str, str], tuple[FloatArray, str]]
+_Edges = Edges
 
 
 @dataclass(frozen=True)
@@ -133,7 +142,7 @@ def imu_mounting(
     found = None
     for add in (_static_edges, _tf_edges, _urdf_edges):
         add(reader, topics, src, edges, problems)
-        found = _chain(edges, frame) if frame else None
+        found = mounting_in(edges, frame) if frame else None
         if found is not None:
             break
     if found is None:
@@ -156,12 +165,28 @@ def imu_mounting(
             f"publish its mounting on /tf_static; {known}{why}",
             source=src,
         )
+    return found
+
+
+def mounting_in(edges: Edges, frame: str, bases: Sequence[str] = BASE_LINKS) -> ImuMounting | None:
+    """The mounting of ``frame`` in the nearest of ``bases`` through the transforms
+    ``edges`` (module notes: the chain may pass other links and walk a transform
+    backwards); None where no chain joins them. What the bag reader and a live robot's
+    IMU (:mod:`umbmark.robot.ros_imu`) share."""
+    frame = frame.lstrip("/")
+    if frame in bases:
+        return ImuMounting(frame, frame, np.eye(3), "the IMU's own frame")
+    found = _chain(edges, frame, bases) if frame else None
+    if found is None:
+        return None
     base, rotation, sources = found
     return ImuMounting(frame, base, rotation, ", ".join(sources))
 
 
-def _chain(edges: _Edges, frame: str) -> tuple[str, FloatArray, list[str]] | None:
-    """The nearest base frame to ``frame`` through ``edges`` (walked either way), the
+def _chain(
+    edges: _Edges, frame: str, bases: Sequence[str] = BASE_LINKS
+) -> tuple[str, FloatArray, list[str]] | None:
+    """The nearest of ``bases`` to ``frame`` through ``edges`` (walked either way), the
     rotation of ``frame`` in it, and the sources of the transforms on the way."""
     neighbours: dict[str, list[tuple[str, FloatArray, str]]] = {}
     for (parent, child), (rotation, source) in edges.items():
@@ -172,7 +197,7 @@ def _chain(edges: _Edges, frame: str) -> tuple[str, FloatArray, list[str]] | Non
     queue = deque([frame])
     while queue:
         at = queue.popleft()
-        if at in BASE_LINKS:
+        if at in bases:
             rotation, sources = np.eye(3), []
             node = at
             while (step := previous[node]) is not None:
