@@ -7,7 +7,8 @@ is exact: ``x = x_0 + (L / A)(sin(theta) - sin(theta_0))``, ``y = y_0 - (L / A)(
 cos(theta_0))`` (``x_0 + L u cos(theta_0)`` on a straight). The wheels' true angles are
 ``(s -/+ (theta - theta_0) b / 2) / r`` with the true radii and wheelbase, sampled at the
 wheels' rate, slipping a little (a random walk of ``slip`` times each step's rotation) and
-counted in encoder ticks. The gyro, sampled at its rate, reads the true yaw rate divided by
+counted in encoder ticks. The gyro, sampled at its rate, reads the true yaw rate (``delay``
+late) divided by
 its scale ``k_g`` in its own frame, tilted on the base by ``tilt`` (roll, pitch) and read
 through a stated transform that does not know it, plus a bias (a constant per axis, the
 yaw's with a random walk) and white noise; its accelerometer reads gravity (and the
@@ -41,7 +42,8 @@ class Truth:
     ``bias_walk``: its random walk [rad/s/sqrt(s)]; ``bias_xy``: the other axes' [rad/s];
     ``noise``: white noise density [rad/s/sqrt(Hz)]; ``tilt``: the IMU's roll and pitch on
     the base [rad]; ``slip``: the wheels' slip per unit rotation; ``ticks``: encoder counts
-    per wheel revolution (0: none).
+    per wheel revolution (0: none); ``delay``: how late the gyro reads the motion [s] (a
+    reading that is the mean over its period lags by half of it).
     """
 
     radius_left: float = 0.0505
@@ -57,6 +59,7 @@ class Truth:
     tilt: tuple[float, float] = (math.radians(0.7), math.radians(0.7))
     slip: float = 0.002
     ticks: int = 4096
+    delay: float = 0.0
 
     @property
     def E_d(self) -> float:
@@ -232,7 +235,7 @@ def record(
         angles = np.round(angles / per) * per
     tg = np.arange(0.0, motion.duration, 1.0 / gyro_rate) + 0.37 / gyro_rate
     tg = tg[tg < tw[-1]]
-    sg = motion.state(tg)
+    sg = motion.state(tg - truth.delay)
     tilt = _tilt_matrix(truth.tilt)
     true_rate = np.column_stack([np.zeros_like(tg), np.zeros_like(tg), sg["omega"]])
     in_imu = true_rate @ tilt / truth.k_g  # R^T w, row by row

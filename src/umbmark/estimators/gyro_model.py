@@ -12,7 +12,7 @@ import numpy as np
 
 from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.messages import blocking
-from umbmark.estimators.gyro_fit import DRIVING, REFERENCE, REST, LinearFit, Rows, fit_rows
+from umbmark.estimators.gyro_fit import DRIVING, PAIRED, REFERENCE, REST, LinearFit, Rows, fit_rows
 from umbmark.estimators.gyro_fit import _antiderivative as antiderivative
 from umbmark.estimators.gyro_mounting import gyro_mounting
 from umbmark.estimators.gyro_result import FIGURES, GyroCalibration
@@ -49,29 +49,92 @@ def odometry_turns(
 def gyro_rows(
     intervals: GyroIntervals, active: WheelParams, reference: GyroReference | None
 ) -> Rows:
+    """The rows of the fit (:mod:`umbmark.estimators.gyro_fit`): the gyro's intervals,
+    then the reference's stretches, each the wheels' row (:data:`PAIRED`) and the
+    reference's where the wheels over it are known, the reference's alone elsewhere. The
+    columns: ``theta_odo``, ``F``, the reference's heading change (with one), then the
+    delays' (minus the gyro's rate change across the row): against the wheels, and
+    against the reference (with one). The gyro's intervals mostly within paired stretches
+    are left out (:data:`_COVERED`)."""
     theta, forward, wheel = odometry_turns(intervals, active)
-    n = len(intervals)
     kind = np.where(intervals.rest, REST, DRIVING).astype(np.int64)
-    columns = [theta, forward]
+    wheel = np.where(intervals.rest, 0.0, wheel)
+    change = intervals.rate_changes
     if reference is None:
         return Rows(
-            y=intervals.yaw, x=np.column_stack(columns), start=intervals.start,
-            end=intervals.end, kind=kind, wheel=np.where(intervals.rest, 0.0, wheel),
-            given=np.full(n, np.nan),
+            y=intervals.yaw, x=np.column_stack([theta, forward, -change]),
+            start=intervals.start, end=intervals.end, kind=kind, wheel=wheel,
+            given=np.full(len(intervals), np.nan), delays=1,
         )  # fmt: skip
-    m = len(reference)
-    x = np.zeros((n + m, 3))
-    x[:n, 0], x[:n, 1], x[n:, 2] = theta, forward, reference.yaw
+    paired = reference.paired
+    covered = _covered(intervals.start, intervals.end, reference.start[paired], reference.end[paired])
+    own = covered <= _COVERED * intervals.duration
+    n, m = int(own.sum()), len(reference)
+    # the stretches' rows: each paired stretch twice (its wheels' row, then its reference's)
+    stretch = np.repeat(np.arange(m), np.where(paired, 2, 1))
+    first = np.concatenate([[True], stretch[1:] != stretch[:-1]])
+    on_wheels = first & paired[stretch]
+    u_r = 0.5 * active.diameter_right * _nan_zero(reference.phi_right, m) / active.wheelbase
+    u_l = 0.5 * active.diameter_left * _nan_zero(reference.phi_left, m) / active.wheelbase
+    size = n + stretch.size
+    x = np.zeros((size, 5))
+    x[:n, 0], x[:n, 1], x[:n, 3] = theta[own], forward[own], -change[own]
+    x[n:, 0] = np.where(on_wheels, (u_r - u_l)[stretch], 0.0)
+    x[n:, 1] = np.where(on_wheels, (u_r + u_l)[stretch], 0.0)
+    x[n:, 2] = np.where(on_wheels, 0.0, reference.yaw[stretch])
+    x[n:, 3] = np.where(on_wheels, -reference.rate_changes[stretch], 0.0)
+    x[n:, 4] = np.where(on_wheels, 0.0, -reference.rate_changes[stretch])
+    kinds = np.where(on_wheels, PAIRED, REFERENCE).astype(np.int64)
+    wheels = np.where(on_wheels, (u_r * u_r + u_l * u_l)[stretch], 0.0)
     return Rows(
-        y=np.concatenate([intervals.yaw, reference.gyro_yaw]),
+        y=np.concatenate([intervals.yaw[own], reference.gyro_yaw[stretch]]),
         x=x,
-        start=np.concatenate([intervals.start, reference.start]),
-        end=np.concatenate([intervals.end, reference.end]),
-        kind=np.concatenate([kind, np.full(m, REFERENCE, dtype=np.int64)]),
-        wheel=np.concatenate([np.where(intervals.rest, 0.0, wheel), np.zeros(m)]),
-        given=np.concatenate([np.full(n, np.nan), reference.variance]),
+        start=np.concatenate([intervals.start[own], reference.start[stretch]]),
+        end=np.concatenate([intervals.end[own], reference.end[stretch]]),
+        kind=np.concatenate([kind[own], kinds]),
+        wheel=np.concatenate([wheel[own], wheels]),
+        given=np.concatenate([np.full(n, np.nan), np.where(on_wheels, np.nan, reference.variance[stretch])]),
         noisy=2,
+        delays=2,
     )
+
+
+#: A gyro interval more than this share of which lies within the reference's paired
+#: stretches is left out of the rows: the pairs hold its wheels and gyro.
+_COVERED = 0.25
+
+
+def _nan_zero(values: FloatArray | None, size: int) -> FloatArray:
+    """``values`` with 0 for NaN (zeros of ``size`` for None)."""
+    if values is None:
+        return np.zeros(size)
+    return np.asarray(np.where(np.isfinite(values), values, 0.0))
+
+
+def _covered(
+    start: FloatArray, end: FloatArray, begin: FloatArray, finish: FloatArray
+) -> FloatArray:
+    """``(n,)`` how long each ``[start, end]`` lies within the union of the stretches
+    ``[begin, finish]`` [s]."""
+    if begin.size == 0:
+        return np.zeros(start.shape)
+    order = np.argsort(begin)
+    lows, highs = [float(begin[order[0]])], [float(finish[order[0]])]
+    for a, b in zip(begin[order[1:]], finish[order[1:]], strict=True):
+        if a <= highs[-1]:
+            highs[-1] = max(highs[-1], float(b))
+        else:
+            lows.append(float(a))
+            highs.append(float(b))
+    low, high = np.array(lows), np.array(highs)
+    before = np.concatenate([[0.0], np.cumsum(high - low)])
+
+    def upto(t: FloatArray) -> FloatArray:
+        i = np.searchsorted(low, t, side="right") - 1
+        inside = np.clip(t - low[np.maximum(i, 0)], 0.0, (high - low)[np.maximum(i, 0)])
+        return np.asarray(np.where(i >= 0, before[np.maximum(i, 0)] + inside, 0.0))
+
+    return np.asarray(upto(end) - upto(start))
 
 
 # --- the figures -------------------------------------------------------------------------
@@ -86,9 +149,10 @@ def _bias_gradient(fit: LinearFit, k: int, low: float, high: float) -> FloatArra
 
 
 def _figures(
-    fit: LinearFit, k: int, span: tuple[float, float]
+    fit: LinearFit, k: int, span: tuple[float, float], reference: bool
 ) -> dict[str, tuple[float, FloatArray, tuple[int, ...]]]:
-    """Each figure's value, gradient in the unknowns, and the unknowns it needs."""
+    """Each figure's value, gradient in the unknowns (``k`` coefficients, then the
+    bias's knots), and the unknowns it needs."""
     c = fit.coefficients
     S, D = float(c[0]), float(c[1])
     size = k + fit.knots.size
@@ -107,7 +171,7 @@ def _figures(
         out["E_b_k_g"] = (1.0 / S, grad(S=-1.0 / S**2), (0,))
     else:
         out["E_d"], out["E_b_k_g"] = (nan, none, (0, 1)), (nan, none, (0,))
-    if k == 3:
+    if reference:
         s = float(c[2])
         out["k_g"] = (1.0 / s, grad(s=-1.0 / s**2), (2,)) if s != 0.0 else (nan, none, (2,))
         if S != 0.0:
@@ -298,8 +362,10 @@ def calibration_of(
     held = _Held.of(theta, forward, intervals.rest, reference)
     spacing = float(fit.knots[1] - fit.knots[0])
     values, errors, undetermined = _determine(
-        fit, _figures(fit, k, span), held, lambda: _first_order(rows, spacing)
-    )
+        fit, _figures(fit, k, span, reference is not None), held,
+        lambda: _first_order(rows, spacing),
+    )  # fmt: skip
+    delays = _delays(fit, rows)
     own: dict[str, float] = {}
     for name, (value, se) in (extra or {}).items():
         (values if name in FIGURES else own)[name] = value
@@ -358,7 +424,24 @@ def calibration_of(
         warnings=tuple(warnings),
         extra=own,
         scan=scan,
+        delays=delays,
     )
+
+
+#: A delay whose standard error exceeds this is not determined [s].
+_LOOSE_DELAY = 0.05
+
+
+def _delays(fit: LinearFit, rows: Rows) -> dict[str, tuple[float, float]]:
+    """The gyro's delays the rows determine: ``wheels`` and ``reference`` [s]."""
+    out = {}
+    k = fit.coefficients.size
+    for j, name in zip(range(rows.delays), ("wheels", "reference"), strict=False):
+        g = _unit(rows.figures + j, k, fit)
+        se = math.sqrt(fit.variance(g))
+        if fit.determined(g) and math.isfinite(se) and se <= _LOOSE_DELAY:
+            out[name] = (float(fit.coefficients[rows.figures + j]), se)
+    return out
 
 
 def _implausible(fit: LinearFit, held: _Held, values: dict[str, float]) -> list[str]:

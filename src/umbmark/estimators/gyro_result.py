@@ -62,6 +62,10 @@ class GyroCalibration:
     scan : ScanCalibration or None
         The same as a scan-matching calibration (the wheels and the laser's mounting, with
         their covariance), where the reference is scan matching.
+    delays : dict of str to (float, float)
+        The gyro's readings' delay [s] and its standard error, against the ``wheels`` and
+        against the ``reference`` (positive: the gyro lags), where the motion determines
+        it (turns that start and stop).
     """
 
     values: dict[str, float]
@@ -84,6 +88,7 @@ class GyroCalibration:
     warnings: tuple[str, ...] = ()
     extra: dict[str, float] = field(default_factory=dict)
     scan: ScanCalibration | None = field(default=None, compare=False)
+    delays: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def get(self, name: str) -> float | None:
         """A figure's value, None where not determined (or not made)."""
@@ -124,5 +129,9 @@ class GyroCalibration:
             "n_reference": self.n_reference,
             "n_outliers": self.n_outliers,
             "warnings": list(self.warnings),
+            "delays": {
+                name: {"value": value, "standard_error": se}
+                for name, (value, se) in self.delays.items()
+            },
             **({"reference_figures": self.extra} if self.extra else {}),
         }

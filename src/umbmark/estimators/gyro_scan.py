@@ -26,6 +26,7 @@ from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.estimators.gyro_fit import (
     _NULL,
     OUTLIER,
+    REFERENCE,
     LinearFit,
     _prior,
     attenuation,
@@ -111,11 +112,11 @@ def fit_gyro_scan(
     assert motion is not None
     rows = gyro_rows(intervals, active, reference)
     linear = fit_rows(rows, bias_window)
-    k, m = 3, linear.knots.size
+    k, m = rows.x.shape[1], linear.knots.size
     design = np.hstack([rows.x, bias_basis(rows.start, rows.end, linear.knots)])
     white = whiten(design, linear.variances, linear.lag)
     prior = _prior(m, float(linear.knots[1] - linear.knots[0]), linear.walk, k)
-    S, D, s = (float(v) for v in linear.coefficients)
+    S, D, s = (float(v) for v in linear.coefficients[:3])
     ra_l, ra_r, ba = 0.5 * active.diameter_left, 0.5 * active.diameter_right, active.wheelbase
     x = second_step(
         motion.phi_left, motion.phi_right, motion.sensor_motion,
@@ -127,13 +128,14 @@ def fit_gyro_scan(
     n_lin = k + m
     size = n_lin + 4
     columns = [0, 1, 2, size - 4, size - 3, size - 2, size - 1]
-    moving = linear.kept[len(intervals) :]  # the reference's rows kept by the linear fit
+    allowed = linear.kept[rows.kind == REFERENCE]  # the reference's rows the linear fit kept
+    moving = allowed
     noise = _noise(_translation(theta, motion, active, np.ones(len(motion), dtype=bool)))
     full_prior = np.zeros((size, size))
     full_prior[:n_lin, :n_lin] = prior
     normal_lin = np.zeros((size, size))
     normal_lin[:n_lin, :n_lin] = white.T @ white
-    attenuated = attenuation(linear.variances, linear.own)
+    attenuated = attenuation(linear.variances, linear.own, linear.lag)
     normal_lin[2, 2] -= attenuated
     for _ in range(_STEPS):
         w_t = np.tile(1.0 / noise**2, int(moving.sum()))
@@ -151,9 +153,7 @@ def fit_gyro_scan(
         step = inverse @ grad
         theta = theta + step
         noise = _noise(_translation(theta, motion, active, np.ones(len(motion), dtype=bool)))
-        moving = _kept_translations(
-            theta, motion, active, moving, noise, linear.kept[len(intervals) :]
-        )
+        moving = _kept_translations(theta, motion, active, moving, noise, allowed)
         if np.all(np.abs(step[columns]) <= 1e-10 * np.maximum(np.abs(theta[columns]), 1e-3)):
             break
     jac = _translation_jacobian(theta, motion, active, moving, columns)

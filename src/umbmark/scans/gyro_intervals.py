@@ -26,7 +26,11 @@ largest value for :data:`SATURATED_RUN` samples or more, near a full scale of
 :data:`FULL_SCALES`): a turn faster than its range reads short.
 
 The gyro's integrals are exact for its samples joined by straight lines (the trapezoid
-rule, as :meth:`GyroSeries.yaw_change`). Units: seconds, radians, m/s^2.
+rule, as :meth:`GyroSeries.yaw_change`); its yaw rate at an interval's two ends, the
+same way, gives the rate's change across it (``rate_change``): what a delay of the gyro's
+readings against the wheels' makes of the interval's heading change, to first order (a
+reading that is the mean over its period, a MEMS part's decimation filter, lags by half
+of it: 10 ms at 50 Hz). Units: seconds, radians, m/s^2.
 """
 
 from __future__ import annotations
@@ -127,6 +131,9 @@ class GyroIntervals:
         The gyro's source, for messages.
     frame : str
         The IMU's own frame.
+    rate_change : array, shape (n,), or None
+        The gyro's yaw rate at the interval's end less at its start [rad/s], as read
+        (None: not known, taken as 0).
     """
 
     start: FloatArray
@@ -140,12 +147,15 @@ class GyroIntervals:
     left_out: dict[str, int] = field(default_factory=dict)
     source: str = ""
     frame: str = "imu_link"
+    rate_change: FloatArray | None = None
 
     def __post_init__(self) -> None:
         n = self.start.shape[0]
         for name in ("end", "phi_left", "phi_right", "yaw", "rest"):
             if getattr(self, name).shape != (n,):
                 raise ValueError(f"GyroIntervals.{name} must have shape ({n},)")
+        if self.rate_change is not None and self.rate_change.shape != (n,):
+            raise ValueError(f"GyroIntervals.rate_change must have shape ({n},)")
         if self.rotation.shape != (n, 3) or (self.accel is not None and self.accel.shape != (n, 3)):
             raise ValueError(f"GyroIntervals.rotation and accel must have shape ({n}, 3)")
 
@@ -164,7 +174,15 @@ class GyroIntervals:
             self.yaw[rows], self.rotation[rows], self.rest[rows],
             None if self.accel is None else self.accel[rows], dict(self.left_out),
             self.source, self.frame,
+            None if self.rate_change is None else self.rate_change[rows],
         )  # fmt: skip
+
+    @property
+    def rate_changes(self) -> FloatArray:
+        """``(n,)`` :attr:`rate_change`, zeros where not known."""
+        if self.rate_change is None:
+            return np.zeros(len(self))
+        return self.rate_change
 
 
 def _true_runs(mask: BoolArray) -> list[tuple[int, int]]:
@@ -351,7 +369,15 @@ def gyro_intervals(
         left_out=dict(left),
         source=gyro.source,
         frame=gyro.frame,
+        rate_change=_rate_change(gyro, start, end),
     )
+
+
+def _rate_change(gyro: GyroSeries, start: FloatArray, end: FloatArray) -> FloatArray:
+    """``(k,)`` the gyro's yaw rate at each ``end`` less at each ``start`` [rad/s] (its
+    samples joined by straight lines)."""
+    w = gyro.rate[:, 2]
+    return np.asarray(np.interp(end, gyro.time, w) - np.interp(start, gyro.time, w))
 
 
 def _said(left: Counter[str]) -> str:
@@ -410,6 +436,13 @@ class GyroReference:
     left_out : dict of str to int
         Stretches left out (outside the gyro's readings, across a gap in them).
     source : str
+    phi_left, phi_right : array, shape (n,), or None
+        The wheels' rotation over each stretch [rad] (scan matching's own, or the wheels'
+        readings where they were given), NaN where the wheels do not cover it; None: not
+        known. Where known, the gyro estimator sets the wheels, the gyro and the reference
+        side by side over the same stretch (:mod:`umbmark.estimators.gyro_fit`).
+    rate_change : array, shape (n,), or None
+        The gyro's yaw rate at each stretch's end less at its start [rad/s].
     """
 
     start: FloatArray
@@ -420,16 +453,37 @@ class GyroReference:
     motion: MotionIntervals | None = None
     left_out: dict[str, int] = field(default_factory=dict)
     source: str = ""
+    phi_left: FloatArray | None = None
+    phi_right: FloatArray | None = None
+    rate_change: FloatArray | None = None
 
     def __len__(self) -> int:
         return int(self.start.shape[0])
 
+    @property
+    def paired(self) -> BoolArray:
+        """``(n,)`` the stretches whose wheels' rotation is known."""
+        if self.phi_left is None or self.phi_right is None:
+            return np.zeros(len(self), dtype=bool)
+        return np.asarray(np.isfinite(self.phi_left) & np.isfinite(self.phi_right))
+
+    @property
+    def rate_changes(self) -> FloatArray:
+        """``(n,)`` :attr:`rate_change`, zeros where not known."""
+        if self.rate_change is None:
+            return np.zeros(len(self))
+        return self.rate_change
+
 
 def gyro_reference(
-    gyro: GyroSeries, reference: HeadingReference | MotionIntervals
+    gyro: GyroSeries,
+    reference: HeadingReference | MotionIntervals,
+    wheels: WheelSeries | None = None,
 ) -> GyroReference:
     """The reference's stretches within the gyro's readings, with the gyro's heading
-    change over each.
+    change over each, and the wheels' rotation: scan matching's own, or, for heading
+    changes, the ``wheels``' readings (interpolated at the stretch's ends; NaN outside
+    them and across a gap in them).
 
     Raises
     ------
@@ -474,18 +528,40 @@ def gyro_reference(
         raise InputError(
             "no stretch of the heading reference lies within the gyro's readings", source=where
         )
+    start, end = start[keep], end[keep]
+    phi: tuple[FloatArray, FloatArray] | None = None
     if motion is not None:
         motion = _motion_rows(motion, keep)
+        phi = (motion.phi_left, motion.phi_right)
+    elif wheels is not None:
+        phi = _wheel_rotation(wheels, start, end)
     return GyroReference(
-        start=start[keep],
-        end=end[keep],
+        start=start,
+        end=end,
         yaw=yaw[keep],
         variance=np.asarray(variance[keep], dtype=np.float64),
-        gyro_yaw=gyro.yaw_change(start[keep], end[keep]),
+        gyro_yaw=gyro.yaw_change(start, end),
         motion=motion,
         left_out=dict(left),
         source=reference.source,
+        phi_left=None if phi is None else phi[0],
+        phi_right=None if phi is None else phi[1],
+        rate_change=_rate_change(gyro, start, end),
     )
+
+
+def _wheel_rotation(
+    wheels: WheelSeries, start: FloatArray, end: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """``(phi_left, phi_right)`` over each stretch [rad], NaN where the wheels' readings
+    do not cover it or have a gap in it."""
+    t = wheels.time
+    covered = (start >= t[0]) & (end <= t[-1]) & ~_crosses(_gap_spans(t), start, end)
+    out = []
+    for w in (0, 1):
+        turned = np.interp(end, t, wheels.angles[:, w]) - np.interp(start, t, wheels.angles[:, w])
+        out.append(np.where(covered, turned, np.nan))
+    return out[0], out[1]
 
 
 def _motion_rows(motion: MotionIntervals, rows: BoolArray) -> MotionIntervals:
