@@ -67,7 +67,9 @@ def gyro_rows(
             given=np.full(len(intervals), np.nan), delays=1,
         )  # fmt: skip
     paired = reference.paired
-    covered = _covered(intervals.start, intervals.end, reference.start[paired], reference.end[paired])
+    covered = _covered(
+        intervals.start, intervals.end, reference.start[paired], reference.end[paired]
+    )
     own = covered <= _COVERED * intervals.duration
     n, m = int(own.sum()), len(reference)
     # the stretches' rows: each paired stretch twice (its wheels' row, then its reference's)
@@ -93,7 +95,9 @@ def gyro_rows(
         end=np.concatenate([intervals.end[own], reference.end[stretch]]),
         kind=np.concatenate([kind[own], kinds]),
         wheel=np.concatenate([wheel[own], wheels]),
-        given=np.concatenate([np.full(n, np.nan), np.where(on_wheels, np.nan, reference.variance[stretch])]),
+        given=np.concatenate(
+            [np.full(n, np.nan), np.where(on_wheels, np.nan, reference.variance[stretch])]
+        ),
         noisy=2,
         delays=2,
     )
