@@ -320,7 +320,8 @@ def fit_rows(rows: Rows, spacing: float) -> LinearFit:
     solved = _weighted(design, rows, (variances, lag, own), m, spacing, k)
     for round_ in range(ROUNDS + 1):
         residual = rows.y - design @ solved[0]
-        variances, lag, own, noise = row_variances(rows, residual, kept)
+        s = 1.0 if rows.noisy is None else float(solved[0][rows.noisy])
+        variances, lag, own, noise = row_variances(rows, residual, kept, s)
         far = np.zeros_like(kept)
         if round_ > 0:  # the first round's variances were a guess
             z = np.abs(residual) / np.sqrt(variances)
@@ -330,7 +331,7 @@ def fit_rows(rows: Rows, spacing: float) -> LinearFit:
                 far &= z >= np.sort(z[far])[-cap]
             if far.any():
                 kept &= ~far
-                variances, lag, own, noise = row_variances(rows, residual, kept)
+                variances, lag, own, noise = row_variances(rows, residual, kept, s)
         solved = _weighted(design, rows, (variances, lag, own), m, spacing, k)
         if round_ > 0 and not far.any():
             break

@@ -78,6 +78,11 @@ class Rows:
     delays : int
         How many of ``x``'s last columns are the gyro's delays' (minus the gyro's rate
         change across the row: their coefficients are the delays [s]).
+    spread : float or None
+        The reference's heading noise against the wheels over one stretch [rad], as the
+        reference alone measured it (the scan-matching estimator's yaw noise): each
+        pair's difference gets it (times ``s``); None: the differences' own median
+        absolute deviation.
     """
 
     y: FloatArray
@@ -89,6 +94,7 @@ class Rows:
     given: FloatArray
     noisy: int | None = None
     delays: int = 0
+    spread: float | None = None
 
     @property
     def duration(self) -> FloatArray:
@@ -130,11 +136,12 @@ class Rows:
 
 
 def row_variances(
-    rows: Rows, residual: FloatArray, kept: BoolArray
+    rows: Rows, residual: FloatArray, kept: BoolArray, s: float = 1.0
 ) -> tuple[FloatArray, FloatArray, FloatArray, dict[str, float]]:
     """Each row's variance and covariance with the row before, fitted to the residuals
     of the ``kept`` rows (the module's documentation), the reference's own share of each
-    (0 for the others), and the noise figures."""
+    (0 for the others), and the noise figures; ``s``: the reference's coefficient (the
+    gyro's heading per radian of the reference's)."""
     r2, t, n = residual**2, rows.duration, len(rows)
     rest, ref = (kept & (rows.kind == k) for k in (REST, REFERENCE))
     moving = rows.moving
@@ -178,6 +185,7 @@ def row_variances(
             own = np.where(refs, spread, 0.0)
             noise["reference"] = math.sqrt(spread)
         var = np.where(refs, shared + own, var)
+    var, own = _as_the_reference_alone(rows, residual, (var, own, shared), s, noise)
     var = np.where(kept, np.maximum(var, 1e-18), 1e30)
     lag = np.zeros(n)
     lag[1:] = np.where(pairs[1:], -reading, 0.0)
@@ -185,6 +193,47 @@ def row_variances(
     lag = np.where(tied, shared, lag)
     own = np.where(kept, own, 0.0)
     return var, lag, own, noise
+
+
+#: The median absolute deviation's factor to a Gaussian's standard deviation.
+_MAD = 1.482602218505602
+
+
+def _as_the_reference_alone(
+    rows: Rows,
+    residual: FloatArray,
+    variances: tuple[FloatArray, FloatArray, FloatArray],
+    s: float,
+    noise: dict[str, float],
+) -> tuple[FloatArray, FloatArray]:
+    """``(var, own)`` with each pair's difference (the reference against the wheels, the
+    gyro cancelling) of the one variance the reference alone gives it: the scan-matching
+    estimator's yaw noise (:attr:`Rows.spread`, times ``s``: the difference is in the
+    gyro's radians), else the differences' median absolute deviation over every pair
+    (outliers included, as that estimator takes it). It is shared between the wheels'
+    row and the reference's as the fitted model shares it; the gyro's part, common to
+    both, stays as fitted. So the pairs hold the reference alone's equations on the
+    wheels unchanged, and the gyro's on top. Fewer than 10 pairs: as they were."""
+    var, own, shared = variances
+    second = np.flatnonzero(rows.pairs)
+    if second.size < 10:
+        return var, own
+    first = second - 1
+    difference = residual[first] - residual[second]
+    spread = _MAD * float(np.median(np.abs(difference - np.median(difference))))
+    if rows.spread is not None and rows.spread > 0.0:
+        spread = abs(s) * rows.spread
+    wheels = np.maximum(var[first] - shared[first], 0.0)
+    total = wheels + own[second]
+    if spread <= 0.0 or not (total > 0.0).all():
+        return var, own
+    share = spread**2 / total
+    var, own = var.copy(), own.copy()
+    var[first] = shared[first] + wheels * share
+    own[second] = own[second] * share
+    var[second] = shared[second] + own[second]
+    noise["reference_wheels"] = spread
+    return var, own
 
 
 def _trimmed_mean(products: FloatArray) -> float:

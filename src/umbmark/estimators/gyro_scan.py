@@ -19,10 +19,12 @@ the joint maximum likelihood, whose inverse information is the covariance. Then
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from umbmark.core.arrays import BoolArray, FloatArray
+from umbmark.core.errors import InputError
 from umbmark.estimators.gyro_fit import (
     _NULL,
     OUTLIER,
@@ -37,7 +39,12 @@ from umbmark.estimators.gyro_fit import (
 from umbmark.estimators.gyro_model import calibration_of, gyro_rows
 from umbmark.estimators.gyro_result import GyroCalibration
 from umbmark.estimators.scan_excitation import excitation
-from umbmark.estimators.scan_matching import ScanCalibration, predicted_motion, second_step
+from umbmark.estimators.scan_matching import (
+    ScanCalibration,
+    fit_intervals,
+    predicted_motion,
+    second_step,
+)
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.scans.gyro_intervals import GyroIntervals, GyroReference
@@ -110,7 +117,9 @@ def fit_gyro_scan(
     documentation): ``k_g``, the bias, ``E_d``, ``E_b``, ``E_s`` and the laser's mounting."""
     motion = reference.motion
     assert motion is not None
+    alone = _noise_alone(motion)
     rows = gyro_rows(intervals, active, reference)
+    rows = replace(rows, spread=None if alone is None else float(alone[2]))
     linear = fit_rows(rows, bias_window)
     k, m = rows.x.shape[1], linear.knots.size
     design = np.hstack([rows.x, bias_basis(rows.start, rows.end, linear.knots)])
@@ -130,7 +139,8 @@ def fit_gyro_scan(
     columns = [0, 1, 2, size - 4, size - 3, size - 2, size - 1]
     allowed = linear.kept[rows.kind == REFERENCE]  # the reference's rows the linear fit kept
     moving = allowed
-    noise = _noise(_translation(theta, motion, active, np.ones(len(motion), dtype=bool)))
+    every = np.ones(len(motion), dtype=bool)
+    noise = _noise(_translation(theta, motion, active, every)) if alone is None else alone[:2]
     full_prior = np.zeros((size, size))
     full_prior[:n_lin, :n_lin] = prior
     normal_lin = np.zeros((size, size))
@@ -152,7 +162,8 @@ def fit_gyro_scan(
         inverse, _, _ = _pseudo_inverse(total)
         step = inverse @ grad
         theta = theta + step
-        noise = _noise(_translation(theta, motion, active, np.ones(len(motion), dtype=bool)))
+        if alone is None:
+            noise = _noise(_translation(theta, motion, active, every))
         moving = _kept_translations(theta, motion, active, moving, noise, allowed)
         if np.all(np.abs(step[columns]) <= 1e-10 * np.maximum(np.abs(theta[columns]), 1e-3)):
             break
@@ -185,6 +196,19 @@ def fit_gyro_scan(
     return calibration_of(
         intervals, active, rows, fit, reference, 0.0, stated, extra, scan, undetermined
     )
+
+
+def _noise_alone(motion: MotionIntervals) -> FloatArray | None:
+    """``(3,)`` the laser's noise (x, y [m], yaw [rad]) as the scan-matching estimator
+    alone finds it (:func:`~umbmark.estimators.scan_matching.fit_intervals`: its
+    residuals' median absolute deviation at its own fit), None where it finds none (the
+    motion does not excite it): the joint fit weighs the laser's equations as it does."""
+    try:
+        found = fit_intervals(motion)
+    except InputError:
+        return None
+    noise = np.asarray(found.noise, dtype=np.float64)
+    return noise if bool(np.all(np.isfinite(noise) & (noise > 1e-12))) else None
 
 
 def _noise(residual: FloatArray) -> FloatArray:
