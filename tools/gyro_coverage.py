@@ -7,7 +7,8 @@ straights, spins and arcs with rests, calibrated without a reference, with a hea
 reference (0.2 deg a second) and with scan matching (2 mm, 0.3 deg a second), and by scan
 matching alone. For each figure: the share of robots whose 95 % interval holds the truth,
 the mean and spread of the standardised errors (estimate less truth, over the standard
-error), the root mean square error and the mean standard error.
+error), the root mean square error and the mean standard error; then the joint fit with
+scan matching against scan matching alone, robot by robot (:func:`against_scan_matching`).
 ``tests/estimators/test_gyro_fit.py`` asserts them; this prints them
 (``docs/estimators.md``).
 
@@ -85,6 +86,7 @@ def draws(robots: int = ROBOTS) -> dict[str, np.ndarray]:
         cal = fit_gyro(iv, active, reference=gyro_reference(rec.gyro, scans))
         v, se = cal.values, cal.standard_errors
         add("k_g (scan)", v["k_g"], truth.k_z, se["k_g"])
+        add("bias (scan)", v["bias"], bias, se["bias"])
         add("E_d (scan)", v["E_d"], truth.E_d, se["E_d"])
         add("E_b (scan)", v["E_b"], truth.E_b, se["E_b"])
         add("E_s (scan)", v["E_s"], truth.E_s, se["E_s"])
@@ -101,14 +103,49 @@ def errors(robots: int = ROBOTS) -> dict[str, np.ndarray]:
     return {name: pairs[:, 0] / pairs[:, 1] for name, pairs in draws(robots).items()}
 
 
+def _rms(pairs: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(pairs[:, 0] ** 2)))
+
+
+def against_scan_matching(drawn: dict[str, np.ndarray]) -> list[str]:
+    """The joint fit (with scan matching) against scan matching alone on the same
+    recordings, as Markdown lines: per figure the share of robots whose joint standard
+    error is at most the scan-alone one, the largest ratio of the two, and each one's
+    root mean square error; then how many robots have ``k_g`` within 0.1 % and the bias
+    within 0.01 deg/s."""
+    robots = drawn["E_d"].shape[0]
+    lines = [
+        f"| figure ({robots} robots) | joint standard error <= scan matching alone's "
+        "| largest ratio of the two | rms error, joint | rms error, scan matching alone |",
+        "|---|---|---|---|---|",
+    ]
+    for name in ("E_d", "E_b", "E_s"):
+        joint, alone = drawn[f"{name} (scan)"], drawn[f"{name} (scan matching alone)"]
+        ratio = joint[:, 1] / alone[:, 1]
+        lines.append(
+            f"| {name} | {100 * float(np.mean(ratio <= 1.0)):.0f} % | {float(ratio.max()):.3f} "
+            f"| {_rms(joint):.2g} | {_rms(alone):.2g} |"
+        )
+    k_g = np.abs(drawn["k_g (scan)"][:, 0])
+    bias = np.degrees(np.abs(drawn["bias (scan)"][:, 0]))
+    lines += [
+        "",
+        f"k_g within 0.1 %: {int(np.sum(k_g < 1e-3))} of {robots} robots (the largest error "
+        f"{100 * float(k_g.max()):.3f} %); the bias within 0.01 deg/s: "
+        f"{int(np.sum(bias < 0.01))} of {robots} (the largest error {float(bias.max()):.4f} deg/s)",
+    ]
+    return lines
+
+
 def main() -> None:
     robots = int(sys.argv[1]) if len(sys.argv) > 1 else ROBOTS
+    drawn = draws(robots)
     print(
         f"| figure ({robots} robots) | 95 % interval holds the truth | mean z | spread of z "
         "| rms error | mean standard error |"
     )
     print("|---|---|---|---|---|---|")
-    for name, pairs in draws(robots).items():
+    for name, pairs in drawn.items():
         z = pairs[:, 0] / pairs[:, 1]
         covered = float(np.mean(np.abs(z) <= Z95))
         scale, unit = (math.degrees(1.0), " deg/s") if name.startswith("bias") else (1.0, "")
@@ -118,6 +155,8 @@ def main() -> None:
             f"| {name} | {100 * covered:.0f} % | {np.mean(z):+.2f} | {np.std(z):.2f} "
             f"| {rms:.2g}{unit} | {se:.2g}{unit} |"
         )
+    print()
+    print("\n".join(against_scan_matching(drawn)))
 
 
 if __name__ == "__main__":

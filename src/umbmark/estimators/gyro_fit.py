@@ -16,10 +16,10 @@ Every row's gyro reading may lag (or lead) what it is compared with: its reading
 ``delta`` (a MEMS part's decimation filter, its driver's stamps) makes the gyro's
 heading change over ``[t_0, t_1]`` that over ``[t_0 - delta, t_1 - delta]``, which is,
 to first order, ``- delta (w_1 - w_0)`` more (``w`` the gyro's rate read at the ends):
-one column of each delay (:attr:`~umbmark.estimators.gyro_noise.Rows.delays`: the gyro's
-against the wheels', and against the reference's), fitted with the rest. Unmodelled, 10
-ms (half a period at 50 Hz) is an error of 0.2 degree in a second that starts or ends a
-turn at a rad/s.
+one column (:attr:`~umbmark.estimators.gyro_noise.Rows.delays`), the gyro's delay
+against the wheels and the reference alike (one clock), fitted with the rest.
+Unmodelled, 10 ms (half a period at 50 Hz) is an error of 0.2 degree in a second that
+starts or ends a turn at a rad/s.
 
 The rows' variances follow their kind, each fitted to the residuals
 (:func:`umbmark.estimators.gyro_noise.row_variances`). Rows beyond :data:`OUTLIER`

@@ -53,9 +53,10 @@ def gyro_rows(
     then the reference's stretches, each the wheels' row (:data:`PAIRED`) and the
     reference's where the wheels over it are known, the reference's alone elsewhere. The
     columns: ``theta_odo``, ``F``, the reference's heading change (with one), then the
-    delays' (minus the gyro's rate change across the row): against the wheels, and
-    against the reference (with one). The gyro's intervals mostly within paired stretches
-    are left out (:data:`_COVERED`)."""
+    gyro's delay's (minus the gyro's rate change across the row: one delay against the
+    wheels and the reference alike, on one clock, so that it cancels in a pair's
+    difference). The gyro's intervals mostly within paired stretches are left out
+    (:data:`_COVERED`)."""
     theta, forward, wheel = odometry_turns(intervals, active)
     kind = np.where(intervals.rest, REST, DRIVING).astype(np.int64)
     wheel = np.where(intervals.rest, 0.0, wheel)
@@ -79,13 +80,12 @@ def gyro_rows(
     u_r = 0.5 * active.diameter_right * _nan_zero(reference.phi_right, m) / active.wheelbase
     u_l = 0.5 * active.diameter_left * _nan_zero(reference.phi_left, m) / active.wheelbase
     size = n + stretch.size
-    x = np.zeros((size, 5))
+    x = np.zeros((size, 4))
     x[:n, 0], x[:n, 1], x[:n, 3] = theta[own], forward[own], -change[own]
     x[n:, 0] = np.where(on_wheels, (u_r - u_l)[stretch], 0.0)
     x[n:, 1] = np.where(on_wheels, (u_r + u_l)[stretch], 0.0)
     x[n:, 2] = np.where(on_wheels, 0.0, reference.yaw[stretch])
-    x[n:, 3] = np.where(on_wheels, -reference.rate_changes[stretch], 0.0)
-    x[n:, 4] = np.where(on_wheels, 0.0, -reference.rate_changes[stretch])
+    x[n:, 3] = -reference.rate_changes[stretch]
     kinds = np.where(on_wheels, PAIRED, REFERENCE).astype(np.int64)
     wheels = np.where(on_wheels, (u_r * u_r + u_l * u_l)[stretch], 0.0)
     return Rows(
@@ -99,7 +99,7 @@ def gyro_rows(
             [np.full(n, np.nan), np.where(on_wheels, np.nan, reference.variance[stretch])]
         ),
         noisy=2,
-        delays=2,
+        delays=1,
     )
 
 
@@ -437,10 +437,10 @@ _LOOSE_DELAY = 0.05
 
 
 def _delays(fit: LinearFit, rows: Rows) -> dict[str, tuple[float, float]]:
-    """The gyro's delays the rows determine: ``wheels`` and ``reference`` [s]."""
+    """The gyro's delay where the rows determine it: ``gyro`` [s]."""
     out = {}
     k = fit.coefficients.size
-    for j, name in zip(range(rows.delays), ("wheels", "reference"), strict=False):
+    for j, name in zip(range(rows.delays), ("gyro",), strict=False):
         g = _unit(rows.figures + j, k, fit)
         se = math.sqrt(fit.variance(g))
         if fit.determined(g) and math.isfinite(se) and se <= _LOOSE_DELAY:

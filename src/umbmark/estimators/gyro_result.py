@@ -63,9 +63,10 @@ class GyroCalibration:
         The same as a scan-matching calibration (the wheels and the laser's mounting, with
         their covariance), where the reference is scan matching.
     delays : dict of str to (float, float)
-        The gyro's readings' delay [s] and its standard error, against the ``wheels`` and
-        against the ``reference`` (positive: the gyro lags), where the motion determines
-        it (turns that start and stop).
+        ``gyro``: the gyro's readings' delay [s] and its standard error, against the
+        wheels and the reference alike (positive: the gyro lags; a reading that is the
+        mean over its period lags by half of it), where the motion determines it (turns
+        that start and stop).
     """
 
     values: dict[str, float]
