@@ -31,8 +31,10 @@ rows with ``theta_odo = F = 0``: the bias alone.
   bias, ``E_d`` and ``E_b / E_s = s / S`` are separated. The pair of rows (gyro against
   reference, gyro against wheels) holds all the reference's information on the wheels
   (their difference is the reference against the wheels, the bias cancelling), so the
-  joint fit is as tight as the reference alone at least (up to the gyro's own noise,
-  common to both rows and neglected). Where the reference gives distance too (scan
+  joint fit is as tight as the reference alone at least: where the wheels over each
+  stretch are known (scan matching's intervals) the two rows are of one stretch, their
+  covariance the gyro's own variance, their difference weighed as the reference alone
+  weighs it (:mod:`umbmark.estimators.gyro_noise`). Where the reference gives distance too (scan
   matching's translations), :mod:`umbmark.estimators.gyro_scan` adds ``E_s`` and the
   laser's mounting.
 
