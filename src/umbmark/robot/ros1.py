@@ -93,6 +93,7 @@ ROS1_PACKAGES = {
     "tf2_msgs": "python3-tf2-msgs",
     "dynamic_reconfigure": "python3-dynamic-reconfigure",
     "yaml": "python3-yaml",
+    "diagnostic_msgs": "python3-diagnostic-msgs",
 }
 
 
