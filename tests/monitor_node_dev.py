@@ -8,10 +8,9 @@ import sys
 
 sys.path.insert(0, __file__.rsplit("/", 1)[0])
 
-from monitor_recording_core import RecordingCore  # noqa: E402
-
-from umbmark.monitor.ros2_node import Found, run_ros2  # noqa: E402
-from umbmark.monitor.ros_node import split_ros_args  # noqa: E402
+from monitor_recording_core import RecordingCore
+from umbmark.monitor.ros2_node import Found, run_ros2
+from umbmark.monitor.ros_node import split_ros_args
 
 
 def main() -> int:

@@ -44,7 +44,7 @@ def test_the_status_is_named_and_levelled_as_diagnostic_updater_writes_it() -> N
 
 def test_the_key_values_are_strings_in_order() -> None:
     values = dict(compose(_status()).values)
-    assert list(compose(_status()).values)[0] == ("E_d", "1.0021 +- 0.0004")
+    assert compose(_status()).values[0] == ("E_d", "1.0021 +- 0.0004")
     assert values["laser_x [m]"] == "not determined: turned one way only"
     assert values["metres observed [m]"] == "123.4"
     assert values["applied"] == "yaml: wrote x"
@@ -107,7 +107,8 @@ def test_real_odometry_and_transform_messages_are_filled() -> None:
     p = msg.pose.pose.position
     assert (p.x, p.y, p.z) == (1.0, -2.0, 0.0)
     assert (msg.twist.twist.linear.x, msg.twist.twist.angular.z) == (0.3, -0.1)
-    assert len(msg.pose.covariance) == 36 and msg.pose.covariance[7] == 1.0
+    assert len(msg.pose.covariance) == 36
+    assert msg.pose.covariance[7] == 1.0
     tf = fill_transform(fields, geo.TransformStamped(), "T")
     assert (tf.header.frame_id, tf.child_frame_id) == ("odom", "base_link")
     assert tf.transform.rotation.z == pytest.approx(math.sqrt(0.5))

@@ -279,8 +279,8 @@ class Ros2Monitor:
         loop = self.loop
         if loop is None:
             return
-        self._frames = Frames(msg.header.frame_id.lstrip("/") or "odom",
-                              msg.child_frame_id.lstrip("/") or self.options.base_frame)  # fmt: skip
+        odom_frame = msg.header.frame_id.lstrip("/") or "odom"
+        self._frames = Frames(odom_frame, msg.child_frame_id.lstrip("/") or self.options.base_frame)
         self._covariance = (tuple(msg.pose.covariance), tuple(msg.twist.covariance))
         if self._joint_wheels:
             loop.heard(self._ros.odom)
