@@ -20,6 +20,10 @@ def main() -> int:
     def make(found: Found) -> RecordingCore:
         return RecordingCore(found.options.robot)
 
+    if given.pop("ros1", None):
+        from umbmark.monitor.ros1_node import run_ros1
+
+        return run_ros1(given, argv.ros1, make)
     return run_ros2(given, argv.ros2, make)
 
 

@@ -41,19 +41,15 @@ from typing import Any
 
 from umbmark.core.errors import InputError, SafetyError
 from umbmark.monitor.diagnostics import NODE_NAME, TOPIC, compose, fill_array
+from umbmark.monitor.node_loop import MonitorLoop, Outputs, run_ticks, stop_on_signals, stopped_line
 from umbmark.monitor.odometry_msg import Frames, fill_odometry, fill_transform, odometry_fields
 from umbmark.monitor.ros_node import (
     NODE_OPTIONS,
     SHARED,
-    MonitorLoop,
     NodeOptions,
-    Outputs,
     base_yaw_rate,
     node_options,
     parameter_values,
-    run_ticks,
-    stop_on_signals,
-    stopped_line,
     wheel_angles,
 )
 from umbmark.monitor.status import CorrectedOdometry, MonitorCore, MonitorStatus
