@@ -411,7 +411,7 @@ class Ros2Monitor:
 
     def apply(self, params: DriveParams) -> ApplyResult:
         """Apply at rest through selfcal's ROS 2 paths (:func:`apply_params`)."""
-        from umbmark.robot.ros2 import apply_params, reload_plan
+        from umbmark.robot.ros2_reload import apply_params, reload_plan
 
         target = _Target(self)
         if self._reload_plan is None:

@@ -49,7 +49,6 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import math
-import os
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -57,8 +56,8 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError, SafetyError, option
-from umbmark.robot.base import AppliedBy, ApplyMethod, ApplyResult, DriveParams
-from umbmark.robot.ros2_reload import RESTART, ReloadPlan, ReloadTarget, plan_reload, reload
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams
+from umbmark.robot.ros2_reload import ReloadPlan, apply_params, reload_plan
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
     Latest,
@@ -66,9 +65,6 @@ from umbmark.robot.ros_common import (
     RosOptions,
     controller_keys,
     default_topics,
-    plan_apply,
-    restart_commands,
-    write_params,
 )
 from umbmark.robot.ros_robot import RosRobot
 from umbmark.robot.urdf import static_mount, urdf_footprint, urdf_geometry, urdf_mount
@@ -76,7 +72,7 @@ from umbmark.robot.urdf import static_mount, urdf_footprint, urdf_geometry, urdf
 if TYPE_CHECKING:
     from umbmark.sources.bag.imu_frames import ImuMounting
 
-__all__ = ["Ros2Robot", "apply_params", "call_service", "controller_params", "reload_plan"]
+__all__ = ["Ros2Robot", "call_service", "controller_params"]
 
 #: The velocity types a diff_drive_controller subscribes.
 STAMPED, UNSTAMPED = "geometry_msgs/msg/TwistStamped", "geometry_msgs/msg/Twist"
@@ -527,56 +523,6 @@ def controller_params(
     for name in MULTIPLIERS:
         values[name] = values[name] or 1.0
     return DriveParams(**values)
-
-
-def reload_plan(target: ReloadTarget) -> ReloadPlan:
-    """How new multipliers will reach ``target``'s controller (``options.reload``,
-    ``controller_manager_msgs`` importable, then the manager asked: :func:`plan_reload`)."""
-    if not target.options.reload:
-        return ReloadPlan(
-            None,
-            "the controller reads its multipliers only when it is configured, and "
-            f"--reload was not given: {RESTART}",
-        )
-    if importlib.util.find_spec("controller_manager_msgs") is None:
-        return ReloadPlan(
-            None,
-            "--reload needs controller_manager_msgs, not installed here (no ROS "
-            "installation: python tools/build_ros2_interfaces.py builds it into this "
-            f"Python); {RESTART}",
-        )
-    return plan_reload(target)
-
-
-def apply_params(
-    target: ReloadTarget, plan_: ReloadPlan, params: DriveParams, method: ApplyMethod
-) -> ApplyResult:
-    """Write ``options.params_file`` (when given) and, where ``plan_`` allows, reload the
-    controller through the controller manager; else say how to restart it on the new
-    values. The result's method is the way taken: ``set_parameters`` or ``reload``
-    through the manager, ``yaml`` where only the file was written, ``none`` where nothing
-    was."""
-    plan = plan_apply(params, "yaml" if method == "reconfigure" else method)
-    if plan.method == "none":
-        return ApplyResult("none", False, plan.reason)
-    options = target.options
-    path = options.params_file
-    edit = None if path is None else write_params(path, params, options.controller, ros2=True)
-    wrote = "" if edit is None else f"{edit.line()}; "
-    file = None if path is None else os.fspath(path)
-    line = None if edit is None else edit.line()
-    if plan_.way is not None:
-        done = reload(target, plan_.way, params)
-        how: AppliedBy = "set_parameters" if plan_.way == "configure" else "reload"
-        return ApplyResult(how, True, f"{wrote}{done}", file=file, wrote=line)
-    return ApplyResult(
-        "yaml" if edit is not None else "none",
-        False,
-        f"{wrote}restart the controller on them: "
-        f"{restart_commands(options.controller, params, path)}",
-        file=file,
-        wrote=line,
-    )
 
 
 def _node_name(namespace: str, name: str) -> str:
