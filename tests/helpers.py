@@ -304,6 +304,7 @@ def dom_text(page: Path, tmp_path: Path) -> str:
 #: import besides the adapter's own modules (umbmark.robot.ros1.ROS1_MODULES).
 ROS1_TEST_MODULES = (
     "std_msgs.msg",
+    "diagnostic_msgs.msg",
     "rosgraph_msgs.msg",
     "tf2_msgs.msg",
     "dynamic_reconfigure.server",

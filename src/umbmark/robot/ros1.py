@@ -29,6 +29,7 @@ import math
 import os
 import threading
 import time
+from collections.abc import Callable
 from types import ModuleType
 from typing import Any
 
@@ -51,7 +52,7 @@ from umbmark.robot.ros_common import (
 from umbmark.robot.ros_robot import RosRobot
 from umbmark.sources.bag.imu_frames import ImuMounting
 
-__all__ = ["ROS1_MODULES", "ROS1_PACKAGES", "Ros1Robot", "ros1_problem"]
+__all__ = ["ROS1_MODULES", "ROS1_PACKAGES", "Ros1Robot", "apply_params", "ros1_problem"]
 
 #: The node's base name (rospy makes it unique: ``anonymous``).
 NODE_NAME = "umbmark_selfcal"
@@ -93,6 +94,7 @@ ROS1_PACKAGES = {
     "tf2_msgs": "python3-tf2-msgs",
     "dynamic_reconfigure": "python3-dynamic-reconfigure",
     "yaml": "python3-yaml",
+    "diagnostic_msgs": "python3-diagnostic-msgs",
 }
 
 
@@ -316,12 +318,7 @@ class Ros1Robot(RosRobot):
     def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
         """Reconfigure the controller (multipliers within 0.5 to 1.5), or write its
         parameter file (``yaml``, or outside that range), or nothing (``none``)."""
-        plan = plan_apply(params, method)
-        if plan.method == "none":
-            return ApplyResult("none", False, plan.reason)
-        if plan.method == "reconfigure":
-            return self._reconfigure(params)
-        return self._write_yaml(params, plan.reason)
+        return apply_params(self.options, params, method, self._stop)
 
     def close(self) -> None:
         """Send a zero velocity (and let it go out); the node stays for the process."""
@@ -331,44 +328,58 @@ class Ros1Robot(RosRobot):
         time.sleep(0.05)
         self._closed = True
 
-    # --- applying ---------------------------------------------------------------------
 
-    def _reconfigure(self, params: DriveParams) -> ApplyResult:
-        from dynamic_reconfigure.client import Client
+# --- applying (the monitor's ROS 1 node applies so too) -------------------------------------
 
-        ns = self.options.controller.rstrip("/")
+
+def apply_params(
+    options: RosOptions, params: DriveParams, method: ApplyMethod, stop: Callable[[], None]
+) -> ApplyResult:
+    """Reconfigure ``options.controller`` (multipliers within 0.5 to 1.5), or write its
+    parameter file (``yaml``, or outside that range), or nothing (``none``); ``stop`` is
+    called before any error (the robot's zero velocity)."""
+    plan = plan_apply(params, method)
+    if plan.method == "none":
+        return ApplyResult("none", False, plan.reason)
+    if plan.method == "reconfigure":
+        return _reconfigure(options, params, stop)
+    return _write_yaml(options, params, plan.reason)
+
+
+def _reconfigure(options: RosOptions, params: DriveParams, stop: Callable[[], None]) -> ApplyResult:
+    from dynamic_reconfigure.client import Client
+
+    ns = options.controller.rstrip("/")
+    try:
+        client = Client(ns, timeout=options.timeout)
         try:
-            client = Client(ns, timeout=self.options.timeout)
-            try:
-                held = client.update_configuration(multipliers(params))
-            finally:
-                client.close()
-        except Exception as exc:  # rospy.ROSException, ServiceException
-            self._stop()
-            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise InputError(
-                f"no dynamic_reconfigure server at {ns} ({detail}): is it a "
-                f"diff_drive_controller? ({option('controller')}; or {option('apply', 'yaml')} "
-                f"with {option('params_file')})"
-            ) from None
-        problem = held_problem(params, held)
-        if problem is not None:
-            return ApplyResult("reconfigure", False, problem)
-        return ApplyResult("reconfigure", True, f"parameters reconfigured ({ns}/set_parameters)")
+            held = client.update_configuration(multipliers(params))
+        finally:
+            client.close()
+    except Exception as exc:  # rospy.ROSException, ServiceException
+        stop()
+        detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(
+            f"no dynamic_reconfigure server at {ns} ({detail}): is it a "
+            f"diff_drive_controller? ({option('controller')}; or {option('apply', 'yaml')} "
+            f"with {option('params_file')})"
+        ) from None
+    problem = held_problem(params, held)
+    if problem is not None:
+        return ApplyResult("reconfigure", False, problem)
+    return ApplyResult("reconfigure", True, f"parameters reconfigured ({ns}/set_parameters)")
 
-    def _write_yaml(self, params: DriveParams, reason: str) -> ApplyResult:
-        path = self.options.params_file
-        lead = f"{reason}; " if reason else ""
-        if path is None:
-            return ApplyResult(
-                "none", False, f"{lead}no --params-file to write them to: not applied"
-            )
-        edit = write_params(path, params, self.options.controller, ros2=False)
-        return ApplyResult(
-            "yaml",
-            False,
-            f"{lead}{edit.line()}: load it (rosparam load) and restart the controller to run "
-            "with them",
-            file=os.fspath(path),
-            wrote=edit.line(),
-        )
+
+def _write_yaml(options: RosOptions, params: DriveParams, reason: str) -> ApplyResult:
+    path = options.params_file
+    lead = f"{reason}; " if reason else ""
+    if path is None:
+        return ApplyResult("none", False, f"{lead}no --params-file to write them to: not applied")
+    edit = write_params(path, params, options.controller, ros2=False)
+    return ApplyResult(
+        "yaml",
+        False,
+        f"{lead}{edit.line()}: load it (rosparam load) and restart the controller to run with them",
+        file=os.fspath(path),
+        wrote=edit.line(),
+    )

@@ -49,16 +49,15 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import math
-import os
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from umbmark.core.errors import InputError, SafetyError, option
-from umbmark.robot.base import AppliedBy, ApplyMethod, ApplyResult, DriveParams
-from umbmark.robot.ros2_reload import RESTART, ReloadPlan, plan_reload, reload
+from umbmark.robot.base import ApplyMethod, ApplyResult, DriveParams
+from umbmark.robot.ros2_reload import ReloadPlan, apply_params, reload_plan
 from umbmark.robot.ros_common import (
     MULTIPLIERS,
     Latest,
@@ -66,9 +65,6 @@ from umbmark.robot.ros_common import (
     RosOptions,
     controller_keys,
     default_topics,
-    plan_apply,
-    restart_commands,
-    write_params,
 )
 from umbmark.robot.ros_robot import RosRobot
 from umbmark.robot.urdf import static_mount, urdf_footprint, urdf_geometry, urdf_mount
@@ -76,7 +72,7 @@ from umbmark.robot.urdf import static_mount, urdf_footprint, urdf_geometry, urdf
 if TYPE_CHECKING:
     from umbmark.sources.bag.imu_frames import ImuMounting
 
-__all__ = ["Ros2Robot"]
+__all__ = ["Ros2Robot", "call_service", "controller_params"]
 
 #: The velocity types a diff_drive_controller subscribes.
 STAMPED, UNSTAMPED = "geometry_msgs/msg/TwistStamped", "geometry_msgs/msg/Twist"
@@ -399,31 +395,7 @@ class Ros2Robot(RosRobot):
     def drive_params(self) -> DriveParams:
         """The controller's parameters (its ``get_parameters`` service); the wheel
         separation and radius, where it has none, from the URDF or the options."""
-        from rcl_interfaces.srv import GetParameters
-
-        names = ["wheel_separation", "wheel_radius", *MULTIPLIERS]
-        request = GetParameters.Request()
-        request.names = names
-        ns = self.options.controller.rstrip("/")
-        answer = self.call(GetParameters, f"{ns}/get_parameters", request)
-        got = {n: _double(v) for n, v in zip(names, answer.values, strict=False)}
-        values = {name: got.get(name) or 0.0 for name in names}
-        if not (values["wheel_separation"] > 0.0 and values["wheel_radius"] > 0.0):
-            text = self._description.wait(min(1.0, self.options.timeout))
-            geometry = None if text is None else urdf_geometry(text, self.options.base_frame)
-            sep, radius = geometry or (self.options.wheel_separation, self.options.wheel_radius)
-            if sep is None or radius is None:
-                self._stop()
-                raise InputError(
-                    f"{ns} has no wheel_separation and wheel_radius, nor has the URDF on "
-                    f"/robot_description two wheels: is {option('controller')} the "
-                    "diff_drive_controller?"
-                )
-            values["wheel_separation"] = values["wheel_separation"] or sep
-            values["wheel_radius"] = values["wheel_radius"] or radius
-        for name in MULTIPLIERS:
-            values[name] = values[name] or 1.0
-        return DriveParams(**values)
+        return controller_params(self.call, self.options, self._description, self._stop)
 
     def can_apply(self) -> str | None:
         """Why the controller cannot take new parameters while the routine runs (None:
@@ -438,51 +410,14 @@ class Ros2Robot(RosRobot):
 
     def _plan(self) -> ReloadPlan:
         if self._reload_plan is None:
-            if not self.options.reload:
-                self._reload_plan = ReloadPlan(
-                    None,
-                    "the controller reads its multipliers only when it is configured, and "
-                    f"--reload was not given: {RESTART}",
-                )
-            elif importlib.util.find_spec("controller_manager_msgs") is None:
-                self._reload_plan = ReloadPlan(
-                    None,
-                    "--reload needs controller_manager_msgs, not installed here (no ROS "
-                    "installation: python tools/build_ros2_interfaces.py builds it into this "
-                    f"Python); {RESTART}",
-                )
-            else:
-                self._reload_plan = plan_reload(self)
+            self._reload_plan = reload_plan(self)
         return self._reload_plan
 
     def apply(self, params: DriveParams, method: ApplyMethod) -> ApplyResult:
         """Write the parameter file (when given) and, where the plan found before moving
         allows, reload the controller through the controller manager; else say how to
-        restart it on the new values. The result's method is the way taken:
-        ``set_parameters`` or ``reload`` through the manager, ``yaml`` where only the file
-        was written, ``none`` where nothing was."""
-        plan = plan_apply(params, "yaml" if method == "reconfigure" else method)
-        if plan.method == "none":
-            return ApplyResult("none", False, plan.reason)
-        path = self.options.params_file
-        edit = None if path is None else write_params(path, params, self.options.controller,
-                                                      ros2=True)  # fmt: skip
-        wrote = "" if edit is None else f"{edit.line()}; "
-        file = None if path is None else os.fspath(path)
-        line = None if edit is None else edit.line()
-        way = self._plan().way
-        if way is not None:
-            done = reload(self, way, params)
-            how: AppliedBy = "set_parameters" if way == "configure" else "reload"
-            return ApplyResult(how, True, f"{wrote}{done}", file=file, wrote=line)
-        return ApplyResult(
-            "yaml" if edit is not None else "none",
-            False,
-            f"{wrote}restart the controller on them: "
-            f"{restart_commands(self.options.controller, params, path)}",
-            file=file,
-            wrote=line,
-        )
+        restart it on the new values (:func:`apply_params`)."""
+        return apply_params(self, self._plan(), params, method)
 
     def wait_back(self, since: float) -> None:
         """After a reload: wait until the velocity topic is subscribed again and an
@@ -521,24 +456,73 @@ class Ros2Robot(RosRobot):
 
     def call(self, kind: Any, service: str, request: Any) -> Any:  # noqa: ANN401
         """Call a service (waiting ``options.timeout`` for it and for its answer)."""
-        timeout = self.options.timeout
-        client = self._node.create_client(kind, service)
-        try:
-            if not client.wait_for_service(timeout_sec=timeout):
-                self._stop()
-                raise InputError(
-                    f"no service {service} after {timeout:g} s ({option('controller')})"
-                )
-            future = client.call_async(request)
-            deadline = time.monotonic() + timeout
-            while not future.done():
-                if time.monotonic() > deadline:
-                    self._stop()
-                    raise InputError(f"{service} did not answer in {timeout:g} s")
-                time.sleep(0.005)
-            return future.result()
-        finally:
-            self._node.destroy_client(client)
+        return call_service(self._node, kind, service, request, self.options.timeout, self._stop)
+
+
+# --- what the monitor's node shares: services, the controller's parameters, applying ------
+
+
+def call_service(
+    node: Any,  # noqa: ANN401 (an rclpy Node)
+    kind: Any,  # noqa: ANN401 (a service type)
+    service: str,
+    request: Any,  # noqa: ANN401
+    timeout: float,
+    stop: Callable[[], None],
+) -> Any:  # noqa: ANN401 (its answer)
+    """Call a service of ``node``'s graph (waiting ``timeout`` for it and for its answer;
+    ``stop`` called before any error: the robot's zero velocity)."""
+    client = node.create_client(kind, service)
+    try:
+        if not client.wait_for_service(timeout_sec=timeout):
+            stop()
+            raise InputError(f"no service {service} after {timeout:g} s ({option('controller')})")
+        future = client.call_async(request)
+        deadline = time.monotonic() + timeout
+        while not future.done():
+            if time.monotonic() > deadline:
+                stop()
+                raise InputError(f"{service} did not answer in {timeout:g} s")
+            time.sleep(0.005)
+        return future.result()
+    finally:
+        node.destroy_client(client)
+
+
+def controller_params(
+    call: Callable[[Any, str, Any], Any],
+    options: RosOptions,
+    description: Latest[str],
+    stop: Callable[[], None],
+) -> DriveParams:
+    """The controller's parameters (its ``get_parameters`` service, through ``call``); the
+    wheel separation and radius, where it has none, from the URDF on
+    ``/robot_description`` (``description``) or the options."""
+    from rcl_interfaces.srv import GetParameters
+
+    names = ["wheel_separation", "wheel_radius", *MULTIPLIERS]
+    request = GetParameters.Request()
+    request.names = names
+    ns = options.controller.rstrip("/")
+    answer = call(GetParameters, f"{ns}/get_parameters", request)
+    got = {n: _double(v) for n, v in zip(names, answer.values, strict=False)}
+    values = {name: got.get(name) or 0.0 for name in names}
+    if not (values["wheel_separation"] > 0.0 and values["wheel_radius"] > 0.0):
+        text = description.wait(min(1.0, options.timeout))
+        geometry = None if text is None else urdf_geometry(text, options.base_frame)
+        sep, radius = geometry or (options.wheel_separation, options.wheel_radius)
+        if sep is None or radius is None:
+            stop()
+            raise InputError(
+                f"{ns} has no wheel_separation and wheel_radius, nor has the URDF on "
+                f"/robot_description two wheels: is {option('controller')} the "
+                "diff_drive_controller?"
+            )
+        values["wheel_separation"] = values["wheel_separation"] or sep
+        values["wheel_radius"] = values["wheel_radius"] or radius
+    for name in MULTIPLIERS:
+        values[name] = values[name] or 1.0
+    return DriveParams(**values)
 
 
 def _node_name(namespace: str, name: str) -> str:

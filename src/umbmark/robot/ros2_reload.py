@@ -28,15 +28,25 @@ further pass is driven.
 
 from __future__ import annotations
 
+import importlib.util
 import math
+import os
 from dataclasses import dataclass
 from typing import Any, Literal, Protocol
 
 from umbmark.core.errors import InputError, SafetyError
-from umbmark.robot.base import DriveParams
-from umbmark.robot.ros_common import MULTIPLIERS, RosOptions, multipliers
+from umbmark.robot.base import AppliedBy, ApplyMethod, ApplyResult, DriveParams
+from umbmark.robot.ros_common import (
+    MULTIPLIERS,
+    RosOptions,
+    multipliers,
+    plan_apply,
+    restart_commands,
+    write_params,
+)
 
-__all__ = ["RESTART", "ReloadPlan", "controller_names", "plan_reload", "reload"]
+__all__ = ["RESTART", "ReloadPlan", "ReloadTarget", "apply_params", "controller_names"]
+__all__ += ["plan_reload", "reload", "reload_plan"]
 
 #: What the routine does where the controller cannot take new parameters while it runs.
 RESTART = (
@@ -287,4 +297,57 @@ def _stopped(robot: ReloadTarget, what: str) -> SafetyError:
     return SafetyError(
         f"{what}: {now}; the robot stands and no further pass is driven on parameters that "
         f"were not applied (the controller manager's log says why)"
+    )
+
+
+# --- applying: the self-calibration's and the monitor's ROS 2 node's -----------------------
+
+
+def reload_plan(target: ReloadTarget) -> ReloadPlan:
+    """How new multipliers will reach ``target``'s controller (``options.reload``,
+    ``controller_manager_msgs`` importable, then the manager asked: :func:`plan_reload`)."""
+    if not target.options.reload:
+        return ReloadPlan(
+            None,
+            "the controller reads its multipliers only when it is configured, and "
+            f"--reload was not given: {RESTART}",
+        )
+    if importlib.util.find_spec("controller_manager_msgs") is None:
+        return ReloadPlan(
+            None,
+            "--reload needs controller_manager_msgs, not installed here (no ROS "
+            "installation: python tools/build_ros2_interfaces.py builds it into this "
+            f"Python); {RESTART}",
+        )
+    return plan_reload(target)
+
+
+def apply_params(
+    target: ReloadTarget, plan_: ReloadPlan, params: DriveParams, method: ApplyMethod
+) -> ApplyResult:
+    """Write ``options.params_file`` (when given) and, where ``plan_`` allows, reload the
+    controller through the controller manager; else say how to restart it on the new
+    values. The result's method is the way taken: ``set_parameters`` or ``reload``
+    through the manager, ``yaml`` where only the file was written, ``none`` where nothing
+    was."""
+    plan = plan_apply(params, "yaml" if method == "reconfigure" else method)
+    if plan.method == "none":
+        return ApplyResult("none", False, plan.reason)
+    options = target.options
+    path = options.params_file
+    edit = None if path is None else write_params(path, params, options.controller, ros2=True)
+    wrote = "" if edit is None else f"{edit.line()}; "
+    file = None if path is None else os.fspath(path)
+    line = None if edit is None else edit.line()
+    if plan_.way is not None:
+        done = reload(target, plan_.way, params)
+        how: AppliedBy = "set_parameters" if plan_.way == "configure" else "reload"
+        return ApplyResult(how, True, f"{wrote}{done}", file=file, wrote=line)
+    return ApplyResult(
+        "yaml" if edit is not None else "none",
+        False,
+        f"{wrote}restart the controller on them: "
+        f"{restart_commands(options.controller, params, path)}",
+        file=file,
+        wrote=line,
     )
