@@ -45,7 +45,7 @@ def test_without_a_reference_the_wheelbase_is_the_gyros_and_applied_with_care(re
     lines = gyro_lines(done.gyro)
     assert lines[0] == "Gyro (imu_link), against the wheels alone:"
     said = next(line for line in lines if line.startswith("bias = "))
-    value, error = (float(x) for x in re.findall(r"[-\d.]+(?= deg/s| \+-)", said)[:2])
+    value, error = (float(x) for x in re.findall(r"[-\d.]+(?= deg/s| ±)", said)[:2])
     true_mean = math.degrees(float(np.mean(recording.bias)))
     assert value == pytest.approx(true_mean, abs=0.01)
     assert 0.0 < error < 0.01

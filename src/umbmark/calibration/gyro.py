@@ -107,22 +107,22 @@ def gyro_lines(gyro: GyroCalibration) -> list[str]:
     out = [f"Gyro ({gyro.mounting.frame}), against {_AGAINST.get(gyro.reference, gyro.reference)}:"]
     if "k_g" in v:
         out.append(
-            f"scale k_g = {v['k_g']:.5f} +- {se['k_g']:.5f}{_interval(gyro, 'k_g', 1.0, '.5f')}"
+            f"scale k_g = {v['k_g']:.5f} ± {se['k_g']:.5f}{_interval(gyro, 'k_g', 1.0, '.5f')}"
             ": omega_true = k_g (omega_read - bias); a driver that scales its rates: its "
             "gyro scale times k_g"
         )
     if "bias" in v:
         deg = 180.0 / math.pi
         out.append(
-            f"bias = {v['bias'] * deg:.4f} +- {se['bias'] * deg:.4f} deg/s"
+            f"bias = {v['bias'] * deg:.4f} ± {se['bias'] * deg:.4f} deg/s"
             f"{_interval(gyro, 'bias', deg, '.4f')} ({v['bias']:.3e} rad/s, its mean over the "
             "recording): subtract it from the yaw rate (a driver's gyro offset; most drivers "
             "measure it themselves while the robot stands still)"
         )
     if "E_b_k_g" in v and "k_g" not in v:
         out.append(
-            f"E_b k_g = {v['E_b_k_g']:.5f} +- {se['E_b_k_g']:.5f}: the wheelbase relative to "
-            f"the gyro (its scale known to +-{100 * gyro.scale_tolerance:g} %, "
+            f"E_b k_g = {v['E_b_k_g']:.5f} ± {se['E_b_k_g']:.5f}: the wheelbase relative to "
+            f"the gyro (its scale known to ±{100 * gyro.scale_tolerance:g} %, "
             "--gyro-scale-tolerance), not E_b itself"
         )
     for name, why in gyro.undetermined.items():

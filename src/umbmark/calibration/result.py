@@ -416,8 +416,10 @@ class CalibrationResult(JsonText):
             out["time_association"] = {name: a.to_dict() for name, a in self.associations}
         if self.without is not None:
             out["without_rows"] = self.without.to_dict()
-        if self.gyro is not None:
+        if self.gyro is not None:  # the gyro's new scale and bias beside the wheels'
             out["gyro_calibration"] = self.gyro.to_dict()
+            out["new"]["gyro_scale_multiplier"] = self.gyro.values.get("k_g")
+            out["new"]["gyro_bias"] = self.gyro.values.get("bias")
         if self.notes:
             out["notes"] = list(self.notes)
         return out

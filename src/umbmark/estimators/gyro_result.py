@@ -105,8 +105,9 @@ class GyroCalibration:
         subtract from the yaw rate), and the IMU frame's origin ``rpy`` found and stated
         [rad] (None where the stated one or the turning axis is not known), with
         ``rotation_offset``, the rotation of the readings that keeps the stated
-        transform (ros2_controllers' ``imu_sensor_broadcaster``: ``Rz Ry Rx``), and
-        whether the mounting differs."""
+        transform (ros2_controllers' ``imu_sensor_broadcaster``: ``Rz Ry Rx``), whether
+        the mounting differs, and the scale tolerance ``E_b`` is relative to (None where
+        ``k_g`` is determined)."""
         from umbmark.estimators.gyro_mounting import rpy_of
 
         v, mounting = self.values, self.mounting
@@ -121,6 +122,7 @@ class GyroCalibration:
             "origin_rpy_stated": None if stated is None else rpy_of(stated),
             "rotation_offset": offset,
             "mounting_differs": mounting.differs,
+            "scale_tolerance": None if "k_g" in v else self.scale_tolerance,
         }
 
     def to_dict(self) -> dict[str, Any]:

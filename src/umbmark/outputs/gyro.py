@@ -68,22 +68,20 @@ DRIVERS = (
 
 
 def gyro_html(result: CalibrationResult) -> str:
-    """The report page's gyro section (empty without a gyro)."""
+    """The report page's gyro section's content: the gyro's figures and where they go,
+    the table of :data:`DRIVERS` (empty without a gyro)."""
     from umbmark.calibration.gyro import gyro_lines
+    from umbmark.outputs.html_parts import table
 
     gyro = result.gyro
     if gyro is None:
         return ""
-    lines = gyro_lines(gyro)
-    items = "".join(f"<li>{html.escape(line)}</li>" for line in lines[1:])
-    rows = "".join(
-        f"<tr><td>{html.escape(driver)}</td><td>{html.escape(scale)}</td>"
-        f"<td>{html.escape(bias)}</td></tr>"
-        for driver, scale, bias in DRIVERS
-    )
+    head, *lines = gyro_lines(gyro)
+    items = "".join(f'<li class="command">{html.escape(line)}</li>\n' for line in lines)
+    drivers = table(["driver", "the scale", "the bias"], [list(d) for d in DRIVERS], (1, 2))
     return (
-        f'<section id="gyro"><h2>The gyro</h2><p>{html.escape(lines[0])}</p><ul>{items}</ul>'
-        "<p>Where common drivers take the scale and the bias (as their sources name them):"
-        "</p><table><thead><tr><th>driver</th><th>scale</th><th>bias</th></tr></thead>"
-        f"<tbody>{rows}</tbody></table></section>"
+        f"<p>{html.escape(head)}</p>\n<ul>\n{items}</ul>\n"
+        "<p>Where common drivers take them (as their sources name them; "
+        "docs/reading-results.md cites them):</p>\n"
+        f"{drivers}"
     )
