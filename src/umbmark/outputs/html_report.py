@@ -445,11 +445,10 @@ def passes_html(page: Passes) -> str:
     robot = page.passes[0].robot
     if robot:
         title = f"{robot}: {title}"
+    from umbmark.outputs.gyro import gyro_html
     from umbmark.outputs.html_verdict import CSS, verdict_section
     from umbmark.outputs.mounting import CSS as MOUNTING_CSS
     from umbmark.outputs.mounting import mounting_forms, mounting_html
-
-    from umbmark.outputs.gyro import gyro_html
 
     forms = mounting_forms(page.last)  # None but for a calibration from motion intervals
     mounting = [] if forms is None else [("mounting", "The laser's mounting", mounting_html(forms))]
