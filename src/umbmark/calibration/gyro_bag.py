@@ -22,18 +22,19 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from umbmark.calibration.scan import bag_guess, no_intervals, scan_report
+from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError, option
 from umbmark.core.messages import info
 from umbmark.runs.active import choose_active
 from umbmark.runs.read import bag_options, parameter_file
-from umbmark.scans.gyro_intervals import SATURATED, HeadingReference
+from umbmark.scans.gyro_intervals import SATURATED, HeadingReference, motion_rows
 
 if TYPE_CHECKING:
     from umbmark.calibration.gyro import GyroResult
@@ -47,6 +48,8 @@ __all__ = [
     "PIECE",
     "GyroRecording",
     "calibrate_gyro_bags",
+    "gyro_figures",
+    "gyro_heading_errors",
     "heading_reference",
     "imu_topic_of",
     "read_gyro_recording",
@@ -77,6 +80,8 @@ class GyroRecording:
         The laser's stated mounting (with scan matching).
     notes : tuple of str
         What reading said (information and warnings).
+    held_out : array, shape (k, 2)
+        Stretches [s] left out (:meth:`without`).
     """
 
     path: str
@@ -88,10 +93,39 @@ class GyroRecording:
     stated_mounting: LaserMounting | None = None
     notes: tuple[str, ...] = ()
 
+    held_out: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
+
     @property
-    def excluded(self) -> dict[str, np.ndarray]:
-        """The stretches the gyro's reader found it did not read, by reason."""
-        return {"gyro frozen": self.imu.frozen, SATURATED: self.imu.saturated}
+    def excluded(self) -> dict[str, FloatArray]:
+        """The stretches the gyro's reader found it did not read, by reason (and those
+        held out: :meth:`without`)."""
+        out = {"gyro frozen": self.imu.frozen, SATURATED: self.imu.saturated}
+        if self.held_out.size:
+            out["held out"] = self.held_out
+        return out
+
+    def without(self, spans: Sequence[tuple[float, float]]) -> GyroRecording:
+        """The recording with the stretches ``spans`` [s] left out (a held-out run): of
+        its intervals (:attr:`excluded`) and its reference's."""
+        cut = np.array(spans, dtype=np.float64).reshape(-1, 2)
+        reference = self.reference
+        if isinstance(reference, HeadingReference):
+            keep = np.ones(reference.start.shape, dtype=bool)
+            for a, b in cut.tolist():
+                keep &= ~((reference.start < b) & (reference.end > a))
+            reference = HeadingReference(
+                reference.start[keep], reference.end[keep], reference.yaw[keep],
+                None if reference.variance is None else reference.variance[keep],
+                reference.source,
+            )  # fmt: skip
+        elif reference is not None and reference.start_time is not None:
+            start, end = reference.start_time, reference.start_time + reference.duration
+            keep = np.ones(start.shape, dtype=bool)
+            for a, b in cut.tolist():
+                keep &= ~((start < b) & (end > a))
+            reference = motion_rows(reference, keep)
+        held = np.concatenate([self.held_out, cut]) if self.held_out.size else cut
+        return replace(self, reference=reference, held_out=held)
 
     def calibrate(self, side_length: float | None = None) -> GyroResult:
         """The wheels and the gyro calibrated together
@@ -231,3 +265,76 @@ def calibrate_gyro_bags(
             f"its wheels on one clock): give one bag, not {len(bags)}"
         )
     return read_gyro_recording(bags[0], options, wheelbase).calibrate(side_length)
+
+
+def gyro_figures(params: object) -> tuple[float, float] | None:
+    """The gyro's scale ``k_g`` and bias [rad/s] of a calibration: a result
+    (:attr:`CalibrationResult.gyro <umbmark.calibration.result.CalibrationResult.gyro>`) or
+    a result file (its ``new`` block's ``gyro_scale_multiplier``, ``gyro_bias``); ``k_g``
+    1 where it was not determined (wheels and gyro alone); None without a gyro's."""
+    import json
+
+    from umbmark.calibration.result import CalibrationResult
+
+    if isinstance(params, CalibrationResult):
+        if params.gyro is None or "bias" not in params.gyro.values:
+            return None
+        return params.gyro.values.get("k_g", 1.0), params.gyro.values["bias"]
+    if not isinstance(params, str | os.PathLike):
+        return None
+    try:
+        new = json.loads(Path(params).read_text(encoding="utf-8")).get("new") or {}
+    except (OSError, ValueError, AttributeError):
+        return None  # reading the result says what is wrong with it
+    scale, bias = new.get("gyro_scale_multiplier"), new.get("gyro_bias")
+    if not isinstance(bias, int | float) or isinstance(bias, bool) or not np.isfinite(bias):
+        return None
+    good = isinstance(scale, int | float) and not isinstance(scale, bool) and 0.5 < scale < 2.0
+    return (float(scale) if good else 1.0), float(bias)
+
+
+def gyro_heading_errors(
+    path: str | os.PathLike[str],
+    options: ReadOptions,
+    spans: Sequence[tuple[float, float, float] | None],
+    figures: tuple[float, float] | None,
+) -> dict[str, tuple[float | None, ...]]:
+    """Each run's true heading change less the gyro's over it [rad]: ``as read`` (its
+    rates integrated as they are) and, with a calibration's ``figures`` (``k_g``,
+    bias), ``calibrated`` (``k_g`` times the rates less the bias); None where the gyro
+    did not read the whole run.
+
+    Parameters
+    ----------
+    spans : sequence of (float, float, float) or None
+        Each run's start and end [s, the recording's clock] and its true heading change
+        [rad] (:meth:`umbmark.model.recording.RunLog.truth_turn`; None: no truth).
+
+    Raises
+    ------
+    InputError
+        As :func:`umbmark.sources.bag.imu.read_imu`.
+    """
+    from umbmark.sources.bag.imu import read_imu
+
+    name = os.fspath(path)
+    topic, _ = imu_topic_of(path, options.imu_topic)
+    read = read_imu(
+        name, bag_options(replace(options, imu_topic=topic), None, parameter_file(options))
+    )
+    rows = np.array([s or (0.0, 0.0, np.nan) for s in spans], dtype=np.float64).reshape(-1, 3)
+    start, end, truth = rows[:, 0], rows[:, 1], rows[:, 2]
+    usable = read.usable(start, end) & np.isfinite(truth)
+    raw = np.full(start.shape, np.nan)
+    if usable.any():
+        raw[usable] = read.gyro.yaw_change(start[usable], end[usable])
+    sets = {"as read": raw}
+    if figures is not None:
+        k_g, bias = figures
+        sets["calibrated"] = k_g * (raw - bias * (end - start))
+    return {
+        key: tuple(
+            None if not np.isfinite(v) else float(t - v) for t, v in zip(truth, values, strict=True)
+        )
+        for key, values in sets.items()
+    }

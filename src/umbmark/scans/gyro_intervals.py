@@ -57,6 +57,7 @@ __all__ = [
     "HeadingReference",
     "gyro_intervals",
     "gyro_reference",
+    "motion_rows",
 ]
 
 #: The reason intervals across a saturated stretch are left out by.
@@ -501,7 +502,7 @@ def gyro_reference(
             "no stretch of the heading reference lies within the gyro's readings", source=where
         )
     if motion is not None:
-        motion = _motion_rows(motion, keep)
+        motion = motion_rows(motion, keep)
     return GyroReference(
         start=start[keep],
         end=end[keep],
@@ -514,7 +515,8 @@ def gyro_reference(
     )
 
 
-def _motion_rows(motion: MotionIntervals, rows: BoolArray) -> MotionIntervals:
+def motion_rows(motion: MotionIntervals, rows: BoolArray) -> MotionIntervals:
+    """The intervals ``rows`` (a mask of shape (n,)) of ``motion``."""
     cov, start = motion.sensor_covariance, motion.start_time
     return MotionIntervals(
         duration=motion.duration[rows],
