@@ -289,8 +289,9 @@ def gyro_figures(params: object) -> tuple[float, float] | None:
     scale, bias = new.get("gyro_scale_multiplier"), new.get("gyro_bias")
     if not isinstance(bias, int | float) or isinstance(bias, bool) or not np.isfinite(bias):
         return None
-    good = isinstance(scale, int | float) and not isinstance(scale, bool) and 0.5 < scale < 2.0
-    return (float(scale) if good else 1.0), float(bias)
+    if isinstance(scale, int | float) and not isinstance(scale, bool) and 0.5 < scale < 2.0:
+        return float(scale), float(bias)
+    return 1.0, float(bias)
 
 
 def gyro_heading_errors(
