@@ -43,6 +43,7 @@ if TYPE_CHECKING:
     from umbmark.model.scans import LaserMounting
     from umbmark.runs.read_options import ReadOptions
     from umbmark.sources.bag.imu import ImuRead
+    from umbmark.sources.params.reader import CalibratedParams
 
 __all__ = [
     "PIECE",
@@ -267,31 +268,13 @@ def calibrate_gyro_bags(
     return read_gyro_recording(bags[0], options, wheelbase).calibrate(side_length)
 
 
-def gyro_figures(params: object) -> tuple[float, float] | None:
-    """The gyro's scale ``k_g`` and bias [rad/s] of a calibration: a result
-    (:attr:`CalibrationResult.gyro <umbmark.calibration.result.CalibrationResult.gyro>`) or
-    a result file (its ``new`` block's ``gyro_scale_multiplier``, ``gyro_bias``); ``k_g``
-    1 where it was not determined (wheels and gyro alone); None without a gyro's."""
-    import json
-
-    from umbmark.calibration.result import CalibrationResult
-
-    if isinstance(params, CalibrationResult):
-        if params.gyro is None or "bias" not in params.gyro.values:
-            return None
-        return params.gyro.values.get("k_g", 1.0), params.gyro.values["bias"]
-    if not isinstance(params, str | os.PathLike):
+def gyro_figures(params: CalibratedParams) -> tuple[float, float] | None:
+    """The gyro's scale ``k_g`` and bias [rad/s] of a calibration's new parameters
+    (``k_g`` 1 where it was not determined: wheels and gyro alone); None without a
+    gyro's."""
+    if params.gyro_bias is None:
         return None
-    try:
-        new = json.loads(Path(params).read_text(encoding="utf-8")).get("new") or {}
-    except (OSError, ValueError, AttributeError):
-        return None  # reading the result says what is wrong with it
-    scale, bias = new.get("gyro_scale_multiplier"), new.get("gyro_bias")
-    if not isinstance(bias, int | float) or isinstance(bias, bool) or not np.isfinite(bias):
-        return None
-    if isinstance(scale, int | float) and not isinstance(scale, bool) and 0.5 < scale < 2.0:
-        return float(scale), float(bias)
-    return 1.0, float(bias)
+    return (1.0 if params.gyro_scale is None else params.gyro_scale), params.gyro_bias
 
 
 def gyro_heading_errors(

@@ -307,6 +307,8 @@ class CalibrationResult(JsonText):
             wheel_diameter=cal.active.wheel_diameter,
             source=self.source,
             controller=self._controller_name,
+            gyro_scale=None if self.gyro is None else self.gyro.values.get("k_g"),
+            gyro_bias=None if self.gyro is None else self.gyro.values.get("bias"),
         )
 
     @property

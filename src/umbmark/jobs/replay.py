@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from typing_extensions import Unpack
 
     from umbmark.outputs.tum import TumTime
+    from umbmark.sources.params.reader import CalibratedParams
 
 __all__ = ["ReplayReport", "replay", "trajectory_rmse"]
 
@@ -333,14 +334,14 @@ def replay(
         associations=read.associations,
         notes=split_messages(read.notes)[0],
         warnings=split_messages(read.notes)[1],
-        gyro_heading_errors=_gyro(source, read_options, read.runs, params),
+        gyro_heading_errors=_gyro(source, read_options, read.runs, calibrated),
     )
     report.write(plot=plot, tum=tum, tum_time=tum_time, force=force)
     return report
 
 
 def _gyro(
-    source: PathLike, options: ReadOptions, runs: tuple[Run, ...], params: Calibrated | None
+    source: PathLike, options: ReadOptions, runs: tuple[Run, ...], params: CalibratedParams | None
 ) -> dict[str, tuple[float | None, ...]]:
     """The gyro's heading over each run against the truth's (with ``imu_topic``)."""
     if options.imu_topic is None:
