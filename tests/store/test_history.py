@@ -433,8 +433,9 @@ def _gyro_history(path: Path) -> History:
         E_b = 1.02 if k_g else 1.02 * 0.98
         new = {"gyro_scale_multiplier": k_g, "gyro_bias": 0.005}
         verdict = {"level": "apply" if k_g else "care", "reasons": [], "instead": None}
-        store.record("amr", NewCalibration(when, "gyro", 1.003, E_b, None, None, se, active,
-                                           new, verdict, 0.34, 0.15), same_nominal=False)  # fmt: skip
+        made = NewCalibration(when, "gyro", 1.003, E_b, None, None, se, active, new, verdict,
+                              0.34, 0.15)  # fmt: skip
+        store.record("amr", made, same_nominal=False)
     return store
 
 
