@@ -123,3 +123,34 @@ def test_a_runs_table_is_not_for_the_gyro(tmp_path, table):
     line = cli_error("calibrate", str(path), "-b", "0.34", "-L", "4", "--method", "gyro")
     assert "the gyro method needs a recording's wheels and its gyro" in line
     assert "--imu-topic" in line
+
+
+def test_a_tilt_the_stated_transform_misses_is_said_as_the_imu_frames_urdf_origin(recording):
+    """The closed-form IMU rolled and pitched 0.7 deg each (TRUTH.tilt), stated level:
+    the origin found is that roll and pitch (the yaw as stated), within three of the
+    tilt's standard errors, and the line says where to put it."""
+    done = calibrate_gyro(
+        recording.wheels, recording.gyro, OPTIONS, wheelbase=0.34, stated=np.eye(3)
+    )
+    apply = done.gyro.to_apply()
+    assert apply["mounting_differs"] is True
+    assert apply["origin_rpy_stated"] == [0.0, 0.0, 0.0]
+    roll, pitch, yaw = apply["origin_rpy_found"]
+    error = done.gyro.mounting.tilt_error
+    assert error is not None
+    assert roll == pytest.approx(TRUTH.tilt[0], abs=3 * error + 1e-4)
+    assert pitch == pytest.approx(TRUTH.tilt[1], abs=3 * error + 1e-4)
+    assert yaw == pytest.approx(0.0, abs=1e-12)
+    assert apply["rotation_offset"] == pytest.approx([roll, pitch, yaw], abs=1e-12)
+    said = [line for line in gyro_lines(done.gyro) if "URDF joint origin" in line]
+    assert said == [
+        f'imu_link\'s URDF joint origin: rpy="{roll:.5f} {pitch:.5f} 0.00000" (stated: '
+        '"0.00000 0.00000 0.00000"; its yaw as stated, which the turns do not show) [rad]; '
+        "or, keeping the stated transform, imu_sensor_broadcaster's rotation_offset roll, "
+        f"pitch, yaw = {roll:.5f} {pitch:.5f} 0.00000 [rad]"
+    ]
+    data = json.loads(json.dumps(done.to_dict()))
+    assert data["gyro_calibration"]["apply"]["origin_rpy_found"] == pytest.approx(
+        [roll, pitch, yaw]
+    )
+    assert data["new"]["gyro_bias"] == done.gyro.values["bias"]
