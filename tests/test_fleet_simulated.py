@@ -145,7 +145,7 @@ def test_the_latest_figures_are_each_robots_truth_within_their_intervals(
     truth = json.loads((fleet / "truth.json").read_text())
     last = {r["robot"]: r for r in truth["recordings"] if r["day"] == "2026-11-07"}
     for day in last.values():
-        day["k_g"] = day["gyro"]["k_g"]
+        day["k_g"] = day["imu"]["k_g"]
     assert sorted(last) == [f"robot{k:02d}" for k in range(1, ROBOTS + 1)]
     missed = []
     for robot in watched[0]["robots"]:
@@ -316,7 +316,7 @@ def test_wheels_and_an_imu_alone_are_calibrated_by_the_gyro_apart_from_the_laser
         strict=True,
     ):
         t = true[Path(day).parent.name]
-        expected = t["E_b"] * t["gyro"]["k_g"] / t["E_s"]
+        expected = t["E_b"] * t["imu"]["k_g"] / t["E_s"]
         assert abs(value - expected) < 3.29 * se + 2e-4, (value, expected, se)
     assert robot["apply"]["wheel_separation_multiplier"] == pytest.approx(
         figures["E_b"]["value"], rel=1e-12

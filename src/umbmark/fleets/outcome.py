@@ -516,7 +516,7 @@ def _record(result: Any) -> dict[str, Any]:  # noqa: ANN401 (CalibrationResult)
         "wheel_diameter": result.calibration.active.wheel_diameter,
         "overlay": None if result.overlay_withheld else result.overlay_yaml(),
         "mounting": None if forms is None else forms.to_dict(),
-        "gyro": None if result.gyro is None else result.gyro.to_apply(),
+        "gyro_calibration": None if result.gyro is None else result.gyro.to_apply(),
         "controller": {
             "key_path": list(result.controller.key_path),
             "named": bool(result.controller.named),

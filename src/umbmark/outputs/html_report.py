@@ -453,7 +453,7 @@ def passes_html(page: Passes) -> str:
     forms = mounting_forms(page.last)  # None but for a calibration from motion intervals
     mounting = [] if forms is None else [("mounting", "The laser's mounting", mounting_html(forms))]
     if page.last.gyro is not None:
-        mounting.append(("gyro", "The gyro", gyro_html(page.last)))
+        mounting.append(("gyro-calibration", "The gyro", gyro_html(page.last)))
     sections = [
         ("apply", "Apply the correction?", verdict_section(page)),
         ("verdict", "E_max,syst and the 3 x SEM rule", _verdict(page) + _clusters(page)),

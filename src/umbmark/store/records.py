@@ -177,7 +177,9 @@ class CalibrationRecord:
     def relative_to_gyro(self) -> bool:
         """Its ``E_b`` is relative to the gyro (``E_b k_g``: wheels and gyro alone, no
         absolute heading), not the wheelbase itself: never compared with one that is."""
-        return self.method == "gyro" and "gyro_scale" not in self.standard_errors
+        from umbmark.estimators.registry import GYROS
+
+        return self.method in GYROS and "gyro_scale" not in self.standard_errors
 
     @property
     def k_g(self) -> float | None:
