@@ -460,7 +460,8 @@ def _relative_e_b(track: FigureTrack, latest: RecordingOutcome) -> float:
     from umbmark.estimators.gyro import SCALE_TOLERANCE, widened_resolves
 
     value, se = track.latest
-    tolerance = (latest.record.get("gyro_calibration") or {}).get("scale_tolerance") or SCALE_TOLERANCE
+    gyro = latest.record.get("gyro_calibration") or {}
+    tolerance = gyro.get("scale_tolerance") or SCALE_TOLERANCE
     widened = math.hypot(se, value * float(tolerance) / Z95)
     return value if widened_resolves(value, widened) else 1.0
 
