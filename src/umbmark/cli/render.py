@@ -201,7 +201,10 @@ def _render_errors(report: CalibrationResult, console: Console) -> None:
     if nominal:
         E_b = _plus_minus(est.E_b, se.get("E_b"), ".6f")
         if "E_b_gyro" in est.components and "gyro_scale" not in est.components:
-            _row(errors, "E_b relative to the gyro", E_b, "E_b k_g: the gyro's scale tolerance")
+            if "E_b" in se:
+                _row(errors, "E_b relative to the gyro", E_b, "E_b k_g, ± its scale tolerance")
+            else:
+                _row(errors, "E_b, not corrected", E_b, "relative to the gyro: see its lines")
         else:
             _row(errors, "E_b = b_actual / b_nominal", E_b, "Eq. 4.27")
     _row(errors, "E_d = D_R / D_L", _plus_minus(est.E_d, se.get("E_d"), ".6f"), "Eq. 4.22")
