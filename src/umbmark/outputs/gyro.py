@@ -78,7 +78,7 @@ def gyro_html(result: CalibrationResult) -> str:
         return ""
     head, *lines = gyro_lines(gyro)
     items = "".join(f'<li class="command">{html.escape(line)}</li>\n' for line in lines)
-    drivers = table(["driver", "the scale", "the bias"], [list(d) for d in DRIVERS], (1, 2))
+    drivers = table(["driver", "the scale", "the bias"], [list(d) for d in DRIVERS], (0, 1, 2))
     return (
         f"<p>{html.escape(head)}</p>\n<ul>\n{items}</ul>\n"
         "<p>Where common drivers take them (as their sources name them; "
