@@ -53,7 +53,7 @@ if TYPE_CHECKING:
     from umbmark.model.scans import LaserMounting
     from umbmark.runs.read_options import ReadOptions
 
-__all__ = ["GyroResult", "calibrate_gyro", "gyro_lines"]
+__all__ = ["GyroResult", "calibrate_gyro", "gyro_lines", "refuse_saturated"]
 
 
 @dataclass(frozen=True)
@@ -250,7 +250,8 @@ def calibrate_gyro(
     assert entry.name in GYROS
     try:
         intervals = gyro_intervals(wheels, gyro, cut, excluded=excluded)
-        _check_saturation(intervals.left_out, gyro, where)
+        clipped = intervals.left_out.get(SATURATED, 0)
+        refuse_saturated(gyro, clipped, "interval(s) of the turns", where)
         ref = None if reference is None else gyro_reference(gyro, reference)
         estimate, found = entry.load()(
             intervals, used, side_length, reference=ref,
@@ -280,17 +281,19 @@ def calibrate_gyro(
     return GyroResult(result, found)
 
 
-def _check_saturation(left: Mapping[str, int], gyro: GyroSeries, where: str | None) -> None:
-    """Refuse a gyro that saturated in the turns: the clipped readings read the turns
-    short, and where a turn only touched the full scale the clipping is not seen."""
-    if not left.get(SATURATED):
+def refuse_saturated(gyro: GyroSeries, count: int, what: str, where: str | None) -> None:
+    """Refuse a gyro that saturated (``count`` of ``what``: the intervals of the turns
+    across a stretch :func:`umbmark.model.gyro_series.saturated_stretches` found, or the
+    stretches themselves): the clipped readings read the turns short, and where a turn
+    only touched the full scale the clipping is not seen. Nothing is calibrated, replayed
+    or validated from it: the one refusal of a saturating gyro."""
+    if not count:
         return
     peak = math.degrees(float(abs(gyro.rate).max()))
     raise InputError(
         f"the gyro saturates: an axis held at its extreme reading ({peak:.1f} deg/s) in "
-        f"{left[SATURATED]} interval(s) of the turns, its full scale exceeded, so the turns "
-        f"read short: record again turning slower than {0.8 * peak:.0f} deg/s, or set the "
-        "gyro's range higher",
+        f"{count} {what}, its full scale exceeded, so the turns read short: record again "
+        f"turning slower than {0.8 * peak:.0f} deg/s, or set the gyro's range higher",
         source=where,
     )
 

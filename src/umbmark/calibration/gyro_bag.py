@@ -105,6 +105,15 @@ class GyroRecording:
             out["held out"] = self.held_out
         return out
 
+    def refuse_saturated(self) -> None:
+        """Refuse the recording where its gyro saturated anywhere
+        (:func:`umbmark.calibration.gyro.refuse_saturated`): what reads the gyro over
+        whole runs (replay, validate) uses no stretch of it."""
+        from umbmark.calibration.gyro import refuse_saturated
+
+        saturated = self.imu.saturated
+        refuse_saturated(self.imu.gyro, len(saturated), "stretch(es) of the recording", self.path)
+
     def without(self, spans: Sequence[tuple[float, float]]) -> GyroRecording:
         """The recording with the stretches ``spans`` [s] left out (a held-out run): of
         its intervals (:attr:`excluded`) and its reference's."""
@@ -297,7 +306,8 @@ def gyro_heading_errors(
     Raises
     ------
     InputError
-        As :func:`umbmark.sources.bag.imu.read_imu`.
+        As :func:`umbmark.sources.bag.imu.read_imu`; a gyro that saturated
+        (:func:`umbmark.calibration.gyro.refuse_saturated`).
     """
     from umbmark.sources.bag.imu import read_imu
 
@@ -308,6 +318,9 @@ def gyro_heading_errors(
     )
     rows = np.array([s or (0.0, 0.0, np.nan) for s in spans], dtype=np.float64).reshape(-1, 3)
     start, end, truth = rows[:, 0], rows[:, 1], rows[:, 2]
+    from umbmark.calibration.gyro import refuse_saturated
+
+    refuse_saturated(read.gyro, len(read.saturated), "stretch(es) of the recording", name)
     usable = read.usable(start, end) & np.isfinite(truth)
     raw = np.full(start.shape, np.nan)
     if usable.any():

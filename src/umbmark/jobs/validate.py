@@ -104,4 +104,5 @@ def validate(
         from umbmark.calibration.gyro_bag import read_gyro_recording
 
         gyro = read_gyro_recording(paths[0], read_options, wheelbase)
+        gyro.refuse_saturated()
     return validate_read(read, chosen, progress, gyro)
