@@ -271,3 +271,45 @@ def test_the_report_page_shows_the_gyro(imu_bag, tmp_path):
         _within(float(k_g[1]), K_G, float(k_g[2]))
         assert abs(float(bias[1]) - BIAS) < Z * float(bias[2]) + 0.02  # its walk: 0.02 deg/s
         assert "turtlebot_create" in text  # where a driver takes them
+
+
+@pytest.mark.slow
+def test_the_fleet_lists_each_bad_imu_with_its_line(tmp_path):
+    """A robot's recordings of wheels and an IMU, no laser, no reference: the good IMU
+    calibrated by the gyro (E_b relative to the gyro), each bad one (no messages, frozen,
+    its frame unknown, accelerations only, saturating) left out with the line calibrate
+    says of it, none offered for applying; the robot's figures from the good one only."""
+    pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fleet]'")
+    import corpus_inputs as ci
+
+    session = ci.simulated_session()
+    kinds = {"ok": "", "empty": "the topic has no messages", "frozen": "a frozen IMU",
+             "no-frame": "the IMU's frame imu_link has no transform",
+             "accel-only": "no angular velocity", "saturated": "the gyro saturates"}  # fmt: skip
+    assert set(kinds) == set(ci.IMUS)
+    paths = {}
+    for day, kind in enumerate(kinds, 1):
+        folder = tmp_path / "fleet" / "robot01" / f"2026-11-0{day}"
+        folder.mkdir(parents=True)
+        paths[kind] = str(ci.write_session_bag(folder / "drive", "mcap", session, truth=False,
+                                               imu=kind))  # fmt: skip
+    proc = run_cli("fleet", str(tmp_path / "fleet"), "--robot-from", "{robot}/{date}/*", "-b",
+                   "0.34", "--wheel-diameter", "0.15", "--history", str(tmp_path / "h.sqlite3"),
+                   "--workers", "1", "--json", timeout=300)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads(proc.stdout)
+    (robot,) = data["robots"]
+    assert data["failed"] == []
+    assert robot["latest"]["method"] == "gyro"
+    assert robot["latest"]["path"].endswith("2026-11-01/drive")
+    left = {entry["path"]: entry["reason"] for entry in robot["left_out"]}
+    assert len(left) == 5
+    for kind, said in kinds.items():
+        if kind == "ok":
+            continue
+        reason = left[next(p for p in left if paths[kind].endswith(p))]
+        assert said in reason, (kind, reason)
+        assert "\n" not in reason
+        assert next(p for p in left if paths[kind].endswith(p)) in reason
+    assert "E_b_gyro" in robot["figures"]
+    assert "E_b" not in robot["figures"]

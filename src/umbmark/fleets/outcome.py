@@ -306,6 +306,16 @@ def _plan(info: Any, options: Mapping[str, Any]) -> tuple[str | None, dict[str, 
         return GYRO.name, {**reading, **options}, ""
     if not inputs:
         return None, {}, "no wheels or controller odometry found"
+    if info.imus:  # an IMU, and what makes it no gyro to calibrate by (as calibrate says)
+        imu = info.imus[0]
+        return (
+            None,
+            {},
+            (
+                "neither a laser scan, a usable IMU nor an independent reference (motion "
+                f"capture): {info.path}: {imu.topic}: {imu.problem}"
+            ),
+        )
     return None, {}, "neither a laser scan, an IMU nor an independent reference (motion capture)"
 
 
