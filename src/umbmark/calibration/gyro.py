@@ -51,6 +51,7 @@ if TYPE_CHECKING:
     from umbmark.model.motion_intervals import MotionIntervals
     from umbmark.model.recording import WheelSeries
     from umbmark.model.scans import LaserMounting
+    from umbmark.runs.read import Chosen
     from umbmark.runs.read_options import ReadOptions
 
 __all__ = ["GyroResult", "calibrate_gyro", "gyro_lines", "refuse_saturated"]
@@ -233,25 +234,12 @@ def calibrate_gyro(
             f"{' and '.join(missing)} (or {option('current_params')})",
             source=where,
         )
-    active = ActiveParams(
-        wheelbase=chosen.wheelbase,
-        c_left=1.0 if chosen.c_left is None else chosen.c_left,
-        c_right=1.0 if chosen.c_right is None else chosen.c_right,
-        separation_multiplier=1.0 if chosen.separation is None else chosen.separation,
-        wheel_diameter=chosen.wheel_diameter,
-    )
-    used = WheelParams(
-        wheelbase=active.effective_wheelbase,
-        wheel_diameter=chosen.wheel_diameter,
-        c_left=active.c_left,
-        c_right=active.c_right,
-    )
+    active, used = _active_and_used(chosen, chosen.wheelbase, chosen.wheel_diameter)
     entry = estimator(GYRO.name)
     assert entry.name in GYROS
     try:
         intervals = gyro_intervals(wheels, gyro, cut, excluded=excluded)
-        clipped = intervals.left_out.get(SATURATED, 0)
-        refuse_saturated(gyro, clipped, "interval(s) of the turns", where)
+        refuse_saturated(gyro, intervals.left_out.get(SATURATED, 0), _TURNS, where)
         ref = None if reference is None else gyro_reference(gyro, reference)
         estimate, found = entry.load()(
             intervals, used, side_length, reference=ref,
@@ -279,6 +267,33 @@ def calibrate_gyro(
         gyro=found,
     )
     return GyroResult(result, found)
+
+
+def _active_and_used(
+    chosen: Chosen, wheelbase: float, wheel_diameter: float
+) -> tuple[ActiveParams, WheelParams]:
+    """The parameters active while the recording was made (``chosen``: the options' and
+    the parameter file's, :func:`umbmark.runs.active.choose_active`, with its nominal
+    ``wheelbase`` and ``wheel_diameter`` [m]), and the wheels the odometry integrated with
+    them."""
+    active = ActiveParams(
+        wheelbase=wheelbase,
+        c_left=1.0 if chosen.c_left is None else chosen.c_left,
+        c_right=1.0 if chosen.c_right is None else chosen.c_right,
+        separation_multiplier=1.0 if chosen.separation is None else chosen.separation,
+        wheel_diameter=wheel_diameter,
+    )
+    used = WheelParams(
+        wheelbase=active.effective_wheelbase,
+        wheel_diameter=wheel_diameter,
+        c_left=active.c_left,
+        c_right=active.c_right,
+    )
+    return active, used
+
+
+#: What a calibration's saturated count is of.
+_TURNS = "interval(s) of the turns"
 
 
 def refuse_saturated(gyro: GyroSeries, count: int, what: str, where: str | None) -> None:
