@@ -216,10 +216,12 @@ def write_session_bag(
     wheels: bool = True,
     extra_topic: str | None = None,
     joints: str | None = None,
+    imu: str | None = None,
 ) -> Path:
     """The session as JointState (wheel angles [rad]) on /joint_states and PoseStamped
     ground truth (every 2nd sample) on /mocap/pose; types may be swapped for wrong ones,
-    ``joints`` names a malformation of :data:`JOINTS`."""
+    ``joints`` names a malformation of :data:`JOINTS`; ``imu`` one of :data:`IMUS`, an IMU
+    on /imu (``sensor_msgs/Imu`` in imu_link, level on base: ``/tf_static``)."""
     times, angles, poses = session
     bag = _Bag(path, fmt)
 
@@ -248,6 +250,8 @@ def write_session_bag(
         raise ValueError(typ)
 
     with bag.writer:
+        if imu is not None:
+            _write_imu(bag, imu, times, poses)
         js = bag.topic("/joint_states", wheel_type) if wheels else None
         gt = bag.topic("/mocap/pose", truth_type) if truth else None
         ex = bag.topic(extra_topic, "std_msgs/msg/String") if extra_topic else None
@@ -260,6 +264,52 @@ def write_session_bag(
                 string = "std_msgs/msg/String"
                 bag.write(ex, t, message(string, t, k), string)
     return bag.path
+
+
+#: The IMUs a session bag may carry: a gyro that reads the true turn rate (its bias 0.3
+#: deg/s, its noise 1e-3 rad/s a reading), and what goes wrong with one: a topic without
+#: messages, every reading the same, a frame without a transform, accelerations only
+#: (``angular_velocity_covariance[0] = -1``), the turns clipped at 0.6 rad/s (34 deg/s).
+IMUS = ("ok", "empty", "frozen", "no-frame", "accel-only", "saturated")
+IMU_MSG = "sensor_msgs/msg/Imu"
+
+
+def _write_imu(bag: _Bag, kind: str, times: np.ndarray, poses: np.ndarray) -> None:
+    """The IMU ``kind`` (:data:`IMUS`) of the session on /imu, and its mounting."""
+    if kind not in IMUS:
+        raise ValueError(kind)
+    if kind != "no-frame":
+        tf = bag.topic("/tf_static", "tf2_msgs/msg/TFMessage")
+        move = bag.transform(0.0, "base_link", "imu_link", 0.0, 0.0, 0.0)
+        bag.write(tf, 0.0, bag.msg("tf2_msgs/msg/TFMessage", transforms=[move]),
+                  "tf2_msgs/msg/TFMessage")  # fmt: skip
+    conn = bag.topic("/imu", IMU_MSG)
+    if kind == "empty":
+        return
+    rng = np.random.default_rng(7)
+    yaw = np.gradient(np.unwrap(poses[:, 2]), times) + math.radians(0.3)
+    rates = np.column_stack([np.zeros_like(yaw), np.zeros_like(yaw), yaw])
+    rates += rng.normal(0.0, 1e-3, rates.shape)
+    if kind == "frozen":
+        rates[:] = rates[0]
+    if kind == "saturated":
+        rates[:, 2] = np.clip(rates[:, 2], -0.6, 0.6)
+    covariance = np.zeros(9)
+    covariance[0] = -1.0 if kind == "accel-only" else 0.0
+    none = np.zeros(9)
+    none[0] = -1.0
+
+    def vector(x: float, y: float, z: float) -> Any:
+        return bag.msg("geometry_msgs/msg/Vector3", x=x, y=y, z=z)
+
+    for k, t in enumerate(times):
+        msg = bag.msg(
+            IMU_MSG, header=bag.header(t, "imu_link"), orientation=bag.quaternion(0.0),
+            orientation_covariance=none, angular_velocity=vector(*map(float, rates[k])),
+            angular_velocity_covariance=covariance,
+            linear_acceleration=vector(0.0, 0.0, 9.81), linear_acceleration_covariance=np.zeros(9),
+        )  # fmt: skip
+        bag.write(conn, t, msg, IMU_MSG)
 
 
 def write_tf_ticks_bag(

@@ -542,3 +542,23 @@ def two_bodies_bag(path: Path, fmt: str, mine: Drive, other: Drive) -> Path:
         bag.add("/tf", TF, t, bag.tf([tf]))
     bag.add("/robot_description", STRING, 0.0, bag.T(STRING)(data=TB3_URDF))
     return bag.write(path)
+
+
+def without_topics(source: Path, target: Path, drop: Sequence[str]) -> Path:
+    """A copy of the ROS 2 bag folder ``source`` (sqlite3 or MCAP) at ``target`` with the
+    topics ``drop`` left out: every other message as stored (its bytes, its time), each
+    connection with its type's definition (a robot that never had that sensor)."""
+    from rosbags.rosbag2 import Reader
+
+    with Reader(source) as reader:
+        mcap = any(p.suffix == ".mcap" for p in source.iterdir())
+        plugin = StoragePlugin.MCAP if mcap else StoragePlugin.SQLITE3
+        kept = [c for c in reader.connections if c.topic not in drop]
+        store = get_typestore(Stores.ROS2_HUMBLE)
+        for conn in kept:
+            store.register(get_types_from_msg(conn.msgdef.data, conn.msgtype))
+        with Writer2(target, version=9, storage_plugin=plugin) as writer:
+            made = {c.id: writer.add_connection(c.topic, c.msgtype, typestore=store) for c in kept}
+            for conn, stamp, raw in reader.messages(connections=kept):
+                writer.write(made[conn.id], stamp, raw)
+    return target

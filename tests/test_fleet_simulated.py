@@ -1,8 +1,10 @@
 """A simulated fleet (``umbmark simulate --fleet``: robots driving ordinary missions in a
-warehouse with wheels and a laser, no squares) watched by ``umbmark fleet``: every robot
-calibrated by scan matching, the truth in ``truth.json`` recovered, the changed wheel and
-the knocked laser flagged as steps at the day they happened, the wearing tyres as a trend
-of about their true rate, and the steady robot not flagged."""
+warehouse with wheels, a laser and an IMU, no squares) watched by ``umbmark fleet``: every
+robot calibrated by its gyro and its laser together, the truth in ``truth.json``
+recovered (the gyro's scale too), the changed wheel, the knocked laser and robot05's
+changed gyro flagged as steps at the day they happened, the wearing tyres as a trend of
+about their true rate, and the steady robot not flagged; a recording of wheels and an
+IMU alone calibrated by the gyro, its E_b relative to the gyro kept apart."""
 
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ pytest.importorskip("distributed", reason="the fleet's extra: pip install '.[fle
 from fleet_page_view import plot_of, rows_as_seen
 from helpers import run_cli
 
-ROBOTS, DAYS = 4, 6
+ROBOTS, DAYS = 5, 6
 
 
 @pytest.fixture(scope="module")
@@ -53,15 +55,20 @@ def test_the_simulated_fleet_is_watched(
     data, page = watched
     assert data["recordings_done"] == ROBOTS * DAYS
     assert all(r["recordings"] == DAYS for r in data["robots"])
-    assert data["drifted"] == ["robot02", "robot03", "robot04"]
+    assert data["drifted"] == ["robot02", "robot03", "robot04", "robot05"]
     by = {r["robot"]: r for r in data["robots"]}
+    assert all(r["latest"]["method"] == "gyro" for r in data["robots"])
     assert all(f["change"] == "steady" for f in by["robot01"]["figures"].values())
     wheel, laser = by["robot02"]["figures"]["E_d"], by["robot03"]["figures"]["laser_yaw"]
-    for step in (wheel, laser):
+    gyro = by["robot05"]["figures"]["k_g"]
+    for step in (wheel, laser, gyro):
         assert step["change"] == "step"
         assert "2026-11-05" in step["since"]  # day 4 of 6, from 2026-11-02
     assert wheel["size"] == pytest.approx(-0.006, abs=5 * wheel["size_standard_error"])
     assert laser["size"] == pytest.approx(0.05236, abs=5 * laser["size_standard_error"])
+    assert gyro["size"] == pytest.approx(0.015, abs=5 * gyro["size_standard_error"])
+    assert by["robot05"]["flags"] == [next(f for f in by["robot05"]["flags"] if "k_g" in f)]
+    assert truth["events"]["robot05"] == "gyro scale changed on day 4: k_g +0.015"
     wear = by["robot04"]["figures"]["E_s"]
     assert wear["change"] == "trend"
     assert wear["size"] == pytest.approx(-0.0008 * 7, abs=4 * wear["size_standard_error"])
@@ -95,22 +102,22 @@ def _check_the_page(page: Path, tmp_path: Path) -> None:
         by = {r["robot"]: r for r in rows}
         assert by["robot01"]["flags"] == []
         for row in rows:
-            assert len(row["plots"]) == 6, width
+            assert len(row["plots"]) == 8, width  # the wheels', the laser's, the gyro's
             for plot in row["plots"]:
                 assert plot["days"] == ["2026-11-02", "2026-11-07"], (width, plot)
-        for robot, label in (("robot02", "E_d"), ("robot03", "laser yaw")):
+        for robot, label in (("robot02", "E_d"), ("robot03", "laser yaw"), ("robot05", "k_g")):
             plot = plot_of(by[robot], label)
             assert plot["since"] == ["2026-11-05"], (width, robot)
             assert plot["since_x"][0] == pytest.approx(plot["points_x"][3], abs=0.2)
         marked = sum(bool(p["since"]) for r in rows for p in r["plots"])
-        assert marked == 3, width  # robot02's E_d, robot03's laser forward and yaw
+        assert marked == 4, width  # robot02's E_d, robot03's laser forward and yaw, robot05's k_g
 
 
 #: How much wider than its 95 % interval a figure may miss the truth by: to its 99.9 %
-#: interval (3.29 instead of 1.96 standard errors), so that of the 12 figures checked
-#: (4 robots x E_d, E_b, E_s), all of them independent, any one misses by chance in at
-#: most 12 x 0.1 % = 1.2 % of fleets (Bonferroni), where the 95 % intervals themselves
-#: would let one in two fleets fail (1 - 0.95^12 = 46 %).
+#: interval (3.29 instead of 1.96 standard errors), so that of the 20 figures checked
+#: (5 robots x E_d, E_b, E_s, k_g), all of them independent, any one misses by chance in
+#: at most 20 x 0.1 % = 2 % of fleets (Bonferroni), where the 95 % intervals themselves
+#: would let two in three fleets fail (1 - 0.95^20 = 64 %).
 WIDER = 3.29 / 1.96
 #: The widest 95 % half-interval accepted [1], so that an interval cannot hold the truth
 #: by being wide: one recording of 1.5 min gives E_d to about 8e-5 and E_b, E_s to about
@@ -119,7 +126,9 @@ WIDER = 3.29 / 1.96
 #: for E_d and 1.96 x 5.5e-4 / sqrt(3) = 6.2e-4 for E_b and E_s. The bounds are about
 #: twice those (room for scatter carried into an interval, and a trend's end, known less
 #: well than its middle).
-WIDEST = {"E_d": 2e-4, "E_b": 1.5e-3, "E_s": 1.5e-3}
+#: k_g: a recording's about 3e-4 (the laser's heading changes against the gyro's), a
+#: step's three 1.96 x 3e-4 / sqrt(3) = 3.4e-4, bounded likewise at about twice.
+WIDEST = {"E_d": 2e-4, "E_b": 1.5e-3, "E_s": 1.5e-3, "k_g": 8e-4}
 
 
 @pytest.mark.slow
@@ -127,17 +136,20 @@ def test_the_latest_figures_are_each_robots_truth_within_their_intervals(
     fleet: Path,
     watched: tuple[dict, Path],  # type: ignore[type-arg]
 ):
-    """E_d, E_b and E_s of every robot, on its latest state: the steady figures pooled
-    over all six days, robot02's E_d since its wheel was changed (day 4: pooled over all
-    days it would be 0.003 off, some 60 standard errors), robot04's E_s at the end of its
-    wear (the mean of its days is 2.5 days of wear, 0.002, higher) against the truth of
-    the last day in ``truth.json``."""
+    """E_d, E_b, E_s and the gyro's k_g of every robot, on its latest state: the steady
+    figures pooled over all six days, robot02's E_d since its wheel was changed (day 4:
+    pooled over all days it would be 0.003 off, some 60 standard errors), robot05's k_g
+    since its gyro changed, robot04's E_s at the end of its wear (the mean of its days is
+    2.5 days of wear, 0.002, higher) against the truth of the last day in
+    ``truth.json``."""
     truth = json.loads((fleet / "truth.json").read_text())
     last = {r["robot"]: r for r in truth["recordings"] if r["day"] == "2026-11-07"}
+    for day in last.values():
+        day["k_g"] = day["imu"]["k_g"]
     assert sorted(last) == [f"robot{k:02d}" for k in range(1, ROBOTS + 1)]
     missed = []
     for robot in watched[0]["robots"]:
-        for name in ("E_d", "E_b", "E_s"):
+        for name in ("E_d", "E_b", "E_s", "k_g"):
             figure = robot["figures"][name]
             low, high = figure["interval_95"]
             half = 0.5 * (high - low)
@@ -248,3 +260,65 @@ def test_the_morning_after_a_change_and_the_morning_it_is_confirmed(fleet: Path,
         assert step["confirmed_by"] == 2
     assert confirmed["recordings_skipped"] == ROBOTS * 4
     assert not any("latest recording alone" in r for r in by["robot02"]["apply"]["reasons"])
+
+
+@pytest.mark.slow
+def test_wheels_and_an_imu_alone_are_calibrated_by_the_gyro_apart_from_the_lasers(
+    fleet: Path, tmp_path: Path
+):
+    """robot01's recordings as another robot's whose laser and motion capture were off
+    after the first day (``/scan`` and ``/mocap/robot/pose`` left out of the bag): each
+    day without them calibrated by the gyro alone, not left out, its E_d within its
+    interval of the truth and its E_b relative to the gyro (E_b k_g) followed as a figure
+    of its own, never in one course with the first day's E_b from the laser; the E_b
+    offered is the laser's."""
+    import shutil
+
+    from robot_bags import without_topics
+
+    truth = json.loads((fleet / "truth.json").read_text())
+    days = sorted(p.name for p in (fleet / "robot01").iterdir())[:3]
+    lab = tmp_path / "lab" / "robot06"
+    for k, day in enumerate(days):
+        (lab / day).mkdir(parents=True)
+        source = fleet / "robot01" / day / "drive"
+        if k == 0:
+            shutil.copytree(source, lab / day / "drive")
+        else:
+            without_topics(source, lab / day / "drive", ["/scan", "/mocap/robot/pose"])
+    proc = run_cli("fleet", str(tmp_path / "lab"), "--robot-from", "{robot}/{date}/*",
+                   "--history", str(tmp_path / "h.sqlite3"), "--workers", "1", "--json",
+                   timeout=600)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads(proc.stdout)
+    (robot,) = data["robots"]
+    figures = robot["figures"]
+    assert robot["recordings"] == 3
+    assert robot["left_out"] == []
+    assert len(figures["E_b"]["values"]) == 1  # the laser's day alone
+    assert len(figures["E_b_gyro"]["values"]) == 2  # the gyro's days
+    assert len(figures["E_d"]["values"]) == 3
+    assert len(figures["k_g"]["values"]) == 1
+    true = {r["day"]: r for r in truth["recordings"] if r["robot"] == "robot01"}
+    for day, value, se in zip(
+        figures["E_d"]["paths"],
+        figures["E_d"]["values"],
+        figures["E_d"]["standard_errors"],
+        strict=True,
+    ):
+        when = Path(day).parent.name
+        assert abs(value - true[when]["E_d"]) < 3.29 * se, (day, value, se)
+    # E_b relative to the gyro is the true E_b times the gyro's true k_g (E_s near 1)
+    for value, se, day in zip(
+        figures["E_b_gyro"]["values"],
+        figures["E_b_gyro"]["standard_errors"],
+        figures["E_b_gyro"]["paths"],
+        strict=True,
+    ):
+        t = true[Path(day).parent.name]
+        expected = t["E_b"] * t["imu"]["k_g"] / t["E_s"]
+        assert abs(value - expected) < 3.29 * se + 2e-4, (value, expected, se)
+    assert robot["apply"]["wheel_separation_multiplier"] == pytest.approx(
+        figures["E_b"]["value"], rel=1e-12
+    )
+    assert all("E_b" not in flag.split(" ")[0] for flag in robot["flags"])

@@ -43,12 +43,14 @@ def test_without_a_reference_the_wheelbase_is_the_gyros_and_applied_with_care(re
     )
     assert any("E_b is relative to the gyro" in w for w in result.warnings)
     lines = gyro_lines(done.gyro)
-    said = next(line for line in lines if line.startswith("gyro bias = "))
-    value, error = (float(x) for x in re.findall(r"[-\d.]+(?= deg/s| \+-)", said)[:2])
+    assert lines[0] == "Gyro (imu_link), against the wheels alone:"
+    said = next(line for line in lines if line.startswith("bias = "))
+    value, error = (float(x) for x in re.findall(r"[-\d.]+(?= deg/s| ±)", said)[:2])
     true_mean = math.degrees(float(np.mean(recording.bias)))
     assert value == pytest.approx(true_mean, abs=0.01)
     assert 0.0 < error < 0.01
-    assert not any(line.startswith("gyro scale") for line in lines)
+    assert not any(line.startswith("scale k_g") for line in lines)
+    assert "k_g not determined" in " ".join(lines) or any("E_b k_g = " in x for x in lines)
     data = json.loads(json.dumps(done.to_dict()))
     assert data["method"] == "gyro"
     assert data["gyro_calibration"]["relative_to_gyro"] == ["E_b"]
@@ -64,7 +66,7 @@ def test_with_motion_capture_the_gyro_is_calibrated_too(recording):
     k_g = done.gyro.values["k_g"]
     assert k_g == pytest.approx(TRUTH.k_z, rel=1e-3)
     assert done.result.estimate.components["gyro_scale"] == k_g
-    assert any(line.startswith(f"gyro scale k_g = {k_g:.5f}") for line in gyro_lines(done.gyro))
+    assert any(line.startswith(f"scale k_g = {k_g:.5f}") for line in gyro_lines(done.gyro))
     assert not any("relative to the gyro" in w for w in done.result.warnings)
 
 
@@ -86,20 +88,25 @@ def test_an_imu_upside_down_is_never_applied(recording):
     assert done.result.overlay_withheld
 
 
-def test_a_saturating_gyro_is_said_and_its_turns_left_out():
+def test_a_saturating_gyro_is_refused_in_one_line_saying_how_fast_it_turned():
     fast = record(mixed_program(3.0), TRUTH, seed=13)
     g = fast.gyro
     rate = g.rate.copy()
     top = 0.9 * float(np.abs(rate[:, 2]).max())  # a full scale below the fastest turn
     rate[:, 2] = np.clip(rate[:, 2], -top, top)
-    scale = math.degrees(top)
-    gyro = GyroSeries(g.time, rate * 250.0 / scale, None, source="imu")  # as if 250 deg/s
-    truth = replace(TRUTH, k_g=TRUTH.k_g * scale / 250.0)
-    done = calibrate_gyro(fast.wheels, gyro, OPTIONS, wheelbase=0.34)
-    assert any("gyro saturated" in w and "turn slower" in w for w in done.result.warnings)
-    assert done.verdict.level != "apply"
-    low, high = done.gyro.interval("E_b_k_g")
-    assert low <= truth.E_b * truth.k_z / truth.E_s <= high
+    gyro = GyroSeries(g.time, rate, None, source="drive.bag /imu")
+    with pytest.raises(InputError) as caught:
+        calibrate_gyro(fast.wheels, gyro, OPTIONS, wheelbase=0.34)
+    line = caught.value.command_line()
+    peak = math.degrees(top)
+    assert line.startswith(
+        f"drive.bag /imu: the gyro saturates: an axis held at its extreme reading ({peak:.1f} "
+        "deg/s) in "
+    )
+    assert line.endswith(
+        f"record again turning slower than {0.8 * peak:.0f} deg/s, or set the gyro's range higher"
+    )
+    assert "\n" not in line
 
 
 def test_without_the_nominal_geometry_one_line_names_the_options(recording):
@@ -116,3 +123,34 @@ def test_a_runs_table_is_not_for_the_gyro(tmp_path, table):
     line = cli_error("calibrate", str(path), "-b", "0.34", "-L", "4", "--method", "gyro")
     assert "the gyro method needs a recording's wheels and its gyro" in line
     assert "--imu-topic" in line
+
+
+def test_a_tilt_the_stated_transform_misses_is_said_as_the_imu_frames_urdf_origin(recording):
+    """The closed-form IMU rolled and pitched 0.7 deg each (TRUTH.tilt), stated level:
+    the origin found is that roll and pitch (the yaw as stated), within three of the
+    tilt's standard errors, and the line says where to put it."""
+    done = calibrate_gyro(
+        recording.wheels, recording.gyro, OPTIONS, wheelbase=0.34, stated=np.eye(3)
+    )
+    apply = done.gyro.to_apply()
+    assert apply["mounting_differs"] is True
+    assert apply["origin_rpy_stated"] == [0.0, 0.0, 0.0]
+    roll, pitch, yaw = apply["origin_rpy_found"]
+    error = done.gyro.mounting.tilt_error
+    assert error is not None
+    assert roll == pytest.approx(TRUTH.tilt[0], abs=3 * error + 1e-4)
+    assert pitch == pytest.approx(TRUTH.tilt[1], abs=3 * error + 1e-4)
+    assert yaw == pytest.approx(0.0, abs=1e-12)
+    assert apply["rotation_offset"] == pytest.approx([roll, pitch, yaw], abs=1e-12)
+    said = [line for line in gyro_lines(done.gyro) if "URDF joint origin" in line]
+    assert said == [
+        f'imu_link\'s URDF joint origin: rpy="{roll:.5f} {pitch:.5f} 0.00000" (stated: '
+        '"0.00000 0.00000 0.00000"; its yaw as stated, which the turns do not show) [rad]; '
+        "or, keeping the stated transform, imu_sensor_broadcaster's rotation_offset roll, "
+        f"pitch, yaw = {roll:.5f} {pitch:.5f} 0.00000 [rad]"
+    ]
+    data = json.loads(json.dumps(done.to_dict()))
+    assert data["gyro_calibration"]["apply"]["origin_rpy_found"] == pytest.approx(
+        [roll, pitch, yaw]
+    )
+    assert data["new"]["gyro_bias"] == done.gyro.values["bias"]

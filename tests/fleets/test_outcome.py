@@ -217,7 +217,8 @@ def test_a_truth_topic_not_in_the_recording_is_its_reason_for_being_left_out(two
     )
     umbmark.simulate_fleet(tmp_path / "f", fleet=1, days=1, minutes=0.5)
     (laser,) = (tmp_path / "f").glob("robot01/*/drive")
-    assert calibrate_recording(RecordingTask(str(laser))).method == "scan-matching"
+    # its laser and its IMU: the gyro and the laser together
+    assert calibrate_recording(RecordingTask(str(laser))).method == "gyro"
     wrong = calibrate_recording(RecordingTask(str(laser), options={"truth_topic": "/mocap/amr2"}))
     assert (wrong.calibrated, wrong.failed) == (False, False)
     assert wrong.reason is not None
@@ -241,7 +242,11 @@ def test_a_reference_given_is_fitted_where_the_look_found_none_independent(tmp_p
     geometry = {"wheelbase": 0.555, "wheel_diameter": 0.33}
     alone = calibrate_recording(RecordingTask(str(bag), options=geometry))
     assert (alone.calibrated, alone.failed) == (False, False)
-    assert alone.reason == "neither a laser scan nor an independent reference (motion capture)"
+    assert alone.reason == (  # its IMU, robot_localization's input, gives orientation only
+        "neither a laser scan, a usable IMU nor an independent reference (motion capture): "
+        f"{bag}: /imu/data: its messages give no angular velocity "
+        "(angular_velocity_covariance[0] = -1, or exactly 0): no gyro"
+    )
     given = {**geometry, "truth_topic": "/odometry/filtered"}
     out = calibrate_recording(RecordingTask(str(bag), options=given))
     assert (out.method, out.reason) == ("trajectory", None)

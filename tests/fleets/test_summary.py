@@ -203,3 +203,53 @@ def test_a_recording_is_counted_once_however_often_it_was_tried():
         "recordings: 5 calibrated, 1 left out, 1 failed; worst E_max,syst"
     )
     assert robot.to_dict()["failed"] == [{"path": days[5].path, "reason": "cannot be read"}]
+
+
+def _gyro_outcomes(robot: str, days: range, figures: dict[str, tuple[float, float]]):  # type: ignore[no-untyped-def]
+    """A robot's outcomes calibrated by the gyro on ``days`` with these figures."""
+    return [
+        RecordingOutcome(
+            f"{robot}/day{day:02d}.mcap", robot, T0 + day * 86400.0, 1.0, "0" * 64,
+            method="gyro", figures=dict(figures), e_max_syst=None if "E_b" not in figures
+            else 0.1, multipliers=(1.0, 1.0, 1.0), verdict="care", wheelbase=0.34,
+        )
+        for day in days
+    ]  # fmt: skip
+
+
+def test_e_b_relative_to_the_gyro_is_a_figure_of_its_own_never_the_lasers_e_b():
+    """A robot with a laser three days (E_b 1.02, its gyro's k_g 0.98) and without it
+    three more (E_b k_g = 0.9996): two courses, neither changed, the E_b to apply the
+    laser's; a robot with a gyro alone: its E_b k_g applied where the gyro's 3 % scale
+    tolerance says which way to correct (1.06), with care and said so, not where it
+    does not (1.01: left at 1, said so)."""
+    from umbmark.fleets.summary import NOT_CORRECTED, RELATIVE_TO_GYRO
+
+    both = {"E_d": (1.003, 1e-4), "E_b": (1.02, 5e-4), "E_s": (1.0, 5e-4), "k_g": (0.98, 2e-4)}
+    alone = {"E_d": (1.003, 1e-4), "E_b_gyro": (1.02 * 0.98, 2e-4)}
+    fleet = summarize(
+        [
+            *_gyro_outcomes("mixed", range(3), both),
+            *_gyro_outcomes("mixed", range(3, 6), alone),
+            *_gyro_outcomes("wide", range(2), {"E_d": (1.0, 1e-4), "E_b_gyro": (1.06, 2e-4)}),
+            *_gyro_outcomes("level", range(2), {"E_d": (1.0, 1e-4), "E_b_gyro": (1.01, 2e-4)}),
+        ]
+    )
+    by = {r.robot: r for r in fleet.robots}
+    mixed = by["mixed"]
+    assert len(mixed.tracks["E_b"].values) == 3
+    assert len(mixed.tracks["E_b_gyro"].values) == 3
+    assert mixed.flags == ()
+    assert mixed.apply is not None
+    assert mixed.apply.multipliers[0] == pytest.approx(1.02, abs=1e-12)
+    assert mixed.e_max_syst is not None
+    wide, level = by["wide"].apply, by["level"].apply
+    assert wide is not None
+    assert level is not None
+    assert wide.multipliers[0] == pytest.approx(1.06, abs=1e-12)
+    assert (wide.verdict, RELATIVE_TO_GYRO in wide.reasons) == ("care", True)
+    assert level.multipliers[0] == 1.0
+    assert NOT_CORRECTED in level.reasons
+    assert by["wide"].e_max_syst is None  # not from E_b relative to the gyro
+    shown = by["mixed"].tracks["E_b_gyro"].shown()
+    assert shown.startswith("0.999600 ± 0.000")

@@ -25,6 +25,10 @@ from umbmark.scans.gyro_intervals import (
 
 #: A gyro without noise, bias walk or tilt, its bias constant: its integral is exact.
 CLEAN = Truth(noise=0.0, bias_walk=0.0, tilt=(0.0, 0.0), slip=0.0, ticks=0)
+#: The same with a real gyro's white noise: without any, its readings repeat exactly
+#: wherever the motion is steady, which is what a frozen or a clipped gyro reads
+#: (umbmark.model.gyro_series), so where the cut's rests, turns and clipping are tested.
+NOISY = replace(CLEAN, noise=Truth().noise)
 
 
 def _program():
@@ -32,7 +36,7 @@ def _program():
 
 
 def test_rests_are_where_the_robot_rests_and_driving_covers_every_turn():
-    rec = record(_program(), CLEAN)
+    rec = record(_program(), NOISY)
     iv = gyro_intervals(rec.wheels, rec.gyro)
     motion = rec.motion
     # the program's rests: 4 s at the start, then 3 s after each of 8 segments
@@ -83,7 +87,7 @@ def test_the_gyros_integral_is_the_true_turn_over_its_scale_plus_the_bias():
 
 
 def test_a_gap_in_the_gyro_and_a_saturated_turn_leave_their_intervals_out():
-    rec = record(program([spin(4 * math.pi, rate=math.radians(300))], 1, rests=2.0), CLEAN)
+    rec = record(program([spin(4 * math.pi, rate=math.radians(300))], 1, rests=2.0), NOISY)
     g = rec.gyro
     # the turn at 300 deg/s read by a gyro of 250 deg/s full scale, and a gap of 0.5 s
     clipped = g.rate.copy()
@@ -101,8 +105,20 @@ def test_a_gap_in_the_gyro_and_a_saturated_turn_leave_their_intervals_out():
 
 
 def test_a_fast_turn_below_full_scale_is_not_saturation():
-    rec = record(program([spin(4 * math.pi, rate=math.radians(200))], 1, rests=2.0), CLEAN)
+    rec = record(program([spin(4 * math.pi, rate=math.radians(200))], 1, rests=2.0), NOISY)
     assert "gyro saturated" not in gyro_intervals(rec.wheels, rec.gyro).left_out
+
+
+def test_a_noise_free_gyros_steady_turn_is_no_saturation_but_repeats_as_a_frozen_one():
+    # 200 deg/s held exactly for 3.6 s: the same three rates, frozen by the rule, so the
+    # saturation inside it is not named twice (umbmark.model.gyro_series)
+    from umbmark.model.gyro_series import frozen_stretches, saturated_stretches
+
+    rec = record(program([spin(4 * math.pi, rate=math.radians(200))], 1, rests=2.0), CLEAN)
+    g = rec.gyro
+    assert saturated_stretches(g.time, g.rate).shape == (0, 2)
+    frozen = frozen_stretches(g.time, g.rate)
+    assert (frozen[:, 1] - frozen[:, 0]).max() > 3.0
 
 
 def test_a_gyro_and_wheels_that_do_not_overlap_are_one_line():

@@ -416,3 +416,48 @@ def test_the_command_names_the_option_for_another_history(tmp_path):
     assert asked.returncode == 2
     assert asked.stderr.count("\n") == 1
     assert asked.stderr.endswith("is read with umbmark history --history FILE\n")
+
+
+def _gyro_history(path: Path) -> History:
+    """A robot calibrated four days with its gyro and laser (E_b 1.02, its gyro's k_g
+    0.98, then 0.995: a changed gyro), and twice with the gyro alone (E_b k_g = 1.02 x
+    0.98 = 0.9996, 0.02 below E_b: relative to the gyro)."""
+    from umbmark.store.records import NewCalibration
+
+    store = History(path)
+    active = {"wheelbase": 0.34, "c_L": 1.0, "c_R": 1.0, "wheel_separation_multiplier": 1.0}
+    days = [(1, 0.98), (2, 0.98), (3, 0.995), (4, 0.995), (5, None), (6, None)]
+    for day, k_g in days:
+        when = dt.datetime(2026, 11, day, tzinfo=dt.timezone.utc)
+        se = {"E_d": 1e-4, "E_b": 5e-4} | ({"gyro_scale": 2e-4} if k_g else {"E_b_gyro": 2e-4})
+        E_b = 1.02 if k_g else 1.02 * 0.98
+        new = {"gyro_scale_multiplier": k_g, "gyro_bias": 0.005}
+        verdict = {"level": "apply" if k_g else "care", "reasons": [], "instead": None}
+        made = NewCalibration(when, "gyro", 1.003, E_b, None, None, se, active, new, verdict,
+                              0.34, 0.15)  # fmt: skip
+        store.record("amr", made, same_nominal=False)
+    return store
+
+
+def test_e_b_relative_to_the_gyro_stays_out_of_e_bs_course_and_k_g_is_followed(tmp_path):
+    """E_b does not drift (the gyro's E_b k_g is left out of its course, said so), k_g
+    steps at the third day (:func:`_gyro_history`)."""
+    store = _gyro_history(tmp_path / "h.sqlite3")
+    records = store.calibrations("amr")
+    assert [c.relative_to_gyro for c in records] == [False] * 4 + [True] * 2
+    assert [c.k_g for c in records] == [0.98, 0.98, 0.995, 0.995, None, None]
+    verdict = store.drift("amr")
+    assert verdict is not None
+    assert verdict.startswith("drift: robot k_g stepped from 0.980000 to 0.995000")
+    assert "robot E_b 1.020000 ± " in verdict  # steady: the relative ones left out
+    assert "over 4 calibrations (1 to 4)" in verdict
+    assert "E_b of calibrations 5, 6 relative to the gyro (E_b k_g) left out" in verdict
+
+
+@pytest.mark.slow
+def test_the_history_command_shows_k_g_and_marks_e_b_relative_to_the_gyro(tmp_path):
+    _gyro_history(tmp_path / "h.sqlite3")
+    shown = run_cli("history", "amr", "--history", str(tmp_path / "h.sqlite3")).stdout
+    assert "gyro k_g" in shown
+    assert "0.999600 (k_g)" in shown  # E_b k_g, marked
+    assert "0.99500" in shown  # k_g

@@ -10,6 +10,13 @@ An estimator of a turn-rate term (``trajectory-scrub``) is credited only where t
 the runs identify it (they hold arcs and turns on the spot, and the fit pins the term), so
 that it is never credited with runs it extrapolates to, nor with the single wheelbase it
 falls back to.
+
+The ``gyro`` estimator (a bag read with ``imu_topic``) is a candidate where the recording's
+wheels and gyro are given (:class:`~umbmark.calibration.gyro_bag.GyroRecording`, with the
+ground truth's heading as its reference): a run held out is a stretch of the recording
+left out of its intervals and its reference (the rests around it kept). It calibrates
+one recording at a time: with several sources (leave one source out) it is refused, and
+said so.
 """
 
 from __future__ import annotations
@@ -18,15 +25,19 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from umbmark.calibration.validation import Fold, ValidationReport
 from umbmark.core.errors import InputError
 from umbmark.core.messages import info, split_messages
 from umbmark.estimators.motions import SCRUB_FALLBACK, MotionCoverage, motion_coverage
-from umbmark.estimators.registry import RUNS, names
+from umbmark.estimators.registry import GYROS, RUNS, names
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run, end_errors
 from umbmark.runs.read import SourceRuns, pool_runs
+
+if TYPE_CHECKING:
+    from umbmark.calibration.gyro_bag import GyroRecording
 
 __all__ = ["CANDIDATES", "validate_read"]
 
@@ -38,6 +49,7 @@ def validate_read(
     read: Sequence[SourceRuns],
     candidates: Sequence[str] = CANDIDATES,
     progress: Callable[[float], None] | None = None,
+    gyro: GyroRecording | None = None,
 ) -> ValidationReport:
     """The held-out end errors of ``candidates`` on sources read one by one.
 
@@ -47,9 +59,12 @@ def validate_read(
         Each source read on its own (:func:`umbmark.runs.active.read_each`), with
         recorded wheel data (``params`` set).
     candidates : sequence of str
-        ``"nominal"`` and names of estimators of runs (default: all of :data:`CANDIDATES`).
+        ``"nominal"`` and names of estimators of runs (default: all of :data:`CANDIDATES`),
+        and ``gyro`` with ``gyro``.
     progress : callable, optional
         Called with the fraction done.
+    gyro : GyroRecording, optional
+        The one source's wheels and gyro, for the ``gyro`` candidate.
 
     Raises
     ------
@@ -83,8 +98,9 @@ def validate_read(
             for run in whole.runs
         ]
     folds = []
+    recording = gyro if len(read) == 1 else None
     for k, (name, held, training) in enumerate(parts):
-        folds.append(_fold(name, held, pool_runs(training), candidates))
+        folds.append(_fold(name, held, pool_runs(training), candidates, recording))
         if progress is not None:
             progress((k + 1) / len(parts))
     notes, warnings = split_messages([*(n for r in read for n in r.notes), *_refusals(folds)])
@@ -115,12 +131,23 @@ def _coverage(runs: SourceRuns) -> MotionCoverage:
     return motion_coverage([run.log for run in runs.runs if run.log is not None], runs.params)
 
 
-def _fold(name: str, held: SourceRuns, training: SourceRuns, candidates: Sequence[str]) -> Fold:
+def _fold(
+    name: str,
+    held: SourceRuns,
+    training: SourceRuns,
+    candidates: Sequence[str],
+    gyro: GyroRecording | None = None,
+) -> Fold:
     assert held.params is not None
     trained_on = _coverage(training)
     errors: dict[str, float | None] = {}
     refused: dict[str, str] = {}
     for candidate in candidates:
+        if candidate in GYROS:
+            errors[candidate], why = _gyro_error(gyro, held)
+            if why is not None:
+                refused[candidate] = why
+            continue
         turn_rate = candidate in names(turn_rate=True)
         if turn_rate and not trained_on.holds_both_turns:
             errors[candidate] = None
@@ -171,3 +198,21 @@ def _mean_error(runs: Sequence[Run], params: WheelParams) -> float:
     errors = end_errors([run.reintegrated(params) for run in runs])
     value = float(errors.mean())
     return value if math.isfinite(value) else math.inf
+
+
+def _gyro_error(gyro: GyroRecording | None, held: SourceRuns) -> tuple[float | None, str | None]:
+    """The held-out runs' mean end error with the gyro's calibration of the rest of the
+    recording (their stretches left out of it), and why there is none."""
+    from umbmark.core.errors import ProblemError
+
+    if gyro is None:
+        return None, "the gyro calibrates one recording at a time (leave one run out)"
+    assert held.params is not None
+    spans = [
+        (run.log.start, run.log.start + float(run.log.time[-1])) for run in held.runs if run.log
+    ]
+    try:
+        report = gyro.without(spans).calibrate().result
+    except (InputError, ProblemError, ValueError) as exc:
+        return None, str(exc).splitlines()[0]
+    return _mean_error(held.runs, report.new_params().applied_to(held.params)), None

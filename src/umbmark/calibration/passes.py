@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from umbmark.calibration.result import CalibrationResult
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.core.jsontext import JsonText
 from umbmark.core.messages import info
 from umbmark.core.version import __version__
@@ -301,13 +301,60 @@ def calibrate_passes(
             fit_truth_offset=fit_truth_offset,
             override_verdict=override_verdict,
         )
+        if result.benchmark is None and result.gyro is not None:
+            result = _with_square_runs(result, one, pass_options, side_length, wheelbase)
         if result.benchmark is None:
             raise InputError(
                 f"pass {k}: UMBmark needs square runs in both directions (cw and ccw), at "
-                "least two each",
+                f"least two each{_ONE_PAGE if result.gyro is not None else ''}",
                 source=name,
             )
         if note is not None:
             result = replace(result, notes=(*result.notes, note))
         passes.append(result)
     return passes, pass_options
+
+
+#: What a recording calibrated by its gyro without square runs does instead of a report.
+_ONE_PAGE = (
+    f" (a recording calibrated by its gyro: its square runs are read with "
+    f"{option('truth_topic')} and {option('side_length')}; without them, umbmark calibrate "
+    f"{option('imu_topic')} TOPIC --report PAGE writes its page)"
+)
+
+
+def _with_square_runs(
+    result: CalibrationResult,
+    source: RunSource,
+    options: SourceOptions,
+    side_length: float | None,
+    wheelbase: float | None,
+) -> CalibrationResult:
+    """A pass calibrated by its gyro, with the UMBmark figures of the square runs its
+    recording holds against its ground truth (read as without the IMU): its runs, their
+    ``E_max,syst`` and the parameters they were integrated with, the correction the
+    gyro's. Unchanged where the recording holds no square runs in both directions."""
+    from umbmark.calibration.sources import calibrate_sources
+
+    plain = {**options, "imu_topic": None, "scan_topic": None}
+    try:
+        squares = calibrate_sources(
+            [source], ReadOptions.of(plain), side_length=side_length, wheelbase=wheelbase
+        )
+    except InputError:
+        return result
+    if squares.benchmark is None:
+        return result
+    said = info(
+        f"E_max,syst and the runs: the recording's {len(squares.runs)} runs against its "
+        "ground truth; the correction: the gyro's calibration (predicted after: these runs "
+        "integrated with it)"
+    )
+    return replace(
+        result,
+        runs=squares.runs,
+        benchmark=squares.benchmark,
+        params=squares.params,
+        associations=squares.associations,
+        notes=(*result.notes, said),
+    )

@@ -16,13 +16,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeAlias
 
 from umbmark.calibration.compose import Calibration
+from umbmark.calibration.result_parts import cluster_dict, run_dict, sensor_dict
 from umbmark.core.jsontext import JsonText
 from umbmark.core.version import __version__
 from umbmark.estimators.base import ErrorEstimate, SquareTest
 from umbmark.estimators.registry import LOGGED
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.run import Run
-from umbmark.returns.clusters import Benchmark, Cluster, sem_verdict
+from umbmark.returns.clusters import Benchmark, sem_verdict
 from umbmark.runs.association import Association
 from umbmark.sources.params.reader import (
     DEFAULT_CONTROLLER,
@@ -35,6 +36,7 @@ from umbmark.sources.params.reader import (
 
 if TYPE_CHECKING:
     from umbmark.calibration.verdict import Evidence, Verdict
+    from umbmark.estimators.gyro_result import GyroCalibration
     from umbmark.estimators.scan_matching import ScanCalibration
     from umbmark.estimators.trajectory_fit import TrajectoryFit
     from umbmark.model.scans import LaserMounting
@@ -161,6 +163,10 @@ class CalibrationResult(JsonText):
         against the measured geometry itself, so ``E_b``, ``E_s``, ``alpha`` and the
         multipliers say nothing and the JSON gives them as null, and no parameter file
         is written.
+    gyro : GyroCalibration or None
+        A calibration with a gyro (``method="gyro"``): the gyro's own scale and bias,
+        what the motion did not determine, the IMU's mounting as its readings show it
+        (the JSON's ``gyro_calibration``).
     """
 
     sources: tuple[str, ...]
@@ -186,6 +192,7 @@ class CalibrationResult(JsonText):
     without: Without | None = None
     stated_mounting: LaserMounting | None = field(default=None, compare=False)
     nominal: bool = True
+    gyro: GyroCalibration | None = field(default=None, compare=False)
 
     def __repr__(self) -> str:
         est = self.estimate
@@ -300,6 +307,8 @@ class CalibrationResult(JsonText):
             wheel_diameter=cal.active.wheel_diameter,
             source=self.source,
             controller=self._controller_name,
+            gyro_scale=None if self.gyro is None else self.gyro.values.get("k_g"),
+            gyro_bias=None if self.gyro is None else self.gyro.values.get("bias"),
         )
 
     @property
@@ -343,7 +352,7 @@ class CalibrationResult(JsonText):
                 }
             )
             for cluster in bench.clusters:
-                out.update(_cluster_dict(cluster))
+                out.update(cluster_dict(cluster))
             out.update(
                 {
                     "sem": bench.sem,
@@ -387,7 +396,7 @@ class CalibrationResult(JsonText):
                     "wheelbase": cal.wheelbase_corrected,
                 },
                 "warnings": list(self.warnings),
-                "runs": [_run_dict(run) for run in self.runs],
+                "runs": [run_dict(run) for run in self.runs],
                 "format": self.format,
             }
         )
@@ -395,7 +404,7 @@ class CalibrationResult(JsonText):
         if model is not None:
             out["model"] = {"kind": "scrub", **model}
         if self.sensor is not None:
-            out.update(_sensor_dict(self.sensor))
+            out.update(sensor_dict(self.sensor))
             nominal = {"wheelbase": active.wheelbase, "wheel_diameter": active.wheel_diameter}
             out["nominal"] = nominal if self.nominal else None
         if not self.nominal:
@@ -409,6 +418,10 @@ class CalibrationResult(JsonText):
             out["time_association"] = {name: a.to_dict() for name, a in self.associations}
         if self.without is not None:
             out["without_rows"] = self.without.to_dict()
+        if self.gyro is not None:  # the gyro's new scale and bias beside the wheels'
+            out["gyro_calibration"] = self.gyro.to_dict()
+            out["new"]["gyro_scale_multiplier"] = self.gyro.values.get("k_g")
+            out["new"]["gyro_bias"] = self.gyro.values.get("bias")
         if self.notes:
             out["notes"] = list(self.notes)
         return out
@@ -529,31 +542,6 @@ def _intervals(estimate: ErrorEstimate) -> dict[str, list[float]]:
     return {name: [pair[0], pair[1]] for name, pair in pairs if pair is not None}
 
 
-def _sensor_dict(sensor: ScanCalibration) -> dict[str, Any]:
-    """What a calibration from motion intervals adds to the JSON (metres, radians)."""
-    se = sensor.standard_errors
-    return {
-        "laser_pose": list(sensor.laser_pose),
-        "laser_pose_standard_errors": [se["laser_x"], se["laser_y"], se["laser_yaw"]],
-        "wheel_diameter_left_standard_error": se["wheel_diameter_left"],
-        "wheel_diameter_right_standard_error": se["wheel_diameter_right"],
-        "wheelbase_standard_error": se["wheelbase"],
-        "motion_intervals": {
-            "n": int(sensor.kept.shape[0]),
-            "used": sensor.n_used,
-            "outliers": int(sensor.kept.shape[0] - sensor.n_used),
-            "noise": list(sensor.noise),
-            "condition": sensor.excitation.condition,
-            "turns_on_the_spot": sensor.excitation.n_spot,
-            "straights": sensor.excitation.n_straight,
-            "arcs": sensor.excitation.n_arc,
-            "turning_left": sensor.excitation.n_left,
-            "turning_right": sensor.excitation.n_right,
-        },
-        "uncertainty": "Cramer-Rao bound, sensor noise from the residuals",
-    }
-
-
 #: What a calibration is against a nominal geometry: null in the JSON without one.
 _AGAINST_NOMINAL = ("alpha", "E_b", "E_s", "c_L", "c_R", "wheelbase_corrected", "active", "new")
 
@@ -563,33 +551,3 @@ def _without_nominal(out: dict[str, Any]) -> None:
     out.update(dict.fromkeys(_AGAINST_NOMINAL))
     for key in ("standard_errors", "intervals_95"):
         out[key] = {k: v for k, v in out[key].items() if k not in _AGAINST_NOMINAL}
-
-
-def _cluster_dict(cluster: Cluster) -> dict[str, Any]:
-    d = cluster.direction.value
-    std = cluster.std_xy
-    return {
-        f"cg_{d}": [float(cluster.cg[0]), float(cluster.cg[1])],
-        f"r_cg_{d}": cluster.r_cg,
-        f"std_{d}": [float(std[0]), float(std[1])],
-        f"sigma_{d}": cluster.sigma,
-        f"sem_{d}": cluster.sem,
-    }
-
-
-def _run_dict(run: Run) -> dict[str, Any]:
-    """A run's figures; a logged run's also its start and end time on the recording's own
-    clock [s] (a bag's stamps, a run log's time column)."""
-    eps_x, eps_y = run.return_error
-    out: dict[str, Any] = {
-        "label": run.label,
-        "kind": run.kind,
-        "direction": run.direction.value,
-        "eps_x": eps_x,
-        "eps_y": eps_y,
-        "eps_theta": run.heading_error,
-    }
-    if run.log is not None:
-        out["start_time"] = run.log.start
-        out["end_time"] = run.log.start + float(run.log.time[-1])
-    return out

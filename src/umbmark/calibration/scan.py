@@ -37,7 +37,15 @@ from umbmark.sources.params.reader import ControllerParams
 if TYPE_CHECKING:
     from umbmark.scans.intervals import IntervalReport, OdometryGuess
 
-__all__ = ["IntervalSource", "calibrate_intervals", "calibrate_scan_bags", "read_intervals"]
+__all__ = [
+    "IntervalSource",
+    "bag_guess",
+    "calibrate_intervals",
+    "calibrate_scan_bags",
+    "no_intervals",
+    "read_intervals",
+    "scan_report",
+]
 
 IntervalSource = str | os.PathLike[str] | MotionIntervals
 
@@ -208,9 +216,6 @@ def calibrate_scan_bags(
         parameters, too few intervals, or motion that does not excite the parameters
         (what to drive).
     """
-    from umbmark.scans.bag import scan_intervals_from_bag
-    from umbmark.scans.intervals import IntervalOptions
-
     entry = _interval_estimator(method)
     topic = options.scan_topic
     if not bags:
@@ -226,35 +231,12 @@ def calibrate_scan_bags(
     parts, notes = [], list[str]()
     stated: LaserMounting | None = None
     for path in paths:
-        name = str(path)
-        guess, used, chosen = _bag_guess(path, options, file, chosen, notes)
-        report = scan_intervals_from_bag(
-            path,
-            topic,
-            bag_options(options, used, file),
-            IntervalOptions(guess=guess),
-            tf_mounting=True,
-        )
-        notes += report.notes
-        notes += _guess_given_up(name, topic, report)
+        report, _, chosen = scan_report(path, options, file, chosen, notes)
         stated = stated or report.stated
-        kept = len(report.intervals)
-        dropped = ", ".join(f"{n} {why}" for why, n in sorted(report.left_out.items()))
-        notes.append(
-            info(
-                f"{name} {topic}: {kept} motion intervals matched of {report.tried}"
-                + (f" (left out: {dropped})" if dropped else "")
-            )
-        )
-        if kept:
+        if len(report.intervals):
             parts.append(report.intervals)
     if not parts:
-        raise InputError(
-            f"{topic}: no motion interval could be matched (the robot stood still, or the "
-            "scans are of a corridor or open space): drive turns on the spot and straights "
-            "where the laser sees walls",
-            source=str(paths[0]),
-        )
+        raise no_intervals(topic, paths[0])
     intervals = parts[0] if len(parts) == 1 else MotionIntervals.concatenate(parts)
     where = str(paths[0]) if len(paths) == 1 else None
     try:
@@ -266,6 +248,53 @@ def calibrate_scan_bags(
         if error.source is None and where is not None:
             raise InputError(error.problem, source=where) from None
         raise
+
+
+def scan_report(
+    path: Path, options: ReadOptions, file: ControllerParams, chosen: Chosen, notes: list[str]
+) -> tuple[IntervalReport, WheelParams | None, Chosen]:
+    """A bag's motion intervals against its laser (``options.scan_topic``), matched from
+    the nominal geometry (given, else the bag's robot description: ``chosen`` with it),
+    and the geometry its wheels were read with; what was found and left out appended to
+    ``notes``.
+
+    Raises
+    ------
+    InputError
+        As :func:`calibrate_scan_bags`.
+    """
+    from umbmark.scans.bag import scan_intervals_from_bag
+    from umbmark.scans.intervals import IntervalOptions
+
+    topic = options.scan_topic
+    assert topic is not None
+    name = str(path)
+    guess, used, chosen = bag_guess(path, options, file, chosen, notes)
+    report = scan_intervals_from_bag(
+        path, topic, bag_options(options, used, file), IntervalOptions(guess=guess),
+        tf_mounting=True,
+    )  # fmt: skip
+    notes += report.notes
+    notes += _guess_given_up(name, topic, report)
+    kept = len(report.intervals)
+    dropped = ", ".join(f"{n} {why}" for why, n in sorted(report.left_out.items()))
+    notes.append(
+        info(
+            f"{name} {topic}: {kept} motion intervals matched of {report.tried}"
+            + (f" (left out: {dropped})" if dropped else "")
+        )
+    )
+    return report, used, chosen
+
+
+def no_intervals(topic: str, path: Path) -> InputError:
+    """The line where a laser's sweeps gave no motion interval."""
+    return InputError(
+        f"{topic}: no motion interval could be matched (the robot stood still, or the "
+        "scans are of a corridor or open space): drive turns on the spot and straights "
+        "where the laser sees walls",
+        source=str(path),
+    )
 
 
 def _guess_given_up(name: str, topic: str, report: IntervalReport) -> list[str]:
@@ -284,7 +313,7 @@ def _guess_given_up(name: str, topic: str, report: IntervalReport) -> list[str]:
     ]
 
 
-def _bag_guess(
+def bag_guess(
     path: Path, options: ReadOptions, file: ControllerParams, chosen: Chosen, notes: list[str]
 ) -> tuple[OdometryGuess | None, WheelParams | None, Chosen]:
     """The first guess of a bag's matches, the geometry its wheels are read with and the

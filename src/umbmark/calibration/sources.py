@@ -23,6 +23,7 @@ from umbmark.estimators.registry import (
     AUTO,
     CHOICES,
     DEFAULT,
+    GYROS,
     INTERVALS,
     NAMES,
     SQUARE,
@@ -34,6 +35,8 @@ from umbmark.runs.active import read_each
 from umbmark.runs.read import (
     RunSource,
     SourceRuns,
+    holds_gyro,
+    is_bag,
     is_intervals,
     is_runs,
     pool_runs,
@@ -93,8 +96,11 @@ def _calibrate(
     override_verdict: bool,
     fit_truth_offset: bool,
 ) -> CalibrationResult:
-    """The calibration of the sources by what they hold: a bag's scans, motion intervals,
-    or runs (with the note of ``auto``'s choice)."""
+    """The calibration of the sources by what they hold: a bag's gyro (with its scans),
+    a bag's scans, motion intervals, or runs (with the note of ``auto``'s choice)."""
+    gyro = method in GYROS and all(is_bag(s, read_options) for s in sources)
+    if read_options.imu_topic is not None or gyro:
+        return _calibrate_gyro(sources, read_options, method, wheelbase, side_length)
     if read_options.scan_topic is not None:
         return _calibrate_scans(sources, read_options, method, wheelbase, side_length)
     if any(is_intervals(s, read_options) for s in sources) or method in INTERVALS:
@@ -132,6 +138,32 @@ def _calibrate_intervals(
     chosen = INTERVALS[0] if method == AUTO else method
     paths = [Path(source_name(s)) for s in sources]
     return calibrate_intervals(paths, options, chosen, wheelbase=wheelbase, side_length=side_length)
+
+
+def _calibrate_gyro(
+    sources: Sequence[RunSource],
+    options: ReadOptions,
+    method: str | None,
+    wheelbase: float | None,
+    side_length: float | None,
+) -> CalibrationResult:
+    """A calibration of a bag's wheels against its gyro (``--imu-topic``; with
+    ``--scan-topic``, its laser's scan matching the gyro's reference)."""
+    from umbmark.calibration.gyro_bag import calibrate_gyro_bags
+
+    if method is not None and method not in (*GYROS, AUTO):
+        raise InputError(
+            f"{option('imu_topic')} calibrates by {option('method', ' or '.join(GYROS))} (the "
+            f"default with it), not {method}: leave {option('imu_topic')} out to calibrate "
+            f"by {method}"
+        )
+    for source in sources:
+        if not holds_gyro(source, options) and options.imu_topic is not None:
+            raise InputError(
+                f"{option('imu_topic')} reads a bag's IMU: {source_name(source)} is not a bag"
+            )
+    paths = [Path(source_name(s)) for s in sources]
+    return calibrate_gyro_bags(paths, options, wheelbase=wheelbase, side_length=side_length).result
 
 
 def _calibrate_scans(

@@ -154,6 +154,13 @@ _MORE_DRIVING = (
     "record more driving, with turns both ways (the interval narrows with the square root "
     "of the number of motion intervals matched)"
 )
+#: What narrows ``E_b``'s interval where it is relative to the gyro (wheels and gyro
+#: alone): not more driving, an absolute heading that calibrates the gyro's scale.
+_GYRO_REFERENCE = (
+    "calibrate the gyro's scale with an absolute heading in the same recording (its laser: "
+    "--scan-topic; motion capture: --truth-topic), or state its scale tolerance from its "
+    "datasheet (--gyro-scale-tolerance)"
+)
 _CHECK_MODEL = (
     "check the nominal wheelbase and wheel diameter, the time offset between wheels and "
     "ground truth, a tracked point off the axle (--fit-truth-offset) and slip (slower "
@@ -272,12 +279,12 @@ _Finding = tuple[Level, str, "str | None"]
 def _intervals(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
     found: list[_Finding] = []
     scans = estimate.method in (*INTERVALS, *GYROS)  # ordinary driving: no square, no runs
-    more = _MORE_DRIVING if scans else _MORE_RUNS
     where = (
         f"over {test.side_length:g} m of driving"
         if scans
         else f"on the {test.side_length:g} m square"
     )
+    comp = estimate.components
     for name in ("E_d", "E_b", "E_s"):
         interval = estimate.interval(name)
         value = getattr(estimate, name)
@@ -286,6 +293,11 @@ def _intervals(estimate: ErrorEstimate, test: SquareTest) -> list[_Finding]:
         low, high = interval
         correction, half, floor = abs(value - 1.0), 0.5 * (high - low), noticeable(name, test)
         shown = f"{name}'s 95 % interval, {low:.6f} to {high:.6f},"
+        if name == "E_b" and "E_b_gyro" in comp and "gyro_scale" not in comp:
+            shown = f"{name}'s 95 % interval, {low:.6f} to {high:.6f} (the gyro's scale tolerance),"
+            more = _GYRO_REFERENCE
+        else:
+            more = _MORE_DRIVING if scans else _MORE_RUNS
         mirror = 2.0 - value
         if low <= min(1.0, mirror) and high >= max(1.0, mirror) and correction >= floor:
             found.append(

@@ -70,6 +70,8 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
             return
         _robots(report, out)
         return
+    gyro = any(c.k_g is not None for c in report.calibrations)
+    relative = any(c.relative_to_gyro for c in report.calibrations)
     grid = table(
         f"Calibrations of {report.robot}",
         [
@@ -80,6 +82,7 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
             "pass E_b (measured)",
             "robot E_d (composed)",
             "robot E_b (composed)",
+            *(["gyro k_g"] if gyro else []),
             "E_max,syst [mm]",
             "verdict",
             "applied",
@@ -88,20 +91,30 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
     )
     for c in report.calibrations:
         e_max = "-" if c.e_max_syst is None else f"{c.e_max_syst * 1000:.1f}"
+        mark = " (k_g)" if c.relative_to_gyro else ""
         row(
             grid,
             str(c.id),
             c.time[:19],
             c.method,
             f"{c.E_d:.6f}",
-            f"{c.E_b:.6f}",
+            f"{c.E_b:.6f}{mark}",
             f"{c.robot_E_d:.6f}",
-            f"{c.robot_E_b:.6f}",
+            f"{c.robot_E_b:.6f}{mark}",
+            *([("-" if c.k_g is None else f"{c.k_g:.5f}")] if gyro else []),
             e_max,
             "-" if c.verdict is None else Verdict(c.verdict["level"]).words,
             "yes" if c.applied else "no",
         )
     out.print(grid)
+    if relative:
+        out.print(
+            "(k_g): E_b relative to the gyro (E_b k_g: wheels and gyro alone), not the "
+            "wheelbase itself; left out of robot E_b's drift.",
+            markup=False,
+        )
+    if gyro:
+        out.print(f"gyro k_g: {DEFINITIONS['k_g']}.", markup=False)
     for name in ("E_d", "E_b", "robot_E_d", "robot_E_b"):
         label = name.replace("_", " ", 1) if name.startswith("robot") else f"pass {name}"
         out.print(f"{label}: {DEFINITIONS[name]}.", markup=False)

@@ -78,7 +78,9 @@ def render_calibration(
     for line in summarize(list(report.associations)):
         console.print(line)
     bench, sensor = report.benchmark, report.sensor
-    if sensor is not None:
+    if report.gyro is not None:
+        _render_gyro_head(report, console)
+    elif sensor is not None:
         console.print(
             Text.assemble(
                 ("Calibration of ", "bold"),
@@ -114,6 +116,7 @@ def render_calibration(
     _render_without(report, console)
     _render_correction(report, console)
     _render_mounting(report, console)
+    _render_gyro(report, console)
 
     if overlay and report.overlay_withheld:
         console.print(
@@ -129,6 +132,38 @@ def render_calibration(
         )
         # Plain text, no box: it must copy and paste as it is.
         console.print(Text(report.overlay_yaml().rstrip()), soft_wrap=True)
+
+
+def _render_gyro_head(report: CalibrationResult, console: Console) -> None:
+    """The head of a calibration with a gyro: what its intervals held."""
+    gyro = report.gyro
+    assert gyro is not None
+    sensor = report.sensor
+    laser = (
+        ""
+        if sensor is None
+        else f", {sensor.n_used} of {len(sensor.kept)} motion intervals of its laser"
+    )
+    console.print(
+        Text.assemble(
+            ("Calibration of ", "bold"),
+            (report.source, "bold cyan"),
+            f"  with its gyro ({gyro.n_intervals - gyro.n_rests} intervals of driving, "
+            f"{gyro.n_rests} rests{laser}; no UMBmark figures)",
+        )
+    )
+
+
+def _render_gyro(report: CalibrationResult, console: Console) -> None:
+    """The gyro's own calibration: its figures and where they go, plain lines."""
+    if report.gyro is None:
+        return
+    from umbmark.calibration.gyro import gyro_lines
+
+    head, *lines = gyro_lines(report.gyro)
+    console.print(Text(head, style="bold"))
+    for line in lines:
+        console.print(Text(f"  {line}"), soft_wrap=True)
 
 
 def _render_mounting(report: CalibrationResult, console: Console) -> None:
@@ -165,7 +200,13 @@ def _render_errors(report: CalibrationResult, console: Console) -> None:
             _row(errors, label, f"{shown} {ANGLE_UNIT}", note)
     if nominal:
         E_b = _plus_minus(est.E_b, se.get("E_b"), ".6f")
-        _row(errors, "E_b = b_actual / b_nominal", E_b, "Eq. 4.27")
+        if "E_b_gyro" in est.components and "gyro_scale" not in est.components:
+            if "E_b" in se:
+                _row(errors, "E_b relative to the gyro", E_b, "E_b k_g, ± its scale tolerance")
+            else:
+                _row(errors, "E_b, not corrected", E_b, "relative to the gyro: see its lines")
+        else:
+            _row(errors, "E_b = b_actual / b_nominal", E_b, "Eq. 4.27")
     _row(errors, "E_d = D_R / D_L", _plus_minus(est.E_d, se.get("E_d"), ".6f"), "Eq. 4.22")
     if est.E_s is not None and nominal:
         _row(errors, "E_s = D_avg / D_active", _plus_minus(est.E_s, se.get("E_s"), ".6f"), "scale")

@@ -91,6 +91,8 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
     columns = ["run", "dir"]
     for name in sets:
         columns += [f"{name}\nend [mm]", f"{name}\nheading [deg]", f"{name}\nRMSE [mm]"]
+    gyro = report.gyro_heading_errors
+    columns += [f"gyro {name}\nheading [deg]" for name in gyro]
     grid = table(
         f"Replay of {report.source}: odometry against ground truth",
         columns,
@@ -105,6 +107,9 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
                 "" if h is None else f"{math.degrees(h):+.2f}",
                 f"{1000 * report.rmse[name][i]:.1f}",
             ]
+        cells += [
+            "" if (g := gyro[name][i]) is None else f"{math.degrees(g):+.2f}" for name in gyro
+        ]
         row(grid, *cells)
     cells = ["mean", ""]
     for name in sets:
@@ -113,6 +118,7 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
             "",
             f"{1000 * report.rmse[name].mean():.1f}",
         ]
+    cells += [""] * len(gyro)
     row(grid, *cells, bold=True)
     out.print(grid)
     for name, p in sets.items():
@@ -122,3 +128,11 @@ def replay(source: str, json_out: bool, **options: Any) -> None:
         )
     for line in summarize(list(report.associations)):
         out.print(line)
+    if gyro:
+        out.print(
+            "gyro heading: each run's true heading change less the gyro's, as read and "
+            "corrected by the calibration's scale and bias (omega = k_g (omega_read - bias))"
+            if "calibrated" in gyro
+            else "gyro heading: each run's true heading change less the gyro's, as read (the "
+            "calibration replayed holds no gyro's scale and bias)"
+        )

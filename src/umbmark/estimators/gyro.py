@@ -64,6 +64,7 @@ __all__ = [
     "GyroCalibration",
     "fit_gyro",
     "gyro_estimate",
+    "widened_resolves",
 ]
 
 #: The gyro scale tolerance where none is given: MPU-6050's sensitivity scale factor
@@ -73,6 +74,14 @@ SCALE_TOLERANCE = 0.03
 BIAS_WINDOW = 10.0
 #: Fewest intervals a calibration is made from.
 MIN_INTERVALS = 10
+
+
+def widened_resolves(E_b: float, se: float) -> bool:
+    """Whether ``E_b`` relative to the gyro, its standard error ``se`` widened by the
+    gyro's scale tolerance, says which way to correct: its 95 % interval does not hold
+    both 1 (no correction) and ``2 - E_b`` (a correction that makes the wheelbase twice
+    as wrong), the verdict's rule (:mod:`umbmark.calibration.verdict`)."""
+    return 1.959963984540054 * se < 2.0 * abs(E_b - 1.0)
 
 
 def fit_gyro(
@@ -139,8 +148,9 @@ def gyro_estimate(
     """The ``gyro`` estimator: :func:`fit_gyro`, as errors of ``active``.
 
     ``E_d`` and ``E_b`` as the calibration determines them (``E_b``: relative to the
-    gyro without a reference, its interval widened by ``scale_tolerance``), ``E_s`` where
-    the reference gives distance; an undetermined figure is left at 1 (no correction)
+    gyro without a reference, its interval widened by ``scale_tolerance``, and left at 1
+    where that interval does not say which way to correct, :func:`widened_resolves`),
+    ``E_s`` where the reference gives distance; an undetermined figure is left at 1 (no correction)
     with a warning saying what to drive, and where neither ``E_d`` nor ``E_b`` is
     determined a blocking warning says there is nothing to apply. ``alpha`` and
     ``beta`` are what the errors make of a square of side ``side_length`` (1 m by
@@ -159,6 +169,14 @@ def gyro_estimate(
     if E_b <= 0.0:  # a gyro that reads backwards (a blocking warning says so)
         E_b = 1.0
         errors.pop("E_b", None)
+    elif "E_b" in cal.relative_to_gyro and "E_b" in errors and not widened_resolves(E_b, se["E_b"]):
+        warnings.append(
+            f"E_b is not corrected: relative to the gyro it is {E_b:.5f}, and the gyro's scale "
+            f"tolerance (+-{100 * scale_tolerance:g} %) holds both no correction and one "
+            "that would make the wheelbase twice as wrong: left at 1, E_d alone applied"
+        )
+        E_b = 1.0
+        errors.pop("E_b")
     for name in ("E_d", "E_b"):
         if name in cal.undetermined:
             warnings.append(

@@ -27,7 +27,7 @@ import numpy as np
 from umbmark.core.arrays import FloatArray
 from umbmark.scans.gyro_intervals import GyroIntervals
 
-__all__ = ["GRAVITY", "NOTICEABLE_TILT", "GyroMounting", "gyro_mounting"]
+__all__ = ["GRAVITY", "NOTICEABLE_TILT", "GyroMounting", "gyro_mounting", "rpy_of"]
 
 #: Standard gravity [m/s^2].
 GRAVITY = 9.80665
@@ -57,6 +57,10 @@ class GyroMounting:
     axis_in_imu, stated_in_imu : array, shape (3,), or None
         With the stated transform: the axis found and the base's z as the transform puts
         it, both in the IMU's frame.
+    stated_rotation : array, shape (3, 3), or None
+        The stated rotation ``base <- imu`` itself.
+    frame : str
+        The IMU's own frame.
     """
 
     axis: FloatArray | None = None
@@ -71,6 +75,8 @@ class GyroMounting:
     gravity_tilt: float | None = None
     axis_in_imu: FloatArray | None = None
     stated_in_imu: FloatArray | None = None
+    stated_rotation: FloatArray | None = None
+    frame: str = "imu_link"
 
     @property
     def differs(self) -> bool:
@@ -79,6 +85,20 @@ class GyroMounting:
             return False
         error = self.tilt_error or 0.0
         return self.upside_down or self.tilt > max(NOTICEABLE_TILT, 3.0 * error)
+
+    def found_rotation(self) -> FloatArray | None:
+        """The rotation ``base <- imu`` (shape (3, 3)) the readings show: the stated one
+        turned by the roll and pitch found, ``Ry(pitch) Rx(roll) R_stated`` (the readings
+        turn about ``R^T z`` of that turn: the module's documentation; the yaw about the
+        base's z is not seen by the turns, and stays as stated); None without a stated
+        rotation or a turning axis."""
+        if self.stated_rotation is None or self.roll is None or self.pitch is None:
+            return None
+        cr, sr = math.cos(self.roll), math.sin(self.roll)
+        cp, sp = math.cos(self.pitch), math.sin(self.pitch)
+        rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+        ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+        return np.asarray(ry @ rx @ self.stated_rotation)
 
     def notes(self, frame: str = "imu_link") -> list[str]:
         """What it means, for people (degrees)."""
@@ -131,7 +151,23 @@ class GyroMounting:
             "gravity_tilt": self.gravity_tilt,
             "axis_in_imu": listed(self.axis_in_imu),
             "stated_in_imu": listed(self.stated_in_imu),
+            "stated_rotation": None
+            if self.stated_rotation is None
+            else [listed(row) for row in self.stated_rotation],
+            "frame": self.frame,
+            "stated_rpy": None if self.stated_rotation is None else rpy_of(self.stated_rotation),
+            "found_rpy": None if (found := self.found_rotation()) is None else rpy_of(found),
         }
+
+
+def rpy_of(rotation: FloatArray) -> list[float]:
+    """The roll, pitch and yaw [rad] of a rotation (shape (3, 3)) as a URDF origin's
+    ``rpy`` states it: ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (fixed axes x, y, z)."""
+    r = np.asarray(rotation, dtype=np.float64)
+    pitch = math.asin(max(-1.0, min(1.0, -float(r[2, 0]))))
+    roll = math.atan2(float(r[2, 1]), float(r[2, 2]))
+    yaw = math.atan2(float(r[1, 0]), float(r[0, 0]))
+    return [roll, pitch, yaw]
 
 
 def _angles(v: FloatArray) -> tuple[float, float, float]:
@@ -181,7 +217,9 @@ def gyro_mounting(
     stated : array, shape (3, 3), or None
         The stated rotation ``base <- imu`` the rates were put in the base frame with.
     """
-    out: dict[str, object] = {}
+    out: dict[str, object] = {"frame": intervals.frame}
+    if stated is not None:
+        out["stated_rotation"] = np.asarray(stated, dtype=np.float64)
     found = _axis(intervals, theta_odo)
     if found is not None:
         a, error = found

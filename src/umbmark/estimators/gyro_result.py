@@ -105,8 +105,34 @@ class GyroCalibration:
         half = t_quantile(0.5 + 0.5 * level, math.inf) * se
         return (value - half, value + half)
 
+    def to_apply(self) -> dict[str, Any]:
+        """What to set, JSON-ready: ``scale_multiplier`` (``k_g``: a driver's gyro scale
+        times it; None where not determined), ``bias`` [rad/s] and ``bias_deg_s`` (to
+        subtract from the yaw rate), and the IMU frame's origin ``rpy`` found and stated
+        [rad] (None where the stated one or the turning axis is not known), with
+        ``rotation_offset``, the rotation of the readings that keeps the stated
+        transform (ros2_controllers' ``imu_sensor_broadcaster``: ``Rz Ry Rx``), whether
+        the mounting differs, and the scale tolerance ``E_b`` is relative to (None where
+        ``k_g`` is determined)."""
+        from umbmark.estimators.gyro_mounting import rpy_of
+
+        v, mounting = self.values, self.mounting
+        found, stated = mounting.found_rotation(), mounting.stated_rotation
+        offset = None if found is None or stated is None else rpy_of(stated.T @ found)
+        return {
+            "scale_multiplier": v.get("k_g"),
+            "bias": v.get("bias"),
+            "bias_deg_s": None if "bias" not in v else math.degrees(v["bias"]),
+            "frame": mounting.frame,
+            "origin_rpy_found": None if found is None else rpy_of(found),
+            "origin_rpy_stated": None if stated is None else rpy_of(stated),
+            "rotation_offset": offset,
+            "mounting_differs": mounting.differs,
+            "scale_tolerance": None if "k_g" in v else self.scale_tolerance,
+        }
+
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready (radians, rad/s)."""
+        """JSON-ready (radians, rad/s); ``apply``: :meth:`to_apply`."""
         return {
             "values": dict(self.values),
             "standard_errors": dict(self.standard_errors),
@@ -134,5 +160,6 @@ class GyroCalibration:
                 name: {"value": value, "standard_error": se}
                 for name, (value, se) in self.delays.items()
             },
+            "apply": self.to_apply(),
             **({"reference_figures": self.extra} if self.extra else {}),
         }

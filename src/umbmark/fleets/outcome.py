@@ -8,8 +8,15 @@ description) and calibrates it through the calls ``umbmark calibrate`` makes
 
 - **scan matching** where it holds wheels (or the controller's odometry) and a laser: the
   wheels' diameters, the wheelbase, ``E_s`` and the laser's mounting from ordinary driving;
+  with an IMU too (``sensor_msgs/Imu`` with a gyro and a mounting, as ``umbmark info``
+  finds it), **the gyro and the laser together** (``method="gyro"`` with both topics): the
+  same figures, and the gyro's scale ``k_g`` and bias;
 - **a trajectory fit** where it holds an independent reference (motion capture) and no
   laser, and for a run log or an OptiOdom session (wheels and motion capture by format);
+- **the gyro** where it holds wheels and an IMU and neither a laser nor a reference:
+  ``E_d``, and ``E_b`` relative to the gyro, followed as its own figure ``E_b_gyro``
+  (``E_b k_g``: never compared with a laser's ``E_b`` of the same robot), and the gyro's
+  bias;
 - else it is **left out**, with the reason.
 
 The reading options the user gave (``--truth-topic``, ``-b``, ...) win over what the look
@@ -34,11 +41,12 @@ from typing import Any
 
 from umbmark.core.conventions import Direction
 from umbmark.core.errors import InputError, ProblemError
-from umbmark.estimators.registry import SCAN_MATCHING, TRAJECTORY
+from umbmark.estimators.registry import GYRO, SCAN_MATCHING, TRAJECTORY
 from umbmark.fleets.naming import UNNAMED
 
 __all__ = [
     "FIGURES",
+    "GYRO_FIGURES",
     "LOGGED",
     "REFERENCE",
     "STANDARD_SIDE",
@@ -48,8 +56,12 @@ __all__ = [
     "e_max_on_standard_square",
 ]
 
-#: The figures a fleet follows per robot, in this order.
-FIGURES = ("E_d", "E_b", "E_s", "laser_x", "laser_y", "laser_yaw")
+#: The figures a fleet follows per robot, in this order: the wheels', the laser's, and the
+#: gyro's (``E_b_gyro``: ``E_b k_g``, what wheels and a gyro give without an absolute
+#: heading, kept apart from ``E_b``; ``k_g``, the gyro's scale; ``gyro_bias`` [rad/s]).
+FIGURES = ("E_d", "E_b", "E_s", "laser_x", "laser_y", "laser_yaw", "E_b_gyro", "k_g", "gyro_bias")
+#: The estimate's components the gyro's figures are (figure: component).
+GYRO_FIGURES = {"k_g": "gyro_scale", "gyro_bias": "gyro_bias"}
 #: The square E_max,syst is projected on [m] (the paper's).
 STANDARD_SIDE = 4.0
 #: Recordings that are wheels and motion capture by their format (no bag to look into).
@@ -108,12 +120,13 @@ class RecordingOutcome:
     digest : str or None
         SHA-256 of its bytes.
     method : str or None
-        ``scan-matching`` or ``trajectory``; None when left out or failed.
+        ``scan-matching``, ``gyro`` or ``trajectory``; None when left out or failed.
     figures : dict of str to (float, float or None)
         Each of :data:`FIGURES` it measured: value and standard error (metres, radians).
     e_max_syst : float or None
         E_max,syst [m] these errors make on the standard 4 m square driven by the
-        odometry (both directions, the worse), from ``E_d``, ``E_b``, ``E_s``.
+        odometry (both directions, the worse), from ``E_d``, ``E_b``, ``E_s``; None from
+        ``E_b`` relative to the gyro.
     multipliers : tuple of float or None
         ``(wheel_separation_multiplier, left, right)`` to configure.
     verdict : str or None
@@ -275,18 +288,40 @@ def _plan(info: Any, options: Mapping[str, Any]) -> tuple[str | None, dict[str, 
     missing = _missing_truth(info, options.get("truth_topic"))
     if missing is not None:
         return None, {}, missing
+    imus = [imu.topic for imu in info.imus if imu.problem is None]
+    if imus and options.get("imu_topic") is None:
+        reading["imu_topic"] = imus[0]
+    gyro = bool(imus) or options.get("imu_topic") is not None
     if info.laser_scans and inputs:
         reading["scan_topic"] = info.laser_scans[0]
-        return SCAN_MATCHING.name, {**reading, **options}, ""
+        method = GYRO.name if gyro else SCAN_MATCHING.name
+        return method, {**_without_imu(reading, gyro), **options}, ""
     given = any(options.get(name) is not None for name in REFERENCE)
     truth = [c for c in info.truth if c.warning is None]
     if inputs and (given or (truth and info.independent)):
         if not given:
             reading.update(_keywords(truth[0].options))
-        return TRAJECTORY.name, {**reading, **options}, ""
+        return TRAJECTORY.name, {**_without_imu(reading, False), **options}, ""
+    if inputs and gyro:
+        return GYRO.name, {**reading, **options}, ""
     if not inputs:
         return None, {}, "no wheels or controller odometry found"
-    return None, {}, "neither a laser scan nor an independent reference (motion capture)"
+    if info.imus:  # an IMU, and what makes it no gyro to calibrate by (as calibrate says)
+        imu = info.imus[0]
+        return (
+            None,
+            {},
+            (
+                "neither a laser scan, a usable IMU nor an independent reference (motion "
+                f"capture): {info.path}: {imu.topic}: {imu.problem}"
+            ),
+        )
+    return None, {}, "neither a laser scan, an IMU nor an independent reference (motion capture)"
+
+
+def _without_imu(reading: dict[str, Any], gyro: bool) -> dict[str, Any]:
+    """The reading options, the IMU's left out where the gyro is not used."""
+    return reading if gyro else {k: v for k, v in reading.items() if k != "imu_topic"}
 
 
 def _missing_truth(info: Any, topic: str | None) -> str | None:  # noqa: ANN401 (BagInfo)
@@ -304,10 +339,15 @@ def _missing_truth(info: Any, topic: str | None) -> str | None:  # noqa: ANN401 
 def _figures(result: Any) -> dict[str, tuple[float, float | None]]:  # noqa: ANN401
     est = result.estimate
     se = dict(est.standard_errors)
-    out: dict[str, tuple[float, float | None]] = {
-        "E_d": (float(est.E_d), se.get("E_d")),
-        "E_b": (float(est.E_b), se.get("E_b")),
-    }
+    comp = est.components
+    out: dict[str, tuple[float, float | None]] = {"E_d": (float(est.E_d), se.get("E_d"))}
+    if "E_b_gyro" in comp and "gyro_scale" not in comp:  # E_b k_g: the gyro's, kept apart
+        out["E_b_gyro"] = (float(comp["E_b_gyro"]), se.get("E_b_gyro"))
+    else:
+        out["E_b"] = (float(est.E_b), se.get("E_b"))
+    for name, key in GYRO_FIGURES.items():
+        if key in comp:
+            out[name] = (float(comp[key]), se.get(key))
     if est.E_s is not None:
         out["E_s"] = (float(est.E_s), se.get("E_s"))
     sensor = result.sensor
@@ -411,6 +451,11 @@ def _calibrated(
     cal = result.calibration
     wheelbase = float(cal.active.wheelbase)
     E_s = figures.get("E_s", (1.0, None))[0]
+    e_max = (  # none from E_b relative to the gyro: the gyro's scale tolerance is in it
+        None
+        if "E_b" not in figures
+        else e_max_on_standard_square(figures["E_d"][0], figures["E_b"][0], E_s, wheelbase)
+    )
     return RecordingOutcome(
         path,
         robot,
@@ -419,7 +464,7 @@ def _calibrated(
         digest,
         method=method,
         figures=figures,
-        e_max_syst=e_max_on_standard_square(figures["E_d"][0], figures["E_b"][0], E_s, wheelbase),
+        e_max_syst=e_max,
         multipliers=(cal.new_separation_multiplier, cal.new_c_left, cal.new_c_right),
         verdict=result.verdict.level,
         wheelbase=wheelbase,
@@ -481,6 +526,7 @@ def _record(result: Any) -> dict[str, Any]:  # noqa: ANN401 (CalibrationResult)
         "wheel_diameter": result.calibration.active.wheel_diameter,
         "overlay": None if result.overlay_withheld else result.overlay_yaml(),
         "mounting": None if forms is None else forms.to_dict(),
+        "gyro_calibration": None if result.gyro is None else result.gyro.to_apply(),
         "controller": {
             "key_path": list(result.controller.key_path),
             "named": bool(result.controller.named),
@@ -503,7 +549,7 @@ def _calibrate(path: Path, method: str, options: Mapping[str, Any]) -> Any:  # n
 
     wheelbase = options.get("wheelbase")
     reading = {k: v for k, v in options.items() if k != "wheelbase"}
-    fit = None if method == SCAN_MATCHING.name else method
+    fit = None if method in (SCAN_MATCHING.name, GYRO.name) else method
     return calibrate_sources([str(path)], ReadOptions.of(reading), method=fit, wheelbase=wheelbase)
 
 

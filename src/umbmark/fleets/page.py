@@ -30,8 +30,8 @@ from umbmark.fleets.summary import (
 
 __all__ = ["FAILED_SHOWN", "PLOT_H", "PLOT_W", "fleet_page"]
 
-#: A trend plot's size [px]: two side by side fit a phone's 390 px.
-PLOT_W, PLOT_H = 164, 70
+#: A trend plot's size [px]: two side by side fit a phone's 390 px, eight a desk's 1280 px.
+PLOT_W, PLOT_H = 140, 70
 #: The plot's inner box [px]: left and right margins, the top band (the change's day),
 #: the data's bottom, the time axis and its labels' baseline.
 _X0, _X1, _TOP, _BOTTOM, _AXIS, _LABEL = 6, PLOT_W - 6, 13, 50, 54, 66
@@ -62,11 +62,11 @@ border-bottom:1px solid #ddd}
 .ok{color:#27ae60}
 .note{color:#555;font-size:.9em}
 .num{font-variant-numeric:tabular-nums}
-.figs{display:flex;flex-wrap:wrap;gap:.3em .9em;margin-top:.35em}
+.figs{display:flex;flex-wrap:wrap;align-items:flex-end;gap:.3em .9em;margin-top:.35em}
 figure{margin:0;width:min-content}
 figcaption{width:0;min-width:100%;font-size:12px;line-height:1.3;white-space:nowrap;overflow:hidden;
 text-overflow:ellipsis}
-figcaption b{font-weight:600;font-variant-numeric:tabular-nums}
+figcaption b{font-weight:600;font-variant-numeric:tabular-nums;white-space:normal}
 svg{display:block}
 svg text{font-size:10px;fill:#555}
 details{margin:.15em 0}

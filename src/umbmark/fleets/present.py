@@ -139,13 +139,16 @@ def _ratio(ours: float | None, theirs: float | None) -> float:
 
 
 def robot_terms(outcome: RecordingOutcome, latest: RecordingOutcome) -> RecordingOutcome:
-    """``outcome``'s figures as what the robot is (see the module), ``E_b`` and ``E_s`` on
-    ``latest``'s nominal geometry; the laser's figures as they are."""
+    """``outcome``'s figures as what the robot is (see the module), ``E_b`` (and ``E_b``
+    relative to the gyro) and ``E_s`` on ``latest``'s nominal geometry; the laser's and
+    the gyro's own figures as they are."""
     mine, last = _Active.of(outcome), _Active.of(latest)
     E_d = outcome.figures.get("E_d", (1.0, None))[0]
+    E_b = mine.separation * _ratio(mine.wheelbase, last.wheelbase)
     scale = {
         "E_d": mine.c_right / mine.c_left,
-        "E_b": mine.separation * _ratio(mine.wheelbase, last.wheelbase),
+        "E_b": E_b,
+        "E_b_gyro": E_b,  # E_b k_g: the wheelbase's factor alike, the gyro's as it is
         "E_s": mine.scale_of(E_d) * _ratio(mine.diameter, last.diameter),
     }
     if all(v == 1.0 for v in scale.values()):

@@ -33,8 +33,22 @@ from umbmark.outputs.mounting import MountingForms
 
 __all__ = ["FIGURE_UNITS", "FigureTrack", "FleetSummary", "RobotSummary", "summarize"]
 
-#: The figures a robot's controller takes (the others are the laser's).
+#: The figures a robot's controller takes (the others are the laser's and the gyro's).
 WHEELS = ("E_d", "E_b", "E_s")
+#: ``E_b`` where only the gyro gave it: relative to the gyro (``E_b k_g``), taken as the
+#: present ``E_b`` only where no laser (or reference) ever gave ``E_b`` itself.
+GYRO_E_B = "E_b_gyro"
+#: Why ``E_b`` relative to the gyro is left uncorrected.
+NOT_CORRECTED = (
+    "E_b is not corrected: relative to the gyro (E_b k_g) it lies within the gyro's scale "
+    "tolerance of no correction; E_d alone is applied (a laser or motion capture in a "
+    "recording gives E_b itself)"
+)
+#: Why a present ``E_b`` relative to the gyro is applied with care at best.
+RELATIVE_TO_GYRO = (
+    "E_b is relative to the gyro (E_b k_g, from wheels and gyro alone): its interval is the "
+    "gyro's scale tolerance; a laser or motion capture in a recording separates the two"
+)
 
 #: How each figure is shown: (label, factor to the shown unit, unit, decimals).
 FIGURE_UNITS: dict[str, tuple[str, float, str, int]] = {
@@ -44,6 +58,9 @@ FIGURE_UNITS: dict[str, tuple[str, float, str, int]] = {
     "laser_x": ("laser forward", 1000.0, "mm", 2),
     "laser_y": ("laser left", 1000.0, "mm", 2),
     "laser_yaw": ("laser yaw", 180.0 / math.pi, "deg", 3),
+    "E_b_gyro": ("E_b k_g (relative to the gyro)", 1.0, "", 6),
+    "k_g": ("k_g, the gyro's scale", 1.0, "", 5),
+    "gyro_bias": ("gyro bias", 180.0 / math.pi, "deg/s", 4),
 }
 #: z of a 95 % interval.
 Z95 = 1.959964
@@ -408,12 +425,19 @@ def _robot(name: str, mine: Sequence[RecordingOutcome]) -> RobotSummary:
     tracks = {f: t for f in FIGURES if (t := _track(f, on_latest)) is not None}
     notes += _one_offs(tracks)
     present = {f: tracks[f].latest[0] for f in WHEELS if f in tracks}
+    wheel_names = [f for f in WHEELS if f in tracks]
+    cautions = []
+    if "E_b" not in tracks and GYRO_E_B in tracks:  # E_b relative to the gyro, said so
+        present["E_b"] = _relative_e_b(tracks[GYRO_E_B], latest)
+        wheel_names.insert(1, GYRO_E_B)
+        cautions.append(RELATIVE_TO_GYRO if present["E_b"] != 1.0 else NOT_CORRECTED)
     by_path = {o.path: o for o in used}
     rests_on = sorted(
-        {by_path[tracks[f].paths[i]].path for f in WHEELS if f in tracks for i in tracks[f].present}
+        {by_path[tracks[f].paths[i]].path for f in wheel_names for i in tracks[f].present}
     )
-    wheels = [tracks[f] for f in WHEELS if f in tracks]
-    cautions = [UNCONFIRMED] if any(t.change.kind == "latest" for t in wheels) else []
+    wheels = [tracks[f] for f in wheel_names]
+    if any(t.change.kind == "latest" for t in wheels):
+        cautions.insert(0, UNCONFIRMED)
     if calibrated[-1] is not latest:
         cautions.append(
             f"the newest calibration, {calibrated[-1].path}, failed its checks (do not apply): "
@@ -421,10 +445,25 @@ def _robot(name: str, mine: Sequence[RecordingOutcome]) -> RobotSummary:
         )
     apply = to_apply(present, [by_path[p] for p in rests_on], latest, basis=_basis(wheels),
                      cautions=cautions)  # fmt: skip
+    measured = present if "E_b" in tracks else {k: v for k, v in present.items() if k != "E_b"}
     return RobotSummary(
         name, len(mine), hours, tracks, latest, left_out, tuple(notes),
-        present_e_max_syst(present, latest), apply, failed,
+        present_e_max_syst(measured, latest), apply, failed,
     )  # fmt: skip
+
+
+def _relative_e_b(track: FigureTrack, latest: RecordingOutcome) -> float:
+    """The present ``E_b`` from ``E_b`` relative to the gyro: its value where its
+    interval widened by the gyro's scale tolerance says which way to correct
+    (:func:`umbmark.estimators.gyro.widened_resolves`, as a calibration applies it), else
+    1 (no correction)."""
+    from umbmark.estimators.gyro import SCALE_TOLERANCE, widened_resolves
+
+    value, se = track.latest
+    gyro = latest.record.get("gyro_calibration") or {}
+    tolerance = gyro.get("scale_tolerance") or SCALE_TOLERANCE
+    widened = math.hypot(se, value * float(tolerance) / Z95)
+    return value if widened_resolves(value, widened) else 1.0
 
 
 def _basis(wheels: Sequence[FigureTrack]) -> str:

@@ -176,7 +176,7 @@ def _calibration(outcome: RecordingOutcome) -> Any:  # noqa: ANN401 (NewCalibrat
         when,
         str(outcome.method),
         figures["E_d"][0],
-        figures["E_b"][0],
+        figures["E_b"][0] if "E_b" in figures else figures["E_b_gyro"][0],  # said by its errors
         figures["E_s"][0] if "E_s" in figures else None,
         outcome.e_max_syst,
         dict(record.get("standard_errors") or {}),

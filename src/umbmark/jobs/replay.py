@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from typing_extensions import Unpack
 
     from umbmark.outputs.tum import TumTime
+    from umbmark.sources.params.reader import CalibratedParams
 
 __all__ = ["ReplayReport", "replay", "trajectory_rmse"]
 
@@ -105,6 +106,10 @@ class ReplayReport(JsonText):
         What was done and chosen while reading, for people (information).
     warnings : tuple of str
         What makes the input doubtful (runs left out, samples unmatched, ...).
+    gyro_heading_errors : mapping of str to tuple of (float or None)
+        With ``imu_topic``: each run's true heading change less the gyro's [rad], ``as
+        read`` and, with a calibration that holds the gyro's scale and bias,
+        ``calibrated`` (:func:`umbmark.calibration.gyro_bag.gyro_heading_errors`).
     """
 
     source: str
@@ -118,6 +123,7 @@ class ReplayReport(JsonText):
     associations: tuple[tuple[str, Association], ...] = ()
     notes: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
+    gyro_heading_errors: Mapping[str, tuple[float | None, ...]] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         means = ", ".join(
@@ -163,6 +169,10 @@ class ReplayReport(JsonText):
                     **{f"end_error_{name}": float(self.end_errors[name][i]) for name in sets},
                     **{f"heading_error_{name}": self.heading_errors[name][i] for name in sets},
                     **{f"rmse_{name}": float(self.rmse[name][i]) for name in sets},
+                    **{
+                        f"gyro_heading_error_{name.replace(' ', '_')}": errors[i]
+                        for name, errors in self.gyro_heading_errors.items()
+                    },
                 }
                 for i, run in enumerate(self.runs)
             ],
@@ -324,9 +334,23 @@ def replay(
         associations=read.associations,
         notes=split_messages(read.notes)[0],
         warnings=split_messages(read.notes)[1],
+        gyro_heading_errors=_gyro(source, read_options, read.runs, calibrated),
     )
     report.write(plot=plot, tum=tum, tum_time=tum_time, force=force)
     return report
+
+
+def _gyro(
+    source: PathLike, options: ReadOptions, runs: tuple[Run, ...], params: CalibratedParams | None
+) -> dict[str, tuple[float | None, ...]]:
+    """The gyro's heading over each run against the truth's (with ``imu_topic``)."""
+    if options.imu_topic is None:
+        return {}
+    from umbmark.calibration.gyro_bag import gyro_figures, gyro_heading_errors
+
+    spans = [None if run.log is None else run.log.truth_turn() for run in runs]
+    figures = None if params is None else gyro_figures(params)
+    return gyro_heading_errors(source, options, spans, figures)
 
 
 def _run_rmse(run: Run, params: WheelParams) -> float:

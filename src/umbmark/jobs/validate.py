@@ -13,7 +13,9 @@ states which (straight legs, arcs, turns on the spot; :mod:`umbmark.estimators.m
 An estimator of a turn-rate term (``trajectory-scrub``) is credited only where the rest of
 the runs identify it (they hold arcs and turns on the spot, and the fit pins the term),
 so that it is never credited with runs it extrapolates to, nor with the single
-wheelbase it falls back to.
+wheelbase it falls back to. A bag read with ``imu_topic`` adds the ``gyro`` estimator
+(the wheels against the gyro, its reference the ground truth's heading), holding out each
+run's stretch of the recording.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from typing import TYPE_CHECKING
 from umbmark.calibration.heldout import CANDIDATES, validate_read
 from umbmark.calibration.validation import ValidationReport
 from umbmark.core.errors import InputError, option
+from umbmark.estimators.registry import GYROS
 from umbmark.runs.active import read_each
 from umbmark.runs.read import is_table, source_name
 from umbmark.runs.read_options import ReadOptions, SourceOptions
@@ -54,7 +57,8 @@ def validate(
         Recorded runs (run logs, OptiOdom sessions, bags): replaying needs their wheel
         data.
     methods : sequence of str, optional
-        The estimators to compare (default: all of :data:`CANDIDATES`).
+        The estimators to compare (default: all of :data:`CANDIDATES`, and ``gyro`` with
+        ``imu_topic``).
     side_length, wheelbase : float, optional
         As for :func:`umbmark.calibrate`.
     override_verdict : bool
@@ -71,12 +75,15 @@ def validate(
         For sources without recorded wheel data, or too little to hold anything out.
     """
     read_options = ReadOptions.of(options)
-    chosen = tuple(CANDIDATES if methods is None else ("nominal", *methods))
+    known = (*CANDIDATES, *GYROS) if read_options.imu_topic is not None else CANDIDATES
+    chosen = tuple(known if methods is None else ("nominal", *methods))
     for name in chosen:
-        if name not in CANDIDATES:
+        if name in GYROS and name not in known:
             raise InputError(
-                f"{option('methods', repr(name))}: use some of {', '.join(CANDIDATES[1:])}"
+                f"{option('methods', name)} needs {option('imu_topic')}: the bag's IMU"
             )
+        if name not in known:
+            raise InputError(f"{option('methods', repr(name))}: use some of {', '.join(known[1:])}")
     paths = (source, *more_sources)
     for path in paths:
         if is_table(path, read_options):
@@ -92,4 +99,10 @@ def validate(
         side_length=side_length,
         override_verdict=override_verdict,
     )
-    return validate_read(read, chosen, progress)
+    gyro = None
+    if len(paths) == 1 and any(name in GYROS for name in chosen):
+        from umbmark.calibration.gyro_bag import read_gyro_recording
+
+        gyro = read_gyro_recording(paths[0], read_options, wheelbase)
+        gyro.refuse_saturated()
+    return validate_read(read, chosen, progress, gyro)

@@ -209,6 +209,17 @@ class RunLog:
         columns = self.truth if self.headings else self.truth[:, :2]
         return np.asarray(np.all(np.isfinite(columns), axis=1))
 
+    def truth_turn(self) -> tuple[float, float, float] | None:
+        """The ground truth's first and last matched sample's times [s, the recording's
+        clock: ``start + time``] and its heading change between them [rad, unwrapped];
+        None without headings or fewer than two matched samples."""
+        at = np.flatnonzero(self.matched)
+        if not self.headings or at.size < 2:
+            return None
+        heading = np.unwrap(self.truth[at, 2])
+        first, last = float(self.time[at[0]]), float(self.time[at[-1]])
+        return self.start + first, self.start + last, float(heading[-1] - heading[0])
+
     def odometry(self, params: WheelParams, method: IntegrationMethod = "arc") -> FloatArray:
         """Odometry poses, shape (n, 3), from the wheel rotation and ``params``.
 

@@ -21,7 +21,12 @@ __all__ = ["ANGLE_UNIT", "COMPONENTS", "Component", "component", "to_shown"]
 #: The unit of every angle a person reads (terminal, HTML page); JSON stays in radians.
 ANGLE_UNIT = "deg"
 #: Factor from the SI value to the unit shown.
-_SCALE = {"mm": 1000.0, "ms": 1000.0, ANGLE_UNIT: 180.0 / math.pi}
+_SCALE = {
+    "mm": 1000.0,
+    "ms": 1000.0,
+    ANGLE_UNIT: 180.0 / math.pi,
+    f"{ANGLE_UNIT}/s": 180.0 / math.pi,
+}
 
 
 def to_shown(value: float, unit: str) -> float:
@@ -145,6 +150,22 @@ COMPONENTS: Mapping[str, Component] = {
     "laser_yaw": Component("laser yaw", ANGLE_UNIT, "on the robot", ".3f"),
     "n_intervals": Component("motion intervals", "", "in the sources", ".0f"),
     "n_used": Component("motion intervals used", "", "the others: outliers", ".0f"),
+    # gyro: the wheels against a gyro
+    "gyro_scale": Component(
+        "gyro scale k_g",
+        "",
+        "omega_true = k_g (omega_read - bias): a driver's scale times it",
+        ".5f",
+    ),
+    "gyro_bias": Component(
+        "gyro bias (yaw)", f"{ANGLE_UNIT}/s", "its mean over the recording: subtract it", ".4f"
+    ),
+    "E_b_gyro": Component(
+        "E_b k_g / E_s", "", "the wheelbase relative to the gyro (wheels and gyro alone)", ".6f"
+    ),
+    "gyro_tilt": Component("IMU tilt from its turns", ANGLE_UNIT, "off the base's z", ".3f"),
+    "n_rests": Component("rests", "", "the gyro's bias alone over them", ".0f"),
+    "n_reference": Component("reference stretches", "", "an absolute heading's", ".0f"),
 }
 
 

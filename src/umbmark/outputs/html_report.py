@@ -428,7 +428,9 @@ def passes_html(page: Passes) -> str:
     degrees) and the correction, the figures of the fit (each with its unit and
     meaning), warnings, notes and any validation table, the laser's mounting in the forms
     a user applies (a calibration from motion intervals:
-    :func:`umbmark.outputs.mounting.mounting_html`), the ros2_control overlay of the
+    :func:`umbmark.outputs.mounting.mounting_html`), the gyro's own calibration and where
+    it goes (a calibration with a gyro: :func:`umbmark.outputs.gyro.gyro_html`), the
+    ros2_control overlay of the
     last pass and the provenance (inputs with their SHA-256, the parameters active, the
     command, the umbmark version and the method).
     """
@@ -443,12 +445,15 @@ def passes_html(page: Passes) -> str:
     robot = page.passes[0].robot
     if robot:
         title = f"{robot}: {title}"
+    from umbmark.outputs.gyro import gyro_html
     from umbmark.outputs.html_verdict import CSS, verdict_section
     from umbmark.outputs.mounting import CSS as MOUNTING_CSS
     from umbmark.outputs.mounting import mounting_forms, mounting_html
 
     forms = mounting_forms(page.last)  # None but for a calibration from motion intervals
     mounting = [] if forms is None else [("mounting", "The laser's mounting", mounting_html(forms))]
+    if page.last.gyro is not None:
+        mounting.append(("gyro-calibration", "The gyro", gyro_html(page.last)))
     sections = [
         ("apply", "Apply the correction?", verdict_section(page)),
         ("verdict", "E_max,syst and the 3 x SEM rule", _verdict(page) + _clusters(page)),

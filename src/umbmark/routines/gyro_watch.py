@@ -7,8 +7,8 @@ wrong without saying so.
 :func:`gyro_trouble` says what went wrong over a stretch of the robot's clock, in one
 line naming the IMU's topic, or None where the gyro read throughout: silent for
 :data:`SILENT` or longer (within the stretch, at its start or at its end), frozen as the
-bag reader finds it (:func:`umbmark.sources.bag.imu.frozen_stretches`: the same rates
-for :data:`umbmark.sources.bag.imu.FROZEN` s). Shorter gaps are the calibration's
+bag reader finds it (:func:`umbmark.model.gyro_series.frozen_stretches`: the same rates
+for :data:`umbmark.model.gyro_series.FROZEN` s). Shorter gaps are the calibration's
 business (:func:`umbmark.scans.gyro_intervals.gyro_intervals` leaves the intervals
 across them out, counted).
 
@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from umbmark.model.gyro_series import GyroSeries
+from umbmark.model.gyro_series import GyroSeries, frozen_stretches
 
 __all__ = ["SILENT", "gyro_trouble"]
 
@@ -51,8 +51,6 @@ def gyro_trouble(gyro: GyroSeries | None, start: float, end: float, topic: str) 
     str or None
         One line, times counted from ``start``.
     """
-    from umbmark.sources.bag.imu import frozen_stretches
-
     span = end - start
     head = f"the IMU on {topic}"
     if gyro is None or len(gyro) < 2:

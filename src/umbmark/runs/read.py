@@ -39,6 +39,8 @@ __all__ = [
     "SourceRuns",
     "bag_options",
     "check_invertible",
+    "holds_gyro",
+    "is_bag",
     "is_runs",
     "is_table",
     "parameter_file",
@@ -199,6 +201,16 @@ def is_intervals(source: RunSource, options: ReadOptions) -> bool:
         return options.format == "tuples"
     path = Path(cast("PathLike", source))
     return path.is_file() and detect_format(path) == "tuples"
+
+
+def is_bag(source: RunSource, options: ReadOptions) -> bool:
+    """Whether ``source`` is a recording in a bag (ROS 1, ROS 2, MCAP)."""
+    return not is_runs(source) and source_format(source, options)[1] == "bag"
+
+
+def holds_gyro(source: RunSource, options: ReadOptions) -> bool:
+    """Whether ``source`` is calibrated with its gyro: a bag read with ``imu_topic``."""
+    return options.imu_topic is not None and is_bag(source, options)
 
 
 def source_format(source: RunSource, options: ReadOptions) -> tuple[Path | None, Format]:

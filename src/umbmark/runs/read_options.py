@@ -45,11 +45,6 @@ class ReadOptions(ReadFields):
         check_pairs(vars(self))
         if (self.left_field, self.right_field, self.msg_dir) != (None, None, None):
             self._check_wheel_fields()
-        if self.imu_topic is not None:  # read by umbmark info and the library, for now
-            raise InputError(
-                f"{option('imu_topic')} is not used by the calibrations yet: umbmark info "
-                "shows the IMU, umbmark.sources.bag.imu.read_imu reads its gyro"
-            )
         if self.split == "windows" and not self.windows:
             raise InputError(
                 f"{option('split', 'windows')} needs "

@@ -21,9 +21,11 @@ wheels' rotations are their readings, the gyro's rates are integrated to those t
 
 Both within the time both cover. An interval is left out, and counted by its reason, when
 the gyro has a gap in it (:func:`umbmark.model.recording.gap_mask`), when the wheels have
-one in a driving interval, or when the gyro saturates in it (its yaw rate held at its
-largest value for :data:`SATURATED_RUN` samples or more, near a full scale of
-:data:`FULL_SCALES`): a turn faster than its range reads short.
+one in a driving interval, when the gyro saturates in it (an axis held at its extreme:
+:func:`umbmark.model.gyro_series.saturated_stretches`, the one rule the bag's reader names them
+by too): a turn faster than its range reads short), or when it crosses a stretch the
+gyro's reader found it could not have read (``excluded``: a frozen IMU, by
+:func:`umbmark.model.gyro_series.frozen_stretches`).
 
 The gyro's integrals are exact for its samples joined by straight lines (the trapezoid
 rule, as :meth:`GyroSeries.yaw_change`); its yaw rate at an interval's two ends, the
@@ -38,35 +40,32 @@ from __future__ import annotations
 import itertools
 import math
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.errors import InputError
-from umbmark.model.gyro_series import GyroSeries
+from umbmark.model.gyro_series import GyroSeries, saturated_stretches
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.model.recording import WheelSeries, gap_mask
 from umbmark.runs.rests import still_intervals
 
 __all__ = [
     "DEFAULT_GYRO_OPTIONS",
-    "FULL_SCALES",
-    "SATURATED_RUN",
+    "SATURATED",
     "GyroIntervalOptions",
     "GyroIntervals",
     "GyroReference",
     "HeadingReference",
     "gyro_intervals",
     "gyro_reference",
+    "motion_rows",
 ]
 
-#: The full scales of common MEMS gyros [deg/s] (MPU-6050, BMI088, LSM6DS3, ICM-20948).
-FULL_SCALES = (125.0, 250.0, 500.0, 1000.0, 2000.0)
-#: A yaw rate held at its largest value for this many samples in a row saturates ...
-SATURATED_RUN = 5
-#: ... when that value is within this share of a full scale.
-_NEAR_FULL_SCALE = 0.05
+#: The reason intervals across a saturated stretch are left out by.
+SATURATED = "gyro saturated"
 
 
 @dataclass(frozen=True)
@@ -265,19 +264,30 @@ def _crosses(spans: tuple[FloatArray, FloatArray], start: FloatArray, end: Float
     return hit
 
 
-def _saturated_spans(gyro: GyroSeries) -> tuple[FloatArray, FloatArray]:
-    """The stretches where the yaw rate is held at a full scale (module documentation)."""
-    w = np.abs(gyro.rate[:, 2])
-    top = float(w.max()) if w.size else 0.0
-    near = [fs for fs in FULL_SCALES if abs(math.degrees(top) / fs - 1.0) <= _NEAR_FULL_SCALE]
-    if not near:
+def _spans(stretches: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Stretches ``(k, 2)`` as sorted, disjoint ``(begin, end)`` arrays."""
+    if stretches.size == 0:
         return np.zeros(0), np.zeros(0)
-    held = [(a, b) for a, b in _true_runs(w >= top) if b - a >= SATURATED_RUN]
+    order = np.argsort(stretches[:, 0])
+    merged: list[list[float]] = []
+    for a, b in stretches[order].tolist():
+        if merged and a <= merged[-1][1]:
+            merged[-1][1] = max(merged[-1][1], b)
+        else:
+            merged.append([a, b])
+    both = np.array(merged, dtype=np.float64)
+    return both[:, 0], both[:, 1]
+
+
+def _held(gyro: GyroSeries, stretches: FloatArray) -> FloatArray:
+    """Saturated stretches widened to the readings on either side (the rate between them
+    and the first or last clipped reading is clipped too), shape (k, 2)."""
     t = gyro.time
-    return (
-        np.array([t[max(a - 1, 0)] for a, _ in held]),
-        np.array([t[min(b, t.size - 1)] for _, b in held]),
-    )
+    if stretches.size == 0:
+        return np.zeros((0, 2))
+    i = np.searchsorted(t, stretches[:, 0])
+    j = np.searchsorted(t, stretches[:, 1])
+    return np.column_stack([t[np.maximum(i - 1, 0)], t[np.minimum(j + 1, t.size - 1)]])
 
 
 def _integrals(
@@ -303,9 +313,19 @@ def _integrals(
 
 
 def gyro_intervals(
-    wheels: WheelSeries, gyro: GyroSeries, options: GyroIntervalOptions = DEFAULT_GYRO_OPTIONS
+    wheels: WheelSeries,
+    gyro: GyroSeries,
+    options: GyroIntervalOptions = DEFAULT_GYRO_OPTIONS,
+    *,
+    excluded: Mapping[str, FloatArray] | None = None,
 ) -> GyroIntervals:
     """A recording's wheels and gyro cut into intervals (the module's documentation).
+
+    ``excluded`` maps a reason to stretches ``(k, 2)`` [s] the gyro did not read (the
+    reader's frozen and saturated ones: :attr:`umbmark.sources.bag.imu.ImuRead.frozen`);
+    an interval across one is left out by that reason. Without :data:`SATURATED` among
+    them, the saturated stretches are found here
+    (:func:`umbmark.model.gyro_series.saturated_stretches`).
 
     Raises
     ------
@@ -332,10 +352,17 @@ def gyro_intervals(
         start = end = np.zeros(0)
         rest = np.zeros(0, dtype=bool)
     keep = np.ones(start.shape, dtype=bool)
+    stretches = dict(excluded or {})
+    if SATURATED not in stretches:
+        stretches[SATURATED] = saturated_stretches(gyro.time, gyro.rate)
+    stretches[SATURATED] = _held(gyro, np.asarray(stretches[SATURATED]).reshape(-1, 2))
     for reason, hit in (
         ("gap in the gyro", _crosses(_gap_spans(gyro.time), start, end)),
         ("gap in the wheels", _crosses(_gap_spans(wheels.time), start, end) & ~rest),
-        ("gyro saturated", _crosses(_saturated_spans(gyro), start, end)),
+        *(
+            (why, _crosses(_spans(np.asarray(spans).reshape(-1, 2)), start, end))
+            for why, spans in stretches.items()
+        ),
     ):
         dropped = hit & keep
         if dropped.any():
@@ -531,7 +558,7 @@ def gyro_reference(
     start, end = start[keep], end[keep]
     phi: tuple[FloatArray, FloatArray] | None = None
     if motion is not None:
-        motion = _motion_rows(motion, keep)
+        motion = motion_rows(motion, keep)
         phi = (motion.phi_left, motion.phi_right)
     elif wheels is not None:
         phi = _wheel_rotation(wheels, start, end)
@@ -564,7 +591,8 @@ def _wheel_rotation(
     return out[0], out[1]
 
 
-def _motion_rows(motion: MotionIntervals, rows: BoolArray) -> MotionIntervals:
+def motion_rows(motion: MotionIntervals, rows: BoolArray) -> MotionIntervals:
+    """The intervals ``rows`` (a mask of shape (n,)) of ``motion``."""
     cov, start = motion.sensor_covariance, motion.start_time
     return MotionIntervals(
         duration=motion.duration[rows],

@@ -51,6 +51,10 @@ DEFINITIONS = {
     "wheel_separation_multiplier (E_b x multiplier = the new multiplier), the robot's "
     "effective wheelbase over the nominal one",
     "robot_wheelbase": "the robot's effective wheelbase [m]: robot_E_b x nominal wheelbase",
+    "k_g": "the gyro's scale a calibration with a gyro and an absolute heading found "
+    "(omega_true = k_g (omega_read - bias)); followed over time like robot_E_d",
+    "E_b_relative_to_gyro": "the calibration's E_b is relative to the gyro (E_b k_g, from "
+    "wheels and gyro alone): left out of robot_E_b's course",
     "drift": f"robot_E_d and robot_E_b followed over every calibration in time (E_b on the "
     "last one's nominal wheelbase) as the fleet follows its figures: a change beyond "
     f"{Z_CHANGE:g} of its standard errors, scaled by the calibrations' own scatter, is drift "
@@ -94,8 +98,33 @@ def _said(name: str, change: Change, ids: Sequence[int], days: Sequence[str]) ->
     )
 
 
+def _follows(record: CalibrationRecord, name: str) -> bool:
+    """Whether ``record`` is part of the course of ``name``: ``E_b`` not relative to the
+    gyro, ``k_g`` where it found the gyro's scale."""
+    if name == "E_b":
+        return not record.relative_to_gyro
+    if name == "k_g":
+        return record.k_g is not None
+    return True
+
+
+def _figure(
+    record: CalibrationRecord, name: str, last_nominal: float
+) -> tuple[float, float | None]:
+    """The robot's ``name`` of ``record`` and its standard error: ``E_b`` on the last
+    nominal wheelbase, ``k_g`` as found (its error the fit's ``gyro_scale``)."""
+    if name == "k_g":
+        se = record.standard_errors.get("gyro_scale")
+        return float(record.k_g or 0.0), None if se is None else float(se)
+    scale = float(record.active["wheelbase"]) / last_nominal if name == "E_b" else 1.0
+    se = record.robot_standard_errors.get(name)
+    return float(getattr(record, f"robot_{name}")) * scale, None if se is None else se * scale
+
+
 def drift_verdict(calibrations: Sequence[CalibrationRecord]) -> str | None:
-    """Whether the robot's ``E_d`` or ``E_b`` drifted over its calibrations.
+    """Whether the robot's ``E_d`` or ``E_b`` (or its gyro's scale ``k_g``) drifted over
+    its calibrations. ``E_b`` relative to the gyro (:attr:`~umbmark.store.records.
+    CalibrationRecord.relative_to_gyro`) is left out of ``E_b``'s course, said so.
 
     It follows what the robot is, :attr:`~umbmark.store.history.CalibrationRecord.robot_E_d`
     and ``robot_E_b`` (each pass's measured errors composed with the parameters active
@@ -127,19 +156,31 @@ def drift_verdict(calibrations: Sequence[CalibrationRecord]) -> str | None:
     steady: list[str] = []
     unknown: list[str] = []
     one_offs: list[str] = []
-    for name in ("E_d", "E_b"):
+    for name in ("E_d", "E_b", "k_g"):
+        rows = [k for k, c in enumerate(ordered) if _follows(c, name)]
+        if name != "E_d" and len(rows) < DRIFT_MIN_CALIBRATIONS:
+            continue  # no gyro's scale; E_b of calibrations relative to the gyro alone
         values, errors = [], []
-        for c in ordered:
-            scale = float(c.active["wheelbase"]) / last_nominal if name == "E_b" else 1.0
-            se = c.robot_standard_errors.get(name)
-            values.append(float(getattr(c, f"robot_{name}")) * scale)
-            errors.append(math.nan if se is None else se * scale)
+        for k in rows:
+            value, se = _figure(ordered[k], name, last_nominal)
+            values.append(value)
+            errors.append(math.nan if se is None else se)
         if not all(math.isfinite(e) and e > 0 for e in errors):
             unknown.append(f"robot {name}")
             continue
-        change = change_of(times, np.array(values), np.array(errors))
-        (drifted if change.changed else steady).append(_said(name, change, ids, days))
-        one_offs += [f"calibration {ids[k]} in robot {name}" for k in change.one_offs]
+        at = [ids[k] for k in rows]
+        change = change_of(times[rows], np.array(values), np.array(errors))
+        (drifted if change.changed else steady).append(
+            _said(name, change, at, [days[k] for k in rows])
+        )
+        one_offs += [f"calibration {at[k]} in robot {name}" for k in change.one_offs]
+    relative = [c.id for c in ordered if c.relative_to_gyro]
+    if relative:
+        steady.append(
+            f"E_b of calibration{'s' if len(relative) > 1 else ''} "
+            f"{', '.join(map(str, relative))} relative to the gyro (E_b k_g) left out of "
+            "robot E_b"
+        )
     parts = []
     if drifted:
         parts.append(f"drift: {'; '.join(drifted)}")

@@ -169,7 +169,23 @@ class CalibrationRecord:
             "robot_E_b": self.robot_E_b,
             "robot_standard_errors": self.robot_standard_errors,
             "robot_wheelbase": self.robot_wheelbase,
+            "E_b_relative_to_gyro": self.relative_to_gyro,
+            "k_g": self.k_g,
         }
+
+    @property
+    def relative_to_gyro(self) -> bool:
+        """Its ``E_b`` is relative to the gyro (``E_b k_g``: wheels and gyro alone, no
+        absolute heading), not the wheelbase itself: never compared with one that is."""
+        from umbmark.estimators.registry import GYROS
+
+        return self.method in GYROS and "gyro_scale" not in self.standard_errors
+
+    @property
+    def k_g(self) -> float | None:
+        """The gyro's scale it found (``new``'s ``gyro_scale_multiplier``), where it did."""
+        value = self.new.get("gyro_scale_multiplier")
+        return float(value) if isinstance(value, int | float) else None
 
     @property
     def active_params(self) -> ActiveParams:

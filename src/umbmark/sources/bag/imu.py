@@ -25,12 +25,14 @@ the rest is usable, an :class:`~umbmark.core.errors.InputError` where nothing is
 - messages that repeat an earlier stamp (the first kept, the later dropped, counted), and
   messages out of order (read in the order of their stamps, counted);
 - gaps (:func:`umbmark.model.recording.gap_mask`): kept, named, in :attr:`ImuRead.gaps`;
-- a frozen IMU: exactly the same three rates for at least :data:`FROZEN` seconds (a
-  real gyro's noise changes every reading), in :attr:`ImuRead.frozen`; every reading
+- a frozen IMU (:func:`umbmark.model.gyro_series.frozen_stretches`: exactly the same three
+  rates for at least :data:`FROZEN` seconds), in :attr:`ImuRead.frozen`; every reading
   the same: refused. :func:`check_against_wheels` says where the wheels turned meanwhile;
-- a saturating gyro: one axis held at its largest (or smallest) value for at least
-  :data:`SATURATED_RUN` readings in a row, at least :data:`MIN_FULL_SCALE` (a rate
-  clipped at the gyro's full scale in a fast turn), in :attr:`ImuRead.saturated`.
+- a saturating gyro (:func:`umbmark.model.gyro_series.saturated_stretches`: one axis held at
+  its extreme for :data:`SATURATED_RUN` readings in a row), in :attr:`ImuRead.saturated`.
+
+Both rules are :mod:`umbmark.model.gyro_series`'s, the ones the gyro's intervals leave out by
+(:func:`umbmark.scans.gyro_intervals.gyro_intervals`).
 
 :meth:`ImuRead.usable` says which motion intervals cross none of these stretches.
 """
@@ -47,7 +49,14 @@ import numpy as np
 
 from umbmark.core.arrays import BoolArray, FloatArray, IntArray
 from umbmark.core.errors import InputError, option
-from umbmark.model.gyro_series import GyroSeries
+from umbmark.model.gyro_series import (
+    FROZEN,
+    MIN_FULL_SCALE,
+    SATURATED_RUN,
+    GyroSeries,
+    frozen_stretches,
+    saturated_stretches,
+)
 from umbmark.model.recording import WheelSeries, gap_mask
 from umbmark.sources.bag import reader as bag_reader
 from umbmark.sources.bag.bag_options import BagOptions
@@ -77,15 +86,6 @@ __all__ = [
 #: Readings held at most in one read (2.2 hours at 1 kHz, 11 hours at 200 Hz): more, and
 #: the recording is read in windows.
 MAX_SAMPLES = 8_000_000
-#: The same three rates for this long [s] (and :data:`_FROZEN_READINGS` readings) is a
-#: frozen IMU.
-FROZEN = 1.0
-_FROZEN_READINGS = 10
-#: Readings in a row at an axis' extreme that make it saturated ...
-SATURATED_RUN = 5
-#: ... where that extreme is at least this [rad/s] (29 deg/s; no gyro's full scale is
-#: lower).
-MIN_FULL_SCALE = 0.5
 #: Wheel rotation [rad] over a frozen stretch above which the wheels turned meanwhile.
 _TURNING = 0.5
 #: Stretches named in a message at most.
@@ -260,7 +260,7 @@ def read_imu_topic(
             f"last, {time[-1] - time[0]:.1f} s: a frozen IMU",
             source=src,
         )
-    saturated = _saturated(time, rates, frozen)
+    saturated = saturated_stretches(time, rates, frozen)
     gaps = _gaps(time)
     peak = float(np.max(np.abs(rates)))
     notes += _stretch_notes(where, gaps, frozen, saturated, peak, origin)
@@ -361,40 +361,6 @@ def _dropped_notes(where: str, dropped: dict[str, int], total: int) -> list[str]
         "read in the order of their stamps",
     }
     return [f"{where} {n:,} of {total:,} messages {texts[key]}" for key, n in dropped.items() if n]
-
-
-def _runs(mask: BoolArray) -> tuple[IntArray, IntArray]:
-    """The runs of True in ``mask`` (shape (n,)): their first indices and the indices
-    after their last, each shape (r,)."""
-    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-
-
-def frozen_stretches(time: FloatArray, rates: FloatArray) -> FloatArray:
-    """Stretches ``[start, end]`` [s] of exactly the same three rates, at least
-    :data:`FROZEN` long and :data:`_FROZEN_READINGS` readings, shape (k, 2)."""
-    same = np.all(rates[1:] == rates[:-1], axis=1)
-    first, after = _runs(same)  # pairs i..after-1 equal: readings first..after
-    long = (time[after] - time[first] >= FROZEN) & (after - first + 1 >= _FROZEN_READINGS)
-    return np.column_stack([time[first[long]], time[after[long]]])
-
-
-def _saturated(time: FloatArray, rates: FloatArray, frozen: FloatArray) -> FloatArray:
-    """Stretches ``[start, end]`` [s] where an axis holds its extreme (module notes),
-    outside frozen stretches, in time order, shape (k, 2)."""
-    out: list[tuple[float, float]] = []
-    for axis in range(3):
-        column = rates[:, axis]
-        for extreme in (float(column.max()), float(column.min())):
-            if abs(extreme) < MIN_FULL_SCALE:
-                continue
-            first, after = _runs(column == extreme)
-            for a, b in zip(first.tolist(), after.tolist(), strict=True):
-                start, end = float(time[a]), float(time[b - 1])
-                inside = np.any((frozen[:, 0] <= start) & (frozen[:, 1] >= end))
-                if b - a >= SATURATED_RUN and not inside:
-                    out.append((start, end))
-    return np.array(sorted(out), dtype=np.float64).reshape(-1, 2)
 
 
 def _gaps(time: FloatArray) -> FloatArray:

@@ -210,6 +210,9 @@ class CalibratedParams:
     controller : str or None
         The controller the result is for, with its namespace (``/robot1/diff_cont``);
         None where nothing named it.
+    gyro_scale, gyro_bias : float or None
+        A calibration with a gyro: its scale ``k_g`` (None where not determined) and its
+        bias [rad/s] (``new``'s ``gyro_scale_multiplier`` and ``gyro_bias``).
     """
 
     wheelbase: float
@@ -223,6 +226,8 @@ class CalibratedParams:
     spot_wheelbase: float | None = None
     source: str = ""
     controller: str | None = None
+    gyro_scale: float | None = None
+    gyro_bias: float | None = None
 
     def applied_to(self, nominal: WheelParams) -> WheelParams:
         """``nominal`` with this result's wheelbase(s) and wheel factors.
@@ -275,7 +280,9 @@ def read_calibrated_params(path: str | Path) -> CalibratedParams:
             shown = f"{raw!r}"[:24]
             raise InputError(f"{where}{key} is {shown}, not a positive number", source=path)
         low, high = (
-            MULTIPLIER_RANGE if key.startswith(("c_", "wheel_separation_m")) else LENGTH_RANGE
+            MULTIPLIER_RANGE
+            if key.startswith(("c_", "wheel_separation_m", "gyro_scale"))
+            else LENGTH_RANGE
         )
         if not low <= value <= high:
             raise InputError(
@@ -315,7 +322,27 @@ def read_calibrated_params(path: str | Path) -> CalibratedParams:
         wheel_diameter=optional(active, "wheel_diameter", "active."),
         source=str(path),
         controller=controller,
+        gyro_scale=optional(new, "gyro_scale_multiplier", "new."),
+        gyro_bias=_bias(new, path),
     )
+
+
+def _bias(new: dict[str, object], path: str | Path) -> float | None:
+    """A result's gyro bias [rad/s] (``new.gyro_bias``): a finite number within what a
+    gyro's bias can be, or None where not given."""
+    raw = new.get("gyro_bias")
+    if raw is None:
+        return None
+    value = finite(raw) if isinstance(raw, int | float) and not isinstance(raw, bool) else None
+    if value is None or abs(value) > _MAX_BIAS:
+        raise InputError(
+            f"new.gyro_bias is {f'{raw!r}'[:24]}, not a gyro's bias in rad/s", source=path
+        )
+    return value
+
+
+#: The largest gyro bias a result may hold [rad/s] (10 deg/s: far beyond a MEMS part's).
+_MAX_BIAS = 0.175
 
 
 def result_nominal(path: str | Path) -> tuple[float | None, float | None]:

@@ -103,7 +103,9 @@ def imu_infos(
             mounting = imu_mounting(reader, topics, frame, topic.name, src)
         except InputError as err:
             problem = err.problem.removeprefix(f"{topic.name}: ")
-        if not gyro:
+        if not topic.count:
+            problem = "the topic has no messages"
+        elif not gyro:
             problem = (
                 "its messages give no angular velocity (angular_velocity_covariance[0] = -1, "
                 "or exactly 0): no gyro"
