@@ -34,7 +34,7 @@ from umbmark.core.errors import InputError, option
 from umbmark.core.messages import info
 from umbmark.runs.active import choose_active
 from umbmark.runs.read import bag_options, parameter_file
-from umbmark.scans.gyro_intervals import SATURATED, HeadingReference, motion_rows
+from umbmark.scans.gyro_intervals import SATURATED, HeadingReference
 
 if TYPE_CHECKING:
     from umbmark.calibration.gyro import GyroResult
@@ -133,7 +133,7 @@ class GyroRecording:
             keep = np.ones(start.shape, dtype=bool)
             for a, b in cut.tolist():
                 keep &= ~((start < b) & (end > a))
-            reference = motion_rows(reference, keep)
+            reference = reference.rows(keep)
         held = np.concatenate([self.held_out, cut]) if self.held_out.size else cut
         return replace(self, reference=reference, held_out=held)
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from umbmark.core.arrays import FloatArray
+from umbmark.core.arrays import BoolArray, FloatArray
 
 __all__ = ["MotionIntervals"]
 
@@ -63,6 +63,19 @@ class MotionIntervals:
 
     def __len__(self) -> int:
         return int(self.duration.shape[0])
+
+    def rows(self, mask: BoolArray) -> MotionIntervals:
+        """The intervals ``mask`` (shape (n,), True: kept) picks, in their order."""
+        cov, start = self.sensor_covariance, self.start_time
+        return MotionIntervals(
+            duration=self.duration[mask],
+            phi_left=self.phi_left[mask],
+            phi_right=self.phi_right[mask],
+            sensor_motion=self.sensor_motion[mask],
+            sensor_covariance=None if cov is None else cov[mask],
+            start_time=None if start is None else start[mask],
+            source=self.source,
+        )
 
     @classmethod
     def concatenate(cls, parts: Sequence[MotionIntervals]) -> MotionIntervals:

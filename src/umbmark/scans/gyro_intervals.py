@@ -61,7 +61,6 @@ __all__ = [
     "HeadingReference",
     "gyro_intervals",
     "gyro_reference",
-    "motion_rows",
 ]
 
 #: The reason intervals across a saturated stretch are left out by.
@@ -558,7 +557,7 @@ def gyro_reference(
     start, end = start[keep], end[keep]
     phi: tuple[FloatArray, FloatArray] | None = None
     if motion is not None:
-        motion = motion_rows(motion, keep)
+        motion = motion.rows(keep)
         phi = (motion.phi_left, motion.phi_right)
     elif wheels is not None:
         phi = _wheel_rotation(wheels, start, end)
@@ -589,17 +588,3 @@ def _wheel_rotation(
         turned = np.interp(end, t, wheels.angles[:, w]) - np.interp(start, t, wheels.angles[:, w])
         out.append(np.where(covered, turned, np.nan))
     return out[0], out[1]
-
-
-def motion_rows(motion: MotionIntervals, rows: BoolArray) -> MotionIntervals:
-    """The intervals ``rows`` (a mask of shape (n,)) of ``motion``."""
-    cov, start = motion.sensor_covariance, motion.start_time
-    return MotionIntervals(
-        duration=motion.duration[rows],
-        phi_left=motion.phi_left[rows],
-        phi_right=motion.phi_right[rows],
-        sensor_motion=motion.sensor_motion[rows],
-        sensor_covariance=None if cov is None else cov[rows],
-        start_time=None if start is None else start[rows],
-        source=motion.source,
-    )
