@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import math
+import os
 import signal
 import subprocess
 import sys
@@ -20,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+from monitor_graph import Process, clearance, driver_final, start_driver, start_probe
+from monitor_graph import wall_periods
 from test_ros1 import RosGraph
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -82,6 +86,63 @@ def test_ros1_monitor_stale_while_the_odometry_is_silent_and_on_again(tmp_path: 
     lines = out.strip().splitlines()
     assert lines[-1].startswith("umbmark_monitor stopped (SIGTERM) after")
     assert "umbmark_monitor: /odom back: going on" in lines
+
+
+def _graph(tmp: Path, *node_args: str) -> tuple[RosGraph, dict[str, str]]:
+    g = RosGraph(tmp, "--world", "warehouse", *node_args)
+    return g, {**g.env, "PYTHONPATH": f"{ROOT / 'src'}{os.pathsep}{ROOT / 'tests'}"}
+
+
+@pytest.mark.slow
+def test_ros1_monitor_wiring_on_missions(tmp_path: Path) -> None:
+    """The node (recording core) beside the robot driven on warehouse missions by
+    tests/mission_driver.py: /diagnostics once a wall second, named and the robot its
+    hardware_id, the laser's sweeps reaching the core; STALE naming /scan while the laser
+    is muted, on again after; the corrected odometry in the controller's frames, moving;
+    SIGTERM: one line, exit 0. The driver kept the robot clear of every rack and wall."""
+    g, env = _graph(tmp_path)
+    procs: list[Process] = []
+    try:
+        procs.append(driver := start_driver(sys.executable, "--ros1", env, tmp_path))
+        monitor = Process([sys.executable, str(DEV), "ros1=1", "_stale_after:=1.0",
+                           "_robot:=r7", "_corrected_odom:=/odom_corrected"],
+                          env, tmp_path / "monitor.stderr")  # fmt: skip
+        procs.append(monitor)
+        probe = start_probe(sys.executable, "--ros1", env, tmp_path, "--odom", "/odom_corrected")
+        procs.append(probe)
+        ok = probe.until(lambda r: r["level"] == 0 and "scan 0," not in r["message"], 60.0)
+        assert ok is not None, monitor.stderr()[-2000:]
+        start = len(probe.rows())
+        assert probe.until(lambda r: True, 10.0, after=start + 3) is not None
+        probe.control("mute_scan")
+        stale = probe.until(lambda r: r["level"] == 3, 20.0, after=len(probe.rows()))
+        probe.control("unmute_scan")
+        assert stale is not None
+        back = probe.until(lambda r: r["level"] == 0, 20.0, after=probe.rows().index(stale))
+        code = monitor.stop(signal.SIGTERM)
+        odoms = probe.rows("odom")
+        probe.stop()
+        driver.stop(signal.SIGTERM)
+        final = driver_final(driver)
+    finally:
+        for proc in procs:
+            proc.stop()
+        g.close()
+    rows = probe.rows()
+    assert code == 0, monitor.stderr()[-2000:]
+    assert "Traceback" not in monitor.stderr()
+    assert monitor.lines[-1].startswith("umbmark_monitor stopped (SIGTERM) after")
+    assert {r["name"] for r in rows} == {"umbmark_monitor: odometry"}
+    assert {r["hardware_id"] for r in rows} == {"r7"}
+    periods = wall_periods(rows[start : start + 4])
+    assert all(0.7 < p < 1.3 for p in periods), periods  # 1 Hz of the wall clock
+    assert stale["values"]["stale topics"] == "/scan"
+    assert back is not None
+    assert "stale topics" not in back["values"]
+    assert {(o["frame"], o["child"]) for o in odoms} == {("odom", "base_link")}
+    assert max(math.hypot(o["x"] - odoms[0]["x"], o["y"] - odoms[0]["y"]) for o in odoms) > 1.0
+    assert final["segments"] >= 3
+    assert clearance(final["path"]) > 0.5  # on the aisles: racks 1.1 m from their centre
 
 
 REAL_CORE = importlib.util.find_spec("umbmark.monitor.core") is not None
