@@ -36,7 +36,7 @@ def _say(row: dict[str, Any]) -> None:
         print(json.dumps(row), flush=True)
 
 
-def status_row(status: Any, stamp: float) -> dict[str, Any]:  # noqa: ANN401
+def status_row(status: Any, stamp: float) -> dict[str, Any]:
     """One ``DiagnosticStatus`` as its JSON line."""
     level = status.level
     level = level[0] if isinstance(level, (bytes, bytearray)) else int(level)
@@ -47,7 +47,7 @@ def status_row(status: Any, stamp: float) -> dict[str, Any]:  # noqa: ANN401
     }  # fmt: skip
 
 
-def odom_row(msg: Any, stamp: float) -> dict[str, Any]:  # noqa: ANN401
+def odom_row(msg: Any, stamp: float) -> dict[str, Any]:
     """A ``nav_msgs/Odometry`` as its JSON line."""
     p, q = msg.pose.pose.position, msg.pose.pose.orientation
     yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
@@ -64,7 +64,7 @@ class Thinned:
     def __init__(self, say: Callable[[Any, float], None]) -> None:
         self.say, self.last = say, -math.inf
 
-    def __call__(self, msg: Any, stamp: float) -> None:  # noqa: ANN401
+    def __call__(self, msg: Any, stamp: float) -> None:
         if stamp - self.last >= 1.0:
             self.last = stamp
             self.say(msg, stamp)
@@ -115,7 +115,7 @@ def ros2(args: argparse.Namespace, stop: threading.Event) -> None:
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = rclpy.create_node("diagnostics_probe")
 
-    def seconds(s: Any) -> float:  # noqa: ANN401
+    def seconds(s: Any) -> float:
         return float(s.sec) + 1e-9 * float(s.nanosec)
 
     def on_array(msg: DiagnosticArray) -> None:

@@ -44,14 +44,30 @@ SCAN_CONTROLS = ("mute_scan", "unmute_scan")
 
 def event_arguments(parser: argparse.ArgumentParser) -> None:
     """The world's and the events' options."""
-    parser.add_argument("--world", choices=("corner", "warehouse"), default="corner",
-                        help="corner: the corner world; warehouse: the fleet's warehouse")
-    parser.add_argument("--change-wheel-at", type=float, default=None,
-                        help="simulated seconds after the start: the right wheel changed")
-    parser.add_argument("--wheel-change", type=float, default=0.006,
-                        help="the new right wheel's diameter over the old one, less 1")
-    parser.add_argument("--knock-laser-at", type=float, default=None,
-                        help="simulated seconds after the start: the laser knocked")
+    parser.add_argument(
+        "--world",
+        choices=("corner", "warehouse"),
+        default="corner",
+        help="corner: the corner world; warehouse: the fleet's warehouse",
+    )
+    parser.add_argument(
+        "--change-wheel-at",
+        type=float,
+        default=None,
+        help="simulated seconds after the start: the right wheel changed",
+    )
+    parser.add_argument(
+        "--wheel-change",
+        type=float,
+        default=0.006,
+        help="the new right wheel's diameter over the old one, less 1",
+    )
+    parser.add_argument(
+        "--knock-laser-at",
+        type=float,
+        default=None,
+        help="simulated seconds after the start: the laser knocked",
+    )
     parser.add_argument("--knock-yaw", type=float, default=2.0, help="the knock's turn [deg]")
     parser.add_argument("--knock-x", type=float, default=0.0, help="the knock's shift [m]")
     parser.add_argument("--truth", default=None, help="write the robot's truth here (JSON)")

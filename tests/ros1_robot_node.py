@@ -62,7 +62,6 @@ from tf2_msgs.msg import TFMessage
 
 from robot_node_events import Events, event_arguments, node_world
 from robot_node_imu import ImuFault, imu_arguments, imu_setup
-from umbmark.robot.base import Pose2D
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import LCorner, World, corner_world
 
