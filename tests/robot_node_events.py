@@ -14,7 +14,10 @@ tests/ros2_robot_node.py), and the world it drives in: their options and the tru
   ``--knock-x`` [m] forward), at ``--knock-laser-at T`` or on ``knock_laser``; the mounting
   the robot states (``/tf_static``, its URDF) is kept, as a knock leaves it;
 - ``mute_scan`` / ``unmute_scan`` on ``/sim/control``: the laser's driver silent, and
-  speaking again (the clock and the rest go on).
+  speaking again (the clock and the rest go on);
+- ``--joint-states``: ``sensor_msgs/JointState`` on ``/joint_states`` every period, the
+  wheels' encoder angles (``left_wheel_joint``, ``right_wheel_joint``), as
+  joint_state_broadcaster publishes them (:func:`joint_state_values`).
 
 ``--truth FILE`` (JSON, rewritten by a rename at each event): the robot's truth at the
 start (``E_d``, ``E_b``, ``E_s``, the laser's true and stated mountings ``x, y, yaw``
@@ -71,6 +74,11 @@ def event_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--knock-yaw", type=float, default=2.0, help="the knock's turn [deg]")
     parser.add_argument("--knock-x", type=float, default=0.0, help="the knock's shift [m]")
     parser.add_argument("--truth", default=None, help="write the robot's truth here (JSON)")
+    parser.add_argument(
+        "--joint-states",
+        action="store_true",
+        help="publish the wheels' angles on /joint_states every period",
+    )
 
 
 def node_world(args: argparse.Namespace, corner: World | None = None) -> tuple[World, Lidar]:
@@ -185,3 +193,9 @@ class Events:
         temporary = Path(f"{path}.part")
         temporary.write_text(json.dumps(self.truth), encoding="utf-8")
         os.replace(temporary, path)
+
+
+def joint_state_values(robot: VirtualRobot) -> tuple[list[str], list[float]]:
+    """The joint names and positions [rad] of a ``/joint_states`` message now."""
+    _, left, right = robot.wheel_angles()
+    return ["left_wheel_joint", "right_wheel_joint"], [left, right]

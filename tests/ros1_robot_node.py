@@ -56,11 +56,11 @@ from geometry_msgs.msg import Pose2D as Pose2DMsg
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu, LaserScan
+from sensor_msgs.msg import Imu, JointState, LaserScan
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
-from robot_node_events import Events, event_arguments, node_world
+from robot_node_events import Events, event_arguments, joint_state_values, node_world
 from robot_node_imu import ImuFault, imu_arguments, imu_setup
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import LCorner, World, corner_world
@@ -205,6 +205,10 @@ class SimNode:
         self.tf = rospy.Publisher("/tf", TFMessage, queue_size=10)
         self.tf_static = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
         self.imu = rospy.Publisher("/imu/data", Imu, queue_size=200)
+        self.joints = (
+            rospy.Publisher("/joint_states", JointState, queue_size=10)
+            if args.joint_states else None
+        )  # fmt: skip
         mounts = [self._laser_transform()]
         if self.robot.imu() is not None:
             mounts.append(self._imu_transform())
@@ -297,6 +301,11 @@ class SimNode:
             tf.transform.rotation = p.orientation
             self.tf.publish(TFMessage([tf]))
         self._publish_imu()
+        if self.joints is not None:
+            joints = JointState()
+            joints.header.stamp = stamp
+            joints.name, joints.position = joint_state_values(robot)
+            self.joints.publish(joints)
         if step % self.scan_every == 0:
             self._publish_sensors(stamp)
 

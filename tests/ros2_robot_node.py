@@ -99,10 +99,10 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu, LaserScan
+from sensor_msgs.msg import Imu, JointState, LaserScan
 from std_msgs.msg import String
 
-from robot_node_events import Events, event_arguments, node_world
+from robot_node_events import Events, event_arguments, joint_state_values, node_world
 from robot_node_imu import ImuFault, imu_arguments, imu_setup
 from umbmark.robot.base import DriveParams
 from umbmark.robot.virtual import VirtualRobot
@@ -438,6 +438,9 @@ class SimNode:
         if args.imu_truth:
             Path(args.imu_truth).write_text(json.dumps(self.robot.imu_truth()), encoding="utf-8")
         self.imu = node.create_publisher(Imu, "/imu", 100)
+        self.joints = (
+            node.create_publisher(JointState, "/joint_states", 10) if args.joint_states else None
+        )
         self.upside_down = args.upside_down
         self.rate, self.scan_every = args.rate, args.scan_every
         self.lock = threading.Lock()
@@ -614,6 +617,11 @@ class SimNode:
             if self.tf is not None:
                 self._publish_tf(msg)
         self._publish_imu()
+        if self.joints is not None:
+            joints = JointState()
+            joints.header.stamp.sec, joints.header.stamp.nanosec = sec, nanosec
+            joints.name, joints.position = joint_state_values(robot)
+            self.joints.publish(joints)
         if step % self.scan_every == 0:
             self._publish_sensors(sec, nanosec)
 

@@ -137,11 +137,12 @@ def test_ros1_monitor_flags_a_wheel_changed_and_a_laser_knocked(tmp_path: Path) 
     keeping the stated mounting): OK with nothing flagged before; each flagged within the
     core's stated distance after it, its size the truth's (tests/robot_node_events.py)."""
     truth = tmp_path / "truth.json"
-    g, env = _graph(tmp_path, "--rate", "10", "--no-imu", "--change-wheel-at", str(WHEEL_AT),
-                    "--knock-laser-at", str(KNOCK_AT), "--truth", str(truth))  # fmt: skip
+    events = ("--change-wheel-at", str(WHEEL_AT), "--knock-laser-at", str(KNOCK_AT))
+    g, env = _graph(tmp_path, "--rate", "10", "--no-imu", "--joint-states", *events,
+                    "--truth", str(truth))  # fmt: skip
+    argv = [*COMMAND, "_robot:=r7", "_imu_topic:=none"]
     try:
-        run = run_changes(sys.executable, "--ros1", env, tmp_path, [*COMMAND, "_robot:=r7"],
-                          truth, T0 + END_AT, 600.0)  # fmt: skip
+        run = run_changes(sys.executable, "--ros1", env, tmp_path, argv, truth, T0 + END_AT, 600.0)
     finally:
         g.close()
     check_changes(run, truth)

@@ -68,13 +68,12 @@ def test_ros2_monitor_flags_a_wheel_changed_and_a_laser_knocked(tmp_path: Path) 
     laser knocked mid-run: as tests/test_monitor_ros.py's ROS 1 twin."""
     env = _env(tmp_path)
     truth = tmp_path / "truth.json"
-    robot = Robot2(env, "--world", "warehouse", "--rate", "10", "--no-imu",
-                   "--change-wheel-at", str(WHEEL_AT), "--knock-laser-at", str(KNOCK_AT),
-                   "--truth", str(truth))  # fmt: skip
+    events = ("--change-wheel-at", str(WHEEL_AT), "--knock-laser-at", str(KNOCK_AT))
+    robot = Robot2(env, "--world", "warehouse", "--rate", "10", "--no-imu", "--joint-states",
+                   *events, "--truth", str(truth))  # fmt: skip
+    argv = [*COMMAND, "--ros-args", "-p", "robot:=r7", "-p", "imu_topic:=none"]
     try:
-        run = run_changes(str(PYTHON), "--ros2", env, tmp_path,
-                          [*COMMAND, "--ros-args", "-p", "robot:=r7"], truth, T0 + END_AT,
-                          600.0)  # fmt: skip
+        run = run_changes(str(PYTHON), "--ros2", env, tmp_path, argv, truth, T0 + END_AT, 600.0)
     finally:
         robot.close()
     check_changes(run, truth)
