@@ -31,7 +31,11 @@ Run it with ``ROS_MASTER_URI`` set; it prints ``ready`` on stdout once everythin
   on), ``unmute_odom`` starts it again, ``mute_imu``, ``freeze_imu`` and ``mend_imu``
   make its IMU's driver fall silent, freeze, read again (tests/robot_node_imu.py);
   ``/sim/true_pose`` (``geometry_msgs/Pose2D``) is the robot's true pose in the world, for
-  checks.
+  checks;
+- ``--world warehouse`` (the fleet's warehouse, for tests/mission_driver.py), a wheel
+  changed and the laser knocked mid-run (``--change-wheel-at``, ``--knock-laser-at``, or
+  ``change_wheel``, ``knock_laser`` on ``/sim/control``), ``mute_scan`` and ``unmute_scan``,
+  ``--truth FILE``: tests/robot_node_events.py.
 """
 
 from __future__ import annotations
@@ -52,14 +56,14 @@ from geometry_msgs.msg import Pose2D as Pose2DMsg
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu, LaserScan
+from sensor_msgs.msg import Imu, JointState, LaserScan
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
+from robot_node_events import Events, event_arguments, joint_state_values, node_world
 from robot_node_imu import ImuFault, imu_arguments, imu_setup
-from umbmark.robot.base import Pose2D
 from umbmark.robot.virtual import VirtualRobot
-from umbmark.robot.world import LCorner, Lidar, World, corner_world
+from umbmark.robot.world import LCorner, World, corner_world
 
 #: ROS time at the simulation's start [s] (ROS time 0 means "no time yet").
 T0 = 1000.0
@@ -165,7 +169,7 @@ class SimNode:
         if args.tight_corner:  # walls 0.45 m behind, 0.4 m beside the 1 m cw square's far leg
             corner = LCorner(vertex=(-0.45, -1.4), heading=0.0, x_length=3.0, y_length=3.4)
             world = World.build(np.zeros((0, 4)), (), corner, lidar=world.lidar)
-        self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
+        world, self.lidar = node_world(args, world)
         world = replace(world, lidar=None if args.no_laser else self.lidar)
         self.robot = VirtualRobot(
             E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed,
@@ -183,6 +187,7 @@ class SimNode:
         self.rate, self.scan_every = args.rate, args.scan_every
         self.lock = threading.Lock()
         self.mute_odom = False
+        self.events = Events(args, self.robot, self.stated, T0)
         if args.urdf_geometry:  # as most robots: the controller reads the URDF
             rospy.set_param("/robot_description", urdf(0.34, 0.075, args.laser_x))
             rospy.set_param(f"{CONTROLLER}/left_wheel", "left_wheel_joint")
@@ -200,6 +205,10 @@ class SimNode:
         self.tf = rospy.Publisher("/tf", TFMessage, queue_size=10)
         self.tf_static = rospy.Publisher("/tf_static", TFMessage, queue_size=1, latch=True)
         self.imu = rospy.Publisher("/imu/data", Imu, queue_size=200)
+        self.joints = (
+            rospy.Publisher("/joint_states", JointState, queue_size=10)
+            if args.joint_states else None
+        )  # fmt: skip
         mounts = [self._laser_transform()]
         if self.robot.imu() is not None:
             mounts.append(self._imu_transform())
@@ -266,6 +275,8 @@ class SimNode:
     def _on_control(self, msg: String) -> None:
         self.mute_odom = {"mute_odom": True, "unmute_odom": False}.get(msg.data, self.mute_odom)
         self.imu_fault.control(msg.data)
+        with self.lock:
+            self.events.control(msg.data)
 
     def _publish(self, step: int) -> None:
         robot = self.robot
@@ -290,12 +301,17 @@ class SimNode:
             tf.transform.rotation = p.orientation
             self.tf.publish(TFMessage([tf]))
         self._publish_imu()
+        if self.joints is not None:
+            joints = JointState()
+            joints.header.stamp = stamp
+            joints.name, joints.position = joint_state_values(robot)
+            self.joints.publish(joints)
         if step % self.scan_every == 0:
             self._publish_sensors(stamp)
 
     def _publish_sensors(self, stamp: rospy.Time) -> None:
         robot = self.robot
-        scan = robot.scan()
+        scan = None if self.events.mute_scan else robot.scan()
         if scan is not None:
             msg = LaserScan()
             msg.header.stamp, msg.header.frame_id = stamp, "laser"
@@ -331,6 +347,7 @@ class SimNode:
             step += 1
             with self.lock:
                 self.robot.wait(period)
+                self.events.step()
                 self._publish(step)
             delay = start + step * wall_step - time.monotonic()
             if delay > 0:
@@ -367,6 +384,7 @@ def main() -> None:
         help="wheel_separation and wheel_radius only in robot_description",
     )
     imu_arguments(parser)
+    event_arguments(parser)
     args = parser.parse_args()
     import rosgraph
 

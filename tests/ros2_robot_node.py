@@ -70,7 +70,12 @@ The controller's interfaces as ros2_controllers has them (``diff_drive_controlle
   orientation) at ``--imu-rate``, read from the robot's own motion by the virtual robot's
   IMU (``--gyro-scale``, ``--gyro-bias``, ``--gyro-bias-walk``, ``--imu-roll``:
   tests/robot_node_imu.py), its mounting a fixed joint of the URDF and on ``/tf_static``;
-  ``--imu-truth FILE``: its truth written there at the start.
+  ``--imu-truth FILE``: its truth written there at the start;
+- ``/sim/control`` (``std_msgs/String``): the IMU's faults as ROS 1's node takes them
+  (``mute_imu``, ``freeze_imu``, ``mend_imu``), ``mute_scan`` and ``unmute_scan``, and
+  the events of tests/robot_node_events.py (a wheel changed, the laser knocked: also at a
+  given time, ``--change-wheel-at``, ``--knock-laser-at``; ``--truth FILE``), and
+  ``--world warehouse`` for tests/mission_driver.py.
 """
 
 from __future__ import annotations
@@ -94,13 +99,13 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu, LaserScan
+from sensor_msgs.msg import Imu, JointState, LaserScan
 from std_msgs.msg import String
 
+from robot_node_events import Events, event_arguments, joint_state_values, node_world
 from robot_node_imu import ImuFault, imu_arguments, imu_setup
-from umbmark.robot.base import DriveParams, Pose2D
+from umbmark.robot.base import DriveParams
 from umbmark.robot.virtual import VirtualRobot
-from umbmark.robot.world import Lidar, corner_world
 
 #: ROS time at the simulation's start [s].
 T0 = 1000.0
@@ -422,8 +427,7 @@ class SimNode:
         self.node = node = rclpy.create_node("sim_robot")
         executor.add_node(node)
         configured = read_params(self.files, args.controller)
-        world = corner_world()
-        self.lidar = Lidar(mount=Pose2D(args.laser_x, 0.0, 0.0))
+        world, self.lidar = node_world(args)
         self.robot = VirtualRobot(
             E_d=args.E_d, E_b=args.E_b, E_s=args.E_s, slip=args.slip, seed=args.seed,
             world=replace(world, lidar=None if args.no_laser else self.lidar),
@@ -434,9 +438,14 @@ class SimNode:
         if args.imu_truth:
             Path(args.imu_truth).write_text(json.dumps(self.robot.imu_truth()), encoding="utf-8")
         self.imu = node.create_publisher(Imu, "/imu", 100)
+        self.joints = (
+            node.create_publisher(JointState, "/joint_states", 10) if args.joint_states else None
+        )
         self.upside_down = args.upside_down
         self.rate, self.scan_every = args.rate, args.scan_every
         self.lock = threading.Lock()
+        self.events = Events(args, self.robot, self._stated(), T0)
+        node.create_subscription(String, "/sim/control", self._on_control, 10)
         #: What the controller manager was asked, in order (printed at the end).
         self.calls: list[str] = []
         #: The odometry's first pose after each activation through the manager.
@@ -474,6 +483,13 @@ class SimNode:
             self.manager = None
         else:
             self.manager = Manager(self)
+
+    def _on_control(self, msg: String) -> None:
+        """``/sim/control``: the IMU's faults (tests/robot_node_imu.py), the events and the
+        laser's muting (tests/robot_node_events.py)."""
+        with self.lock:
+            self.imu_fault.control(msg.data)
+            self.events.control(msg.data)
 
     def _stated(self) -> tuple[float, float, float]:
         """The laser's mounting the robot states (x, y, yaw): ``--stated-laser``, else the
@@ -575,6 +591,7 @@ class SimNode:
             else:
                 robot.send_velocity(*controller.command)
         robot.wait(robot.period)
+        self.events.step()
         self._publish(step)
 
     def _publish(self, step: int) -> None:
@@ -600,6 +617,11 @@ class SimNode:
             if self.tf is not None:
                 self._publish_tf(msg)
         self._publish_imu()
+        if self.joints is not None:
+            joints = JointState()
+            joints.header.stamp.sec, joints.header.stamp.nanosec = sec, nanosec
+            joints.name, joints.position = joint_state_values(robot)
+            self.joints.publish(joints)
         if step % self.scan_every == 0:
             self._publish_sensors(sec, nanosec)
 
@@ -635,7 +657,7 @@ class SimNode:
 
     def _publish_sensors(self, sec: int, nanosec: int) -> None:
         robot = self.robot
-        scan = robot.scan()
+        scan = None if self.events.mute_scan else robot.scan()
         if scan is not None:
             msg = LaserScan()
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
@@ -714,6 +736,7 @@ def main() -> None:
         help="configure_controller fails (on_configure returns FAILURE) after the start",
     )  # fmt: skip
     imu_arguments(parser)
+    event_arguments(parser)
     args = parser.parse_args()
     # SIGINT is KeyboardInterrupt even where the node was started with it ignored (a
     # background job of a shell), so that closing it takes no 10 s time-out

@@ -5,14 +5,19 @@
   (tests/monitor_node_dev.py, the node's plumbing only) publishes /diagnostics as the
   probe receives them, STALE naming /odom while the robot's odometry is muted, OK again
   once it returns; SIGTERM ends it with one line and exit 0.
-- With the real core (``umbmark.monitor.core.make_monitor`` and ``umbmark monitor``, from
-  the core's branch): skipped until they are on main.
+- On warehouse missions (``--world warehouse``, tests/mission_driver.py driving; the
+  statuses read as they arrive by tests/diagnostics_probe.py; tests/monitor_graph.py):
+  the wiring with the recording core, and the same with ``umbmark monitor --ros1``; the
+  real core against the robot's truth file, a wheel changed and the laser knocked
+  mid-run (tests/robot_node_events.py). The real core's tests are skipped until
+  ``umbmark.monitor.core`` is on main.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -20,7 +25,8 @@ from pathlib import Path
 
 import pytest
 
-from test_ros1 import RosGraph
+from monitor_graph import check_changes, check_wiring, run_changes, run_wiring
+from test_ros1 import T0, RosGraph
 
 ROOT = Path(__file__).resolve().parents[1]
 DEV = Path(__file__).with_name("monitor_node_dev.py")
@@ -84,35 +90,59 @@ def test_ros1_monitor_stale_while_the_odometry_is_silent_and_on_again(tmp_path: 
     assert "umbmark_monitor: /odom back: going on" in lines
 
 
+def _graph(tmp: Path, *node_args: str) -> tuple[RosGraph, dict[str, str]]:
+    g = RosGraph(tmp, "--world", "warehouse", *node_args)
+    return g, {**g.env, "PYTHONPATH": f"{ROOT / 'src'}{os.pathsep}{ROOT / 'tests'}"}
+
+
 REAL_CORE = importlib.util.find_spec("umbmark.monitor.core") is not None
+NEEDS_CORE = "needs umbmark.monitor.core (branch h-mcore)"
+#: ``umbmark monitor --ros1`` as a user starts it, and the recording core's node.
+COMMAND = (sys.executable, "-m", "umbmark", "monitor", "--ros1")
+RECORDING = (sys.executable, str(DEV), "ros1=1")
+#: The robot's wheel changed and its laser knocked [s of simulated time], and when the
+#: run ends: the core's window filled (50 m) and its course begun before the first, each
+#: given its stated distance (60 m, at about 0.4 m/s on these missions) after.
+WHEEL_AT, KNOCK_AT, END_AT = 240.0, 420.0, 600.0
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(
-    not REAL_CORE,
-    reason="the monitor's core (umbmark.monitor.core.make_monitor, umbmark monitor) is not on "
-    "main yet: branch h-mcore",
-)
-def test_ros1_monitor_with_the_real_core_started_as_a_user_would(tmp_path: Path) -> None:
-    """``umbmark monitor --ros1 --corrected-odom /odom_corrected``: /diagnostics OK with
-    the figures' keys, the corrected odometry in the controller's frames, SIGTERM exit 0."""
-    g = RosGraph(tmp_path)
-    env = {**g.env, "PYTHONPATH": str(ROOT / "src")}
-    monitor = subprocess.Popen(
-        [sys.executable, "-m", "umbmark", "monitor", "--ros1", "--corrected-odom",
-         "/odom_corrected", "_robot:=r7"],
-        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+@pytest.mark.parametrize(
+    "core",
+    ["recording", pytest.param("umbmark", marks=pytest.mark.skipif(not REAL_CORE,
+                                                                   reason=NEEDS_CORE))],
+)  # fmt: skip
+def test_ros1_monitor_wiring_on_missions(tmp_path: Path, core: str) -> None:
+    """The node beside the robot driven on warehouse missions by tests/mission_driver.py
+    (the recording core, and ``umbmark monitor --ros1`` as a user starts it): /diagnostics
+    once a wall second, named and the robot its hardware_id (the laser's sweeps reaching
+    the recording core); STALE naming /scan while the laser is muted, on again after; the
+    corrected odometry in the controller's frames, moving; SIGTERM: one line, exit 0. The
+    driver kept the robot clear of every rack and wall."""
+    g, env = _graph(tmp_path)
+    argv = [*(RECORDING if core == "recording" else COMMAND), "_stale_after:=1.0",
+            "_robot:=r7", "_corrected_odom:=/odom_corrected"]  # fmt: skip
     try:
-        probe = subprocess.run([sys.executable, "-c", PROBE1], env=env, capture_output=True,
-                               text=True, timeout=120, check=False)  # fmt: skip
-        got = json.loads(probe.stdout.strip().splitlines()[-1])
-        monitor.send_signal(signal.SIGTERM)
-        _out, err = monitor.communicate(timeout=20)
+        run = run_wiring(sys.executable, "--ros1", env, tmp_path, argv, core == "recording")
     finally:
-        if monitor.poll() is None:
-            monitor.kill()
-            monitor.communicate()
         g.close()
-    assert monitor.returncode == 0, err[-2000:]
-    assert {"E_d", "E_b", "E_s", "laser_x [m]"} <= set(got["ok"]["values"])
+    check_wiring(run)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not REAL_CORE, reason=NEEDS_CORE)
+def test_ros1_monitor_flags_a_wheel_changed_and_a_laser_knocked(tmp_path: Path) -> None:
+    """``umbmark monitor --ros1`` beside the robot on missions: its right wheel 0.6 %
+    larger at 240 s (E_d 1.004 -> 1.010), its laser turned 2 degrees at 420 s (/tf_static
+    keeping the stated mounting): OK with nothing flagged before; each flagged within the
+    core's stated distance after it, its size the truth's (tests/robot_node_events.py)."""
+    truth = tmp_path / "truth.json"
+    events = ("--change-wheel-at", str(WHEEL_AT), "--knock-laser-at", str(KNOCK_AT))
+    g, env = _graph(tmp_path, "--rate", "10", "--no-imu", "--joint-states", *events,
+                    "--truth", str(truth))  # fmt: skip
+    argv = [*COMMAND, "_robot:=r7", "_imu_topic:=none"]
+    try:
+        run = run_changes(sys.executable, "--ros1", env, tmp_path, argv, truth, T0 + END_AT, 600.0)
+    finally:
+        g.close()
+    check_changes(run, truth)

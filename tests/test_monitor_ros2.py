@@ -1,0 +1,79 @@
+"""The monitor's ROS 2 node against a real ROS 2 graph (slow): tests/ros2_robot_node.py in
+the warehouse (``--world warehouse``) at 8x sim time, driven on ordinary missions by
+tests/mission_driver.py, /diagnostics read as they arrive by tests/diagnostics_probe.py,
+every process in ``.venv-ros2`` on a private domain (test_ros2.ros2_env) and ended by its
+PID.
+
+- The wiring, with the recording core (tests/monitor_node_dev.py: the node's plumbing, its
+  options as ``--ros-args -p``): 1 Hz, the status name, the robot as hardware_id, STALE
+  naming /scan while the laser is muted, the corrected odometry in the controller's
+  frames, SIGTERM exit 0.
+- With the real core, started as a user would (``umbmark monitor --ros2``): a wheel
+  changed and the laser knocked mid-run, against the robot node's truth file
+  (tests/test_monitor_ros.py has the ROS 1 twin); skipped until the core is on main.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from pathlib import Path
+
+import pytest
+
+from monitor_graph import DEV, check_changes, check_wiring, run_changes, run_wiring
+from test_ros2 import PYTHON, ROOT, T0, Robot2, ros2_env
+
+REAL_CORE = importlib.util.find_spec("umbmark.monitor.core") is not None
+NEEDS_CORE = "needs umbmark.monitor.core (branch h-mcore)"
+#: ``umbmark monitor --ros2`` as a user starts it, and the recording core's node.
+COMMAND = (str(PYTHON), "-m", "umbmark", "monitor", "--ros2")
+RECORDING = (str(PYTHON), str(DEV))
+#: The wheel changed, the laser knocked, the run's end [s of simulated time]
+#: (tests/test_monitor_ros.py's).
+WHEEL_AT, KNOCK_AT, END_AT = 240.0, 420.0, 600.0
+
+
+def _env(tmp: Path) -> dict[str, str]:
+    env = ros2_env(tmp)
+    env["PYTHONPATH"] = f"{ROOT / 'src'}{os.pathsep}{ROOT / 'tests'}"
+    return env
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "core",
+    ["recording", pytest.param("umbmark", marks=pytest.mark.skipif(not REAL_CORE,
+                                                                   reason=NEEDS_CORE))],
+)  # fmt: skip
+def test_ros2_monitor_wiring_on_missions(tmp_path: Path, core: str) -> None:
+    """As tests/test_monitor_ros.py's ROS 1 wiring test, on ROS 2, the options as ROS
+    parameters (``--ros-args -p``)."""
+    env = _env(tmp_path)
+    robot = Robot2(env, "--world", "warehouse")
+    options = ("stale_after:=1.0", "robot:=r7", "corrected_odom:=/odom_corrected")
+    argv = [*(RECORDING if core == "recording" else COMMAND), "--ros-args"]
+    argv += [word for option in options for word in ("-p", option)]
+    try:
+        run = run_wiring(str(PYTHON), "--ros2", env, tmp_path, argv, core == "recording")
+    finally:
+        robot.close()
+    check_wiring(run)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not REAL_CORE, reason=NEEDS_CORE)
+def test_ros2_monitor_flags_a_wheel_changed_and_a_laser_knocked(tmp_path: Path) -> None:
+    """``umbmark monitor --ros2`` beside the robot on missions, a wheel changed and the
+    laser knocked mid-run: as tests/test_monitor_ros.py's ROS 1 twin."""
+    env = _env(tmp_path)
+    truth = tmp_path / "truth.json"
+    events = ("--change-wheel-at", str(WHEEL_AT), "--knock-laser-at", str(KNOCK_AT))
+    robot = Robot2(env, "--world", "warehouse", "--rate", "10", "--no-imu", "--joint-states",
+                   *events, "--truth", str(truth))  # fmt: skip
+    argv = [*COMMAND, "--ros-args", "-p", "robot:=r7", "-p", "imu_topic:=none"]
+    try:
+        run = run_changes(str(PYTHON), "--ros2", env, tmp_path, argv, truth, T0 + END_AT, 600.0)
+    finally:
+        robot.close()
+    check_changes(run, truth)
