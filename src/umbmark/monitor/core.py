@@ -1,0 +1,322 @@
+"""The monitor without ROS: :class:`Monitor`, the :class:`~umbmark.monitor.status.MonitorCore`
+the nodes and the simulated robot feed.
+
+Each message goes to its chunk as it arrives (:mod:`umbmark.monitor.chunks`: the motion
+matched a chunk at a time, bounded memory); each chunk joins the window (the newest
+chunks holding ``window_metres`` of driving and ``window_radians`` turned each way, since
+the last change; at most :data:`WINDOW_CAP` times that much driving) and the present
+stretch. A stretch of ``stretch_metres`` of wheel travel is calibrated on its own
+(:mod:`umbmark.monitor.estimate`), recorded in the history and followed by the change
+model (:mod:`umbmark.monitor.course`); a stretch in which wheels and laser disagreed for
+:data:`OUTLIER_SECONDS` or more (pushed, lifted, slipping) is left out and counted
+(:attr:`MonitorStatus.outliers <umbmark.monitor.status.MonitorStatus.outliers>`). The
+window's figures are what :meth:`Monitor.status` says, refitted each :data:`REFIT_METRES`.
+
+Faults: the clock going back restarts the window and the stretch; the wheels' counts or
+the odometry jumping (a controller restarted) starts a new stretch; a message out of order
+is dropped and counted; a laser that matches nothing leaves its intervals out (no estimate
+from them, no change).
+"""
+
+from __future__ import annotations
+
+import math
+import time as wall_clock
+from collections import Counter, deque
+from dataclasses import replace
+
+from umbmark.monitor.arrivals import Arrivals, WheelAngles
+from umbmark.monitor.chunks import Chunk, ChunkMaker, Driving
+from umbmark.monitor.corrected import Calibration, Integrator
+from umbmark.monitor.course import Course, StretchPoint
+from umbmark.monitor.estimate import Estimate, estimate
+from umbmark.monitor.setup import MonitorSetup
+from umbmark.monitor.status import ChangeFound, CorrectedOdometry, MonitorStatus
+from umbmark.robot.base import ApplyResult, DriveParams, Pose2D, ScanSweep
+
+__all__ = ["OUTLIER_SECONDS", "REFIT_METRES", "WINDOW_CAP", "Monitor"]
+
+#: A stretch in which wheels and laser disagreed this long [s] is left out.
+OUTLIER_SECONDS = 2.0
+#: The window is refitted after this much new wheel travel [m].
+REFIT_METRES = 5.0
+#: The window holds at most this many times ``window_metres`` of wheel travel.
+WINDOW_CAP = 10.0
+#: Wheel rotation [rad] between readings under which the wheels stand still.
+_STILL = 1e-3
+#: A robot clock past this [s] is a clock of days (ROS time); before, it started at 0.
+_EPOCH_CLOCK = 1e9
+
+
+class Monitor:
+    """The monitor's core (the module's notes; :class:`MonitorCore
+    <umbmark.monitor.status.MonitorCore>`'s methods)."""
+
+    def __init__(self, setup: MonitorSetup) -> None:
+        self.setup = setup
+        self.params = setup.params
+        self.arrivals = Arrivals()
+        self.angles = WheelAngles(setup.wheel_radii, self.params.wheelbase)
+        self.maker = ChunkMaker(setup.wheel_radii, self.params.wheelbase, setup.scan_period,
+                                laser="scan" in setup.inputs)  # fmt: skip
+        if setup.laser is not None:
+            self.maker.mount = (setup.laser.x, setup.laser.y, setup.laser.theta)
+        self._mounted = setup.laser is not None
+        self.window: deque[tuple[float, Chunk]] = deque()
+        self.stretch: list[Chunk] = []
+        self.course = Course()
+        self.odometer = 0.0
+        self.restarts = 0
+        self.outliers = 0
+        self.stretches = 0
+        self.left_out: Counter[str] = Counter()
+        self.confirmed: dict[tuple[str, float], ChangeFound] = {}
+        self._since_odometer = 0.0
+        self._breaks = 0
+        self._since: float | None = None
+        self._fit: Estimate | None = None
+        self._fitted_at = -math.inf
+        self._travel = 0.0
+        self._epoch: float | None = None
+        self._moved_at: float | None = None
+        self._last_angles: tuple[float, float] | None = None
+        self._applied_line: str | None = None
+        self._applied_at_odometer = -math.inf
+        self._offered: DriveParams | None = None
+        self.integrator = Integrator(self._calibration(None))
+        self._store = None
+        if setup.history is not None:
+            from umbmark.store.history import History
+
+            self._store = History(setup.history)
+            self._take_up()
+
+    # --- what it is fed --------------------------------------------------------------
+
+    def wheels(self, time: float, left: float, right: float) -> None:
+        if self._arrived("wheels", time):
+            self._wheel_step(time, self.angles.from_wheels(time, left, right))
+
+    def odometry(self, time: float, pose: Pose2D) -> None:
+        if self._arrived("odometry", time):
+            self._wheel_step(time, self.angles.from_odometry(time, pose))
+
+    def scan(self, sweep: ScanSweep) -> None:
+        if not self._arrived("scan", sweep.time):
+            return
+        if not self._mounted:
+            m = sweep.mount
+            self.maker.mount, self._mounted = (m.x, m.y, m.theta), True
+        self.maker.scan(sweep)
+
+    def gyro(self, time: float, yaw_rate: float) -> None:
+        if self._arrived("gyro", time) and math.isfinite(yaw_rate):
+            self.maker.gyro(time, yaw_rate)
+
+    def _arrived(self, kind: str, time: float) -> bool:
+        said = self.arrivals.arrive(kind, time)  # type: ignore[arg-type]
+        if self._epoch is None and said == "ok":
+            self._epoch = 0.0 if time > _EPOCH_CLOCK else wall_clock.time() - time
+        if said == "back":
+            self._restart()
+            return True
+        return said == "ok"
+
+    def _restart(self) -> None:
+        """The clock went back (a simulation reset): the window and the stretch restart."""
+        self.restarts += 1
+        self.maker.reset()
+        self.angles.reset()
+        self.window.clear()
+        self.stretch = []
+        self._fit, self._moved_at, self._last_angles = None, None, None
+        self.integrator.time = None
+        self._since_odometer = self.odometer
+
+    def _wheel_step(self, time: float, continued: bool) -> None:
+        if not continued and self.angles.breaks != self._breaks:  # a controller restarted
+            self._breaks = self.angles.breaks
+            self.maker.reset()
+            self.stretch = []
+        angles = self.angles.angles
+        if (
+            self._last_angles is None
+            or max(abs(angles[0] - self._last_angles[0]), abs(angles[1] - self._last_angles[1]))
+            > _STILL
+        ):
+            self._moved_at, self._last_angles = time, angles
+        self.maker.wheels(time, *angles)
+        self.integrator.update(time, angles)
+        while (chunk := self.maker.make()) is not None:
+            self._take(chunk)
+
+    # --- chunks, stretches, the window -----------------------------------------------
+
+    def _take(self, chunk: Chunk) -> None:
+        self.left_out.update(chunk.left_out)
+        self.window.append((self.odometer, chunk))
+        self.odometer += chunk.driving.metres
+        self._travel += chunk.driving.travel
+        self._trim_window()
+        if chunk.moved:
+            self.stretch.append(chunk)
+        travel = sum(c.driving.travel for c in self.stretch)
+        if travel >= self.setup.stretch_metres:
+            self._close_stretch(self.stretch)
+            self.stretch = []
+
+    def _trim_window(self) -> None:
+        s = self.setup
+        while len(self.window) > 1:
+            rest = Driving()
+            for _, c in list(self.window)[1:]:
+                rest = rest + c.driving
+            enough = (rest.metres >= s.window_metres and rest.left >= s.window_radians
+                      and rest.right >= s.window_radians)  # fmt: skip
+            if not (enough or rest.travel > WINDOW_CAP * s.window_metres):
+                break
+            self.window.popleft()
+
+    def _close_stretch(self, chunks: list[Chunk]) -> None:
+        disagreed = sum(c.disagreeing_seconds for c in chunks)
+        if disagreed >= OUTLIER_SECONDS:
+            self.outliers += 1
+            return
+        found = estimate(chunks, self.params, laser="scan" in self.setup.inputs,
+                         gyro="gyro" in self.setup.inputs)  # fmt: skip
+        if not found.values:
+            self.left_out["stretch determined nothing"] += 1
+            return
+        self.stretches += 1
+        start = chunks[0].start
+        odometer = self.odometer - sum(c.driving.metres for c in chunks)
+        wall = start + (self._epoch or 0.0)
+        for name, (value, se) in found.values.items():
+            self.course.add(name, StretchPoint(value, se, start, odometer, wall))
+        self._record(found, start, chunks[-1].end, odometer)
+        self._judge()
+
+    def _judge(self) -> None:
+        """The changes the course shows; a newly confirmed one restarts the window."""
+        b = self.params.wheel_separation
+        for name in self.course.points:
+            _, found = self.course.found(name, self.setup.tolerance, b)
+            if found is None or not found.confirmed:
+                continue
+            key = (name, round(found.since_metres, 3))
+            if key not in self.confirmed and found.since_metres > self._since_odometer:
+                self._since_odometer, self._since = found.since_metres, found.since
+                kept = [(o, c) for o, c in self.window if o >= found.since_metres - 1e-6]
+                self.window = deque(kept)
+                self._fit = None
+            self.confirmed[key] = found
+
+    def _record(self, found: Estimate, start: float, end: float, odometer: float) -> None:
+        if self._store is None:
+            return
+        from umbmark.store.monitor_stretches import StretchRecord, record_stretch
+
+        p = self.params
+        active = {"wheelbase": p.wheel_separation, "wheel_diameter": 2.0 * p.wheel_radius,
+                  "c_L": p.left_wheel_radius_multiplier, "c_R": p.right_wheel_radius_multiplier,
+                  "wheel_separation_multiplier": p.wheel_separation_multiplier}  # fmt: skip
+        epoch = self._epoch or 0.0
+        method = "scan-matching" if found.params is not None else "gyro"
+        record = StretchRecord(self.setup.robot, method, start + epoch, end + epoch, start,
+                               odometer, self.odometer, found.values, active)  # fmt: skip
+        record_stretch(self._store, record)
+
+    def _take_up(self) -> None:
+        """The course (and the odometer) from the history: a monitor started again."""
+        from umbmark.monitor.course import MAX_STRETCHES
+        from umbmark.store.monitor_stretches import read_stretches
+
+        assert self._store is not None
+        stretches = read_stretches(self._store, self.setup.robot, MAX_STRETCHES)
+        for s in stretches:
+            for name, (value, se) in s.figures.items():
+                self.course.add(name, StretchPoint(value, se, s.time, s.odometer, s.wall_start))
+        if stretches:
+            self.odometer = self._since_odometer = stretches[-1].end_odometer
+            self.stretches = len(stretches)
+            self._judge()
+
+    # --- what it says ----------------------------------------------------------------
+
+    def window_estimate(self) -> Estimate | None:
+        """The window's figures, refitted each :data:`REFIT_METRES` of wheel travel."""
+        if self._fit is None or self._travel - self._fitted_at >= REFIT_METRES:
+            chunks = [c for _, c in self.window if c.moved]
+            if not chunks:
+                return self._fit
+            self._fit = estimate(chunks, self.params, laser="scan" in self.setup.inputs,
+                                 gyro="gyro" in self.setup.inputs)  # fmt: skip
+            self._fitted_at = self._travel
+            if self._fit.params is not None:
+                self.maker.params = self._fit.params
+                self.integrator.calibration = self._calibration(self._fit)
+        return self._fit
+
+    def _calibration(self, fit: Estimate | None) -> Calibration:
+        r_left, r_right = self.setup.wheel_radii
+        if fit is None or fit.params is None:
+            return Calibration(r_left, r_right, self.params.wheelbase)
+        p = fit.params
+        se = {n: fit.values.get(n, (0.0, 0.0))[1] for n in ("E_d", "E_b", "E_s")}
+        return Calibration(float(p[0]), float(p[1]), float(p[2]),
+                           se["E_s"] * float(p[0]), se["E_s"] * float(p[1]),
+                           se["E_b"] * self.params.wheel_separation)  # fmt: skip
+
+    def changes(self) -> tuple[ChangeFound, ...]:
+        """The confirmed changes since the start, oldest first, then those to be confirmed."""
+        b = self.params.wheel_separation
+        latest = []
+        for name in self.course.points:
+            _, found = self.course.found(name, self.setup.tolerance, b)
+            if found is not None and not found.confirmed:
+                latest.append(found)
+        done = sorted(self.confirmed.values(), key=lambda c: (c.since_metres, c.figure))
+        return (*done, *latest)
+
+    def status(self, now: float) -> MonitorStatus:
+        from umbmark.monitor.say import said
+
+        return said(self, now)
+
+    def corrected(self) -> CorrectedOdometry | None:
+        return self.integrator.odometry()
+
+    def rested(self, now: float) -> float:
+        """How long the wheels have stood still at ``now`` [s]."""
+        return 0.0 if self._moved_at is None else max(0.0, now - self._moved_at)
+
+    def apply_due(self, now: float) -> DriveParams | None:
+        from umbmark.monitor.apply import offer
+
+        if self.setup.apply != "at-rest" or self.rested(now) < self.setup.rest_time:
+            return None
+        if self.integrator.time is None or now - self.integrator.time > self.setup.stale_after:
+            return None  # the wheels are silent: not known to rest
+        pending = [c for c in self.confirmed.values() if c.figure in ("E_d", "E_b", "E_s")
+                   and c.since_metres > self._applied_at_odometer]  # fmt: skip
+        if not pending:
+            return None
+        present = {n: v for n in ("E_d", "E_b", "E_s") if (v := self.course.present(n))}
+        found = offer(present, self.params)
+        if found is None or not found.verdict.applies:
+            return None
+        self._offered = found.params
+        return found.params
+
+    def applied(self, now: float, result: ApplyResult) -> None:
+        offered = self._offered
+        self._offered = None
+        if offered is None:
+            return
+        if result.active:
+            self.params = offered
+            self.setup = replace(self.setup, params=offered)
+            self.angles.radii, self.angles.separation = self.setup.wheel_radii, offered.wheelbase
+            self._applied_at_odometer = self.odometer
+        said = f"applied at {now:.1f} s: {offered}" if result.active else "not applied"
+        self._applied_line = f"{said} ({result.method}: {result.message})"

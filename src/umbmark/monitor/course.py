@@ -1,0 +1,107 @@
+"""The robot's course on the monitor: each stretch of driving one calibration of it, each
+figure followed by the fleet's change model (:func:`umbmark.calibration.changes.change_of`,
+the same module ``umbmark fleet`` and ``umbmark history`` judge with).
+
+A stretch is :attr:`~umbmark.monitor.setup.MonitorSetup.stretch_metres` of wheel travel,
+calibrated on its own (:mod:`umbmark.monitor.estimate`); stretches do not overlap. The
+course is kept for the last :data:`MAX_STRETCHES` stretches of each figure, on the
+odometer's axis (metres driven: it goes on when the clock goes back). A change in the
+latest stretch alone is found, to be confirmed (``latest``); confirmed once the next
+stretch agrees (``step``): a change is flagged within the stretch it began in and the two
+after it. A trend (tyres wearing over weeks) is not flagged here.
+
+Whether a change is beyond what the robot's navigation tolerates (:func:`beyond`): the
+odometry's error per metre driven or radian turned it makes, against the tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from umbmark.calibration.changes import Change, change_of
+from umbmark.monitor.status import ChangeFound
+
+__all__ = ["MAX_STRETCHES", "Z95", "Course", "StretchPoint", "beyond"]
+
+#: The stretches kept per figure (bounded memory; a day of driving at 20 m a stretch).
+MAX_STRETCHES = 500
+#: z of a 95 % interval.
+Z95 = 1.959964
+
+
+def beyond(name: str, size: float, tolerance: float, wheelbase: float) -> bool:
+    """Whether a change of ``size`` in figure ``name`` is more than the navigation
+    tolerates: ``E_d``'s heading drift per metre driven straight (its change over the
+    wheelbase [rad/m]); the others' change itself (``E_s``, ``E_b``, ``k_g`` per metre or
+    radian, the laser's x, y [m] and yaw [rad]). The gyro's bias is followed, not judged."""
+    if name == "gyro_bias":
+        return False
+    effect = abs(size) / wheelbase if name == "E_d" else abs(size)
+    return effect > tolerance
+
+
+@dataclass(frozen=True)
+class StretchPoint:
+    """One stretch's figure: value and standard error, when it began (the robot's clock
+    [s], the odometer [m]) and the wall clock [s since 1970]."""
+
+    value: float
+    se: float
+    time: float
+    odometer: float
+    wall: float
+
+
+class Course:
+    """Every figure's stretches, and what the change model makes of them."""
+
+    def __init__(self) -> None:
+        self.points: dict[str, deque[StretchPoint]] = {}
+
+    def add(self, name: str, point: StretchPoint) -> None:
+        """One stretch's figure (in order of the odometer)."""
+        series = self.points.setdefault(name, deque(maxlen=MAX_STRETCHES))
+        if series and point.odometer <= series[-1].odometer:
+            point = StretchPoint(point.value, point.se, point.time,
+                                 series[-1].odometer + 1e-6, point.wall)  # fmt: skip
+        series.append(point)
+
+    def change(self, name: str) -> Change | None:
+        """The figure's course by the change model; None without stretches."""
+        series = self.points.get(name)
+        if not series:
+            return None
+        odo = np.array([p.odometer for p in series])
+        values = np.array([p.value for p in series])
+        errors = np.array([p.se for p in series])
+        return change_of(odo, values, errors)
+
+    def found(
+        self, name: str, tolerance: float, wheelbase: float
+    ) -> tuple[Change | None, ChangeFound | None]:
+        """The figure's course and the change it shows now (a latest or a step), if any."""
+        change = self.change(name)
+        if change is None or change.kind not in ("latest", "step") or change.since is None:
+            return change, None
+        first = self.points[name][change.since]
+        return change, ChangeFound(
+            figure=name,
+            size=change.size,
+            size_half_width=Z95 * change.size_se,
+            since=first.time,
+            since_metres=first.odometer,
+            confirmed=change.kind == "step",
+            beyond_tolerance=beyond(name, change.size, tolerance, wheelbase),
+        )
+
+    def present(self, name: str) -> tuple[float, float] | None:
+        """The figure's present value and standard error by the course (since its last
+        change); None without stretches."""
+        change = self.change(name)
+        if change is None or not math.isfinite(change.se):
+            return None
+        return change.value, change.se
