@@ -27,14 +27,21 @@ from dataclasses import replace
 
 from umbmark.monitor.arrivals import Arrivals, WheelAngles
 from umbmark.monitor.chunks import Chunk, ChunkMaker, Driving
-from umbmark.monitor.corrected import Calibration, Integrator
-from umbmark.monitor.course import Course, StretchPoint
+from umbmark.monitor.corrected import Integrator, WheelCalibration
+from umbmark.monitor.course import Z95, Course, StretchPoint
 from umbmark.monitor.estimate import Estimate, estimate
 from umbmark.monitor.setup import MonitorSetup
-from umbmark.monitor.status import ChangeFound, CorrectedOdometry, MonitorStatus
+from umbmark.monitor.status import (
+    FIGURES,
+    ChangeFound,
+    CorrectedOdometry,
+    Figure,
+    Level,
+    MonitorStatus,
+)
 from umbmark.robot.base import ApplyResult, DriveParams, Pose2D, ScanSweep
 
-__all__ = ["OUTLIER_SECONDS", "REFIT_METRES", "WINDOW_CAP", "Monitor"]
+__all__ = ["OUTLIER_SECONDS", "REFIT_METRES", "WINDOW_CAP", "Monitor", "change_line", "said"]
 
 #: A stretch in which wheels and laser disagreed this long [s] is left out.
 OUTLIER_SECONDS = 2.0
@@ -257,13 +264,13 @@ class Monitor:
                 self.integrator.calibration = self._calibration(self._fit)
         return self._fit
 
-    def _calibration(self, fit: Estimate | None) -> Calibration:
+    def _calibration(self, fit: Estimate | None) -> WheelCalibration:
         r_left, r_right = self.setup.wheel_radii
         if fit is None or fit.params is None:
-            return Calibration(r_left, r_right, self.params.wheelbase)
+            return WheelCalibration(r_left, r_right, self.params.wheelbase)
         p = fit.params
         se = {n: fit.values.get(n, (0.0, 0.0))[1] for n in ("E_d", "E_b", "E_s")}
-        return Calibration(float(p[0]), float(p[1]), float(p[2]),
+        return WheelCalibration(float(p[0]), float(p[1]), float(p[2]),
                            se["E_s"] * float(p[0]), se["E_s"] * float(p[1]),
                            se["E_b"] * self.params.wheel_separation)  # fmt: skip
 
@@ -279,8 +286,6 @@ class Monitor:
         return (*done, *latest)
 
     def status(self, now: float) -> MonitorStatus:
-        from umbmark.monitor.say import said
-
         return said(self, now)
 
     def corrected(self) -> CorrectedOdometry | None:
@@ -320,3 +325,73 @@ class Monitor:
             self._applied_at_odometer = self.odometer
         said = f"applied at {now:.1f} s: {offered}" if result.active else "not applied"
         self._applied_line = f"{said} ({result.method}: {result.message})"
+
+
+# --- what it says ----------------------------------------------------------------------
+
+
+def change_line(change: ChangeFound, odometer: float) -> str:
+    """One change for people: ``E_d changed by -0.0060 +- 0.0004 since 482.0 s, 41 m
+    ago``."""
+    sure = "" if change.confirmed else " (to be confirmed by the next stretch)"
+    beyond = " beyond the tolerance" if change.beyond_tolerance else ""
+    ago = max(0.0, odometer - change.since_metres)
+    return (
+        f"{change.figure} changed{beyond} by {change.size:+.4g} +- {change.size_half_width:.2g} "
+        f"since {change.since:.1f} s, {ago:.0f} m ago{sure}"
+    )
+
+
+def _figures(monitor: Monitor) -> tuple[Figure, ...]:
+    fit = monitor.window_estimate()
+    out = []
+    for name, unit in FIGURES:
+        if fit is not None and name in fit.values:
+            value, se = fit.values[name]
+            out.append(Figure(name, value, Z95 * se, unit, fit.notes.get(name, "")))
+            continue
+        present = monitor.course.present(name)
+        if present is not None and (fit is None or fit.intervals == 0):
+            out.append(Figure(name, present[0], Z95 * present[1], unit, "from the course"))
+            continue
+        note = "no driving yet" if fit is None else fit.notes.get(name, "not determined")
+        out.append(Figure(name, None, None, unit, note))
+    return tuple(out)
+
+
+def said(monitor: Monitor, now: float) -> MonitorStatus:
+    """The monitor's status at ``now`` [s]."""
+    s = monitor.setup
+    figures = _figures(monitor)
+    changes = monitor.changes()
+    pending = [c for c in changes if c.confirmed and c.since_metres > monitor._applied_at_odometer]
+    stale = monitor.arrivals.silent(now, s.inputs, s.stale_after) if monitor.arrivals.last else ()
+    level: Level = "OK"
+    if pending:
+        level = "ERROR" if any(c.beyond_tolerance for c in pending) else "WARN"
+    if stale:
+        level = "STALE"
+    lines = [change_line(c, monitor.odometer) for c in changes if c in pending or not c.confirmed]
+    if stale:
+        lines.insert(0, f"silent for more than {s.stale_after:g} s: {', '.join(stale)}")
+    if not lines:
+        lines.append(f"no change over {monitor.stretches} stretches of driving "
+                     f"({monitor.odometer:.0f} m)")  # fmt: skip
+    window = monitor.window_estimate()
+    driving = window.driving if window is not None else None
+    return MonitorStatus(
+        time=now,
+        robot=s.robot,
+        level=level,
+        message="; ".join(lines),
+        figures=figures,
+        metres=0.0 if driving is None else driving.metres,
+        radians_left=0.0 if driving is None else driving.left,
+        radians_right=0.0 if driving is None else driving.right,
+        odometer=monitor.odometer,
+        since=monitor._since,
+        changes=changes,
+        stale=stale,
+        outliers=monitor.outliers,
+        applied=monitor._applied_line,
+    )

@@ -2,7 +2,7 @@
 calibrated odometry on every ROS distribution, whatever the controller's own multipliers.
 
 Each wheel reading moves the pose along the exact arc of the wheels' travel (the radii
-and wheelbase of the present calibration, :class:`Calibration`), as
+and wheelbase of the present calibration, :class:`WheelCalibration`), as
 ``diff_drive_controller`` integrates. Its covariance grows to first order with what the
 calibration leaves uncertain (each radius' and the wheelbase's standard error: a heading
 error of ``dtheta sigma_b / b`` and a travel error of ``ds sigma_r / r`` per step, the
@@ -21,14 +21,14 @@ import numpy as np
 from umbmark.monitor.status import CorrectedOdometry
 from umbmark.robot.base import Pose2D
 
-__all__ = ["SLIP", "Calibration", "Integrator"]
+__all__ = ["SLIP", "Integrator", "WheelCalibration"]
 
 #: The wheels' random slip [m^(1/2)]: a position variance of ``SLIP^2 |ds|`` per step.
 SLIP = 0.005
 
 
 @dataclass(frozen=True)
-class Calibration:
+class WheelCalibration:
     """The wheels as the monitor knows them now.
 
     Attributes
@@ -50,7 +50,7 @@ class Calibration:
 class Integrator:
     """The corrected odometry (the module's notes)."""
 
-    def __init__(self, calibration: Calibration) -> None:
+    def __init__(self, calibration: WheelCalibration) -> None:
         self.calibration = calibration
         self.pose = Pose2D()
         self.time: float | None = None

@@ -152,6 +152,6 @@ def read_stretches(history: History, robot: str, most: int) -> list[StretchRecor
                 float(mine.get("end_odometer", 0.0)),
                 {k: (float(v[0]), float(v[1])) for k, v in (mine.get("figures") or {}).items()},
                 dict(record.get("active") or {}),
-            )  # fmt: skip
+            )
         )
     return out
