@@ -44,6 +44,8 @@ _EXPORTS = {
     "simulate_fleet": "umbmark.jobs.simulate_fleet",
     "FleetSimulation": "umbmark.jobs.simulate_fleet",
     "FleetReport": "umbmark.jobs.fleet",
+    "monitor_sim": "umbmark.jobs.monitor",
+    "MonitorSimReport": "umbmark.jobs.monitor",
     "History": "umbmark.store.history",
     "plan": "umbmark.jobs.plan",
     "PlanReport": "umbmark.calibration.plan",
@@ -105,6 +107,7 @@ __all__ = [
     "HistoryReport",
     "InfoReport",
     "InputError",
+    "MonitorSimReport",
     "PassesReport",
     "PlanReport",
     "ReplayReport",
@@ -131,6 +134,7 @@ __all__ = [
     "history",
     "info",
     "integrate_odometry",
+    "monitor_sim",
     "plan",
     "read_runs_table",
     "replay",
@@ -159,6 +163,7 @@ if TYPE_CHECKING:
     from umbmark.jobs.fleet import FleetReport, fleet
     from umbmark.jobs.history import HistoryReport, history
     from umbmark.jobs.info import InfoReport, info
+    from umbmark.jobs.monitor import MonitorSimReport, monitor_sim
     from umbmark.jobs.plan import plan
     from umbmark.jobs.replay import ReplayReport, replay
     from umbmark.jobs.report import PassesReport, report

@@ -48,6 +48,7 @@ COMMANDS = (
     "history",
     "selfcal",
     "fleet",
+    "monitor",
 )
 
 
