@@ -49,6 +49,8 @@ class Arrivals:
     def __init__(self) -> None:
         self.last: dict[Input, float] = {}
         self.dropped: Counter[str] = Counter()
+        #: The first arrival since the start (or since the clock went back).
+        self.first: float | None = None
 
     def arrive(self, kind: Input, time: float) -> str:
         """``"ok"`` for a message to use, ``"drop"`` for one out of order (counted),
@@ -60,17 +62,19 @@ class Arrivals:
         last = self.last.get(kind)
         if last is not None and time <= last:
             if time < last - CLOCK_BACK:
-                self.last = {kind: time}
+                self.last, self.first = {kind: time}, time
                 return "back"
             self.dropped[f"{kind}: out of order"] += 1
             return "drop"
         self.last[kind] = time
+        if self.first is None:
+            self.first = time
         return "ok"
 
     def silent(self, now: float, expected: tuple[Input, ...], after: float) -> tuple[str, ...]:
         """The expected inputs silent for more than ``after`` [s] at ``now`` (never heard
         counts once ``now`` is ``after`` past the first input heard)."""
-        first = min(self.last.values(), default=now)
+        first = now if self.first is None else self.first
         out = []
         for kind in expected:
             last = self.last.get(kind, first)

@@ -1,0 +1,51 @@
+"""The course on the fleet's change model: a steady series found steady, a step found in
+the latest stretch, then confirmed, and the navigation tolerance."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from umbmark.monitor.course import Z95, Course, StretchPoint, beyond
+
+
+def _course(values: list[float], se: float = 1e-4) -> Course:
+    c = Course()
+    for k, v in enumerate(values):
+        c.add("E_d", StretchPoint(v, se, 60.0 * k, 20.0 * k, 1e9 + 60.0 * k))
+    return c
+
+
+def test_steady_is_not_a_change() -> None:
+    rng = np.random.default_rng(4)
+    c = _course(list(1.002 + 1e-4 * rng.standard_normal(30)))
+    change, found = c.found("E_d", 0.02, 0.34)
+    assert change is not None and change.kind == "steady" and found is None
+
+
+def test_a_step_is_found_then_confirmed() -> None:
+    before, after = [1.002] * 8, [0.996]
+    _, found = _course(before + after).found("E_d", 0.02, 0.34)
+    assert found is not None and not found.confirmed
+    assert found.since == 60.0 * 8 and found.since_metres == 20.0 * 8
+    _, found = _course(before + after + [0.996]).found("E_d", 0.02, 0.34)
+    assert found is not None and found.confirmed
+    assert found.size == pytest.approx(-0.006, abs=1e-6)
+    # the 95 % half-width of a difference of means of 8 and 2 stretches of 1e-4
+    assert found.size_half_width == pytest.approx(Z95 * 1e-4 * np.sqrt(1 / 8 + 1 / 2), rel=1e-6)
+
+
+def test_the_tolerance() -> None:
+    # E_d: a change of 0.006 on a 0.34 m wheelbase drifts 0.0176 rad per metre
+    assert not beyond("E_d", -0.006, 0.02, 0.34)
+    assert beyond("E_d", -0.007, 0.02, 0.34)
+    assert beyond("laser_yaw", 0.0524, 0.02, 0.34)
+    assert not beyond("laser_x", 0.01, 0.02, 0.34)
+    assert not beyond("gyro_bias", 1.0, 0.02, 0.34)
+
+
+def test_the_course_is_bounded() -> None:
+    from umbmark.monitor.course import MAX_STRETCHES
+
+    c = _course([1.0] * (MAX_STRETCHES + 20))
+    assert len(c.points["E_d"]) == MAX_STRETCHES
