@@ -66,5 +66,6 @@ def test_an_odometry_jump_is_a_restart() -> None:
     w.from_odometry(0.02, Pose2D(12.01, 3.0, 1.0))
     before = w.angles
     assert not w.from_odometry(0.04, Pose2D(0.0, 0.0, 0.0))  # the controller restarted
-    assert w.breaks == 1 and w.angles == before
+    assert w.breaks == 1
+    assert w.angles == before
     assert w.from_odometry(0.06, Pose2D(0.01 * math.cos(0.0), 0.0, 0.0))

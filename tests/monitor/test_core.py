@@ -25,7 +25,8 @@ def _drive(core: Monitor, t0: float, t1: float, speed: float = 4.0, start: float
 def test_the_clock_going_back_restarts_the_window() -> None:
     core = Monitor(MonitorSetup("r", PARAMS, inputs=("wheels",)))
     _drive(core, 0.0, 30.0)
-    assert core.window and core.odometer > 0
+    assert core.window
+    assert core.odometer > 0
     _drive(core, 0.0, 15.0)  # a simulation reset
     assert core.restarts == 1
     assert sum(c.driving.metres for _, c in core.window) < 15 * 4 * 0.075
@@ -37,7 +38,8 @@ def test_out_of_order_and_stale() -> None:
     core.wheels(4.5, 0.0, 0.0)  # late
     assert core.arrivals.dropped["wheels: out of order"] == 1
     status = core.status(5.0)
-    assert status.level == "STALE" and status.stale == ("scan",)
+    assert status.level == "STALE"
+    assert status.stale == ("scan",)
     assert dict(status.key_values())["stale topics"] == "scan"
 
 
@@ -50,7 +52,8 @@ def test_a_controller_restart_keeps_the_odometry_going() -> None:
     for k in range(100, 150):  # the controller restarted at the origin
         core.odometry(0.02 * k, Pose2D(0.01 * (k - 100), 0.0, 0.0))
     after = core.corrected()
-    assert core.angles.breaks == 1 and after is not None
+    assert core.angles.breaks == 1
+    assert after is not None
     # the corrected odometry went on by the 0.49 m driven after the restart, no jump
     moved = math.hypot(after.pose.x - before.pose.x, after.pose.y - before.pose.y)
     assert abs(moved - 0.50) < 0.02
@@ -72,5 +75,19 @@ def test_the_status_says_every_figure() -> None:
     status = core.status(12.0)
     assert [f.name for f in status.figures][:3] == ["E_d", "E_b", "E_s"]
     notes = {f.name: f.note for f in status.figures}
-    assert notes["laser_x"] == "no laser" and notes["k_g"] == "no gyro"
+    assert notes["laser_x"] == "no laser"
+    assert notes["k_g"] == "no gyro"
     assert status.level == "OK"
+
+
+def test_the_options_defaults_are_the_setups() -> None:
+    import inspect
+
+    from umbmark.jobs.monitor import monitor_sim
+    from umbmark.options.monitor import MONITOR
+
+    signature = inspect.signature(monitor_sim).parameters
+    setup = MonitorSetup("r", PARAMS)
+    for name, spec in MONITOR.items():
+        if name != "robot":
+            assert signature[name].default == spec.default == getattr(setup, name), name

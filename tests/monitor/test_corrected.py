@@ -27,5 +27,8 @@ def test_a_straight_and_a_turn_with_the_calibration() -> None:
     assert got.pose.y == pytest.approx(chord * math.sin(turn / 2))
     assert got.linear == pytest.approx(travel)
     cov = got.pose_covariance
-    assert cov.shape == (6, 6) and np.allclose(cov, cov.T)
-    assert cov[0, 0] > 0 and cov[5, 5] > 0 and np.all(np.linalg.eigvalsh(cov) >= -1e-15)
+    assert cov.shape == (6, 6)
+    assert np.allclose(cov, cov.T)
+    assert cov[0, 0] > 0
+    assert cov[5, 5] > 0
+    assert np.all(np.linalg.eigvalsh(cov) >= -1e-15)

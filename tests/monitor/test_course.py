@@ -20,16 +20,21 @@ def test_steady_is_not_a_change() -> None:
     rng = np.random.default_rng(4)
     c = _course(list(1.002 + 1e-4 * rng.standard_normal(30)))
     change, found = c.found("E_d", 0.02, 0.34)
-    assert change is not None and change.kind == "steady" and found is None
+    assert change is not None
+    assert change.kind == "steady"
+    assert found is None
 
 
 def test_a_step_is_found_then_confirmed() -> None:
     before, after = [1.002] * 8, [0.996]
     _, found = _course(before + after).found("E_d", 0.02, 0.34)
-    assert found is not None and not found.confirmed
-    assert found.since == 60.0 * 8 and found.since_metres == 20.0 * 8
+    assert found is not None
+    assert not found.confirmed
+    assert found.since == 60.0 * 8
+    assert found.since_metres == 20.0 * 8
     _, found = _course(before + after + [0.996]).found("E_d", 0.02, 0.34)
-    assert found is not None and found.confirmed
+    assert found is not None
+    assert found.confirmed
     assert found.size == pytest.approx(-0.006, abs=1e-6)
     # the 95 % half-width of a difference of means of 8 and 2 stretches of 1e-4
     assert found.size_half_width == pytest.approx(Z95 * 1e-4 * np.sqrt(1 / 8 + 1 / 2), rel=1e-6)

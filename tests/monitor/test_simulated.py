@@ -29,25 +29,38 @@ BASE = SimRobotSetup()
 CHANGE_AT = 240.0
 
 
-def _run(sim: SimRobotSetup, minutes: float, occluded: tuple[float, float] | None = None,
-         **options: object) -> tuple[Monitor, dict[str, float], list[tuple[float, str]]]:  # fmt: skip
+Run = tuple[Monitor, dict[str, float], list[tuple[float, str]]]
+
+
+def _run(
+    sim: SimRobotSetup, minutes: float, occluded: tuple[float, float] | None = None, **options
+) -> Run:
     """The monitor over the simulated robot; the odometer at each change's time, and
     every moment apply_due offered something with how long the wheels had rested."""
-    setup = MonitorSetup("sim", DriveParams(NOMINAL[0], 0.5 * NOMINAL[1]), Pose2D(*BASE.stated),
-                         inputs=("wheels", "scan", "gyro"), **options)  # type: ignore[arg-type]
+    setup = MonitorSetup(
+        "sim",
+        DriveParams(NOMINAL[0], 0.5 * NOMINAL[1]),
+        Pose2D(*BASE.stated),
+        inputs=("wheels", "scan", "gyro"),
+        **options,
+    )  # type: ignore[arg-type]
     core = Monitor(setup)
     at: dict[str, float] = {}
     offered: list[tuple[float, str]] = []
     still_since, last = 0.0, None
-    for message, _ in messages(sim, 60.0 * minutes):
-        if occluded and message.sweep is not None and occluded[0] <= message.time < occluded[1]:
-            blind = np.full_like(message.sweep.ranges, np.inf)
-            message = dataclasses.replace(message, sweep=dataclasses.replace(message.sweep,
-                                                                             ranges=blind))
+    for given, _ in messages(sim, 60.0 * minutes):
+        message = given
+        if occluded and given.sweep is not None and occluded[0] <= given.time < occluded[1]:
+            blind = dataclasses.replace(
+                given.sweep, ranges=np.full_like(given.sweep.ranges, np.inf)
+            )
+            message = dataclasses.replace(given, sweep=blind)
         feed(core, message)
         if message.kind == "wheels":
-            if last is not None and max(abs(a - b) for a, b in zip(message.values, last,
-                                                                   strict=True)) > 1e-3:
+            if (
+                last is not None
+                and max(abs(a - b) for a, b in zip(message.values, last, strict=True)) > 1e-3
+            ):
                 still_since = message.time
             last = message.values
             due = core.apply_due(message.time)
@@ -86,11 +99,13 @@ def test_a_laser_knocked_is_flagged() -> None:
     sim = dataclasses.replace(BASE, changes=(SimChange(CHANGE_AT, laser=knocked),), seed=2)
     core, at, _ = _run(sim, 9.0)
     yaw = _confirmed(core, "laser_yaw")
-    assert len(yaw) == 1 and yaw[0].beyond_tolerance  # 0.052 rad > 0.02 rad
+    assert len(yaw) == 1
+    assert yaw[0].beyond_tolerance
     assert yaw[0].since_metres - at[str(CHANGE_AT)] < FLAGGED_WITHIN
     assert abs(yaw[0].size - math.radians(3.0)) < max(yaw[0].size_half_width, 0.003)
     assert core.status(540.0).level == "ERROR"
-    assert not _confirmed(core, "E_d") and not _confirmed(core, "E_b")
+    assert not _confirmed(core, "E_d")
+    assert not _confirmed(core, "E_b")
 
 
 def test_a_payload_widening_the_effective_wheelbase() -> None:
@@ -112,10 +127,12 @@ def test_a_steady_robot_is_not_flagged_and_a_push_is_an_outlier() -> None:
     assert core.left_out["wheels and laser disagree"] >= 2
     assert not [c for c in core.changes() if c.confirmed]
     status = core.status(720.0)
-    assert status.level == "OK" and status.outliers == core.outliers
+    assert status.level == "OK"
+    assert status.outliers == core.outliers
     truth = dict(zip(("E_d", "E_b", "E_s"), BASE.errors, strict=True))
     for fig in status.figures[:3]:  # the truth within the window's interval (3 x: 99.7 %)
-        assert fig.value is not None and fig.half_width is not None
+        assert fig.value is not None
+        assert fig.half_width is not None
         assert abs(fig.value - truth[fig.name]) < 1.5 * fig.half_width + 1e-4
 
 
@@ -132,7 +149,8 @@ def test_the_command_end_to_end(tmp_path) -> None:
     result = run_cli("monitor", "--sim", "--minutes", "9", "--change-after", "4",
                      "--history", str(history), "--robot", "amr1")  # fmt: skip
     assert result.returncode == 0, result.stderr
-    assert "WARN" in result.stdout and "E_d changed by -0.00" in result.stdout
+    assert "WARN" in result.stdout
+    assert "E_d changed by -0.00" in result.stdout
     assert "truth 0.995988" in result.stdout  # 1.002 x 0.994
     shown = run_cli("history", "amr1", "--history", str(history), "--json")
     data = json.loads(shown.stdout)

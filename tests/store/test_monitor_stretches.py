@@ -29,7 +29,11 @@ def test_a_stretch_is_a_calibration_and_a_fleet_recording(tmp_path) -> None:
     import json
 
     outcome = RecordingOutcome.of_dict(json.loads(text))
-    assert outcome.calibrated and outcome.robot == "amr" and outcome.start == 1.7e9
+    assert outcome.calibrated
+    assert outcome.robot == "amr"
+    assert outcome.start == 1.7e9
     assert outcome.figures["laser_yaw"] == (0.01, 4e-4)
     (back,) = read_stretches(h, "amr", 10)
-    assert back.figures == figures and back.end_odometer == 120.0 and back.time == 12.0
+    assert back.figures == figures
+    assert back.end_odometer == 120.0
+    assert back.time == 12.0

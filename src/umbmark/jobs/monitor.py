@@ -13,7 +13,7 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 from umbmark.core.jsontext import JsonText
 from umbmark.monitor.status import MonitorStatus
@@ -90,7 +90,14 @@ def monitor_sim(
     seed: int = 1,
     history: str | os.PathLike[str] | None = None,
     on_status: Callable[[MonitorStatus], None] | None = None,
-    **options: Any,
+    window_metres: float = 50.0,
+    window_radians: float = 4.0 * math.pi,
+    stretch_metres: float = 20.0,
+    scan_period: float = 1.0,
+    stale_after: float = 2.0,
+    tolerance: float = 0.02,
+    apply: Literal["never", "at-rest"] = "never",
+    rest_time: float = 5.0,
 ) -> MonitorSimReport:
     """Run the monitor on the simulated robot (the module's notes).
 
@@ -113,8 +120,10 @@ def monitor_sim(
         The history file the stretches go to (none by default).
     on_status : callable, optional
         Called with each status that differs from the one before in what it says.
-    options
-        The monitor's options (:data:`umbmark.options.monitor.MONITOR`) by keyword.
+    window_metres, window_radians, stretch_metres, scan_period, stale_after, tolerance,
+    apply, rest_time
+        The monitor's options (:data:`umbmark.options.monitor.MONITOR`, whose defaults
+        these are: :class:`umbmark.monitor.setup.MonitorSetup` checks them).
 
     Raises
     ------
@@ -140,7 +149,10 @@ def monitor_sim(
     sim = SimRobotSetup(seed=seed, changes=(change,))
     setup = MonitorSetup(
         robot, DriveParams(NOMINAL[0], 0.5 * NOMINAL[1]), Pose2D(*base.stated),
-        history=history, inputs=("wheels", "scan", "gyro"), **options,
+        window_metres=window_metres, window_radians=window_radians,
+        stretch_metres=stretch_metres, scan_period=scan_period, stale_after=stale_after,
+        tolerance=tolerance, apply=apply, rest_time=rest_time, history=history,
+        inputs=("wheels", "scan", "gyro"),
     )  # fmt: skip
     core = Monitor(setup)
     said: list[MonitorStatus] = []
