@@ -61,6 +61,7 @@ class Course:
 
     def __init__(self) -> None:
         self.points: dict[str, deque[StretchPoint]] = {}
+        self._changes: dict[str, Change] = {}  # the change model's, until the next stretch
 
     def add(self, name: str, point: StretchPoint) -> None:
         """One stretch's figure (in order of the odometer)."""
@@ -69,16 +70,20 @@ class Course:
             point = StretchPoint(point.value, point.se, point.time,
                                  series[-1].odometer + 1e-6, point.wall)  # fmt: skip
         series.append(point)
+        self._changes.pop(name, None)
 
     def change(self, name: str) -> Change | None:
         """The figure's course by the change model; None without stretches."""
         series = self.points.get(name)
         if not series:
             return None
+        if name in self._changes:
+            return self._changes[name]
         odo = np.array([p.odometer for p in series])
         values = np.array([p.value for p in series])
         errors = np.array([p.se for p in series])
-        return change_of(odo, values, errors)
+        self._changes[name] = change_of(odo, values, errors)
+        return self._changes[name]
 
     def found(
         self, name: str, tolerance: float, wheelbase: float
