@@ -91,3 +91,16 @@ def test_the_options_defaults_are_the_setups() -> None:
     for name, spec in MONITOR.items():
         if name != "robot":
             assert signature[name].default == spec.default == getattr(setup, name), name
+
+
+def test_the_nodes_make_the_core_from_what_they_found() -> None:
+    from umbmark.monitor.core import make_monitor
+    from umbmark.monitor.ros2_node import Found
+    from umbmark.monitor.ros_node import NodeOptions
+
+    found = Found({"window_metres": 80.0, "tolerance": None}, NodeOptions(robot="amr",
+                  imu_topic=None), PARAMS, sim_time=False)  # fmt: skip
+    core = make_monitor(found)
+    assert core.setup.robot == "amr"
+    assert core.setup.window_metres == 80.0
+    assert core.setup.inputs == ("wheels", "scan")

@@ -24,13 +24,14 @@ import math
 import time as wall_clock
 from collections import Counter, deque
 from dataclasses import replace
+from typing import Any
 
 from umbmark.monitor.arrivals import Arrivals, WheelAngles
 from umbmark.monitor.chunks import Chunk, ChunkMaker, Driving
 from umbmark.monitor.corrected import Integrator, WheelCalibration
 from umbmark.monitor.course import Z95, Course, StretchPoint
 from umbmark.monitor.estimate import Estimate, estimate
-from umbmark.monitor.setup import MonitorSetup
+from umbmark.monitor.setup import Input, MonitorSetup
 from umbmark.monitor.status import (
     FIGURES,
     ChangeFound,
@@ -41,7 +42,15 @@ from umbmark.monitor.status import (
 )
 from umbmark.robot.base import ApplyResult, DriveParams, Pose2D, ScanSweep
 
-__all__ = ["OUTLIER_SECONDS", "REFIT_METRES", "WINDOW_CAP", "Monitor", "change_line", "said"]
+__all__ = [
+    "OUTLIER_SECONDS",
+    "REFIT_METRES",
+    "WINDOW_CAP",
+    "Monitor",
+    "change_line",
+    "make_monitor",
+]
+__all__ += ["said"]
 
 #: A stretch in which wheels and laser disagreed this long [s] is left out.
 OUTLIER_SECONDS = 2.0
@@ -325,6 +334,37 @@ class Monitor:
             self._applied_at_odometer = self.odometer
         said = f"applied at {now:.1f} s: {offered}" if result.active else "not applied"
         self._applied_line = f"{said} ({result.method}: {result.message})"
+
+
+def make_monitor(found: Any) -> Monitor:  # noqa: ANN401 (umbmark.monitor.ros2_node.Found)
+    """The core a ROS node makes from what it found (``Found``: the options' values by
+    keyword, its :class:`~umbmark.monitor.ros_node.NodeOptions`, the controller's
+    parameters, whether sim time runs): the monitor's options of
+    :data:`umbmark.options.monitor.MONITOR` from the values, the inputs from the topics.
+
+    Raises
+    ------
+    InputError
+        Without the controller's parameters (the wheels' geometry is needed).
+    """
+    from umbmark.core.errors import InputError
+    from umbmark.options.monitor import MONITOR
+
+    options, values = found.options, dict(found.values)
+    if found.params is None:
+        raise InputError("the controller's parameters did not come: the monitor needs its "
+                         "wheel radius and separation (give --params-file)")  # fmt: skip
+    kept = {k: values[k] for k in MONITOR if k in values and values[k] is not None}
+    kept.pop("robot", None)
+    wheels: Input = "wheels" if getattr(options, "wheel_topic", "") else "odometry"
+    inputs: tuple[Input, ...] = (wheels,)
+    inputs += ("scan",) if getattr(options, "scan_topic", None) else ()
+    inputs += ("gyro",) if getattr(options, "imu_topic", None) else ()
+    setup = MonitorSetup(
+        str(getattr(options, "robot", "") or values.get("robot") or "robot"), found.params,
+        getattr(options, "laser_mount", None), inputs=inputs, **kept,
+    )  # fmt: skip
+    return Monitor(setup)
 
 
 # --- what it says ----------------------------------------------------------------------
