@@ -114,13 +114,19 @@ def main() -> None:
                 if c.confirmed and line not in flagged:
                     flagged.append(line)
         cpu += time.process_time() - t0
-        if message.time >= next_hour or message.time + 0.02 >= seconds:
+        if message.time >= next_hour:
             hours = message.time / 3600.0
             wall = time.monotonic() - start_wall
             rate = cpu / hours
             print(f"{hours:8.2f}   {cpu:10.1f}   {rate:11.1f}   {rate / 36:14.2f} %"
                   f"   {_rss_mib():7.0f}   {_core_mib(core):8.2f}   {wall:6.0f}")  # fmt: skip
             next_hour += 3600.0
+    if next_hour - 3600.0 < seconds - 1.0:  # the last part of an hour
+        hours = seconds / 3600.0
+        print(
+            f"{hours:8.2f}   {cpu:10.1f}   {cpu / hours:11.1f}   {cpu / hours / 36:14.2f} %"
+            f"   {_rss_mib():7.0f}   {_core_mib(core):8.2f}   {time.monotonic() - start_wall:6.0f}"
+        )
     total = time.process_time() - start_cpu
     print(f"messages: {counts}; the simulation's own CPU {total - cpu:.0f} s beside the core's "
           f"{cpu:.1f} s")  # fmt: skip

@@ -139,13 +139,9 @@ def _back_to(truth: FloatArray, crossing: tuple[float, float, float]) -> list[Se
     out: list[Segment] = []
     if math.hypot(dx, dy) > 0.02:
         way = math.atan2(dy, dx)
-        first = math.remainder(way - th, math.tau)
-        if abs(first) > math.pi / 2:  # back up rather than turn round
-            way = math.remainder(way + math.pi, math.tau)
-            first = math.remainder(way - th, math.tau)
-        out.append(Segment("turn", first))
+        out.append(Segment("turn", math.remainder(way - th, math.tau)))
         th = way
-        out.append(Segment("straight", math.hypot(dx, dy)))  # driven forward or back
+        out.append(Segment("straight", math.hypot(dx, dy)))
     last = math.remainder(crossing[2] - th, math.tau)
     if abs(last) > 1e-3:
         out.append(Segment("turn", last))
