@@ -453,6 +453,8 @@ OTHER_PROGRAMS = {
     # Dask's scheduler and workers, in docs/fleet.md's cluster (over TLS too)
     "--port", "--nworkers", "--nthreads", "--protocol", "--tls-ca-file", "--tls-cert",
     "--tls-key",
+    # ROS 2's own arguments, passed through by umbmark monitor --ros2
+    "--ros-args",
     # pytest-xdist, in docs/development.md's tests
     "--dist", "--maxprocesses",
 }  # fmt: skip

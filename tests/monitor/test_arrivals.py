@@ -34,8 +34,10 @@ def test_silent_inputs() -> None:
     a.arrive("wheels", 10.0)
     a.arrive("scan", 10.0)
     a.arrive("wheels", 14.0)
-    assert a.silent(14.0, ("wheels", "scan", "gyro"), 2.0) == ("scan", "gyro")
+    # the scan fell silent; the gyro never spoke (a robot may have none)
+    assert a.silent(14.0, ("wheels", "scan", "gyro"), 2.0) == ("scan",)
     assert a.silent(11.0, ("wheels", "scan"), 2.0) == ()
+    assert a.silent(17.0, ("odometry", "scan"), 2.0) == ("wheels", "scan")
 
 
 def test_a_wheel_reset_is_a_break_not_a_jump() -> None:

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from umbmark.monitor.core import Monitor
 from umbmark.monitor.setup import MonitorSetup
 from umbmark.robot.base import DriveParams, Pose2D
@@ -33,7 +35,10 @@ def test_the_clock_going_back_restarts_the_window() -> None:
 
 
 def test_out_of_order_and_stale() -> None:
+    from umbmark.robot.base import ScanSweep
+
     core = Monitor(MonitorSetup("r", PARAMS, inputs=("wheels", "scan"), stale_after=2.0))
+    core.scan(ScanSweep(0.0, -1.0, 0.01, np.full(200, 3.0), 0.1, 10.0))
     _drive(core, 0.0, 5.0)
     core.wheels(4.5, 0.0, 0.0)  # late
     assert core.arrivals.dropped["wheels: out of order"] == 1

@@ -72,13 +72,18 @@ class Arrivals:
         return "ok"
 
     def silent(self, now: float, expected: tuple[Input, ...], after: float) -> tuple[str, ...]:
-        """The expected inputs silent for more than ``after`` [s] at ``now`` (never heard
-        counts once ``now`` is ``after`` past the first input heard)."""
+        """The expected inputs silent for more than ``after`` [s] at ``now``: the wheels
+        (joint states or odometry, either) from the first input heard on, a laser or a
+        gyro (which a robot may not have) once it has spoken, as the nodes judge."""
         first = now if self.first is None else self.first
+        wheels = [self.last[k] for k in ("wheels", "odometry") if k in self.last]
         out = []
         for kind in expected:
-            last = self.last.get(kind, first)
-            if now - last > after:
+            if kind in ("wheels", "odometry"):
+                last = max(wheels, default=first)
+                if now - last > after and "wheels" not in out:
+                    out.append("wheels")
+            elif kind in self.last and now - self.last[kind] > after:
                 out.append(kind)
         return tuple(out)
 
