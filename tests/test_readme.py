@@ -461,11 +461,14 @@ OTHER_PROGRAMS = {
 
 
 def _script_options() -> set[str]:
-    """The options the project's own scripts (``tools/``, ``benchmarks/``, the corpus runner)
-    declare."""
+    """The options the project's own scripts (``tools/``, ``benchmarks/``, the corpus runner,
+    the tests' robot nodes and mission driver) declare."""
     found: set[str] = set()
     scripts = [*(ROOT / "tools").glob("*.py"), *(ROOT / "benchmarks").glob("*.py")]
-    for script in [*scripts, ROOT / "tests" / "corpus_runner.py"]:
+    # the tests' own processes: the corpus runner, the ROS robot nodes, the mission driver
+    scripts += [ROOT / "tests" / "corpus_runner.py", *(ROOT / "tests").glob("*_node*.py")]
+    scripts += [ROOT / "tests" / "mission_driver.py"]
+    for script in scripts:
         text = script.read_text(encoding="utf-8")
         found |= set(re.findall(r"add_argument\(\s*\"(--[a-z][a-z0-9-]*)\"", text))
     return found
