@@ -374,6 +374,36 @@ def commands(folder: Path) -> dict[str, Command]:
                 number_opt("--obstacle-margin", real(0.05, 0.5)),
                 choice_opt("--corner-side", "auto", "right", "left", "behind"),
                 number_opt("--robot-width", real(0.2, 0.5)),
+                number_opt("--sim-imu-rate", real(20.0, 400.0)),
+                number_opt("--sim-gyro-scale", real(0.97, 1.03)),
+                number_opt("--sim-gyro-bias", real(-0.5, 0.5)),
+                number_opt("--sim-gyro-bias-walk", real(0.0, 0.01)),
+                number_opt("--sim-gyro-noise", real(0.0, 0.05)),
+                number_opt("--sim-gyro-range", real(250.0, 2000.0)),
+                number_opt("--sim-imu-roll", real(-2.0, 2.0)),
+                number_opt("--sim-imu-pitch", real(-2.0, 2.0)),
+                number_opt("--sim-imu-yaw", real(-2.0, 2.0)),
+                number_opt("--gyro-scale-tolerance", real(0.0, 0.05)),
+            ],
+        ),
+        "monitor": Command(
+            # the monitor's core on the simulated warehouse robot, a minute of driving
+            ["monitor", "--sim", "--minutes", "1", "--speedup", "0"],
+            [
+                number_opt("--timeout", real(0.5, 30.0)),
+                number_opt("--window-metres", real(10.0, 100.0)),
+                number_opt("--window-radians", real(2.0, 20.0)),
+                number_opt("--stretch-metres", real(5.0, 40.0)),
+                number_opt("--scan-period", real(0.2, 2.0)),
+                number_opt("--stale-after", real(0.5, 10.0)),
+                number_opt("--tolerance", real(0.001, 0.1)),
+                choice_opt("--apply", "never", "at-rest"),
+                number_opt("--rest-time", real(1.0, 30.0)),
+                number_opt("--minutes", real(1.0, 1.5)),
+                number_opt("--change-after", real(0.0, 1.0)),
+                number_opt("--wheel-change", real(-0.01, 0.01)),
+                number_opt("--speedup", real(0.0, 0.0)),
+                number_opt("--seed", whole(0, 2**31 - 1)),
             ],
         ),
         # The IMU of a small bag (its options do nothing without --imu and --bag).
@@ -556,13 +586,14 @@ NAMES = [
     "simulate-fleet",
     "simulate-imu",
     "fleet",
+    "monitor",
 ]
 
 
 #: The commands whose examples take seconds each (a demo, a self-calibration, a study, the
 #: reproductions, a report page, a fleet on its local cluster): fuzzed in the full run only.
 SLOW_COMMANDS = {"demo", "fig4", "selfcal", "study", "table1", "report", "simulate-fleet",
-                 "simulate-imu", "fleet"}  # fmt: skip
+                 "simulate-imu", "fleet", "monitor"}  # fmt: skip
 
 
 @pytest.mark.parametrize(

@@ -73,7 +73,8 @@ class MonitorSimReport(JsonText):
             "robot": self.robot,
             "said": [_status_dict(s) for s in self.said],
             "last": _status_dict(self.last),
-            "truth": dict(self.truth),
+            # a change that never came (the run ended before it) has no time or odometer
+            "truth": {k: v if math.isfinite(v) else None for k, v in self.truth.items()},
             "seconds": self.seconds,
             "cpu_seconds": self.cpu,
         }
