@@ -36,6 +36,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
+import itertools  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
 
@@ -115,7 +116,7 @@ def main() -> None:
         stretches += core.stretches
         for name, z in z_scores(core).items():
             pooled.setdefault(name, []).extend(z)
-            lagged.setdefault(name, []).extend(zip(z[:-1], z[1:], strict=True))
+            lagged.setdefault(name, []).extend(itertools.pairwise(z))
     hours = args.hours * args.seeds
     week = stretches / hours * WEEK_HOURS
     print(f"steady robot: {hours:g} h of robot time over {args.seeds} seeds, {stretches} "
