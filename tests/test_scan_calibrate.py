@@ -340,7 +340,7 @@ def test_a_turtlebot3_as_its_bags_are(tmp_path: Path) -> None:
     # the robot moves, 0.12 to 3.5 m, 1.5 cm noise, 0.0 where a beam saw nothing; the
     # wheels at 30 Hz; a ROS 2 MCAP bag
     b_nominal, d_nominal = 0.160, 0.066
-    e_d, e_b, e_s = 1.004, 1.03, 0.97
+    e_d, e_b, e_s = 1.006, 1.04, 0.96  # each 6 of its (widened) errors off 1 at least
     f_left = 2 * e_s / (1 + e_d)
     radii = (f_left * d_nominal / 2, e_d * f_left * d_nominal / 2)
     world = room_world()

@@ -354,3 +354,26 @@ def test_a_tuple_file_calibrates_without_nominal_geometry(tmp_path):
     with pytest.raises(InputError, match="yaml needs the nominal geometry"):
         umbmark.calibrate(path, method="scan-matching", yaml=tmp_path / "o.yaml")
     assert not (tmp_path / "o.yaml").exists()
+
+
+@pytest.mark.slow
+def test_standard_errors_widen_where_some_intervals_scatter_more():
+    # A sweep distorted by the robot's own turning: the turns on the spot (a quarter of
+    # the intervals, most of what fixes the laser's offset) scatter sideways 6 times more
+    # than the rest, whose residuals set the noise the bound takes alike everywhere. 60
+    # trials, the scatter over the standard error measured: the bound alone 3.5 for
+    # laser_x and 2.3 for laser_y; widened 1.5 and 1.45 (the sandwich's score is the
+    # weighted fit's, the estimator the closed-form steps: not all of it), the rest 0.65
+    # (laser_yaw) to 0.95.
+    rng = np.random.default_rng(5)
+    kinds = _mix(300)
+    spot = np.array([k == "spot" for k in kinds])
+    values, errors = [], []
+    for _ in range(60):
+        intervals = simulate(kinds, rng=rng, noise=NOISE)
+        intervals.sensor_motion[:, 1] += np.where(spot, rng.normal(0.0, 0.012, len(kinds)), 0.0)
+        cal = fit_intervals(intervals)
+        values.append(cal.values)
+        errors.append(np.sqrt(np.diag(cal.covariance)))
+    ratio = np.std(values, axis=0, ddof=1) / np.mean(errors, axis=0)
+    assert np.all((ratio > 0.5) & (ratio < 1.8)), ratio

@@ -54,3 +54,14 @@ def test_the_course_is_bounded() -> None:
 
     c = _course([1.0] * (MAX_STRETCHES + 20))
     assert len(c.points["E_d"]) == MAX_STRETCHES
+
+
+def test_the_gyro_bias_is_followed_not_flagged() -> None:
+    c = Course()
+    for k, v in enumerate([0.002] * 8 + [0.0025] * 3):  # a bias that wandered: 5e-4 rad/s
+        c.add("gyro_bias", StretchPoint(v, 1e-5, 60.0 * k, 20.0 * k, 1e9 + 60.0 * k))
+    change, found = c.found("gyro_bias", 0.02, 0.34)
+    assert change is not None
+    assert change.kind == "step"  # the change model sees it ...
+    assert found is None  # ... the monitor does not flag it
+    assert c.present("gyro_bias") == pytest.approx((0.0025, 1e-5 / np.sqrt(3)), rel=1e-6)

@@ -32,7 +32,9 @@ information ``sum_k J_k^T Sigma^-1 J_k`` of the six parameters ``(r_L, r_R, b, l
 l_theta)`` (``J_k``: the Jacobian of the predicted sensor motion), with the sensor noise
 ``Sigma`` diagonal and estimated from the residuals (the paper's choice; here robustly,
 by their median absolute deviation, so that neither the outliers nor the cut tails of the
-kept intervals bias it).
+kept intervals bias it), widened to the sandwich covariance where the intervals' own
+residuals scatter more than that noise says (the intervals across a turn's start or end:
+``_widened``).
 The scan matcher's own covariances are not used: matchers are often optimistic.
 """
 
@@ -232,11 +234,13 @@ def _outliers(residual: FloatArray, fraction: float) -> BoolArray:
 def _covariance(
     intervals: MotionIntervals, params: FloatArray, rows: BoolArray
 ) -> tuple[FloatArray, FloatArray]:
-    """The Cramer-Rao bound of the parameters, and the sensor noise's ``(3,)`` deviations.
+    """The parameters' covariance, and the sensor noise's ``(3,)`` deviations.
 
     The noise is the residuals' median absolute deviation over every interval (outliers
     included) times 1.4826: the standard deviation of Gaussian noise, which the residuals
-    of the kept intervals alone would understate (their tails were cut).
+    of the kept intervals alone would understate (their tails were cut). The covariance
+    is the Cramer-Rao bound of that noise, widened where the kept intervals' own residuals
+    say the noise is not alike in every interval (:func:`_widened`).
     """
     residual = predicted_motion(intervals, params) - intervals.sensor_motion
     spread = np.median(np.abs(residual - np.median(residual, axis=0)), axis=0)
@@ -252,7 +256,39 @@ def _covariance(
         jac[:, :, j] = diff / (2.0 * step)
     weighted = jac / noise[None, :, None]
     fisher = np.einsum("kij,kil->jl", weighted, weighted)
-    return np.linalg.inv(fisher), noise
+    bound = np.linalg.inv(fisher)
+    return _widened(bound, weighted, residual[rows] / noise[None, :]), noise
+
+
+def _widened(bound: FloatArray, weighted: FloatArray, scaled: FloatArray) -> FloatArray:
+    """``(6, 6)`` the Cramer-Rao ``bound``, widened to the sandwich covariance where that
+    is wider: every figure's variance the larger of the two.
+
+    The bound takes the noise alike in every interval. It is not: a sweep taken while the
+    robot starts or stops a turn is distorted by its own motion, and the intervals across
+    a turn's start or end scatter sideways several times more than the straights and
+    whole turns whose residuals set the noise, while they hold most of what fixes the
+    laser's offset along the robot and ``E_d``. The sandwich ``F^-1 (sum_k g_k g_k^T)
+    F^-1`` (``g_k`` interval ``k``'s score: its weighted Jacobian times its residual,
+    ``weighted`` ``(m, 3, 6)`` and ``scaled`` ``(m, 3)`` in units of the noise; times
+    ``m / (m - 6)``) holds each interval's own scatter (Huber 1967, White 1980). In the
+    bound's whitened coordinates the sandwich's eigenvalues below 1 are raised to 1:
+    never tighter than the bound (the sandwich of a few intervals scatters itself)."""
+    m = scaled.shape[0]
+    if m <= 6:
+        return bound
+    score = np.einsum("kij,ki->kj", weighted, scaled)
+    sandwich = bound @ (score.T @ score) @ bound * (m / (m - 6.0))
+    values, vectors = np.linalg.eigh(0.5 * (bound + bound.T))
+    if not bool(np.all(values > 0.0)):
+        return bound
+    root = (vectors * np.sqrt(values)) @ vectors.T
+    inverse_root = (vectors / np.sqrt(values)) @ vectors.T
+    inner = inverse_root @ sandwich @ inverse_root
+    lam, basis = np.linalg.eigh(0.5 * (inner + inner.T))
+    inner = (basis * np.maximum(lam, 1.0)) @ basis.T
+    out: FloatArray = root @ inner @ root
+    return out
 
 
 def fit_intervals(

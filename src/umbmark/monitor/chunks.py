@@ -27,6 +27,7 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -341,11 +342,20 @@ def _rows(motion: MotionIntervals, rows: BoolArray) -> MotionIntervals:
     )
 
 
+def _joined(parts: Sequence[Any], name: str) -> FloatArray | None:
+    """The parts' optional array ``name`` one after the other; None where any lacks it."""
+    arrays = [getattr(p, name) for p in parts]
+    return None if any(a is None for a in arrays) else np.concatenate(arrays)
+
+
 def join_gyro(parts: Sequence[GyroIntervals]) -> GyroIntervals | None:
-    """The chunks' gyro intervals one after the other (None: none)."""
+    """The chunks' gyro intervals one after the other, every field kept (the gyro's rate
+    changes among them: its delay is fitted from them); None: none."""
     if not parts:
         return None
-    accel = None
+    left: Counter[str] = Counter()
+    for p in parts:
+        left.update(p.left_out)
     return GyroIntervals(
         start=np.concatenate([p.start for p in parts]),
         end=np.concatenate([p.end for p in parts]),
@@ -354,17 +364,24 @@ def join_gyro(parts: Sequence[GyroIntervals]) -> GyroIntervals | None:
         yaw=np.concatenate([p.yaw for p in parts]),
         rotation=np.concatenate([p.rotation for p in parts]),
         rest=np.concatenate([p.rest for p in parts]),
-        accel=accel,
+        accel=_joined(parts, "accel"),
+        left_out=dict(left),
         source=parts[0].source,
         frame=parts[0].frame,
+        rate_change=_joined(parts, "rate_change"),
     )
 
 
 def join_reference(parts: Sequence[GyroReference]) -> GyroReference | None:
-    """The chunks' gyro references one after the other (None: none)."""
+    """The chunks' gyro references one after the other, every field kept (the wheels'
+    rotation over each stretch among them: the pairs of the joint fit; the gyro's rate
+    changes); None: none."""
     if not parts:
         return None
     motions = [p.motion for p in parts if p.motion is not None]
+    left: Counter[str] = Counter()
+    for p in parts:
+        left.update(p.left_out)
     return GyroReference(
         start=np.concatenate([p.start for p in parts]),
         end=np.concatenate([p.end for p in parts]),
@@ -372,5 +389,9 @@ def join_reference(parts: Sequence[GyroReference]) -> GyroReference | None:
         variance=np.concatenate([p.variance for p in parts]),
         gyro_yaw=np.concatenate([p.gyro_yaw for p in parts]),
         motion=MotionIntervals.concatenate(motions) if len(motions) == len(parts) else None,
+        left_out=dict(left),
         source=parts[0].source,
+        phi_left=_joined(parts, "phi_left"),
+        phi_right=_joined(parts, "phi_right"),
+        rate_change=_joined(parts, "rate_change"),
     )

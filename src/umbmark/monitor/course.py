@@ -8,7 +8,8 @@ course is kept for the last :data:`MAX_STRETCHES` stretches of each figure, on t
 odometer's axis (metres driven: it goes on when the clock goes back). A change in the
 latest stretch alone is found, to be confirmed (``latest``); confirmed once the next
 stretch agrees (``step``): a change is flagged within the stretch it began in and the two
-after it. A trend (tyres wearing over weeks) is not flagged here.
+after it. A trend (tyres wearing over weeks) is not flagged here, nor the gyro's bias
+(:data:`FOLLOWED`: it wanders).
 
 Whether a change is beyond what the robot's navigation tolerates (:func:`beyond`): the
 odometry's error per metre driven or radian turned it makes, against the tolerance.
@@ -25,10 +26,15 @@ import numpy as np
 from umbmark.calibration.changes import Change, change_of
 from umbmark.monitor.status import ChangeFound
 
-__all__ = ["MAX_STRETCHES", "Z95", "Course", "StretchPoint", "beyond"]
+__all__ = ["FOLLOWED", "MAX_STRETCHES", "Z95", "Course", "StretchPoint", "beyond"]
 
 #: The stretches kept per figure (bounded memory; a day of driving at 20 m a stretch).
 MAX_STRETCHES = 500
+#: Figures followed on their course (its present value) but never flagged: a MEMS gyro's
+#: bias wanders (a random walk of 2e-4 deg/s/sqrt(s), about 7 deg/h of instability, moves
+#: it by several of a stretch's standard errors within the hour) and is no change of the
+#: robot's odometry; each stretch fits its own bias.
+FOLLOWED = frozenset({"gyro_bias"})
 #: z of a 95 % interval.
 Z95 = 1.959964
 
@@ -90,7 +96,9 @@ class Course:
     ) -> tuple[Change | None, ChangeFound | None]:
         """The figure's course and the change it shows now (a latest or a step), if any."""
         change = self.change(name)
-        if change is None or change.kind not in ("latest", "step") or change.since is None:
+        if name in FOLLOWED or change is None or change.kind not in ("latest", "step"):
+            return change, None
+        if change.since is None:
             return change, None
         first = self.points[name][change.since]
         return change, ChangeFound(

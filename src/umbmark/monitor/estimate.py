@@ -8,7 +8,9 @@ chunks' motion, each figure with its standard error, or what the motion does not
   what the robot *is*, whatever multipliers its controller runs with; the laser's x, y, yaw.
 - With a gyro: the gyro estimator (:func:`umbmark.estimators.gyro.fit_gyro`), with the
   matched intervals as its heading reference where they are (its scale ``k_g`` and bias);
-  without a laser it gives ``E_d`` and ``E_b`` (``E_b`` relative to the gyro's scale).
+  without a laser it gives ``E_d`` and ``E_b`` (``E_b`` relative to the gyro's scale);
+  where the laser's matches do not determine a stretch, ``E_d`` (which the gyro's scale
+  does not touch) but not that ``E_b``: a figure of another quantity on ``E_b``'s course.
 
 A figure the motion does not determine is said with why (:data:`NO_LASER`,
 :data:`NO_GYRO`, :data:`STRAIGHT_ONLY`, :data:`ONE_WAY`, the estimator's own reason),
@@ -131,7 +133,9 @@ def _scan_figures(chunks: Sequence[Chunk], nominal: WheelParams, out: Estimate) 
     out.warnings = (*out.warnings, *est.warnings)
 
 
-def _gyro_figures(chunks: Sequence[Chunk], nominal: WheelParams, out: Estimate) -> None:
+def _gyro_figures(
+    chunks: Sequence[Chunk], nominal: WheelParams, out: Estimate, laser: bool
+) -> None:
     from umbmark.estimators.gyro import MIN_INTERVALS as GYRO_MIN
     from umbmark.estimators.gyro import fit_gyro
 
@@ -157,8 +161,10 @@ def _gyro_figures(chunks: Sequence[Chunk], nominal: WheelParams, out: Estimate) 
         out.values["gyro_bias"] = (values["bias"], se["bias"])
     else:
         out.notes["gyro_bias"] = cal.undetermined.get("bias", "not determined by the motion")
-    if out.params is None:  # no laser: the wheels from the gyro
+    if out.params is None:  # no laser's figures: the wheels from the gyro
         for name in ("E_d", "E_b"):
+            if name == "E_b" and laser and "E_b" in cal.relative_to_gyro:
+                continue  # E_b k_g / E_s, not the laser's E_b: not on its course
             if name in values and name in se:
                 out.values[name] = (values[name], se[name])
                 out.notes.pop(name, None)
@@ -182,7 +188,7 @@ def estimate(chunks: Sequence[Chunk], params: DriveParams, *, laser: bool, gyro:
         for name in _SCAN:
             out.notes[name] = NO_LASER
     if gyro:
-        _gyro_figures(chunks, nominal, out)
+        _gyro_figures(chunks, nominal, out, laser)
     else:
         out.notes["k_g"] = out.notes["gyro_bias"] = NO_GYRO
     for name, _ in FIGURES:

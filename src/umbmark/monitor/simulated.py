@@ -81,7 +81,10 @@ class SimRobotSetup:
     scan_rate, imu_rate : float
         [Hz] (the wheels come at the engine's 50 Hz); ``imu_rate`` 0: no gyro.
     gyro_scale, gyro_bias : float
-        The gyro's ``k_g`` and bias [rad/s].
+        The gyro's ``k_g`` and bias [rad/s] (the bias at the start).
+    gyro_bias_walk : float
+        The bias's random walk [rad/s/sqrt(s)], carried from one mission to the next (0:
+        a steady bias).
     slip : float
         The wheels' random slip [m^0.5].
     seed : int
@@ -96,6 +99,7 @@ class SimRobotSetup:
     imu_rate: float = 200.0
     gyro_scale: float = 1.01
     gyro_bias: float = 0.002
+    gyro_bias_walk: float = 0.0
     slip: float = 0.0002
     seed: int = 1
 
@@ -170,6 +174,7 @@ def messages(setup: SimRobotSetup, seconds: float) -> Iterator[tuple[Message, Po
     clock, angles_at = 0.0, np.zeros(2)
     pushes = sorted(setup.pushes, key=lambda p: p.at)
     stated = Pose2D(*setup.stated)
+    bias = setup.gyro_bias
     while clock < seconds:
         errors, laser = setup.state_at(clock)
         robot = SimRobot.with_errors(wheels, *errors, noise=NoiseModel(slip=setup.slip))
@@ -191,8 +196,9 @@ def messages(setup: SimRobotSetup, seconds: float) -> Iterator[tuple[Message, Po
         gyro = None
         if setup.imu_rate > 0:
             imu = ImuSetup(imu_rate=setup.imu_rate, gyro_scale=setup.gyro_scale,
-                           gyro_bias=setup.gyro_bias, gyro_bias_walk=0.0)  # fmt: skip
-            gyro = simulate_imu(truth, imu, rng).track
+                           gyro_bias=bias, gyro_bias_walk=setup.gyro_bias_walk)  # fmt: skip
+            read = simulate_imu(truth, imu, rng)
+            gyro, bias = read.track, float(read.bias_end[2])  # the IMU's axes are the base's
         yield from _merged(times, angles, sweeps, gyro, clock, truth, stated)
         truth_at = truth.poses[-1].copy()
         clock = float(times[-1]) + 0.02
