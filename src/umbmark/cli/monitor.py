@@ -10,6 +10,7 @@ with the core :func:`umbmark.monitor.core.make_monitor` makes. ROS's own argumen
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import click
@@ -60,10 +61,13 @@ def _truth(report: MonitorSimReport) -> None:
         f"After {report.seconds / 60:.0f} min of robot time ({last.odometer:.0f} m driven, "
         f"{report.cpu:.1f} s of CPU in the monitor): {last.level}"
     )
-    click.echo(
-        f"The change: at {truth['changed_at']:.0f} s, {truth['changed_at_metres']:.0f} m "
-        "driven. Each figure as the monitor says it (95 %), and the truth:"
+    metres = truth["changed_at_metres"]
+    change = (
+        f"The change: at {truth['changed_at']:.0f} s, {metres:.0f} m driven."
+        if math.isfinite(metres)
+        else f"The change at {truth['changed_at']:.0f} s did not come: the run ended first."
     )
+    click.echo(f"{change} Each figure as the monitor says it (95 %), and the truth:")
     for fig in last.figures:
         unit = f" {fig.unit}" if fig.unit else ""
         said = (
