@@ -88,11 +88,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=3)
     args = parser.parse_args()
     setup = MonitorSetup("bench", DriveParams(NOMINAL[0], 0.5 * NOMINAL[1]), Pose2D(0.1, 0, 0),
-                         inputs=("wheels", "scan", "gyro"))  # fmt: skip
+                         inputs=("wheels", "scan", "imu"))  # fmt: skip
     core = Monitor(setup)
     sim = SimRobotSetup(seed=args.seed)
     cpu, next_status, next_hour = 0.0, 0.0, 3600.0
-    counts = {"wheels": 0, "scan": 0, "gyro": 0}
+    counts = {"wheels": 0, "scan": 0, "imu": 0}
     start_cpu, start_wall = time.process_time(), time.monotonic()
     print(
         f"monitor core over {args.hours:g} h of robot time (10 Hz laser, 50 Hz wheels, 200 Hz gyro)"

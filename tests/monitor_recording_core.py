@@ -14,7 +14,7 @@ from umbmark.robot.base import ApplyResult, DriveParams, Pose2D, ScanSweep
 class RecordingCore:
     def __init__(self, robot: str = "robot", apply: DriveParams | None = None) -> None:
         self.robot = robot
-        self.counts = {"wheels": 0, "odometry": 0, "scan": 0, "gyro": 0}
+        self.counts = {"wheels": 0, "odometry": 0, "scan": 0, "imu": 0}
         self.last: tuple[float, Pose2D] | None = None
         self.to_apply = apply
         self.results: list[ApplyResult] = []
@@ -30,7 +30,7 @@ class RecordingCore:
         self.counts["scan"] += 1
 
     def gyro(self, time: float, yaw_rate: float) -> None:
-        self.counts["gyro"] += 1
+        self.counts["imu"] += 1
 
     def status(self, now: float) -> MonitorStatus:
         figures = tuple(Figure(n, None, None, u, "recording core") for n, u in FIGURES)

@@ -140,7 +140,7 @@ def test_the_husky_calibrated_with_its_gyro_is_plausible(parking):
         fits.append((float(np.sum((turned_by_wheels - k * turned_by_gyro) ** 2)), lag, k))
     _, lag, lagged = min(fits)
     assert 0.08 <= lag <= 0.10
-    assert g.delays["gyro"][0] == pytest.approx(lag, abs=0.03)
+    assert g.delays["imu"][0] == pytest.approx(lag, abs=0.03)
     assert v["E_b_k_g"] == pytest.approx(lagged, abs=0.01)
     # a skid-steered Husky turns about with Clearpath's separation multiplier
     assert 0.9 <= v["E_b_k_g"] <= 1.1
@@ -198,7 +198,7 @@ def test_the_tools_scan_matching_and_joint_rows_on_a_simulated_robot(tmp_path):
         # the joint fit holds the laser's equations as scan matching alone weighs them
         assert j.standard_errors[name] <= done.scan[f"se_{name}"], name
     assert j.values["k_g"] == pytest.approx(0.98, rel=1e-3)
-    assert j.delays["gyro"][0] == pytest.approx(0.010, abs=3 * j.delays["gyro"][1] + 2e-4)
+    assert j.delays["imu"][0] == pytest.approx(0.010, abs=3 * j.delays["imu"][1] + 2e-4)
     assert done.gyro.gyro.values["E_b_k_g"] == pytest.approx(0.98, abs=0.003)
     assert math.degrees(j.values["bias"]) == pytest.approx(0.3, abs=0.01)
     cells = pub.row(done)

@@ -60,7 +60,7 @@ def run(seed: int, hours: float, walk: float) -> tuple[Monitor, list[str]]:
     """The core over a steady robot; the changes it confirmed."""
     sim = SimRobotSetup(seed=seed, gyro_bias_walk=walk)
     setup = MonitorSetup("steady", DriveParams(NOMINAL[0], 0.5 * NOMINAL[1]),
-                         Pose2D(*sim.stated), inputs=("wheels", "scan", "gyro"))  # fmt: skip
+                         Pose2D(*sim.stated), inputs=("wheels", "scan", "imu"))  # fmt: skip
     core = Monitor(setup)
     seconds = 3600.0 * hours
     for message, _ in messages(sim, seconds):

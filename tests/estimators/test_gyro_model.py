@@ -202,7 +202,7 @@ def test_a_gyro_that_reads_late_has_its_delay_fitted_and_stays_as_tight_as_the_l
     scans = scan_reference(rec, seed=8)
     cal = fit_gyro(iv, ACTIVE, reference=gyro_reference(rec.gyro, scans))
     v, se = cal.values, cal.standard_errors
-    late, late_se = cal.delays["gyro"]
+    late, late_se = cal.delays["imu"]
     assert abs(late - 0.010) < 3 * late_se + 1e-4
     assert late_se < 2e-4  # the turns' starts and stops pin it to 0.2 ms
     assert abs(v["k_g"] / truth.k_z - 1) < 1e-3

@@ -35,7 +35,7 @@ def test_silent_inputs() -> None:
     a.arrive("scan", 10.0)
     a.arrive("wheels", 14.0)
     # the scan fell silent; the gyro never spoke (a robot may have none)
-    assert a.silent(14.0, ("wheels", "scan", "gyro"), 2.0) == ("scan",)
+    assert a.silent(14.0, ("wheels", "scan", "imu"), 2.0) == ("scan",)
     assert a.silent(11.0, ("wheels", "scan"), 2.0) == ()
     assert a.silent(17.0, ("odometry", "scan"), 2.0) == ("wheels", "scan")
 

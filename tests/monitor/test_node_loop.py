@@ -56,7 +56,7 @@ def test_a_silent_topic_is_stale_and_the_monitor_goes_on_when_it_returns() -> No
     assert status.message.startswith("silent: /scan")
     loop.scan(_sweep)
     assert loop.tick().level == "OK"  # type: ignore[union-attr]
-    assert core.counts == {"wheels": 0, "odometry": 2, "scan": 2, "gyro": 0}
+    assert core.counts == {"wheels": 0, "odometry": 2, "scan": 2, "imu": 0}
     assert "umbmark_monitor: /scan back: going on" in out.lines
     assert len(out.statuses) == 3
     assert [c.time for c in out.corrected] == [1.0, 2.0]  # once per new wheel reading

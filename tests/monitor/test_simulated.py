@@ -41,7 +41,7 @@ def _run(
         "sim",
         DriveParams(NOMINAL[0], 0.5 * NOMINAL[1]),
         Pose2D(*BASE.stated),
-        inputs=("wheels", "scan", "gyro"),
+        inputs=("wheels", "scan", "imu"),
         **options,
     )  # type: ignore[arg-type]
     core = Monitor(setup)

@@ -440,7 +440,7 @@ def _delays(fit: LinearFit, rows: Rows) -> dict[str, tuple[float, float]]:
     """The gyro's delay where the rows determine it: ``gyro`` [s]."""
     out = {}
     k = fit.coefficients.size
-    for j, name in zip(range(rows.delays), ("gyro",), strict=False):
+    for j, name in zip(range(rows.delays), ("imu",), strict=False):
         g = _unit(rows.figures + j, k, fit)
         se = math.sqrt(fit.variance(g))
         if fit.determined(g) and math.isfinite(se) and se <= _LOOSE_DELAY:

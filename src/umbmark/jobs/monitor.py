@@ -153,7 +153,7 @@ def monitor_sim(
         window_metres=window_metres, window_radians=window_radians,
         stretch_metres=stretch_metres, scan_period=scan_period, stale_after=stale_after,
         tolerance=tolerance, apply=apply, rest_time=rest_time, history=history,
-        inputs=("wheels", "scan", "gyro"),
+        inputs=("wheels", "scan", "imu"),
     )  # fmt: skip
     core = Monitor(setup)
     said: list[MonitorStatus] = []

@@ -26,6 +26,7 @@ from collections import Counter, deque
 from dataclasses import replace
 from typing import Any
 
+from umbmark.estimators.registry import GYRO, SCAN_MATCHING
 from umbmark.monitor.arrivals import Arrivals, WheelAngles
 from umbmark.monitor.chunks import Chunk, ChunkMaker, Driving
 from umbmark.monitor.corrected import Integrator, WheelCalibration
@@ -126,7 +127,7 @@ class Monitor:
         self.maker.scan(sweep)
 
     def gyro(self, time: float, yaw_rate: float) -> None:
-        if self._arrived("gyro", time) and math.isfinite(yaw_rate):
+        if self._arrived("imu", time) and math.isfinite(yaw_rate):
             self.maker.gyro(time, yaw_rate)
 
     def _arrived(self, kind: str, time: float) -> bool:
@@ -199,7 +200,7 @@ class Monitor:
             self.outliers += 1
             return
         found = estimate(chunks, self.params, laser="scan" in self.setup.inputs,
-                         gyro="gyro" in self.setup.inputs)  # fmt: skip
+                         gyro="imu" in self.setup.inputs)  # fmt: skip
         if not found.values:
             self.left_out["stretch determined nothing"] += 1
             return
@@ -237,7 +238,7 @@ class Monitor:
                   "c_L": p.left_wheel_radius_multiplier, "c_R": p.right_wheel_radius_multiplier,
                   "wheel_separation_multiplier": p.wheel_separation_multiplier}  # fmt: skip
         epoch = self._epoch or 0.0
-        method = "scan-matching" if found.params is not None else "gyro"
+        method = SCAN_MATCHING.name if found.params is not None else GYRO.name
         record = StretchRecord(self.setup.robot, method, start + epoch, end + epoch, start,
                                odometer, self.odometer, found.values, active)  # fmt: skip
         record_stretch(self._store, record)
@@ -266,7 +267,7 @@ class Monitor:
             if not chunks:
                 return self._fit
             self._fit = estimate(chunks, self.params, laser="scan" in self.setup.inputs,
-                                 gyro="gyro" in self.setup.inputs)  # fmt: skip
+                                 gyro="imu" in self.setup.inputs)  # fmt: skip
             self._fitted_at = self._travel
             if self._fit.params is not None:
                 self.maker.params = self._fit.params
@@ -359,7 +360,7 @@ def make_monitor(found: Any) -> Monitor:  # noqa: ANN401 (umbmark.monitor.ros2_n
     wheels: Input = "wheels" if getattr(options, "wheel_topic", "") else "odometry"
     inputs: tuple[Input, ...] = (wheels,)
     inputs += ("scan",) if getattr(options, "scan_topic", None) else ()
-    inputs += ("gyro",) if getattr(options, "imu_topic", None) else ()
+    inputs += ("imu",) if getattr(options, "imu_topic", None) else ()
     setup = MonitorSetup(
         str(getattr(options, "robot", "") or values.get("robot") or "robot"), found.params,
         getattr(options, "laser_mount", None), inputs=inputs, **kept,

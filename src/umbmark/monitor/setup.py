@@ -16,8 +16,8 @@ from umbmark.robot.base import DriveParams, Pose2D
 __all__ = ["INPUTS", "Input", "MonitorSetup"]
 
 #: The monitor's inputs, as :attr:`MonitorSetup.inputs` names them.
-Input = Literal["wheels", "odometry", "scan", "gyro"]
-INPUTS: tuple[Input, ...] = ("wheels", "odometry", "scan", "gyro")
+Input = Literal["wheels", "odometry", "scan", "imu"]
+INPUTS: tuple[Input, ...] = ("wheels", "odometry", "scan", "imu")
 
 
 def _default(name: str) -> float:

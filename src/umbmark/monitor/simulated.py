@@ -118,7 +118,7 @@ class Message:
     """One message: ``kind`` ``wheels`` (``values`` = left, right [rad]), ``gyro``
     (``values`` = yaw rate [rad/s]), ``scan`` (``sweep``), with the true pose."""
 
-    kind: Literal["wheels", "gyro", "scan"]
+    kind: Literal["wheels", "imu", "scan"]
     time: float
     values: tuple[float, ...] = ()
     sweep: ScanSweep | None = None
@@ -236,7 +236,7 @@ def _merged(
         items.append((t, 1, Message("scan", t, sweep=sweep)))
     if gyro is not None:
         for t, w in zip((gyro.time + clock).tolist(), gyro.rate[:, 2].tolist(), strict=True):
-            items.append((t, 2, Message("gyro", t, (w,))))
+            items.append((t, 2, Message("imu", t, (w,))))
     items.sort(key=lambda i: (i[0], i[1]))
     tt = truth.time + clock
     poses = truth.poses
@@ -249,7 +249,7 @@ def feed(core: MonitorCore, message: Message) -> None:
     """Hand one message to the monitor's core."""
     if message.kind == "wheels":
         core.wheels(message.time, message.values[0], message.values[1])
-    elif message.kind == "gyro":
+    elif message.kind == "imu":
         core.gyro(message.time, message.values[0])
     elif message.sweep is not None:
         core.scan(message.sweep)
