@@ -97,13 +97,16 @@ def test_a_fresh_fleet_install_reads_and_calibrates_a_fleet_of_bags(tmp_path: Pa
     assert sorted(by) == ["robot01", "robot02"]
     for robot in by.values():
         assert robot["recordings"] == DAYS
-        assert robot["latest"]["method"] == "scan-matching"
-    # Each recording's E_d is its day's truth (robot02's wheel changed on its second day).
+        # wheels, laser and IMU recorded: the gyro calibrated with the laser (issue 36)
+        assert robot["latest"]["method"] == "gyro"
+    # Each recording's E_d and gyro scale are its day's truth (robot02's wheel changed on
+    # its second day).
     for row in truth["recordings"]:
-        track = by[row["robot"]]["figures"]["E_d"]
-        k = next(i for i, t in enumerate(track["times"]) if _day(t) == row["day"])
-        error = track["standard_errors"][k]
-        assert abs(track["values"][k] - row["E_d"]) <= max(5 * error, 3e-4), row
+        for figure, true in (("E_d", row["E_d"]), ("k_g", row["imu"]["k_g"])):
+            track = by[row["robot"]]["figures"][figure]
+            k = next(i for i, t in enumerate(track["times"]) if _day(t) == row["day"])
+            error = track["standard_errors"][k]
+            assert abs(track["values"][k] - true) <= max(5 * error, 3e-4), (figure, row)
 
 
 def _day(start: float) -> str:

@@ -455,8 +455,6 @@ OTHER_PROGRAMS = {
     "--tls-key",
     # ROS 2's own arguments, passed through by umbmark monitor --ros2
     "--ros-args",
-    # pytest-xdist, in docs/development.md's tests
-    "--dist", "--maxprocesses",
 }  # fmt: skip
 
 

@@ -111,7 +111,7 @@ def test_without_a_laser_the_wheels_are_relative_to_the_gyro(tmp_path) -> None: 
     assert text.returncode == 0, text.stderr
     assert "no laser: the wheels are calibrated against the gyro alone" in text.stderr
     assert "warning: calibrated against the gyro alone (no laser)" in text.stderr
-    assert re.search(r"E_b k_g = 0\.97\d+ \+- 0\.000\d+: the wheelbase relative to the gyro",
+    assert re.search(r"E_b k_g = 0\.97\d+ (?:±|\+-) 0\.000\d+: the wheelbase relative to the gyro",
                      text.stdout), text.stdout  # fmt: skip
     page = unescape((tmp_path / "t" / "report.html").read_text(encoding="utf-8"))
     gyro_section = page.split('<section id="imu">', 1)[1].split("</section>", 1)[0]

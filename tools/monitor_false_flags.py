@@ -23,7 +23,7 @@ and the change model itself (:class:`umbmark.monitor.course.Course`, the monitor
 path of it: steps hidden in the course too) run on series of each figure's measured ``z``
 drawn again at random (bootstrap: their tails as measured), ``--weeks`` robot-weeks,
 judged every :data:`EVERY` stretches. The gyro's bias is followed, not flagged
-(:data:`umbmark.monitor.course.FOLLOWED`): shown, not counted.
+(:data:`umbmark.calibration.changes.FOLLOWED`): shown, not counted.
 
     PYTHONPATH=src python tools/monitor_false_flags.py --hours 6 --seeds 4
 """
@@ -43,9 +43,9 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
-from umbmark.calibration.changes import Z_CHANGE  # noqa: E402
+from umbmark.calibration.changes import FOLLOWED, Z_CHANGE  # noqa: E402
 from umbmark.monitor.core import Monitor  # noqa: E402
-from umbmark.monitor.course import FOLLOWED, Course, StretchPoint  # noqa: E402
+from umbmark.monitor.course import Course, StretchPoint  # noqa: E402
 from umbmark.monitor.setup import MonitorSetup  # noqa: E402
 from umbmark.monitor.simulated import NOMINAL, SimRobotSetup, feed, messages  # noqa: E402
 from umbmark.robot.base import DriveParams, Pose2D  # noqa: E402

@@ -8,7 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from umbmark.calibration.changes import SECONDS_PER_WEEK, Z_CHANGE, change_of
+from umbmark.calibration.changes import (
+    FOLLOWED,
+    SECONDS_PER_WEEK,
+    Z_CHANGE,
+    change_of,
+    followed_of,
+)
 from umbmark.core.errors import InputError
 
 DAY = 86400.0
@@ -208,3 +214,19 @@ def test_each_morning_tells_the_day_befores_story_and_one_more_recording():
     assert all(c.one_offs == (7,) for c in told[16:])
     assert told[-1].confirmed_by == 9
     assert abs(told[-1].size - 30 * SE) < 4 * told[-1].size_se
+
+
+def test_a_gyro_bias_that_wanders_is_followed_not_judged():
+    # A MEMS gyro's bias as a random walk over a week of daily recordings, each stating
+    # a standard error far below the walk: the followed course is steady and its present
+    # value is the newest recording's own, never a mean over the wandering.
+    rng = np.random.default_rng(5)
+    t = np.arange(8) * DAY
+    v = np.radians(0.3 + np.cumsum(rng.normal(0.0, 0.01, 8)))
+    s = np.full(8, np.radians(0.0005))
+    assert "gyro_bias" in FOLLOWED
+    followed = followed_of(t, v, s)
+    assert (followed.kind, followed.value, followed.se) == ("steady", v[-1], s[-1])
+    assert (followed.steps, followed.since, followed.size) == ((), None, 0.0)
+    with pytest.raises(InputError, match="standard errors"):
+        followed_of(t, v, np.zeros(8))

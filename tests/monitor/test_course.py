@@ -62,6 +62,6 @@ def test_the_gyro_bias_is_followed_not_flagged() -> None:
         c.add("gyro_bias", StretchPoint(v, 1e-5, 60.0 * k, 20.0 * k, 1e9 + 60.0 * k))
     change, found = c.found("gyro_bias", 0.02, 0.34)
     assert change is not None
-    assert change.kind == "step"  # the change model sees it ...
-    assert found is None  # ... the monitor does not flag it
-    assert c.present("gyro_bias") == pytest.approx((0.0025, 1e-5 / np.sqrt(3)), rel=1e-6)
+    assert change.kind == "steady"  # followed, not judged
+    assert found is None  # not flagged
+    assert c.present("gyro_bias") == pytest.approx((0.0025, 1e-5), rel=1e-6)  # the latest's

@@ -57,7 +57,16 @@ import numpy as np
 from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 
-__all__ = ["MIN_SIDE", "MIN_TREND", "SECONDS_PER_WEEK", "Z_CHANGE", "Change", "change_of"]
+__all__ = [
+    "FOLLOWED",
+    "MIN_SIDE",
+    "MIN_TREND",
+    "SECONDS_PER_WEEK",
+    "Z_CHANGE",
+    "Change",
+    "change_of",
+    "followed_of",
+]
 
 #: A change counts beyond this many of its own standard errors.
 Z_CHANGE = 5.0
@@ -67,6 +76,12 @@ MIN_SIDE = 3
 MIN_TREND = 4
 #: Seconds in a week (a trend is said per week).
 SECONDS_PER_WEEK = 7 * 86400.0
+#: Figures followed on their course but never judged (:func:`followed_of`): a MEMS gyro's
+#: bias wanders (its random walk, about 7 deg/h of instability at 2e-4 deg/s/sqrt(s),
+#: moves it by several of a calibration's standard errors within the hour; its turn-on
+#: bias and its temperature move it from one power-up to the next) and is no change of
+#: the robot's odometry: each calibration fits its own, and drivers remove it at rest.
+FOLLOWED = frozenset({"gyro_bias"})
 
 Kind = Literal["steady", "latest", "step", "trend"]
 
@@ -382,6 +397,30 @@ def _said(course: _Course, t: FloatArray, v: FloatArray, s: FloatArray, unit: fl
                   present.n)  # fmt: skip
 
 
+def _checked(
+    times: FloatArray, values: FloatArray, errors: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    t, v, s = (np.asarray(a, dtype=np.float64) for a in (times, values, errors))
+    n = len(v)
+    if n < 1 or t.shape != (n,) or s.shape != (n,) or v.shape != (n,):
+        raise InputError(f"a series needs matching times, values and errors, got {n}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+        raise InputError("a series' times and values must be finite")
+    if not np.all(np.isfinite(s) & (s > 0)):
+        raise InputError("a series' standard errors must be positive and finite")
+    if np.any(np.diff(t) < 0):
+        raise InputError("a series' times must be in order, oldest first")
+    return t, v, s
+
+
+def followed_of(times: FloatArray, values: FloatArray, errors: FloatArray) -> Change:
+    """The course of a figure followed, not judged (:data:`FOLLOWED`): ``steady``, its
+    present value the latest calibration alone (what the figure is now, never a mean over
+    its wandering). Parameters and errors as :func:`change_of`."""
+    _, v, s = _checked(times, values, errors)
+    return Change("steady", float(v[-1]), float(s[-1]), compared=1, confirmed_by=1)
+
+
 def change_of(times: FloatArray, values: FloatArray, errors: FloatArray) -> Change:
     """The course of a figure over its calibrations (see the module).
 
@@ -404,16 +443,7 @@ def change_of(times: FloatArray, values: FloatArray, errors: FloatArray) -> Chan
         For fewer than one calibration, arrays of different lengths, times not in order,
         or standard errors that are not positive and finite.
     """
-    t, v, s = (np.asarray(a, dtype=np.float64) for a in (times, values, errors))
-    n = len(v)
-    if n < 1 or t.shape != (n,) or s.shape != (n,) or v.shape != (n,):
-        raise InputError(f"a series needs matching times, values and errors, got {n}")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
-        raise InputError("a series' times and values must be finite")
-    if not np.all(np.isfinite(s) & (s > 0)):
-        raise InputError("a series' standard errors must be positive and finite")
-    if np.any(np.diff(t) < 0):
-        raise InputError("a series' times must be in order, oldest first")
+    t, v, s = _checked(times, values, errors)
     centre = float(np.sum(v / s**2) / np.sum(1.0 / s**2))  # the sums lose no digits
     weeks = (t - t[0]) / SECONDS_PER_WEEK
     course = _settle(_replay(weeks, v - centre, s), weeks, v - centre, s)

@@ -79,7 +79,8 @@ ul.list{padding-left:1.2em}
 @media (max-width:760px){
 body{padding:0 .5em}
 .robot{padding:.4em .35em}
-.figs{gap:.2em .6em}
+.figs{display:grid;grid-template-columns:repeat(2,minmax(0,1fr));gap:.2em .6em}
+figure{width:auto}
 .line{grid-template-columns:minmax(0,1fr) auto}
 .line>.flags,.line>.apply{grid-column:1/-1}
 .head{display:none}

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from umbmark.calibration.changes import Change, change_of
+from umbmark.calibration.changes import FOLLOWED, Change, change_of, followed_of
 from umbmark.fleets.outcome import FIGURES, STANDARD_SIDE, RecordingOutcome
 from umbmark.fleets.present import (
     UNCONFIRMED,
@@ -385,7 +385,7 @@ def _track(name: str, outcomes: Sequence[RecordingOutcome]) -> FigureTrack | Non
         tuple(float(v) for v in values),
         tuple(float(e) for e in errors),
         tuple(r[3] for r in rows),
-        change_of(times, values, errors),
+        (followed_of if name in FOLLOWED else change_of)(times, values, errors),
     )
 
 

@@ -9,7 +9,8 @@ odometer's axis (metres driven: it goes on when the clock goes back). A change i
 latest stretch alone is found, to be confirmed (``latest``); confirmed once the next
 stretch agrees (``step``): a change is flagged within the stretch it began in and the two
 after it. A trend (tyres wearing over weeks) is not flagged here, nor the gyro's bias
-(:data:`FOLLOWED`: it wanders).
+(:data:`umbmark.calibration.changes.FOLLOWED`: it wanders; its present value is the
+latest stretch's).
 
 Whether a change is beyond what the robot's navigation tolerates (:func:`beyond`): the
 odometry's error per metre driven or radian turned it makes, against the tolerance.
@@ -23,18 +24,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from umbmark.calibration.changes import Change, change_of
+from umbmark.calibration.changes import FOLLOWED, Change, change_of, followed_of
 from umbmark.monitor.status import ChangeFound
 
-__all__ = ["FOLLOWED", "MAX_STRETCHES", "Z95", "Course", "StretchPoint", "beyond"]
+__all__ = ["MAX_STRETCHES", "Z95", "Course", "StretchPoint", "beyond"]
 
 #: The stretches kept per figure (bounded memory; a day of driving at 20 m a stretch).
 MAX_STRETCHES = 500
-#: Figures followed on their course (its present value) but never flagged: a MEMS gyro's
-#: bias wanders (a random walk of 2e-4 deg/s/sqrt(s), about 7 deg/h of instability, moves
-#: it by several of a stretch's standard errors within the hour) and is no change of the
-#: robot's odometry; each stretch fits its own bias.
-FOLLOWED = frozenset({"gyro_bias"})
 #: z of a 95 % interval.
 Z95 = 1.959964
 
@@ -88,7 +84,8 @@ class Course:
         odo = np.array([p.odometer for p in series])
         values = np.array([p.value for p in series])
         errors = np.array([p.se for p in series])
-        self._changes[name] = change_of(odo, values, errors)
+        judge = followed_of if name in FOLLOWED else change_of
+        self._changes[name] = judge(odo, values, errors)
         return self._changes[name]
 
     def found(
