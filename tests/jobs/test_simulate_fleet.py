@@ -117,10 +117,10 @@ def test_ctrl_c_midway_through_the_command_leaves_nothing(tmp_path: Path):
         start_new_session=True,
     )  # fmt: skip
     try:
-        end = time.monotonic() + 120
+        end = time.monotonic() + 300  # a loaded machine writes its first recording late
         while not list(tmp_path.glob(".fleet.*/fleet/robot01/*/drive/metadata.yaml")):
             assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < end, "no recording written in 120 s"
+            assert time.monotonic() < end, "no recording written in 300 s"
             time.sleep(0.05)
         assert not (tmp_path / "fleet").exists()  # being built beside it
         os.killpg(proc.pid, signal.SIGINT)
