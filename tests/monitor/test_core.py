@@ -109,3 +109,27 @@ def test_the_nodes_make_the_core_from_what_they_found() -> None:
     assert core.setup.robot == "amr"
     assert core.setup.window_metres == 80.0
     assert core.setup.inputs == ("wheels", "scan")
+
+
+def test_the_odometry_then_joint_states_stamped_before_it_go_on() -> None:
+    """A node feeds the odometry until joint states with the wheels come, then those:
+    joint states stamped before the last odometry are dropped and counted, the wheels
+    then go on in new chunks: 0.3 m/s for the two whole chunks of 10 s after the switch
+    (the third not yet ended), 6 m."""
+    core = Monitor(MonitorSetup("r", PARAMS, inputs=("odometry",)))
+    for k in range(100):  # 2 s at 0.3 m/s straight ahead
+        core.odometry(0.02 * k, Pose2D(0.006 * k, 0.0, 0.0))
+    for k in range(1500):  # the joint states: 4 rad/s x 0.075 m, from 0.1 s before
+        t = 1.9 + 0.02 * k
+        core.wheels(t, 4.0 * t, 4.0 * t)
+    assert core.arrivals.dropped["wheels: not after the last wheel reading"] == 5
+    assert abs(core.odometer - 0.3 * 20.0) < 0.05
+
+
+def test_a_core_that_leaves_silence_to_its_node_says_no_stale() -> None:
+    setup = MonitorSetup("r", PARAMS, inputs=("wheels", "scan"), stale_after=2.0,
+                         judge_silence=False)  # fmt: skip
+    core = Monitor(setup)
+    _drive(core, 0.0, 5.0)
+    status = core.status(60.0)  # nothing for 55 s of the robot's clock
+    assert (status.level, status.stale) == ("OK", ())

@@ -115,3 +115,20 @@ def test_never_applies_unless_asked() -> None:
     out = _Outputs()
     MonitorLoop(core, NodeOptions(), out.outputs(), lambda: 5.0, "/o").tick()
     assert (out.applied, core.results) == ([], [])
+
+
+def test_after_its_stop_the_loop_takes_nothing_and_says_nothing() -> None:
+    """ROS calls back with what its subscriptions still hold while the node shuts down:
+    after :meth:`MonitorLoop.stop` none of it reaches the core, the corrected odometry
+    or the terminal (its last line is the node's stop line)."""
+    core = RecordingCore("r1")
+    out = _Outputs()
+    loop = MonitorLoop(core, NodeOptions(robot="r1"), out.outputs(), lambda: 1.0, "/odom")
+    loop.odometry(1.0, Pose2D())
+    loop.stop()
+    loop.odometry(2.0, Pose2D())
+    loop.scan(_sweep)
+    loop._fault("corrected odometry", RuntimeError("publish() to a closed topic"))
+    assert core.counts == {"wheels": 0, "odometry": 1, "scan": 0, "imu": 0}
+    assert [c.time for c in out.corrected] == [1.0]
+    assert (out.lines, loop.faults) == ([], 0)

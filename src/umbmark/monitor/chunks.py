@@ -173,6 +173,9 @@ class ChunkMaker:
         self.params: FloatArray | None = None
         self.mount = (0.0, 0.0, 0.0)
         self.reset()
+        if laser:  # the matching's KD-trees: a second or two to import, taken now rather
+            # than in the first chunk, inside a node's callback (its status waiting on it)
+            import scipy.spatial  # noqa: F401
 
     def reset(self) -> None:
         """Forget everything not yet in a chunk (the clock went back, a restart)."""
@@ -202,6 +205,13 @@ class ChunkMaker:
             self._sweeps = []  # the beams changed: start again from this sweep
         self._sweeps.append(sweep)
         return True
+
+    def pending(self) -> Driving:
+        """The driving since the last chunk's end, not yet in a chunk."""
+        if self._start is None or len(self._wheels) < 2:
+            return Driving()
+        w = np.asarray(self._wheels, dtype=np.float64)
+        return Driving.of(w[w[:, 0] >= self._start - 1e-9, 1:], self.radii, self.separation)
 
     def make(self) -> Chunk | None:
         """A chunk, where the wheels are far enough past the next one's end; else None."""

@@ -90,6 +90,7 @@ class Monitor:
         self.confirmed: dict[tuple[str, float], ChangeFound] = {}
         self._since_odometer = 0.0
         self._breaks = 0
+        self._wheel_kind: Input | None = None
         self._since: float | None = None
         self._fit: Estimate | None = None
         self._fitted_at = -math.inf
@@ -111,12 +112,12 @@ class Monitor:
     # --- what it is fed --------------------------------------------------------------
 
     def wheels(self, time: float, left: float, right: float) -> None:
-        if self._arrived("wheels", time):
-            self._wheel_step(time, self.angles.from_wheels(time, left, right))
+        if self._arrived("wheels", time) and self._in_order("wheels", time):
+            self._wheel_step("wheels", time, self.angles.from_wheels(time, left, right))
 
     def odometry(self, time: float, pose: Pose2D) -> None:
-        if self._arrived("odometry", time):
-            self._wheel_step(time, self.angles.from_odometry(time, pose))
+        if self._arrived("odometry", time) and self._in_order("odometry", time):
+            self._wheel_step("odometry", time, self.angles.from_odometry(time, pose))
 
     def scan(self, sweep: ScanSweep) -> None:
         if not self._arrived("scan", sweep.time):
@@ -150,8 +151,22 @@ class Monitor:
         self.integrator.time = None
         self._since_odometer = self.odometer
 
-    def _wheel_step(self, time: float, continued: bool) -> None:
-        if not continued and self.angles.breaks != self._breaks:  # a controller restarted
+    def _in_order(self, kind: Input, time: float) -> bool:
+        """Whether a wheel reading comes after the last one taken of either kind (a node
+        feeds the odometry until joint states with the wheels come, then those, stamped
+        by another clock's cycle): one that does not is dropped and counted, so that the
+        wheels' times in a chunk always increase."""
+        last = self.angles.time
+        if last is not None and time <= last:
+            self.arrivals.dropped[f"{kind}: not after the last wheel reading"] += 1
+            return False
+        return True
+
+    def _wheel_step(self, kind: Input, time: float, continued: bool) -> None:
+        switched = self._wheel_kind not in (None, kind)  # the odometry, then joint states
+        self._wheel_kind = kind
+        if not continued and (switched or self.angles.breaks != self._breaks):
+            # a controller restarted, or the wheels from another source: a new chunk
             self._breaks = self.angles.breaks
             self.maker.reset()
             self.stretch = []
@@ -341,20 +356,21 @@ def make_monitor(found: Any) -> Monitor:  # noqa: ANN401 (umbmark.monitor.ros2_n
     """The core a ROS node makes from what it found (``Found``: the options' values by
     keyword, its :class:`~umbmark.monitor.ros_node.NodeOptions`, the controller's
     parameters, whether sim time runs): the monitor's options of
-    :data:`umbmark.options.monitor.MONITOR` from the values, the inputs from the topics.
+    :data:`umbmark.options.monitor.MONITOR` from the values, the inputs from the topics;
+    the topics' silence the node's to judge (``judge_silence`` off).
 
     Raises
     ------
     InputError
         Without the controller's parameters (the wheels' geometry is needed).
     """
-    from umbmark.core.errors import InputError
+    from umbmark.core.errors import InputError, option
     from umbmark.options.monitor import MONITOR
 
     options, values = found.options, dict(found.values)
     if found.params is None:
         raise InputError("the controller's parameters did not come: the monitor needs its "
-                         "wheel radius and separation (give --params-file)")  # fmt: skip
+                         f"wheel radius and separation (give {option('params_file')})")  # fmt: skip
     kept = {k: values[k] for k in MONITOR if k in values and values[k] is not None}
     kept.pop("robot", None)
     wheels: Input = "wheels" if getattr(options, "wheel_topic", "") else "odometry"
@@ -363,7 +379,7 @@ def make_monitor(found: Any) -> Monitor:  # noqa: ANN401 (umbmark.monitor.ros2_n
     inputs += ("imu",) if getattr(options, "imu_topic", None) else ()
     setup = MonitorSetup(
         str(getattr(options, "robot", "") or values.get("robot") or "robot"), found.params,
-        getattr(options, "laser_mount", None), inputs=inputs, **kept,
+        getattr(options, "laser_mount", None), inputs=inputs, judge_silence=False, **kept,
     )  # fmt: skip
     return Monitor(setup)
 
@@ -406,18 +422,21 @@ def said(monitor: Monitor, now: float) -> MonitorStatus:
     figures = _figures(monitor)
     changes = monitor.changes()
     pending = [c for c in changes if c.confirmed and c.since_metres > monitor._applied_at_odometer]
-    stale = monitor.arrivals.silent(now, s.inputs, s.stale_after) if monitor.arrivals.last else ()
+    stale: tuple[str, ...] = ()
+    if s.judge_silence and monitor.arrivals.last:
+        stale = monitor.arrivals.silent(now, s.inputs, s.stale_after)
     level: Level = "OK"
     if pending:
         level = "ERROR" if any(c.beyond_tolerance for c in pending) else "WARN"
     if stale:
         level = "STALE"
-    lines = [change_line(c, monitor.odometer) for c in changes if c in pending or not c.confirmed]
+    odometer = monitor.odometer + monitor.maker.pending().metres  # the chunk in progress too
+    lines = [change_line(c, odometer) for c in changes if c in pending or not c.confirmed]
     if stale:
         lines.insert(0, f"silent for more than {s.stale_after:g} s: {', '.join(stale)}")
     if not lines:
         lines.append(f"no change over {monitor.stretches} stretches of driving "
-                     f"({monitor.odometer:.0f} m)")  # fmt: skip
+                     f"({odometer:.0f} m)")  # fmt: skip
     window = monitor.window_estimate()
     driving = window.driving if window is not None else None
     return MonitorStatus(
@@ -429,7 +448,7 @@ def said(monitor: Monitor, now: float) -> MonitorStatus:
         metres=0.0 if driving is None else driving.metres,
         radians_left=0.0 if driving is None else driving.left,
         radians_right=0.0 if driving is None else driving.right,
-        odometer=monitor.odometer,
+        odometer=odometer,
         since=monitor._since,
         changes=changes,
         stale=stale,

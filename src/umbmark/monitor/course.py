@@ -8,7 +8,10 @@ course is kept for the last :data:`MAX_STRETCHES` stretches of each figure, on t
 odometer's axis (metres driven: it goes on when the clock goes back). A change in the
 latest stretch alone is found, to be confirmed (``latest``); confirmed once the next
 stretch agrees (``step``): a change is flagged within the stretch it began in and the two
-after it. A trend (tyres wearing over weeks) is not flagged here, nor the gyro's bias
+after it. A confirmed change's size is the stretches' after the one it fell in, where it
+has any (:meth:`Course.found`): that one holds both states, and pooled with the rest it
+would pull the size towards the value before by a share its interval does not hold. A
+trend (tyres wearing over weeks) is not flagged here, nor the gyro's bias
 (:data:`umbmark.calibration.changes.FOLLOWED`: it wanders; its present value is the
 latest stretch's).
 
@@ -58,6 +61,26 @@ class StretchPoint:
     wall: float
 
 
+def _after_the_mixed(series: deque[StretchPoint], change: Change) -> tuple[float, float]:
+    """A step's size and its standard error from the stretches after the first of its
+    present state (the stretch the change fell in, part before it and part after), the
+    change model's scatter scaling kept; the model's own where the change model left the
+    stretch before that first one out as unsettled (then the first is after the change
+    whole) or no other stretch is in the present state."""
+    since = change.since
+    assert since is not None
+    left_out = {*change.one_offs, *change.unsettled}
+    later = [p for k, p in enumerate(series) if k > since and k not in left_out]
+    if since - 1 in change.unsettled or not later:
+        return change.size, change.size_se
+    before = change.value - change.size  # the mean before the step
+    before_var = max(change.size_se**2 - change.se**2, 0.0)
+    weights = np.array([1.0 / p.se**2 for p in later])
+    value = float(np.sum(weights * np.array([p.value for p in later])) / np.sum(weights))
+    se = change.birge / math.sqrt(float(np.sum(weights)))
+    return value - before, math.sqrt(se**2 + before_var)
+
+
 class Course:
     """Every figure's stretches, and what the change model makes of them."""
 
@@ -98,10 +121,13 @@ class Course:
         if change.since is None:
             return change, None
         first = self.points[name][change.since]
+        size, size_se = change.size, change.size_se
+        if change.kind == "step":
+            size, size_se = _after_the_mixed(self.points[name], change)
         return change, ChangeFound(
             figure=name,
-            size=change.size,
-            size_half_width=Z95 * change.size_se,
+            size=size,
+            size_half_width=Z95 * size_se,
             since=first.time,
             since_metres=first.odometer,
             confirmed=change.kind == "step",

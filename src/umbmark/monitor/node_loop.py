@@ -127,11 +127,19 @@ class MonitorLoop:
         self._applied: str | None = None
         self._last_corrected: float | None = None
         self.published = 0
+        self._stopped = False
+
+    def stop(self) -> None:
+        """The node stops: messages still queued in its subscriptions (ROS goes on calling
+        back while it shuts down) are not taken, nor said, after its last line."""
+        self._stopped = True
 
     # --- messages in (from any thread) ----------------------------------------------
 
     def _fault(self, what: str, exc: BaseException) -> None:
         """One line per kind of fault a minute at most; counted."""
+        if self._stopped:  # a publisher closed under a callback as the node stops
+            return
         self.faults += 1
         wall = time.monotonic()
         if wall - self._faults.get(what, -math.inf) >= 60.0:
@@ -168,6 +176,8 @@ class MonitorLoop:
         self._feed("IMU message", self.options.imu_topic or "imu", feed)
 
     def _feed(self, what: str, topic: str, call: Callable[[], None]) -> None:
+        if self._stopped:
+            return
         self._silence.heard(topic, time.monotonic())
         try:
             with self._lock:
@@ -177,7 +187,7 @@ class MonitorLoop:
 
     def _corrected(self) -> None:
         publish = self.outputs.corrected
-        if publish is None:
+        if publish is None or self._stopped:
             return
         try:
             with self._lock:

@@ -10,7 +10,8 @@ shares with ROS 2 is :mod:`umbmark.monitor.ros_node`.
   wheels' where no joint states with wheels come), ``sensor_msgs/JointState``,
   ``LaserScan``, ``Imu``; mountings from TF (a ``tf2_ros.Buffer``, looked up without
   waiting in the callbacks: a message before its transform is there is left out). Every
-  queue is 10 deep. ``/use_sim_time`` as rospy reads it: ROS time is the simulation's.
+  queue is :data:`~umbmark.monitor.ros_node.INPUT_QUEUE` deep. ``/use_sim_time`` as rospy
+  reads it: ROS time is the simulation's.
 - Out: ``diagnostic_msgs/DiagnosticArray`` on ``/diagnostics`` every wall second (queue
   10, as diagnostic_updater), ``nav_msgs/Odometry`` on ``corrected_odom``, its transform
   on ``/tf`` with ``corrected_tf``.
@@ -32,6 +33,7 @@ from umbmark.monitor.node_loop import MonitorLoop, Outputs, run_ticks, stop_on_s
 from umbmark.monitor.odometry_msg import Frames, fill_odometry, fill_transform, odometry_fields
 from umbmark.monitor.ros2_node import Found
 from umbmark.monitor.ros_node import (
+    INPUT_QUEUE,
     NODE_OPTIONS,
     SHARED,
     base_yaw_rate,
@@ -131,12 +133,13 @@ class Ros1Monitor:
         from sensor_msgs.msg import Imu, JointState, LaserScan
 
         rospy, o = self._rospy, self.options
-        rospy.Subscriber(self.ros.odom, Odometry, self._on_odom, queue_size=10)
-        rospy.Subscriber(o.wheel_topic, JointState, self._on_joints, queue_size=10)
+        depth = INPUT_QUEUE
+        rospy.Subscriber(self.ros.odom, Odometry, self._on_odom, queue_size=depth)
+        rospy.Subscriber(o.wheel_topic, JointState, self._on_joints, queue_size=depth)
         if o.scan_topic:
-            rospy.Subscriber(o.scan_topic, LaserScan, self._on_scan, queue_size=10)
+            rospy.Subscriber(o.scan_topic, LaserScan, self._on_scan, queue_size=depth)
         if o.imu_topic:
-            rospy.Subscriber(o.imu_topic, Imu, self._on_imu, queue_size=10)
+            rospy.Subscriber(o.imu_topic, Imu, self._on_imu, queue_size=depth)
 
     def publishers(self) -> Outputs:
         from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -290,6 +293,7 @@ def run_ros1(
     )
     started = time.monotonic()
     run_ticks(loop, stop)
+    loop.stop()
     _say(stopped_line(stop, loop, started))
     rospy.signal_shutdown("stopped")
     return 0

@@ -16,7 +16,8 @@ messages as values, the 1 Hz loop, silence, applying at rest) is
   ``sensor_msgs/msg/Imu`` (sensor-data QoS), the URDF on ``/robot_description`` and
   ``/tf_static`` (transient local) for the laser's and IMU's mountings (chained as
   :func:`umbmark.robot.urdf.static_mount` does; else :func:`umbmark.robot.urdf.urdf_mount`),
-  ``/clock``. Every queue is 10 deep (sensor data: rclpy's 5): nothing grows over days.
+  ``/clock``. Every subscription's queue is :data:`~umbmark.monitor.ros_node.INPUT_QUEUE`
+  deep (sensor data best effort, as rclpy's sensor-data profile): nothing grows over days.
 - Out: ``diagnostic_msgs/msg/DiagnosticArray`` on ``/diagnostics`` every wall second
   (depth 1, as diagnostic_updater), stamped on the node's clock; with ``corrected_odom``
   ``nav_msgs/msg/Odometry`` there, with ``corrected_tf`` its transform on ``/tf``.
@@ -39,11 +40,12 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from umbmark.core.errors import InputError, SafetyError
+from umbmark.core.errors import InputError, SafetyError, option
 from umbmark.monitor.diagnostics import NODE_NAME, TOPIC, compose, fill_array
 from umbmark.monitor.node_loop import MonitorLoop, Outputs, run_ticks, stop_on_signals, stopped_line
 from umbmark.monitor.odometry_msg import Frames, fill_odometry, fill_transform, odometry_fields
 from umbmark.monitor.ros_node import (
+    INPUT_QUEUE,
     NODE_OPTIONS,
     SHARED,
     NodeOptions,
@@ -97,8 +99,8 @@ def _rclpy() -> Any:  # noqa: ANN401 (the module)
         import rclpy
     except ImportError as exc:
         raise InputError(
-            f"--ros2 needs rclpy ({exc}): python -m pip install '.[ros2]' in umbmark's "
-            "checkout, or source your ROS 2 setup (/opt/ros/DISTRO)"
+            f"{option('ros2')} needs rclpy ({exc}): python -m pip install '.[ros2]' in "
+            "umbmark's checkout, or source your ROS 2 setup (/opt/ros/DISTRO)"
         ) from None
     return rclpy
 
@@ -184,7 +186,7 @@ class Ros2Monitor:
     def subscribe(self) -> None:
         """Subscribe every topic (the loop must be set: :meth:`start`)."""
         from nav_msgs.msg import Odometry
-        from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import Imu, JointState, LaserScan
         from std_msgs.msg import String
@@ -200,14 +202,14 @@ class Ros2Monitor:
 
             static = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL)
             node.create_subscription(TFMessage, "/tf_static", self._on_static, static)
-        node.create_subscription(Odometry, self._ros.odom, self._on_odom, 10)
-        node.create_subscription(JointState, options.wheel_topic, self._on_joints, 10)
+        depth = INPUT_QUEUE
+        node.create_subscription(Odometry, self._ros.odom, self._on_odom, depth)
+        node.create_subscription(JointState, options.wheel_topic, self._on_joints, depth)
+        sensor = QoSProfile(depth=depth, reliability=ReliabilityPolicy.BEST_EFFORT)  # sensor data
         if options.scan_topic:
-            node.create_subscription(LaserScan, options.scan_topic, self._on_scan,
-                                     qos_profile_sensor_data)  # fmt: skip
+            node.create_subscription(LaserScan, options.scan_topic, self._on_scan, sensor)
         if options.imu_topic:
-            node.create_subscription(Imu, options.imu_topic, self._on_imu,
-                                     qos_profile_sensor_data)  # fmt: skip
+            node.create_subscription(Imu, options.imu_topic, self._on_imu, sensor)
 
     def publishers(self) -> Outputs:
         """Where the loop's statuses, corrected odometry and applies go."""
@@ -499,6 +501,7 @@ def run_ros2(
         _say(_started_line(monitor, params, sim))
         started = time.monotonic()
         run_ticks(loop, stop)
+        loop.stop()
         _say(stopped_line(stop, loop, started))
     finally:
         monitor.close()

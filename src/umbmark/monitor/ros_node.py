@@ -33,7 +33,8 @@ from umbmark.options.spec import READ, Spec
 from umbmark.robot.base import Pose2D
 from umbmark.robot.ros_common import Mount
 
-__all__ = ["NODE_OPTIONS", "ROS_SECTION", "NodeOptions", "RosArgv", "base_yaw_rate"]
+__all__ = ["INPUT_QUEUE", "NODE_OPTIONS", "ROS_SECTION", "NodeOptions", "RosArgv"]
+__all__ += ["base_yaw_rate"]
 __all__ += ["node_options", "parameter_values", "split_ros_args", "wheel_angles"]
 
 #: The section of ``umbmark monitor --help`` listing the node's options.
@@ -42,6 +43,12 @@ ROS_SECTION = "On the robot (ROS 1, ROS 2)"
 DEFAULT_JOINTS = ("left_wheel_joint", "right_wheel_joint")
 #: Longest ``stale_after`` [s].
 LONGEST_SILENCE = 600.0
+#: How deep the subscriptions' queues are (the publishers' are 10): the core matches a
+#: chunk of driving inside the wheels' callback (a tenth of a second of CPU or more, the
+#: ROS 2 node's other callbacks waiting behind it), and 10 deep a 50 Hz topic would lose
+#: the messages of those moments (a simulation run faster loses more); 100 hold 2 s of
+#: 50 Hz wheels. Bounded: nothing grows over days.
+INPUT_QUEUE = 100
 
 #: The node's options of its own (the reading options it shares are :data:`READ`'s).
 NODE_OPTIONS: tuple[Spec, ...] = (

@@ -9,7 +9,7 @@ import os
 from dataclasses import dataclass
 from typing import Literal
 
-from umbmark.core.errors import InputError
+from umbmark.core.errors import InputError, option
 from umbmark.options.monitor import MONITOR
 from umbmark.robot.base import DriveParams, Pose2D
 
@@ -54,8 +54,15 @@ class MonitorSetup:
     history : path or None
         The history file the stretches go to and the course is taken up from; None: none.
     inputs : tuple of str
-        The inputs the node feeds (``wheels`` or ``odometry``, ``scan``, ``gyro``): the
+        The inputs the node feeds (``wheels`` or ``odometry``, ``scan``, ``imu``): the
         ones whose silence makes the status STALE.
+    judge_silence : bool
+        Whether the core says its inputs' silence itself (STALE after ``stale_after`` of
+        the robot's clock, naming the inputs): the simulated robot's and the library's
+        core. A ROS node judges its topics' silence on the wall clock and names the topics
+        (:class:`umbmark.monitor.node_loop.MonitorLoop`): its core does not
+        (:func:`umbmark.monitor.core.make_monitor`), so that sim time running faster than
+        the wall clock makes no STALE of its own.
     """
 
     robot: str
@@ -71,10 +78,11 @@ class MonitorSetup:
     rest_time: float = _default("rest_time")
     history: str | os.PathLike[str] | None = None
     inputs: tuple[Input, ...] = ("wheels", "scan")
+    judge_silence: bool = True
 
     def __post_init__(self) -> None:
         if not self.robot.strip():
-            raise InputError("the monitor needs a robot name (--robot)")
+            raise InputError(f"the monitor needs a robot name ({option('robot')})")
         for name in ("window_metres", "window_radians", "stretch_metres", "scan_period",
                      "stale_after", "tolerance", "rest_time"):  # fmt: skip
             MONITOR[name].check(getattr(self, name))

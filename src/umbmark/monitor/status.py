@@ -132,7 +132,8 @@ class MonitorStatus:
     metres, radians_left, radians_right : float
         The window's driving: metres driven, radians turned left (ccw) and right (cw).
     odometer : float
-        Metres driven since the monitor started (taken up from the history on a restart).
+        Metres driven since the monitor started (taken up from the history on a restart),
+        up to the latest wheel reading (the chunk being collected included).
     since : float or None
         When the present state began (the last change, or the start) [s].
     changes : tuple of ChangeFound

@@ -134,8 +134,8 @@ class Ros2Robot(RosRobot):
             from rclpy.signals import SignalHandlerOptions
         except ImportError as exc:
             raise InputError(
-                f"--ros2 needs rclpy ({exc}): python -m pip install '.[ros2]' in umbmark's "
-                "checkout, or source your ROS 2 setup (/opt/ros/DISTRO)"
+                f"{option('ros2')} needs rclpy ({exc}): python -m pip install '.[ros2]' in "
+                "umbmark's checkout, or source your ROS 2 setup (/opt/ros/DISTRO)"
             ) from None
         given_cmd_vel = bool(options.cmd_vel)
         options = default_topics(options, ros2=True)
