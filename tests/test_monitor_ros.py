@@ -23,7 +23,15 @@ from pathlib import Path
 
 import pytest
 
-from monitor_graph import check_changes, check_wiring, run_changes, run_wiring
+from monitor_graph import (
+    END_AT,
+    KNOCK_AT,
+    WHEEL_AT,
+    check_changes,
+    check_wiring,
+    run_changes,
+    run_wiring,
+)
 from test_ros1 import T0, RosGraph
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -96,12 +104,6 @@ def _graph(tmp: Path, *node_args: str) -> tuple[RosGraph, dict[str, str]]:
 #: ``umbmark monitor --ros1`` as a user starts it, and the recording core's node.
 COMMAND = (sys.executable, "-m", "umbmark", "monitor", "--ros1")
 RECORDING = (sys.executable, str(DEV), "ros1=1")
-#: The robot's wheel changed and its laser knocked [s of simulated time], and when the
-#: run ends: the core's window filled (50 m) and its course begun before the first, each
-#: given its stated distance (60 m) after, and more: these missions drive 0.33 m/s on
-#: the whole (their rests, turns and shelf stops in it; 196 m in 600 s), so 180 s after
-#: the knock were 55-60 m, short of it; 300 s are about 100 m.
-WHEEL_AT, KNOCK_AT, END_AT = 240.0, 420.0, 720.0
 
 
 @pytest.mark.slow
@@ -126,7 +128,7 @@ def test_ros1_monitor_wiring_on_missions(tmp_path: Path, core: str) -> None:
 @pytest.mark.slow
 def test_ros1_monitor_flags_a_wheel_changed_and_a_laser_knocked(tmp_path: Path) -> None:
     """``umbmark monitor --ros1`` beside the robot on missions: its right wheel 0.6 %
-    larger at 240 s (E_d 1.004 -> 1.010), its laser turned 2 degrees at 420 s (/tf_static
+    larger at 240 s (E_d 1.004 -> 1.010), its laser turned 2 degrees at 600 s (/tf_static
     keeping the stated mounting): OK with nothing flagged before; each flagged within the
     core's stated distance after it, its size the truth's (tests/robot_node_events.py)."""
     truth = tmp_path / "truth.json"

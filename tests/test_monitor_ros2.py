@@ -20,15 +20,21 @@ from pathlib import Path
 
 import pytest
 
-from monitor_graph import DEV, check_changes, check_wiring, run_changes, run_wiring
+from monitor_graph import (
+    DEV,
+    END_AT,
+    KNOCK_AT,
+    WHEEL_AT,
+    check_changes,
+    check_wiring,
+    run_changes,
+    run_wiring,
+)
 from test_ros2 import PYTHON, ROOT, T0, Robot2, ros2_env
 
 #: ``umbmark monitor --ros2`` as a user starts it, and the recording core's node.
 COMMAND = (str(PYTHON), "-m", "umbmark", "monitor", "--ros2")
 RECORDING = (str(PYTHON), str(DEV))
-#: The wheel changed, the laser knocked, the run's end [s of simulated time]
-#: (tests/test_monitor_ros.py's).
-WHEEL_AT, KNOCK_AT, END_AT = 240.0, 420.0, 720.0
 #: The robot's speed-up for that run: the monitor takes 10x a robot's message rates at
 #: 10x (rclpy's callbacks in one thread: 500 joint states, 500 odometries and 100 sweeps a
 #: wall second), which on two shared cores lost a sixth of the joint states (gaps up to
