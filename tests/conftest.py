@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -11,6 +12,16 @@ import umbmark
 
 from dask_cluster import cluster  # noqa: F401 (a fixture: Dask started as processes)
 from helpers import DemoCommand, run_cli, write_table
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Ctrl-C reaches the tests' commands however pytest was started. A shell starts a
+    command in the background (``pytest &``, ``nohup``, some CI runners) with SIGINT
+    ignored, Python keeps it so, and every child inherits it through exec: the interrupt
+    tests' real SIGINT would then do nothing. Python's own handler is set back; a child's
+    SIGINT is then its default again."""
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture

@@ -324,6 +324,7 @@ def check_changes(run: Run, truth_file: Path) -> None:
     row, change = found
     at = odometer_at(rows, wheel["time"])
     odometer = float(row["values"]["odometer [m]"])
+    print(f"E_d confirmed {odometer - at:.0f} m after the wheel was changed")  # -rP shows it
     assert odometer - at < FLAGGED_WITHIN, (odometer, at)
     assert row["level"] == 1  # WARN: 0.006 / 0.34 m = 0.018 rad/m, within the tolerance
     size = wheel["after"]["E_d"] - wheel["before"]["E_d"]
@@ -333,6 +334,7 @@ def check_changes(run: Run, truth_file: Path) -> None:
     assert yaw is not None, "the laser's knock was not flagged"
     row, change = yaw
     at = odometer_at(rows, knock["time"])
+    print(f"laser_yaw confirmed {float(row['values']['odometer [m]']) - at:.0f} m after the knock")
     assert float(row["values"]["odometer [m]"]) - at < FLAGGED_WITHIN
     turned = knock["after"]["yaw"] - knock["before"]["yaw"]
     assert abs(change["size"] - turned) <= max(change["half"], 0.003), (change, turned)

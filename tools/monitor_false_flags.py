@@ -26,6 +26,7 @@ judged every :data:`EVERY` stretches. The gyro's bias is followed, not flagged
 (:data:`umbmark.calibration.changes.FOLLOWED`): shown, not counted.
 
     PYTHONPATH=src python tools/monitor_false_flags.py --hours 6 --seeds 4
+    PYTHONPATH=src python tools/monitor_false_flags.py --hours 3 --seeds 2 --no-imu
 """
 
 from __future__ import annotations
@@ -56,11 +57,12 @@ WEEK_HOURS = 168.0
 EVERY = 10
 
 
-def run(seed: int, hours: float, walk: float) -> tuple[Monitor, list[str]]:
-    """The core over a steady robot; the changes it confirmed."""
-    sim = SimRobotSetup(seed=seed, gyro_bias_walk=walk)
+def run(seed: int, hours: float, walk: float, imu: bool = True) -> tuple[Monitor, list[str]]:
+    """The core over a steady robot (``imu``: with its gyro); the changes it confirmed."""
+    sim = SimRobotSetup(seed=seed, gyro_bias_walk=walk, imu_rate=200.0 if imu else 0.0)
+    inputs = ("wheels", "scan", "imu") if imu else ("wheels", "scan")
     setup = MonitorSetup("steady", DriveParams(NOMINAL[0], 0.5 * NOMINAL[1]),
-                         Pose2D(*sim.stated), inputs=("wheels", "scan", "imu"))  # fmt: skip
+                         Pose2D(*sim.stated), inputs=inputs)  # fmt: skip
     core = Monitor(setup)
     seconds = 3600.0 * hours
     for message, _ in messages(sim, seconds):
@@ -104,6 +106,7 @@ def main() -> None:
     parser.add_argument("--weeks", type=float, default=5.0, help="bootstrap robot-weeks")
     parser.add_argument("--bias-walk", type=float, default=0.0,
                         help="the gyro bias's random walk [deg/s/sqrt(s)]")  # fmt: skip
+    parser.add_argument("--no-imu", action="store_true", help="the robot has no gyro")
     args = parser.parse_args()
     walk = math.radians(args.bias_walk)
     pooled: dict[str, list[float]] = {}
@@ -111,7 +114,7 @@ def main() -> None:
     flags: list[str] = []
     stretches, cpu = 0, time.process_time()
     for seed in range(1, args.seeds + 1):
-        core, found = run(seed, args.hours, walk)
+        core, found = run(seed, args.hours, walk, imu=not args.no_imu)
         flags += found
         stretches += core.stretches
         for name, z in z_scores(core).items():
@@ -121,7 +124,7 @@ def main() -> None:
     week = stretches / hours * WEEK_HOURS
     print(f"steady robot: {hours:g} h of robot time over {args.seeds} seeds, {stretches} "
           f"stretches ({time.process_time() - cpu:.0f} s of CPU); bias walk "
-          f"{args.bias_walk:g} deg/s/sqrt(s)")  # fmt: skip
+          f"{args.bias_walk:g} deg/s/sqrt(s){'; no IMU' if args.no_imu else ''}")  # fmt: skip
     print(f"confirmed false flags: {len(flags)} {flags or ''}")
     print("figure       n    rms z [95 %]          max |z|  >3  >4  >5  lag-1 corr")
     gauss = free = 0.0

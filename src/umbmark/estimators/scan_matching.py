@@ -34,7 +34,7 @@ l_theta)`` (``J_k``: the Jacobian of the predicted sensor motion), with the sens
 by their median absolute deviation, so that neither the outliers nor the cut tails of the
 kept intervals bias it), widened to the sandwich covariance where the intervals' own
 residuals scatter more than that noise says (the intervals across a turn's start or end:
-``_widened``).
+``widened``).
 The scan matcher's own covariances are not used: matchers are often optimistic.
 """
 
@@ -58,10 +58,12 @@ __all__ = [
     "PARAMETERS",
     "ScanCalibration",
     "fit_intervals",
+    "outliers",
     "predicted_motion",
     "scan_matching_estimate",
     "second_step",
     "solve_intervals",
+    "widened",
 ]
 
 
@@ -219,7 +221,7 @@ def solve_intervals(intervals: MotionIntervals, rows: BoolArray | None = None) -
 # --- outliers and uncertainty ------------------------------------------------------------
 
 
-def _outliers(residual: FloatArray, fraction: float) -> BoolArray:
+def outliers(residual: FloatArray, fraction: float) -> BoolArray:
     """The rows whose rotation or translation residual is beyond the ``1 - fraction``
     quantile (the reference implementation's rule: the value at sorted index
     ``round((1 - fraction) n)``, exceeded strictly)."""
@@ -240,7 +242,7 @@ def _covariance(
     included) times 1.4826: the standard deviation of Gaussian noise, which the residuals
     of the kept intervals alone would understate (their tails were cut). The covariance
     is the Cramer-Rao bound of that noise, widened where the kept intervals' own residuals
-    say the noise is not alike in every interval (:func:`_widened`).
+    say the noise is not alike in every interval (:func:`widened`).
     """
     residual = predicted_motion(intervals, params) - intervals.sensor_motion
     spread = np.median(np.abs(residual - np.median(residual, axis=0)), axis=0)
@@ -257,12 +259,12 @@ def _covariance(
     weighted = jac / noise[None, :, None]
     fisher = np.einsum("kij,kil->jl", weighted, weighted)
     bound = np.linalg.inv(fisher)
-    return _widened(bound, weighted, residual[rows] / noise[None, :]), noise
+    return widened(bound, weighted, residual[rows] / noise[None, :]), noise
 
 
-def _widened(bound: FloatArray, weighted: FloatArray, scaled: FloatArray) -> FloatArray:
-    """``(6, 6)`` the Cramer-Rao ``bound``, widened to the sandwich covariance where that
-    is wider: every figure's variance the larger of the two.
+def widened(bound: FloatArray, weighted: FloatArray, scaled: FloatArray) -> FloatArray:
+    """``(k, k)`` the Cramer-Rao ``bound`` of ``k`` parameters (six here), widened to the
+    sandwich covariance where that is wider: every figure's variance the larger of the two.
 
     The bound takes the noise alike in every interval. It is not: a sweep taken while the
     robot starts or stops a turn is distorted by its own motion, and the intervals across
@@ -270,15 +272,15 @@ def _widened(bound: FloatArray, weighted: FloatArray, scaled: FloatArray) -> Flo
     whole turns whose residuals set the noise, while they hold most of what fixes the
     laser's offset along the robot and ``E_d``. The sandwich ``F^-1 (sum_k g_k g_k^T)
     F^-1`` (``g_k`` interval ``k``'s score: its weighted Jacobian times its residual,
-    ``weighted`` ``(m, 3, 6)`` and ``scaled`` ``(m, 3)`` in units of the noise; times
-    ``m / (m - 6)``) holds each interval's own scatter (Huber 1967, White 1980). In the
+    ``weighted`` ``(m, 3, k)`` and ``scaled`` ``(m, 3)`` in units of the noise; times
+    ``m / (m - k)``) holds each interval's own scatter (Huber 1967, White 1980). In the
     bound's whitened coordinates the sandwich's eigenvalues below 1 are raised to 1:
     never tighter than the bound (the sandwich of a few intervals scatters itself)."""
-    m = scaled.shape[0]
-    if m <= 6:
+    m, k = scaled.shape[0], bound.shape[0]
+    if m <= k:
         return bound
     score = np.einsum("kij,ki->kj", weighted, scaled)
-    sandwich = bound @ (score.T @ score) @ bound * (m / (m - 6.0))
+    sandwich = bound @ (score.T @ score) @ bound * (m / (m - float(k)))
     values, vectors = np.linalg.eigh(0.5 * (bound + bound.T))
     if not bool(np.all(values > 0.0)):
         return bound
@@ -340,7 +342,7 @@ def fit_intervals(
         params = solve_intervals(intervals, kept)
         for _ in range(rounds):
             residual = predicted_motion(intervals, params, kept) - intervals.sensor_motion[kept]
-            drop = _outliers(residual, fraction)
+            drop = outliers(residual, fraction)
             if not drop.any():
                 break
             kept[np.flatnonzero(kept)[drop]] = False

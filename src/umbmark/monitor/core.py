@@ -31,7 +31,7 @@ from umbmark.monitor.arrivals import Arrivals, WheelAngles
 from umbmark.monitor.chunks import Chunk, ChunkMaker, Driving
 from umbmark.monitor.corrected import Integrator, WheelCalibration
 from umbmark.monitor.course import Z95, Course, StretchPoint
-from umbmark.monitor.estimate import Estimate, estimate
+from umbmark.monitor.estimate import Estimate, Held, estimate
 from umbmark.monitor.setup import Input, MonitorSetup
 from umbmark.monitor.status import (
     FIGURES,
@@ -214,8 +214,10 @@ class Monitor:
         if disagreed >= OUTLIER_SECONDS:
             self.outliers += 1
             return
-        found = estimate(chunks, self.params, laser="scan" in self.setup.inputs,
-                         gyro="imu" in self.setup.inputs)  # fmt: skip
+        laser, gyro = "scan" in self.setup.inputs, "imu" in self.setup.inputs
+        window = self.window_estimate() if laser else None
+        held = None if window is None else Held.of(window, self.params.wheel_separation)
+        found = estimate(chunks, self.params, laser=laser, gyro=gyro, held=held)
         if not found.values:
             self.left_out["stretch determined nothing"] += 1
             return
@@ -253,7 +255,7 @@ class Monitor:
                   "c_L": p.left_wheel_radius_multiplier, "c_R": p.right_wheel_radius_multiplier,
                   "wheel_separation_multiplier": p.wheel_separation_multiplier}  # fmt: skip
         epoch = self._epoch or 0.0
-        method = SCAN_MATCHING.name if found.params is not None else GYRO.name
+        method = SCAN_MATCHING.name if found.params is not None or found.held else GYRO.name
         record = StretchRecord(self.setup.robot, method, start + epoch, end + epoch, start,
                                odometer, self.odometer, found.values, active)  # fmt: skip
         record_stretch(self._store, record)

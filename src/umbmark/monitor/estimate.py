@@ -11,6 +11,11 @@ chunks' motion, each figure with its standard error, or what the motion does not
   without a laser it gives ``E_d`` and ``E_b`` (``E_b`` relative to the gyro's scale);
   where the laser's matches do not determine a stretch, ``E_d`` (which the gyro's scale
   does not touch) but not that ``E_b``: a figure of another quantity on ``E_b``'s course.
+- Where the laser's matches turn too little to determine the wheelbase (straights, few
+  turns) and a wheelbase and mounting are held (``held``: the window's, which turned both
+  ways): ``E_d`` and ``E_s`` from the same matches with those held
+  (:func:`umbmark.estimators.scan_radii.fit_radii`, their uncertainty carried), the other
+  figures not determined, said so.
 
 A figure the motion does not determine is said with why (:data:`NO_LASER`,
 :data:`NO_GYRO`, :data:`STRAIGHT_ONLY`, :data:`ONE_WAY`, the estimator's own reason),
@@ -28,11 +33,21 @@ import numpy as np
 from umbmark.core.arrays import FloatArray
 from umbmark.core.errors import InputError
 from umbmark.model.kinematics import WheelParams
+from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.monitor.chunks import Chunk, Driving, join_gyro, join_reference
 from umbmark.monitor.status import FIGURES
 from umbmark.robot.base import DriveParams
 
-__all__ = ["NO_GYRO", "NO_LASER", "ONE_WAY", "STRAIGHT_ONLY", "Estimate", "estimate"]
+__all__ = [
+    "HELD",
+    "NO_GYRO",
+    "NO_LASER",
+    "ONE_WAY",
+    "STRAIGHT_ONLY",
+    "Estimate",
+    "Held",
+    "estimate",
+]
 
 NO_LASER = "no laser"
 NO_GYRO = "no gyro"
@@ -42,6 +57,27 @@ ONE_WAY = "turned one way only"
 #: minimum is 10).
 MIN_INTERVALS = 12
 _SCAN = ("E_d", "E_b", "E_s", "laser_x", "laser_y", "laser_yaw")
+#: What a stretch's ``E_d`` and ``E_s`` rest on where its own motion fixes no wheelbase.
+HELD = "the wheelbase and the laser's mounting held at the window's"
+
+
+@dataclass(frozen=True)
+class Held:
+    """A wheelbase and a laser mounting found elsewhere (the window), for a stretch that
+    turned too little: ``params`` ``(6,)`` in the order of
+    :data:`umbmark.estimators.scan_matching.PARAMETERS`, ``covariance`` ``(4, 4)`` of the
+    wheelbase [m] and the mounting's x, y [m] and yaw [rad]."""
+
+    params: FloatArray
+    covariance: FloatArray
+
+    @classmethod
+    def of(cls, fit: Estimate, nominal_wheelbase: float) -> Held | None:
+        """The window's ``fit`` as held parameters (None: it determined no wheelbase)."""
+        if fit.params is None or not all(n in fit.values for n in ("E_b", *_SCAN[3:])):
+            return None
+        se = [fit.values["E_b"][1] * nominal_wheelbase, *(fit.values[n][1] for n in _SCAN[3:])]
+        return cls(np.asarray(fit.params, dtype=np.float64), np.diag(np.square(se)))
 
 
 @dataclass
@@ -65,6 +101,9 @@ class Estimate:
         The driving of the chunks.
     warnings : tuple of str
         The estimators' warnings.
+    held : bool
+        ``E_d`` and ``E_s`` are the laser's with the wheelbase and the mounting held
+        (:data:`HELD`).
     """
 
     values: dict[str, tuple[float, float]]
@@ -73,6 +112,7 @@ class Estimate:
     intervals: int
     driving: Driving
     warnings: tuple[str, ...] = field(default=())
+    held: bool = False
 
 
 def nominal_wheels(params: DriveParams) -> WheelParams:
@@ -92,9 +132,10 @@ def _why(phi_left: FloatArray, phi_right: FloatArray, said: str) -> str:
     return said
 
 
-def _scan_figures(chunks: Sequence[Chunk], nominal: WheelParams, out: Estimate) -> None:
+def _scan_figures(
+    chunks: Sequence[Chunk], nominal: WheelParams, out: Estimate, held: Held | None
+) -> None:
     from umbmark.estimators.scan_matching import scan_matching_estimate
-    from umbmark.model.motion_intervals import MotionIntervals
 
     parts = [c.motion for c in chunks if c.motion is not None]
     if not parts:
@@ -112,6 +153,8 @@ def _scan_figures(chunks: Sequence[Chunk], nominal: WheelParams, out: Estimate) 
         said = _why(motion.phi_left, motion.phi_right, str(exc).split(": ", 1)[-1][:120])
         for name in _SCAN:
             out.notes[name] = said
+        if held is not None:
+            _held_figures(motion, nominal, out, held)
         return
     se = est.standard_errors
     for name in ("E_d", "E_b"):
@@ -131,6 +174,23 @@ def _scan_figures(chunks: Sequence[Chunk], nominal: WheelParams, out: Estimate) 
     out.params = cal.values
     out.intervals = cal.n_used
     out.warnings = (*out.warnings, *est.warnings)
+
+
+def _held_figures(motion: MotionIntervals, nominal: WheelParams, out: Estimate, held: Held) -> None:
+    """``E_d`` and ``E_s`` of motion that fixes no wheelbase, with ``held``'s."""
+    from umbmark.estimators.scan_radii import fit_radii
+
+    try:
+        fit = fit_radii(motion, held.params, held.covariance)
+    except InputError:
+        return
+    found = fit.errors_of(0.5 * nominal.diameter_left, 0.5 * nominal.diameter_right)
+    for name, (value, se) in found.items():
+        if math.isfinite(value) and math.isfinite(se) and se > 0.0:
+            out.values[name] = (value, se)
+            out.notes[name] = HELD
+    out.held = bool(out.values)
+    out.intervals = int(fit.kept.sum())
 
 
 def _gyro_figures(
@@ -174,16 +234,19 @@ def _gyro_figures(
             out.notes["E_b"] = "relative to the gyro's scale"
 
 
-def estimate(chunks: Sequence[Chunk], params: DriveParams, *, laser: bool, gyro: bool) -> Estimate:
+def estimate(
+    chunks: Sequence[Chunk], params: DriveParams, *, laser: bool, gyro: bool,
+    held: Held | None = None,
+) -> Estimate:  # fmt: skip
     """The figures over ``chunks`` (the module's notes): never raises for what the motion
-    does not determine."""
+    does not determine. ``held``: a wheelbase and mounting for motion that fixes none."""
     driving = Driving()
     for c in chunks:
         driving = driving + c.driving
     out = Estimate({}, {}, None, 0, driving)
     nominal = nominal_wheels(params)
     if laser:
-        _scan_figures(chunks, nominal, out)
+        _scan_figures(chunks, nominal, out, held)
     else:
         for name in _SCAN:
             out.notes[name] = NO_LASER
