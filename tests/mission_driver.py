@@ -22,7 +22,8 @@ a separate process publishing velocity commands, never a square.
 - Prints ``ready`` once the odometry and a true pose came; on SIGINT or SIGTERM (or after
   ``--seconds`` of simulated time) stops the robot and prints ``final {json}``: the
   segments done, the missions started, the true path (x, y every 0.5 s of simulated time,
-  for a check of its clearance from the world's walls).
+  for a check of its clearance from the world's walls), how often the clock went back.
+- The clock going back (a simulation reset) starts the missions again from the start.
 """
 
 from __future__ import annotations
@@ -191,24 +192,48 @@ def _yaw(q: object) -> float:
 
 
 class Driver:
-    """What both ROS sides share: the follower fed, the commands paced, the path kept."""
+    """What both ROS sides share: the follower fed, the commands paced, the path kept.
+    The clock going back (a simulation reset: the robot back at its start) starts the
+    missions again from the start, as a navigation stack started again would; the
+    simulated time driven before counts towards ``--seconds``."""
 
     def __init__(self, args: argparse.Namespace) -> None:
-        self.follower = Follower(Warehouse(), args.seed, args.speed, args.turn_rate,
-                                 args.mission_seconds, args.rest)  # fmt: skip
+        self.args = args
+        self.follower = self._follower()
         self.where = Localised()
         self.lock = threading.Lock()
         self.last_sent = -math.inf
         self.first: float | None = None
+        self.latest = -math.inf
+        self.before = 0.0  # the simulated time driven before the clock last went back [s]
+        self.resets = 0
+        self.done_before = self.missions_before = 0  # the follower's before that
         self.seconds = args.seconds
         self.path: list[list[float]] = []
         self.last_kept = -math.inf
         self.ready = threading.Event()
         self.stop = threading.Event()
 
+    def _follower(self) -> Follower:
+        a = self.args
+        return Follower(Warehouse(), a.seed, a.speed, a.turn_rate, a.mission_seconds, a.rest)
+
+    def _clock_back(self, stamp: float) -> None:
+        """A simulation reset: the missions again from the start, the localisation anew."""
+        if self.first is not None:
+            self.before += self.latest - self.first
+        self.done_before += self.follower.done
+        self.missions_before += self.follower.missions
+        self.follower, self.where = self._follower(), Localised()
+        self.first, self.last_sent, self.last_kept = stamp, -math.inf, -math.inf
+        self.resets += 1
+
     def on_odometry(self, stamp: float, pose: Pose2D) -> tuple[float, float] | None:
         """The command to send now, if one is due."""
         with self.lock:
+            if stamp < self.latest - 1.0:
+                self._clock_back(stamp)
+            self.latest = stamp
             self.where.odometry(pose)
             here = self.where.pose()
             if here is None:
@@ -216,7 +241,7 @@ class Driver:
             if self.first is None:
                 self.first = stamp
                 self.ready.set()
-            if self.seconds is not None and stamp - self.first > self.seconds:
+            if self.seconds is not None and self.before + stamp - self.first > self.seconds:
                 self.stop.set()
                 return None
             if stamp - self.last_sent < COMMAND_PERIOD - 1e-6:
@@ -235,7 +260,12 @@ class Driver:
         with self.lock:
             f = self.follower
             return "final " + json.dumps(
-                {"segments": f.done, "missions": f.missions, "path": self.path}
+                {
+                    "segments": self.done_before + f.done,
+                    "path": self.path,
+                    "missions": self.missions_before + f.missions,
+                    "resets": self.resets,
+                }
             )
 
 

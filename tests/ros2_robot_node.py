@@ -74,8 +74,11 @@ The controller's interfaces as ros2_controllers has them (``diff_drive_controlle
 - ``/sim/control`` (``std_msgs/String``): the IMU's faults as ROS 1's node takes them
   (``mute_imu``, ``freeze_imu``, ``mend_imu``), ``mute_scan`` and ``unmute_scan``, and
   the events of tests/robot_node_events.py (a wheel changed, the laser knocked: also at a
-  given time, ``--change-wheel-at``, ``--knock-laser-at``; ``--truth FILE``), and
-  ``--world warehouse`` for tests/mission_driver.py.
+  given time, ``--change-wheel-at``, ``--knock-laser-at``; ``--truth FILE``), the faults
+  of tests/robot_node_faults.py (``reset_clock``: a simulation reset as Gazebo's;
+  ``restart_controller``: the controller deactivated, configured and activated again, its
+  odometry from zero; every ``set_parameters`` on the controller kept, with the robot's
+  true speed then), and ``--world warehouse`` for tests/mission_driver.py.
 """
 
 from __future__ import annotations
@@ -103,6 +106,7 @@ from sensor_msgs.msg import Imu, JointState, LaserScan
 from std_msgs.msg import String
 
 from robot_node_events import Events, event_arguments, joint_state_values, node_world
+from robot_node_faults import Faults
 from robot_node_imu import ImuFault, imu_arguments, imu_setup
 from umbmark.robot.base import DriveParams
 from umbmark.robot.virtual import VirtualRobot
@@ -218,6 +222,7 @@ class Controller:
         for key, value in values.items():  # set_parameters changes these, not the robot
             locked = read_only and key.endswith("_multiplier")
             node.declare_parameter(key, value, ParameterDescriptor(read_only=locked))
+        sim.faults.watch(node)
         if sim.args.distro == "humble":  # Humble's and Iron's parameter (gone in Jazzy)
             node.declare_parameter("use_stamped_vel", read_stamped(sim.files, sim.name))
         self.state = "unconfigured"
@@ -445,6 +450,7 @@ class SimNode:
         self.rate, self.scan_every = args.rate, args.scan_every
         self.lock = threading.Lock()
         self.events = Events(args, self.robot, self._stated(), T0)
+        self.faults = Faults(self)
         node.create_subscription(String, "/sim/control", self._on_control, 10)
         #: What the controller manager was asked, in order (printed at the end).
         self.calls: list[str] = []
@@ -490,6 +496,7 @@ class SimNode:
         with self.lock:
             self.imu_fault.control(msg.data)
             self.events.control(msg.data)
+            self.faults.control(msg.data)
 
     def _stated(self) -> tuple[float, float, float]:
         """The laser's mounting the robot states (x, y, yaw): ``--stated-laser``, else the
@@ -578,6 +585,7 @@ class SimNode:
             "restarts": self.restarts,
             "params_file": self.files,
             "velocity": None if controller is None else controller.velocity_topic,
+            **self.faults.final(),
         }
 
     def _step(self, step: int) -> None:
@@ -592,6 +600,7 @@ class SimNode:
                 robot.send_velocity(*controller.command)
         robot.wait(robot.period)
         self.events.step()
+        self.faults.step()
         self._publish(step)
 
     def _publish(self, step: int) -> None:
@@ -601,7 +610,8 @@ class SimNode:
         clock.clock.sec, clock.clock.nanosec = sec, nanosec
         self.clock.publish(clock)
         controller = self.controller
-        if controller is not None and controller.state == "active":  # update() runs
+        silent = self.faults.odometry_silent()  # after a reset, Humble to Kilted
+        if controller is not None and controller.state == "active" and not silent:
             pose = robot.odometry().pose
             msg = Odometry()
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec

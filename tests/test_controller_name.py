@@ -139,7 +139,7 @@ def test_an_older_history_is_read_with_no_controller(tmp_path: Path) -> None:
     (old,) = History(db, read_only=True).calibrations("R")
     assert old.controller is None
     assert old.new["wheel_separation_multiplier"] == 0.98
-    assert History(db).schema_version == 4
+    assert History(db).schema_version == 5
 
 
 def test_with_nothing_naming_it_the_default_is_said(tmp_path: Path) -> None:

@@ -82,3 +82,26 @@ def test_the_rest_of_the_simulation_is_the_same_with_or_without_an_imu():
         poses.append((robot.true_pose, robot.odometry().pose, scan.ranges))
     assert poses[0][:2] == poses[1][:2]
     np.testing.assert_array_equal(poses[0][2], poses[1][2])
+
+
+def test_a_simulation_reset_puts_the_robot_back_and_leaves_its_controller_alone():
+    """Gazebo's reset: 2 s at 0.5 m/s straight ahead (1 m), then the clock at 0, the robot
+    at its start at rest, its wheels' joints at 0; the controller's odometry kept (1 m
+    ahead) until its next update, which moves it back by the wheels' jump (1 m): ~0."""
+    robot = VirtualRobot(seed=1)
+    start = robot.true_pose
+    for _ in range(100):
+        robot.send_velocity(0.5, 0.0)
+        robot.wait(robot.period)
+    robot.send_velocity(0.0, 0.0)
+    robot.wait(1.0)  # stopped (the braking's few millimetres in it)
+    ahead = robot.odometry().pose.x
+    assert ahead == pytest.approx(1.0, abs=0.02)
+    robot.reset_simulation()
+    assert robot.now() == 0.0
+    assert robot.true_pose == start
+    assert robot.wheel_angles() == (0.0, 0.0, 0.0)
+    assert robot.odometry().pose.x == ahead
+    robot.wait(robot.period)
+    assert robot.odometry().pose.x == pytest.approx(0.0, abs=1e-3)
+    assert robot.true_pose == start  # at rest

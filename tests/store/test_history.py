@@ -115,9 +115,9 @@ def test_refuses_another_robots_parameters(tmp_path: Path) -> None:
 
 def test_schema_version_and_wal(tmp_path: Path) -> None:
     db = tmp_path / "deep" / "history.sqlite3"
-    assert History(db).schema_version == SCHEMA_VERSION == 4
+    assert History(db).schema_version == SCHEMA_VERSION == 5
     with sqlite3.connect(db) as raw:
-        assert raw.execute("PRAGMA user_version").fetchone()[0] == 4
+        assert raw.execute("PRAGMA user_version").fetchone()[0] == 5
         assert raw.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
         raw.execute("PRAGMA user_version = 99")
     raw.close()

@@ -37,3 +37,17 @@ def test_a_stretch_is_a_calibration_and_a_fleet_recording(tmp_path) -> None:
     assert back.figures == figures
     assert back.end_odometer == 120.0
     assert back.time == 12.0
+
+
+def test_umbmark_history_lists_a_monitors_stretches(tmp_path) -> None:
+    """A stretch has no verdict (nothing to apply is judged on it): listed with ``-``."""
+    from helpers import run_cli
+
+    path = tmp_path / "h.sqlite3"
+    h = History(path)
+    figures = {"E_d": (1.004, 1e-4), "E_b": (1.0201, 5e-4)}
+    record_stretch(h, StretchRecord("amr", "scan-matching", 1.7e9, 1.7e9 + 60, 12.0, 100.0,
+                                    120.0, figures, ACTIVE))  # fmt: skip
+    done = run_cli("history", "amr", "--history", str(path))
+    assert done.returncode == 0, done.stderr
+    assert "scan-matching" in done.stdout

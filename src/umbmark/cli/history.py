@@ -103,7 +103,7 @@ def history(robot: str | None, json_out: bool, **options: Any) -> None:
             f"{c.robot_E_b:.6f}{mark}",
             *([("-" if c.k_g is None else f"{c.k_g:.5f}")] if gyro else []),
             e_max,
-            "-" if c.verdict is None else Verdict(c.verdict["level"]).words,
+            "-" if not c.verdict else Verdict(c.verdict["level"]).words,  # a stretch: none
             "yes" if c.applied else "no",
         )
     out.print(grid)

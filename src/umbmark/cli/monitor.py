@@ -106,8 +106,9 @@ _NODE = [spec for spec in NODE_OPTIONS if spec.name not in MONITOR]
 @apply([spec_option(spec) for spec in MONITOR_SIM_OPTIONS])
 @apply(
     [
-        spec_option(HISTORY, help="The history file each stretch of driving is recorded in "
-                    "[default: none with --sim]."),
+        spec_option(HISTORY, help="The history file each stretch of driving is recorded in, "
+                    "and a monitor started again takes its course up from (--ros1, --ros2: "
+                    "also the parameter history) [default: none]."),
         option("--json", "json_out", section=OUTPUTS, is_flag=True,
                help="Print one JSON object at the end (metres, radians, seconds)."),
     ]
@@ -140,10 +141,10 @@ def monitor(
     if ros1:
         from umbmark.monitor.ros1_node import run_ros1
 
-        ctx.exit(run_ros1(given, argv.ros1, make_monitor, MONITOR_OPTIONS))
+        ctx.exit(run_ros1(given, argv.ros1, make_monitor, (*MONITOR_OPTIONS, HISTORY)))
     from umbmark.monitor.ros2_node import run_ros2
 
-    ctx.exit(run_ros2(given, argv.ros2, make_monitor, MONITOR_OPTIONS))
+    ctx.exit(run_ros2(given, argv.ros2, make_monitor, (*MONITOR_OPTIONS, HISTORY)))
 
 
 def _sim(json_out: bool, options: dict[str, Any]) -> None:

@@ -13,9 +13,13 @@ model (:mod:`umbmark.monitor.course`); a stretch in which wheels and laser disag
 window's figures are what :meth:`Monitor.status` says, refitted each :data:`REFIT_METRES`.
 
 Faults: the clock going back restarts the window and the stretch; the wheels' counts or
-the odometry jumping (a controller restarted) starts a new stretch; a message out of order
-is dropped and counted; a laser that matches nothing leaves its intervals out (no estimate
-from them, no change).
+the odometry jumping (a controller restarted) starts a new stretch; either way the chunk
+in progress is dropped, its driving kept in the odometer (which never goes back); a
+message out of order is dropped and counted; a laser that matches nothing leaves its
+intervals out (no estimate from them, no change). With a history the monitor's state (its
+odometer as each status says it, its last apply: :mod:`umbmark.store.monitor_state`) is
+kept before the status is said, and each apply recorded: a monitor started again, killed
+or not, goes on from them.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import math
 import time as wall_clock
 from collections import Counter, deque
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from umbmark.estimators.registry import GYRO, SCAN_MATCHING
 from umbmark.monitor.arrivals import Arrivals, WheelAngles
@@ -42,6 +46,9 @@ from umbmark.monitor.status import (
     MonitorStatus,
 )
 from umbmark.robot.base import ApplyResult, DriveParams, Pose2D, ScanSweep
+
+if TYPE_CHECKING:
+    from umbmark.monitor.apply import Offer
 
 __all__ = [
     "OUTLIER_SECONDS",
@@ -63,6 +70,9 @@ WINDOW_CAP = 10.0
 _STILL = 1e-3
 #: A robot clock past this [s] is a clock of days (ROS time); before, it started at 0.
 _EPOCH_CLOCK = 1e9
+#: The monitor's state is written into the history at most this often [s of wall time]:
+#: every status of a node (1 Hz), not every second of a simulation run faster.
+_SAVE_EVERY = 0.5
 
 
 class Monitor:
@@ -96,11 +106,15 @@ class Monitor:
         self._fitted_at = -math.inf
         self._travel = 0.0
         self._epoch: float | None = None
+        self._latest = -math.inf  # the latest time arrived (since the clock last went back)
+        self._wall_floor = -math.inf  # the wall clock at the end of the history's last stretch
         self._moved_at: float | None = None
         self._last_angles: tuple[float, float] | None = None
         self._applied_line: str | None = None
         self._applied_at_odometer = -math.inf
         self._offered: DriveParams | None = None
+        self._offer: Offer | None = None
+        self._saved_odometer, self._saved_at = -math.inf, -math.inf
         self.integrator = Integrator(self._calibration(None))
         self._store = None
         if setup.history is not None:
@@ -134,22 +148,37 @@ class Monitor:
     def _arrived(self, kind: str, time: float) -> bool:
         said = self.arrivals.arrive(kind, time)  # type: ignore[arg-type]
         if self._epoch is None and said == "ok":
-            self._epoch = 0.0 if time > _EPOCH_CLOCK else wall_clock.time() - time
+            # a simulation's clock (from 0) on the wall clock from now, after the history's
+            self._epoch = 0.0 if time > _EPOCH_CLOCK else max(wall_clock.time(),
+                                                              self._wall_floor) - time  # fmt: skip
         if said == "back":
+            if self._epoch:  # a simulation's clock: the wall clock of its stretches goes on
+                self._epoch = max(wall_clock.time(), self._latest + self._epoch) - time
+            self._latest = time
             self._restart()
             return True
+        if said == "ok":
+            self._latest = max(self._latest, time)
         return said == "ok"
 
     def _restart(self) -> None:
         """The clock went back (a simulation reset): the window and the stretch restart."""
         self.restarts += 1
-        self.maker.reset()
+        self._drop_chunk()
         self.angles.reset()
         self.window.clear()
         self.stretch = []
         self._fit, self._moved_at, self._last_angles = None, None, None
         self.integrator.time = None
         self._since_odometer = self.odometer
+
+    def _drop_chunk(self) -> None:
+        """The chunk in progress forgotten (a restart): its driving kept in the odometer,
+        which never goes back."""
+        pending = self.maker.pending()
+        self.odometer += pending.metres
+        self._travel += pending.travel
+        self.maker.reset()
 
     def _in_order(self, kind: Input, time: float) -> bool:
         """Whether a wheel reading comes after the last one taken of either kind (a node
@@ -168,7 +197,7 @@ class Monitor:
         if not continued and (switched or self.angles.breaks != self._breaks):
             # a controller restarted, or the wheels from another source: a new chunk
             self._breaks = self.angles.breaks
-            self.maker.reset()
+            self._drop_chunk()
             self.stretch = []
         angles = self.angles.angles
         if (
@@ -250,10 +279,7 @@ class Monitor:
             return
         from umbmark.store.monitor_stretches import StretchRecord, record_stretch
 
-        p = self.params
-        active = {"wheelbase": p.wheel_separation, "wheel_diameter": 2.0 * p.wheel_radius,
-                  "c_L": p.left_wheel_radius_multiplier, "c_R": p.right_wheel_radius_multiplier,
-                  "wheel_separation_multiplier": p.wheel_separation_multiplier}  # fmt: skip
+        active = _active(self.params)
         epoch = self._epoch or 0.0
         method = SCAN_MATCHING.name if found.params is not None or found.held else GYRO.name
         record = StretchRecord(self.setup.robot, method, start + epoch, end + epoch, start,
@@ -263,6 +289,7 @@ class Monitor:
     def _take_up(self) -> None:
         """The course (and the odometer) from the history: a monitor started again."""
         from umbmark.monitor.course import MAX_STRETCHES
+        from umbmark.store.monitor_state import read_state
         from umbmark.store.monitor_stretches import read_stretches
 
         assert self._store is not None
@@ -271,9 +298,15 @@ class Monitor:
             for name, (value, se) in s.figures.items():
                 self.course.add(name, StretchPoint(value, se, s.time, s.odometer, s.wall_start))
         if stretches:
+            self._wall_floor = stretches[-1].wall_end
             self.odometer = self._since_odometer = stretches[-1].end_odometer
             self.stretches = len(stretches)
             self._judge()
+        state = read_state(self._store, self.setup.robot)
+        if state is not None:  # as it last said it, the chunk then in progress included
+            self.odometer = self._saved_odometer = max(self.odometer, state.odometer)
+            if state.applied_odometer is not None:
+                self._applied_at_odometer = state.applied_odometer
 
     # --- what it says ----------------------------------------------------------------
 
@@ -313,7 +346,29 @@ class Monitor:
         return (*done, *latest)
 
     def status(self, now: float) -> MonitorStatus:
-        return said(self, now)
+        status = said(self, now)
+        if (
+            self._store is not None
+            and status.odometer > self._saved_odometer
+            and wall_clock.monotonic() - self._saved_at >= _SAVE_EVERY
+        ):
+            self._save(status.odometer)  # before it is said: a monitor killed goes on from it
+        return status
+
+    def _save(self, odometer: float) -> None:
+        """The monitor's state into the history (a history that cannot be written is
+        counted, ``left_out``, and the monitor goes on)."""
+        from umbmark.core.errors import InputError
+        from umbmark.store.monitor_state import MonitorState, save_state
+
+        assert self._store is not None
+        applied = None if math.isinf(self._applied_at_odometer) else self._applied_at_odometer
+        try:
+            save_state(self._store, self.setup.robot, MonitorState(odometer, applied))
+        except InputError:
+            self.left_out["history not written"] += 1
+            return
+        self._saved_odometer, self._saved_at = odometer, wall_clock.monotonic()
 
     def corrected(self) -> CorrectedOdometry | None:
         return self.integrator.odometry()
@@ -337,21 +392,56 @@ class Monitor:
         found = offer(present, self.params)
         if found is None or not found.verdict.applies:
             return None
-        self._offered = found.params
+        self._offered, self._offer = found.params, found
         return found.params
 
     def applied(self, now: float, result: ApplyResult) -> None:
-        offered = self._offered
-        self._offered = None
+        offered, offer = self._offered, self._offer
+        self._offered = self._offer = None
         if offered is None:
             return
-        if result.active:
-            self.params = offered
-            self.setup = replace(self.setup, params=offered)
-            self.angles.radii, self.angles.separation = self.setup.wheel_radii, offered.wheelbase
-            self._applied_at_odometer = self.odometer
         said = f"applied at {now:.1f} s: {offered}" if result.active else "not applied"
         self._applied_line = f"{said} ({result.method}: {result.message})"
+        if not result.active:
+            return
+        before = self.params
+        self.params = offered
+        self.setup = replace(self.setup, params=offered)
+        self.angles.radii, self.angles.separation = self.setup.wheel_radii, offered.wheelbase
+        self._applied_at_odometer = self.odometer
+        if self._store is not None and offer is not None:
+            from umbmark.core.errors import InputError
+
+            try:
+                self._record_applied(now, before, offer, result)
+            except InputError:
+                self.left_out["history not written"] += 1
+            self._save(max(self._saved_odometer, self.odometer))
+
+    def _record_applied(
+        self, now: float, before: DriveParams, offer: Offer, result: ApplyResult
+    ) -> None:
+        """The apply into the history: a calibration marked applied."""
+        from umbmark.store.monitor_state import AppliedRecord, record_applied
+
+        assert self._store is not None
+        present = {n: v for n in ("E_d", "E_b", "E_s") if (v := self.course.present(n))}
+        new = offer.params
+        record = AppliedRecord(
+            self.setup.robot, SCAN_MATCHING.name if "scan" in self.setup.inputs else GYRO.name,
+            now + (self._epoch or 0.0), self.odometer, present, _active(before),
+            {"c_L": new.left_wheel_radius_multiplier, "c_R": new.right_wheel_radius_multiplier,
+             "wheel_separation_multiplier": new.wheel_separation_multiplier},
+            offer.verdict.to_dict(), f"{result.method}: {result.message}"[:200],
+        )  # fmt: skip
+        record_applied(self._store, record)
+
+
+def _active(p: DriveParams) -> dict[str, float]:
+    """The controller's parameters as the history records them."""
+    return {"wheelbase": p.wheel_separation, "wheel_diameter": 2.0 * p.wheel_radius,
+            "c_L": p.left_wheel_radius_multiplier, "c_R": p.right_wheel_radius_multiplier,
+            "wheel_separation_multiplier": p.wheel_separation_multiplier}  # fmt: skip
 
 
 def make_monitor(found: Any) -> Monitor:  # noqa: ANN401 (umbmark.monitor.ros2_node.Found)
@@ -379,9 +469,11 @@ def make_monitor(found: Any) -> Monitor:  # noqa: ANN401 (umbmark.monitor.ros2_n
     inputs: tuple[Input, ...] = (wheels,)
     inputs += ("scan",) if getattr(options, "scan_topic", None) else ()
     inputs += ("imu",) if getattr(options, "imu_topic", None) else ()
+    history = values.get("history")  # the history given (none without it)
     setup = MonitorSetup(
         str(getattr(options, "robot", "") or values.get("robot") or "robot"), found.params,
-        getattr(options, "laser_mount", None), inputs=inputs, judge_silence=False, **kept,
+        getattr(options, "laser_mount", None), inputs=inputs, judge_silence=False,
+        history=None if history is None else str(history), **kept,
     )  # fmt: skip
     return Monitor(setup)
 

@@ -192,6 +192,7 @@ class VirtualRobot:
         #: Every velocity command sent, with its time: ``(t, linear, angular)``.
         self.commands: list[tuple[float, float, float]] = []
         self._travel = 0.0  # the distance driven forward [m]
+        self._seed = seed
         self._imu = None if imu is None else _imu_stream(imu, seed, self._pose.theta)
         self._held: deque[ImuReadings] = deque()
 
@@ -343,6 +344,24 @@ class VirtualRobot:
         self._odom = [0.0, 0.0, 0.0]
         if loaded:
             self._old = [0.0, 0.0]
+
+    def reset_simulation(self) -> None:
+        """The simulation reset as Gazebo's (``/reset_simulation``) does it: the clock back
+        to 0, the robot at its start and at rest, its wheels' joints back to 0 (encoder
+        counts 0), its IMU started again. The controller is a plugin the reset does not
+        tell: its odometry keeps its pose and the wheel positions of its last update, so
+        that its next update moves it by the wheels' jump (ros2_controllers' position
+        feedback, ``update_from_pos``), and the last command stands."""
+        self._time = 0.0
+        self._pose = self.world.start
+        self._velocity = (0.0, 0.0)
+        self._angle = [0.0, 0.0]
+        self._counts = [0, 0]
+        self._odom_time = 0.0
+        self._travel = 0.0
+        if self._imu is not None:
+            self._imu = _imu_stream(self._imu.setup, self._seed, self._pose.theta)
+            self._held.clear()
 
     def close(self) -> None:
         """Stop: a zero velocity."""

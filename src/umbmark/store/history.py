@@ -122,12 +122,27 @@ def _migrate_4(db: sqlite3.Connection) -> None:
     db.execute("CREATE INDEX recordings_robot ON recordings(robot, start)")
 
 
+def _migrate_5(db: sqlite3.Connection) -> None:
+    """Version 5: each robot's monitor (``umbmark monitor``): its odometer as it last
+    said it and where it last applied a change, so that a monitor started again (killed,
+    say) goes on from there (:mod:`umbmark.store.monitor_stretches`)."""
+    db.execute(
+        """CREATE TABLE monitors (
+            robot TEXT PRIMARY KEY,
+            odometer REAL NOT NULL,
+            applied_odometer REAL,
+            updated TEXT NOT NULL
+        )"""
+    )
+
+
 #: The schema's migrations: ``MIGRATIONS[k]`` takes a file from version ``k`` to ``k + 1``.
 MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (
     _migrate_1,
     _migrate_2,
     _migrate_3,
     _migrate_4,
+    _migrate_5,
 )
 #: The schema version this umbmark writes.
 SCHEMA_VERSION = len(MIGRATIONS)

@@ -24,7 +24,7 @@ from umbmark.store.fleet_recordings import RecordingRow, record_recording
 from umbmark.store.history import History
 from umbmark.store.records import NewCalibration
 
-__all__ = ["MONITOR_KEY", "StretchRecord", "read_stretches", "record_stretch"]
+__all__ = ["MONITOR_KEY", "StretchRecord", "read_stretches", "record_stretch", "relative_figures"]
 
 #: The reading-options key of the monitor's rows (no recording file has it).
 MONITOR_KEY = "monitor"
@@ -64,7 +64,7 @@ class StretchRecord:
     active: Mapping[str, float]
 
 
-def _relative(
+def relative_figures(
     figures: Mapping[str, tuple[float, float]], active: Mapping[str, float]
 ) -> dict[str, tuple[float, float]]:
     """The robot's figures relative to the active parameters (what a pass measures)."""
@@ -89,7 +89,7 @@ def record_stretch(history: History, stretch: StretchRecord) -> int | None:
     determined neither ``E_d`` nor ``E_b`` (then only the fleet's row is written)."""
     start = dt.datetime.fromtimestamp(stretch.wall_start, dt.timezone.utc)
     path = f"monitor:{stretch.robot}/{start.strftime('%Y-%m-%dT%H:%M:%S.%fZ')}"
-    relative = _relative(stretch.figures, stretch.active)
+    relative = relative_figures(stretch.figures, stretch.active)
     errors = {k: s for k, (_, s) in relative.items()}
     active = {**stretch.active, "wheel_diameter": stretch.active.get("wheel_diameter")}
     calibration = None
