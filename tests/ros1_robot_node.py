@@ -44,7 +44,6 @@ import argparse
 import json
 import math
 import threading
-import time
 import types
 from dataclasses import replace
 
@@ -62,6 +61,7 @@ from tf2_msgs.msg import TFMessage
 
 from robot_node_events import Events, event_arguments, joint_state_values, node_world
 from robot_node_imu import ImuFault, imu_arguments, imu_setup
+from robot_node_pace import Pace
 from umbmark.robot.virtual import VirtualRobot
 from umbmark.robot.world import LCorner, World, corner_world
 
@@ -342,18 +342,14 @@ class SimNode:
         with self.lock:
             self._publish(0)
         print("ready", flush=True)
-        step, start = 0, time.monotonic()
+        step, pace = 0, Pace(wall_step)
         while not rospy.is_shutdown():
             step += 1
             with self.lock:
                 self.robot.wait(period)
                 self.events.step()
                 self._publish(step)
-            delay = start + step * wall_step - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            elif delay < -0.5:  # fell behind (a busy machine): do not race to catch up
-                start = time.monotonic() - step * wall_step
+            pace.wait()
 
 
 def main() -> None:

@@ -88,7 +88,6 @@ import json
 import math
 import signal
 import threading
-import time
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -108,6 +107,7 @@ from std_msgs.msg import String
 from robot_node_events import Events, event_arguments, joint_state_values, node_world
 from robot_node_faults import Faults
 from robot_node_imu import ImuFault, imu_arguments, imu_setup
+from robot_node_pace import Pace
 from umbmark.robot.base import DriveParams
 from umbmark.robot.virtual import VirtualRobot
 
@@ -696,7 +696,7 @@ class SimNode:
         with self.lock:
             self._publish(0)
         print("ready", flush=True)
-        step, start = 0, time.monotonic()
+        step, pace = 0, Pace(wall_step)
         while not stop.is_set() and rclpy.ok():
             step += 1
             with self.lock:
@@ -706,11 +706,7 @@ class SimNode:
                     if not rclpy.ok():  # Ctrl-C shut the context down under the loop
                         return
                     raise
-            delay = start + step * wall_step - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            elif delay < -0.5:  # fell behind (a busy machine): do not race to catch up
-                start = time.monotonic() - step * wall_step
+            pace.wait()
 
 
 def main() -> None:
