@@ -50,6 +50,7 @@ from umbmark.core.errors import InputError
 from umbmark.estimators.base import ErrorEstimate
 from umbmark.estimators.registry import SCAN_MATCHING
 from umbmark.estimators.scan_excitation import MAX_CONDITION, Excitation, excitation
+from umbmark.estimators.solve import relative_jacobian
 from umbmark.model.kinematics import WheelParams
 from umbmark.model.motion_intervals import MotionIntervals
 from umbmark.model.systematic import alpha_from_E_b, beta_from_E_d
@@ -60,6 +61,7 @@ __all__ = [
     "fit_intervals",
     "outliers",
     "predicted_motion",
+    "residual_noise",
     "scan_matching_estimate",
     "second_step",
     "solve_intervals",
@@ -233,6 +235,15 @@ def outliers(residual: FloatArray, fraction: float) -> BoolArray:
     return drop
 
 
+def residual_noise(residual: FloatArray) -> FloatArray:
+    """``(c,)`` the noise of each of the ``(m, c)`` residuals' components: 1.4826 times
+    their median absolute deviation (a Gaussian's standard deviation, which neither
+    outliers nor cut tails bias), ``1e-12`` at least."""
+    spread = np.median(np.abs(residual - np.median(residual, axis=0)), axis=0)
+    noise: FloatArray = np.maximum(1.482602218505602 * spread, 1e-12)
+    return noise
+
+
 def _covariance(
     intervals: MotionIntervals, params: FloatArray, rows: BoolArray
 ) -> tuple[FloatArray, FloatArray]:
@@ -245,17 +256,8 @@ def _covariance(
     say the noise is not alike in every interval (:func:`widened`).
     """
     residual = predicted_motion(intervals, params) - intervals.sensor_motion
-    spread = np.median(np.abs(residual - np.median(residual, axis=0)), axis=0)
-    noise = 1.482602218505602 * spread
-    noise = np.where(noise > 0.0, noise, 1e-12)
-    jac = np.empty((int(rows.sum()), 3, 6))
-    for j in range(6):
-        step = 1e-6 * max(abs(float(params[j])), 1e-3)
-        up, down = params.copy(), params.copy()
-        up[j] += step
-        down[j] -= step
-        diff = predicted_motion(intervals, up, rows) - predicted_motion(intervals, down, rows)
-        jac[:, :, j] = diff / (2.0 * step)
+    noise = residual_noise(residual)
+    jac = relative_jacobian(lambda p: predicted_motion(intervals, p, rows), params)
     weighted = jac / noise[None, :, None]
     fisher = np.einsum("kij,kil->jl", weighted, weighted)
     bound = np.linalg.inv(fisher)

@@ -16,7 +16,8 @@ motion its mounting's yaw does not touch: the length of its translation and its 
 A laser knocked since the mounting was held then moves neither ``E_d`` nor ``E_s``: its
 x and y enter only through the turn times the lever, its yaw not at all. The radii are
 found by Gauss-Newton from the held ones. The noise of each motion component
-is the residuals' median absolute deviation, as the full fit takes it, and the same
+is the residuals' median absolute deviation, as the full fit takes it
+(:func:`umbmark.estimators.scan_matching.residual_noise`), and the same
 outlier rounds are used. The covariance is the Cramer-Rao bound, widened to the sandwich
 where the intervals scatter unlike (:func:`umbmark.estimators.scan_matching.widened`).
 To it is added what the held parameters' own uncertainty does to the radii, to first
@@ -32,14 +33,19 @@ import numpy as np
 
 from umbmark.core.arrays import BoolArray, FloatArray
 from umbmark.core.errors import InputError
-from umbmark.estimators.scan_matching import outliers, predicted_motion, widened
+from umbmark.estimators.scan_matching import (
+    outliers,
+    predicted_motion,
+    residual_noise,
+    widened,
+)
+from umbmark.estimators.solve import relative_jacobian
 from umbmark.model.motion_intervals import MotionIntervals
 
 __all__ = ["MIN_INTERVALS", "RadiiFit", "fit_radii"]
 
 #: Fewest intervals the radii are fitted from.
 MIN_INTERVALS = 10
-_NOISE_FLOOR = 1e-12
 _STEPS = 4
 #: Most solves with the noise estimated again (the weights settle in two or three).
 _REWEIGHTS = 8
@@ -156,12 +162,8 @@ def _reweighted(
 
 
 def _noise(intervals: MotionIntervals, params: FloatArray) -> FloatArray:
-    """``(2,)`` the length's and the turn's noise: the residuals' median absolute
-    deviation over all intervals."""
-    residual = _seen(intervals, params) - _measured(intervals)
-    spread = np.median(np.abs(residual - np.median(residual, axis=0)), axis=0)
-    out: FloatArray = np.maximum(1.482602218505602 * spread, _NOISE_FLOOR)
-    return out
+    """``(2,)`` the length's and the turn's noise, over all intervals."""
+    return residual_noise(_seen(intervals, params) - _measured(intervals))
 
 
 def _seen(
@@ -180,14 +182,7 @@ def _measured(intervals: MotionIntervals, rows: BoolArray | None = None) -> Floa
 
 def _jacobian(intervals: MotionIntervals, params: FloatArray, rows: BoolArray) -> FloatArray:
     """``(m, 2, 6)`` the length's and turn's derivatives in the six parameters."""
-    jac = np.empty((int(rows.sum()), 2, 6))
-    for j in range(6):
-        step = 1e-6 * max(abs(float(params[j])), 1e-3)
-        up, down = params.copy(), params.copy()
-        up[j] += step
-        down[j] -= step
-        jac[:, :, j] = (_seen(intervals, up, rows) - _seen(intervals, down, rows)) / (2.0 * step)
-    return jac
+    return relative_jacobian(lambda p: _seen(intervals, p, rows), params)
 
 
 def _solved(

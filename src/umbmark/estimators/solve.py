@@ -16,7 +16,7 @@ import numpy as np
 
 from umbmark.core.arrays import FloatArray
 
-__all__ = ["JACOBIAN_STEP", "gauss_newton", "jacobian"]
+__all__ = ["JACOBIAN_STEP", "gauss_newton", "jacobian", "relative_jacobian"]
 
 #: Gauss-Newton iterations at most.
 MAX_ITERATIONS = 60
@@ -35,6 +35,20 @@ def jacobian(
         dp[j] = step
         columns.append((residuals(p + dp) - residuals(p - dp)) / (2.0 * step))
     return np.column_stack(columns)
+
+
+def relative_jacobian(model: Callable[[FloatArray], FloatArray], p: FloatArray) -> FloatArray:
+    """Central-difference Jacobian of ``model`` at ``p`` for parameters of any scale (radii
+    of centimetres, wheelbases, angles): each step ``1e-6`` of its parameter (``1e-9`` at
+    least). ``model`` returns an array of any shape ``s``; the result is ``(*s, len(p))``."""
+    columns = []
+    for j in range(p.size):
+        step = 1e-6 * max(abs(float(p[j])), 1e-3)
+        up, down = p.copy(), p.copy()
+        up[j] += step
+        down[j] -= step
+        columns.append((model(up) - model(down)) / (2.0 * step))
+    return np.stack(columns, axis=-1)
 
 
 def gauss_newton(

@@ -46,6 +46,7 @@ __all__ = [
     "compose_last_applied",
     "default_history_path",
     "drift_verdict",
+    "utc_stamp",
 ]
 
 #: How long a writer waits for another one's lock [s].
@@ -164,7 +165,8 @@ def default_history_path() -> Path:
     return Path(data) / "umbmark" / "history.sqlite3"
 
 
-def _now() -> str:
+def utc_stamp() -> str:
+    """Now, as the history's files stamp their rows (UTC, ISO 8601, microseconds)."""
     return dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
@@ -349,7 +351,7 @@ class History:
                 db.execute(
                     "INSERT INTO robots (name, wheelbase, wheel_diameter, created) "
                     "VALUES (?, ?, ?, ?)",
-                    (robot, calibration.wheelbase, calibration.wheel_diameter, _now()),
+                    (robot, calibration.wheelbase, calibration.wheel_diameter, utc_stamp()),
                 )
             else:
                 if same_nominal:

@@ -19,7 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from umbmark.store.history import History
+from umbmark.store.history import History, utc_stamp
 from umbmark.store.monitor_stretches import relative_figures
 from umbmark.store.records import NewCalibration
 
@@ -55,7 +55,7 @@ def read_state(history: History, robot: str) -> MonitorState | None:
 
 def save_state(history: History, robot: str, state: MonitorState) -> None:
     """Keep the robot's monitor's state (replacing the one kept)."""
-    now = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+    now = utc_stamp()
     with history.transaction(write=True) as db:
         db.execute(
             "INSERT INTO monitors (robot, odometer, applied_odometer, updated) "
